@@ -1,0 +1,82 @@
+!> EL1, shaft: massless visco-elastic torsion spring (Appendix H, eqs. H.1-H.2):
+!>   T = b (x_l - x_r) + d (w_l - w_r) ;  left node gets -T, right node +T.
+module trainsim_el_shaft
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, string_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_sink, only: param_list_t
+   use trainsim_element, only: element_t
+   implicit none
+   private
+
+   public :: shaft_t
+
+   !> Torsional stiffness b (torque/rad) and internal damping d (torque*s/rad).
+   type, extends(element_t) :: shaft_t
+      real(wp) :: k = 0.0_wp, c = 0.0_wp
+   contains
+      procedure :: configure => shaft_configure
+      procedure :: torques => shaft_torques
+      procedure :: stiffness_matrix => shaft_stiffness
+      procedure :: potential_energy => shaft_potential
+      procedure :: dissipation_power => shaft_dissipation
+      procedure :: params => shaft_params
+   end type shaft_t
+
+contains
+
+   subroutine shaft_configure(self, grp, units, err)
+      class(shaft_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      type(error_t), allocatable, intent(out) :: err
+      associate (unused => units)
+      end associate
+      call grp%get_real('stiffness', self%k, err); if (allocated(err)) return
+      call grp%get_real('damping', self%c, err, default=0.0_wp); if (allocated(err)) return
+      if (.not. self%k > 0.0_wp) then
+         call fatal_error(err, grp%where('stiffness')//': error: stiffness must be > 0, got '//str(self%k), err_input)
+         return
+      end if
+      if (.not. self%c >= 0.0_wp) then
+         call fatal_error(err, grp%where('damping')//': error: damping must be >= 0, got '//str(self%c), err_input)
+      end if
+   end subroutine shaft_configure
+
+   pure subroutine shaft_torques(self, thl, wl, thr, wr, tl, tr)
+      class(shaft_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      tr = self%k*(thl - thr) + self%c*(wl - wr)   ! eq. (H.1)/(H.2)
+      tl = -tr
+   end subroutine shaft_torques
+
+   pure subroutine shaft_stiffness(self, k)
+      class(shaft_t), intent(in) :: self
+      real(wp), intent(out) :: k(2, 2)
+      k = self%k*reshape([1.0_wp, -1.0_wp, -1.0_wp, 1.0_wp], [2, 2])
+   end subroutine shaft_stiffness
+
+   pure real(wp) function shaft_potential(self, thl, thr) result(e)
+      class(shaft_t), intent(in) :: self
+      real(wp), intent(in) :: thl, thr
+      e = 0.5_wp*self%k*(thl - thr)**2
+   end function shaft_potential
+
+   pure real(wp) function shaft_dissipation(self, thl, wl, thr, wr) result(p)
+      class(shaft_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      associate (u1 => thl, u2 => thr)
+      end associate
+      p = self%c*(wl - wr)**2
+   end function shaft_dissipation
+
+   function shaft_params(self) result(p)
+      class(shaft_t), intent(in) :: self
+      type(param_list_t) :: p
+      p%names = [string_t('stiffness'), string_t('damping')]
+      p%values = [self%k, self%c]
+   end function shaft_params
+end module trainsim_el_shaft

@@ -1,0 +1,164 @@
+!> N02, constant-field DC motor (Appendix G, eqs. G.3-G.5):
+!>   x1' = x2
+!>   J x2' = -d x2 + alpha x3 + T          (T: net torque from elements and loads)
+!>   L x3' = -R x3 - alpha' x2 + e(t)      (armature current x3, voltage e)
+!> Electrical quantities in V, A, ohm, H; alpha in torque/A, alpha' in V*s/rad.
+module trainsim_node_dc_motor
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, string_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_signal, only: signal_t, constant_signal
+   use trainsim_sink, only: param_list_t
+   use trainsim_node, only: node_t
+   implicit none
+   private
+
+   public :: dc_motor_node_t
+
+   !> Armature inertia and damping plus the armature circuit.
+   type, extends(node_t) :: dc_motor_node_t
+      real(wp) :: j = 0.0_wp, d = 0.0_wp
+      real(wp) :: alpha = 0.0_wp      !< torque constant (torque per ampere)
+      real(wp) :: l = 0.0_wp          !< armature inductance, H
+      real(wp) :: r = 0.0_wp          !< armature resistance, ohm
+      real(wp) :: alpha_e = 0.0_wp    !< back-emf constant, V*s/rad
+      real(wp) :: current0 = 0.0_wp
+      real(wp) :: power_per_watt = 1.0_wp
+      type(signal_t) :: voltage
+   contains
+      procedure :: configure => motor_configure
+      procedure :: nstates => motor_nstates
+      procedure :: derivatives => motor_derivatives
+      procedure :: inertia => motor_inertia
+      procedure :: initial_state => motor_initial_state
+      procedure :: set_initial_extra => motor_set_initial_extra
+      procedure :: stored_energy => motor_stored_energy
+      procedure :: dissipation_power => motor_dissipation
+      procedure :: input_power => motor_input_power
+      procedure :: attach_voltage => motor_attach_voltage
+      procedure :: state_names => motor_state_names
+      procedure :: params => motor_params
+   end type dc_motor_node_t
+
+contains
+
+   subroutine motor_configure(self, grp, units, err)
+      class(dc_motor_node_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      type(error_t), allocatable, intent(out) :: err
+      call grp%get_real('inertia', self%j, err); if (allocated(err)) return
+      call grp%get_real('damping', self%d, err, default=0.0_wp); if (allocated(err)) return
+      call grp%get_real('torque_constant', self%alpha, err); if (allocated(err)) return
+      call grp%get_real('inductance', self%l, err); if (allocated(err)) return
+      call grp%get_real('resistance', self%r, err); if (allocated(err)) return
+      call grp%get_real('back_emf_constant', self%alpha_e, err); if (allocated(err)) return
+      call positive('inertia', self%j); if (allocated(err)) return
+      call positive('inductance', self%l); if (allocated(err)) return
+      call positive('resistance', self%r); if (allocated(err)) return
+      call positive('torque_constant', self%alpha); if (allocated(err)) return
+      call positive('back_emf_constant', self%alpha_e); if (allocated(err)) return
+      if (.not. self%d >= 0.0_wp) then
+         call fatal_error(err, grp%where('damping')//': error: damping must be >= 0, got '//str(self%d), err_input)
+         return
+      end if
+      self%power_per_watt = units%power_per_watt
+      self%voltage = constant_signal(0.0_wp)
+   contains
+      subroutine positive(key, v)
+         character(len=*), intent(in) :: key
+         real(wp), intent(in) :: v
+         if (.not. v > 0.0_wp) call fatal_error(err, grp%where(key)//': error: '//key//' must be > 0, got '// &
+                                                str(v), err_input)
+      end subroutine positive
+   end subroutine motor_configure
+
+   pure integer function motor_nstates(self) result(n)
+      class(dc_motor_node_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      n = 3
+   end function motor_nstates
+
+   pure subroutine motor_derivatives(self, t, y, torque, dydt)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:), torque
+      real(wp), intent(inout) :: dydt(:)
+      associate (w => y(self%offset + 2), i => y(self%offset + 3))
+         dydt(self%offset + 1) = w                                                        ! eq. (G.3)
+         dydt(self%offset + 2) = (-self%d*w + self%alpha*i + torque)/self%j                ! eq. (G.4)
+         dydt(self%offset + 3) = (-self%r*i - self%alpha_e*w + self%voltage%value(t))/self%l ! eq. (G.5)
+      end associate
+   end subroutine motor_derivatives
+
+   pure real(wp) function motor_inertia(self) result(j)
+      class(dc_motor_node_t), intent(in) :: self
+      j = self%j
+   end function motor_inertia
+
+   pure subroutine motor_initial_state(self, y)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(inout) :: y(:)
+      y(self%offset + 1) = self%theta0
+      y(self%offset + 2) = self%omega0
+      y(self%offset + 3) = self%current0
+   end subroutine motor_initial_state
+
+   subroutine motor_set_initial_extra(self, grp, err)
+      class(dc_motor_node_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(error_t), allocatable, intent(out) :: err
+      call grp%get_real('current', self%current0, err, default=0.0_wp)
+   end subroutine motor_set_initial_extra
+
+   pure real(wp) function motor_stored_energy(self, y) result(e)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(in) :: y(:)
+      e = 0.5_wp*self%j*y(self%offset + 2)**2 + 0.5_wp*self%l*y(self%offset + 3)**2*self%power_per_watt
+   end function motor_stored_energy
+
+   pure real(wp) function motor_dissipation(self, y) result(p)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(in) :: y(:)
+      p = self%d*y(self%offset + 2)**2 + self%r*y(self%offset + 3)**2*self%power_per_watt
+   end function motor_dissipation
+
+   !> Electrical power in minus the power the back-emf and torque constants
+   !> fail to convert (zero when alpha = alpha' in consistent units).
+   pure real(wp) function motor_input_power(self, t, y) result(p)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:)
+      associate (w => y(self%offset + 2), i => y(self%offset + 3))
+         p = self%voltage%value(t)*i*self%power_per_watt + (self%alpha - self%alpha_e*self%power_per_watt)*i*w
+      end associate
+   end function motor_input_power
+
+   subroutine motor_attach_voltage(self, sig, where, err)
+      class(dc_motor_node_t), intent(inout) :: self
+      type(signal_t), intent(in) :: sig
+      character(len=*), intent(in) :: where
+      type(error_t), allocatable, intent(out) :: err
+      associate (unused => where)
+      end associate
+      self%voltage = sig
+      if (allocated(err)) return
+   end subroutine motor_attach_voltage
+
+   pure subroutine motor_state_names(self, names)
+      class(dc_motor_node_t), intent(in) :: self
+      type(string_t), intent(out) :: names(:)
+      names(1)%s = self%id//'.angle'
+      names(2)%s = self%id//'.speed'
+      names(3)%s = self%id//'.current'
+   end subroutine motor_state_names
+
+   function motor_params(self) result(p)
+      class(dc_motor_node_t), intent(in) :: self
+      type(param_list_t) :: p
+      p%names = [string_t('inertia'), string_t('damping'), string_t('torque_constant'), string_t('inductance'), &
+                 string_t('resistance'), string_t('back_emf_constant')]
+      p%values = [self%j, self%d, self%alpha, self%l, self%r, self%alpha_e]
+   end function motor_params
+end module trainsim_node_dc_motor

@@ -1,0 +1,90 @@
+!> N01, passive inertia (Appendix G, eqs. G.1-G.2):
+!>   x1' = x2,   J x2' = -d x2 + T   (T: net torque from elements and loads)
+module trainsim_node_inertia
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, string_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_sink, only: param_list_t
+   use trainsim_node, only: node_t
+   implicit none
+   private
+
+   public :: inertia_node_t
+
+   !> A rigid disk: inertia J and external (viscous, to ground) damping d.
+   type, extends(node_t) :: inertia_node_t
+      real(wp) :: j = 0.0_wp, d = 0.0_wp
+   contains
+      procedure :: configure => inertia_configure
+      procedure :: nstates => inertia_nstates
+      procedure :: derivatives => inertia_derivatives
+      procedure :: inertia => inertia_inertia
+      procedure :: dissipation_power => inertia_dissipation
+      procedure :: can_prescribe_speed => inertia_can_prescribe
+      procedure :: params => inertia_params
+   end type inertia_node_t
+
+contains
+
+   subroutine inertia_configure(self, grp, units, err)
+      class(inertia_node_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      type(error_t), allocatable, intent(out) :: err
+      associate (unused => units)
+      end associate
+      call grp%get_real('inertia', self%j, err); if (allocated(err)) return
+      call grp%get_real('damping', self%d, err, default=0.0_wp); if (allocated(err)) return
+      if (.not. self%j > 0.0_wp) then
+         call fatal_error(err, grp%where('inertia')//': error: inertia must be > 0, got '//str(self%j), err_input)
+         return
+      end if
+      if (.not. self%d >= 0.0_wp) then
+         call fatal_error(err, grp%where('damping')//': error: damping must be >= 0, got '//str(self%d), err_input)
+      end if
+   end subroutine inertia_configure
+
+   pure integer function inertia_nstates(self) result(n)
+      class(inertia_node_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      n = 2
+   end function inertia_nstates
+
+   pure subroutine inertia_derivatives(self, t, y, torque, dydt)
+      class(inertia_node_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:), torque
+      real(wp), intent(inout) :: dydt(:)
+      associate (unused => t)
+      end associate
+      dydt(self%offset + 1) = y(self%offset + 2)                                 ! eq. (G.1)
+      dydt(self%offset + 2) = (torque - self%d*y(self%offset + 2))/self%j         ! eq. (G.2)
+   end subroutine inertia_derivatives
+
+   pure real(wp) function inertia_inertia(self) result(j)
+      class(inertia_node_t), intent(in) :: self
+      j = self%j
+   end function inertia_inertia
+
+   pure real(wp) function inertia_dissipation(self, y) result(p)
+      class(inertia_node_t), intent(in) :: self
+      real(wp), intent(in) :: y(:)
+      p = self%d*y(self%offset + 2)**2
+   end function inertia_dissipation
+
+   pure logical function inertia_can_prescribe(self) result(f)
+      class(inertia_node_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      f = .true.
+   end function inertia_can_prescribe
+
+   function inertia_params(self) result(p)
+      class(inertia_node_t), intent(in) :: self
+      type(param_list_t) :: p
+      p%names = [string_t('inertia'), string_t('damping')]
+      p%values = [self%j, self%d]
+   end function inertia_params
+end module trainsim_node_inertia

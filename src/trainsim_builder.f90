@@ -1,0 +1,345 @@
+!> Deck -> model: reads the &run, &node, &element, &load and &initial groups,
+!> validates every field and reports errors with file, line, group and key.
+module trainsim_builder
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_units, only: make_units
+   use trainsim_deck, only: deck_t, deck_group_t
+   use trainsim_signal, only: signal_t, signal_from_group
+   use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
+   use trainsim_model, only: model_t, load_t
+   implicit none
+   private
+
+   public :: build_model, integrator_names
+
+contains
+
+   !> Valid integrator names.
+   function integrator_names() result(names)
+      type(string_t), allocatable :: names(:)
+      names = [string_t('rk4'), string_t('rk4-thesis'), string_t('cvode-bdf'), string_t('cvode-adams')]
+   end function integrator_names
+
+   !> Build a model from a parsed deck.
+   subroutine build_model(deck, model, err)
+      type(deck_t), intent(inout) :: deck
+      type(model_t), intent(out) :: model
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i
+
+      call deck%check_group_names([string_t('run'), string_t('node'), string_t('element'), string_t('load'), &
+                                   string_t('initial')], err)
+      if (allocated(err)) return
+      model%deck_file = deck%file
+      model%deck_text = deck%text
+      call read_run(deck, model, err); if (allocated(err)) return
+      call read_nodes(deck, model, err); if (allocated(err)) return
+      call read_elements(deck, model, err); if (allocated(err)) return
+      call read_loads(deck, model, err); if (allocated(err)) return
+      call model%finalize()
+      call read_initial(deck, model, err); if (allocated(err)) return
+      do i = 1, size(deck%groups)
+         associate (g => deck%groups(i))
+            if (g%name == 'run') call g%check_unused(err, 'the &run group')
+            if (g%name == 'load') call g%check_unused(err, 'a &load group')
+            if (g%name == 'initial') call g%check_unused(err, 'an &initial group')
+         end associate
+         if (allocated(err)) return
+      end do
+   end subroutine build_model
+
+   subroutine read_run(deck, model, err)
+      type(deck_t), intent(inout) :: deck
+      type(model_t), intent(inout) :: model
+      type(error_t), allocatable, intent(out) :: err
+      integer :: n, i
+      character(len=:), allocatable :: units_name
+      type(string_t), allocatable :: valid(:)
+      logical :: ok
+      real(wp) :: tmp
+
+      n = deck%count_groups('run')
+      if (n /= 1) then
+         call fatal_error(err, deck%file//': error: the deck must have exactly one &run group, found '//str(n), err_input)
+         return
+      end if
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name == 'run') exit
+      end do
+      associate (g => deck%groups(i), r => model%run)
+         call g%get_string('title', model%title, err, default=''); if (allocated(err)) return
+         call g%get_string('units', units_name, err, default='in-lbf-s'); if (allocated(err)) return
+         call make_units(units_name, model%units, err)
+         if (allocated(err)) then
+            err%message = g%where('units')//': error: '//err%message
+            return
+         end if
+         call g%get_real('t_start', r%t_start, err, default=0.0_wp); if (allocated(err)) return
+         call g%get_real('t_end', r%t_end, err); if (allocated(err)) return
+         call g%get_real('dt', r%dt, err); if (allocated(err)) return
+         call g%get_string('integrator', r%integrator, err, default='rk4'); if (allocated(err)) return
+         r%integrator = to_lower(r%integrator)
+         call g%get_string('output', r%output, err, default=''); if (allocated(err)) return
+         call g%get_real('output_interval', r%output_interval, err, default=0.0_wp); if (allocated(err)) return
+         tmp = r%rtol; call g%get_real('rtol', r%rtol, err, default=tmp); if (allocated(err)) return
+         tmp = r%atol_angle; call g%get_real('atol_angle', r%atol_angle, err, default=tmp); if (allocated(err)) return
+         tmp = r%atol_speed; call g%get_real('atol_speed', r%atol_speed, err, default=tmp); if (allocated(err)) return
+         tmp = r%atol_current; call g%get_real('atol_current', r%atol_current, err, default=tmp); if (allocated(err)) return
+         call g%get_real('max_step', r%max_step, err, default=0.0_wp); if (allocated(err)) return
+         call g%get_real('event_tol', r%event_tol, err, default=0.0_wp); if (allocated(err)) return
+         call g%get_real('settle_time', r%settle_time, err, default=0.0_wp); if (allocated(err)) return
+         call g%get_logical('track_energy', r%track_energy, err, default=.true.); if (allocated(err)) return
+
+         if (.not. r%dt > 0.0_wp) then
+            call fatal_error(err, g%where('dt')//': error: time step dt must be > 0, got '//str(r%dt), err_input)
+         else if (.not. r%t_end > r%t_start) then
+            call fatal_error(err, g%where('t_end')//': error: t_end must be later than t_start ('//str(r%t_start)// &
+                             '), got '//str(r%t_end), err_input)
+         else if (r%dt > r%t_end - r%t_start) then
+            call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)// &
+                             ' is longer than the run (t_end - t_start = '//str(r%t_end - r%t_start)//')', err_input)
+         else if (.not. r%output_interval >= 0.0_wp) then
+            call fatal_error(err, g%where('output_interval')//': error: output_interval must be >= 0, got '// &
+                             str(r%output_interval), err_input)
+         else if (.not. (r%rtol > 0.0_wp .and. r%rtol < 1.0_wp)) then
+            call fatal_error(err, g%where('rtol')//': error: rtol must be in (0, 1), got '//str(r%rtol), err_input)
+         else if (.not. (r%atol_angle > 0.0_wp .and. r%atol_speed > 0.0_wp .and. r%atol_current > 0.0_wp)) then
+            call fatal_error(err, g%where('atol_angle')//': error: absolute tolerances must be > 0', err_input)
+         else if (.not. (r%max_step >= 0.0_wp .and. r%event_tol >= 0.0_wp .and. r%settle_time >= 0.0_wp)) then
+            call fatal_error(err, g%where('max_step')//': error: max_step, event_tol and settle_time must be >= 0', &
+                             err_input)
+         end if
+         if (allocated(err)) return
+         valid = integrator_names()
+         ok = .false.
+         do n = 1, size(valid)
+            if (valid(n)%s == r%integrator) ok = .true.
+         end do
+         if (.not. ok) then
+            call fatal_error(err, g%where('integrator')//": error: unknown integrator '"//r%integrator// &
+                             "'; valid integrators are: "//join(valid, ', '), err_input)
+            return
+         end if
+      end associate
+   end subroutine read_run
+
+   subroutine read_nodes(deck, model, err)
+      type(deck_t), intent(inout) :: deck
+      type(model_t), intent(inout) :: model
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, k, j
+      character(len=:), allocatable :: id, tname
+
+      allocate (model%nodes(deck%count_groups('node')))
+      if (size(model%nodes) == 0) then
+         call fatal_error(err, deck%file//': error: the deck has no &node group (a train needs at least one node)', &
+                          err_input)
+         return
+      end if
+      k = 0
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= 'node') cycle
+         k = k + 1
+         associate (g => deck%groups(i))
+            call g%get_string('id', id, err, default='n'//str(k)); if (allocated(err)) return
+            call g%get_string('type', tname, err); if (allocated(err)) return
+            do j = 1, k - 1
+               if (model%nodes(j)%n%id == id) then
+                  call fatal_error(err, g%where('id')//": error: duplicate node id '"//id//"' (already used by node "// &
+                                   str(j)//')', err_input)
+                  return
+               end if
+            end do
+            call make_node(tname, model%nodes(k)%n)
+            if (.not. allocated(model%nodes(k)%n)) then
+               call fatal_error(err, g%where('type')//": error: unknown node type '"//tname// &
+                                "'; valid node types are: "//join(node_type_names(), ', '), err_input)
+               return
+            end if
+            model%nodes(k)%n%id = id
+            call model%nodes(k)%n%configure(g, model%units, err); if (allocated(err)) return
+            call g%check_unused(err, "node type '"//model%nodes(k)%n%type_name//"'"); if (allocated(err)) return
+         end associate
+      end do
+   end subroutine read_nodes
+
+   subroutine read_elements(deck, model, err)
+      type(deck_t), intent(inout) :: deck
+      type(model_t), intent(inout) :: model
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, k, j, nn
+      character(len=:), allocatable :: id, tname, lid, rid, dl, dr
+
+      allocate (model%elements(deck%count_groups('element')))
+      nn = size(model%nodes)
+      k = 0
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= 'element') cycle
+         k = k + 1
+         associate (g => deck%groups(i))
+            call g%get_string('id', id, err, default='e'//str(k)); if (allocated(err)) return
+            call g%get_string('type', tname, err); if (allocated(err)) return
+            do j = 1, k - 1
+               if (model%elements(j)%e%id == id) then
+                  call fatal_error(err, g%where('id')//": error: duplicate element id '"//id//"'", err_input)
+                  return
+               end if
+            end do
+            call make_element(tname, model%elements(k)%e)
+            if (.not. allocated(model%elements(k)%e)) then
+               call fatal_error(err, g%where('type')//": error: unknown element type '"//tname// &
+                                "'; valid element types are: "//join(element_type_names(), ', '), err_input)
+               return
+            end if
+            associate (e => model%elements(k)%e)
+               e%id = id
+               ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1
+               if (k <= nn) then
+                  lid = model%nodes(k)%n%id
+               else
+                  lid = ''
+               end if
+               if (k + 1 <= nn) then
+                  rid = model%nodes(k + 1)%n%id
+               else
+                  rid = ''
+               end if
+               dl = lid; dr = rid
+               call g%get_string('left', lid, err, default=dl); if (allocated(err)) return
+               call g%get_string('right', rid, err, default=dr); if (allocated(err)) return
+               e%left = model%node_index(lid)
+               e%right = model%node_index(rid)
+               if (e%left == 0) then
+                  call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
+                                   "', which is not defined"//merge(' (give left = ...)', '                  ', &
+                                   len(lid) == 0), err_input)
+                  return
+               end if
+               if (e%right == 0) then
+                  call fatal_error(err, g%where('right')//": error: element '"//id//"' joins node '"//rid// &
+                                   "', which is not defined", err_input)
+                  return
+               end if
+               if (e%left == e%right) then
+                  call fatal_error(err, g%where('right')//": error: element '"//id//"' joins node '"//lid// &
+                                   "' to itself", err_input)
+                  return
+               end if
+               call e%configure(g, model%units, err); if (allocated(err)) return
+               call g%check_unused(err, "element type '"//e%type_name//"'"); if (allocated(err)) return
+            end associate
+         end associate
+      end do
+   end subroutine read_elements
+
+   subroutine read_loads(deck, model, err)
+      type(deck_t), intent(inout) :: deck
+      type(model_t), intent(inout) :: model
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, inode
+      character(len=:), allocatable :: nid, quantity
+      type(signal_t) :: sig
+      type(load_t), allocatable :: loads(:)
+      type(signal_t), allocatable :: speeds(:)
+
+      allocate (loads(0), speeds(0), model%speed_of(size(model%nodes)))
+      model%speed_of = 0
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= 'load') cycle
+         associate (g => deck%groups(i))
+            call g%get_string('node', nid, err); if (allocated(err)) return
+            inode = model%node_index(nid)
+            if (inode == 0) then
+               call fatal_error(err, g%where('node')//": error: load on node '"//nid//"', which is not defined", &
+                                err_input)
+               return
+            end if
+            call g%get_string('quantity', quantity, err, default='torque'); if (allocated(err)) return
+            quantity = to_lower(quantity)
+            call signal_from_group(g, sig, err); if (allocated(err)) return
+            select case (quantity)
+            case ('torque')
+               loads = [loads, load_t(inode, sig)]
+            case ('speed')
+               if (.not. model%nodes(inode)%n%can_prescribe_speed()) then
+                  call fatal_error(err, g%where('quantity')//": error: node '"//nid//"' of type '"// &
+                                   model%nodes(inode)%n%type_name//"' cannot have a prescribed speed "// &
+                                   "(only 'inertia' nodes can)", err_input)
+                  return
+               end if
+               if (model%speed_of(inode) /= 0) then
+                  call fatal_error(err, g%where('node')//": error: node '"//nid//"' already has a prescribed speed", &
+                                   err_input)
+                  return
+               end if
+               speeds = [speeds, sig]
+               model%speed_of(inode) = size(speeds)
+            case ('voltage')
+               call model%nodes(inode)%n%attach_voltage(sig, g%where('quantity'), err); if (allocated(err)) return
+            case default
+               call fatal_error(err, g%where('quantity')//": error: unknown load quantity '"//quantity// &
+                                "'; valid quantities are: torque, speed, voltage", err_input)
+               return
+            end select
+         end associate
+      end do
+      call move_alloc(loads, model%loads)
+      call move_alloc(speeds, model%speeds)
+   end subroutine read_loads
+
+   subroutine read_initial(deck, model, err)
+      type(deck_t), intent(inout) :: deck
+      type(model_t), intent(inout) :: model
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, inode, j
+      character(len=:), allocatable :: nid
+      real(wp) :: speed
+      logical, allocatable :: seen(:)
+      real(wp) :: tmp
+
+      allocate (seen(size(model%nodes)))
+      seen = .false.
+      ! 'all' groups first, so that per-node groups override them
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= 'initial') cycle
+         associate (g => deck%groups(i))
+            call g%get_string('node', nid, err); if (allocated(err)) return
+            if (to_lower(nid) /= 'all') cycle
+            call g%get_real('speed', speed, err); if (allocated(err)) return
+            do j = 1, size(model%nodes)
+               if (.not. model%nodes(j)%n%is_fixed()) model%nodes(j)%n%omega0 = speed
+            end do
+         end associate
+      end do
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= 'initial') cycle
+         associate (g => deck%groups(i))
+            call g%get_string('node', nid, err); if (allocated(err)) return
+            if (to_lower(nid) == 'all') cycle
+            inode = model%node_index(nid)
+            if (inode == 0) then
+               call fatal_error(err, g%where('node')//": error: initial conditions for node '"//nid// &
+                                "', which is not defined", err_input)
+               return
+            end if
+            if (seen(inode)) then
+               call fatal_error(err, g%where('node')//": error: node '"//nid//"' has two &initial groups", err_input)
+               return
+            end if
+            seen(inode) = .true.
+            associate (nd => model%nodes(inode)%n)
+               tmp = nd%theta0; call g%get_real('angle', nd%theta0, err, default=tmp); if (allocated(err)) return
+               tmp = nd%omega0; call g%get_real('speed', nd%omega0, err, default=tmp); if (allocated(err)) return
+               call nd%set_initial_extra(g, err); if (allocated(err)) return
+               if (nd%is_fixed() .and. nd%omega0 /= 0.0_wp) then
+                  call fatal_error(err, g%where('speed')//": error: node '"//nid//"' is fixed; its speed must be 0", &
+                                   err_input)
+                  return
+               end if
+            end associate
+         end associate
+      end do
+   end subroutine read_initial
+end module trainsim_builder

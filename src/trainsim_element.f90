@@ -1,0 +1,182 @@
+!> The abstract element: what every element type must answer (TRAIN's
+!> LTRQ/RTRQ as `torques`, reading its own parameters) and what elements with
+!> clearances add (switching functions, a discrete mode updated at a switch,
+!> recorded outputs). Optional capabilities have no-op defaults, so a smooth
+!> element is a configure + torques pair and nothing else.
+!>
+!> Sign convention: `torques` returns the torque the element puts ON its left
+!> node (tl) and ON its right node (tr), positive in the direction of positive
+!> rotation. TRAIN's RTRQ of element i is -tl, its LTRQ seen by node i+1 is tr.
+module trainsim_element
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_sink, only: event_t, param_list_t
+   implicit none
+   private
+
+   public :: element_t, element_slot_t
+
+   type, abstract :: element_t
+      character(len=:), allocatable :: id
+      character(len=:), allocatable :: type_name
+      integer :: left = 0   !< index of the left (driver) node
+      integer :: right = 0  !< index of the right (driven) node
+   contains
+      procedure(configure_i), deferred :: configure
+      procedure(torques_i), deferred :: torques
+      procedure :: displacement => el_displacement
+      procedure :: displacement_unit => el_displacement_unit
+      procedure :: stiffness_matrix => el_stiffness_matrix
+      procedure :: potential_energy => el_potential_energy
+      procedure :: dissipation_power => el_dissipation_power
+      procedure :: n_guards => el_n_guards
+      procedure :: guards => el_guards
+      procedure :: init_mode => el_init_mode
+      procedure :: update_mode => el_update_mode
+      procedure :: in_contact => el_in_contact
+      procedure :: status => el_status
+      procedure :: params => el_params
+   end type element_t
+
+   !> A slot in the model's element list (arrays of polymorphic objects).
+   type :: element_slot_t
+      class(element_t), allocatable :: e
+   end type element_slot_t
+
+   abstract interface
+      !> Read and validate the element's own keys from its deck group.
+      subroutine configure_i(self, grp, units, err)
+         import :: element_t, deck_group_t, units_t, error_t
+         class(element_t), intent(inout) :: self
+         type(deck_group_t), intent(inout) :: grp
+         type(units_t), intent(in) :: units
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine configure_i
+      !> Torques on the left and right node for the given node kinematics.
+      pure subroutine torques_i(self, thl, wl, thr, wr, tl, tr)
+         import :: element_t, wp
+         class(element_t), intent(in) :: self
+         real(wp), intent(in) :: thl, wl, thr, wr
+         real(wp), intent(out) :: tl, tr
+      end subroutine torques_i
+   end interface
+
+contains
+
+   !> Relative displacement (default: twist thl - thr, rad).
+   pure real(wp) function el_displacement(self, thl, thr) result(d)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, thr
+      associate (unused => self)
+      end associate
+      d = thl - thr
+   end function el_displacement
+
+   !> Unit of `displacement` ('rad' by default, 'length' along a line of action).
+   pure function el_displacement_unit(self) result(u)
+      class(element_t), intent(in) :: self
+      character(len=:), allocatable :: u
+      associate (unused => self)
+      end associate
+      u = 'rad'
+   end function el_displacement_unit
+
+   !> Linearised stiffness in the node angles (thl, thr), for `trainsim modes`.
+   pure subroutine el_stiffness_matrix(self, k)
+      class(element_t), intent(in) :: self
+      real(wp), intent(out) :: k(2, 2)
+      associate (unused => self)
+      end associate
+      k = 0.0_wp
+   end subroutine el_stiffness_matrix
+
+   !> Elastic energy stored in the element.
+   pure real(wp) function el_potential_energy(self, thl, thr) result(e)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, thr
+      associate (u1 => self, u2 => thl, u3 => thr)
+      end associate
+      e = 0.0_wp
+   end function el_potential_energy
+
+   !> Power dissipated in the element.
+   pure real(wp) function el_dissipation_power(self, thl, wl, thr, wr) result(p)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      associate (u1 => self, u2 => thl, u3 => wl, u4 => thr, u5 => wr)
+      end associate
+      p = 0.0_wp
+   end function el_dissipation_power
+
+   !> Number of switching functions (guards). A mode stays valid while all are >= 0.
+   pure integer function el_n_guards(self) result(n)
+      class(element_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      n = 0
+   end function el_n_guards
+
+   !> Evaluate the guards of the current mode.
+   pure subroutine el_guards(self, thl, wl, thr, wr, g)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: g(:)
+      associate (u1 => self, u2 => thl, u3 => wl, u4 => thr, u5 => wr)
+      end associate
+      g = 1.0_wp
+   end subroutine el_guards
+
+   !> Set the discrete mode consistent with the initial state.
+   subroutine el_init_mode(self, thl, wl, thr, wr)
+      class(element_t), intent(inout) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      associate (u1 => self, u2 => thl, u3 => wl, u4 => thr, u5 => wr)
+      end associate
+   end subroutine el_init_mode
+
+   !> A guard crossed zero (fired(j) for guard j): change mode, report what happened.
+   !> `nev` events are returned in ev(1:nev) (ev must hold at least 2).
+   subroutine el_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
+      class(element_t), intent(inout) :: self
+      real(wp), intent(in) :: t, thl, wl, thr, wr
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(out) :: nev
+      associate (u1 => self, u2 => t, u3 => thl, u4 => wl, u5 => thr, u6 => wr, u7 => fired, u8 => ev)
+      end associate
+      nev = 0
+   end subroutine el_update_mode
+
+   !> Whether a clearance of this element is closed (always false if it has none).
+   pure logical function el_in_contact(self) result(c)
+      class(element_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      c = .false.
+   end function el_in_contact
+
+   !> Recorded outputs: relative displacement, contact force, contact face, pairs.
+   !> Default (elements without clearance): force = torque on the right node, always engaged.
+   pure subroutine el_status(self, thl, wl, thr, wr, disp, force, contact, pairs)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      real(wp) :: tl
+      call self%torques(thl, wl, thr, wr, tl, force)
+      disp = self%displacement(thl, thr)
+      contact = 1
+      pairs = 0
+   end subroutine el_status
+
+   !> Parameters as used (derived values included), for the output file.
+   function el_params(self) result(p)
+      class(element_t), intent(in) :: self
+      type(param_list_t) :: p
+      associate (unused => self)
+      end associate
+      allocate (p%names(0), p%values(0))
+   end function el_params
+end module trainsim_element

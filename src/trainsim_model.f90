@@ -1,0 +1,296 @@
+!> The model: nodes joined by elements, external torques, prescribed speeds
+!> and run settings. A model is a plain value (no global state, no pointers):
+!> copy it to re-parameterise a run. The right-hand side, the guards and the
+!> mode updates below are the only code the integrators call; they do no
+!> allocation, I/O or string work.
+module trainsim_model
+   use trainsim_kinds, only: wp
+   use trainsim_units, only: units_t
+   use trainsim_signal, only: signal_t
+   use trainsim_node, only: node_slot_t
+   use trainsim_element, only: element_slot_t
+   use trainsim_sink, only: event_t
+   implicit none
+   private
+
+   public :: model_t, run_settings_t, load_t
+
+   !> Run conditions from the &run group.
+   type :: run_settings_t
+      real(wp) :: t_start = 0.0_wp, t_end = 0.0_wp, dt = 0.0_wp
+      real(wp) :: output_interval = 0.0_wp      !< 0: every step
+      character(len=:), allocatable :: integrator  !< 'rk4', 'rk4-thesis', 'cvode-bdf', 'cvode-adams'
+      character(len=:), allocatable :: output      !< HDF5 file name
+      real(wp) :: rtol = 1.0e-8_wp
+      real(wp) :: atol_angle = 1.0e-10_wp, atol_speed = 1.0e-8_wp, atol_current = 1.0e-8_wp
+      real(wp) :: max_step = 0.0_wp             !< CVODE maximum step (0: from the highest frequency)
+      real(wp) :: event_tol = 0.0_wp            !< event time tolerance (0: 1e-9 dt)
+      real(wp) :: settle_time = 0.0_wp          !< metrics ignore t < t_start + settle_time
+      logical :: track_energy = .true.          !< integrate dissipated energy and work input
+      logical :: keep_series = .false.          !< keep displacement series in memory (sweeps)
+   end type run_settings_t
+
+   !> An external torque on a node.
+   type :: load_t
+      integer :: node = 0
+      type(signal_t) :: torque
+   end type load_t
+
+   type :: model_t
+      character(len=:), allocatable :: title, deck_file, deck_text
+      type(units_t) :: units
+      type(run_settings_t) :: run
+      type(node_slot_t), allocatable :: nodes(:)
+      type(element_slot_t), allocatable :: elements(:)
+      type(load_t), allocatable :: loads(:)
+      type(signal_t), allocatable :: speeds(:)   !< prescribed-speed profiles
+      integer, allocatable :: speed_of(:)        !< per node: index into speeds, 0 if free
+      integer :: n_states = 0                    !< physical states
+      integer :: n_y = 0                         !< + 2 energy-accounting states if tracked
+      integer :: n_guards = 0
+      integer, allocatable :: guard_offset(:)    !< per element
+      real(wp) :: energy0 = 0.0_wp               !< stored energy at t_start
+      ! workspace (sized once in `finalize`)
+      real(wp), allocatable :: theta(:), omega(:), torque(:)
+   contains
+      procedure :: finalize => model_finalize
+      procedure :: initial_state => model_initial_state
+      procedure :: kinematics => model_kinematics
+      procedure :: rhs => model_rhs
+      procedure :: guards => model_guards
+      procedure :: init_modes => model_init_modes
+      procedure :: apply_events => model_apply_events
+      procedure :: any_contact => model_any_contact
+      procedure :: stored_energy => model_stored_energy
+      procedure :: node_index => model_node_index
+      procedure :: is_held => model_is_held
+   end type model_t
+
+contains
+
+   !> Lay out the state vector and size the workspace; call after nodes,
+   !> elements, loads and speeds are set.
+   subroutine model_finalize(self)
+      class(model_t), intent(inout) :: self
+      integer :: i, nn, ne
+      nn = size(self%nodes)
+      ne = size(self%elements)
+      if (.not. allocated(self%speed_of)) then
+         allocate (self%speed_of(nn))
+         self%speed_of = 0
+      end if
+      if (.not. allocated(self%loads)) allocate (self%loads(0))
+      if (.not. allocated(self%speeds)) allocate (self%speeds(0))
+      self%n_states = 0
+      do i = 1, nn
+         self%nodes(i)%n%offset = self%n_states
+         if (self%speed_of(i) == 0) self%n_states = self%n_states + self%nodes(i)%n%nstates()
+      end do
+      self%n_y = self%n_states
+      if (self%run%track_energy) self%n_y = self%n_states + 2
+      allocate (self%guard_offset(ne))
+      self%n_guards = 0
+      do i = 1, ne
+         self%guard_offset(i) = self%n_guards
+         self%n_guards = self%n_guards + self%elements(i)%e%n_guards()
+      end do
+      if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
+      allocate (self%theta(nn), self%omega(nn), self%torque(nn))
+      self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
+   end subroutine model_finalize
+
+   !> Whether node i has a prescribed speed.
+   pure logical function model_is_held(self, i) result(held)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      held = self%speed_of(i) /= 0
+   end function model_is_held
+
+   !> Index of the node with this id (0 if none).
+   pure integer function model_node_index(self, id) result(idx)
+      class(model_t), intent(in) :: self
+      character(len=*), intent(in) :: id
+      integer :: i
+      idx = 0
+      do i = 1, size(self%nodes)
+         if (self%nodes(i)%n%id == id) then
+            idx = i
+            return
+         end if
+      end do
+   end function model_node_index
+
+   !> The initial state vector (energy states zero).
+   subroutine model_initial_state(self, y)
+      class(model_t), intent(inout) :: self
+      real(wp), allocatable, intent(out) :: y(:)
+      integer :: i
+      allocate (y(self%n_y))
+      y = 0.0_wp
+      do i = 1, size(self%nodes)
+         if (self%speed_of(i) == 0) call self%nodes(i)%n%initial_state(y)
+      end do
+   end subroutine model_initial_state
+
+   !> Node angles and speeds at (t, y) into self%theta, self%omega.
+   subroutine model_kinematics(self, t, y)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      integer :: i, s
+      do i = 1, size(self%nodes)
+         s = self%speed_of(i)
+         if (s == 0) then
+            call self%nodes(i)%n%kinematics(y, self%theta(i), self%omega(i))
+         else
+            self%theta(i) = self%nodes(i)%n%theta0 + self%speeds(s)%integral(t)
+            self%omega(i) = self%speeds(s)%value(t)
+         end if
+      end do
+   end subroutine model_kinematics
+
+   !> dy/dt at (t, y). Leaves node kinematics and net node torques in the workspace.
+   subroutine model_rhs(self, t, y, dydt)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
+      integer :: i, l, r, s
+      real(wp) :: tl, tr, pdiss, pin
+      call self%kinematics(t, y)
+      self%torque = 0.0_wp
+      do i = 1, size(self%loads)
+         l = self%loads(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      do i = 1, size(self%elements)
+         l = self%elements(i)%e%left
+         r = self%elements(i)%e%right
+         call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+         self%torque(l) = self%torque(l) + tl
+         self%torque(r) = self%torque(r) + tr
+      end do
+      do i = 1, size(self%nodes)
+         if (self%speed_of(i) == 0) call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+      end do
+      if (.not. self%run%track_energy) return
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      do i = 1, size(self%nodes)
+         s = self%speed_of(i)
+         if (s == 0) then
+            pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
+            pin = pin + self%nodes(i)%n%input_power(t, y)
+         else
+            ! torque the drive must supply: J*alpha minus what acts on the node
+            pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
+         end if
+      end do
+      do i = 1, size(self%loads)
+         l = self%loads(i)%node
+         if (self%speed_of(l) == 0) pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+      end do
+      do i = 1, size(self%elements)
+         l = self%elements(i)%e%left
+         r = self%elements(i)%e%right
+         pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
+      end do
+      dydt(self%n_states + 1) = pdiss
+      dydt(self%n_states + 2) = pin
+   end subroutine model_rhs
+
+   !> All elements' guards at (t, y) (a mode is valid while every guard is >= 0).
+   subroutine model_guards(self, t, y, g)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: g(:)
+      integer :: i, l, r, o, n
+      if (self%n_guards == 0) return
+      call self%kinematics(t, y)
+      do i = 1, size(self%elements)
+         n = self%elements(i)%e%n_guards()
+         if (n == 0) cycle
+         l = self%elements(i)%e%left
+         r = self%elements(i)%e%right
+         o = self%guard_offset(i)
+         call self%elements(i)%e%guards(self%theta(l), self%omega(l), self%theta(r), self%omega(r), g(o + 1:o + n))
+      end do
+   end subroutine model_guards
+
+   !> Set every element's discrete mode from the state at t_start.
+   subroutine model_init_modes(self, t, y)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      integer :: i, l, r
+      call self%kinematics(t, y)
+      do i = 1, size(self%elements)
+         l = self%elements(i)%e%left
+         r = self%elements(i)%e%right
+         call self%elements(i)%e%init_mode(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
+      end do
+      self%energy0 = self%stored_energy(t, y)
+   end subroutine model_init_modes
+
+   !> Update the modes of the elements whose guards fired; the events that
+   !> result are appended to events(nev+1:) (with the element index filled in).
+   subroutine model_apply_events(self, t, y, fired, events, nev)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: events(:)
+      integer, intent(inout) :: nev
+      integer :: i, l, r, o, n, k, m
+      type(event_t) :: local(4)
+      call self%kinematics(t, y)
+      do i = 1, size(self%elements)
+         n = self%elements(i)%e%n_guards()
+         if (n == 0) cycle
+         o = self%guard_offset(i)
+         if (.not. any(fired(o + 1:o + n))) cycle
+         l = self%elements(i)%e%left
+         r = self%elements(i)%e%right
+         call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
+                                             fired(o + 1:o + n), local, m)
+         do k = 1, m
+            if (nev < size(events)) then
+               nev = nev + 1
+               events(nev) = local(k)
+               events(nev)%t = t
+               events(nev)%element = i
+            end if
+         end do
+      end do
+   end subroutine model_apply_events
+
+   !> Whether any clearance element is in contact (thesis-mode step control).
+   pure logical function model_any_contact(self) result(c)
+      class(model_t), intent(in) :: self
+      integer :: i
+      c = .false.
+      do i = 1, size(self%elements)
+         if (self%elements(i)%e%in_contact()) then
+            c = .true.
+            return
+         end if
+      end do
+   end function model_any_contact
+
+   !> Kinetic + elastic (+ magnetic) energy at (t, y).
+   real(wp) function model_stored_energy(self, t, y) result(e)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      integer :: i, l, r
+      call self%kinematics(t, y)
+      e = 0.0_wp
+      do i = 1, size(self%nodes)
+         if (self%speed_of(i) == 0) then
+            e = e + self%nodes(i)%n%stored_energy(y)
+         else
+            e = e + 0.5_wp*self%nodes(i)%n%inertia()*self%omega(i)**2
+         end if
+      end do
+      do i = 1, size(self%elements)
+         l = self%elements(i)%e%left
+         r = self%elements(i)%e%right
+         e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+      end do
+   end function model_stored_energy
+end module trainsim_model

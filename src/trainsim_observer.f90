@@ -1,0 +1,337 @@
+!> What every integrator reports to after each accepted step and each event:
+!> keeps the metrics engineers look at (torque and displacement extremes,
+!> impacts, approach velocities, peak contact forces, loss of contact), the
+!> event table (with each contact's peak force and duration), and hands
+!> samples to the sink at the output interval and at every event.
+module trainsim_observer
+   use trainsim_kinds, only: wp, i8
+   use trainsim_error, only: error_t
+   use trainsim_strings, only: string_t
+   use trainsim_model, only: model_t
+   use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, &
+                            ev_contact_front, ev_contact_rear, ev_separation
+   use trainsim_version, only: version_string
+   implicit none
+   private
+
+   public :: observer_t, element_metrics_t, run_result_t, make_meta
+
+   !> Per-element figures of a run (over t >= t_start + settle_time).
+   type :: element_metrics_t
+      real(wp) :: force_min = huge(1.0_wp), force_max = -huge(1.0_wp)   !< contact force / shaft torque
+      real(wp) :: torque_min = huge(1.0_wp), torque_max = -huge(1.0_wp) !< torque on the right node
+      real(wp) :: disp_min = huge(1.0_wp), disp_max = -huge(1.0_wp)     !< relative displacement (TE)
+      integer :: impacts = 0, separations = 0, zone_changes = 0
+      real(wp) :: max_approach_velocity = 0.0_wp
+      real(wp) :: max_peak_force = 0.0_wp
+      real(wp) :: time_out_of_contact = 0.0_wp
+      integer :: open_event = 0        !< index of the event row of the contact in progress
+   end type element_metrics_t
+
+   !> What a run returns in memory.
+   type :: run_result_t
+      type(run_stats_t) :: stats
+      type(event_t), allocatable :: events(:)
+      type(element_metrics_t), allocatable :: el(:)
+      real(wp), allocatable :: y_final(:)
+      real(wp) :: t_final = 0.0_wp
+      real(wp) :: energy_residual_max = 0.0_wp  !< max |stored + dissipated - input - E0|
+      real(wp) :: energy_scale = 0.0_wp         !< max of stored energy and work input
+      real(wp), allocatable :: series_t(:), series_disp(:, :)   !< (element, sample) if keep_series
+   end type run_result_t
+
+   type :: observer_t
+      type(sample_t) :: s
+      type(run_result_t) :: res
+      integer :: n_events = 0
+      real(wp) :: next_out = 0.0_wp, t_prev = 0.0_wp, t_metrics = 0.0_wp
+      integer :: n_series = 0
+      logical :: track = .false.
+   contains
+      procedure :: start => obs_start
+      procedure :: step => obs_step
+      procedure :: record_events => obs_record_events
+      procedure :: finish => obs_finish
+      procedure, private :: fill => obs_fill
+      procedure, private :: emit => obs_emit
+   end type observer_t
+
+contains
+
+   !> The run's description for the output file.
+   function make_meta(model) result(meta)
+      type(model_t), intent(in) :: model
+      type(run_meta_t) :: meta
+      integer :: i, k, n, ne, nn
+      type(string_t), allocatable :: names(:)
+      nn = size(model%nodes); ne = size(model%elements)
+      meta%title = model%title
+      meta%deck_file = model%deck_file
+      meta%deck_text = model%deck_text
+      meta%units = model%units%name
+      meta%version = version_string
+      meta%integrator = model%run%integrator
+      allocate (meta%state_names(model%n_y))
+      k = 0
+      do i = 1, nn
+         if (model%speed_of(i) /= 0) cycle
+         n = model%nodes(i)%n%nstates()
+         if (n == 0) cycle
+         allocate (names(n))
+         call model%nodes(i)%n%state_names(names)
+         meta%state_names(k + 1:k + n) = names
+         deallocate (names)
+         k = k + n
+      end do
+      if (model%run%track_energy) then
+         meta%state_names(k + 1)%s = 'energy.dissipated'
+         meta%state_names(k + 2)%s = 'energy.input'
+      end if
+      allocate (meta%node_ids(nn), meta%node_types(nn), meta%node_params(nn))
+      do i = 1, nn
+         meta%node_ids(i)%s = model%nodes(i)%n%id
+         meta%node_types(i)%s = model%nodes(i)%n%type_name
+         if (model%speed_of(i) /= 0) meta%node_types(i)%s = meta%node_types(i)%s//' (prescribed speed)'
+         meta%node_params(i) = model%nodes(i)%n%params()
+      end do
+      allocate (meta%element_ids(ne), meta%element_types(ne), meta%element_params(ne), meta%element_disp_units(ne))
+      allocate (meta%element_left(ne), meta%element_right(ne))
+      do i = 1, ne
+         associate (e => model%elements(i)%e)
+            meta%element_ids(i)%s = e%id
+            meta%element_types(i)%s = e%type_name
+            meta%element_left(i) = e%left
+            meta%element_right(i) = e%right
+            meta%element_params(i) = e%params()
+            meta%element_disp_units(i)%s = e%displacement_unit()
+            if (meta%element_disp_units(i)%s == 'length') meta%element_disp_units(i)%s = model%units%length
+         end associate
+      end do
+   end function make_meta
+
+   !> Begin a run at (t, y): open the sink and record the first sample.
+   subroutine obs_start(self, model, t, y, sink, err)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      class(sink_t), intent(inout) :: sink
+      type(error_t), allocatable, intent(out) :: err
+      integer :: nn, ne, nmax
+      nn = size(model%nodes); ne = size(model%elements)
+      allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
+      allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
+      allocate (self%s%contact(ne), self%s%pairs(ne))
+      allocate (self%res%el(ne), self%res%events(256))
+      self%n_events = 0
+      self%track = model%run%track_energy
+      self%t_metrics = model%run%t_start + model%run%settle_time
+      self%next_out = t
+      self%t_prev = t
+      if (model%run%keep_series) then
+         if (model%run%output_interval > 0.0_wp) then
+            nmax = int((model%run%t_end - model%run%t_start)/model%run%output_interval) + 2
+         else
+            nmax = int((model%run%t_end - model%run%t_start)/model%run%dt) + 2
+         end if
+         allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
+      end if
+      call sink%open(make_meta(model), err)
+      if (allocated(err)) return
+      call self%step(model, t, y, sink, err)
+   end subroutine obs_start
+
+   !> Evaluate the recorded quantities at (t, y) into the sample buffer.
+   subroutine obs_fill(self, model, t, y)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      integer :: i, l, r
+      real(wp) :: stored
+      call model%kinematics(t, y)
+      self%s%t = t
+      self%s%y = y
+      self%s%theta = model%theta
+      self%s%omega = model%omega
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e)
+            l = e%left; r = e%right
+            call e%torques(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
+                           self%s%torque_left(i), self%s%torque_right(i))
+            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
+                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
+         end associate
+      end do
+      if (self%track) then
+         stored = model%stored_energy(t, y)
+         self%s%energy(1) = stored - sum_potential(model)
+         self%s%energy(2) = sum_potential(model)
+         self%s%energy(3) = y(model%n_states + 1)
+         self%s%energy(4) = y(model%n_states + 2)
+         self%s%energy(5) = stored + self%s%energy(3) - self%s%energy(4) - model%energy0
+      end if
+   end subroutine obs_fill
+
+   !> Elastic energy in the elements at the kinematics currently in the model workspace.
+   real(wp) function sum_potential(model) result(e)
+      type(model_t), intent(in) :: model
+      integer :: i
+      e = 0.0_wp
+      do i = 1, size(model%elements)
+         associate (el => model%elements(i)%e)
+            e = e + el%potential_energy(model%theta(el%left), model%theta(el%right))
+         end associate
+      end do
+   end function sum_potential
+
+   !> Write the current sample to the sink (and the in-memory series).
+   subroutine obs_emit(self, sink, err)
+      class(observer_t), intent(inout) :: self
+      class(sink_t), intent(inout) :: sink
+      type(error_t), allocatable, intent(out) :: err
+      if (allocated(self%res%series_t)) then
+         if (self%n_series < size(self%res%series_t)) then
+            self%n_series = self%n_series + 1
+            self%res%series_t(self%n_series) = self%s%t
+            self%res%series_disp(:, self%n_series) = self%s%displacement
+         end if
+      end if
+      call sink%write_sample(self%s, err)
+   end subroutine obs_emit
+
+   !> After an accepted step: update metrics; write a sample if an output time is reached.
+   subroutine obs_step(self, model, t, y, sink, err)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      class(sink_t), intent(inout) :: sink
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, k
+      real(wp) :: tol
+      call self%fill(model, t, y)
+      do i = 1, size(model%elements)
+         associate (m => self%res%el(i))
+            k = m%open_event
+            if (k > 0) self%res%events(k)%peak_force = max(self%res%events(k)%peak_force, abs(self%s%force(i)))
+            if (t >= self%t_metrics) then
+               m%force_min = min(m%force_min, self%s%force(i))
+               m%force_max = max(m%force_max, self%s%force(i))
+               m%torque_min = min(m%torque_min, self%s%torque_right(i))
+               m%torque_max = max(m%torque_max, self%s%torque_right(i))
+               m%disp_min = min(m%disp_min, self%s%displacement(i))
+               m%disp_max = max(m%disp_max, self%s%displacement(i))
+               if (self%s%contact(i) == 0 .and. t > self%t_prev) &
+                  m%time_out_of_contact = m%time_out_of_contact + (t - self%t_prev)
+            end if
+         end associate
+      end do
+      if (self%track) then
+         self%res%energy_residual_max = max(self%res%energy_residual_max, abs(self%s%energy(5)))
+         self%res%energy_scale = max(self%res%energy_scale, abs(self%s%energy(1) + self%s%energy(2)), &
+                                     abs(self%s%energy(4)), abs(self%s%energy(3)))
+      end if
+      self%t_prev = t
+      tol = 1.0e-9_wp*model%run%dt
+      if (t >= self%next_out - tol) then
+         call self%emit(sink, err)
+         if (allocated(err)) return
+         if (model%run%output_interval > 0.0_wp) then
+            do while (self%next_out <= t + tol)
+               self%next_out = self%next_out + model%run%output_interval
+            end do
+         else
+            self%next_out = t
+         end if
+      end if
+   end subroutine obs_step
+
+   !> Record events that happened at (t, y) (the state after the mode update).
+   subroutine obs_record_events(self, model, t, y, evs, nev, sink, err)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      type(event_t), intent(in) :: evs(:)
+      integer, intent(in) :: nev
+      class(sink_t), intent(inout) :: sink
+      type(error_t), allocatable, intent(out) :: err
+      type(event_t), allocatable :: tmp(:)
+      integer :: k, i
+      if (nev == 0) return
+      call self%fill(model, t, y)
+      do k = 1, nev
+         i = evs(k)%element
+         if (self%n_events == size(self%res%events)) then
+            allocate (tmp(2*size(self%res%events)))
+            tmp(1:self%n_events) = self%res%events(1:self%n_events)
+            call move_alloc(tmp, self%res%events)
+         end if
+         self%n_events = self%n_events + 1
+         self%res%events(self%n_events) = evs(k)
+         associate (m => self%res%el(i))
+            select case (evs(k)%kind)
+            case (ev_contact_front, ev_contact_rear)
+               if (m%open_event > 0) self%res%events(m%open_event)%duration = t - self%res%events(m%open_event)%t
+               m%open_event = self%n_events
+               self%res%events(self%n_events)%peak_force = abs(self%s%force(i))
+               if (t >= self%t_metrics) then
+                  m%impacts = m%impacts + 1
+                  m%max_approach_velocity = max(m%max_approach_velocity, abs(evs(k)%approach_velocity))
+               end if
+            case (ev_separation)
+               if (m%open_event > 0) then
+                  associate (o => self%res%events(m%open_event))
+                     o%duration = t - o%t
+                     o%peak_force = max(o%peak_force, abs(self%s%force(i)))
+                     if (o%t >= self%t_metrics) m%max_peak_force = max(m%max_peak_force, o%peak_force)
+                  end associate
+                  self%res%events(self%n_events)%peak_force = self%res%events(m%open_event)%peak_force
+                  self%res%events(self%n_events)%duration = self%res%events(m%open_event)%duration
+               end if
+               m%open_event = 0
+               if (t >= self%t_metrics) m%separations = m%separations + 1
+            case default
+               if (t >= self%t_metrics) m%zone_changes = m%zone_changes + 1
+            end select
+         end associate
+      end do
+      call self%emit(sink, err)
+   end subroutine obs_record_events
+
+   !> End of a successful run: close the sink and fill the result.
+   subroutine obs_finish(self, model, t, y, stats, sink, result, err)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      type(run_stats_t), intent(in) :: stats
+      class(sink_t), intent(inout) :: sink
+      type(run_result_t), intent(out) :: result
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i
+      ! contacts still open at the end count towards the peak force
+      do i = 1, size(model%elements)
+         if (self%res%el(i)%open_event > 0) then
+            associate (o => self%res%events(self%res%el(i)%open_event))
+               if (o%t >= self%t_metrics) self%res%el(i)%max_peak_force = max(self%res%el(i)%max_peak_force, o%peak_force)
+            end associate
+         end if
+      end do
+      if (self%s%t < t) then   ! make sure the final state is in the file
+         call self%fill(model, t, y)
+         call self%emit(sink, err)
+         if (allocated(err)) return
+      end if
+      self%res%stats = stats
+      self%res%stats%events = int(self%n_events, i8)
+      self%res%stats%t_final = t
+      self%res%stats%completed = .true.
+      call sink%close(self%res%events(1:self%n_events), self%res%stats, err)
+      if (allocated(err)) return
+      result = self%res
+      result%events = self%res%events(1:self%n_events)
+      result%y_final = y
+      result%t_final = t
+      if (allocated(result%series_t)) then
+         result%series_t = result%series_t(1:self%n_series)
+         result%series_disp = result%series_disp(:, 1:self%n_series)
+      end if
+   end subroutine obs_finish
+end module trainsim_observer

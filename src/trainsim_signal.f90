@@ -1,0 +1,326 @@
+!> Functions of time for loads, prescribed speeds and motor voltages:
+!> constant, step, ramp, sine, piecewise-linear table (inline or from a file)
+!> and the start-stop duty cycle (accelerate, cruise, decelerate, dwell, n times).
+!> Each gives its value, its time integral from t = 0 (the angle of a
+!> prescribed-speed node) and its derivative (the prescribed acceleration).
+module trainsim_signal
+   use trainsim_kinds, only: wp, two_pi
+   use trainsim_error, only: error_t, fatal_error, err_input, err_io
+   use trainsim_strings, only: to_lower, str
+   use trainsim_deck, only: deck_group_t
+   implicit none
+   private
+
+   public :: signal_t, signal_from_group, constant_signal
+
+   integer, parameter :: sig_constant = 0, sig_table = 1, sig_sine = 2
+
+   !> A function of time. Tables are stored with the cumulative integral at the knots.
+   type :: signal_t
+      integer :: kind = sig_constant
+      character(len=:), allocatable :: label      !< 'constant', 'step', ... (for output)
+      real(wp) :: value0 = 0.0_wp                 !< constant value / sine offset
+      real(wp) :: amplitude = 0.0_wp, omega = 0.0_wp, phase = 0.0_wp
+      real(wp), allocatable :: times(:), values(:), cum(:)
+      real(wp) :: integral_at_zero = 0.0_wp
+   contains
+      procedure :: value => signal_value
+      procedure :: integral => signal_integral
+      procedure :: derivative => signal_derivative
+      procedure :: breakpoints => signal_breakpoints
+   end type signal_t
+
+contains
+
+   !> A constant signal.
+   pure function constant_signal(v) result(s)
+      real(wp), intent(in) :: v
+      type(signal_t) :: s
+      s%kind = sig_constant
+      s%value0 = v
+      s%label = 'constant'
+   end function constant_signal
+
+   !> Read a signal from a deck group: key `kind` selects the shape, the
+   !> other keys give its parameters (see docs/deck.md, "Time functions").
+   subroutine signal_from_group(grp, sig, err)
+      type(deck_group_t), intent(inout) :: grp
+      type(signal_t), intent(out) :: sig
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: kind, path
+      real(wp) :: v0, v1, t0, t1, ta, tc, td, tw, vc
+      real(wp), allocatable :: tt(:), vv(:)
+      integer :: cycles, i, k
+
+      call grp%get_string('kind', kind, err, default='constant')
+      if (allocated(err)) return
+      kind = to_lower(kind)
+      sig%label = kind
+      select case (kind)
+      case ('constant')
+         call grp%get_real('value', v0, err); if (allocated(err)) return
+         sig = constant_signal(v0)
+      case ('step')
+         call grp%get_real('value0', v0, err, default=0.0_wp); if (allocated(err)) return
+         call grp%get_real('value1', v1, err); if (allocated(err)) return
+         call grp%get_real('t_step', t0, err); if (allocated(err)) return
+         call set_table(sig, [t0, t0], [v0, v1])
+      case ('ramp')
+         call grp%get_real('value0', v0, err, default=0.0_wp); if (allocated(err)) return
+         call grp%get_real('value1', v1, err); if (allocated(err)) return
+         call grp%get_real('t0', t0, err, default=0.0_wp); if (allocated(err)) return
+         call grp%get_real('t1', t1, err); if (allocated(err)) return
+         if (.not. t1 > t0) then
+            call fatal_error(err, grp%where('t1')//': error: ramp end t1 must be later than its start t0 (got t0 = '// &
+                             str(t0)//', t1 = '//str(t1)//')', err_input)
+            return
+         end if
+         call set_table(sig, [t0, t1], [v0, v1])
+      case ('sine')
+         sig%kind = sig_sine
+         call grp%get_real('offset', sig%value0, err, default=0.0_wp); if (allocated(err)) return
+         call grp%get_real('amplitude', sig%amplitude, err); if (allocated(err)) return
+         call grp%get_real('frequency', v1, err); if (allocated(err)) return
+         call grp%get_real('phase', sig%phase, err, default=0.0_wp); if (allocated(err)) return
+         if (.not. v1 > 0.0_wp) then
+            call fatal_error(err, grp%where('frequency')//': error: sine frequency must be > 0 Hz, got '//str(v1), err_input)
+            return
+         end if
+         sig%omega = two_pi*v1
+         sig%integral_at_zero = -sig%amplitude/sig%omega*cos(sig%phase)
+      case ('table')
+         if (grp%has('table_file')) then
+            call grp%get_string('table_file', path, err); if (allocated(err)) return
+            call read_table_file(path, tt, vv, err)
+            if (allocated(err)) then
+               err%message = grp%where('table_file')//': error: '//err%message
+               return
+            end if
+         else
+            call grp%get_real_array('times', tt, err); if (allocated(err)) return
+            call grp%get_real_array('values', vv, err); if (allocated(err)) return
+            if (size(tt) == 0) then
+               call fatal_error(err, grp%where('times')//": error: kind = 'table' needs 'times' and 'values' "// &
+                                "(or 'table_file')", err_input)
+               return
+            end if
+            if (size(tt) /= size(vv)) then
+               call fatal_error(err, grp%where('values')//': error: table has '//str(size(tt))//' times but '// &
+                                str(size(vv))//' values', err_input)
+               return
+            end if
+         end if
+         do i = 2, size(tt)
+            if (tt(i) < tt(i - 1)) then
+               call fatal_error(err, grp%where('times')//': error: table times must not decrease (entry '// &
+                                str(i)//': '//str(tt(i))//' after '//str(tt(i - 1))//')', err_input)
+               return
+            end if
+         end do
+         call set_table(sig, tt, vv)
+      case ('start_stop')
+         call grp%get_real('value', vc, err); if (allocated(err)) return
+         call grp%get_real('t_accel', ta, err); if (allocated(err)) return
+         call grp%get_real('t_cruise', tc, err); if (allocated(err)) return
+         call grp%get_real('t_decel', td, err); if (allocated(err)) return
+         call grp%get_real('t_dwell', tw, err, default=0.0_wp); if (allocated(err)) return
+         call grp%get_real('t_start', t0, err, default=0.0_wp); if (allocated(err)) return
+         call grp%get_int('cycles', cycles, err, default=1); if (allocated(err)) return
+         if (.not. (ta > 0.0_wp .and. td > 0.0_wp .and. tc >= 0.0_wp .and. tw >= 0.0_wp .and. t0 >= 0.0_wp)) then
+            call fatal_error(err, grp%where('t_accel')//': error: start_stop needs t_accel > 0, t_decel > 0 and '// &
+                             't_cruise, t_dwell, t_start >= 0', err_input)
+            return
+         end if
+         if (cycles < 1) then
+            call fatal_error(err, grp%where('cycles')//': error: cycles must be >= 1, got '//str(cycles), err_input)
+            return
+         end if
+         allocate (tt(4*cycles + 1), vv(4*cycles + 1))
+         tt(1) = t0; vv(1) = 0.0_wp
+         k = 1
+         do i = 1, cycles
+            tt(k + 1) = tt(k) + ta; vv(k + 1) = vc
+            tt(k + 2) = tt(k + 1) + tc; vv(k + 2) = vc
+            tt(k + 3) = tt(k + 2) + td; vv(k + 3) = 0.0_wp
+            tt(k + 4) = tt(k + 3) + tw; vv(k + 4) = 0.0_wp
+            k = k + 4
+         end do
+         call set_table(sig, tt, vv)
+      case default
+         call fatal_error(err, grp%where('kind')//": error: unknown time function kind '"//kind// &
+                          "'; valid kinds are: constant, step, ramp, sine, table, start_stop", err_input)
+         return
+      end select
+      sig%label = kind
+   end subroutine signal_from_group
+
+   !> Store a piecewise-linear table and its cumulative integral.
+   pure subroutine set_table(sig, tt, vv)
+      type(signal_t), intent(inout) :: sig
+      real(wp), intent(in) :: tt(:), vv(:)
+      integer :: i
+      sig%kind = sig_table
+      sig%times = tt
+      sig%values = vv
+      allocate (sig%cum(size(tt)))
+      sig%cum(1) = 0.0_wp
+      do i = 2, size(tt)
+         sig%cum(i) = sig%cum(i - 1) + 0.5_wp*(vv(i) + vv(i - 1))*(tt(i) - tt(i - 1))
+      end do
+      sig%integral_at_zero = 0.0_wp
+      sig%integral_at_zero = table_antiderivative(sig, 0.0_wp)
+   end subroutine set_table
+
+   !> Index of the last knot with times(i) <= t (0 if before the first).
+   pure integer function locate(times, t) result(i)
+      real(wp), intent(in) :: times(:), t
+      integer :: lo, hi, mid
+      if (t < times(1)) then
+         i = 0; return
+      end if
+      lo = 1; hi = size(times)
+      do while (hi > lo)
+         mid = (lo + hi + 1)/2
+         if (times(mid) <= t) then
+            lo = mid
+         else
+            hi = mid - 1
+         end if
+      end do
+      i = lo
+   end function locate
+
+   !> Value at time t.
+   pure real(wp) function signal_value(self, t) result(v)
+      class(signal_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      integer :: i, n
+      select case (self%kind)
+      case (sig_constant)
+         v = self%value0
+      case (sig_sine)
+         v = self%value0 + self%amplitude*sin(self%omega*t + self%phase)
+      case default
+         n = size(self%times)
+         i = locate(self%times, t)
+         if (i == 0) then
+            v = self%values(1)
+         else if (i == n) then
+            v = self%values(n)
+         else
+            v = self%values(i) + (self%values(i + 1) - self%values(i))*(t - self%times(i)) &
+                /(self%times(i + 1) - self%times(i))
+         end if
+      end select
+   end function signal_value
+
+   !> Antiderivative of a table, zero at the first knot.
+   pure real(wp) function table_antiderivative(self, t) result(f)
+      type(signal_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      integer :: i, n
+      real(wp) :: v
+      n = size(self%times)
+      i = locate(self%times, t)
+      if (i == 0) then
+         f = self%values(1)*(t - self%times(1))
+      else if (i == n) then
+         f = self%cum(n) + self%values(n)*(t - self%times(n))
+      else
+         v = self%values(i) + (self%values(i + 1) - self%values(i))*(t - self%times(i)) &
+             /(self%times(i + 1) - self%times(i))
+         f = self%cum(i) + 0.5_wp*(self%values(i) + v)*(t - self%times(i))
+      end if
+   end function table_antiderivative
+
+   !> Integral of the signal from 0 to t.
+   pure real(wp) function signal_integral(self, t) result(f)
+      class(signal_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      select case (self%kind)
+      case (sig_constant)
+         f = self%value0*t
+      case (sig_sine)
+         f = self%value0*t - self%amplitude/self%omega*cos(self%omega*t + self%phase) - self%integral_at_zero
+      case default
+         f = table_antiderivative(self, t) - self%integral_at_zero
+      end select
+   end function signal_integral
+
+   !> Time derivative at t (right derivative at table knots).
+   pure real(wp) function signal_derivative(self, t) result(d)
+      class(signal_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      integer :: i
+      select case (self%kind)
+      case (sig_constant)
+         d = 0.0_wp
+      case (sig_sine)
+         d = self%amplitude*self%omega*cos(self%omega*t + self%phase)
+      case default
+         i = locate(self%times, t)
+         if (i == 0 .or. i == size(self%times)) then
+            d = 0.0_wp
+         else
+            d = (self%values(i + 1) - self%values(i))/(self%times(i + 1) - self%times(i))
+         end if
+      end select
+   end function signal_derivative
+
+   !> Times where the signal or its slope jumps (for integrators to stop at).
+   pure subroutine signal_breakpoints(self, bp)
+      class(signal_t), intent(in) :: self
+      real(wp), allocatable, intent(out) :: bp(:)
+      if (self%kind == sig_table) then
+         bp = self%times
+      else
+         allocate (bp(0))
+      end if
+   end subroutine signal_breakpoints
+
+   !> Read a two-column (time, value) text table; '#' or '!' lines are comments.
+   subroutine read_table_file(path, tt, vv, err)
+      character(len=*), intent(in) :: path
+      real(wp), allocatable, intent(out) :: tt(:), vv(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: u, ios, n, lineno
+      character(len=512) :: line, msg
+      real(wp) :: a, b
+      real(wp), allocatable :: tmp_t(:), tmp_v(:)
+      open (newunit=u, file=path, status='old', action='read', iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+         call fatal_error(err, "cannot open table file '"//path//"': "//trim(msg), err_io)
+         return
+      end if
+      allocate (tt(64), vv(64))
+      n = 0; lineno = 0
+      do
+         read (u, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         lineno = lineno + 1
+         line = adjustl(line)
+         if (len_trim(line) == 0) cycle
+         if (line(1:1) == '#' .or. line(1:1) == '!') cycle
+         read (line, *, iostat=ios) a, b
+         if (ios /= 0 .or. a /= a .or. b /= b) then
+            call fatal_error(err, "table file '"//path//"' line "//str(lineno)//": expected two numbers, got '"// &
+                             trim(line)//"'", err_input)
+            close (u)
+            return
+         end if
+         n = n + 1
+         if (n > size(tt)) then
+            allocate (tmp_t(2*size(tt)), tmp_v(2*size(tt)))
+            tmp_t(1:n - 1) = tt(1:n - 1); tmp_v(1:n - 1) = vv(1:n - 1)
+            call move_alloc(tmp_t, tt); call move_alloc(tmp_v, vv)
+         end if
+         tt(n) = a; vv(n) = b
+      end do
+      close (u)
+      if (n == 0) then
+         call fatal_error(err, "table file '"//path//"' holds no data rows", err_input)
+         return
+      end if
+      tt = tt(1:n); vv = vv(1:n)
+   end subroutine read_table_file
+end module trainsim_signal

@@ -1,0 +1,163 @@
+!> What a run hands to an output sink: the run's description, samples at the
+!> output interval, the event table and the run statistics. Sinks (HDF5 file,
+!> in-memory, none) extend sink_t; the integrators never see a file format.
+module trainsim_sink
+   use trainsim_kinds, only: wp, i8
+   use trainsim_strings, only: string_t
+   use trainsim_error, only: error_t
+   implicit none
+   private
+
+   public :: run_meta_t, param_list_t, sample_t, event_t, run_stats_t, sink_t, null_sink_t
+   public :: ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
+
+   !> Event kinds (column `kind` of the event table).
+   integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
+   integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
+   integer, parameter :: ev_separation = 3    !< contact ends
+   integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
+
+   !> Named real parameters of one element or node (derived values included).
+   type :: param_list_t
+      type(string_t), allocatable :: names(:)
+      real(wp), allocatable :: values(:)
+   end type param_list_t
+
+   !> Everything that says how a run was made; written as attributes.
+   type :: run_meta_t
+      character(len=:), allocatable :: title, deck_file, deck_text, units, version, integrator
+      type(string_t), allocatable :: state_names(:)
+      type(string_t), allocatable :: node_ids(:), node_types(:)
+      type(string_t), allocatable :: element_ids(:), element_types(:)
+      integer, allocatable :: element_left(:), element_right(:)  !< node indices
+      type(param_list_t), allocatable :: element_params(:)
+      type(param_list_t), allocatable :: node_params(:)
+      !> Unit of each element's relative displacement, e.g. "in" or "rad".
+      type(string_t), allocatable :: element_disp_units(:)
+   end type run_meta_t
+
+   !> One output sample (all arrays sized at run start; no allocation per sample).
+   type :: sample_t
+      real(wp) :: t = 0.0_wp
+      real(wp), allocatable :: y(:)          !< full state vector
+      real(wp), allocatable :: theta(:)      !< node angles (prescribed nodes included)
+      real(wp), allocatable :: omega(:)      !< node speeds
+      real(wp), allocatable :: torque_left(:)  !< torque each element puts on its left node
+      real(wp), allocatable :: torque_right(:) !< torque each element puts on its right node
+      real(wp), allocatable :: displacement(:) !< relative displacement (TE for gears)
+      real(wp), allocatable :: force(:)        !< contact/mesh force (or shaft torque)
+      integer, allocatable :: contact(:)       !< +1 front, 0 none, -1 rear
+      integer, allocatable :: pairs(:)         !< tooth pairs in contact (0 if n/a)
+      !> kinetic, potential, dissipated, work input, balance residual
+      real(wp) :: energy(5) = 0.0_wp
+   end type sample_t
+
+   !> One row of the event table.
+   type :: event_t
+      real(wp) :: t = 0.0_wp
+      integer :: element = 0
+      integer :: kind = 0
+      real(wp) :: approach_velocity = 0.0_wp !< V_i captured at contact onset
+      real(wp) :: restitution = 0.0_wp       !< e used for D (contact onsets)
+      real(wp) :: damping = 0.0_wp           !< D of eq. (3.12) used for this contact
+      real(wp) :: peak_force = 0.0_wp        !< largest |force| during this contact
+      real(wp) :: duration = -1.0_wp         !< contact duration (-1 while open)
+   end type event_t
+
+   !> Counters and timings of a run.
+   type :: run_stats_t
+      integer(i8) :: steps = 0, rhs_evals = 0, jac_evals = 0, root_returns = 0
+      integer(i8) :: error_test_fails = 0, conv_fails = 0, events = 0, rejected = 0
+      real(wp) :: wall_time = 0.0_wp, t_final = 0.0_wp
+      logical :: completed = .false.
+   end type run_stats_t
+
+   !> An output sink.
+   type, abstract :: sink_t
+   contains
+      procedure(open_i), deferred :: open
+      procedure(write_sample_i), deferred :: write_sample
+      procedure(close_i), deferred :: close
+      procedure :: abort => sink_abort
+   end type sink_t
+
+   abstract interface
+      !> Prepare for a run described by `meta` (create files, datasets).
+      subroutine open_i(self, meta, err)
+         import :: sink_t, run_meta_t, error_t
+         class(sink_t), intent(inout) :: self
+         type(run_meta_t), intent(in) :: meta
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine open_i
+      !> Store one sample (called at the output interval and at every event).
+      subroutine write_sample_i(self, s, err)
+         import :: sink_t, sample_t, error_t
+         class(sink_t), intent(inout) :: self
+         type(sample_t), intent(in) :: s
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine write_sample_i
+      !> Finish a successful run: write the event table and statistics, publish.
+      subroutine close_i(self, events, stats, err)
+         import :: sink_t, event_t, run_stats_t, error_t
+         class(sink_t), intent(inout) :: self
+         type(event_t), intent(in) :: events(:)
+         type(run_stats_t), intent(in) :: stats
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine close_i
+   end interface
+
+   !> A sink that stores nothing (sweeps, tests that only want metrics).
+   type, extends(sink_t) :: null_sink_t
+   contains
+      procedure :: open => null_open
+      procedure :: write_sample => null_sample
+      procedure :: close => null_close
+   end type null_sink_t
+
+contains
+
+   !> Name of an event kind.
+   pure function ev_name(kind) result(name)
+      integer, intent(in) :: kind
+      character(len=:), allocatable :: name
+      select case (kind)
+      case (ev_contact_front); name = 'contact_front'
+      case (ev_contact_rear); name = 'contact_rear'
+      case (ev_separation); name = 'separation'
+      case (ev_zone); name = 'zone'
+      case default; name = 'unknown'
+      end select
+   end function ev_name
+
+   !> Default abort: nothing to clean up.
+   subroutine sink_abort(self)
+      class(sink_t), intent(inout) :: self
+      associate (unused => self)
+      end associate
+   end subroutine sink_abort
+
+   subroutine null_open(self, meta, err)
+      class(null_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      type(error_t), allocatable, intent(out) :: err
+      associate (u1 => self, u2 => meta)
+      end associate
+   end subroutine null_open
+
+   subroutine null_sample(self, s, err)
+      class(null_sink_t), intent(inout) :: self
+      type(sample_t), intent(in) :: s
+      type(error_t), allocatable, intent(out) :: err
+      associate (u1 => self, u2 => s)
+      end associate
+   end subroutine null_sample
+
+   subroutine null_close(self, events, stats, err)
+      class(null_sink_t), intent(inout) :: self
+      type(event_t), intent(in) :: events(:)
+      type(run_stats_t), intent(in) :: stats
+      type(error_t), allocatable, intent(out) :: err
+      associate (u1 => self, u2 => events, u3 => stats)
+      end associate
+   end subroutine null_close
+end module trainsim_sink

@@ -1,0 +1,66 @@
+!> Small string utilities shared by the deck reader, the registry and the output.
+module trainsim_strings
+   use trainsim_kinds, only: wp
+   implicit none
+   private
+
+   public :: string_t, to_lower, str, join
+
+   !> A variable-length string, for arrays of names.
+   type :: string_t
+      character(len=:), allocatable :: s
+   end type string_t
+
+   interface str
+      module procedure str_int, str_real
+   end interface str
+
+contains
+
+   !> Lower-case copy of `text` (ASCII).
+   pure function to_lower(text) result(low)
+      character(len=*), intent(in) :: text
+      character(len=len(text)) :: low
+      integer :: i, c
+      low = text
+      do i = 1, len(text)
+         c = iachar(text(i:i))
+         if (c >= iachar('A') .and. c <= iachar('Z')) low(i:i) = achar(c + 32)
+      end do
+   end function to_lower
+
+   !> Integer as trimmed text.
+   pure function str_int(i) result(s)
+      integer, intent(in) :: i
+      character(len=:), allocatable :: s
+      character(len=32) :: buf
+      write (buf, '(i0)') i
+      s = trim(buf)
+   end function str_int
+
+   !> Real as compact text with enough digits to be read back (g0 style).
+   pure function str_real(x) result(s)
+      real(wp), intent(in) :: x
+      character(len=:), allocatable :: s
+      character(len=40) :: buf
+      write (buf, '(es24.16e3)') x
+      s = trim(adjustl(buf))
+      if (abs(x) < 1.0e15_wp .and. abs(x) >= 1.0e-4_wp .or. x == 0.0_wp) then
+         write (buf, '(g0)') x
+         s = trim(adjustl(buf))
+      end if
+   end function str_real
+
+   !> Join names with a separator: ["a","b"] -> "a, b".
+   pure function join(items, sep) result(s)
+      type(string_t), intent(in) :: items(:)
+      character(len=*), intent(in) :: sep
+      character(len=:), allocatable :: s
+      integer :: i
+      s = ''
+      do i = 1, size(items)
+         if (i > 1) s = s//sep
+         s = s//items(i)%s
+      end do
+   end function join
+end module trainsim_strings
