@@ -9,6 +9,9 @@ module trainsim_registry
    use trainsim_node_dc_motor, only: dc_motor_node_t
    use trainsim_el_shaft, only: shaft_t
    use trainsim_el_ideal_gear, only: ideal_gear_t
+   use trainsim_el_spur_gear, only: spur_gear_t
+   use trainsim_el_keyed_joint, only: keyed_joint_t
+   use trainsim_el_clearance_coupling, only: clearance_coupling_t
    implicit none
    private
 
@@ -19,7 +22,8 @@ contains
    !> Canonical element type names (TRAIN aliases: el1 shaft, el2 keyed_joint, el3 ideal_gear, el4 spur_gear).
    function element_type_names() result(names)
       type(string_t), allocatable :: names(:)
-      names = [string_t('shaft'), string_t('ideal_gear')]
+      names = [string_t('shaft'), string_t('keyed_joint'), string_t('ideal_gear'), string_t('spur_gear'), &
+               string_t('clearance_coupling')]
    end function element_type_names
 
    !> Canonical node type names (TRAIN aliases: n01 inertia, n02 dc_motor).
@@ -35,6 +39,9 @@ contains
       select case (to_lower(type_name))
       case ('shaft', 'el1'); allocate (shaft_t :: el); el%type_name = 'shaft'
       case ('ideal_gear', 'el3'); allocate (ideal_gear_t :: el); el%type_name = 'ideal_gear'
+      case ('spur_gear', 'el4'); allocate (spur_gear_t :: el); el%type_name = 'spur_gear'
+      case ('keyed_joint', 'el2'); allocate (keyed_joint_t :: el); el%type_name = 'keyed_joint'
+      case ('clearance_coupling'); allocate (clearance_coupling_t :: el); el%type_name = 'clearance_coupling'
       end select
    end subroutine make_element
 

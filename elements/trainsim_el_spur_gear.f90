@@ -1,0 +1,298 @@
+!> EL4, spur gear pair with backlash (Ch. III; App. A, F, H).
+!>
+!> Mesh force along the line of action with clearance 2b (see trainsim_contact),
+!> stiffness c k with c = 1 in the single-pair zone and c = two_pair_factor
+!> (1.8 by default, Table 3.1; 2 in App. A/H and the listing) in the two-pair
+!> zone of the driver's angle. Zones follow the Pascal `Mode` function of
+!> App. F: with u = N (theta + alpha) / (2 pi) and n = INT(u) + 1, one pair is in
+!> contact while 2 pi (n - 2 + m_p)/N - alpha < theta < 2 pi n/N - alpha.
+!> zone_function = 'periodic' (default) uses floor for INT; 'truncate' is the
+!> listing's TRUNC, which makes every negative u a two-pair zone.
+!>
+!> Parameters either as TRAIN's seven constants (stiffness, rb_driver,
+!> rb_driven, teeth, contact_ratio, approach_angle, half_backlash) or from gear
+!> geometry (teeth_driver, teeth_driven, diametral_pitch [1/in] or module [mm],
+!> pressure_angle [deg], face_width, backlash [total, along the line of action]);
+!> the mesh stiffness then defaults to eq. (3.9) per unit face width.
+module trainsim_el_spur_gear
+   use trainsim_kinds, only: wp, pi, two_pi
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, string_t, to_lower
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_sink, only: param_list_t, event_t, ev_zone
+   use trainsim_clearance_element, only: clearance_element_t
+   implicit none
+   private
+
+   public :: spur_gear_t, contact_ratio, mesh_zone
+
+   type, extends(clearance_element_t) :: spur_gear_t
+      real(wp) :: teeth = 0.0_wp          !< teeth on the driver
+      real(wp) :: mp = 1.0_wp             !< contact ratio
+      real(wp) :: alpha = 0.0_wp          !< approach angle, rad
+      real(wp) :: c2 = 1.8_wp             !< stiffness factor in the two-pair zone
+      logical :: truncate = .false.       !< zone_function = 'truncate'
+      integer :: pairs = 1                !< current zone: 1 or 2 pairs
+      real(wp) :: th_lo = 0.0_wp, th_hi = 0.0_wp   !< driver-angle bounds of the current zone
+      ! geometry (0 when given as TRAIN constants)
+      real(wp) :: teeth2 = 0.0_wp, pitch_module = 0.0_wp, phi = 0.0_wp, face = 0.0_wp
+   contains
+      procedure :: configure => spur_configure
+      procedure :: n_guards => spur_n_guards
+      procedure :: guards => spur_guards
+      procedure :: init_mode => spur_init_mode
+      procedure :: update_mode => spur_update_mode
+      procedure :: status => spur_status
+      procedure :: params => spur_params
+      procedure :: factor => spur_factor
+      procedure, private :: set_zone
+   end type spur_gear_t
+
+contains
+
+   !> Contact ratio of a standard full-depth pair (App. F `Contratio`): radii
+   !> r1, r2 of the pitch circles, addendum a, pressure angle phi.
+   pure real(wp) function contact_ratio(phi, r1, r2, a) result(mp)
+      real(wp), intent(in) :: phi, r1, r2, a
+      real(wp) :: ro1, ro2, rb1, rb2, lab
+      ro1 = r1 + a; ro2 = r2 + a
+      rb1 = r1*cos(phi); rb2 = r2*cos(phi)
+      lab = sqrt(ro1**2 - rb1**2) + sqrt(ro2**2 - rb2**2) - (r1 + r2)*sin(phi)
+      mp = lab/(pi*a*cos(phi))   ! length of action / base pitch (p_b = pi m cos phi, module m = addendum a)
+   end function contact_ratio
+
+   !> Mesh zone at tooth phase u = N (theta + alpha)/(2 pi): number of pairs and
+   !> the bounds [u_lo, u_hi] of the zone in u.
+   pure subroutine mesh_zone(u, mp, truncate, pairs, u_lo, u_hi)
+      real(wp), intent(in) :: u, mp
+      logical, intent(in) :: truncate
+      integer, intent(out) :: pairs
+      real(wp), intent(out) :: u_lo, u_hi
+      real(wp) :: m
+      if (truncate .and. u < 0.0_wp) then
+         ! TRUNC: n = 1 on (-1, 1); on every negative u the single-pair window is empty
+         pairs = 2; u_lo = -huge(1.0_wp); u_hi = mp - 1.0_wp
+         return
+      end if
+      m = floor(u)
+      if (u - m <= mp - 1.0_wp) then
+         pairs = 2; u_lo = m; u_hi = m + mp - 1.0_wp
+      else
+         pairs = 1; u_lo = m + mp - 1.0_wp; u_hi = m + 1.0_wp
+      end if
+   end subroutine mesh_zone
+
+   subroutine spur_configure(self, grp, units, err)
+      class(spur_gear_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: zf
+      real(wp) :: pd, modl, kw, bl, r1p, r2p, k, kdef
+      logical :: geometry
+
+      geometry = grp%has('diametral_pitch') .or. grp%has('module')
+      if (geometry) then
+         if (grp%has('diametral_pitch') .and. grp%has('module')) then
+            call fatal_error(err, grp%where('module')//': error: give diametral_pitch or module, not both', err_input)
+            return
+         end if
+         call grp%get_real('teeth_driver', self%teeth, err); if (allocated(err)) return
+         call grp%get_real('teeth_driven', self%teeth2, err); if (allocated(err)) return
+         call grp%get_real('pressure_angle', self%phi, err, default=20.0_wp); if (allocated(err)) return
+         call grp%get_real('face_width', self%face, err); if (allocated(err)) return
+         call grp%get_real('backlash', bl, err); if (allocated(err)) return
+         if (grp%has('diametral_pitch')) then
+            call grp%get_real('diametral_pitch', pd, err); if (allocated(err)) return
+            call positive('diametral_pitch', pd); if (allocated(err)) return
+            self%pitch_module = 1.0_wp/pd/units%to_inch          ! module in deck length units
+         else
+            call grp%get_real('module', modl, err); if (allocated(err)) return
+            call positive('module', modl); if (allocated(err)) return
+            self%pitch_module = modl/25.4_wp/units%to_inch
+         end if
+         call positive('teeth_driver', self%teeth); if (allocated(err)) return
+         call positive('teeth_driven', self%teeth2); if (allocated(err)) return
+         call positive('face_width', self%face); if (allocated(err)) return
+         if (.not. (self%phi > 0.0_wp .and. self%phi < 45.0_wp)) then
+            call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, got '// &
+                             str(self%phi), err_input)
+            return
+         end if
+         if (.not. bl >= 0.0_wp) then
+            call fatal_error(err, grp%where('backlash')//': error: backlash must be >= 0, got '//str(bl), err_input)
+            return
+         end if
+         self%phi = self%phi*pi/180.0_wp
+         r1p = 0.5_wp*self%teeth*self%pitch_module
+         r2p = 0.5_wp*self%teeth2*self%pitch_module
+         self%cl%r1 = r1p*cos(self%phi)
+         self%cl%r2 = r2p*cos(self%phi)
+         self%mp = contact_ratio(self%phi, r1p, r2p, self%pitch_module)
+         self%alpha = pi*self%mp/self%teeth                      ! App. E
+         self%cl%b = 0.5_wp*bl
+         ! eq. (3.9): deflection W (0.39 + 1.49 cos phi) 1e-7 / F in inch-lbf (steel)
+         kdef = 1.0e7_wp/(0.39_wp + 1.49_wp*cos(self%phi))*units%to_inch**2/units%to_lbf
+         call grp%get_real('stiffness_per_width', kw, err, default=kdef); if (allocated(err)) return
+         call positive('stiffness_per_width', kw); if (allocated(err)) return
+         call grp%get_real('stiffness', k, err, default=kw*self%face); if (allocated(err)) return
+         self%cl%law%k = k
+      else
+         call grp%get_real('stiffness', self%cl%law%k, err); if (allocated(err)) return
+         call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
+         call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
+         call grp%get_real('teeth', self%teeth, err); if (allocated(err)) return
+         call grp%get_real('contact_ratio', self%mp, err); if (allocated(err)) return
+         call grp%get_real('approach_angle', self%alpha, err); if (allocated(err)) return
+         call grp%get_real('half_backlash', self%cl%b, err); if (allocated(err)) return
+         call positive('rb_driver', self%cl%r1); if (allocated(err)) return
+         call positive('rb_driven', self%cl%r2); if (allocated(err)) return
+         call positive('teeth', self%teeth); if (allocated(err)) return
+         if (.not. self%cl%b >= 0.0_wp) then
+            call fatal_error(err, grp%where('half_backlash')//': error: half_backlash must be >= 0, got '// &
+                             str(self%cl%b), err_input)
+            return
+         end if
+      end if
+      call positive('stiffness', self%cl%law%k); if (allocated(err)) return
+      if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
+         call fatal_error(err, grp%where('contact_ratio')//': error: contact ratio must be in [1, 2], got '// &
+                          str(self%mp), err_input)
+         return
+      end if
+      call grp%get_real('two_pair_factor', self%c2, err, default=1.8_wp); if (allocated(err)) return
+      if (.not. (self%c2 >= 1.0_wp .and. self%c2 <= 2.0_wp)) then
+         call fatal_error(err, grp%where('two_pair_factor')//': error: two_pair_factor must be in [1, 2], got '// &
+                          str(self%c2), err_input)
+         return
+      end if
+      call grp%get_string('zone_function', zf, err, default='periodic'); if (allocated(err)) return
+      select case (to_lower(zf))
+      case ('periodic'); self%truncate = .false.
+      case ('truncate'); self%truncate = .true.
+      case default
+         call fatal_error(err, grp%where('zone_function')//": error: unknown zone_function '"//zf// &
+                          "'; valid: periodic, truncate", err_input)
+         return
+      end select
+      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
+   contains
+      subroutine positive(key, v)
+         character(len=*), intent(in) :: key
+         real(wp), intent(in) :: v
+         if (.not. v > 0.0_wp) call fatal_error(err, grp%where(key)//': error: '//key//' must be > 0, got '// &
+                                                str(v), err_input)
+      end subroutine positive
+   end subroutine spur_configure
+
+   !> Set the zone from the driver angle.
+   subroutine set_zone(self, thl)
+      class(spur_gear_t), intent(inout) :: self
+      real(wp), intent(in) :: thl
+      real(wp) :: u, u_lo, u_hi
+      u = self%teeth*(thl + self%alpha)/two_pi
+      call mesh_zone(u, self%mp, self%truncate, self%pairs, u_lo, u_hi)
+      self%th_lo = max(two_pi*u_lo/self%teeth - self%alpha, -huge(1.0_wp)/4)
+      self%th_hi = two_pi*u_hi/self%teeth - self%alpha
+   end subroutine set_zone
+
+   !> Stiffness factor of the current zone (1 single pair, two_pair_factor two pairs).
+   pure real(wp) function spur_factor(self, thl) result(c)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl
+      associate (unused => thl)
+      end associate
+      if (self%pairs == 2) then
+         c = self%c2
+      else
+         c = 1.0_wp
+      end if
+   end function spur_factor
+
+   !> Linearised in the current contact state and zone (zero when out of contact).
+   pure integer function spur_n_guards(self) result(n)
+      class(spur_gear_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      n = 4
+   end function spur_n_guards
+
+   !> Guards 1-2: faces; 3-4: the driver angle inside its zone.
+   pure subroutine spur_guards(self, thl, wl, thr, wr, g)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: g(:)
+      call self%cl%guards(thl, thr, g(1:2))
+      associate (u1 => wl, u2 => wr)
+      end associate
+      g(3) = thl - self%th_lo
+      g(4) = self%th_hi - thl
+   end subroutine spur_guards
+
+   subroutine spur_init_mode(self, thl, wl, thr, wr)
+      class(spur_gear_t), intent(inout) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      call self%set_zone(thl)
+      call self%cl%init(thl, wl, thr, wr)
+   end subroutine spur_init_mode
+
+   subroutine spur_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
+      class(spur_gear_t), intent(inout) :: self
+      real(wp), intent(in) :: t, thl, wl, thr, wr
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(out) :: nev
+      integer :: old
+      real(wp) :: lo, hi
+      associate (u1 => t, u2 => thr)
+      end associate
+      nev = 0
+      if (fired(3) .or. fired(4)) then
+         old = self%pairs
+         lo = self%th_lo; hi = self%th_hi
+         call self%set_zone(thl)
+         ! rounding at the boundary: make sure the zone really moves across it
+         if (self%th_lo == lo .and. self%th_hi == hi) then
+            if (fired(4)) then
+               call self%set_zone(hi + 1.0e-12_wp*max(1.0_wp, abs(hi)))
+            else
+               call self%set_zone(lo - 1.0e-12_wp*max(1.0_wp, abs(lo)))
+            end if
+         end if
+         if (old /= self%pairs) then
+            nev = nev + 1
+            ev(nev) = event_t(kind=ev_zone)
+         end if
+      end if
+      call self%cl%update(wl, wr, fired(1:2), ev, nev)
+   end subroutine spur_update_mode
+
+   !> TE = delta (length), force = signed mesh force, contact = face, pairs = zone (1/2).
+   pure subroutine spur_status(self, thl, wl, thr, wr, disp, force, contact, pairs)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      disp = self%cl%delta(thl, thr)
+      force = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      contact = self%cl%mode
+      pairs = self%pairs
+   end subroutine spur_status
+
+   function spur_params(self) result(p)
+      class(spur_gear_t), intent(in) :: self
+      type(param_list_t) :: p
+      p%names = [string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), &
+                 string_t('contact_ratio'), string_t('approach_angle'), string_t('half_backlash'), &
+                 string_t('two_pair_factor'), string_t('truncate_zones'), string_t('min_approach_velocity'), &
+                 string_t('initial_contact_velocity')]
+      p%values = [self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%cl%b, self%c2, &
+                  merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, self%cl%law%v_initial]
+      if (self%pitch_module > 0.0_wp) then
+         p%names = [p%names, string_t('teeth_driven'), string_t('module'), string_t('pressure_angle_rad'), &
+                    string_t('face_width')]
+         p%values = [p%values, self%teeth2, self%pitch_module, self%phi, self%face]
+      end if
+   end function spur_params
+end module trainsim_el_spur_gear

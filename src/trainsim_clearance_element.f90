@@ -1,0 +1,142 @@
+!> An element whose two nodes act through a clearance (trainsim_contact):
+!> implements everything the integrators and the recorder ask of it from the
+!> clearance and a stiffness factor. Concrete elements (spur and helical gear,
+!> keyed joint, clearance coupling) add `configure`, `params` and, where the
+!> stiffness depends on the mesh position, `factor`, guards and mode updates.
+module trainsim_clearance_element
+   use trainsim_kinds, only: wp
+   use trainsim_sink, only: event_t
+   use trainsim_contact, only: clearance_t
+   use trainsim_element, only: element_t
+   implicit none
+   private
+
+   public :: clearance_element_t
+
+   type, abstract, extends(element_t) :: clearance_element_t
+      type(clearance_t) :: cl
+   contains
+      procedure :: factor => ce_factor
+      procedure :: torques => ce_torques
+      procedure :: displacement => ce_displacement
+      procedure :: displacement_unit => ce_displacement_unit
+      procedure :: stiffness_matrix => ce_stiffness
+      procedure :: potential_energy => ce_potential
+      procedure :: dissipation_power => ce_dissipation
+      procedure :: n_guards => ce_n_guards
+      procedure :: guards => ce_guards
+      procedure :: init_mode => ce_init_mode
+      procedure :: update_mode => ce_update_mode
+      procedure :: in_contact => ce_in_contact
+      procedure :: status => ce_status
+   end type clearance_element_t
+
+contains
+
+   !> Stiffness factor at driver angle thl (1: the law's stiffness as given).
+   pure real(wp) function ce_factor(self, thl) result(c)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl
+      associate (u1 => self, u2 => thl)
+      end associate
+      c = 1.0_wp
+   end function ce_factor
+
+   pure subroutine ce_torques(self, thl, wl, thr, wr, tl, tr)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      call self%cl%torques(self%factor(thl), thl, wl, thr, wr, tl, tr)   ! eqs. (3.15)-(3.17), (H.3)-(H.25)
+   end subroutine ce_torques
+
+   pure real(wp) function ce_displacement(self, thl, thr) result(d)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, thr
+      d = self%cl%delta(thl, thr)
+   end function ce_displacement
+
+   pure function ce_displacement_unit(self) result(u)
+      class(clearance_element_t), intent(in) :: self
+      character(len=:), allocatable :: u
+      associate (unused => self)
+      end associate
+      u = 'length'
+   end function ce_displacement_unit
+
+   !> Linearised in the current contact state (zero across an open clearance).
+   pure subroutine ce_stiffness(self, k)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(out) :: k(2, 2)
+      real(wp) :: kk
+      kk = 0.0_wp
+      if (self%cl%mode /= 0) kk = self%cl%law%k*self%factor(0.0_wp)
+      k(1, 1) = kk*self%cl%r1**2
+      k(1, 2) = -kk*self%cl%r1*self%cl%r2
+      k(2, 1) = k(1, 2)
+      k(2, 2) = kk*self%cl%r2**2
+   end subroutine ce_stiffness
+
+   pure real(wp) function ce_potential(self, thl, thr) result(e)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, thr
+      e = self%cl%potential(self%factor(thl), thl, thr)
+   end function ce_potential
+
+   pure real(wp) function ce_dissipation(self, thl, wl, thr, wr) result(p)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      p = self%cl%dissipation(self%factor(thl), thl, wl, thr, wr)
+   end function ce_dissipation
+
+   pure integer function ce_n_guards(self) result(n)
+      class(clearance_element_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      n = 2
+   end function ce_n_guards
+
+   !> Guards 1-2: the front and rear faces.
+   pure subroutine ce_guards(self, thl, wl, thr, wr, g)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: g(:)
+      associate (u1 => wl, u2 => wr)
+      end associate
+      call self%cl%guards(thl, thr, g(1:2))
+   end subroutine ce_guards
+
+   subroutine ce_init_mode(self, thl, wl, thr, wr)
+      class(clearance_element_t), intent(inout) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      call self%cl%init(thl, wl, thr, wr)
+   end subroutine ce_init_mode
+
+   subroutine ce_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
+      class(clearance_element_t), intent(inout) :: self
+      real(wp), intent(in) :: t, thl, wl, thr, wr
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(out) :: nev
+      associate (u1 => t, u2 => thl, u3 => thr)
+      end associate
+      nev = 0
+      call self%cl%update(wl, wr, fired(1:2), ev, nev)
+   end subroutine ce_update_mode
+
+   pure logical function ce_in_contact(self) result(c)
+      class(clearance_element_t), intent(in) :: self
+      c = self%cl%mode /= 0
+   end function ce_in_contact
+
+   !> displacement = delta, force = signed contact force, contact = face, pairs = 0.
+   pure subroutine ce_status(self, thl, wl, thr, wr, disp, force, contact, pairs)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      disp = self%cl%delta(thl, thr)
+      force = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      contact = self%cl%mode
+      pairs = 0
+   end subroutine ce_status
+end module trainsim_clearance_element

@@ -1,0 +1,346 @@
+!> Contact across a clearance, shared by the spur and helical gear pairs, the
+!> keyed joint and the clearance coupling.
+!>
+!> Geometry: delta = r1 th_l - r2 th_r (a length along the line of action for
+!> gears and keys, an angle for a coupling), half clearance b. Front face in
+!> contact when delta >= b, rear face when delta <= -b, none in between.
+!> Penetration p = |delta| - b, rate pdot = sign(delta) * delta' (MODEL-NOTES 7).
+!> The contact force F >= 0 acts along the face's normal: on the front face the
+!> driver (left) gets -F r1 and the driven (right) gets +F r2; signs reverse on
+!> the rear face.
+!>
+!> Laws (F for stiffness factor c, e.g. 1 or 1.8 tooth pairs):
+!>   yang_sun  F = c (k p + D p pdot),  D = 6(1-e)k / [((2e-1)^2 + 3) V_i]   eq. (3.12), (3.18)-(3.19)
+!>   linear    F = c k p + d pdot
+!>   elasto    Modelica ElastoBacklash: tc = c k p, td = d pdot; F = 0 if tc + td <= 0,
+!>             else tc + min(tc, td)   (never pulls)
+!> Restitution for yang_sun: goldsmith e = 1 - 0.019 V^0.48 (App. E.2, default),
+!> smith e = (1 - exp(-0.0263 V))/3 (eq. 3.20), or a constant. Both fits take V
+!> in in/s: the approach velocity is converted from the deck's units first.
+!>
+!> The discrete mode (face) changes only at events; inside a mode the force is
+!> a smooth function of the state (the penetration may go slightly negative
+!> within a step before the event is located).
+module trainsim_contact
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, to_lower, string_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_sink, only: event_t, ev_contact_front, ev_contact_rear, ev_separation
+   implicit none
+   private
+
+   public :: contact_law_t, clearance_t
+   public :: law_yang_sun, law_linear, law_elasto, rest_goldsmith, rest_smith, rest_constant
+
+   integer, parameter :: law_yang_sun = 1, law_linear = 2, law_elasto = 3
+   integer, parameter :: rest_goldsmith = 1, rest_smith = 2, rest_constant = 3
+
+   !> A contact law with the state of the contact in progress (D, e, V_i).
+   type :: contact_law_t
+      integer :: law = law_yang_sun
+      integer :: restitution_law = rest_goldsmith
+      real(wp) :: k = 0.0_wp            !< contact stiffness (single pair for gears)
+      real(wp) :: c = 0.0_wp            !< viscous damping (linear, elasto laws)
+      real(wp) :: e_const = 1.0_wp      !< restitution for restitution_law = constant
+      real(wp) :: v_min = 0.0_wp        !< smallest approach velocity used in eq. (3.12)
+      real(wp) :: v_initial = 0.0_wp    !< approach velocity assumed for a contact closed at t_start
+      real(wp) :: v_to_ips = 1.0_wp     !< approach velocity (deck units) -> in/s for the fits
+      logical :: no_tension = .false.
+      ! the contact in progress
+      real(wp) :: d = 0.0_wp, e = 1.0_wp, v_i = 0.0_wp
+   contains
+      procedure :: configure => law_configure
+      procedure :: begin_contact => law_begin_contact
+      procedure :: restitution => law_restitution
+      procedure :: force => law_force
+   end type contact_law_t
+
+   !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
+   type :: clearance_t
+      real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp, b = 0.0_wp
+      type(contact_law_t) :: law
+      integer :: mode = 0               !< +1 front face, 0 free, -1 rear face
+   contains
+      procedure :: delta => cl_delta
+      procedure :: init => cl_init
+      procedure :: guards => cl_guards
+      procedure :: update => cl_update
+      procedure :: contact_force => cl_contact_force
+      procedure :: torques => cl_torques
+      procedure :: potential => cl_potential
+      procedure :: dissipation => cl_dissipation
+   end type clearance_t
+
+contains
+
+   !> Read the contact-law keys shared by all clearance elements.
+   !> `v_scale` converts the element's approach velocity to a line speed in the
+   !> deck's length unit (1 for gears and keys; a radius for an angular coupling).
+   subroutine law_configure(self, grp, units, v_scale, default_law, err)
+      class(contact_law_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      real(wp), intent(in) :: v_scale
+      character(len=*), intent(in) :: default_law
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: name
+      real(wp) :: vmin_ips
+
+      call grp%get_string('contact_law', name, err, default=default_law); if (allocated(err)) return
+      select case (to_lower(name))
+      case ('yang_sun'); self%law = law_yang_sun
+      case ('linear'); self%law = law_linear
+      case ('elasto_backlash'); self%law = law_elasto
+      case default
+         call fatal_error(err, grp%where('contact_law')//": error: unknown contact_law '"//name// &
+                          "'; valid laws are: yang_sun, linear, elasto_backlash", err_input)
+         return
+      end select
+      if (self%law == law_yang_sun) then
+         call grp%get_string('restitution_law', name, err, default='goldsmith'); if (allocated(err)) return
+         select case (to_lower(name))
+         case ('goldsmith'); self%restitution_law = rest_goldsmith
+         case ('smith'); self%restitution_law = rest_smith
+         case ('constant')
+            self%restitution_law = rest_constant
+            call grp%get_real('restitution', self%e_const, err); if (allocated(err)) return
+            if (.not. (self%e_const > 0.0_wp .and. self%e_const <= 1.0_wp)) then
+               call fatal_error(err, grp%where('restitution')//': error: restitution must be in (0, 1], got '// &
+                                str(self%e_const), err_input)
+               return
+            end if
+         case default
+            call fatal_error(err, grp%where('restitution_law')//": error: unknown restitution_law '"//name// &
+                             "'; valid laws are: goldsmith, smith, constant", err_input)
+            return
+         end select
+         ! 1e-3 in/s: below it eq. (3.12) is evaluated at this floor (D stays finite)
+         call grp%get_real('min_approach_velocity', vmin_ips, err, default=1.0e-3_wp/(units%to_inch*v_scale))
+         if (allocated(err)) return
+         self%v_min = vmin_ips
+         if (.not. self%v_min > 0.0_wp) then
+            call fatal_error(err, grp%where('min_approach_velocity')//': error: must be > 0, got '// &
+                             str(self%v_min), err_input)
+            return
+         end if
+         call grp%get_real('initial_contact_velocity', self%v_initial, err, default=0.0_wp); if (allocated(err)) return
+         if (.not. self%v_initial >= 0.0_wp) then
+            call fatal_error(err, grp%where('initial_contact_velocity')//': error: must be >= 0, got '// &
+                             str(self%v_initial), err_input)
+            return
+         end if
+      else
+         call grp%get_real('contact_damping', self%c, err); if (allocated(err)) return
+         if (.not. self%c >= 0.0_wp) then
+            call fatal_error(err, grp%where('contact_damping')//': error: must be >= 0, got '//str(self%c), err_input)
+            return
+         end if
+      end if
+      call grp%get_logical('no_tension', self%no_tension, err, default=.false.); if (allocated(err)) return
+      self%v_to_ips = units%to_inch*v_scale
+   end subroutine law_configure
+
+   !> Coefficient of restitution at approach velocity v (deck units).
+   pure real(wp) function law_restitution(self, v) result(e)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: v
+      real(wp) :: v_ips
+      v_ips = abs(v)*self%v_to_ips
+      select case (self%restitution_law)
+      case (rest_goldsmith)
+         e = 1.0_wp - 0.019_wp*v_ips**0.48_wp           ! App. E.2
+      case (rest_smith)
+         e = (1.0_wp - exp(-0.0263_wp*v_ips))/3.0_wp     ! eq. (3.20)
+      case default
+         e = self%e_const
+      end select
+      e = min(max(e, 0.0_wp), 1.0_wp)
+   end function law_restitution
+
+   !> A contact begins with approach velocity v_i: fix e and D for its duration.
+   !> `initial` marks a contact already closed at t_start (MODEL-NOTES 11).
+   subroutine law_begin_contact(self, v_i, initial)
+      class(contact_law_t), intent(inout) :: self
+      real(wp), intent(in) :: v_i
+      logical, intent(in) :: initial
+      real(wp) :: v
+      self%v_i = v_i
+      if (self%law /= law_yang_sun) return
+      if (initial) then
+         ! no approach: undamped as the App. F listing (D = 0) unless a velocity is assumed
+         if (self%v_initial <= 0.0_wp) then
+            self%e = 1.0_wp; self%d = 0.0_wp
+            return
+         end if
+         v = self%v_initial
+      else
+         v = max(abs(v_i), self%v_min)
+      end if
+      self%e = self%restitution(v)
+      self%d = 6.0_wp*(1.0_wp - self%e)*self%k/(((2.0_wp*self%e - 1.0_wp)**2 + 3.0_wp)*v)   ! eq. (3.12)
+   end subroutine law_begin_contact
+
+   !> Contact force (>= 0 compressive) for penetration p, rate pdot, stiffness factor c.
+   pure real(wp) function law_force(self, c, p, pdot) result(f)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: c, p, pdot
+      real(wp) :: tc, td
+      select case (self%law)
+      case (law_yang_sun)
+         f = c*(self%k*p + self%d*p*pdot)                 ! eqs. (3.18)-(3.19)
+         if (self%no_tension) f = max(f, 0.0_wp)
+      case (law_linear)
+         f = c*self%k*p + self%c*pdot
+         if (self%no_tension) f = max(f, 0.0_wp)
+      case default
+         tc = c*self%k*p
+         td = self%c*pdot
+         if (tc + td <= 0.0_wp) then
+            f = 0.0_wp
+         else
+            f = tc + min(tc, td)
+         end if
+      end select
+   end function law_force
+
+   !> Relative displacement along the line of action.
+   pure real(wp) function cl_delta(self, thl, thr) result(d)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: thl, thr
+      d = self%r1*thl - self%r2*thr
+   end function cl_delta
+
+   !> Mode at t_start from the initial state.
+   subroutine cl_init(self, thl, wl, thr, wr)
+      class(clearance_t), intent(inout) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: d, dd
+      d = self%delta(thl, thr)
+      dd = self%r1*wl - self%r2*wr
+      if (d >= self%b) then
+         self%mode = 1
+         call self%law%begin_contact(dd, .true.)
+      else if (d <= -self%b) then
+         self%mode = -1
+         call self%law%begin_contact(-dd, .true.)
+      else
+         self%mode = 0
+      end if
+   end subroutine cl_init
+
+   !> Guards: g(1) for the front face, g(2) for the rear face.
+   pure subroutine cl_guards(self, thl, thr, g)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: thl, thr
+      real(wp), intent(out) :: g(2)
+      real(wp) :: d
+      d = self%delta(thl, thr)
+      select case (self%mode)
+      case (1)
+         g(1) = d - self%b; g(2) = 1.0_wp
+      case (-1)
+         g(1) = 1.0_wp; g(2) = -d - self%b
+      case default
+         g(1) = self%b - d; g(2) = d + self%b
+      end select
+   end subroutine cl_guards
+
+   !> A face guard fired: contact begins or ends. Appends 0 or 1 event.
+   subroutine cl_update(self, wl, wr, fired, ev, nev)
+      class(clearance_t), intent(inout) :: self
+      real(wp), intent(in) :: wl, wr
+      logical, intent(in) :: fired(2)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(inout) :: nev
+      real(wp) :: dd
+      dd = self%r1*wl - self%r2*wr
+      select case (self%mode)
+      case (0)
+         if (fired(1)) then
+            self%mode = 1
+            call self%law%begin_contact(dd, .false.)
+            call push(ev_contact_front, dd)
+         else if (fired(2)) then
+            self%mode = -1
+            call self%law%begin_contact(-dd, .false.)
+            call push(ev_contact_rear, -dd)
+         end if
+      case (1)
+         if (fired(1)) then
+            self%mode = 0
+            call push(ev_separation, -dd)
+         end if
+      case (-1)
+         if (fired(2)) then
+            self%mode = 0
+            call push(ev_separation, dd)
+         end if
+      end select
+   contains
+      subroutine push(kind, v)
+         integer, intent(in) :: kind
+         real(wp), intent(in) :: v
+         nev = nev + 1
+         ev(nev) = event_t(kind=kind, approach_velocity=v)
+         if (kind /= ev_separation) then
+            ev(nev)%restitution = self%law%e
+            ev(nev)%damping = self%law%d
+         end if
+      end subroutine push
+   end subroutine cl_update
+
+   !> Signed contact force along the line (+ on the front face) for factor c.
+   pure real(wp) function cl_contact_force(self, c, thl, wl, thr, wr) result(fs)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, wl, thr, wr
+      real(wp) :: d, dd
+      if (self%mode == 0) then
+         fs = 0.0_wp
+         return
+      end if
+      d = self%delta(thl, thr)
+      dd = self%r1*wl - self%r2*wr
+      if (self%mode == 1) then
+         fs = self%law%force(c, d - self%b, dd)
+      else
+         fs = -self%law%force(c, -d - self%b, -dd)
+      end if
+   end function cl_contact_force
+
+   !> Torques on the left and right node for factor c.
+   pure subroutine cl_torques(self, c, thl, wl, thr, wr, tl, tr)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      real(wp) :: fs
+      fs = self%contact_force(c, thl, wl, thr, wr)
+      tl = -fs*self%r1
+      tr = fs*self%r2
+   end subroutine cl_torques
+
+   !> Elastic energy c k p^2 / 2 while in contact.
+   pure real(wp) function cl_potential(self, c, thl, thr) result(e)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, thr
+      real(wp) :: p
+      e = 0.0_wp
+      if (self%mode == 0) return
+      p = self%mode*self%delta(thl, thr) - self%b
+      e = 0.5_wp*c*self%law%k*p**2
+   end function cl_potential
+
+   !> Power dissipated: (F - c k p) pdot, the force beyond the elastic one times the rate.
+   pure real(wp) function cl_dissipation(self, c, thl, wl, thr, wr) result(pw)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, wl, thr, wr
+      real(wp) :: p, pdot, f
+      pw = 0.0_wp
+      if (self%mode == 0) return
+      p = self%mode*self%delta(thl, thr) - self%b
+      pdot = self%mode*(self%r1*wl - self%r2*wr)
+      f = self%mode*self%contact_force(c, thl, wl, thr, wr)
+      pw = (f - c*self%law%k*p)*pdot
+   end function cl_dissipation
+end module trainsim_contact
