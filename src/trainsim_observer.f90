@@ -38,6 +38,7 @@ module trainsim_observer
       real(wp) :: energy_residual_max = 0.0_wp  !< max |stored + dissipated - input - E0|
       real(wp) :: energy_scale = 0.0_wp         !< max of stored energy and work input
       real(wp), allocatable :: series_t(:), series_disp(:, :)   !< (element, sample) if keep_series
+      real(wp), allocatable :: series_theta(:, :), series_omega(:, :)   !< (node, sample) if keep_series
    end type run_result_t
 
    type :: observer_t
@@ -134,6 +135,7 @@ contains
             nmax = int((model%run%t_end - model%run%t_start)/model%run%dt) + 2
          end if
          allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
+         allocate (self%res%series_theta(nn, nmax), self%res%series_omega(nn, nmax))
       end if
       call sink%open(make_meta(model), err)
       if (allocated(err)) return
@@ -193,6 +195,8 @@ contains
             self%n_series = self%n_series + 1
             self%res%series_t(self%n_series) = self%s%t
             self%res%series_disp(:, self%n_series) = self%s%displacement
+            self%res%series_theta(:, self%n_series) = self%s%theta
+            self%res%series_omega(:, self%n_series) = self%s%omega
          end if
       end if
       call sink%write_sample(self%s, err)
@@ -332,6 +336,8 @@ contains
       if (allocated(result%series_t)) then
          result%series_t = result%series_t(1:self%n_series)
          result%series_disp = result%series_disp(:, 1:self%n_series)
+         result%series_theta = result%series_theta(:, 1:self%n_series)
+         result%series_omega = result%series_omega(:, 1:self%n_series)
       end if
    end subroutine obs_finish
 end module trainsim_observer

@@ -1,0 +1,1145 @@
+!> HDF5 output sink: one file per run, layout documented in docs/output-format.md.
+!>
+!> The file is written as `<path>.part` and renamed to `<path>` only when `close`
+!> succeeds, so a file under the final name is always complete. Samples are buffered
+!> in blocks of `block_rows` and appended to extendible, chunked, deflate-compressed
+!> datasets. Every HDF5 call is checked; failures are returned as `error_t` values
+!> (code `err_io`, message naming the output path). HDF5's automatic error printing is
+!> switched off (process-wide) when a sink is opened, so the library never prints.
+!> After any error the sink cleans up after itself (ids closed, `.part` removed) and
+!> must be opened again before further use; `abort` is always safe to call.
+module trainsim_hdf5
+   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, &
+      h5fcreate_f, h5fclose_f, H5F_ACC_TRUNC_F, H5F_CLOSE_STRONG_F, H5F_LIBVER_V18_F, &
+      h5pcreate_f, h5pclose_f, h5pset_fclose_degree_f, h5pset_libver_bounds_f, &
+      h5pset_chunk_f, h5pset_deflate_f, H5P_FILE_ACCESS_F, H5P_DATASET_CREATE_F, &
+      h5zfilter_avail_f, H5Z_FILTER_DEFLATE_F, &
+      h5screate_simple_f, h5screate_f, h5sclose_f, h5sselect_hyperslab_f, &
+      H5S_SCALAR_F, H5S_UNLIMITED_F, H5S_SELECT_SET_F, &
+      h5dcreate_f, h5dclose_f, h5dset_extent_f, h5dget_space_f, h5dwrite_f, &
+      h5gcreate_f, h5gclose_f, h5acreate_f, h5awrite_f, h5aclose_f, &
+      h5tcopy_f, h5tset_size_f, h5tset_strpad_f, h5tclose_f, &
+      H5T_FORTRAN_S1, H5T_STR_NULLTERM_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, &
+      h5kind_to_type, H5_INTEGER_KIND
+   use trainsim_kinds, only: wp, i8
+   use trainsim_error, only: error_t, fatal_error, err_io, err_internal
+   use trainsim_strings, only: string_t, str
+   use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, &
+      param_list_t, ev_name
+   implicit none
+   private
+
+   public :: hdf5_sink_t
+
+   !> Deflate level of the sample datasets (1 fast .. 9 small).
+   integer, parameter :: deflate_level = 4
+   !> Names of the five energy columns (rows of /energy in Fortran order).
+   character(len=*), parameter :: energy_names(5) = [character(len=10) :: &
+      'kinetic', 'potential', 'dissipated', 'input', 'balance']
+   !> Dataset names under /elements (element ids must not clash with them).
+   character(len=*), parameter :: element_sets(6) = [character(len=12) :: &
+      'torque_left', 'torque_right', 'displacement', 'force', 'contact', 'pairs']
+   !> Dataset names under /nodes.
+   character(len=*), parameter :: node_sets(2) = [character(len=5) :: 'theta', 'omega']
+
+   !> h5open_f has been called by this module.
+   logical :: hdf5_ready = .false.
+
+   !> Indices into hdf5_sink_t%dset.
+   integer, parameter :: ds_time = 1, ds_states = 2, ds_theta = 3, ds_omega = 4, &
+      ds_energy = 5, ds_tl = 6, ds_tr = 7, ds_disp = 8, ds_force = 9, ds_contact = 10, &
+      ds_pairs = 11, n_ds = 11
+
+   !> Writes one run to an HDF5 file (see docs/output-format.md for the layout).
+   type, extends(sink_t) :: hdf5_sink_t
+      !> Final file name, set by the caller before `open`; written as `path//'.part'`.
+      character(len=:), allocatable :: path
+      !> Samples buffered in memory before each write (also the chunk length in time).
+      integer :: block_rows = 256
+      character(len=:), allocatable, private :: part
+      logical, private :: is_open = .false.       ! between a successful open and close
+      logical, private :: part_made = .false.     ! the .part file may exist
+      integer(hid_t), private :: file_id = -1
+      integer(hid_t), private :: dset(n_ds) = -1
+      integer, private :: n_states = 0, n_nodes = 0, n_el = 0, rows = 0
+      integer, private :: n_buf = 0                ! samples in the block buffers
+      integer(hsize_t), private :: n_written = 0   ! samples already in the file
+      real(wp), allocatable, private :: b_time(:), b_states(:, :), b_theta(:, :), &
+         b_omega(:, :), b_energy(:, :), b_tl(:, :), b_tr(:, :), b_disp(:, :), b_force(:, :)
+      integer, allocatable, private :: b_contact(:, :), b_pairs(:, :)
+   contains
+      procedure :: open => h5_open
+      procedure :: write_sample => h5_write_sample
+      procedure :: close => h5_close
+      procedure :: abort => h5_abort
+   end type hdf5_sink_t
+
+   interface
+      !> C stdio rename(3).
+      function c_rename(old, new) bind(C, name='rename') result(rc)
+         import :: c_int, c_char
+         character(kind=c_char), intent(in) :: old(*), new(*)
+         integer(c_int) :: rc
+      end function c_rename
+      !> C stdio remove(3).
+      function c_remove(path) bind(C, name='remove') result(rc)
+         import :: c_int, c_char
+         character(kind=c_char), intent(in) :: path(*)
+         integer(c_int) :: rc
+      end function c_remove
+   end interface
+
+contains
+
+   ! ------------------------------------------------------------------ sink API
+
+   !> Create `path//'.part'` with all datasets and the run description.
+   subroutine h5_open(self, meta, err)
+      class(hdf5_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: shown
+
+      shown = ''
+      if (allocated(self%path)) shown = self%path
+      if (self%is_open) then
+         call fatal_error(err, "cannot write output file '"//shown// &
+                          "': the HDF5 sink is already open", err_internal)
+         return
+      end if
+      call self%abort()   ! reset any state left from an earlier run
+      if (len(shown) == 0) then
+         call fatal_error(err, "cannot write output file '': no output path set", err_io)
+         return
+      end if
+      if (self%block_rows < 1) then
+         call fatal_error(err, "cannot write output file '"//shown// &
+                          "': block_rows must be positive, got "//str(self%block_rows), err_internal)
+         return
+      end if
+      call open_impl(self, meta, err)
+      if (allocated(err)) then
+         call self%abort()
+         err%message = "cannot write output file '"//shown//"': "//err%message
+      end if
+   end subroutine h5_open
+
+   !> Buffer one sample; append a block to the file when the buffer is full.
+   subroutine h5_write_sample(self, s, err)
+      class(hdf5_sink_t), intent(inout) :: self
+      type(sample_t), intent(in) :: s
+      type(error_t), allocatable, intent(out) :: err
+      integer :: k
+
+      if (.not. self%is_open) then
+         call fatal_error(err, 'HDF5 sink: write_sample called while not open', err_internal)
+         return
+      end if
+      if (bad_size_r(s%y, self%n_states) .or. bad_size_r(s%theta, self%n_nodes) .or. &
+          bad_size_r(s%omega, self%n_nodes) .or. bad_size_r(s%torque_left, self%n_el) .or. &
+          bad_size_r(s%torque_right, self%n_el) .or. bad_size_r(s%displacement, self%n_el) .or. &
+          bad_size_r(s%force, self%n_el) .or. bad_size_i(s%contact, self%n_el) .or. &
+          bad_size_i(s%pairs, self%n_el)) then
+         call fatal_error(err, "HDF5 sink '"//self%path//"': sample arrays do not match the run "// &
+                          "description ("//str(self%n_states)//' states, '//str(self%n_nodes)// &
+                          ' nodes, '//str(self%n_el)//' elements)', err_internal)
+         call self%abort()
+         return
+      end if
+
+      k = self%n_buf + 1
+      self%b_time(k) = s%t
+      self%b_energy(:, k) = s%energy
+      if (self%n_states > 0) self%b_states(:, k) = s%y
+      if (self%n_nodes > 0) then
+         self%b_theta(:, k) = s%theta
+         self%b_omega(:, k) = s%omega
+      end if
+      if (self%n_el > 0) then
+         self%b_tl(:, k) = s%torque_left
+         self%b_tr(:, k) = s%torque_right
+         self%b_disp(:, k) = s%displacement
+         self%b_force(:, k) = s%force
+         self%b_contact(:, k) = s%contact
+         self%b_pairs(:, k) = s%pairs
+      end if
+      self%n_buf = k
+
+      if (self%n_buf == self%rows) then
+         call flush_block(self, err)
+         if (allocated(err)) then
+            err%message = "cannot write output file '"//self%path//"': "//err%message
+            call self%abort()
+         end if
+      end if
+   end subroutine h5_write_sample
+
+   !> Flush, write the event table and run statistics, close and publish the file.
+   subroutine h5_close(self, events, stats, err)
+      class(hdf5_sink_t), intent(inout) :: self
+      type(event_t), intent(in) :: events(:)
+      type(run_stats_t), intent(in) :: stats
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr, i
+      integer(c_int) :: rc
+
+      if (.not. self%is_open) then
+         call fatal_error(err, 'HDF5 sink: close called while not open', err_internal)
+         return
+      end if
+      call flush_block(self, err)
+      if (.not. allocated(err)) call write_events(self%file_id, events, err)
+      if (.not. allocated(err)) call write_stats(self%file_id, stats, err)
+      if (.not. allocated(err)) then
+         do i = 1, n_ds
+            call h5dclose_f(self%dset(i), hdferr)
+            if (hdferr < 0) then
+               call fatal_error(err, 'H5Dclose failed', err_io)
+               exit
+            end if
+            self%dset(i) = -1
+         end do
+      end if
+      if (.not. allocated(err)) then
+         call h5fclose_f(self%file_id, hdferr)
+         if (hdferr < 0) then
+            call fatal_error(err, 'H5Fclose failed (disk full?)', err_io)
+         else
+            self%file_id = -1
+         end if
+      end if
+      if (allocated(err)) then
+         err%message = "cannot write output file '"//self%path//"': "//err%message
+         call self%abort()
+         return
+      end if
+
+      self%is_open = .false.
+      call free_buffers(self)
+      rc = c_rename(self%part//c_null_char, self%path//c_null_char)
+      if (rc /= 0) then
+         ! The data are complete: keep them under the .part name rather than lose them.
+         self%part_made = .false.
+         call fatal_error(err, "cannot write output file '"//self%path//"': rename from '"// &
+                          self%part//"' failed (the complete output was left there)", err_io)
+         return
+      end if
+      self%part_made = .false.
+   end subroutine h5_close
+
+   !> Close whatever is open and delete the `.part` file. Safe to call at any time.
+   subroutine h5_abort(self)
+      class(hdf5_sink_t), intent(inout) :: self
+      integer :: hdferr, i
+      integer(c_int) :: rc
+
+      do i = 1, n_ds
+         if (self%dset(i) >= 0) call h5dclose_f(self%dset(i), hdferr)
+         self%dset(i) = -1
+      end do
+      ! The file was created with H5F_CLOSE_STRONG: this also closes any other object.
+      if (self%file_id >= 0) call h5fclose_f(self%file_id, hdferr)
+      self%file_id = -1
+      if (self%part_made .and. allocated(self%part)) rc = c_remove(self%part//c_null_char)
+      self%part_made = .false.
+      self%is_open = .false.
+      self%n_buf = 0
+      self%n_written = 0
+      call free_buffers(self)
+   end subroutine h5_abort
+
+   ! ------------------------------------------------------------- open helpers
+
+   !> Body of open: errors carry only the reason, h5_open adds the path and cleans up.
+   subroutine open_impl(self, meta, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr, unit, ios, i
+      integer(hid_t) :: fapl, grp
+      character(len=512) :: msg
+      logical :: deflate
+
+      self%part = self%path//'.part'
+      self%n_states = count_of(meta%state_names)
+      self%n_nodes = count_of(meta%node_ids)
+      self%n_el = count_of(meta%element_ids)
+      self%rows = self%block_rows
+      self%n_buf = 0
+      self%n_written = 0
+
+      if (.not. hdf5_ready) then
+         ! Once per process: every h5open_f call makes new copies of ~55 datatypes.
+         call h5open_f(hdferr)
+         if (hdferr < 0) then
+            call fatal_error(err, 'cannot initialise the HDF5 library', err_io)
+            return
+         end if
+         hdf5_ready = .true.
+      end if
+      call h5eset_auto_f(0, hdferr)   ! errors are returned as values, never printed
+
+      ! Probe with Fortran I/O: it gives the operating system's reason on failure.
+      msg = ''
+      open (newunit=unit, file=self%part, status='replace', action='write', iostat=ios, iomsg=msg)
+      if (ios /= 0) then
+         call fatal_error(err, os_reason(msg), err_io)
+         return
+      end if
+      close (unit, status='delete')
+
+      call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, hdferr)
+      if (hdferr < 0) then
+         call fatal_error(err, 'H5Pcreate (file access) failed', err_io)
+         return
+      end if
+      call h5pset_fclose_degree_f(fapl, H5F_CLOSE_STRONG_F, hdferr)
+      ! 1.8 format: large attributes (the deck text) go to dense storage;
+      ! files stay readable by HDF5 1.8 and later.
+      if (hdferr >= 0) call h5pset_libver_bounds_f(fapl, H5F_LIBVER_V18_F, H5F_LIBVER_V18_F, hdferr)
+      if (hdferr >= 0) then
+         self%part_made = .true.
+         call h5fcreate_f(self%part, H5F_ACC_TRUNC_F, self%file_id, hdferr, access_prp=fapl)
+         if (hdferr < 0) self%file_id = -1
+      end if
+      call close_plist(fapl)
+      if (hdferr < 0) then
+         call fatal_error(err, 'H5Fcreate failed for '''//self%part//'''', err_io)
+         return
+      end if
+      self%is_open = .true.
+
+      call h5zfilter_avail_f(H5Z_FILTER_DEFLATE_F, deflate, hdferr)
+      if (hdferr < 0) deflate = .false.
+
+      ! Root attributes.
+      call put_str_attr(self%file_id, 'title', opt_text(meta%title), err)
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'deck_file', opt_text(meta%deck_file), err)
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'deck', opt_text(meta%deck_text), err)
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'units', opt_text(meta%units), err)
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'trainsim_version', opt_text(meta%version), err)
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'integrator', opt_text(meta%integrator), err)
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'created', iso_now(), err)
+      if (allocated(err)) return
+
+      ! Time series datasets.
+      call make_series(self%file_id, 'time', 1, 0, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_time), err)
+      if (allocated(err)) return
+      call make_series(self%file_id, 'states', 2, self%n_states, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_states), err)
+      if (allocated(err)) return
+      call put_names_attr(self%dset(ds_states), 'names', meta%state_names, self%n_states, err)
+      if (allocated(err)) return
+      call make_series(self%file_id, 'energy', 2, 5, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_energy), err)
+      if (allocated(err)) return
+      call put_fixed_names_attr(self%dset(ds_energy), 'names', energy_names, err)
+      if (allocated(err)) return
+
+      ! /nodes
+      call make_group(self%file_id, 'nodes', grp, err)
+      if (allocated(err)) return
+      call make_series(grp, 'theta', 2, self%n_nodes, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_theta), err)
+      if (.not. allocated(err)) call make_series(grp, 'omega', 2, self%n_nodes, self%rows, &
+                                                 H5T_NATIVE_DOUBLE, deflate, self%dset(ds_omega), err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'ids', meta%node_ids, self%n_nodes, err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'types', meta%node_types, self%n_nodes, err)
+      if (.not. allocated(err) .and. allocated(meta%node_params)) then
+         if (size(meta%node_params) /= self%n_nodes) then
+            call fatal_error(err, 'run description has '//str(size(meta%node_params))// &
+                             ' node parameter lists for '//str(self%n_nodes)//' nodes', err_io)
+         else
+            do i = 1, self%n_nodes
+               call put_param_group(grp, member_name(meta%node_ids, i), node_sets, &
+                                    meta%node_params(i), 'node', err)
+               if (allocated(err)) exit
+            end do
+         end if
+      end if
+      call close_group(grp, err)
+      if (allocated(err)) return
+
+      ! /elements
+      call make_group(self%file_id, 'elements', grp, err)
+      if (allocated(err)) return
+      call make_series(grp, 'torque_left', 2, self%n_el, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_tl), err)
+      if (.not. allocated(err)) call make_series(grp, 'torque_right', 2, self%n_el, self%rows, &
+                                                 H5T_NATIVE_DOUBLE, deflate, self%dset(ds_tr), err)
+      if (.not. allocated(err)) call make_series(grp, 'displacement', 2, self%n_el, self%rows, &
+                                                 H5T_NATIVE_DOUBLE, deflate, self%dset(ds_disp), err)
+      if (.not. allocated(err)) call make_series(grp, 'force', 2, self%n_el, self%rows, &
+                                                 H5T_NATIVE_DOUBLE, deflate, self%dset(ds_force), err)
+      if (.not. allocated(err)) call make_series(grp, 'contact', 2, self%n_el, self%rows, &
+                                                 H5T_NATIVE_INTEGER, deflate, self%dset(ds_contact), err)
+      if (.not. allocated(err)) call make_series(grp, 'pairs', 2, self%n_el, self%rows, &
+                                                 H5T_NATIVE_INTEGER, deflate, self%dset(ds_pairs), err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'ids', meta%element_ids, self%n_el, err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'types', meta%element_types, self%n_el, err)
+      if (.not. allocated(err)) call put_index_attr(grp, 'left', meta%element_left, self%n_el, err)
+      if (.not. allocated(err)) call put_index_attr(grp, 'right', meta%element_right, self%n_el, err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'displacement_units', &
+                                                    meta%element_disp_units, self%n_el, err)
+      if (.not. allocated(err)) then
+         if (allocated(meta%element_params)) then
+            if (size(meta%element_params) /= self%n_el) then
+               call fatal_error(err, 'run description has '//str(size(meta%element_params))// &
+                                ' element parameter lists for '//str(self%n_el)//' elements', err_io)
+            end if
+         end if
+      end if
+      if (.not. allocated(err)) then
+         do i = 1, self%n_el
+            if (allocated(meta%element_params)) then
+               call put_param_group(grp, member_name(meta%element_ids, i), element_sets, &
+                                    meta%element_params(i), 'element', err)
+            else
+               call put_param_group(grp, member_name(meta%element_ids, i), element_sets, &
+                                    param_list_t(), 'element', err)
+            end if
+            if (allocated(err)) exit
+         end do
+      end if
+      call close_group(grp, err)
+      if (allocated(err)) return
+
+      call alloc_buffers(self)
+   end subroutine open_impl
+
+   !> Block buffers, allocated once per run.
+   subroutine alloc_buffers(self)
+      type(hdf5_sink_t), intent(inout) :: self
+      integer :: r
+      r = self%rows
+      call free_buffers(self)
+      allocate (self%b_time(r), self%b_energy(5, r))
+      allocate (self%b_states(self%n_states, r))
+      allocate (self%b_theta(self%n_nodes, r), self%b_omega(self%n_nodes, r))
+      allocate (self%b_tl(self%n_el, r), self%b_tr(self%n_el, r), self%b_disp(self%n_el, r), &
+                self%b_force(self%n_el, r), self%b_contact(self%n_el, r), self%b_pairs(self%n_el, r))
+   end subroutine alloc_buffers
+
+   subroutine free_buffers(self)
+      type(hdf5_sink_t), intent(inout) :: self
+      if (allocated(self%b_time)) deallocate (self%b_time)
+      if (allocated(self%b_energy)) deallocate (self%b_energy)
+      if (allocated(self%b_states)) deallocate (self%b_states)
+      if (allocated(self%b_theta)) deallocate (self%b_theta)
+      if (allocated(self%b_omega)) deallocate (self%b_omega)
+      if (allocated(self%b_tl)) deallocate (self%b_tl)
+      if (allocated(self%b_tr)) deallocate (self%b_tr)
+      if (allocated(self%b_disp)) deallocate (self%b_disp)
+      if (allocated(self%b_force)) deallocate (self%b_force)
+      if (allocated(self%b_contact)) deallocate (self%b_contact)
+      if (allocated(self%b_pairs)) deallocate (self%b_pairs)
+   end subroutine free_buffers
+
+   !> Write the buffered samples: extend every series and write one hyperslab each.
+   subroutine flush_block(self, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer :: nb
+      nb = self%n_buf
+      if (nb == 0) return
+      call append_r1(self%dset(ds_time), self%b_time(1:nb), self%n_written, '/time', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_states), self%b_states(:, 1:nb), &
+                                               self%n_written, '/states', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_energy), self%b_energy(:, 1:nb), &
+                                               self%n_written, '/energy', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_theta), self%b_theta(:, 1:nb), &
+                                               self%n_written, '/nodes/theta', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_omega), self%b_omega(:, 1:nb), &
+                                               self%n_written, '/nodes/omega', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_tl), self%b_tl(:, 1:nb), &
+                                               self%n_written, '/elements/torque_left', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_tr), self%b_tr(:, 1:nb), &
+                                               self%n_written, '/elements/torque_right', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_disp), self%b_disp(:, 1:nb), &
+                                               self%n_written, '/elements/displacement', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_force), self%b_force(:, 1:nb), &
+                                               self%n_written, '/elements/force', err)
+      if (.not. allocated(err)) call append_i2(self%dset(ds_contact), self%b_contact(:, 1:nb), &
+                                               self%n_written, '/elements/contact', err)
+      if (.not. allocated(err)) call append_i2(self%dset(ds_pairs), self%b_pairs(:, 1:nb), &
+                                               self%n_written, '/elements/pairs', err)
+      if (allocated(err)) return
+      self%n_written = self%n_written + int(nb, hsize_t)
+      self%n_buf = 0
+   end subroutine flush_block
+
+   ! ------------------------------------------------------------ close helpers
+
+   !> /events: one 1-D dataset per column (zero length when there are no events).
+   subroutine write_events(file_id, events, err)
+      integer(hid_t), intent(in) :: file_id
+      type(event_t), intent(in) :: events(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: grp
+      integer :: n, i, width
+      real(wp) :: rcol(size(events))   ! contiguous copies of the columns
+      integer :: icol(size(events))
+
+      n = size(events)
+      call make_group(file_id, 'events', grp, err)
+      if (allocated(err)) return
+      rcol = events%t
+      call put_column_r(grp, 'time', rcol, err)
+      icol = events%element
+      if (.not. allocated(err)) call put_column_i(grp, 'element', icol, err)
+      icol = events%kind
+      if (.not. allocated(err)) call put_column_i(grp, 'kind', icol, err)
+      if (.not. allocated(err)) then
+         width = 1
+         do i = 1, n
+            width = max(width, len(ev_name(events(i)%kind)) + 1)
+         end do
+         block
+            character(len=width) :: names(n)
+            do i = 1, n
+               names(i) = null_padded(ev_name(events(i)%kind), width)
+            end do
+            call put_column_s(grp, 'kind_name', names, width, err)
+         end block
+      end if
+      rcol = events%approach_velocity
+      if (.not. allocated(err)) call put_column_r(grp, 'approach_velocity', rcol, err)
+      rcol = events%restitution
+      if (.not. allocated(err)) call put_column_r(grp, 'restitution', rcol, err)
+      rcol = events%damping
+      if (.not. allocated(err)) call put_column_r(grp, 'damping', rcol, err)
+      rcol = events%peak_force
+      if (.not. allocated(err)) call put_column_r(grp, 'peak_force', rcol, err)
+      rcol = events%duration
+      if (.not. allocated(err)) call put_column_r(grp, 'duration', rcol, err)
+      call close_group(grp, err)
+   end subroutine write_events
+
+   !> /run_stats: counters (64-bit), timings and the completion flag as attributes.
+   subroutine write_stats(file_id, stats, err)
+      integer(hid_t), intent(in) :: file_id
+      type(run_stats_t), intent(in) :: stats
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: grp
+      integer :: completed
+
+      call make_group(file_id, 'run_stats', grp, err)
+      if (allocated(err)) return
+      completed = merge(1, 0, stats%completed)
+      call put_i8_attr(grp, 'steps', stats%steps, err)
+      if (.not. allocated(err)) call put_i8_attr(grp, 'rhs_evals', stats%rhs_evals, err)
+      if (.not. allocated(err)) call put_i8_attr(grp, 'jac_evals', stats%jac_evals, err)
+      if (.not. allocated(err)) call put_i8_attr(grp, 'root_returns', stats%root_returns, err)
+      if (.not. allocated(err)) call put_i8_attr(grp, 'error_test_fails', stats%error_test_fails, err)
+      if (.not. allocated(err)) call put_i8_attr(grp, 'conv_fails', stats%conv_fails, err)
+      if (.not. allocated(err)) call put_i8_attr(grp, 'events', stats%events, err)
+      if (.not. allocated(err)) call put_i8_attr(grp, 'rejected', stats%rejected, err)
+      if (.not. allocated(err)) call put_real_attr(grp, 'wall_time', stats%wall_time, err)
+      if (.not. allocated(err)) call put_real_attr(grp, 't_final', stats%t_final, err)
+      if (.not. allocated(err)) call put_int_attr(grp, 'completed', completed, err)
+      call close_group(grp, err)
+   end subroutine write_stats
+
+   ! ------------------------------------------------------- low-level writers
+
+   !> Extendible chunked dataset: (n) when rank == 1, else (nvar x n) in Fortran order.
+   !> A zero-sized variable dimension is made unlimited too (chunk sizes must be > 0).
+   subroutine make_series(loc, name, rank, nvar, rows, dtype, deflate, dset, err)
+      integer(hid_t), intent(in) :: loc, dtype
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: rank, nvar, rows
+      logical, intent(in) :: deflate
+      integer(hid_t), intent(out) :: dset
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: space, dcpl
+      integer(hsize_t) :: dims(2), maxdims(2), chunk(2)
+      integer :: hdferr, hdferr2
+
+      dset = -1
+      if (rank == 1) then
+         dims(1) = 0; maxdims(1) = H5S_UNLIMITED_F; chunk(1) = int(rows, hsize_t)
+      else
+         dims = [int(nvar, hsize_t), 0_hsize_t]
+         maxdims = [int(nvar, hsize_t), H5S_UNLIMITED_F]
+         if (nvar == 0) maxdims(1) = H5S_UNLIMITED_F
+         chunk = [int(max(nvar, 1), hsize_t), int(rows, hsize_t)]
+      end if
+
+      call h5screate_simple_f(rank, dims(1:rank), space, hdferr, maxdims(1:rank))
+      if (hdferr < 0) then
+         call fatal_error(err, 'H5Screate failed for dataset '//name, err_io)
+         return
+      end if
+      call h5pcreate_f(H5P_DATASET_CREATE_F, dcpl, hdferr)
+      if (hdferr >= 0) then
+         call h5pset_chunk_f(dcpl, rank, chunk(1:rank), hdferr)
+         if (hdferr >= 0 .and. deflate) call h5pset_deflate_f(dcpl, deflate_level, hdferr)
+         if (hdferr >= 0) then
+            call h5dcreate_f(loc, name, dtype, space, dset, hdferr, dcpl_id=dcpl)
+            if (hdferr < 0) dset = -1
+         end if
+         call h5pclose_f(dcpl, hdferr2)
+      end if
+      call h5sclose_f(space, hdferr2)
+      if (hdferr < 0) call fatal_error(err, 'cannot create dataset '//name, err_io)
+   end subroutine make_series
+
+   !> Extend `dset` to row0+nb rows and select the new rows; also a memory space.
+   subroutine begin_append(dset, rank, nvar, row0, nb, fspace, mspace, what, err)
+      integer(hid_t), intent(in) :: dset
+      integer, intent(in) :: rank, nvar, nb
+      integer(hsize_t), intent(in) :: row0
+      integer(hid_t), intent(out) :: fspace, mspace
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer(hsize_t) :: dims(2), start(2), cnt(2)
+      integer :: hdferr, hdferr2
+
+      fspace = -1
+      mspace = -1
+      if (rank == 1) then
+         dims(1) = row0 + int(nb, hsize_t); start(1) = row0; cnt(1) = int(nb, hsize_t)
+      else
+         dims = [int(nvar, hsize_t), row0 + int(nb, hsize_t)]
+         start = [0_hsize_t, row0]
+         cnt = [int(nvar, hsize_t), int(nb, hsize_t)]
+      end if
+      call h5dset_extent_f(dset, dims(1:rank), hdferr)
+      if (hdferr < 0) then
+         call fatal_error(err, 'H5Dset_extent failed for '//what, err_io)
+         return
+      end if
+      call h5dget_space_f(dset, fspace, hdferr)
+      if (hdferr < 0) then
+         fspace = -1
+         call fatal_error(err, 'H5Dget_space failed for '//what, err_io)
+         return
+      end if
+      call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, start(1:rank), cnt(1:rank), hdferr)
+      if (hdferr >= 0) then
+         call h5screate_simple_f(rank, cnt(1:rank), mspace, hdferr)
+         if (hdferr < 0) mspace = -1
+      end if
+      if (hdferr < 0) then
+         call h5sclose_f(fspace, hdferr2)
+         fspace = -1
+         call fatal_error(err, 'cannot select rows of '//what, err_io)
+      end if
+   end subroutine begin_append
+
+   !> Close the two spaces of an append and turn a failed write into an error.
+   subroutine end_append(fspace, mspace, write_err, what, err)
+      integer(hid_t), intent(in) :: fspace, mspace
+      integer, intent(in) :: write_err
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr
+      call h5sclose_f(mspace, hdferr)
+      call h5sclose_f(fspace, hdferr)
+      if (write_err < 0) call fatal_error(err, 'H5Dwrite failed for '//what//' (disk full?)', err_io)
+   end subroutine end_append
+
+   subroutine append_r1(dset, buf, row0, what, err)
+      integer(hid_t), intent(in) :: dset
+      real(wp), contiguous, intent(in) :: buf(:)
+      integer(hsize_t), intent(in) :: row0
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: fspace, mspace
+      integer :: hdferr
+      call begin_append(dset, 1, 0, row0, size(buf), fspace, mspace, what, err)
+      if (allocated(err)) return
+      call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, buf, [int(size(buf), hsize_t)], hdferr, &
+                      mem_space_id=mspace, file_space_id=fspace)
+      call end_append(fspace, mspace, hdferr, what, err)
+   end subroutine append_r1
+
+   subroutine append_r2(dset, buf, row0, what, err)
+      integer(hid_t), intent(in) :: dset
+      real(wp), contiguous, intent(in) :: buf(:, :)
+      integer(hsize_t), intent(in) :: row0
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: fspace, mspace
+      integer :: hdferr
+      if (size(buf, 1) == 0) then   ! nothing to store, but keep the row count right
+         call h5dset_extent_f(dset, [0_hsize_t, row0 + int(size(buf, 2), hsize_t)], hdferr)
+         if (hdferr < 0) call fatal_error(err, 'H5Dset_extent failed for '//what, err_io)
+         return
+      end if
+      call begin_append(dset, 2, size(buf, 1), row0, size(buf, 2), fspace, mspace, what, err)
+      if (allocated(err)) return
+      call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, buf, int(shape(buf), hsize_t), hdferr, &
+                      mem_space_id=mspace, file_space_id=fspace)
+      call end_append(fspace, mspace, hdferr, what, err)
+   end subroutine append_r2
+
+   subroutine append_i2(dset, buf, row0, what, err)
+      integer(hid_t), intent(in) :: dset
+      integer, contiguous, intent(in) :: buf(:, :)
+      integer(hsize_t), intent(in) :: row0
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: fspace, mspace
+      integer :: hdferr
+      if (size(buf, 1) == 0) then
+         call h5dset_extent_f(dset, [0_hsize_t, row0 + int(size(buf, 2), hsize_t)], hdferr)
+         if (hdferr < 0) call fatal_error(err, 'H5Dset_extent failed for '//what, err_io)
+         return
+      end if
+      call begin_append(dset, 2, size(buf, 1), row0, size(buf, 2), fspace, mspace, what, err)
+      if (allocated(err)) return
+      call h5dwrite_f(dset, H5T_NATIVE_INTEGER, buf, int(shape(buf), hsize_t), hdferr, &
+                      mem_space_id=mspace, file_space_id=fspace)
+      call end_append(fspace, mspace, hdferr, what, err)
+   end subroutine append_i2
+
+   !> Fixed-size 1-D dataset (contiguous; may have zero length).
+   subroutine make_column(loc, name, dtype, n, dset, err)
+      integer(hid_t), intent(in) :: loc, dtype
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: n
+      integer(hid_t), intent(out) :: dset
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: space
+      integer :: hdferr, hdferr2
+      dset = -1
+      call h5screate_simple_f(1, [int(n, hsize_t)], space, hdferr)
+      if (hdferr < 0) then
+         call fatal_error(err, 'H5Screate failed for events/'//name, err_io)
+         return
+      end if
+      call h5dcreate_f(loc, name, dtype, space, dset, hdferr)
+      if (hdferr < 0) then
+         dset = -1
+         call fatal_error(err, 'cannot create dataset events/'//name, err_io)
+      end if
+      call h5sclose_f(space, hdferr2)
+   end subroutine make_column
+
+   !> Close a column dataset, reporting a failed write or close.
+   subroutine finish_column(dset, write_err, name, err)
+      integer(hid_t), intent(in) :: dset
+      integer, intent(in) :: write_err
+      character(len=*), intent(in) :: name
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr
+      call h5dclose_f(dset, hdferr)
+      if (write_err < 0 .or. hdferr < 0) call fatal_error(err, 'cannot write events/'//name, err_io)
+   end subroutine finish_column
+
+   subroutine put_column_r(loc, name, values, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      real(wp), contiguous, intent(in) :: values(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: dset
+      integer :: hdferr
+      call make_column(loc, name, H5T_NATIVE_DOUBLE, size(values), dset, err)
+      if (allocated(err)) return
+      hdferr = 0
+      if (size(values) > 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, values, [int(size(values), hsize_t)], hdferr)
+      call finish_column(dset, hdferr, name, err)
+   end subroutine put_column_r
+
+   subroutine put_column_i(loc, name, values, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      integer, contiguous, intent(in) :: values(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: dset
+      integer :: hdferr
+      call make_column(loc, name, H5T_NATIVE_INTEGER, size(values), dset, err)
+      if (allocated(err)) return
+      hdferr = 0
+      if (size(values) > 0) call h5dwrite_f(dset, H5T_NATIVE_INTEGER, values, [int(size(values), hsize_t)], hdferr)
+      call finish_column(dset, hdferr, name, err)
+   end subroutine put_column_i
+
+   !> Column of fixed-length NULLTERM strings (`names` already null padded to `width`).
+   subroutine put_column_s(loc, name, names, width, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      character(len=*), contiguous, intent(in) :: names(:)
+      integer, intent(in) :: width
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: dset, stype
+      integer :: hdferr, hdferr2
+      call make_string_type(width, stype, err)
+      if (allocated(err)) return
+      call make_column(loc, name, stype, size(names), dset, err)
+      if (.not. allocated(err)) then
+         hdferr = 0
+         if (size(names) > 0) call h5dwrite_f(dset, stype, names, [int(size(names), hsize_t)], hdferr)
+         call finish_column(dset, hdferr, name, err)
+      end if
+      call h5tclose_f(stype, hdferr2)
+   end subroutine put_column_s
+
+   !> Fixed-length, null-terminated C string type of `width` bytes (terminator included).
+   subroutine make_string_type(width, stype, err)
+      integer, intent(in) :: width
+      integer(hid_t), intent(out) :: stype
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr, hdferr2
+      call h5tcopy_f(H5T_FORTRAN_S1, stype, hdferr)
+      if (hdferr < 0) then
+         stype = -1
+         call fatal_error(err, 'H5Tcopy failed for a string type', err_io)
+         return
+      end if
+      call h5tset_size_f(stype, int(width, size_t), hdferr)
+      if (hdferr >= 0) call h5tset_strpad_f(stype, H5T_STR_NULLTERM_F, hdferr)
+      if (hdferr < 0) then
+         call h5tclose_f(stype, hdferr2)
+         stype = -1
+         call fatal_error(err, 'cannot set up a string type of '//str(width)//' bytes', err_io)
+      end if
+   end subroutine make_string_type
+
+   !> Create attribute `name` of type `dtype` with `n` elements (scalar if n < 0).
+   subroutine make_attr(loc, name, dtype, n, attr, err)
+      integer(hid_t), intent(in) :: loc, dtype
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: n
+      integer(hid_t), intent(out) :: attr
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: space
+      integer :: hdferr, hdferr2
+      attr = -1
+      if (n < 0) then
+         call h5screate_f(H5S_SCALAR_F, space, hdferr)
+      else
+         call h5screate_simple_f(1, [int(n, hsize_t)], space, hdferr)
+      end if
+      if (hdferr < 0) then
+         call fatal_error(err, 'H5Screate failed for attribute '//name, err_io)
+         return
+      end if
+      call h5acreate_f(loc, name, dtype, space, attr, hdferr)
+      if (hdferr < 0) then
+         attr = -1
+         call fatal_error(err, "cannot create attribute '"//name//"'", err_io)
+      end if
+      call h5sclose_f(space, hdferr2)
+   end subroutine make_attr
+
+   !> Close an attribute, reporting a failed write or close.
+   subroutine finish_attr(attr, write_err, name, err)
+      integer(hid_t), intent(in) :: attr
+      integer, intent(in) :: write_err
+      character(len=*), intent(in) :: name
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr
+      call h5aclose_f(attr, hdferr)
+      if (write_err < 0 .or. hdferr < 0) call fatal_error(err, "cannot write attribute '"//name//"'", err_io)
+   end subroutine finish_attr
+
+   !> Scalar string attribute (fixed length, NULLTERM; '' allowed).
+   subroutine put_str_attr(loc, name, value, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name, value
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: buf
+      integer(hid_t) :: stype, attr
+      integer :: hdferr, hdferr2
+      buf = value//c_null_char
+      call make_string_type(len(buf), stype, err)
+      if (allocated(err)) return
+      call make_attr(loc, name, stype, -1, attr, err)
+      if (.not. allocated(err)) then
+         call h5awrite_f(attr, stype, buf, [1_hsize_t], hdferr)
+         call finish_attr(attr, hdferr, name, err)
+      end if
+      call h5tclose_f(stype, hdferr2)
+   end subroutine put_str_attr
+
+   !> 1-D string attribute from a list of `n` names (unallocated list: `n` empty strings).
+   subroutine put_names_attr(loc, name, list, n, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      type(string_t), allocatable, intent(in) :: list(:)
+      integer, intent(in) :: n
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, width
+      if (allocated(list)) then
+         if (size(list) /= n) then
+            call fatal_error(err, 'run description: '//name//' has '//str(size(list))// &
+                             ' entries, expected '//str(n), err_io)
+            return
+         end if
+      end if
+      width = 1
+      do i = 1, n
+         width = max(width, len(member_text(list, i)) + 1)
+      end do
+      block
+         character(len=width) :: buf(n)
+         do i = 1, n
+            buf(i) = null_padded(member_text(list, i), width)
+         end do
+         call put_fixed_names_attr(loc, name, buf, err)
+      end block
+   end subroutine put_names_attr
+
+   !> 1-D string attribute from a character array (trailing blanks dropped).
+   subroutine put_fixed_names_attr(loc, name, names, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      character(len=*), contiguous, intent(in) :: names(:)
+      type(error_t), allocatable, intent(out) :: err
+      character(len=len(names) + 1) :: buf(size(names))
+      integer(hid_t) :: stype, attr
+      integer :: hdferr, hdferr2, i
+      do i = 1, size(names)
+         buf(i) = null_padded(trim(names(i)), len(buf))
+      end do
+      call make_string_type(len(buf), stype, err)
+      if (allocated(err)) return
+      call make_attr(loc, name, stype, size(buf), attr, err)
+      if (.not. allocated(err)) then
+         hdferr = 0
+         if (size(buf) > 0) call h5awrite_f(attr, stype, buf, [int(size(buf), hsize_t)], hdferr)
+         call finish_attr(attr, hdferr, name, err)
+      end if
+      call h5tclose_f(stype, hdferr2)
+   end subroutine put_fixed_names_attr
+
+   !> 1-D integer attribute of `n` node indices (the list must be allocated when n > 0).
+   subroutine put_index_attr(loc, name, list, n, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      integer, allocatable, intent(in) :: list(:)
+      integer, intent(in) :: n
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: attr
+      integer :: hdferr
+      integer :: buf(n)
+      if (n > 0) then
+         if (.not. allocated(list)) then
+            call fatal_error(err, 'run description: element '//name//' nodes are missing', err_io)
+            return
+         end if
+         if (size(list) /= n) then
+            call fatal_error(err, 'run description: element '//name//' has '//str(size(list))// &
+                             ' entries, expected '//str(n), err_io)
+            return
+         end if
+         buf = list
+      end if
+      call make_attr(loc, name, H5T_NATIVE_INTEGER, n, attr, err)
+      if (allocated(err)) return
+      hdferr = 0
+      if (n > 0) call h5awrite_f(attr, H5T_NATIVE_INTEGER, buf, [int(n, hsize_t)], hdferr)
+      call finish_attr(attr, hdferr, name, err)
+   end subroutine put_index_attr
+
+   subroutine put_real_attr(loc, name, value, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: attr
+      integer :: hdferr
+      call make_attr(loc, name, H5T_NATIVE_DOUBLE, -1, attr, err)
+      if (allocated(err)) return
+      call h5awrite_f(attr, H5T_NATIVE_DOUBLE, value, [1_hsize_t], hdferr)
+      call finish_attr(attr, hdferr, name, err)
+   end subroutine put_real_attr
+
+   subroutine put_int_attr(loc, name, value, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: attr
+      integer :: hdferr
+      call make_attr(loc, name, H5T_NATIVE_INTEGER, -1, attr, err)
+      if (allocated(err)) return
+      call h5awrite_f(attr, H5T_NATIVE_INTEGER, value, [1_hsize_t], hdferr)
+      call finish_attr(attr, hdferr, name, err)
+   end subroutine put_int_attr
+
+   subroutine put_i8_attr(loc, name, value, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      integer(i8), intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: attr, itype
+      integer :: hdferr
+      itype = h5kind_to_type(i8, H5_INTEGER_KIND)
+      call make_attr(loc, name, itype, -1, attr, err)
+      if (allocated(err)) return
+      call h5awrite_f(attr, itype, value, [1_hsize_t], hdferr)
+      call finish_attr(attr, hdferr, name, err)
+   end subroutine put_i8_attr
+
+   !> Subgroup `<parent>/<name>` holding one scalar real attribute per parameter.
+   subroutine put_param_group(parent, name, reserved, params, what, err)
+      integer(hid_t), intent(in) :: parent
+      character(len=*), intent(in) :: name, what
+      character(len=*), intent(in) :: reserved(:)
+      type(param_list_t), intent(in) :: params
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: grp
+      integer :: j, n
+      if (any(reserved == name)) then
+         call fatal_error(err, what//" id '"//name//"' clashes with the dataset of that name", err_io)
+         return
+      end if
+      if (index(name, '/') > 0 .or. name == '.' .or. name == '..') then
+         call fatal_error(err, what//" id '"//name//"' cannot be used as an HDF5 group name", err_io)
+         return
+      end if
+      n = 0
+      if (allocated(params%values)) n = size(params%values)
+      if (n > 0) then
+         if (.not. allocated(params%names)) then
+            call fatal_error(err, what//" '"//name//"': parameter names are missing", err_io)
+            return
+         end if
+         if (size(params%names) /= n) then
+            call fatal_error(err, what//" '"//name//"': "//str(size(params%names))// &
+                             ' parameter names for '//str(n)//' values', err_io)
+            return
+         end if
+      end if
+      call make_group(parent, name, grp, err)
+      if (allocated(err)) return
+      do j = 1, n
+         if (len(member_text(params%names, j)) == 0) then
+            call fatal_error(err, what//" '"//name//"': parameter "//str(j)//' has no name', err_io)
+            exit
+         end if
+         call put_real_attr(grp, member_text(params%names, j), params%values(j), err)
+         if (allocated(err)) then
+            err%message = what//" '"//name//"': "//err%message//' (duplicate name?)'
+            exit
+         end if
+      end do
+      call close_group(grp, err)
+   end subroutine put_param_group
+
+   subroutine make_group(loc, name, grp, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      integer(hid_t), intent(out) :: grp
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr
+      call h5gcreate_f(loc, name, grp, hdferr)
+      if (hdferr < 0) then
+         grp = -1
+         call fatal_error(err, "cannot create group '"//name//"'", err_io)
+      end if
+   end subroutine make_group
+
+   !> Close a group; keeps an earlier error, or reports a failed close.
+   subroutine close_group(grp, err)
+      integer(hid_t), intent(in) :: grp
+      type(error_t), allocatable, intent(inout) :: err
+      integer :: hdferr
+      if (grp < 0) return
+      call h5gclose_f(grp, hdferr)
+      if (hdferr < 0 .and. .not. allocated(err)) call fatal_error(err, 'H5Gclose failed', err_io)
+   end subroutine close_group
+
+   subroutine close_plist(plist)
+      integer(hid_t), intent(in) :: plist
+      integer :: hdferr
+      call h5pclose_f(plist, hdferr)
+   end subroutine close_plist
+
+   ! ------------------------------------------------------------ small utilities
+
+   !> `text` followed by NUL characters up to `width`.
+   pure function null_padded(text, width) result(buf)
+      character(len=*), intent(in) :: text
+      integer, intent(in) :: width
+      character(len=width) :: buf
+      buf = repeat(c_null_char, width)
+      buf(1:min(len(text), width)) = text
+   end function null_padded
+
+   !> Number of entries of an optional list.
+   pure integer function count_of(list)
+      type(string_t), allocatable, intent(in) :: list(:)
+      count_of = 0
+      if (allocated(list)) count_of = size(list)
+   end function count_of
+
+   !> Entry `i` of an optional list ('' when absent).
+   pure function member_text(list, i) result(text)
+      type(string_t), allocatable, intent(in) :: list(:)
+      integer, intent(in) :: i
+      character(len=:), allocatable :: text
+      text = ''
+      if (.not. allocated(list)) return
+      if (i > size(list)) return
+      if (allocated(list(i)%s)) text = list(i)%s
+   end function member_text
+
+   !> Group name for member `i`: its id, or '_<i>' when the id is empty.
+   pure function member_name(list, i) result(name)
+      type(string_t), allocatable, intent(in) :: list(:)
+      integer, intent(in) :: i
+      character(len=:), allocatable :: name
+      name = member_text(list, i)
+      if (len(name) == 0) name = '_'//str(i)
+   end function member_name
+
+   !> An optional deferred-length text ('' when unallocated).
+   pure function opt_text(text) result(out)
+      character(len=:), allocatable, intent(in) :: text
+      character(len=:), allocatable :: out
+      out = ''
+      if (allocated(text)) out = text
+   end function opt_text
+
+   !> True when an optional sample array does not have `n` entries.
+   pure logical function bad_size_r(a, n)
+      real(wp), allocatable, intent(in) :: a(:)
+      integer, intent(in) :: n
+      if (allocated(a)) then
+         bad_size_r = size(a) /= n
+      else
+         bad_size_r = n > 0
+      end if
+   end function bad_size_r
+
+   pure logical function bad_size_i(a, n)
+      integer, allocatable, intent(in) :: a(:)
+      integer, intent(in) :: n
+      if (allocated(a)) then
+         bad_size_i = size(a) /= n
+      else
+         bad_size_i = n > 0
+      end if
+   end function bad_size_i
+
+   !> The operating-system part of a gfortran OPEN message ("Cannot open file 'x': reason").
+   pure function os_reason(msg) result(reason)
+      character(len=*), intent(in) :: msg
+      character(len=:), allocatable :: reason
+      integer :: k
+      k = index(msg, ': ', back=.true.)
+      if (k > 0) then
+         reason = trim(msg(k + 2:))
+      else
+         reason = trim(msg)
+      end if
+      if (len(reason) == 0) reason = 'cannot create file'
+   end function os_reason
+
+   !> Local date and time as ISO 8601, e.g. 2024-05-01T13:45:07+02:00.
+   function iso_now() result(stamp)
+      character(len=:), allocatable :: stamp
+      character(len=8) :: d
+      character(len=10) :: t
+      character(len=5) :: z
+      call date_and_time(date=d, time=t, zone=z)
+      stamp = d(1:4)//'-'//d(5:6)//'-'//d(7:8)//'T'//t(1:2)//':'//t(3:4)//':'//t(5:6)
+      if (len_trim(z) == 5) stamp = stamp//z(1:3)//':'//z(4:5)
+   end function iso_now
+end module trainsim_hdf5

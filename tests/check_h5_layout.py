@@ -1,0 +1,178 @@
+#!/usr/bin/python3
+"""Print the layout of a trainsim HDF5 output file and check that it is complete.
+
+Usage: /usr/bin/python3 tests/check_h5_layout.py FILE
+
+Checks the datasets, groups and attributes described in docs/output-format.md and that
+their dimensions agree. Exits 0 when everything is there, 1 (listing the problems)
+otherwise, 2 on bad usage.
+"""
+import sys
+
+import h5py
+import numpy as np
+
+ROOT_ATTRS = ["title", "deck_file", "deck", "units", "trainsim_version", "integrator", "created"]
+ELEMENT_REAL = ["torque_left", "torque_right", "displacement", "force"]
+ELEMENT_INT = ["contact", "pairs"]
+ENERGY_NAMES = ["kinetic", "potential", "dissipated", "input", "balance"]
+EVENT_COLUMNS = ["time", "element", "kind", "kind_name", "approach_velocity",
+                 "restitution", "damping", "peak_force", "duration"]
+STATS_INT = ["steps", "rhs_evals", "jac_evals", "root_returns", "error_test_fails",
+             "conv_fails", "events", "rejected"]
+STATS_REAL = ["wall_time", "t_final"]
+
+
+def text(value):
+    """Fixed-length HDF5 strings arrive as bytes: decode (element-wise for arrays)."""
+    if isinstance(value, (bytes, np.bytes_)):
+        return value.decode("ascii", "replace")
+    if isinstance(value, np.ndarray):
+        return [text(v) for v in value.tolist()]
+    return value
+
+
+def short(value, width=60):
+    s = repr(text(value))
+    return s if len(s) <= width else s[: width - 3] + "..."
+
+
+def show(f):
+    """Print every group and dataset with shape, type, chunking and attributes."""
+    def attrs(obj, indent):
+        for k, v in obj.attrs.items():
+            print(f"{indent}@{k} = {short(v)}")
+
+    print("/")
+    attrs(f, "  ")
+
+    def visit(name, obj):
+        depth = name.count("/") + 1
+        indent = "  " * depth
+        if isinstance(obj, h5py.Dataset):
+            print(f"{indent}{name}  shape={obj.shape} maxshape={obj.maxshape} "
+                  f"dtype={obj.dtype} chunks={obj.chunks} compression={obj.compression}")
+        else:
+            print(f"{indent}{name}/")
+        attrs(obj, indent + "  ")
+
+    f.visititems(visit)
+
+
+class Checker:
+    def __init__(self):
+        self.problems = []
+
+    def require(self, condition, message):
+        if not condition:
+            self.problems.append(message)
+        return condition
+
+
+def check(f):
+    c = Checker()
+
+    for a in ROOT_ATTRS:
+        c.require(a in f.attrs, f"root attribute '{a}' missing")
+
+    for name in ["time", "states", "energy", "nodes", "elements", "events", "run_stats"]:
+        c.require(name in f, f"'/{name}' missing")
+    if c.problems:
+        return c.problems
+
+    n = f["time"].shape[0]
+    c.require(f["time"].ndim == 1, "/time is not 1-D")
+    c.require(f["time"].maxshape[0] is None, "/time is not extendible")
+    t = f["time"][...]
+    c.require(bool(np.all(np.diff(t) >= 0)), "/time is not non-decreasing")
+
+    states = f["states"]
+    c.require(states.ndim == 2 and states.shape[0] == n, f"/states shape {states.shape}, expected ({n}, n_states)")
+    if c.require("names" in states.attrs, "/states@names missing"):
+        c.require(len(states.attrs["names"]) == states.shape[1],
+                  f"/states@names has {len(states.attrs['names'])} entries for {states.shape[1]} states")
+
+    energy = f["energy"]
+    c.require(energy.shape == (n, 5), f"/energy shape {energy.shape}, expected ({n}, 5)")
+    if c.require("names" in energy.attrs, "/energy@names missing"):
+        c.require(text(energy.attrs["names"]) == ENERGY_NAMES, f"/energy@names = {text(energy.attrs['names'])}")
+
+    nodes = f["nodes"]
+    n_nodes = None
+    for a in ["ids", "types"]:
+        c.require(a in nodes.attrs, f"/nodes@{a} missing")
+    if "ids" in nodes.attrs:
+        n_nodes = len(nodes.attrs["ids"])
+        if "types" in nodes.attrs:
+            c.require(len(nodes.attrs["types"]) == n_nodes, "/nodes@types length differs from @ids")
+    for d in ["theta", "omega"]:
+        if c.require(d in nodes, f"/nodes/{d} missing") and n_nodes is not None:
+            c.require(nodes[d].shape == (n, n_nodes), f"/nodes/{d} shape {nodes[d].shape}, expected ({n}, {n_nodes})")
+
+    el = f["elements"]
+    n_el = None
+    for a in ["ids", "types", "left", "right", "displacement_units"]:
+        c.require(a in el.attrs, f"/elements@{a} missing")
+    if "ids" in el.attrs:
+        n_el = len(el.attrs["ids"])
+        for a in ["types", "left", "right", "displacement_units"]:
+            if a in el.attrs:
+                c.require(len(el.attrs[a]) == n_el, f"/elements@{a} length differs from @ids")
+        if n_nodes is not None:
+            for a in ["left", "right"]:
+                if a in el.attrs and n_el > 0:
+                    idx = np.asarray(el.attrs[a])
+                    c.require(bool(np.all((idx >= 1) & (idx <= n_nodes))),
+                              f"/elements@{a} = {idx} not within 1..{n_nodes}")
+        for i, eid in enumerate(text(el.attrs["ids"])):
+            group = eid if eid else f"_{i + 1}"
+            c.require(group in el and isinstance(el[group], h5py.Group),
+                      f"/elements/{group} parameter group missing")
+    for d in ELEMENT_REAL + ELEMENT_INT:
+        if c.require(d in el, f"/elements/{d} missing") and n_el is not None:
+            c.require(el[d].shape == (n, n_el), f"/elements/{d} shape {el[d].shape}, expected ({n}, {n_el})")
+            kind = "i" if d in ELEMENT_INT else "f"
+            c.require(el[d].dtype.kind == kind, f"/elements/{d} dtype {el[d].dtype}")
+
+    ev = f["events"]
+    n_ev = None
+    for col in EVENT_COLUMNS:
+        if c.require(col in ev, f"/events/{col} missing"):
+            c.require(ev[col].ndim == 1, f"/events/{col} is not 1-D")
+            if n_ev is None:
+                n_ev = ev[col].shape[0]
+            c.require(ev[col].shape[0] == n_ev, f"/events/{col} has {ev[col].shape[0]} rows, expected {n_ev}")
+    if "element" in ev and n_el is not None and n_ev:
+        e = ev["element"][...]
+        c.require(bool(np.all((e >= 0) & (e <= n_el))), f"/events/element out of range: {e}")
+
+    rs = f["run_stats"]
+    for a in STATS_INT:
+        if c.require(a in rs.attrs, f"/run_stats@{a} missing"):
+            c.require(np.asarray(rs.attrs[a]).dtype == np.int64, f"/run_stats@{a} is not a 64-bit integer")
+    for a in STATS_REAL:
+        c.require(a in rs.attrs, f"/run_stats@{a} missing")
+    if c.require("completed" in rs.attrs, "/run_stats@completed missing"):
+        c.require(int(rs.attrs["completed"]) in (0, 1), "/run_stats@completed is not 0/1")
+
+    return c.problems
+
+
+def main(argv):
+    if len(argv) != 2:
+        print(__doc__.strip(), file=sys.stderr)
+        return 2
+    with h5py.File(argv[1], "r") as f:
+        show(f)
+        problems = check(f)
+    if problems:
+        print(f"\nlayout check FAILED ({len(problems)} problem(s)):")
+        for p in problems:
+            print("  - " + p)
+        return 1
+    print("\nlayout check passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

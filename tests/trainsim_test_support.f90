@@ -1,0 +1,64 @@
+!> Helpers for the test suites: build a model from a deck file or text and run
+!> it in memory. A setup failure is a test-harness failure (error stop).
+module trainsim_test_support
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t
+   use trainsim_deck, only: deck_t, read_deck, parse_deck
+   use trainsim_builder, only: build_model
+   use trainsim_model, only: model_t
+   use trainsim_simulate, only: simulate
+   use trainsim_observer, only: run_result_t
+   use trainsim_sink, only: null_sink_t
+   implicit none
+   private
+
+   public :: load_model, load_model_text, run_model, nl
+
+   character(len=1), parameter :: nl = new_line('a')
+
+contains
+
+   !> Model from a deck file (paths relative to the repository root).
+   subroutine load_model(path, model)
+      character(len=*), intent(in) :: path
+      type(model_t), intent(out) :: model
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      call read_deck(path, deck, err)
+      if (.not. allocated(err)) call build_model(deck, model, err)
+      if (allocated(err)) then
+         write (*, '(a)') 'test setup failed: '//err%message
+         error stop 2
+      end if
+      model%run%output = ''
+   end subroutine load_model
+
+   !> Model from deck text.
+   subroutine load_model_text(text, model)
+      character(len=*), intent(in) :: text
+      type(model_t), intent(out) :: model
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      call parse_deck(text, 'inline.nml', deck, err)
+      if (.not. allocated(err)) call build_model(deck, model, err)
+      if (allocated(err)) then
+         write (*, '(a)') 'test setup failed: '//err%message
+         error stop 2
+      end if
+      model%run%output = ''
+   end subroutine load_model_text
+
+   !> Run without output; keep the in-memory series.
+   subroutine run_model(model, res)
+      type(model_t), intent(inout) :: model
+      type(run_result_t), intent(out) :: res
+      type(null_sink_t) :: none
+      type(error_t), allocatable :: err
+      model%run%keep_series = .true.
+      call simulate(model, none, res, err)
+      if (allocated(err)) then
+         write (*, '(a)') 'run failed: '//err%message
+         error stop 2
+      end if
+   end subroutine run_model
+end module trainsim_test_support
