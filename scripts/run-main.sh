@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Set up (install what is missing, build in Release) and run the main job on the
+# bundled deck; the HDF5 history goes to results/.
+#
+#   bash scripts/run-main.sh
+set -euo pipefail
+
+repo_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$repo_root"
+
+bash scripts/setup.sh
+
+deck=inputs/gregory_harris_munro.nml
+if [ ! -f "$deck" ]; then
+  echo "run-main.sh: $deck is not there yet; running verification/table5_1/table5_1.nml instead"
+  deck=verification/table5_1/table5_1.nml
+fi
+
+mkdir -p results
+out="results/$(basename "$deck" .nml).h5"
+build/trainsim run "$deck" -o "$out"
+echo "run-main.sh: history of $deck written to $repo_root/$out"

@@ -1,0 +1,428 @@
+#!/usr/bin/python3
+"""Bad decks and command-line misuse must fail cleanly.
+
+Usage (as CTest runs it, cwd = repo root):
+
+    /usr/bin/python3 tests/cli/run_bad_decks.py <path to trainsim>
+
+Every case writes its deck to a fresh temporary directory as ``deck.nml``, runs
+``trainsim run deck.nml -o <tmp>/out.h5`` there (or the command line the case gives)
+and checks:
+
+* the exit status (2 for input and file errors, 1 for a run that fails numerically);
+* that stderr holds every expected substring (file name, ``deck.nml:<line>:``, the
+  offending key/value/group, what was expected);
+* that stderr holds none of the signs of a crash (backtrace, runtime error, signal);
+* that no output file was left behind (neither out.h5 nor out.h5.part).
+
+One line per case (ok/FAIL), then ``N passed, M failed``; exit status 1 if M > 0.
+"""
+
+import os
+import subprocess
+import sys
+import tempfile
+
+# Signs of a crash rather than a clean error report.
+FORBIDDEN = [
+    "Backtrace",
+    "Error termination",
+    "Fortran runtime error",
+    "SIGSEGV",
+    "SIGFPE",
+    "Program received signal",
+]
+
+TIMEOUT = 120  # seconds per case; a hang is a failure
+
+# A small valid train: two disks on one shaft. Line numbers: 1 &run, 2-3 &node, 4 &element.
+RUN = "&run t_end = 0.01, dt = 1.0e-4 /\n"
+NODES = (
+    "&node id = 'a', type = 'inertia', inertia = 5.0 /\n"
+    "&node id = 'b', type = 'inertia', inertia = 11.0 /\n"
+)
+SHAFT = "&element id = 's1', type = 'shaft', stiffness = 1.0e5 /\n"
+GOOD = RUN + NODES + SHAFT
+
+# Three disks of verification/table5_1 (19.68 and 32.25 Hz modes).
+TABLE5_1 = (
+    "&run title = 'unstable', t_end = {t_end}, dt = {dt}, integrator = 'rk4' /\n"
+    "&node id = 'n1', type = 'inertia', inertia = 5.0 /\n"
+    "&node id = 'n2', type = 'inertia', inertia = 11.0 /\n"
+    "&node id = 'n3', type = 'inertia', inertia = 22.0 /\n"
+    "&element id = 'e1', type = 'shaft', stiffness = 100000.0 /\n"
+    "&element id = 'e2', type = 'shaft', stiffness = 200000.0 /\n"
+    "&initial node = 'n1', angle = 0.1000 /\n"
+    "&initial node = 'n2', angle = 0.02353 /\n"
+    "&initial node = 'n3', angle = -0.03449 /\n"
+)
+
+
+def load(text):
+    """GOOD plus a &load group (line 5)."""
+    return GOOD + "&load " + text + " /\n"
+
+
+# Each case: name, deck (text; None for CLI cases), args (command line after the
+# executable; '{out}' is replaced by the output path; default run deck.nml -o {out}),
+# exit (expected status), stderr (substrings that must appear), optional stdout
+# (substrings that must appear on stdout), optional output (True: out.h5 must exist).
+CASES = [
+    # ---- sanity: the base deck is good, so the failures below are the edits' doing
+    dict(name="baseline good deck runs", deck=GOOD, exit=0, stderr=[], output=True),
+    dict(name="&initial node='all' is accepted", deck=GOOD + "&initial node = 'all', speed = 10.0 /\n",
+         exit=0, stderr=[], output=True),
+
+    # ---- unknown names
+    dict(name="unknown key in &node",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0,\n      diameter = 3.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:3:", "unknown key 'diameter'", "inertia", "valid keys are"]),
+    dict(name="unknown key in &run",
+         deck="&run t_end = 0.01, dt = 1.0e-4, tend = 3.0 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "unknown key 'tend'", "t_end", "valid keys are"]),
+    dict(name="unknown group name",
+         deck=RUN + NODES + SHAFT + "&nodes id = 'c', type = 'inertia', inertia = 1.0 /\n",
+         exit=2, stderr=["deck.nml:5:", "unknown group '&nodes'", "valid groups are", "node"]),
+    dict(name="unknown node type",
+         deck=RUN + "&node id = 'a', type = 'disk', inertia = 5.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "unknown node type 'disk'", "valid node types are", "inertia"]),
+    dict(name="unknown element type",
+         deck=RUN + NODES + "&element id = 's1', type = 'spring', stiffness = 1.0e5 /\n",
+         exit=2, stderr=["deck.nml:4:", "unknown element type 'spring'", "valid element types are", "shaft"]),
+    dict(name="unknown integrator",
+         deck="&run t_end = 0.01, dt = 1.0e-4, integrator = 'euler' /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "unknown integrator 'euler'", "valid integrators are", "rk4"]),
+    dict(name="unknown unit system",
+         deck="&run t_end = 0.01, dt = 1.0e-4, units = 'cgs' /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "unknown unit system 'cgs'", "si"]),
+    dict(name="unknown load kind (time function)",
+         deck=load("node = 'b', kind = 'square', value = 1.0"),
+         exit=2, stderr=["deck.nml:5:", "unknown time function kind 'square'", "valid kinds are", "table"]),
+    dict(name="unknown load quantity",
+         deck=load("node = 'b', quantity = 'force', value = 1.0"),
+         exit=2, stderr=["deck.nml:5:", "unknown load quantity 'force'", "torque, speed, voltage"]),
+
+    # ---- topology
+    dict(name="element joins a missing node",
+         deck=RUN + NODES + "&element id = 's1', type = 'shaft', left = 'a',\n"
+         "         right = 'zz', stiffness = 1.0e5 /\n",
+         exit=2, stderr=["deck.nml:5:", "'s1'", "'zz'", "not defined"]),
+    dict(name="element joins a node to itself",
+         deck=RUN + NODES + "&element id = 's1', type = 'shaft', left = 'a', right = 'a', stiffness = 1.0e5 /\n",
+         exit=2, stderr=["deck.nml:4:", "'s1'", "'a'", "to itself"]),
+    dict(name="chain default runs out of nodes",
+         deck=GOOD + "&element id = 's2', type = 'shaft', stiffness = 1.0e5 /\n",
+         exit=2, stderr=["deck.nml:5:", "'s2'", "not defined", "right"]),
+    dict(name="duplicate node id",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0 /\n"
+         "&node id = 'a', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:3:", "duplicate node id 'a'"]),
+    dict(name="duplicate element id",
+         deck=RUN + NODES + "&node id = 'c', type = 'inertia', inertia = 22.0 /\n"
+         "&element id = 's1', type = 'shaft', stiffness = 1.0e5 /\n"
+         "&element id = 's1', type = 'shaft', stiffness = 2.0e5 /\n",
+         exit=2, stderr=["deck.nml:6:", "duplicate element id 's1'"]),
+    dict(name="no &node group",
+         deck=RUN,
+         exit=2, stderr=["deck.nml", "no &node group"]),
+
+    # ---- physical values
+    dict(name="negative inertia",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = -5.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "inertia", "must be > 0", "-5"]),
+    dict(name="zero inertia",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 0.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "inertia", "must be > 0"]),
+    dict(name="negative shaft damping",
+         deck=RUN + NODES + "&element id = 's1', type = 'shaft', stiffness = 1.0e5, damping = -1.0 /\n",
+         exit=2, stderr=["deck.nml:4:", "damping", "must be >= 0"]),
+    dict(name="zero shaft stiffness",
+         deck=RUN + NODES + "&element id = 's1', type = 'shaft', stiffness = 0.0 /\n",
+         exit=2, stderr=["deck.nml:4:", "stiffness", "must be > 0"]),
+    dict(name="ideal gear with zero base radius",
+         deck=RUN + NODES + "&element id = 'g1', type = 'ideal_gear', stiffness = 1.0e6,\n"
+         "         rb_driver = 0.0, rb_driven = 2.0 /\n",
+         exit=2, stderr=["deck.nml:5:", "rb_driver", "must be > 0"]),
+
+    # ---- &run timing
+    dict(name="zero dt",
+         deck="&run t_end = 0.01, dt = 0.0 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "dt", "must be > 0"]),
+    dict(name="negative dt",
+         deck="&run t_end = 0.01,\n     dt = -1.0e-4 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "dt", "must be > 0", "-"]),
+    dict(name="dt longer than the run",
+         deck="&run t_end = 0.01, dt = 0.1 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "dt", "longer than the run"]),
+    dict(name="t_end before t_start",
+         deck="&run t_start = 1.0, t_end = 0.5, dt = 1.0e-4 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "t_end", "later than t_start"]),
+    dict(name="t_end equal to t_start",
+         deck="&run t_start = 0.5, t_end = 0.5, dt = 1.0e-4 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "t_end", "later than t_start"]),
+    dict(name="dt so small that the step count overflows",
+         deck="&run t_end = 1.0, dt = 1.0e-20 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "dt"]),
+    dict(name="rtol out of range",
+         deck="&run t_end = 0.01, dt = 1.0e-4, rtol = 2.0 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "rtol", "(0, 1)"]),
+    dict(name="negative output_interval",
+         deck="&run t_end = 0.01, dt = 1.0e-4, output_interval = -1.0 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "output_interval", ">= 0"]),
+
+    # ---- missing fields and bad values
+    dict(name="missing stiffness of a shaft",
+         deck=RUN + NODES + "&element id = 's1', type = 'shaft', damping = 1.0 /\n",
+         exit=2, stderr=["deck.nml:4:", "missing required key 'stiffness'", "real number"]),
+    dict(name="missing t_end",
+         deck="&run dt = 1.0e-4 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "missing required key 't_end'"]),
+    dict(name="missing node type",
+         deck=RUN + "&node id = 'a', inertia = 5.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "missing required key 'type'"]),
+    dict(name="non-numeric value",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = abc /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "'inertia'", "expected a real number", "'abc'"]),
+    dict(name="number with trailing text",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0kg /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "'inertia'", "expected a real number", "'5.0kg'"]),
+    dict(name="number out of range",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 1.0e999 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "'inertia'", "out of range"]),
+    dict(name="quoted number",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = '5.0' /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "'inertia'", "real number", "quoted", "5.0"]),
+    dict(name="two values for a scalar",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0, 6.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "'inertia'", "expected one value, got 2"]),
+    dict(name="bad logical",
+         deck="&run t_end = 0.01, dt = 1.0e-4, track_energy = maybe /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "'track_energy'", "logical", "'maybe'"]),
+    dict(name="duplicate key",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0,\n      inertia = 6.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:3:", "duplicate key 'inertia'", "line 2"]),
+    dict(name="missing '=' after a key",
+         deck=RUN + "&node id = 'a', type = 'inertia' inertia 5.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "missing '='", "'inertia'"]),
+    dict(name="repeat count",
+         deck=load("node = 'b', kind = 'table', times = 0.0, 1.0, values = 2*0.0"),
+         exit=2, stderr=["deck.nml:5:", "repeat count", "2*0.0"]),
+
+    # ---- syntax
+    dict(name="unterminated string",
+         deck=RUN + "&node id = 'a, type = 'inertia', inertia = 5.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "unterminated string"]),
+    dict(name="group not closed at end of file",
+         deck=GOOD + "&initial node = 'a', angle = 0.1\n",
+         exit=2, stderr=["deck.nml:5:", "not closed", "'/'"]),
+    dict(name="group not closed before the next group",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:3:", "not closed", "&node", "line 2"]),
+    dict(name="text outside a group",
+         deck="hello\n" + GOOD,
+         exit=2, stderr=["deck.nml:1:", "text outside a group", "'hello'"]),
+    dict(name="group closed twice",
+         deck=RUN + NODES + SHAFT.rstrip("\n") + " /\n",
+         exit=2, stderr=["deck.nml:4:", "text outside a group", "'/'"]),
+    dict(name="'&' without a group name",
+         deck=GOOD + "& node = 'a', angle = 0.1 /\n",
+         exit=2, stderr=["deck.nml:5:", "group name"]),
+    dict(name="empty deck",
+         deck="! nothing but a comment\n",
+         exit=2, stderr=["deck.nml", "&run", "found 0"]),
+
+    # ---- &run count
+    dict(name="no &run group",
+         deck=NODES + SHAFT,
+         exit=2, stderr=["deck.nml", "exactly one &run group", "found 0"]),
+    dict(name="two &run groups",
+         deck=RUN + NODES + SHAFT + RUN,
+         exit=2, stderr=["deck.nml", "exactly one &run group", "found 2"]),
+
+    # ---- loads, speeds, initial conditions
+    dict(name="load on a missing node",
+         deck=load("node = 'zz', value = -798.8"),
+         exit=2, stderr=["deck.nml:5:", "load on node 'zz'", "not defined"]),
+    dict(name="prescribed speed on a fixed node",
+         deck=RUN + "&node id = 'a', type = 'fixed' /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT
+         + "&load node = 'a', quantity = 'speed', value = 10.0 /\n",
+         exit=2, stderr=["deck.nml:5:", "'a'", "fixed", "cannot have a prescribed speed"]),
+    dict(name="two prescribed speeds on one node",
+         deck=load("node = 'a', quantity = 'speed', value = 10.0")
+         + "&load node = 'a', quantity = 'speed', value = 20.0 /\n",
+         exit=2, stderr=["deck.nml:6:", "'a'", "already has a prescribed speed"]),
+    dict(name="two voltage sources on one motor",
+         deck=RUN + "&node id = 'm', type = 'dc_motor', inertia = 0.1, torque_constant = 8.85,\n"
+         "      inductance = 0.01, resistance = 1.0, back_emf_constant = 1.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT
+         + "&load node = 'm', quantity = 'voltage', value = 24.0 /\n"
+         "&load node = 'm', quantity = 'voltage', value = 12.0 /\n",
+         exit=2, stderr=["deck.nml:7:", "'m'", "voltage"]),
+    dict(name="voltage on an inertia node",
+         deck=load("node = 'a', quantity = 'voltage', value = 24.0"),
+         exit=2, stderr=["deck.nml:5:", "'a'", "no voltage input", "dc_motor"]),
+    dict(name="table load with times/values of different lengths",
+         deck=load("node = 'b', kind = 'table',\n      times = 0.0, 0.5, 1.0,\n      values = 0.0, 1.0"),
+         exit=2, stderr=["deck.nml:7:", "3 times but 2 values"]),
+    dict(name="table load with decreasing times",
+         deck=load("node = 'b', kind = 'table',\n      times = 0.0, 0.5, 0.2,\n      values = 0.0, 1.0, 2.0"),
+         exit=2, stderr=["deck.nml:6:", "times", "must not decrease"]),
+    dict(name="table load without times",
+         deck=load("node = 'b', kind = 'table'"),
+         exit=2, stderr=["deck.nml:5:", "'table'", "times", "values"]),
+    dict(name="table_file that does not exist",
+         deck=load("node = 'b', kind = 'table', table_file = 'no-such-table.txt'"),
+         exit=2, stderr=["deck.nml:5:", "table_file", "no-such-table.txt"]),
+    dict(name="ramp ending before it starts",
+         deck=load("node = 'b', kind = 'ramp', value1 = 5.0, t0 = 0.5, t1 = 0.2"),
+         exit=2, stderr=["deck.nml:5:", "t1", "later than its start"]),
+    dict(name="sine with zero frequency",
+         deck=load("node = 'b', kind = 'sine', amplitude = 1.0, frequency = 0.0"),
+         exit=2, stderr=["deck.nml:5:", "frequency", "> 0"]),
+    dict(name="start_stop with zero cycles",
+         deck=load("node = 'b', kind = 'start_stop', value = 1.0, t_accel = 0.1,\n"
+                   "      t_cruise = 0.1, t_decel = 0.1, cycles = 0"),
+         exit=2, stderr=["deck.nml:6:", "cycles", ">= 1"]),
+    dict(name="unknown key for a time function",
+         deck=load("node = 'b', kind = 'constant', value = 1.0, amplitude = 2.0"),
+         exit=2, stderr=["deck.nml:5:", "unknown key 'amplitude'", "valid keys are"]),
+    dict(name="initial conditions for a missing node",
+         deck=GOOD + "&initial node = 'zz', angle = 0.1 /\n",
+         exit=2, stderr=["deck.nml:5:", "'zz'", "not defined"]),
+    dict(name="two &initial groups for one node",
+         deck=GOOD + "&initial node = 'a', angle = 0.1 /\n&initial node = 'a', speed = 1.0 /\n",
+         exit=2, stderr=["deck.nml:6:", "'a'", "two &initial groups"]),
+    dict(name="initial speed of a fixed node",
+         deck=RUN + "&node id = 'a', type = 'fixed' /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT
+         + "&initial node = 'a', speed = 3.0 /\n",
+         exit=2, stderr=["deck.nml:5:", "'a'", "fixed", "speed must be 0"]),
+    dict(name="dc_motor missing its resistance",
+         deck=RUN + "&node id = 'a', type = 'dc_motor', inertia = 0.1, torque_constant = 1.0,\n"
+         "      inductance = 0.01, back_emf_constant = 0.113 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:2:", "missing required key 'resistance'"]),
+
+    # ---- files
+    dict(name="deck path does not exist", deck=None,
+         args=["run", "{tmp}/no-such-deck.nml", "-o", "{out}"],
+         exit=2, stderr=["cannot open deck", "no-such-deck.nml"]),
+    dict(name="deck path is a directory", deck=None, mkdir="adir.nml",
+         args=["run", "{tmp}/adir.nml", "-o", "{out}"],
+         exit=2, stderr=["adir.nml"]),
+    dict(name="unwritable output path", deck=GOOD,
+         args=["run", "deck.nml", "-o", "/nonexistent-dir/out.h5"],
+         exit=2, stderr=["/nonexistent-dir/out.h5", "cannot write output file"]),
+    dict(name="output path is a directory", deck=GOOD, mkdir="out.h5",
+         args=["run", "deck.nml", "-o", "{out}"],
+         exit=2, stderr=["out.h5", "cannot write output file"], keep_out=True),
+
+    # ---- numerics
+    dict(name="unstable time step blows up",
+         deck=TABLE5_1.format(t_end=5, dt=0.05),
+         exit=1, stderr=["warning", "stability limit", "blew up", "time step"]),
+
+    # ---- command line
+    dict(name="no arguments", deck=None, args=[],
+         exit=2, stderr=["usage"]),
+    dict(name="--help", deck=None, args=["--help"],
+         exit=0, stderr=[], stdout=["usage"]),
+    dict(name="--version", deck=None, args=["--version"],
+         exit=0, stderr=[], stdout=["trainsim"]),
+    dict(name="unknown command", deck=None, args=["simulate", "deck.nml"],
+         exit=2, stderr=["unknown command 'simulate'"]),
+    dict(name="run without a deck", deck=None, args=["run"],
+         exit=2, stderr=["run needs a deck file"]),
+    dict(name="-o without a file name", deck=GOOD, args=["run", "deck.nml", "-o"],
+         exit=2, stderr=["-o needs a file name"]),
+    dict(name="unknown option", deck=GOOD, args=["run", "deck.nml", "--fast"],
+         exit=2, stderr=["unexpected argument '--fast'"]),
+    dict(name="modes on a good deck", deck=GOOD, args=["modes", "deck.nml"],
+         exit=0, stderr=[], stdout=["Hz"]),
+    dict(name="modes with a bad value", deck=RUN + NODES.replace("5.0", "-5.0") + SHAFT,
+         args=["modes", "deck.nml"],
+         exit=2, stderr=["deck.nml:2:", "inertia", "must be > 0"]),
+]
+
+
+def run_case(exe, case):
+    """Run one case; return a list of problems (empty: the case passed)."""
+    problems = []
+    with tempfile.TemporaryDirectory(prefix="trainsim-bad-") as tmp:
+        out = os.path.join(tmp, "out.h5")
+        if case.get("deck") is not None:
+            with open(os.path.join(tmp, "deck.nml"), "w") as f:
+                f.write(case["deck"])
+        if case.get("mkdir"):
+            os.mkdir(os.path.join(tmp, case["mkdir"]))
+        args = case.get("args", ["run", "deck.nml", "-o", "{out}"])
+        args = [a.replace("{out}", out).replace("{tmp}", tmp) for a in args]
+        try:
+            proc = subprocess.run([exe] + args, cwd=tmp, capture_output=True, text=True,
+                                  errors="replace", timeout=TIMEOUT)
+        except subprocess.TimeoutExpired:
+            return ["timed out after %d s" % TIMEOUT], "", ""
+        if proc.returncode != case["exit"]:
+            problems.append("exit status %d, expected %d" % (proc.returncode, case["exit"]))
+        for s in case["stderr"]:
+            if s not in proc.stderr:
+                problems.append("stderr lacks %r" % s)
+        for s in case.get("stdout", []):
+            if s.lower() not in proc.stdout.lower():
+                problems.append("stdout lacks %r" % s)
+        for s in FORBIDDEN:
+            if s in proc.stderr or s in proc.stdout:
+                problems.append("output shows a crash (%r)" % s)
+        if case.get("output"):
+            if not os.path.isfile(out):
+                problems.append("out.h5 was not written")
+        elif not case.get("keep_out") and os.path.exists(out):
+            problems.append("out.h5 was left behind")
+        if os.path.exists(out + ".part"):
+            problems.append("out.h5.part was left behind")
+        return problems, proc.stdout, proc.stderr
+
+
+def main():
+    if len(sys.argv) != 2:
+        print("usage: run_bad_decks.py <path to trainsim>", file=sys.stderr)
+        return 2
+    exe = os.path.abspath(sys.argv[1])
+    if not os.access(exe, os.X_OK):
+        print("run_bad_decks.py: not an executable: %s" % exe, file=sys.stderr)
+        return 2
+    passed = failed = 0
+    for case in CASES:
+        problems, stdout, stderr = run_case(exe, case)
+        if problems:
+            failed += 1
+            print("FAIL  %s" % case["name"])
+            for p in problems:
+                print("        - %s" % p)
+            tail = stderr.strip().splitlines()[-6:]
+            for line in tail:
+                print("        stderr| %s" % line)
+        else:
+            passed += 1
+            print("ok    %s" % case["name"])
+    print("%d passed, %d failed" % (passed, failed))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
