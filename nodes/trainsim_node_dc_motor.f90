@@ -27,6 +27,7 @@ module trainsim_node_dc_motor
       real(wp) :: current0 = 0.0_wp
       real(wp) :: power_per_watt = 1.0_wp
       type(signal_t) :: voltage
+      logical :: has_voltage = .false.
    contains
       procedure :: configure => motor_configure
       procedure :: nstates => motor_nstates
@@ -140,10 +141,12 @@ contains
       type(signal_t), intent(in) :: sig
       character(len=*), intent(in) :: where
       type(error_t), allocatable, intent(out) :: err
-      associate (unused => where)
-      end associate
+      if (self%has_voltage) then
+         call fatal_error(err, where//": error: node '"//self%id//"' already has a voltage load", err_input)
+         return
+      end if
       self%voltage = sig
-      if (allocated(err)) return
+      self%has_voltage = .true.
    end subroutine motor_attach_voltage
 
    pure subroutine motor_state_names(self, names)

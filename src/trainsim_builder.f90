@@ -97,6 +97,9 @@ contains
          else if (.not. r%t_end > r%t_start) then
             call fatal_error(err, g%where('t_end')//': error: t_end must be later than t_start ('//str(r%t_start)// &
                              '), got '//str(r%t_end), err_input)
+         else if ((r%t_end - r%t_start)/r%dt > 1.0e12_wp) then
+            call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s would take more than '// &
+                             '1e12 steps over the run of '//str(r%t_end - r%t_start)//' s', err_input)
          else if (r%dt > r%t_end - r%t_start) then
             call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)// &
                              ' is longer than the run (t_end - t_start = '//str(r%t_end - r%t_start)//')', err_input)
@@ -213,13 +216,14 @@ contains
                e%right = model%node_index(rid)
                if (e%left == 0) then
                   call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
-                                   "', which is not defined"//merge(' (give left = ...)', '                  ', &
-                                   len(lid) == 0), err_input)
+                                   "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
+                                   len(lid) == 0)), err_input)
                   return
                end if
                if (e%right == 0) then
                   call fatal_error(err, g%where('right')//": error: element '"//id//"' joins node '"//rid// &
-                                   "', which is not defined", err_input)
+                                   "', which is not defined"//trim(merge(' (give right = ...)', '                   ', &
+                                   len(rid) == 0)), err_input)
                   return
                end if
                if (e%left == e%right) then

@@ -33,7 +33,7 @@ module trainsim_hdf5
    public :: hdf5_sink_t
 
    !> Deflate level of the sample datasets (1 fast .. 9 small).
-   integer, parameter :: deflate_level = 4
+   integer, parameter :: deflate_level = 1
    !> Names of the five energy columns (rows of /energy in Fortran order).
    character(len=*), parameter :: energy_names(5) = [character(len=10) :: &
       'kinetic', 'potential', 'dissipated', 'input', 'balance']
@@ -259,7 +259,7 @@ contains
       integer :: hdferr, unit, ios, i
       integer(hid_t) :: fapl, grp
       character(len=512) :: msg
-      logical :: deflate
+      logical :: deflate, exists
 
       self%part = self%path//'.part'
       self%n_states = count_of(meta%state_names)
@@ -288,6 +288,17 @@ contains
          return
       end if
       close (unit, status='delete')
+      ! The final name must be replaceable too (not a directory, not read-only):
+      ! say so now rather than after the whole run.
+      inquire (file=self%path, exist=exists)
+      if (exists) then
+         open (newunit=unit, file=self%path, status='old', action='write', position='append', iostat=ios, iomsg=msg)
+         if (ios /= 0) then
+            call fatal_error(err, os_reason(msg), err_io)
+            return
+         end if
+         close (unit)
+      end if
 
       call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, hdferr)
       if (hdferr < 0) then

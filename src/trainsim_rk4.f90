@@ -58,7 +58,7 @@ contains
       do i = 1, model%n_states
          if (y(i) /= y(i) .or. abs(y(i)) > 1.0e100_wp) then
             call fatal_error(err, 'the solution blew up at t = '//str(t)//' s (state '//str(i)// &
-                             ' is '//merge('NaN     ', 'runaway ', y(i) /= y(i))//'); the time step '//str(h)// &
+                             ' is '//trim(merge('NaN    ', 'runaway', y(i) /= y(i)))//'); the time step '//str(h)// &
                              ' s is probably above the stability limit: run `trainsim modes` on the deck '// &
                              'and take dt below 2.8/omega_max', err_numeric)
             return

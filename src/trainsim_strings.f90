@@ -38,16 +38,36 @@ contains
       s = trim(buf)
    end function str_int
 
-   !> Real as compact text with enough digits to be read back (g0 style).
+   !> Real as the shortest text that reads back to the same value
+   !> (fixed notation between 1e-4 and 1e7, else scientific).
    pure function str_real(x) result(s)
       real(wp), intent(in) :: x
       character(len=:), allocatable :: s
-      character(len=40) :: buf
-      write (buf, '(es24.16e3)') x
+      character(len=48) :: buf
+      character(len=16) :: fmt
+      real(wp) :: back
+      integer :: d, ios
+      logical :: fixed
+      if (x /= x) then
+         s = 'NaN'
+         return
+      end if
+      fixed = x == 0.0_wp .or. (abs(x) >= 1.0e-4_wp .and. abs(x) < 1.0e7_wp)
+      do d = 0, 17
+         if (fixed) then
+            write (fmt, '(a,i0,a)') '(f0.', d, ')'
+         else
+            write (fmt, '(a,i0,a)') '(es0.', d, ')'
+         end if
+         write (buf, fmt) x
+         read (buf, *, iostat=ios) back
+         if (ios == 0 .and. back == x) exit
+      end do
       s = trim(adjustl(buf))
-      if (abs(x) < 1.0e15_wp .and. abs(x) >= 1.0e-4_wp .or. x == 0.0_wp) then
-         write (buf, '(g0)') x
-         s = trim(adjustl(buf))
+      if (fixed .and. s(len(s):len(s)) == '.') s = s(1:len(s) - 1)
+      if (s(1:1) == '.') s = '0'//s
+      if (len(s) > 1) then
+         if (s(1:2) == '-.') s = '-0'//s(2:)
       end if
    end function str_real
 
