@@ -231,14 +231,20 @@ contains
 
    !> Update the modes of the elements whose guards fired; the events that
    !> result are appended to events(nev+1:) (with the element index filled in).
+   !> A mode change that changes the stored energy (a mesh-stiffness switch
+   !> while teeth are loaded) is work done on the train: it is booked to the
+   !> work-input state, so that the energy balance keeps closing.
    subroutine model_apply_events(self, t, y, fired, events, nev)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(in) :: t
+      real(wp), intent(inout) :: y(:)
       logical, intent(in) :: fired(:)
       type(event_t), intent(inout) :: events(:)
       integer, intent(inout) :: nev
       integer :: i, l, r, o, n, k, m
       type(event_t) :: local(4)
+      real(wp) :: e_before
+      if (self%run%track_energy) e_before = self%stored_energy(t, y)
       call self%kinematics(t, y)
       do i = 1, size(self%elements)
          n = self%elements(i)%e%n_guards()
@@ -258,6 +264,7 @@ contains
             end if
          end do
       end do
+      if (self%run%track_energy) y(self%n_states + 2) = y(self%n_states + 2) + self%stored_energy(t, y) - e_before
    end subroutine model_apply_events
 
    !> Whether any clearance element is in contact (thesis-mode step control).

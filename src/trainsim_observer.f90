@@ -11,6 +11,7 @@ module trainsim_observer
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_string
+   use trainsim_metrics, only: peak_to_peak
    implicit none
    private
 
@@ -25,6 +26,10 @@ module trainsim_observer
       real(wp) :: max_approach_velocity = 0.0_wp
       real(wp) :: max_peak_force = 0.0_wp
       real(wp) :: time_out_of_contact = 0.0_wp
+      !> peak-to-peak displacement (TE for gears): max - min, and the mean
+      !> swing between successive peaks (trainsim_metrics), after settle_time
+      real(wp) :: p2p_range = 0.0_wp, p2p_mean = 0.0_wp
+      integer :: p2p_swings = 0
       integer :: open_event = 0        !< index of the event row of the contact in progress
    end type element_metrics_t
 
@@ -128,14 +133,18 @@ contains
       self%t_metrics = model%run%t_start + model%run%settle_time
       self%next_out = t
       self%t_prev = t
+      ! output samples are kept in memory for the peak-to-peak metrics (displacement
+      ! only) and, with keep_series, node angles and speeds too
+      if (model%run%output_interval > 0.0_wp) then
+         nmax = int((model%run%t_end - model%run%t_start)/model%run%output_interval) + 2
+      else
+         nmax = int((model%run%t_end - model%run%t_start)/model%run%dt) + 2
+      end if
+      allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
       if (model%run%keep_series) then
-         if (model%run%output_interval > 0.0_wp) then
-            nmax = int((model%run%t_end - model%run%t_start)/model%run%output_interval) + 2
-         else
-            nmax = int((model%run%t_end - model%run%t_start)/model%run%dt) + 2
-         end if
-         allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
          allocate (self%res%series_theta(nn, nmax), self%res%series_omega(nn, nmax))
+      else
+         allocate (self%res%series_theta(nn, 0), self%res%series_omega(nn, 0))
       end if
       call sink%open(make_meta(model), err)
       if (allocated(err)) return
@@ -185,19 +194,36 @@ contains
       end do
    end function sum_potential
 
-   !> Write the current sample to the sink (and the in-memory series).
+   !> Write the current sample to the sink (and the in-memory series, which
+   !> grows by doubling: events add samples beyond the output grid).
    subroutine obs_emit(self, sink, err)
       class(observer_t), intent(inout) :: self
       class(sink_t), intent(inout) :: sink
       type(error_t), allocatable, intent(out) :: err
-      if (allocated(self%res%series_t)) then
-         if (self%n_series < size(self%res%series_t)) then
-            self%n_series = self%n_series + 1
-            self%res%series_t(self%n_series) = self%s%t
-            self%res%series_disp(:, self%n_series) = self%s%displacement
-            self%res%series_theta(:, self%n_series) = self%s%theta
-            self%res%series_omega(:, self%n_series) = self%s%omega
+      real(wp), allocatable :: t2(:), d2(:, :), th2(:, :), om2(:, :)
+      integer :: n, keep
+      if (self%n_series == size(self%res%series_t)) then
+         n = self%n_series
+         keep = size(self%res%series_theta, 2)
+         allocate (t2(2*n + 16), d2(size(self%res%series_disp, 1), 2*n + 16))
+         t2(1:n) = self%res%series_t(1:n)
+         d2(:, 1:n) = self%res%series_disp(:, 1:n)
+         call move_alloc(t2, self%res%series_t)
+         call move_alloc(d2, self%res%series_disp)
+         if (keep > 0) then
+            allocate (th2(size(self%s%theta), 2*n + 16), om2(size(self%s%theta), 2*n + 16))
+            th2(:, 1:n) = self%res%series_theta(:, 1:n)
+            om2(:, 1:n) = self%res%series_omega(:, 1:n)
+            call move_alloc(th2, self%res%series_theta)
+            call move_alloc(om2, self%res%series_omega)
          end if
+      end if
+      self%n_series = self%n_series + 1
+      self%res%series_t(self%n_series) = self%s%t
+      self%res%series_disp(:, self%n_series) = self%s%displacement
+      if (size(self%res%series_theta, 2) > 0) then
+         self%res%series_theta(:, self%n_series) = self%s%theta
+         self%res%series_omega(:, self%n_series) = self%s%omega
       end if
       call sink%write_sample(self%s, err)
    end subroutine obs_emit
@@ -333,11 +359,15 @@ contains
       result%events = self%res%events(1:self%n_events)
       result%y_final = y
       result%t_final = t
-      if (allocated(result%series_t)) then
-         result%series_t = result%series_t(1:self%n_series)
-         result%series_disp = result%series_disp(:, 1:self%n_series)
+      result%series_t = result%series_t(1:self%n_series)
+      result%series_disp = result%series_disp(:, 1:self%n_series)
+      if (size(result%series_theta, 2) > 0) then
          result%series_theta = result%series_theta(:, 1:self%n_series)
          result%series_omega = result%series_omega(:, 1:self%n_series)
       end if
+      do i = 1, size(model%elements)
+         call peak_to_peak(result%series_t, result%series_disp(i, :), self%t_metrics, 0.1_wp, &
+                           result%el(i)%p2p_range, result%el(i)%p2p_mean, result%el(i)%p2p_swings)
+      end do
    end subroutine obs_finish
 end module trainsim_observer

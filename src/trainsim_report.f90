@@ -49,6 +49,12 @@ contains
                m%disp_min, m%disp_max, m%impacts, m%max_approach_velocity, m%max_peak_force
          end associate
       end do
+      write (unit, '(a)') 'peak-to-peak displacement after settle_time (range max-min; mean swing between peaks):'
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e, m => res%el(i))
+            write (unit, '(a12,2es15.6,a,i0,a)') e%id, m%p2p_range, m%p2p_mean, '  (', m%p2p_swings, ' swings)'
+         end associate
+      end do
       write (unit, '(a)') 'final state:'
       k = 0
       do i = 1, size(model%nodes)
