@@ -1,0 +1,188 @@
+!> Unit tests of the element and node plug-ins: torques inside the clearance,
+!> at contact onset, action and reaction, each contact law's promises, unit
+!> conversion of the empirical fits, and a DC motor starting a geared load.
+program test_elements
+   use trainsim_kinds, only: wp
+   use trainsim_model, only: model_t
+   use trainsim_observer, only: run_result_t
+   use trainsim_testing, only: suite_begin, suite_end, test_begin, check
+   use trainsim_test_support, only: load_model_text, run_model, nl
+   implicit none
+
+   character(len=*), parameter :: two_disks = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
+                                              "&node type='inertia', inertia=1.0 /"//nl// &
+                                              "&node type='inertia', inertia=2.0 /"//nl
+
+   call suite_begin('element and node plug-ins')
+   call test_clearance_elements_exert_no_torque_inside_clearance()
+   call test_yang_sun_force_is_continuous_at_contact_onset()
+   call test_linear_law_jumps_by_damping_force_at_onset()
+   call test_elasto_backlash_never_pulls()
+   call test_no_tension_clamp_keeps_force_compressive()
+   call test_gear_torques_are_action_and_reaction_along_line_of_action()
+   call test_restitution_fit_is_unit_independent()
+   call test_dc_motor_reaches_closed_form_steady_state()
+   call suite_end()
+
+contains
+
+   !> Torques of element 1 of `deck` with its mode set from the given state.
+   subroutine torques_at(m, thl, wl, thr, wr, tl, tr)
+      type(model_t), intent(inout) :: m
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      call m%elements(1)%e%init_mode(thl, wl, thr, wr)
+      call m%elements(1)%e%torques(thl, wl, thr, wr, tl, tr)
+   end subroutine torques_at
+
+   subroutine test_clearance_elements_exert_no_torque_inside_clearance()
+      type(model_t) :: m
+      real(wp) :: tl, tr
+      character(len=200) :: el(4)
+      integer :: i
+      call test_begin('clearance_elements_exert_no_torque_inside_clearance')
+      el(1) = "type='spur_gear', stiffness=1e6, rb_driver=1.0, rb_driven=2.0, teeth=20, contact_ratio=1.5,"// &
+              " approach_angle=0.1, half_backlash=0.01"
+      el(2) = "type='keyed_joint', diameter=2.0, half_clearance=0.01, stiffness=1e6"
+      el(3) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_damping=1.0"
+      el(4) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_law='elasto_backlash', "// &
+              "contact_damping=1.0"
+      do i = 1, size(el)
+         call load_model_text(two_disks//'&element '//trim(el(i))//' /', m)
+         ! relative displacement 0.005 (inside b = 0.01), moving fast
+         call torques_at(m, 0.005_wp, 3.0_wp, 0.0_wp, -1.0_wp, tl, tr)
+         call check('zero torque inside the clearance: '//trim(el(i)(1:40)), abs(tl) + abs(tr) == 0.0_wp)
+         call check('not in contact', .not. m%elements(1)%e%in_contact())
+      end do
+   end subroutine test_clearance_elements_exert_no_torque_inside_clearance
+
+   subroutine test_yang_sun_force_is_continuous_at_contact_onset()
+      type(model_t) :: m
+      real(wp) :: tl, tr, eps
+      call test_begin('yang_sun_force_is_continuous_at_contact_onset')
+      call load_model_text(two_disks//"&element type='keyed_joint', diameter=2.0, half_clearance=0.01,"// &
+                           " stiffness=1e6, initial_contact_velocity=5.0 /", m)
+      eps = 1.0e-9_wp
+      ! delta = r (thl - thr) = 0.01 + eps with r = 1: just inside the front contact, approaching at 5
+      call torques_at(m, 0.01_wp + eps, 5.0_wp, 0.0_wp, 0.0_wp, tl, tr)
+      call check('in contact just past b', m%elements(1)%e%in_contact())
+      ! F = k p + D p pdot -> 0 as p -> 0: |T| <= (k + D pdot) eps r
+      call check('torque at p = 1e-9 is O(p)', abs(tr), 0.0_wp, abs_tol=2.0e6_wp*eps)
+      call check('right node pushed forward, left held back', tr > 0.0_wp .and. tl < 0.0_wp)
+   end subroutine test_yang_sun_force_is_continuous_at_contact_onset
+
+   subroutine test_linear_law_jumps_by_damping_force_at_onset()
+      type(model_t) :: m
+      real(wp) :: tl, tr
+      call test_begin('linear_law_jumps_by_damping_force_at_onset')
+      call load_model_text(two_disks//"&element type='clearance_coupling', clearance=0.02, stiffness=1e4,"// &
+                           " contact_damping=3.0 /", m)
+      call torques_at(m, 0.01_wp, 2.0_wp, 0.0_wp, 0.0_wp, tl, tr)
+      ! a spring-damper engages with its full damping torque d * rate (the law says so)
+      call check('onset torque = d x relative speed', tr, 3.0_wp*2.0_wp, rel_tol=1.0e-14_wp)
+      call check('equal and opposite', tl, -tr, rel_tol=1.0e-14_wp)
+   end subroutine test_linear_law_jumps_by_damping_force_at_onset
+
+   subroutine test_elasto_backlash_never_pulls()
+      type(model_t) :: m
+      real(wp) :: tl, tr
+      call test_begin('elasto_backlash_never_pulls')
+      call load_model_text(two_disks//"&element type='clearance_coupling', clearance=0.02, stiffness=1e4,"// &
+                           " contact_law='elasto_backlash', contact_damping=50.0 /", m)
+      ! penetration 1e-3 rad, separating fast: spring 10, damping -500 -> no pull
+      call torques_at(m, 0.011_wp, -10.0_wp, 0.0_wp, 0.0_wp, tl, tr)
+      call check('separating fast: torque is zero, not tensile', tr == 0.0_wp .and. tl == 0.0_wp)
+      ! approaching fast: tau_c + min(tau_c, tau_d) = 2 tau_c
+      call torques_at(m, 0.011_wp, 10.0_wp, 0.0_wp, 0.0_wp, tl, tr)
+      call check('approaching fast: damping limited to the spring torque', tr, 2.0_wp*1.0e4_wp*1.0e-3_wp, &
+                 rel_tol=1.0e-12_wp)
+   end subroutine test_elasto_backlash_never_pulls
+
+   subroutine test_no_tension_clamp_keeps_force_compressive()
+      type(model_t) :: m1, m2
+      real(wp) :: tl, tr1, tr2
+      call test_begin('no_tension_clamp_keeps_force_compressive')
+      call load_model_text(two_disks//"&element type='keyed_joint', diameter=2.0, half_clearance=0.01,"// &
+                           " stiffness=1e6, initial_contact_velocity=1.0 /", m1)
+      call load_model_text(two_disks//"&element type='keyed_joint', diameter=2.0, half_clearance=0.01,"// &
+                           " stiffness=1e6, initial_contact_velocity=1.0, no_tension=.true. /", m2)
+      ! small penetration, fast separation: k p + D p pdot < 0
+      call torques_at(m1, 0.0101_wp, -50.0_wp, 0.0_wp, 0.0_wp, tl, tr1)
+      call torques_at(m2, 0.0101_wp, -50.0_wp, 0.0_wp, 0.0_wp, tl, tr2)
+      call check('thesis default: the Yang-Sun force turns tensile here', tr1 < 0.0_wp)
+      call check('no_tension: clamped to zero', tr2 == 0.0_wp)
+   end subroutine test_no_tension_clamp_keeps_force_compressive
+
+   subroutine test_gear_torques_are_action_and_reaction_along_line_of_action()
+      type(model_t) :: m
+      real(wp) :: tl, tr
+      call test_begin('gear_torques_are_action_and_reaction_along_line_of_action')
+      call load_model_text(two_disks//"&element type='spur_gear', stiffness=1e6, rb_driver=1.0, rb_driven=2.5,"// &
+                           " teeth=20, contact_ratio=1.5, approach_angle=0.1, half_backlash=0.01 /", m)
+      ! rear face: delta = 1.0*0.0 - 2.5*0.006 = -0.015 <= -b
+      call torques_at(m, 0.0_wp, 0.0_wp, 0.006_wp, 0.0_wp, tl, tr)
+      call check('rear face: same force on both base circles (tl/r1 = -tr/r2)', tl/1.0_wp, -tr/2.5_wp, rel_tol=1.0e-14_wp)
+      call check('rear face pushes the driver forward', tl > 0.0_wp)
+      ! p = 0.015 - 0.01 = 0.005; zone of the driver at 0: u = 20 (0 + 0.1)/(2 pi) = 0.318 <= m_p - 1 -> two pairs
+      call check('rear-face force = c k p with c = 1.8 (two-pair zone, no approach so D = 0)', tl/1.0_wp, &
+                 1.8_wp*1.0e6_wp*0.005_wp, rel_tol=1.0e-12_wp)
+   end subroutine test_gear_torques_are_action_and_reaction_along_line_of_action
+
+   subroutine test_restitution_fit_is_unit_independent()
+      type(model_t) :: mi, ms
+      type(run_result_t) :: ri, rs
+      call test_begin('restitution_fit_is_unit_independent')
+      ! the same keyed-joint impact in inch-lbf-s and in SI (Table 5.4 numbers)
+      call load_model_text("&run t_end = 2e-4, dt = 5e-7 /"//nl// &
+                           "&node type='inertia', inertia=7.537e-3 /"//nl//"&node type='inertia', inertia=10.082 /"//nl// &
+                           "&element type='keyed_joint', diameter=2.6312, half_clearance=0.001, stiffness=2.03e6 /"//nl// &
+                           "&initial node='n1', speed=10.0 /", mi)
+      call load_model_text("&run units='si', t_end = 2e-4, dt = 5e-7 /"//nl// &
+                           "&node type='inertia', inertia=8.5157e-4 /"//nl//"&node type='inertia', inertia=1.13911 /"//nl// &
+                           "&element type='keyed_joint', diameter=0.06683248, half_clearance=2.54e-5,"// &
+                           " stiffness=3.5550585e8 /"//nl//"&initial node='n1', speed=10.0 /", ms)
+      call run_model(mi, ri)
+      call run_model(ms, rs)
+      call check('same restitution from the Goldsmith fit in both unit systems', rs%events(1)%restitution, &
+                 ri%events(1)%restitution, rel_tol=1.0e-6_wp)
+      call check('approach velocity in m/s = in/s x 0.0254', rs%events(1)%approach_velocity, &
+                 ri%events(1)%approach_velocity*0.0254_wp, rel_tol=1.0e-6_wp)
+   end subroutine test_restitution_fit_is_unit_independent
+
+   subroutine test_dc_motor_reaches_closed_form_steady_state()
+      type(model_t) :: m, m0, m2
+      real(wp) :: e1
+      type(run_result_t) :: r
+      real(wp), parameter :: v = 12.0_wp, res = 1.0_wp, a = 0.05_wp, dm = 1.0e-5_wp, dl = 1.0e-3_wp, ratio = 1.0_wp/3.0_wp
+      real(wp) :: deq, w_m, i_a, wm_avg, wl_avg, i_avg
+      integer :: n, k0
+      call test_begin('dc_motor_reaches_closed_form_steady_state')
+      ! SI: torque constant = back-emf constant (N m/A = V s). Motor -> 1:3 ideal gear -> damped load.
+      call load_model_text("&run units='si', t_end = 1.5, dt = 1e-4, output_interval = 1e-3 /"//nl// &
+                           "&node id='m', type='dc_motor', inertia=1e-4, damping=1e-5, torque_constant=0.05,"// &
+                           " back_emf_constant=0.05, inductance=1e-3, resistance=1.0 /"//nl// &
+                           "&node id='load', type='inertia', inertia=1e-3, damping=1e-3 /"//nl// &
+                           "&element type='ideal_gear', stiffness=1e7, rb_driver=0.01, rb_driven=0.03 /"//nl// &
+                           "&load node='m', quantity='voltage', kind='constant', value=12.0 /", m)
+      m0 = m
+      call run_model(m, r)
+      deq = dm + dl*ratio**2
+      w_m = v/(res*deq/a + a)          ! V = R i + a w,  a i = d_eq w
+      i_a = w_m*deq/a
+      n = size(r%series_t)
+      k0 = n - 100                     ! average the last 0.1 s (the undamped mesh mode rings)
+      wm_avg = sum(r%series_omega(1, k0:n))/real(n - k0 + 1, wp)
+      wl_avg = sum(r%series_omega(2, k0:n))/real(n - k0 + 1, wp)
+      i_avg = r%y_final(3)
+      call check('motor speed = V / (R d_eq / a + a) (1e-4)', wm_avg, w_m, rel_tol=1.0e-4_wp)
+      call check('load speed = motor speed x r1/r2 (1e-4)', wl_avg, w_m*ratio, rel_tol=1.0e-4_wp)
+      call check('armature current = d_eq w / a (1e-3)', i_avg, i_a, rel_tol=1.0e-3_wp)
+      ! the residual is RK4 error (electrical mode: dt R/L = 0.1): small and O(dt^4)
+      e1 = r%energy_residual_max/r%energy_scale
+      m2 = m0
+      m2%run%dt = 0.5_wp*m0%run%dt
+      call run_model(m2, r)
+      call check('energy balance closes (electrical W converted): residual < 1e-6', e1, 0.0_wp, abs_tol=1.0e-6_wp)
+      call check('and shrinks >= 8x when dt halves', e1/(r%energy_residual_max/r%energy_scale) >= 8.0_wp)
+   end subroutine test_dc_motor_reaches_closed_form_steady_state
+end program test_elements
