@@ -17,6 +17,7 @@ module trainsim_clearance_element
       type(clearance_t) :: cl
    contains
       procedure :: factor => ce_factor
+      procedure :: linear_factor => ce_linear_factor
       procedure :: torques => ce_torques
       procedure :: displacement => ce_displacement
       procedure :: displacement_unit => ce_displacement_unit
@@ -41,6 +42,12 @@ contains
       end associate
       c = 1.0_wp
    end function ce_factor
+
+   !> Stiffness factor used to linearise (modes): the factor in the current state.
+   pure real(wp) function ce_linear_factor(self) result(c)
+      class(clearance_element_t), intent(in) :: self
+      c = self%factor(0.0_wp)
+   end function ce_linear_factor
 
    pure subroutine ce_torques(self, thl, wl, thr, wr, tl, tr)
       class(clearance_element_t), intent(in) :: self
@@ -69,7 +76,7 @@ contains
       real(wp), intent(out) :: k(2, 2)
       real(wp) :: kk
       kk = 0.0_wp
-      if (self%cl%mode /= 0) kk = self%cl%law%k*self%factor(0.0_wp)
+      if (self%cl%mode /= 0) kk = self%cl%law%k*self%linear_factor()
       k(1, 1) = kk*self%cl%r1**2
       k(1, 2) = -kk*self%cl%r1*self%cl%r2
       k(2, 1) = k(1, 2)

@@ -12,6 +12,7 @@ module trainsim_registry
    use trainsim_el_spur_gear, only: spur_gear_t
    use trainsim_el_keyed_joint, only: keyed_joint_t
    use trainsim_el_clearance_coupling, only: clearance_coupling_t
+   use trainsim_el_helical_gear, only: helical_gear_t
    implicit none
    private
 
@@ -23,7 +24,7 @@ contains
    function element_type_names() result(names)
       type(string_t), allocatable :: names(:)
       names = [string_t('shaft'), string_t('keyed_joint'), string_t('ideal_gear'), string_t('spur_gear'), &
-               string_t('clearance_coupling')]
+               string_t('helical_gear'), string_t('clearance_coupling')]
    end function element_type_names
 
    !> Canonical node type names (TRAIN aliases: n01 inertia, n02 dc_motor).
@@ -41,6 +42,7 @@ contains
       case ('ideal_gear', 'el3'); allocate (ideal_gear_t :: el); el%type_name = 'ideal_gear'
       case ('spur_gear', 'el4'); allocate (spur_gear_t :: el); el%type_name = 'spur_gear'
       case ('keyed_joint', 'el2'); allocate (keyed_joint_t :: el); el%type_name = 'keyed_joint'
+      case ('helical_gear'); allocate (helical_gear_t :: el); el%type_name = 'helical_gear'
       case ('clearance_coupling'); allocate (clearance_coupling_t :: el); el%type_name = 'clearance_coupling'
       end select
    end subroutine make_element

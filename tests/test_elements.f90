@@ -5,6 +5,10 @@ program test_elements
    use trainsim_kinds, only: wp
    use trainsim_model, only: model_t
    use trainsim_observer, only: run_result_t
+   use trainsim_kinds, only: two_pi
+   use trainsim_error, only: error_t
+   use trainsim_modes, only: modes_t, compute_modes
+   use trainsim_el_helical_gear, only: helical_contact_length
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model_text, run_model, nl
    implicit none
@@ -22,6 +26,8 @@ program test_elements
    call test_gear_torques_are_action_and_reaction_along_line_of_action()
    call test_restitution_fit_is_unit_independent()
    call test_dc_motor_reaches_closed_form_steady_state()
+   call test_helical_contact_length_eq_6_1()
+   call test_helical_gear_mesh_mode_from_mean_contact_length()
    call suite_end()
 
 contains
@@ -185,4 +191,46 @@ contains
       call check('energy balance closes (electrical W converted): residual < 1e-6', e1, 0.0_wp, abs_tol=1.0e-6_wp)
       call check('and shrinks >= 8x when dt halves', e1/(r%energy_residual_max/r%energy_scale) >= 8.0_wp)
    end subroutine test_dc_motor_reaches_closed_form_steady_state
+   subroutine test_helical_contact_length_eq_6_1()
+      real(wp) :: lc(0:1000), e, zeta
+      integer :: i
+      logical :: continuous
+      call test_begin('helical_contact_length_eq_6_1')
+      zeta = 0.3_wp
+      ! integer face contact ratio: constant length m_p F / cos(zeta) = m_p p_tb / sin(zeta)
+      do i = 0, 100
+         e = real(i, wp)/100.0_wp
+         lc(i) = helical_contact_length(e, 1.6_wp, 1.0_wp, 0.5_wp, zeta)
+      end do
+      call check('m_F = 1: constant length (max - min)', maxval(lc(0:99)) - minval(lc(0:99)), 0.0_wp, abs_tol=1.0e-12_wp)
+      call check('m_F = 1: length = m_p p_tb / sin(zeta)', lc(0), 1.6_wp*0.5_wp/sin(zeta), rel_tol=1.0e-12_wp)
+      ! non-integer m_F: minimum at e = 0, maximum at e = frac(m_F) (sec. 6.2), continuous, periodic
+      do i = 0, 1000
+         e = real(i, wp)/1000.0_wp
+         lc(i) = helical_contact_length(e, 1.6_wp, 1.3_wp, 0.5_wp, zeta)
+      end do
+      continuous = maxval(abs(lc(1:1000) - lc(0:999))) < 2.0e-3_wp
+      call check('continuous in e', continuous)
+      call check('periodic: L(0) = L(1)', lc(1000), lc(0), rel_tol=1.0e-12_wp)
+      call check('minimum at e = 0', minval(lc) >= lc(0) - 1.0e-12_wp)
+      call check('maximum first reached at e = frac(m_F) = 0.3', lc(300) >= maxval(lc) - 1.0e-12_wp .and. &
+                 lc(290) < maxval(lc) - 1.0e-6_wp)
+   end subroutine test_helical_contact_length_eq_6_1
+
+   subroutine test_helical_gear_mesh_mode_from_mean_contact_length()
+      type(model_t) :: m
+      type(modes_t) :: md
+      type(error_t), allocatable :: err
+      real(wp) :: k, zeta
+      call test_begin('helical_gear_mesh_mode_from_mean_contact_length')
+      call load_model_text(two_disks//"&element type='helical_gear', rb_driver=1.5, rb_driven=1.5, teeth=30,"// &
+                           " profile_contact_ratio=1.5, base_helix_angle=20.0, face_width=1.0, half_backlash=0.001 /"// &
+                           nl//"&initial node='n1', angle=0.01 /", m)
+      call compute_modes(m, md, err)
+      call check('modes computed', .not. allocated(err))
+      zeta = 20.0_wp*two_pi/360.0_wp
+      k = 30.0e6_wp/17.6_wp*1.5_wp*1.0_wp/cos(zeta)
+      call check('mesh mode: k = E/17.6 m_p F / cos(zeta_b)', md%freq_hz(2), &
+                 sqrt(k*1.5_wp**2*(1.0_wp/1.0_wp + 1.0_wp/2.0_wp))/two_pi, rel_tol=1.0e-10_wp)
+   end subroutine test_helical_gear_mesh_mode_from_mean_contact_length
 end program test_elements

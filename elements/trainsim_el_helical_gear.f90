@@ -1,0 +1,113 @@
+!> Helical gear pair with backlash (Ch. VI): as the spur pair, but the mesh
+!> stiffness follows the total length of the lines of contact, eq. (6.1)
+!> (Colbourne 1987), times the stiffness per unit length E/17.6 (Quandt 1986):
+!>   L_c(e) = p_tb [ (n_c+1)(m_c - e - n_c/2) - (n_F+1)(m_F - e - n_F/2)
+!>                   - (n_p+1)(m_p - e - n_p/2) ] / sin(zeta_b),  n_x = floor(m_x - e)
+!> with e the mesh position in base pitches (the fractional tooth phase of the
+!> driver, u = N (theta + alpha)/(2 pi)), m_c = m_p + m_F. L_c is continuous and
+!> periodic in e, so the stiffness changes without events (kinks only).
+module trainsim_el_helical_gear
+   use trainsim_kinds, only: wp, pi, two_pi
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, string_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_sink, only: param_list_t
+   use trainsim_clearance_element, only: clearance_element_t
+   implicit none
+   private
+
+   public :: helical_gear_t, helical_contact_length
+
+   type, extends(clearance_element_t) :: helical_gear_t
+      real(wp) :: teeth = 0.0_wp, alpha = 0.0_wp
+      real(wp) :: mp = 1.0_wp, mf = 0.0_wp, ptb = 0.0_wp, zeta = 0.0_wp, youngs = 0.0_wp, face = 0.0_wp
+   contains
+      procedure :: configure => hel_configure
+      procedure :: factor => hel_factor
+      procedure :: linear_factor => hel_linear_factor
+      procedure :: params => hel_params
+   end type helical_gear_t
+
+contains
+
+   !> Total length of the lines of contact at mesh position e (eq. 6.1).
+   pure real(wp) function helical_contact_length(e, mp, mf, ptb, zeta) result(lc)
+      real(wp), intent(in) :: e, mp, mf, ptb, zeta
+      lc = ptb*(term(mp + mf) - term(mf) - term(mp))/sin(zeta)
+   contains
+      pure real(wp) function term(m)
+         real(wp), intent(in) :: m
+         real(wp) :: n
+         n = floor(m - e)
+         term = (n + 1.0_wp)*(m - e - 0.5_wp*n)
+      end function term
+   end function helical_contact_length
+
+   subroutine hel_configure(self, grp, units, err)
+      class(helical_gear_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: zeta_deg, e_default
+      call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
+      call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
+      call grp%get_real('teeth', self%teeth, err); if (allocated(err)) return
+      call grp%get_real('profile_contact_ratio', self%mp, err); if (allocated(err)) return
+      call grp%get_real('base_helix_angle', zeta_deg, err); if (allocated(err)) return
+      call grp%get_real('face_width', self%face, err); if (allocated(err)) return
+      call grp%get_real('approach_angle', self%alpha, err, default=0.0_wp); if (allocated(err)) return
+      call grp%get_real('half_backlash', self%cl%b, err); if (allocated(err)) return
+      e_default = 30.0e6_wp*units%to_inch**2/units%to_lbf          ! steel, 30e6 psi
+      call grp%get_real('youngs_modulus', self%youngs, err, default=e_default); if (allocated(err)) return
+      if (.not. (self%cl%r1 > 0.0_wp .and. self%cl%r2 > 0.0_wp)) then
+         call fatal_error(err, grp%where('rb_driver')//': error: base radii must be > 0', err_input)
+      else if (.not. self%teeth > 0.0_wp) then
+         call fatal_error(err, grp%where('teeth')//': error: teeth must be > 0, got '//str(self%teeth), err_input)
+      else if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
+         call fatal_error(err, grp%where('profile_contact_ratio')//': error: must be in [1, 2], got '//str(self%mp), &
+                          err_input)
+      else if (.not. (zeta_deg > 0.0_wp .and. zeta_deg < 60.0_wp)) then
+         call fatal_error(err, grp%where('base_helix_angle')//': error: must be in (0, 60) degrees, got '// &
+                          str(zeta_deg), err_input)
+      else if (.not. self%face > 0.0_wp) then
+         call fatal_error(err, grp%where('face_width')//': error: must be > 0, got '//str(self%face), err_input)
+      else if (.not. self%cl%b >= 0.0_wp) then
+         call fatal_error(err, grp%where('half_backlash')//': error: must be >= 0, got '//str(self%cl%b), err_input)
+      else if (.not. self%youngs > 0.0_wp) then
+         call fatal_error(err, grp%where('youngs_modulus')//': error: must be > 0, got '//str(self%youngs), err_input)
+      end if
+      if (allocated(err)) return
+      self%zeta = zeta_deg*pi/180.0_wp
+      self%ptb = two_pi*self%cl%r1/self%teeth                   ! transverse base pitch
+      self%mf = self%face*tan(self%zeta)/self%ptb                ! face contact ratio
+      self%cl%law%k = self%youngs/17.6_wp                        ! stiffness per unit length of contact line
+      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
+   end subroutine hel_configure
+
+   !> Length of the lines of contact at the driver angle (multiplies E/17.6).
+   pure real(wp) function hel_factor(self, thl) result(c)
+      class(helical_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl
+      real(wp) :: u
+      u = self%teeth*(thl + self%alpha)/two_pi
+      c = helical_contact_length(u - floor(u), self%mp, self%mf, self%ptb, self%zeta)
+   end function hel_factor
+
+   !> Mean length of the lines of contact, m_p F / cos(zeta_b), for modes.
+   pure real(wp) function hel_linear_factor(self) result(c)
+      class(helical_gear_t), intent(in) :: self
+      c = self%mp*self%face/cos(self%zeta)
+   end function hel_linear_factor
+
+   function hel_params(self) result(p)
+      class(helical_gear_t), intent(in) :: self
+      type(param_list_t) :: p
+      p%names = [string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), string_t('profile_contact_ratio'), &
+                 string_t('face_contact_ratio'), string_t('base_helix_angle_rad'), string_t('transverse_base_pitch'), &
+                 string_t('face_width'), string_t('youngs_modulus'), string_t('stiffness_per_length'), &
+                 string_t('mean_mesh_stiffness'), string_t('approach_angle'), string_t('half_backlash')]
+      p%values = [self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, self%face, self%youngs, &
+                  self%cl%law%k, self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b]
+   end function hel_params
+end module trainsim_el_helical_gear
