@@ -7,6 +7,7 @@ module trainsim_modes
    use trainsim_error, only: error_t, fatal_error, err_numeric, err_input
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
+   use trainsim_clearance_element, only: clearance_element_t
    implicit none
    private
 
@@ -37,11 +38,15 @@ module trainsim_modes
 
 contains
 
-   !> Linearised modes of `model` about its initial state.
-   subroutine compute_modes(model, modes, err)
+   !> Linearised modes of `model` about its initial state. With `closed`, every
+   !> clearance open at the start is linearised as closed (its contact stiffness
+   !> counts: the highest frequency a contact can excite); the modes of the
+   !> model are restored to the initial state afterwards.
+   subroutine compute_modes(model, modes, err, closed)
       type(model_t), intent(inout) :: model
       type(modes_t), intent(out) :: modes
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: closed
       integer, allocatable :: dof(:)
       real(wp), allocatable :: k(:, :), m(:, :), w(:), work(:), y(:)
       real(wp) :: ke(2, 2), lam_max, big
@@ -68,6 +73,16 @@ contains
       ! clearance elements are linearised in the contact state they start in
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
+      if (present(closed)) then
+         if (closed) then
+            do j = 1, size(model%elements)
+               select type (e => model%elements(j)%e)
+               class is (clearance_element_t)
+                  if (e%cl%mode == 0) e%cl%mode = 1
+               end select
+            end do
+         end if
+      end if
       allocate (k(n, n), m(n, n), w(n), work(max(1, 3*n*n)))
       k = 0.0_wp; m = 0.0_wp
       do i = 1, n
@@ -94,6 +109,9 @@ contains
          end do
       end do
       call dsygv(1, 'V', 'U', n, k, n, m, n, w, work, size(work), info)
+      if (present(closed)) then
+         if (closed) call model%init_modes(model%run%t_start, y)
+      end if
       if (info /= 0) then
          call fatal_error(err, 'the eigenvalue solver (LAPACK dsygv) failed with info = '//str(info), err_numeric)
          return

@@ -91,6 +91,7 @@ contains
       case ('table')
          if (grp%has('table_file')) then
             call grp%get_string('table_file', path, err); if (allocated(err)) return
+            path = relative_to_deck(path, grp%file)
             call read_table_file(path, tt, vv, err)
             if (allocated(err)) then
                err%message = grp%where('table_file')//': error: '//err%message
@@ -277,6 +278,18 @@ contains
          allocate (bp(0))
       end if
    end subroutine signal_breakpoints
+
+   !> A relative path is taken relative to the folder of the deck file.
+   pure function relative_to_deck(path, deck_file) result(full)
+      character(len=*), intent(in) :: path, deck_file
+      character(len=:), allocatable :: full
+      integer :: k
+      full = path
+      if (len(path) == 0) return
+      if (path(1:1) == '/') return
+      k = index(deck_file, '/', back=.true.)
+      if (k > 0) full = deck_file(1:k)//path
+   end function relative_to_deck
 
    !> Read a two-column (time, value) text table; '#' or '!' lines are comments.
    subroutine read_table_file(path, tt, vv, err)
