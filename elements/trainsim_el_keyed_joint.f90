@@ -4,14 +4,19 @@
 !> constant contact stiffness k (force/length; Table 5.4: 2.03e6 lb/in) and
 !> the impact laws of the gear pair.
 !>
-!> Not modelled: the load-dependent stiffness fits (eqs. 4.35-4.37) and the
-!> friction torque while the key is out of contact (eqs. 4.38-4.44), which acts
-!> only with an external torque on the hub; their Table 5.4 constants
-!> (friction, friction_angle, phi, load_radius) are accepted and recorded.
+!> stiffness_fit = 'tight' | 'loose' | 'average' replaces the constant
+!> stiffness by the load-dependent FEM fits of eqs. (4.35)-(4.37) (lineal
+!> stiffness per inch of key, in lbf/in/in, as a function of the key force in
+!> lbf; converted for other units) times key_length.
+!> Not modelled: the friction torque while the key is out of contact
+!> (eqs. 4.38-4.44), which acts only with an external torque on the hub; its
+!> Table 5.4 constants (friction, friction_angle, phi, load_radius) are
+!> accepted and recorded.
 module trainsim_el_keyed_joint
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: str, string_t
+   use trainsim_strings, only: str, string_t, to_lower
+   use trainsim_contact, only: fit_tight, fit_loose, fit_average, key_lineal_stiffness
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_sink, only: param_list_t
@@ -24,6 +29,7 @@ module trainsim_el_keyed_joint
    type, extends(clearance_element_t) :: keyed_joint_t
       real(wp) :: diameter = 0.0_wp
       real(wp) :: mu = 0.0_wp, phi = 0.0_wp, load_radius = 0.0_wp, friction_angle = 0.0_wp
+      real(wp) :: key_length = 0.0_wp
    contains
       procedure :: configure => key_configure
       procedure :: params => key_params
@@ -36,9 +42,35 @@ contains
       type(deck_group_t), intent(inout) :: grp
       type(units_t), intent(in) :: units
       type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: fit
+      real(wp) :: kl, dk
       call grp%get_real('diameter', self%diameter, err); if (allocated(err)) return
       call grp%get_real('half_clearance', self%cl%b, err); if (allocated(err)) return
-      call grp%get_real('stiffness', self%cl%law%k, err); if (allocated(err)) return
+      call grp%get_string('stiffness_fit', fit, err, default='constant'); if (allocated(err)) return
+      select case (to_lower(fit))
+      case ('constant')
+         call grp%get_real('stiffness', self%cl%law%k, err); if (allocated(err)) return
+      case ('tight', 'loose', 'average')
+         if (to_lower(fit) == 'tight') self%cl%law%fit = fit_tight
+         if (to_lower(fit) == 'loose') self%cl%law%fit = fit_loose
+         if (to_lower(fit) == 'average') self%cl%law%fit = fit_average
+         call grp%get_real('key_length', self%key_length, err); if (allocated(err)) return
+         if (.not. self%key_length > 0.0_wp) then
+            call fatal_error(err, grp%where('key_length')//': error: key_length must be > 0, got '// &
+                             str(self%key_length), err_input)
+            return
+         end if
+         self%cl%law%key_length_in = self%key_length*units%to_inch
+         self%cl%law%to_inch = units%to_inch
+         self%cl%law%to_lbf = units%to_lbf
+         ! eq. (3.12) needs one stiffness: the fit's at its lowest fitted load (100 lbf)
+         call key_lineal_stiffness(self%cl%law%fit, 100.0_wp, kl, dk)
+         self%cl%law%k = kl*self%cl%law%key_length_in*units%to_inch/units%to_lbf
+      case default
+         call fatal_error(err, grp%where('stiffness_fit')//": error: unknown stiffness_fit '"//fit// &
+                          "'; valid: constant, tight, loose, average", err_input)
+         return
+      end select
       call grp%get_real('friction', self%mu, err, default=0.0_wp); if (allocated(err)) return
       call grp%get_real('phi', self%phi, err, default=0.0_wp); if (allocated(err)) return
       call grp%get_real('load_radius', self%load_radius, err, default=0.0_wp); if (allocated(err)) return
@@ -66,5 +98,9 @@ contains
                  string_t('phi'), string_t('load_radius'), string_t('friction_angle'), string_t('min_approach_velocity')]
       p%values = [self%diameter, self%cl%b, self%cl%law%k, self%mu, self%phi, self%load_radius, &
                   self%friction_angle, self%cl%law%v_min]
+      if (self%cl%law%fit /= 0) then
+         p%names = [p%names, string_t('stiffness_fit'), string_t('key_length')]
+         p%values = [p%values, real(self%cl%law%fit, wp), self%key_length]
+      end if
    end function key_params
 end module trainsim_el_keyed_joint

@@ -36,6 +36,9 @@ module trainsim_contact
 
    integer, parameter :: law_yang_sun = 1, law_linear = 2, law_elasto = 3
    integer, parameter :: rest_goldsmith = 1, rest_smith = 2, rest_constant = 3
+   public :: fit_none, fit_tight, fit_loose, fit_average, key_lineal_stiffness
+   !> Load-dependent keyed-joint stiffness fits, eqs. (4.35)-(4.37)
+   integer, parameter :: fit_none = 0, fit_tight = 1, fit_loose = 2, fit_average = 3
 
    !> A contact law with the state of the contact in progress (D, e, V_i).
    type :: contact_law_t
@@ -48,6 +51,10 @@ module trainsim_contact
       real(wp) :: v_initial = 0.0_wp    !< approach velocity assumed for a contact closed at t_start
       real(wp) :: v_to_ips = 1.0_wp     !< approach velocity (deck units) -> in/s for the fits
       logical :: no_tension = .false.
+      !> keyed joint: stiffness from eqs. (4.35)-(4.37) times key_length (k then unused)
+      integer :: fit = fit_none
+      real(wp) :: key_length_in = 0.0_wp   !< key length, in
+      real(wp) :: to_inch = 1.0_wp, to_lbf = 1.0_wp
       ! the contact in progress
       real(wp) :: d = 0.0_wp, e = 1.0_wp, v_i = 0.0_wp
    contains
@@ -55,6 +62,7 @@ module trainsim_contact
       procedure :: begin_contact => law_begin_contact
       procedure :: restitution => law_restitution
       procedure :: force => law_force
+      procedure :: fit_elastic_force => law_fit_elastic_force
    end type contact_law_t
 
    !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
@@ -186,16 +194,21 @@ contains
    pure real(wp) function law_force(self, c, p, pdot) result(f)
       class(contact_law_t), intent(in) :: self
       real(wp), intent(in) :: c, p, pdot
-      real(wp) :: tc, td
+      real(wp) :: tc, td, fel
+      if (self%fit /= fit_none) then
+         fel = self%fit_elastic_force(p)
+      else
+         fel = self%k*p
+      end if
       select case (self%law)
       case (law_yang_sun)
-         f = c*(self%k*p + self%d*p*pdot)                 ! eqs. (3.18)-(3.19)
+         f = c*(fel + self%d*p*pdot)                      ! eqs. (3.18)-(3.19)
          if (self%no_tension) f = max(f, 0.0_wp)
       case (law_linear)
-         f = c*self%k*p + self%c*pdot
+         f = c*fel + self%c*pdot
          if (self%no_tension) f = max(f, 0.0_wp)
       case default
-         tc = c*self%k*p
+         tc = c*fel
          td = self%c*pdot
          if (tc + td <= 0.0_wp) then
             f = 0.0_wp
@@ -204,6 +217,59 @@ contains
          end if
       end select
    end function law_force
+
+   !> Lineal key stiffness (lbf/in per inch of key) at key force P (lbf), eqs.
+   !> (4.35) tight, (4.36) loose, (4.37) average fit; P is held inside the
+   !> fitted range [100, 60000] lbf. Returns dk/dP too.
+   pure subroutine key_lineal_stiffness(fit, p_lbf, k, dk)
+      integer, intent(in) :: fit
+      real(wp), intent(in) :: p_lbf
+      real(wp), intent(out) :: k, dk
+      real(wp) :: p, a, b, c, den
+      p = min(max(p_lbf, 100.0_wp), 60000.0_wp)
+      select case (fit)
+      case (fit_tight)
+         if (p >= 9000.0_wp) then
+            k = 0.46_wp*p + 272400.0_wp; dk = 0.46_wp
+            if (p_lbf /= p) dk = 0.0_wp
+            return
+         end if
+         a = 98800.0_wp; b = 0.0846_wp; c = 17.1_wp
+      case (fit_loose)
+         a = 85800.0_wp; b = 0.0774_wp; c = 4.62_wp
+      case default
+         if (p >= 22500.0_wp) then
+            k = 0.46_wp*p + 272400.0_wp; dk = 0.46_wp
+            if (p_lbf /= p) dk = 0.0_wp
+            return
+         end if
+         a = 99500.0_wp; b = 0.073_wp; c = 4.05_wp
+      end select
+      den = 1.0_wp + b*log(1.0_wp/p)
+      k = a/den - c*p
+      dk = a*b/(p*den**2) - c
+      if (p_lbf /= p) dk = 0.0_wp
+   end subroutine key_lineal_stiffness
+
+   !> Elastic key force F for penetration p with the load-dependent fit:
+   !> F = k(F) L p solved by Newton (fixed 6 iterations, allocation-free).
+   pure real(wp) function law_fit_elastic_force(self, p) result(f)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: p
+      real(wp) :: lp, fl, k, dk, g
+      integer :: it
+      lp = self%key_length_in*p*self%to_inch            ! L p in in^2
+      fl = 0.0_wp
+      call key_lineal_stiffness(self%fit, 100.0_wp, k, dk)
+      fl = k*lp                                          ! start from the low-load stiffness
+      do it = 1, 6
+         call key_lineal_stiffness(self%fit, abs(fl), k, dk)
+         g = fl - k*lp
+         fl = fl - g/(1.0_wp - dk*lp*sign(1.0_wp, fl))
+      end do
+      call key_lineal_stiffness(self%fit, abs(fl), k, dk)
+      f = k*lp/self%to_lbf
+   end function law_fit_elastic_force
 
    !> Relative displacement along the line of action.
    pure real(wp) function cl_delta(self, thl, thr) result(d)

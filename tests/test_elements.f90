@@ -9,6 +9,8 @@ program test_elements
    use trainsim_error, only: error_t
    use trainsim_modes, only: modes_t, compute_modes
    use trainsim_el_helical_gear, only: helical_contact_length
+   use trainsim_contact, only: key_lineal_stiffness, fit_tight, fit_loose
+   use trainsim_el_keyed_joint, only: keyed_joint_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model_text, run_model, nl
    implicit none
@@ -28,6 +30,8 @@ program test_elements
    call test_dc_motor_reaches_closed_form_steady_state()
    call test_helical_contact_length_eq_6_1()
    call test_helical_gear_mesh_mode_from_mean_contact_length()
+   call test_key_stiffness_fits_match_fem_points()
+   call test_key_fit_force_solves_implicit_stiffness()
    call suite_end()
 
 contains
@@ -233,4 +237,45 @@ contains
       call check('mesh mode: k = E/17.6 m_p F / cos(zeta_b)', md%freq_hz(2), &
                  sqrt(k*1.5_wp**2*(1.0_wp/1.0_wp + 1.0_wp/2.0_wp))/two_pi, rel_tol=1.0e-10_wp)
    end subroutine test_helical_gear_mesh_mode_from_mean_contact_length
+   subroutine test_key_stiffness_fits_match_fem_points()
+      real(wp) :: k, dk
+      call test_begin('key_stiffness_fits_match_fem_points')
+      ! Figs. 4.19-4.41, 1.000 in shaft: key force P = 2 T / d
+      call key_lineal_stiffness(fit_tight, 2.0_wp*450.0_wp, k, dk)
+      call check('tight, T = 450 lb-in vs FEM 218035 (1 %)', k, 218035.0_wp, rel_tol=1.0e-2_wp)
+      call key_lineal_stiffness(fit_tight, 2.0_wp*750.0_wp, k, dk)
+      call check('tight, T = 750 lb-in vs FEM 233650 (1 %)', k, 233650.0_wp, rel_tol=1.0e-2_wp)
+      call key_lineal_stiffness(fit_tight, 2.0_wp*7500.0_wp, k, dk)
+      call check('tight, T = 7500 lb-in vs FEM 280903 (1 %)', k, 280903.0_wp, rel_tol=1.0e-2_wp)
+      call key_lineal_stiffness(fit_loose, 2.0_wp*3000.0_wp, k, dk)
+      call check('loose, T = 3000 lb-in vs FEM 234797 (1 %)', k, 234797.0_wp, rel_tol=1.0e-2_wp)
+      call key_lineal_stiffness(fit_loose, 2.0_wp*7500.0_wp, k, dk)
+      call check('loose, T = 7500 lb-in vs FEM 268556 (1 %)', k, 268556.0_wp, rel_tol=1.0e-2_wp)
+   end subroutine test_key_stiffness_fits_match_fem_points
+
+   subroutine test_key_fit_force_solves_implicit_stiffness()
+      type(model_t) :: m
+      real(wp) :: f, k, dk, p
+      integer :: i
+      call test_begin('key_fit_force_solves_implicit_stiffness')
+      call load_model_text(two_disks//"&element type='keyed_joint', diameter=1.0, half_clearance=0.001,"// &
+                           " stiffness_fit='tight', key_length=1.5 /", m)
+      select type (e => m%elements(1)%e)
+      type is (keyed_joint_t)
+         do i = 1, 4
+            p = 10.0_wp**(-6 + i)*1.0e-1_wp      ! 1e-6 .. 1e-3 in
+            f = e%cl%law%fit_elastic_force(p)
+            call key_lineal_stiffness(fit_tight, f, k, dk)
+            call check('F = k(F) L p at p = '//trim(adjustl(rstr(p))), f, k*1.5_wp*p, rel_tol=1.0e-10_wp)
+         end do
+      class default
+         call check('element is a keyed joint', .false.)
+      end select
+   end subroutine test_key_fit_force_solves_implicit_stiffness
+
+   function rstr(x) result(s)
+      real(wp), intent(in) :: x
+      character(len=16) :: s
+      write (s, '(es9.2)') x
+   end function rstr
 end program test_elements
