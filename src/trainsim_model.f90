@@ -69,7 +69,8 @@ module trainsim_model
 contains
 
    !> Lay out the state vector and size the workspace; call after nodes,
-   !> elements, loads and speeds are set.
+   !> elements, loads and speeds are set, and again after re-parameterising a
+   !> copy in a way that changes the layout (e.g. run%track_energy).
    subroutine model_finalize(self)
       class(model_t), intent(inout) :: self
       integer :: i, nn, ne
@@ -88,6 +89,7 @@ contains
       end do
       self%n_y = self%n_states
       if (self%run%track_energy) self%n_y = self%n_states + 2
+      if (allocated(self%guard_offset)) deallocate (self%guard_offset)
       allocate (self%guard_offset(ne))
       self%n_guards = 0
       do i = 1, ne
