@@ -36,13 +36,8 @@ contains
       end associate
       call grp%get_real('stiffness', self%k, err); if (allocated(err)) return
       call grp%get_real('damping', self%c, err, default=0.0_wp); if (allocated(err)) return
-      if (.not. self%k > 0.0_wp) then
-         call fatal_error(err, grp%where('stiffness')//': error: stiffness must be > 0, got '//str(self%k), err_input)
-         return
-      end if
-      if (.not. self%c >= 0.0_wp) then
-         call fatal_error(err, grp%where('damping')//': error: damping must be >= 0, got '//str(self%c), err_input)
-      end if
+      call grp%require_positive('stiffness', self%k, err)
+      call grp%require_nonnegative('damping', self%c, err)
    end subroutine shaft_configure
 
    pure subroutine shaft_torques(self, thl, wl, thr, wr, tl, tr)

@@ -105,16 +105,16 @@ contains
          call grp%get_real('backlash', bl, err); if (allocated(err)) return
          if (grp%has('diametral_pitch')) then
             call grp%get_real('diametral_pitch', pd, err); if (allocated(err)) return
-            call positive('diametral_pitch', pd); if (allocated(err)) return
+            call grp%require_positive('diametral_pitch', pd, err); if (allocated(err)) return
             self%pitch_module = 1.0_wp/pd/units%to_inch          ! module in deck length units
          else
             call grp%get_real('module', modl, err); if (allocated(err)) return
-            call positive('module', modl); if (allocated(err)) return
+            call grp%require_positive('module', modl, err); if (allocated(err)) return
             self%pitch_module = modl/25.4_wp/units%to_inch
          end if
-         call positive('teeth_driver', self%teeth); if (allocated(err)) return
-         call positive('teeth_driven', self%teeth2); if (allocated(err)) return
-         call positive('face_width', self%face); if (allocated(err)) return
+         call grp%require_positive('teeth_driver', self%teeth, err); if (allocated(err)) return
+         call grp%require_positive('teeth_driven', self%teeth2, err); if (allocated(err)) return
+         call grp%require_positive('face_width', self%face, err); if (allocated(err)) return
          if (.not. (self%phi > 0.0_wp .and. self%phi < 45.0_wp)) then
             call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, got '// &
                              str(self%phi), err_input)
@@ -135,7 +135,7 @@ contains
          ! eq. (3.9): deflection W (0.39 + 1.49 cos phi) 1e-7 / F in inch-lbf (steel)
          kdef = 1.0e7_wp/(0.39_wp + 1.49_wp*cos(self%phi))*units%to_inch**2/units%to_lbf
          call grp%get_real('stiffness_per_width', kw, err, default=kdef); if (allocated(err)) return
-         call positive('stiffness_per_width', kw); if (allocated(err)) return
+         call grp%require_positive('stiffness_per_width', kw, err); if (allocated(err)) return
          call grp%get_real('stiffness', k, err, default=kw*self%face); if (allocated(err)) return
          self%cl%law%k = k
       else
@@ -146,16 +146,16 @@ contains
          call grp%get_real('contact_ratio', self%mp, err); if (allocated(err)) return
          call grp%get_real('approach_angle', self%alpha, err); if (allocated(err)) return
          call grp%get_real('half_backlash', self%cl%b, err); if (allocated(err)) return
-         call positive('rb_driver', self%cl%r1); if (allocated(err)) return
-         call positive('rb_driven', self%cl%r2); if (allocated(err)) return
-         call positive('teeth', self%teeth); if (allocated(err)) return
+         call grp%require_positive('rb_driver', self%cl%r1, err); if (allocated(err)) return
+         call grp%require_positive('rb_driven', self%cl%r2, err); if (allocated(err)) return
+         call grp%require_positive('teeth', self%teeth, err); if (allocated(err)) return
          if (.not. self%cl%b >= 0.0_wp) then
             call fatal_error(err, grp%where('half_backlash')//': error: half_backlash must be >= 0, got '// &
                              str(self%cl%b), err_input)
             return
          end if
       end if
-      call positive('stiffness', self%cl%law%k); if (allocated(err)) return
+      call grp%require_positive('stiffness', self%cl%law%k, err); if (allocated(err)) return
       if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
          call fatal_error(err, grp%where('contact_ratio')//': error: contact ratio must be in [1, 2], got '// &
                           str(self%mp), err_input)
@@ -177,13 +177,6 @@ contains
          return
       end select
       call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
-   contains
-      subroutine positive(key, v)
-         character(len=*), intent(in) :: key
-         real(wp), intent(in) :: v
-         if (.not. v > 0.0_wp) call fatal_error(err, grp%where(key)//': error: '//key//' must be > 0, got '// &
-                                                str(v), err_input)
-      end subroutine positive
    end subroutine spur_configure
 
    !> Set the zone from the driver angle.

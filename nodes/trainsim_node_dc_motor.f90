@@ -56,24 +56,14 @@ contains
       call grp%get_real('inductance', self%l, err); if (allocated(err)) return
       call grp%get_real('resistance', self%r, err); if (allocated(err)) return
       call grp%get_real('back_emf_constant', self%alpha_e, err); if (allocated(err)) return
-      call positive('inertia', self%j); if (allocated(err)) return
-      call positive('inductance', self%l); if (allocated(err)) return
-      call positive('resistance', self%r); if (allocated(err)) return
-      call positive('torque_constant', self%alpha); if (allocated(err)) return
-      call positive('back_emf_constant', self%alpha_e); if (allocated(err)) return
-      if (.not. self%d >= 0.0_wp) then
-         call fatal_error(err, grp%where('damping')//': error: damping must be >= 0, got '//str(self%d), err_input)
-         return
-      end if
+      call grp%require_positive('inertia', self%j, err); if (allocated(err)) return
+      call grp%require_positive('inductance', self%l, err); if (allocated(err)) return
+      call grp%require_positive('resistance', self%r, err); if (allocated(err)) return
+      call grp%require_positive('torque_constant', self%alpha, err); if (allocated(err)) return
+      call grp%require_positive('back_emf_constant', self%alpha_e, err); if (allocated(err)) return
+      call grp%require_nonnegative('damping', self%d, err); if (allocated(err)) return
       self%power_per_watt = units%power_per_watt
       self%voltage = constant_signal(0.0_wp)
-   contains
-      subroutine positive(key, v)
-         character(len=*), intent(in) :: key
-         real(wp), intent(in) :: v
-         if (.not. v > 0.0_wp) call fatal_error(err, grp%where(key)//': error: '//key//' must be > 0, got '// &
-                                                str(v), err_input)
-      end subroutine positive
    end subroutine motor_configure
 
    pure integer function motor_nstates(self) result(n)

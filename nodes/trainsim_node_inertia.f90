@@ -37,13 +37,8 @@ contains
       end associate
       call grp%get_real('inertia', self%j, err); if (allocated(err)) return
       call grp%get_real('damping', self%d, err, default=0.0_wp); if (allocated(err)) return
-      if (.not. self%j > 0.0_wp) then
-         call fatal_error(err, grp%where('inertia')//': error: inertia must be > 0, got '//str(self%j), err_input)
-         return
-      end if
-      if (.not. self%d >= 0.0_wp) then
-         call fatal_error(err, grp%where('damping')//': error: damping must be >= 0, got '//str(self%d), err_input)
-      end if
+      call grp%require_positive('inertia', self%j, err)
+      call grp%require_nonnegative('damping', self%d, err)
    end subroutine inertia_configure
 
    pure integer function inertia_nstates(self) result(n)

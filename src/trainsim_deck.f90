@@ -42,6 +42,8 @@ module trainsim_deck
       procedure :: where => group_where
       procedure :: label => group_label
       procedure :: check_unused => group_check_unused
+      procedure :: require_positive => group_require_positive
+      procedure :: require_nonnegative => group_require_nonnegative
    end type deck_group_t
 
    !> A whole parsed deck.
@@ -563,6 +565,28 @@ contains
 
    !> Error naming the first entry not read by a getter, listing the keys that were queried.
    !> `context` (e.g. "element type 'shaft'") says what the keys were checked against.
+   !> Error naming the key and its value unless value > 0 (NaN fails too).
+   subroutine group_require_positive(self, key, value, err)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(inout) :: err
+      if (allocated(err)) return
+      if (.not. value > 0.0_wp) call fatal_error(err, self%where(key)//': error: '//key//' must be > 0, got '// &
+                                                 str(value), err_input)
+   end subroutine group_require_positive
+
+   !> Error naming the key and its value unless value >= 0 (NaN fails too).
+   subroutine group_require_nonnegative(self, key, value, err)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(inout) :: err
+      if (allocated(err)) return
+      if (.not. value >= 0.0_wp) call fatal_error(err, self%where(key)//': error: '//key//' must be >= 0, got '// &
+                                                  str(value), err_input)
+   end subroutine group_require_nonnegative
+
    subroutine group_check_unused(self, err, context)
       class(deck_group_t), intent(in) :: self
       type(error_t), allocatable, intent(out) :: err
