@@ -26,6 +26,7 @@ module trainsim_el_helical_gear
       procedure :: configure => hel_configure
       procedure :: factor => hel_factor
       procedure :: linear_factor => hel_linear_factor
+      procedure :: input_power => hel_input_power
       procedure :: params => hel_params
    end type helical_gear_t
 
@@ -93,6 +94,28 @@ contains
       u = self%teeth*(thl + self%alpha)/two_pi
       c = helical_contact_length(u - floor(u), self%mp, self%mf, self%ptb, self%zeta)
    end function hel_factor
+
+   !> Work done by the varying stiffness on loaded teeth: (1/2) k p^2 dL_c/dt,
+   !> dL_c/dt = dL_c/de * N/(2 pi) * w_driver (dL_c/de piecewise constant).
+   pure real(wp) function hel_input_power(self, thl, wl, thr, wr) result(pw)
+      class(helical_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: u, e, p, dlde
+      associate (u1 => wr)
+      end associate
+      pw = 0.0_wp
+      if (self%cl%mode == 0) return
+      p = self%cl%mode*self%cl%delta(thl, thr) - self%cl%b
+      u = self%teeth*(thl + self%alpha)/two_pi
+      e = u - floor(u)
+      dlde = self%ptb*(-dterm(self%mp + self%mf) + dterm(self%mf) + dterm(self%mp))/sin(self%zeta)
+      pw = self%cl%law%elastic_energy(p)*dlde*self%teeth/two_pi*wl
+   contains
+      pure real(wp) function dterm(m)
+         real(wp), intent(in) :: m
+         dterm = floor(m - e) + 1.0_wp
+      end function dterm
+   end function hel_input_power
 
    !> Mean length of the lines of contact, m_p F / cos(zeta_b), for modes.
    pure real(wp) function hel_linear_factor(self) result(c)

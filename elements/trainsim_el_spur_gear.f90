@@ -283,7 +283,7 @@ contains
       p%values = [self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%cl%b, self%c2, &
                   merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, self%cl%law%v_initial]
       if (self%pitch_module > 0.0_wp) then
-         p%names = [p%names, string_t('teeth_driven'), string_t('module'), string_t('pressure_angle_rad'), &
+         p%names = [p%names, string_t('teeth_driven'), string_t('module_length'), string_t('pressure_angle_rad'), &
                     string_t('face_width')]
          p%values = [p%values, self%teeth2, self%pitch_module, self%phi, self%face]
       end if

@@ -63,6 +63,8 @@ module trainsim_contact
       procedure :: restitution => law_restitution
       procedure :: force => law_force
       procedure :: fit_elastic_force => law_fit_elastic_force
+      procedure :: elastic_force => law_elastic_force
+      procedure :: elastic_energy => law_elastic_energy
    end type contact_law_t
 
    !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
@@ -271,6 +273,47 @@ contains
       f = k*lp/self%to_lbf
    end function law_fit_elastic_force
 
+   !> Elastic part of the contact force at penetration p (factor 1).
+   pure real(wp) function law_elastic_force(self, p) result(f)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: p
+      if (self%fit /= fit_none) then
+         f = self%fit_elastic_force(p)
+      else
+         f = self%k*p
+      end if
+   end function law_elastic_force
+
+   !> Elastic energy at penetration p (factor 1): k p^2/2, or the integral of the
+   !> load-dependent key force: exact below the 100 lbf floor of the fit (linear
+   !> there), 5-point Gauss-Legendre above it (smooth; the kink is the split point).
+   pure real(wp) function law_elastic_energy(self, p) result(e)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: p
+      real(wp), parameter :: x(5) = [-0.9061798459386640_wp, -0.5384693101056831_wp, 0.0_wp, &
+                                     0.5384693101056831_wp, 0.9061798459386640_wp]
+      real(wp), parameter :: w(5) = [0.2369268850561891_wp, 0.4786286704993665_wp, 0.5688888888888889_wp, &
+                                     0.4786286704993665_wp, 0.2369268850561891_wp]
+      real(wp) :: k100, dk, klin, pk, a
+      integer :: i
+      if (self%fit == fit_none) then
+         e = 0.5_wp*self%k*p**2
+         return
+      end if
+      call key_lineal_stiffness(self%fit, 100.0_wp, k100, dk)
+      klin = k100*self%key_length_in*self%to_inch/self%to_lbf     ! force/length below 100 lbf
+      pk = (100.0_wp/self%to_lbf)/klin                             ! penetration at 100 lbf
+      if (abs(p) <= pk) then
+         e = 0.5_wp*klin*p**2
+         return
+      end if
+      a = sign(pk, p)
+      e = 0.5_wp*klin*pk**2
+      do i = 1, 5
+         e = e + 0.5_wp*(p - a)*w(i)*self%fit_elastic_force(a + 0.5_wp*(p - a)*(x(i) + 1.0_wp))
+      end do
+   end function law_elastic_energy
+
    !> Relative displacement along the line of action.
    pure real(wp) function cl_delta(self, thl, thr) result(d)
       class(clearance_t), intent(in) :: self
@@ -386,7 +429,7 @@ contains
       tr = fs*self%r2
    end subroutine cl_torques
 
-   !> Elastic energy c k p^2 / 2 while in contact.
+   !> Elastic energy (c k p^2 / 2 for a constant stiffness) while in contact.
    pure real(wp) function cl_potential(self, c, thl, thr) result(e)
       class(clearance_t), intent(in) :: self
       real(wp), intent(in) :: c, thl, thr
@@ -394,7 +437,7 @@ contains
       e = 0.0_wp
       if (self%mode == 0) return
       p = self%mode*self%delta(thl, thr) - self%b
-      e = 0.5_wp*c*self%law%k*p**2
+      e = c*self%law%elastic_energy(p)
    end function cl_potential
 
    !> Power dissipated: (F - c k p) pdot, the force beyond the elastic one times the rate.
@@ -407,6 +450,6 @@ contains
       p = self%mode*self%delta(thl, thr) - self%b
       pdot = self%mode*(self%r1*wl - self%r2*wr)
       f = self%mode*self%contact_force(c, thl, wl, thr, wr)
-      pw = (f - c*self%law%k*p)*pdot
+      pw = (f - c*self%law%elastic_force(p))*pdot
    end function cl_dissipation
 end module trainsim_contact

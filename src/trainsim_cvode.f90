@@ -60,7 +60,7 @@ module trainsim_cvode
    !> Fraction of the period of the highest linearised mode (clearances closed)
    !> used as the default maximum step.
    real(wp), parameter :: max_step_fraction = 0.1_wp
-   !> Absolute tolerance of the two energy-accounting states, relative to 1 + E0.
+   !> Floor of the absolute tolerance of the energy-accounting states, per unit of 1 + E0.
    real(wp), parameter :: energy_atol_factor = 1.0e-6_wp
    !> Internal steps allowed per call (per output interval), at least.
    integer(i8), parameter :: mxstep_min = 1000000_i8
@@ -168,8 +168,10 @@ contains
    end subroutine cvode_max_step
 
    !> Absolute tolerance of each state: node angles atol_angle, speeds
-   !> atol_speed, a motor's current (third state) atol_current; the energy
-   !> states energy_atol_factor*(1 + |E0|).
+   !> atol_speed, a motor's current (third state) atol_current; the two
+   !> energy-accounting states max(rtol, 1e-6)*(1 + |E0|) (loose: they are
+   !> diagnostics, and must not set the step at tight rtol). E0 is the stored
+   !> energy at t_start (set by model%init_modes).
    subroutine cvode_abstol(model, atol)
       type(model_t), intent(in) :: model
       real(wp), intent(out) :: atol(:)
@@ -184,7 +186,7 @@ contains
          if (ns >= 3) atol(o + 3:o + ns) = model%run%atol_current
       end do
       if (model%run%track_energy) atol(model%n_states + 1:model%n_states + 2) = &
-         energy_atol_factor*(1.0_wp + abs(model%energy0))
+         max(model%run%rtol, energy_atol_factor)*(1.0_wp + abs(model%energy0))
    end subroutine cvode_abstol
 
    !> Sorted breakpoints of the loads, prescribed speeds and motor voltages
@@ -316,6 +318,11 @@ contains
       else
          dout = model%run%dt
       end if
+      if (hmax > 0.0_wp .and. (t_end - t0)/hmax > 1.0e12_wp) then
+         call fatal_error(err, 'max_step = '//str(hmax)//' s would need more than 1e12 steps over the run of '// &
+                          str(t_end - t0)//' s: raise max_step (0 chooses it from the highest frequency)', err_input)
+         return
+      end if
       mxstep = mxstep_min
       if (hmax > 0.0_wp) mxstep = max(mxstep, min(10_i8*ceiling(dout/hmax, i8), 1000000000_i8))
       tol_out = 1.0e-9_wp*model%run%dt    ! the observer's output-time tolerance
@@ -423,9 +430,19 @@ contains
       do while (t < t_end)
          tout = t0 + real(k, wp)*dout
          if (tout >= t_end - 1.0e-6_wp*dout) tout = t_end
-         if (tout - t <= tol_out .and. tout < t_end) then
-            k = k + 1          ! already there (an event fell on this output time)
-            cycle
+         if (tout - t <= tol_out) then
+            ! already there: an event fell on this output time (the observer has it)
+            if (tout < t_end) then
+               k = k + 1
+               cycle
+            end if
+            ! ... or within rounding of t_end, too close for CVODE to start a step
+            t = t_end
+            call obs%step(model, t, yv, sink, err)
+            if (allocated(err)) then
+               call cleanup(); return
+            end if
+            exit
          end if
          flag = FCVode(mem, tout, nv_y, tret, CV_NORMAL)
          if (flag < 0) then
@@ -584,7 +601,11 @@ contains
             ie = FCVodeGetEstLocalErrors(mem, nv_ele)
             ie = FCVodeGetErrWeights(mem, nv_ewt)
             wmax = maxval(abs(ele*ewt))
-            if (wmax > 0.0_wp .and. wmax == wmax) then
+            if (flag == CV_TOO_MUCH_ACC) then
+               ! what limits the accuracy is |y| against its tolerance, not a local error
+               worst = maxloc(abs(yv)*ewt, 1)
+               loc_text = 'the tightest tolerance relative to its value is on '//state_label(model, worst)
+            else if (wmax > 0.0_wp .and. wmax == wmax) then
                worst = maxloc(abs(ele*ewt), 1)
                loc_text = 'the largest weighted local error estimate is in '//state_label(model, worst)// &
                        ' (|error|/tolerance = '//str(wmax)//')'
@@ -610,13 +631,16 @@ contains
          else
             rk4_hint = "try integrator = 'rk4' with a small dt"
          end if
-         h_text = 'last step size '//str(hlast(1))//' s'
+         h_text = ''
+         if (hlast(1) > 0.0_wp) h_text = ' (last step size '//str(hlast(1))//' s)'
          select case (flag)
          case (CV_TOO_MUCH_WORK)
             what = 'more than '//str(real(mxstep, wp))//' internal steps were taken without reaching the next output time '// &
                    str(tout)//' s'
             advice = 'the step size collapsed (a stiff contact, chattering, or a discontinuity no guard '// &
-                     'announces): loosen rtol/atol'
+                     'announces): '
+            if (adams) advice = advice//"the train may be stiff for the Adams method: use integrator = 'cvode-bdf'; "
+            advice = advice//'loosen rtol/atol'
             if (model%run%max_step > 0.0_wp) advice = advice//', raise max_step (now '//str(model%run%max_step)//' s)'
             advice = advice//", shorten output_interval, or "//rk4_hint
          case (CV_TOO_MUCH_ACC)
@@ -658,7 +682,7 @@ contains
          detail = ''
          if (ud%msg_len > 0) detail = ' [CVODE: '//ud%msg(1:ud%msg_len)//']'
          call fatal_error(err, "integrator '"//model%run%integrator//"' failed at t = "//str(tcur(1))// &
-                          ' s ('//h_text//'): '//what//'; '//loc_text//'. Advice: '//advice//'.'//detail, err_numeric)
+                          ' s'//h_text//': '//what//'; '//loc_text//'. Advice: '//advice//'.'//detail, err_numeric)
       end subroutine failed
 
       !> Free the SUNDIALS objects (in reverse order of creation).

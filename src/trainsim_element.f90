@@ -31,6 +31,7 @@ module trainsim_element
       procedure :: stiffness_matrix => el_stiffness_matrix
       procedure :: potential_energy => el_potential_energy
       procedure :: dissipation_power => el_dissipation_power
+      procedure :: input_power => el_input_power
       procedure :: n_guards => el_n_guards
       procedure :: guards => el_guards
       procedure :: init_mode => el_init_mode
@@ -109,6 +110,16 @@ contains
       end associate
       p = 0.0_wp
    end function el_dissipation_power
+
+   !> Power fed in by the element itself (e.g. a mesh stiffness that varies with
+   !> position does work (1/2) p^2 dk/dt on the loaded teeth).
+   pure real(wp) function el_input_power(self, thl, wl, thr, wr) result(p)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      associate (u1 => self, u2 => thl, u3 => wl, u4 => thr, u5 => wr)
+      end associate
+      p = 0.0_wp
+   end function el_input_power
 
    !> Number of switching functions (guards). A mode stays valid while all are >= 0.
    pure integer function el_n_guards(self) result(n)
