@@ -27,6 +27,7 @@ module trainsim_el_helical_gear
       procedure :: factor => hel_factor
       procedure :: linear_factor => hel_linear_factor
       procedure :: input_power => hel_input_power
+      procedure :: factor_derivative => hel_factor_derivative
       procedure :: params => hel_params
    end type helical_gear_t
 
@@ -95,26 +96,32 @@ contains
       c = helical_contact_length(u - floor(u), self%mp, self%mf, self%ptb, self%zeta)
    end function hel_factor
 
-   !> Work done by the varying stiffness on loaded teeth: (1/2) k p^2 dL_c/dt,
-   !> dL_c/dt = dL_c/de * N/(2 pi) * w_driver (dL_c/de piecewise constant).
-   pure real(wp) function hel_input_power(self, thl, wl, thr, wr) result(pw)
+   !> dL_c/d theta_driver = dL_c/de * N/(2 pi) (dL_c/de is piecewise constant).
+   pure real(wp) function hel_factor_derivative(self, thl) result(dc)
       class(helical_gear_t), intent(in) :: self
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp) :: u, e, p, dlde
-      associate (u1 => wr)
-      end associate
-      pw = 0.0_wp
-      if (self%cl%mode == 0) return
-      p = self%cl%mode*self%cl%delta(thl, thr) - self%cl%b
+      real(wp), intent(in) :: thl
+      real(wp) :: u, e
       u = self%teeth*(thl + self%alpha)/two_pi
       e = u - floor(u)
-      dlde = self%ptb*(-dterm(self%mp + self%mf) + dterm(self%mf) + dterm(self%mp))/sin(self%zeta)
-      pw = self%cl%law%elastic_energy(p)*dlde*self%teeth/two_pi*wl
+      dc = self%ptb*(-dterm(self%mp + self%mf) + dterm(self%mf) + dterm(self%mp))/sin(self%zeta)*self%teeth/two_pi
    contains
       pure real(wp) function dterm(m)
          real(wp), intent(in) :: m
          dterm = floor(m - e) + 1.0_wp
       end function dterm
+   end function hel_factor_derivative
+
+   !> Work done by the varying stiffness on loaded teeth: (1/2) k p^2 dL_c/dt.
+   pure real(wp) function hel_input_power(self, thl, wl, thr, wr) result(pw)
+      class(helical_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: p
+      associate (u1 => wr)
+      end associate
+      pw = 0.0_wp
+      if (self%cl%mode == 0) return
+      p = self%cl%mode*self%cl%delta(thl, thr) - self%cl%b
+      pw = self%cl%law%elastic_energy(p)*self%factor_derivative(thl)*wl
    end function hel_input_power
 
    !> Mean length of the lines of contact, m_p F / cos(zeta_b), for modes.

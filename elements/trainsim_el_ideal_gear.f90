@@ -26,6 +26,7 @@ module trainsim_el_ideal_gear
       procedure :: potential_energy => gear_potential
       procedure :: status => gear_status
       procedure :: params => gear_params
+      procedure :: torque_jacobian => gear_jacobian
    end type ideal_gear_t
 
 contains
@@ -102,6 +103,16 @@ contains
       contact = 1
       pairs = 0
    end subroutine gear_status
+
+   pure subroutine gear_jacobian(self, thl, wl, thr, wr, jt)
+      class(ideal_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      associate (u1 => thl, u2 => wl, u3 => thr, u4 => wr)
+      end associate
+      jt(1, :) = [-self%k*self%r1**2, 0.0_wp, self%k*self%r1*self%r2, 0.0_wp]
+      jt(2, :) = [self%k*self%r1*self%r2, 0.0_wp, -self%k*self%r2**2, 0.0_wp]
+   end subroutine gear_jacobian
 
    function gear_params(self) result(p)
       class(ideal_gear_t), intent(in) :: self

@@ -23,6 +23,7 @@ module trainsim_el_shaft
       procedure :: potential_energy => shaft_potential
       procedure :: dissipation_power => shaft_dissipation
       procedure :: params => shaft_params
+      procedure :: torque_jacobian => shaft_jacobian
    end type shaft_t
 
 contains
@@ -67,6 +68,16 @@ contains
       end associate
       p = self%c*(wl - wr)**2
    end function shaft_dissipation
+
+   pure subroutine shaft_jacobian(self, thl, wl, thr, wr, jt)
+      class(shaft_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      associate (u1 => thl, u2 => wl, u3 => thr, u4 => wr)
+      end associate
+      jt(2, :) = [self%k, self%c, -self%k, -self%c]
+      jt(1, :) = -jt(2, :)
+   end subroutine shaft_jacobian
 
    function shaft_params(self) result(p)
       class(shaft_t), intent(in) :: self

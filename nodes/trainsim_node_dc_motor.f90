@@ -41,6 +41,7 @@ module trainsim_node_dc_motor
       procedure :: attach_voltage => motor_attach_voltage
       procedure :: state_names => motor_state_names
       procedure :: params => motor_params
+      procedure :: jacobian => motor_jacobian
    end type dc_motor_node_t
 
 contains
@@ -146,6 +147,23 @@ contains
       names(2)%s = self%id//'.speed'
       names(3)%s = self%id//'.current'
    end subroutine motor_state_names
+
+   pure subroutine motor_jacobian(self, t, y, jac, dtorque)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: jac(:, :)
+      real(wp), intent(out) :: dtorque(:)
+      integer :: o
+      associate (u1 => t, u2 => y)
+      end associate
+      o = self%offset
+      jac(o + 1, o + 2) = jac(o + 1, o + 2) + 1.0_wp
+      jac(o + 2, o + 2) = jac(o + 2, o + 2) - self%d/self%j
+      jac(o + 2, o + 3) = jac(o + 2, o + 3) + self%alpha/self%j
+      jac(o + 3, o + 2) = jac(o + 3, o + 2) - self%alpha_e/self%l
+      jac(o + 3, o + 3) = jac(o + 3, o + 3) - self%r/self%l
+      dtorque = [0.0_wp, 1.0_wp/self%j, 0.0_wp]
+   end subroutine motor_jacobian
 
    function motor_params(self) result(p)
       class(dc_motor_node_t), intent(in) :: self

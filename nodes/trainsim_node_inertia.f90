@@ -24,6 +24,7 @@ module trainsim_node_inertia
       procedure :: dissipation_power => inertia_dissipation
       procedure :: can_prescribe_speed => inertia_can_prescribe
       procedure :: params => inertia_params
+      procedure :: jacobian => inertia_jacobian
    end type inertia_node_t
 
 contains
@@ -75,6 +76,19 @@ contains
       end associate
       f = .true.
    end function inertia_can_prescribe
+
+   pure subroutine inertia_jacobian(self, t, y, jac, dtorque)
+      class(inertia_node_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: jac(:, :)
+      real(wp), intent(out) :: dtorque(:)
+      associate (u1 => t, u2 => y)
+      end associate
+      jac(self%offset + 1, self%offset + 2) = jac(self%offset + 1, self%offset + 2) + 1.0_wp
+      jac(self%offset + 2, self%offset + 2) = jac(self%offset + 2, self%offset + 2) - self%d/self%j
+      dtorque(1) = 0.0_wp
+      dtorque(2) = 1.0_wp/self%j
+   end subroutine inertia_jacobian
 
    function inertia_params(self) result(p)
       class(inertia_node_t), intent(in) :: self

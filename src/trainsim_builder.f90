@@ -55,7 +55,7 @@ contains
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
       integer :: n, i
-      character(len=:), allocatable :: units_name
+      character(len=:), allocatable :: units_name, jac_kind
       type(string_t), allocatable :: valid(:)
       logical :: ok
       real(wp) :: tmp
@@ -91,6 +91,15 @@ contains
          call g%get_real('event_tol', r%event_tol, err, default=0.0_wp); if (allocated(err)) return
          call g%get_real('settle_time', r%settle_time, err, default=0.0_wp); if (allocated(err)) return
          call g%get_logical('track_energy', r%track_energy, err, default=.true.); if (allocated(err)) return
+         call g%get_string('jacobian', jac_kind, err, default='analytic'); if (allocated(err)) return
+         select case (to_lower(jac_kind))
+         case ('analytic'); r%analytic_jacobian = .true.
+         case ('difference_quotient', 'dq'); r%analytic_jacobian = .false.
+         case default
+            call fatal_error(err, g%where('jacobian')//": error: unknown jacobian '"//jac_kind// &
+                             "'; valid: analytic (default), difference_quotient", err_input)
+            return
+         end select
 
          if (.not. r%dt > 0.0_wp) then
             call fatal_error(err, g%where('dt')//': error: time step dt must be > 0, got '//str(r%dt), err_input)

@@ -18,6 +18,8 @@ module trainsim_clearance_element
    contains
       procedure :: factor => ce_factor
       procedure :: linear_factor => ce_linear_factor
+      procedure :: factor_derivative => ce_factor_derivative
+      procedure :: torque_jacobian => ce_torque_jacobian
       procedure :: torques => ce_torques
       procedure :: displacement => ce_displacement
       procedure :: displacement_unit => ce_displacement_unit
@@ -48,6 +50,22 @@ contains
       class(clearance_element_t), intent(in) :: self
       c = self%factor(0.0_wp)
    end function ce_linear_factor
+
+   !> d factor / d thl (0: the factor is piecewise constant between events).
+   pure real(wp) function ce_factor_derivative(self, thl) result(dc)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl
+      associate (u1 => self, u2 => thl)
+      end associate
+      dc = 0.0_wp
+   end function ce_factor_derivative
+
+   pure subroutine ce_torque_jacobian(self, thl, wl, thr, wr, jt)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      call self%cl%torque_jacobian(self%factor(thl), self%factor_derivative(thl), thl, wl, thr, wr, jt)
+   end subroutine ce_torque_jacobian
 
    pure subroutine ce_torques(self, thl, wl, thr, wr, tl, tr)
       class(clearance_element_t), intent(in) :: self

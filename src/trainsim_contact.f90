@@ -65,6 +65,8 @@ module trainsim_contact
       procedure :: fit_elastic_force => law_fit_elastic_force
       procedure :: elastic_force => law_elastic_force
       procedure :: elastic_energy => law_elastic_energy
+      procedure :: elastic_stiffness => law_elastic_stiffness
+      procedure :: force_partials => law_force_partials
    end type contact_law_t
 
    !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
@@ -81,6 +83,7 @@ module trainsim_contact
       procedure :: torques => cl_torques
       procedure :: potential => cl_potential
       procedure :: dissipation => cl_dissipation
+      procedure :: torque_jacobian => cl_torque_jacobian
    end type clearance_t
 
 contains
@@ -284,6 +287,51 @@ contains
       end if
    end function law_elastic_force
 
+   !> d(elastic force)/dp at penetration p (factor 1).
+   pure real(wp) function law_elastic_stiffness(self, p) result(kp)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: p
+      real(wp) :: f, k, dk, lp
+      if (self%fit == fit_none) then
+         kp = self%k
+         return
+      end if
+      ! F = k(F) L p  =>  dF/dp = k L / (1 - k'(F) L p)   (lengths in inch, forces in lbf)
+      f = self%fit_elastic_force(p)
+      call key_lineal_stiffness(self%fit, abs(f*self%to_lbf), k, dk)
+      lp = self%key_length_in*p*self%to_inch
+      kp = k*self%key_length_in/(1.0_wp - dk*lp*sign(1.0_wp, f))*self%to_inch/self%to_lbf
+   end function law_elastic_stiffness
+
+   !> Contact force and its partials with respect to p, pdot and the factor c.
+   pure subroutine law_force_partials(self, c, p, pdot, f, dfdp, dfdv, dfdc)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: c, p, pdot
+      real(wp), intent(out) :: f, dfdp, dfdv, dfdc
+      real(wp) :: fel, kel, tc, td
+      fel = self%elastic_force(p)
+      kel = self%elastic_stiffness(p)
+      f = self%force(c, p, pdot)
+      select case (self%law)
+      case (law_yang_sun)
+         dfdp = c*(kel + self%d*pdot); dfdv = c*self%d*p; dfdc = fel + self%d*p*pdot
+      case (law_linear)
+         dfdp = c*kel; dfdv = self%c; dfdc = fel
+      case default
+         tc = c*fel; td = self%c*pdot
+         if (tc + td <= 0.0_wp) then
+            dfdp = 0.0_wp; dfdv = 0.0_wp; dfdc = 0.0_wp
+         else if (tc < td) then
+            dfdp = 2.0_wp*c*kel; dfdv = 0.0_wp; dfdc = 2.0_wp*fel
+         else
+            dfdp = c*kel; dfdv = self%c; dfdc = fel
+         end if
+      end select
+      if (self%law /= law_elasto .and. self%no_tension .and. f <= 0.0_wp) then
+         dfdp = 0.0_wp; dfdv = 0.0_wp; dfdc = 0.0_wp
+      end if
+   end subroutine law_force_partials
+
    !> Elastic energy at penetration p (factor 1): k p^2/2, or the integral of the
    !> load-dependent key force: exact below the 100 lbf floor of the fit (linear
    !> there), 5-point Gauss-Legendre above it (smooth; the kink is the split point).
@@ -428,6 +476,24 @@ contains
       tl = -fs*self%r1
       tr = fs*self%r2
    end subroutine cl_torques
+
+   !> d(tl, tr)/d(thl, wl, thr, wr) for factor c with dc/dthl = dc.
+   pure subroutine cl_torque_jacobian(self, c, dc, thl, wl, thr, wr, jt)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, dc, thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      real(wp) :: s, p, pdot, f, dfdp, dfdv, dfdc, dfs(4)
+      jt = 0.0_wp
+      if (self%mode == 0) return
+      s = real(self%mode, wp)
+      p = s*self%delta(thl, thr) - self%b
+      pdot = s*(self%r1*wl - self%r2*wr)
+      call self%law%force_partials(c, p, pdot, f, dfdp, dfdv, dfdc)
+      ! fs = s F(c, p, pdot) with p = s delta - b, pdot = s delta': s^2 = 1
+      dfs = [dfdp*self%r1 + s*dfdc*dc, dfdv*self%r1, -dfdp*self%r2, -dfdv*self%r2]
+      jt(1, :) = -self%r1*dfs
+      jt(2, :) = self%r2*dfs
+   end subroutine cl_torque_jacobian
 
    !> Elastic energy (c k p^2 / 2 for a constant stiffness) while in contact.
    pure real(wp) function cl_potential(self, c, thl, thr) result(e)

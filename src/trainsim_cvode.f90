@@ -27,13 +27,13 @@ module trainsim_cvode
    use fsundials_linearsolver_mod, only: SUNLinearSolver, FSUNLinSolFree
    use fsundials_nonlinearsolver_mod, only: SUNNonlinearSolver, FSUNNonlinSolFree
    use fnvector_serial_mod, only: FN_VMake_Serial
-   use fsunmatrix_dense_mod, only: FSUNDenseMatrix
+   use fsunmatrix_dense_mod, only: FSUNDenseMatrix, FSUNDenseMatrix_Data
    use fsunlinsol_dense_mod, only: FSUNLinSol_Dense
    use fsunnonlinsol_fixedpoint_mod, only: FSUNNonlinSol_FixedPoint
    use fcvode_mod, only: FCVodeCreate, FCVodeInit, FCVodeReInit, FCVodeFree, FCVode, &
                          FCVodeSVtolerances, FCVodeSetUserData, FCVodeSetLinearSolver, FCVodeSetNonlinearSolver, &
                          FCVodeSetMaxStep, FCVodeSetMaxNumSteps, FCVodeSetStopTime, FCVodeSetErrHandlerFn, &
-                         FCVodeSetMaxHnilWarns, FCVodeSetNoInactiveRootWarn, &
+                         FCVodeSetMaxHnilWarns, FCVodeSetNoInactiveRootWarn, FCVodeSetJacFn, &
                          FCVodeRootInit, FCVodeSetRootDirection, FCVodeGetRootInfo, &
                          FCVodeGetNumSteps, FCVodeGetNumRhsEvals, FCVodeGetNumLinRhsEvals, FCVodeGetNumJacEvals, &
                          FCVodeGetNumErrTestFails, FCVodeGetNumNonlinSolvConvFails, FCVodeGetNumStepSolveFails, &
@@ -106,6 +106,28 @@ contains
          end if
       end do
    end function cv_rhs
+
+   !> Dense Jacobian for CVODE BDF's Newton iteration: model%jacobian written
+   !> straight into the SUNDIALS matrix (column-major, no copy, no allocation).
+   integer(c_int) function cv_jac(tn, sunvec_y, sunvec_f, sunmat_j, user_data, tmp1, tmp2, tmp3) &
+      result(ierr) bind(C)
+      real(c_double), value :: tn
+      type(N_Vector) :: sunvec_y, sunvec_f, tmp1, tmp2, tmp3
+      type(SUNMatrix) :: sunmat_j
+      type(c_ptr), value :: user_data
+      type(cv_user_t), pointer :: ud
+      real(c_double), pointer :: yv(:), jflat(:), jac(:, :)
+      integer :: n
+      call c_f_pointer(user_data, ud)
+      yv => FN_VGetArrayPointer(sunvec_y)
+      jflat => FSUNDenseMatrix_Data(sunmat_j)
+      n = size(yv)
+      call c_f_pointer(c_loc(jflat(1)), jac, [n, n])
+      call ud%model%jacobian(tn, yv, jac)
+      ierr = 0
+      associate (u1 => sunvec_f, u2 => tmp1, u3 => tmp2, u4 => tmp3)   ! unused by this Jacobian
+      end associate
+   end function cv_jac
 
    !> The guards as CVODE root functions.
    integer(c_int) function cv_roots(tn, sunvec_y, gout, user_data) result(ierr) bind(C)
@@ -387,6 +409,12 @@ contains
          ierr = FCVodeSetLinearSolver(mem, ls, amat)
          if (ierr /= CV_SUCCESS) then
             call setup_failed('CVodeSetLinearSolver'); return
+         end if
+         if (model%run%analytic_jacobian) then
+            ierr = FCVodeSetJacFn(mem, c_funloc(cv_jac))
+            if (ierr /= CV_SUCCESS) then
+               call setup_failed('CVodeSetJacFn'); return
+            end if
          end if
       end if
       if (hmax > 0.0_wp) then

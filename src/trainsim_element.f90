@@ -32,6 +32,7 @@ module trainsim_element
       procedure :: potential_energy => el_potential_energy
       procedure :: dissipation_power => el_dissipation_power
       procedure :: input_power => el_input_power
+      procedure :: torque_jacobian => el_torque_jacobian
       procedure :: n_guards => el_n_guards
       procedure :: guards => el_guards
       procedure :: init_mode => el_init_mode
@@ -120,6 +121,27 @@ contains
       end associate
       p = 0.0_wp
    end function el_input_power
+
+   !> Partial derivatives of (tl, tr) with respect to (thl, wl, thr, wr), in the
+   !> current mode. Default: central differences of `torques` (any element has
+   !> one); elements with a closed form override it.
+   pure subroutine el_torque_jacobian(self, thl, wl, thr, wr, jt)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      real(wp) :: x(4), xp(4), h, tlp, trp, tlm, trm
+      integer :: j
+      x = [thl, wl, thr, wr]
+      do j = 1, 4
+         h = 1.0e-6_wp*max(1.0_wp, abs(x(j)))
+         xp = x; xp(j) = x(j) + h
+         call self%torques(xp(1), xp(2), xp(3), xp(4), tlp, trp)
+         xp(j) = x(j) - h
+         call self%torques(xp(1), xp(2), xp(3), xp(4), tlm, trm)
+         jt(1, j) = (tlp - tlm)/(2.0_wp*h)
+         jt(2, j) = (trp - trm)/(2.0_wp*h)
+      end do
+   end subroutine el_torque_jacobian
 
    !> Number of switching functions (guards). A mode stays valid while all are >= 0.
    pure integer function el_n_guards(self) result(n)

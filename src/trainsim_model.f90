@@ -28,6 +28,7 @@ module trainsim_model
       real(wp) :: settle_time = 0.0_wp          !< metrics ignore t < t_start + settle_time
       logical :: track_energy = .true.          !< integrate dissipated energy and work input
       logical :: keep_series = .false.          !< keep displacement series in memory (sweeps)
+      logical :: analytic_jacobian = .true.     !< CVODE BDF: model%jacobian, else difference quotients
    end type run_settings_t
 
    !> An external torque on a node.
@@ -57,6 +58,7 @@ module trainsim_model
       procedure :: initial_state => model_initial_state
       procedure :: kinematics => model_kinematics
       procedure :: rhs => model_rhs
+      procedure :: jacobian => model_jacobian
       procedure :: guards => model_guards
       procedure :: init_modes => model_init_modes
       procedure :: apply_events => model_apply_events
@@ -199,6 +201,51 @@ contains
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
    end subroutine model_rhs
+
+   !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes, assembled from
+   !> the nodes' own blocks and the elements' torque partials. The rows of the
+   !> energy-accounting states are left zero: those states feed nothing back,
+   !> so Newton's iteration stays exact for every other state.
+   subroutine model_jacobian(self, t, y, jac)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: jac(:, :)
+      real(wp) :: dtq(3, size(self%nodes)), jt(2, 4)
+      integer :: i, a, b, k, na, nb, row, ia, ib
+      integer :: ends(2)
+      jac = 0.0_wp
+      dtq = 0.0_wp
+      call self%kinematics(t, y)
+      do i = 1, size(self%nodes)
+         if (self%speed_of(i) /= 0) cycle
+         associate (nd => self%nodes(i)%n)
+            if (nd%nstates() > 0) call nd%jacobian(t, y, jac, dtq(1:nd%nstates(), i))
+         end associate
+      end do
+      do i = 1, size(self%elements)
+         associate (e => self%elements(i)%e)
+            ends = [e%left, e%right]
+            call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
+                                   self%omega(e%right), jt)
+            do a = 1, 2
+               na = ends(a)
+               if (self%speed_of(na) /= 0) cycle
+               do k = 1, self%nodes(na)%n%nstates()
+                  if (dtq(k, na) == 0.0_wp) cycle
+                  row = self%nodes(na)%n%offset + k
+                  do b = 1, 2
+                     nb = ends(b)
+                     if (self%speed_of(nb) /= 0 .or. self%nodes(nb)%n%nstates() < 2) cycle
+                     ia = self%nodes(nb)%n%offset + 1
+                     ib = self%nodes(nb)%n%offset + 2
+                     jac(row, ia) = jac(row, ia) + dtq(k, na)*jt(a, 2*b - 1)
+                     jac(row, ib) = jac(row, ib) + dtq(k, na)*jt(a, 2*b)
+                  end do
+               end do
+            end do
+         end associate
+      end do
+   end subroutine model_jacobian
 
    !> All elements' guards at (t, y) (a mode is valid while every guard is >= 0).
    subroutine model_guards(self, t, y, g)

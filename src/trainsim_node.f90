@@ -37,6 +37,7 @@ module trainsim_node
       procedure :: attach_voltage => nd_attach_voltage
       procedure :: state_names => nd_state_names
       procedure :: params => nd_params
+      procedure :: jacobian => nd_jacobian
    end type node_t
 
    !> A slot in the model's node list.
@@ -170,6 +171,18 @@ contains
       if (size(names) >= 1) names(1)%s = self%id//'.angle'
       if (size(names) >= 2) names(2)%s = self%id//'.speed'
    end subroutine nd_state_names
+
+   !> Add d(dydt)/dy of the node's own states to jac at constant net torque, and
+   !> return dtorque(k) = d(dydt of state k)/d(net torque). Default: none.
+   pure subroutine nd_jacobian(self, t, y, jac, dtorque)
+      class(node_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: jac(:, :)
+      real(wp), intent(out) :: dtorque(:)
+      associate (u1 => self, u2 => t, u3 => y, u4 => jac)
+      end associate
+      dtorque = 0.0_wp
+   end subroutine nd_jacobian
 
    !> Parameters as used, for the output file.
    function nd_params(self) result(p)
