@@ -8,10 +8,16 @@
 !> stiffness by the load-dependent FEM fits of eqs. (4.35)-(4.37) (lineal
 !> stiffness per inch of key, in lbf/in/in, as a function of the key force in
 !> lbf; converted for other units) times key_length.
-!> Not modelled: the friction torque while the key is out of contact
-!> (eqs. 4.38-4.44), which acts only with an external torque on the hub; its
-!> Table 5.4 constants (friction, friction_angle, phi, load_radius) are
-!> accepted and recorded.
+!> While the key is out of contact, bore friction couples shaft and hub
+!> (eqs. 4.38-4.41, MODEL-NOTES 14): the hub's external torque T_h acts at the
+!> load radius R (tangential force T_h/R, radial force at the angle phi), the
+!> bore's normal force is F_n = (T_h/R)/(sin a + mu cos a) (4.38) with the
+!> friction angle a of eq. (4.43), and the friction torque transmitted at the
+!> bore radius d/2 is at most T_max = mu (d/2) |T_h| / (R |sin a + mu cos a|)
+!> (4.40; the corrected second line of 4.44). It opposes the slip
+!> w_shaft - w_hub as a regularised Coulomb law T_max tanh(slip/friction_velocity).
+!> The hub is the right node; T_h is the sum of the external loads on it. With
+!> no load on the hub (Table 5.4) there is no friction.
 module trainsim_el_keyed_joint
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -30,9 +36,15 @@ module trainsim_el_keyed_joint
       real(wp) :: diameter = 0.0_wp
       real(wp) :: mu = 0.0_wp, phi = 0.0_wp, load_radius = 0.0_wp, friction_angle = 0.0_wp
       real(wp) :: key_length = 0.0_wp
+      real(wp) :: friction_velocity = 1.0e-3_wp   !< slip speed of the tanh regularisation, rad/s
+      real(wp) :: fric_factor = 0.0_wp            !< T_max / |T_h| = mu (d/2) / (R |sin a + mu cos a|)
    contains
       procedure :: configure => key_configure
       procedure :: params => key_params
+      procedure :: torques => key_torques
+      procedure :: torque_jacobian => key_torque_jacobian
+      procedure :: dissipation_power => key_dissipation
+      procedure, private :: friction => key_friction
    end type keyed_joint_t
 
 contains
@@ -74,7 +86,9 @@ contains
       call grp%get_real('friction', self%mu, err, default=0.0_wp); if (allocated(err)) return
       call grp%get_real('phi', self%phi, err, default=0.0_wp); if (allocated(err)) return
       call grp%get_real('load_radius', self%load_radius, err, default=0.0_wp); if (allocated(err)) return
-      call grp%get_real('friction_angle', self%friction_angle, err, default=0.0_wp); if (allocated(err)) return
+      call grp%get_real('friction_angle', self%friction_angle, err, default=huge(1.0_wp)); if (allocated(err)) return
+      call grp%get_real('friction_velocity', self%friction_velocity, err, default=1.0e-3_wp); if (allocated(err)) return
+      call grp%require_positive('friction_velocity', self%friction_velocity, err); if (allocated(err)) return
       if (.not. self%diameter > 0.0_wp) then
          call fatal_error(err, grp%where('diameter')//': error: diameter must be > 0, got '//str(self%diameter), err_input)
       else if (.not. self%cl%b >= 0.0_wp) then
@@ -88,16 +102,77 @@ contains
       if (allocated(err)) return
       self%cl%r1 = 0.5_wp*self%diameter
       self%cl%r2 = 0.5_wp*self%diameter
+      if (self%friction_angle == huge(1.0_wp)) then
+         ! eq. (4.43): tan a = (1 - mu tan phi) / (tan phi - mu)
+         self%friction_angle = atan2(1.0_wp - self%mu*tan(self%phi), tan(self%phi) - self%mu)
+         if (self%friction_angle > 0.5_wp*acos(-1.0_wp)) self%friction_angle = self%friction_angle - acos(-1.0_wp)
+      end if
+      if (self%mu > 0.0_wp) then
+         if (.not. self%load_radius > 0.0_wp) then
+            call fatal_error(err, grp%where('load_radius')//': error: friction > 0 needs load_radius > 0 (the '// &
+                             'radius at which the hub is loaded), got '//str(self%load_radius), err_input)
+            return
+         end if
+         self%fric_factor = self%mu*0.5_wp*self%diameter/(self%load_radius* &
+                            abs(sin(self%friction_angle) + self%mu*cos(self%friction_angle)))
+         self%needs_loads = .true.
+      end if
       call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
    end subroutine key_configure
+
+   !> Bore friction torque on the hub (the shaft gets its reaction) and its
+   !> derivative with respect to the slip; zero while the key is in contact.
+   pure subroutine key_friction(self, wl, wr, tf, dtf)
+      class(keyed_joint_t), intent(in) :: self
+      real(wp), intent(in) :: wl, wr
+      real(wp), intent(out) :: tf, dtf
+      real(wp) :: tmax, x
+      tf = 0.0_wp; dtf = 0.0_wp
+      if (self%cl%mode /= 0 .or. self%fric_factor == 0.0_wp) return
+      tmax = self%fric_factor*abs(self%ext_right)
+      x = (wl - wr)/self%friction_velocity
+      tf = tmax*tanh(x)
+      dtf = tmax/self%friction_velocity*(1.0_wp - tanh(x)**2)
+   end subroutine key_friction
+
+   pure subroutine key_torques(self, thl, wl, thr, wr, tl, tr)
+      class(keyed_joint_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      real(wp) :: tf, dtf
+      call self%cl%torques(1.0_wp, thl, wl, thr, wr, tl, tr)   ! eqs. (H.3)-(H.11), (4.45)-(4.48)
+      call self%friction(wl, wr, tf, dtf)                      ! eqs. (4.38)-(4.41), out of contact
+      tl = tl - tf
+      tr = tr + tf
+   end subroutine key_torques
+
+   pure subroutine key_torque_jacobian(self, thl, wl, thr, wr, jt)
+      class(keyed_joint_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      real(wp) :: tf, dtf
+      call self%cl%torque_jacobian(1.0_wp, 0.0_wp, thl, wl, thr, wr, jt)
+      call self%friction(wl, wr, tf, dtf)
+      jt(1, 2) = jt(1, 2) - dtf; jt(1, 4) = jt(1, 4) + dtf
+      jt(2, 2) = jt(2, 2) + dtf; jt(2, 4) = jt(2, 4) - dtf
+   end subroutine key_torque_jacobian
+
+   pure real(wp) function key_dissipation(self, thl, wl, thr, wr) result(p)
+      class(keyed_joint_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: tf, dtf
+      call self%friction(wl, wr, tf, dtf)
+      p = self%cl%dissipation(1.0_wp, thl, wl, thr, wr) + tf*(wl - wr)
+   end function key_dissipation
 
    function key_params(self) result(p)
       class(keyed_joint_t), intent(in) :: self
       type(param_list_t) :: p
       p%names = [string_t('diameter'), string_t('half_clearance'), string_t('stiffness'), string_t('friction'), &
-                 string_t('phi'), string_t('load_radius'), string_t('friction_angle'), string_t('min_approach_velocity')]
+                 string_t('phi'), string_t('load_radius'), string_t('friction_angle'), string_t('min_approach_velocity'), &
+                 string_t('friction_velocity'), string_t('friction_capacity_per_hub_torque')]
       p%values = [self%diameter, self%cl%b, self%cl%law%k, self%mu, self%phi, self%load_radius, &
-                  self%friction_angle, self%cl%law%v_min]
+                  self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor]
       if (self%cl%law%fit /= 0) then
          p%names = [p%names, string_t('stiffness_fit'), string_t('key_length')]
          p%values = [p%values, real(self%cl%law%fit, wp), self%key_length]

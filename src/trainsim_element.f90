@@ -23,6 +23,11 @@ module trainsim_element
       character(len=:), allocatable :: type_name
       integer :: left = 0   !< index of the left (driver) node
       integer :: right = 0  !< index of the right (driven) node
+      !> Elements that act on the external loads of their nodes (the keyed joint's
+      !> bore friction) set this in `configure`; the model then stores the load
+      !> torques on the left and right node in ext_left/ext_right before `torques`.
+      logical :: needs_loads = .false.
+      real(wp) :: ext_left = 0.0_wp, ext_right = 0.0_wp
    contains
       procedure(configure_i), deferred :: configure
       procedure(torques_i), deferred :: torques

@@ -51,6 +51,7 @@ module trainsim_model
       integer :: n_guards = 0
       integer, allocatable :: guard_offset(:)    !< per element
       real(wp) :: energy0 = 0.0_wp               !< stored energy at t_start
+      logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
    contains
@@ -59,6 +60,7 @@ module trainsim_model
       procedure :: kinematics => model_kinematics
       procedure :: rhs => model_rhs
       procedure :: jacobian => model_jacobian
+      procedure :: apply_loads => model_apply_loads
       procedure :: guards => model_guards
       procedure :: init_modes => model_init_modes
       procedure :: apply_events => model_apply_events
@@ -91,6 +93,10 @@ contains
       end do
       self%n_y = self%n_states
       if (self%run%track_energy) self%n_y = self%n_states + 2
+      self%any_needs_loads = .false.
+      do i = 1, ne
+         if (self%elements(i)%e%needs_loads) self%any_needs_loads = .true.
+      end do
       if (allocated(self%guard_offset)) deallocate (self%guard_offset)
       allocate (self%guard_offset(ne))
       self%n_guards = 0
@@ -160,11 +166,7 @@ contains
       integer :: i, l, r, s
       real(wp) :: tl, tr, pdiss, pin
       call self%kinematics(t, y)
-      self%torque = 0.0_wp
-      do i = 1, size(self%loads)
-         l = self%loads(i)%node
-         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
-      end do
+      call self%apply_loads(t)
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left
          r = self%elements(i)%e%right
@@ -202,6 +204,25 @@ contains
       dydt(self%n_states + 2) = pin
    end subroutine model_rhs
 
+   !> External load torques at t into self%torque, and published to the
+   !> elements that read their nodes' loads.
+   subroutine model_apply_loads(self, t)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer :: i, l
+      self%torque = 0.0_wp
+      do i = 1, size(self%loads)
+         l = self%loads(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      if (.not. self%any_needs_loads) return
+      do i = 1, size(self%elements)
+         if (.not. self%elements(i)%e%needs_loads) cycle
+         self%elements(i)%e%ext_left = self%torque(self%elements(i)%e%left)
+         self%elements(i)%e%ext_right = self%torque(self%elements(i)%e%right)
+      end do
+   end subroutine model_apply_loads
+
    !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes, assembled from
    !> the nodes' own blocks and the elements' torque partials. The rows of the
    !> energy-accounting states are left zero: those states feed nothing back,
@@ -216,6 +237,7 @@ contains
       jac = 0.0_wp
       dtq = 0.0_wp
       call self%kinematics(t, y)
+      call self%apply_loads(t)
       do i = 1, size(self%nodes)
          if (self%speed_of(i) /= 0) cycle
          associate (nd => self%nodes(i)%n)

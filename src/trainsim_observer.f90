@@ -159,6 +159,7 @@ contains
       integer :: i, l, r
       real(wp) :: stored
       call model%kinematics(t, y)
+      call model%apply_loads(t)
       self%s%t = t
       self%s%y = y
       self%s%theta = model%theta

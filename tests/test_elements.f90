@@ -33,6 +33,7 @@ program test_elements
    call test_key_stiffness_fits_match_fem_points()
    call test_key_fit_force_solves_implicit_stiffness()
    call test_varying_stiffness_work_keeps_energy_balance()
+   call test_key_bore_friction_capacity_from_hub_load()
    call suite_end()
 
 contains
@@ -298,6 +299,29 @@ contains
       ! force/energy pairing would show at the 1e-3 level
       call check('key fit: energy residual < 1e-6 (quadrature of the stored energy)', res1, 0.0_wp, abs_tol=1.0e-6_wp)
    end subroutine test_varying_stiffness_work_keeps_energy_balance
+
+   subroutine test_key_bore_friction_capacity_from_hub_load()
+      type(model_t) :: m
+      type(run_result_t) :: r
+      real(wp) :: tmax, a
+      call test_begin('key_bore_friction_capacity_from_hub_load')
+      ! shaft held (fixed), hub (J = 1) loaded by 100 lbf*in; wide clearance so the key never bears
+      call load_model_text("&run t_end = 0.05, dt = 1e-5 /"//nl//"&node id='shaft', type='fixed' /"//nl// &
+                           "&node id='hub', type='inertia', inertia=1.0 /"//nl// &
+                           "&element type='keyed_joint', diameter=2.6312, half_clearance=0.5, stiffness=2.03e6,"// &
+                           " friction=0.5, load_radius=4.0, friction_angle=-1.4562 /"//nl// &
+                           "&load node='hub', kind='constant', value=100.0 /", m)
+      call run_model(m, r)
+      ! eqs. (4.38)-(4.40): T_max = mu (d/2) T_h / (R |sin a + mu cos a|)
+      a = -1.4562_wp
+      tmax = 0.5_wp*1.3156_wp*100.0_wp/(4.0_wp*abs(sin(a) + 0.5_wp*cos(a)))
+      call check('key stays out of contact', r%el(1)%impacts == 0)
+      call check('hub speed = (T_h - T_max) t / J once slipping (0.1 %)', r%y_final(2), (100.0_wp - tmax)*0.05_wp, &
+                 rel_tol=1.0e-3_wp)
+      call check('friction torque on the hub = -T_max (0.1 %)', r%el(1)%torque_min, -tmax, rel_tol=1.0e-3_wp)
+      call check('friction work dissipated = T_max x slip angle (0.1 %)', r%y_final(m%n_states + 1), &
+                 tmax*0.5_wp*(100.0_wp - tmax)*0.05_wp**2, rel_tol=1.0e-3_wp)
+   end subroutine test_key_bore_friction_capacity_from_hub_load
 
    function rstr(x) result(s)
       real(wp), intent(in) :: x

@@ -33,6 +33,10 @@ program test_jacobian
    call jac_case('helical gear (position-dependent stiffness)', pair//"&element type='helical_gear', rb_driver=1.0,"// &
                  " rb_driven=1.0, teeth=24, profile_contact_ratio=1.5, base_helix_angle=18.0, face_width=1.3,"// &
                  " half_backlash=0.01 /"//closed, '')
+   call jac_case('keyed joint out of contact, bore friction', pair//"&element type='keyed_joint', diameter=2.0,"// &
+                 " half_clearance=0.1, stiffness=1e6, friction=0.3, load_radius=3.0, phi=0.35 /"//nl// &
+                 "&load node='n2', kind='constant', value=50.0 /"//nl//"&initial node='n1', speed=1.0005 /"//nl// &
+                 "&initial node='n2', speed=1.0 /", '')
    call jac_case('DC motor and geometry gear', '', 'inputs/dc_motor_geared_load.nml')
    call jac_case('prescribed speed and loads (Table 5.5)', '', 'inputs/gregory_harris_munro.nml')
    call test_cvode_bdf_same_run_with_fewer_rhs()
