@@ -42,6 +42,7 @@ module trainsim_node_dc_motor
       procedure :: state_names => motor_state_names
       procedure :: params => motor_params
       procedure :: jacobian => motor_jacobian
+      procedure :: breakpoints => motor_breakpoints
    end type dc_motor_node_t
 
 contains
@@ -164,6 +165,13 @@ contains
       jac(o + 3, o + 3) = jac(o + 3, o + 3) - self%r/self%l
       dtorque = [0.0_wp, 1.0_wp/self%j, 0.0_wp]
    end subroutine motor_jacobian
+
+   !> Knots of the armature voltage.
+   pure subroutine motor_breakpoints(self, bp)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), allocatable, intent(out) :: bp(:)
+      call self%voltage%breakpoints(bp)
+   end subroutine motor_breakpoints
 
    function motor_params(self) result(p)
       class(dc_motor_node_t), intent(in) :: self

@@ -51,7 +51,6 @@ module trainsim_cvode
    use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
    use trainsim_sink, only: sink_t, run_stats_t, event_t
    use trainsim_observer, only: observer_t
-   use trainsim_node_dc_motor, only: dc_motor_node_t
    implicit none
    private
 
@@ -211,61 +210,6 @@ contains
          max(model%run%rtol, energy_atol_factor)*(1.0_wp + abs(model%energy0))
    end subroutine cvode_abstol
 
-   !> Sorted breakpoints of the loads, prescribed speeds and motor voltages
-   !> strictly inside (t0, t1).
-   subroutine collect_breakpoints(model, t0, t1, bp)
-      type(model_t), intent(in) :: model
-      real(wp), intent(in) :: t0, t1
-      real(wp), allocatable, intent(out) :: bp(:)
-      real(wp), allocatable :: b(:)
-      integer :: i
-      allocate (bp(0))
-      do i = 1, size(model%loads)
-         call model%loads(i)%torque%breakpoints(b)
-         bp = [bp, b]
-      end do
-      do i = 1, size(model%speeds)
-         call model%speeds(i)%breakpoints(b)
-         bp = [bp, b]
-      end do
-      do i = 1, size(model%nodes)
-         select type (nd => model%nodes(i)%n)
-         class is (dc_motor_node_t)
-            call nd%voltage%breakpoints(b)
-            bp = [bp, b]
-         end select
-      end do
-      bp = pack(bp, bp > t0 .and. bp < t1)
-      call sort_unique(bp, 1.0e-12_wp*max(abs(t0), abs(t1), 1.0e-300_wp))
-   end subroutine collect_breakpoints
-
-   !> Insertion sort, dropping values within tol of the previous one.
-   subroutine sort_unique(a, tol)
-      real(wp), allocatable, intent(inout) :: a(:)
-      real(wp), intent(in) :: tol
-      integer :: i, j, n
-      real(wp) :: x
-      do i = 2, size(a)
-         x = a(i)
-         j = i - 1
-         do while (j >= 1)
-            if (a(j) <= x) exit
-            a(j + 1) = a(j)
-            j = j - 1
-         end do
-         a(j + 1) = x
-      end do
-      if (size(a) < 2) return
-      n = 1
-      do i = 2, size(a)
-         if (a(i) - a(n) > tol) then
-            n = n + 1
-            a(n) = a(i)
-         end if
-      end do
-      a = a(1:n)
-   end subroutine sort_unique
-
    !> "state 2 of node 'gear1' (gear1.speed)" for state index s.
    function state_label(model, s) result(label)
       type(model_t), intent(in) :: model
@@ -348,7 +292,7 @@ contains
       mxstep = mxstep_min
       if (hmax > 0.0_wp) mxstep = max(mxstep, min(10_i8*ceiling(dout/hmax, i8), 1000000000_i8))
       tol_out = 1.0e-9_wp*model%run%dt    ! the observer's output-time tolerance
-      call collect_breakpoints(model, t, t_end, bp)
+      call model%breakpoints(t, t_end, bp)
       ibp = 1
 
       allocate (yv(n), atol(n), rootdir(max(ng, 1)), rootsfound(max(ng, 1)), g(ng), fired(ng))

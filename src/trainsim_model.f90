@@ -61,6 +61,7 @@ module trainsim_model
       procedure :: rhs => model_rhs
       procedure :: jacobian => model_jacobian
       procedure :: apply_loads => model_apply_loads
+      procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
       procedure :: init_modes => model_init_modes
       procedure :: apply_events => model_apply_events
@@ -372,4 +373,56 @@ contains
          e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
       end do
    end function model_stored_energy
+   !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed or a
+   !> node's own input (motor voltage) jumps or kinks: integrators end steps there.
+   subroutine model_breakpoints(model, t0, t1, bp)
+      class(model_t), intent(in) :: model
+      real(wp), intent(in) :: t0, t1
+      real(wp), allocatable, intent(out) :: bp(:)
+      real(wp), allocatable :: b(:)
+      integer :: i
+      allocate (bp(0))
+      do i = 1, size(model%loads)
+         call model%loads(i)%torque%breakpoints(b)
+         bp = [bp, b]
+      end do
+      do i = 1, size(model%speeds)
+         call model%speeds(i)%breakpoints(b)
+         bp = [bp, b]
+      end do
+      do i = 1, size(model%nodes)
+         call model%nodes(i)%n%breakpoints(b)
+         bp = [bp, b]
+      end do
+      bp = pack(bp, bp > t0 .and. bp < t1)
+      call sort_unique(bp, 1.0e-12_wp*max(abs(t0), abs(t1), 1.0e-300_wp))
+   end subroutine model_breakpoints
+
+   !> Insertion sort, dropping values within tol of the previous one.
+   pure subroutine sort_unique(a, tol)
+      real(wp), allocatable, intent(inout) :: a(:)
+      real(wp), intent(in) :: tol
+      integer :: i, j, n
+      real(wp) :: x
+      do i = 2, size(a)
+         x = a(i)
+         j = i - 1
+         do while (j >= 1)
+            if (a(j) <= x) exit
+            a(j + 1) = a(j)
+            j = j - 1
+         end do
+         a(j + 1) = x
+      end do
+      if (size(a) < 2) return
+      n = 1
+      do i = 2, size(a)
+         if (a(i) - a(n) > tol) then
+            n = n + 1
+            a(n) = a(i)
+         end if
+      end do
+      a = a(1:n)
+   end subroutine sort_unique
+
 end module trainsim_model

@@ -38,6 +38,7 @@ module trainsim_node
       procedure :: state_names => nd_state_names
       procedure :: params => nd_params
       procedure :: jacobian => nd_jacobian
+      procedure :: breakpoints => nd_breakpoints
    end type node_t
 
    !> A slot in the model's node list.
@@ -183,6 +184,15 @@ contains
       end associate
       dtorque = 0.0_wp
    end subroutine nd_jacobian
+
+   !> Times where an input of the node itself jumps or kinks (default: none).
+   pure subroutine nd_breakpoints(self, bp)
+      class(node_t), intent(in) :: self
+      real(wp), allocatable, intent(out) :: bp(:)
+      associate (unused => self)
+      end associate
+      allocate (bp(0))
+   end subroutine nd_breakpoints
 
    !> Parameters as used, for the output file.
    function nd_params(self) result(p)

@@ -33,18 +33,26 @@ module trainsim_rk4
 contains
 
    !> One classical RK4 step of size h from (t, y) into ynew; k1 = f(t, y) given.
-   subroutine rk4_step(model, t, y, h, w, ynew, stats)
+   !> A step that ends on a breakpoint of the inputs takes its last stage at the
+   !> left limit there (a load that jumps at t + h acts from t + h on).
+   subroutine rk4_step(model, t, y, h, w, ynew, stats, left_limit)
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:), h
       type(rk4_work_t), intent(inout) :: w
       real(wp), intent(out) :: ynew(:)
       type(run_stats_t), intent(inout) :: stats
+      logical, intent(in), optional :: left_limit
+      real(wp) :: t4
+      t4 = t + h
+      if (present(left_limit)) then
+         if (left_limit) t4 = t + h - 1.0e-9_wp*h
+      end if
       w%ytmp = y + 0.5_wp*h*w%k1
       call model%rhs(t + 0.5_wp*h, w%ytmp, w%k2)
       w%ytmp = y + 0.5_wp*h*w%k2
       call model%rhs(t + 0.5_wp*h, w%ytmp, w%k3)
       w%ytmp = y + h*w%k3
-      call model%rhs(t + h, w%ytmp, w%k4)
+      call model%rhs(t4, w%ytmp, w%k4)
       ynew = y + (h/6.0_wp)*(w%k1 + 2.0_wp*(w%k2 + w%k3) + w%k4)
       stats%rhs_evals = stats%rhs_evals + 3
    end subroutine rk4_step
@@ -78,8 +86,10 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(rk4_work_t) :: w
       integer(i8) :: istep, nsteps
-      real(wp) :: dt, t0, t_target, h
-      integer :: n, ng
+      real(wp) :: dt, t0, t_target, h, t_sub, tiny_t
+      real(wp), allocatable :: bp(:)
+      integer :: n, ng, ib
+      logical :: at_bp
 
       n = size(y); ng = model%n_guards
       allocate (w%k1(n), w%k2(n), w%k3(n), w%k4(n), w%ytmp(n), w%ynew(n), w%ys(n))
@@ -87,6 +97,9 @@ contains
       dt = model%run%dt
       t0 = model%run%t_start
       nsteps = ceiling((model%run%t_end - t0)/dt - 1.0e-9_wp, i8)
+      call model%breakpoints(t, model%run%t_end, bp)
+      ib = 1
+      tiny_t = 1.0e-12_wp*dt
 
       if (thesis) then
          call thesis_loop()
@@ -95,11 +108,24 @@ contains
 
       do istep = 1, nsteps
          t_target = min(t0 + real(istep, wp)*dt, model%run%t_end)
-         do while (t < t_target - 1.0e-12_wp*dt)
-            h = t_target - t
+         do while (t < t_target - tiny_t)
+            ! end the sub-step at the next breakpoint of the inputs, if one comes first
+            do while (ib <= size(bp))
+               if (bp(ib) > t + tiny_t) exit
+               ib = ib + 1
+            end do
+            t_sub = t_target
+            at_bp = .false.
+            if (ib <= size(bp)) then
+               if (bp(ib) <= t_target + tiny_t) then
+                  t_sub = min(bp(ib), t_target)
+                  at_bp = .true.
+               end if
+            end if
+            h = t_sub - t
             call model%rhs(t, y, w%k1)
             stats%rhs_evals = stats%rhs_evals + 1
-            call rk4_step(model, t, y, h, w, w%ynew, stats)
+            call rk4_step(model, t, y, h, w, w%ynew, stats, at_bp)
             if (ng > 0) then
                call model%guards(t + h, w%ynew, w%g1)
                if (any(w%g1 < 0.0_wp)) then
@@ -109,7 +135,8 @@ contains
                end if
             end if
             y = w%ynew
-            t = t_target
+            t = t_sub
+            if (at_bp .and. abs(t_sub - t_target) <= tiny_t) t = t_target
          end do
          stats%steps = stats%steps + 1
          call check_state(model, t, y, dt, err); if (allocated(err)) return

@@ -20,6 +20,7 @@ program test_linear_verification
    call test_damped_driven_train_energy_balance_closes()
    call test_branched_pinion_two_gears_matches_closed_form()
    call test_star_of_shafts_matches_closed_form()
+   call test_rk4_is_exact_through_an_off_grid_load_step()
    call suite_end()
 
 contains
@@ -221,4 +222,20 @@ contains
       call check('hub stays still in the antisymmetric mode', maxval(abs(r%series_theta(1, :))), 0.0_wp, &
                  abs_tol=1.0e-12_wp)
    end subroutine test_star_of_shafts_matches_closed_form
+   subroutine test_rk4_is_exact_through_an_off_grid_load_step()
+      type(model_t) :: m
+      type(run_result_t) :: r
+      real(wp), parameter :: ts = 0.0123456_wp, te = 0.05_wp
+      call test_begin('rk4_is_exact_through_an_off_grid_load_step')
+      ! a free disk (J = 2) under a torque step 0 -> 10 at an instant off the dt grid:
+      ! theta = (10/J)(t - ts)^2/2, a quadratic RK4 integrates exactly if no step straddles ts
+      call load_model_text('&run t_end = 0.05, dt = 1e-3 /'//nl//"&node type='inertia', inertia=2.0 /"//nl// &
+                           "&load node='n1', kind='step', value0=0.0, value1=10.0, t_step="//str(ts)//' /', m)
+      call run_model(m, r)
+      call check('angle at t_end = 2.5 (t_end - ts)^2 (exact to rounding)', r%y_final(1), 2.5_wp*(te - ts)**2, &
+                 rel_tol=1.0e-12_wp)
+      call check('speed at t_end = 5 (t_end - ts)', r%y_final(2), 5.0_wp*(te - ts), rel_tol=1.0e-12_wp)
+      call check('energy balance exact through the jump', r%energy_residual_max/r%energy_scale, 0.0_wp, &
+                 abs_tol=1.0e-12_wp)
+   end subroutine test_rk4_is_exact_through_an_off_grid_load_step
 end program test_linear_verification
