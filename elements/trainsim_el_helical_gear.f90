@@ -84,6 +84,7 @@ contains
       self%ptb = two_pi*self%cl%r1/self%teeth                   ! transverse base pitch
       self%mf = self%face*tan(self%zeta)/self%ptb                ! face contact ratio
       self%cl%law%k = self%youngs/17.6_wp                        ! stiffness per unit length of contact line
+      self%supplies_power = .true.
       call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
    end subroutine hel_configure
 

@@ -27,6 +27,9 @@ module trainsim_element
       !> bore friction) set this in `configure`; the model then stores the load
       !> torques on the left and right node in ext_left/ext_right before `torques`.
       logical :: needs_loads = .false.
+      !> Elements whose `input_power` is not zero (position-dependent stiffness) set
+      !> this in `configure`, so the energy ledger asks only them.
+      logical :: supplies_power = .false.
       real(wp) :: ext_left = 0.0_wp, ext_right = 0.0_wp
    contains
       procedure(configure_i), deferred :: configure

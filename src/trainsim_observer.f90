@@ -159,7 +159,7 @@ contains
       integer :: i, l, r
       real(wp) :: stored
       call model%kinematics(t, y)
-      call model%apply_loads(t)
+      if (model%any_needs_loads) call model%apply_loads(t)   ! torques of elements that read their nodes' loads
       self%s%t = t
       self%s%y = y
       self%s%theta = model%theta
