@@ -11,7 +11,7 @@ program test_cvode
    use trainsim_cvode, only: cvode_max_step, cvode_abstol
    use trainsim_strings, only: str
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model, load_model_text, run_model, nl
+   use trainsim_test_support, only: zero_crossings, load_model, load_model_text, run_model, nl
    implicit none
 
    !> The tight tolerances of the comparisons with RK4.
@@ -46,23 +46,6 @@ contains
       m%run%atol_angle = tight_atol_angle
       m%run%atol_speed = tight_atol_speed
    end subroutine load_tight
-
-   !> Times of the zero crossings of x(t) (linear interpolation).
-   subroutine zero_crossings(t, x, tz, n)
-      real(wp), intent(in) :: t(:), x(:)
-      real(wp), intent(out) :: tz(:)
-      integer, intent(out) :: n
-      integer :: i
-      n = 0
-      do i = 1, size(x) - 1
-         if ((x(i) > 0.0_wp .and. x(i + 1) <= 0.0_wp) .or. (x(i) < 0.0_wp .and. x(i + 1) >= 0.0_wp)) then
-            if (n < size(tz)) then
-               n = n + 1
-               tz(n) = t(i) - x(i)*(t(i + 1) - t(i))/(x(i + 1) - x(i))
-            end if
-         end if
-      end do
-   end subroutine zero_crossings
 
    !> Frequency of disk 1 from its two zero crossings in one period.
    real(wp) function disk1_frequency(r) result(f)

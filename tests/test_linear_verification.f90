@@ -8,7 +8,7 @@ program test_linear_verification
    use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
    use trainsim_strings, only: str
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model, load_model_text, run_model, nl
+   use trainsim_test_support, only: zero_crossings, load_model, load_model_text, run_model, nl
    implicit none
 
    call suite_begin('linear verification (thesis ch. V, issue 2)')
@@ -24,23 +24,6 @@ program test_linear_verification
    call suite_end()
 
 contains
-
-   !> Times of the downward/upward zero crossings of x(t) (linear interpolation).
-   subroutine zero_crossings(t, x, tz, n)
-      real(wp), intent(in) :: t(:), x(:)
-      real(wp), intent(out) :: tz(:)
-      integer, intent(out) :: n
-      integer :: i
-      n = 0
-      do i = 1, size(x) - 1
-         if ((x(i) > 0.0_wp .and. x(i + 1) <= 0.0_wp) .or. (x(i) < 0.0_wp .and. x(i + 1) >= 0.0_wp)) then
-            if (n < size(tz)) then
-               n = n + 1
-               tz(n) = t(i) - x(i)*(t(i + 1) - t(i))/(x(i + 1) - x(i))
-            end if
-         end if
-      end do
-   end subroutine zero_crossings
 
    subroutine test_table5_1_response_is_cosine_at_fundamental()
       type(model_t) :: m

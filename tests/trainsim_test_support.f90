@@ -12,7 +12,7 @@ module trainsim_test_support
    implicit none
    private
 
-   public :: load_model, load_model_text, run_model, nl
+   public :: load_model, load_model_text, run_model, nl, zero_crossings
 
    character(len=1), parameter :: nl = new_line('a')
 
@@ -61,4 +61,20 @@ contains
          error stop 2
       end if
    end subroutine run_model
+   !> Times of the zero crossings of x(t) (linear interpolation between samples).
+   pure subroutine zero_crossings(t, x, tz, n)
+      real(wp), intent(in) :: t(:), x(:)
+      real(wp), intent(out) :: tz(:)
+      integer, intent(out) :: n
+      integer :: i
+      n = 0
+      do i = 1, size(x) - 1
+         if ((x(i) > 0.0_wp .and. x(i + 1) <= 0.0_wp) .or. (x(i) < 0.0_wp .and. x(i + 1) >= 0.0_wp)) then
+            if (n < size(tz)) then
+               n = n + 1
+               tz(n) = t(i) - x(i)*(t(i + 1) - t(i))/(x(i + 1) - x(i))
+            end if
+         end if
+      end do
+   end subroutine zero_crossings
 end module trainsim_test_support
