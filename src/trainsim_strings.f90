@@ -39,9 +39,11 @@ contains
    end function str_int
 
    !> Real as the shortest text that reads back to the same value
-   !> (fixed notation between 1e-4 and 1e7, else scientific).
-   pure function str_real(x) result(s)
+   !> (fixed notation between 1e-4 and 1e7, else scientific); with `sig`, in
+   !> scientific notation with that many significant digits (for messages).
+   pure function str_real(x, sig) result(s)
       real(wp), intent(in) :: x
+      integer, intent(in), optional :: sig   !< significant digits for display (default: round trip)
       character(len=:), allocatable :: s
       character(len=48) :: buf
       character(len=16) :: fmt
@@ -52,12 +54,18 @@ contains
          s = 'NaN'
          return
       end if
+      if (present(sig)) then
+         write (fmt, '(a,i0,a)') '(es0.', max(sig - 1, 1), ')'
+         write (buf, fmt) x
+         s = trim(adjustl(buf))
+         return
+      end if
       fixed = x == 0.0_wp .or. (abs(x) >= 1.0e-4_wp .and. abs(x) < 1.0e7_wp)
       do d = 0, 17
          if (fixed) then
             write (fmt, '(a,i0,a)') '(f0.', d, ')'
-         else
-            write (fmt, '(a,i0,a)') '(es0.', d, ')'
+         else   ! es0.0 means "all digits" to gfortran: start at one decimal
+            write (fmt, '(a,i0,a)') '(es0.', max(d, 1), ')'
          end if
          write (buf, fmt) x
          read (buf, *, iostat=ios) back
