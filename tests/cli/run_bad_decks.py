@@ -336,6 +336,12 @@ CASES = [
     dict(name="unstable time step blows up",
          deck=TABLE5_1.format(t_end=5, dt=0.05),
          exit=1, stderr=["warning", "stability limit", "blew up", "time step"]),
+    dict(name="dt too coarse for the contact mode of an open clearance is warned about",
+         deck="&run t_end = 2e-4, dt = 5e-5 /\n"
+              "&node type = 'inertia', inertia = 7.537e-3 /\n&node type = 'inertia', inertia = 10.082 /\n"
+              "&element type = 'spur_gear', stiffness = 18.03e6, rb_driver = 1.6445, rb_driven = 1.6445,"
+              " teeth = 28, contact_ratio = 1.638, approach_angle = 0.1838, half_backlash = 0.001 /\n",
+         exit=0, stderr=["warning", "every clearance closed", "would be safe"], output=True),
 
     # ---- command line
     dict(name="no arguments", deck=None, args=[],
