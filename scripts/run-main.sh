@@ -11,12 +11,11 @@ cd "$repo_root"
 bash scripts/setup.sh
 
 deck=inputs/gregory_harris_munro.nml
-if [ ! -f "$deck" ]; then
-  echo "run-main.sh: $deck is not there yet; running verification/table5_1/table5_1.nml instead"
-  deck=verification/table5_1/table5_1.nml
-fi
 
 mkdir -p results
 out="results/$(basename "$deck" .nml).h5"
 build/trainsim run "$deck" -o "$out"
 echo "run-main.sh: history of $deck written to $repo_root/$out"
+png="${out%.h5}.png"
+/usr/bin/python3 verification/plot_history.py "$out" --element mesh --out "$png" > /dev/null
+echo "run-main.sh: transmission error, mesh force and phase plane drawn in $repo_root/$png"
