@@ -25,7 +25,7 @@ module trainsim_hdf5
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_io, err_internal
    use trainsim_strings, only: string_t, str
-   use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, &
+   use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t, &
       param_list_t, ev_name
    implicit none
    private
@@ -176,10 +176,11 @@ contains
    end subroutine h5_write_sample
 
    !> Flush, write the event table and run statistics, close and publish the file.
-   subroutine h5_close(self, events, stats, err)
+   subroutine h5_close(self, events, stats, metrics, err)
       class(hdf5_sink_t), intent(inout) :: self
       type(event_t), intent(in) :: events(:)
       type(run_stats_t), intent(in) :: stats
+      type(element_metrics_t), intent(in) :: metrics(:)
       type(error_t), allocatable, intent(out) :: err
       integer :: hdferr, i
       integer(c_int) :: rc
@@ -188,8 +189,15 @@ contains
          call fatal_error(err, 'HDF5 sink: close called while not open', err_internal)
          return
       end if
+      if (size(metrics) /= self%n_el) then
+         call fatal_error(err, 'HDF5 sink: close got metrics for '//str(size(metrics))//' elements, the run has '// &
+                          str(self%n_el), err_internal)
+         call self%abort()
+         return
+      end if
       call flush_block(self, err)
       if (.not. allocated(err)) call write_events(self%file_id, events, err)
+      if (.not. allocated(err)) call write_metrics(self%file_id, metrics, err)
       if (.not. allocated(err)) call write_stats(self%file_id, stats, err)
       if (.not. allocated(err)) then
          do i = 1, n_ds
@@ -484,6 +492,35 @@ contains
    ! ------------------------------------------------------------ close helpers
 
    !> /events: one 1-D dataset per column (zero length when there are no events).
+   !> /metrics: one 1-D dataset per figure, one entry per element (the order of
+   !> /elements/ids), over t >= t_start + settle_time.
+   subroutine write_metrics(file_id, m, err)
+      integer(hid_t), intent(in) :: file_id
+      type(element_metrics_t), intent(in) :: m(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: grp
+      real(wp) :: r(size(m))
+      integer :: k(size(m))
+      call make_group(file_id, 'metrics', grp, err)
+      if (allocated(err)) return
+      r = m%torque_min; call put_column_r(grp, 'torque_min', r, err)
+      r = m%torque_max; if (.not. allocated(err)) call put_column_r(grp, 'torque_max', r, err)
+      r = m%force_min; if (.not. allocated(err)) call put_column_r(grp, 'force_min', r, err)
+      r = m%force_max; if (.not. allocated(err)) call put_column_r(grp, 'force_max', r, err)
+      r = m%disp_min; if (.not. allocated(err)) call put_column_r(grp, 'displacement_min', r, err)
+      r = m%disp_max; if (.not. allocated(err)) call put_column_r(grp, 'displacement_max', r, err)
+      r = m%p2p_range; if (.not. allocated(err)) call put_column_r(grp, 'p2p_range', r, err)
+      r = m%p2p_mean; if (.not. allocated(err)) call put_column_r(grp, 'p2p_mean', r, err)
+      k = m%p2p_swings; if (.not. allocated(err)) call put_column_i(grp, 'p2p_swings', k, err)
+      k = m%impacts; if (.not. allocated(err)) call put_column_i(grp, 'impacts', k, err)
+      k = m%separations; if (.not. allocated(err)) call put_column_i(grp, 'separations', k, err)
+      k = m%zone_changes; if (.not. allocated(err)) call put_column_i(grp, 'zone_changes', k, err)
+      r = m%max_approach_velocity; if (.not. allocated(err)) call put_column_r(grp, 'max_approach_velocity', r, err)
+      r = m%max_peak_force; if (.not. allocated(err)) call put_column_r(grp, 'max_peak_force', r, err)
+      r = m%time_out_of_contact; if (.not. allocated(err)) call put_column_r(grp, 'time_out_of_contact', r, err)
+      call close_group(grp, err)
+   end subroutine write_metrics
+
    subroutine write_events(file_id, events, err)
       integer(hid_t), intent(in) :: file_id
       type(event_t), intent(in) :: events(:)

@@ -8,7 +8,7 @@ module trainsim_observer
    use trainsim_error, only: error_t
    use trainsim_strings, only: string_t
    use trainsim_model, only: model_t
-   use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, &
+   use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_string
    use trainsim_metrics, only: peak_to_peak
@@ -16,22 +16,6 @@ module trainsim_observer
    private
 
    public :: observer_t, element_metrics_t, run_result_t, make_meta
-
-   !> Per-element figures of a run (over t >= t_start + settle_time).
-   type :: element_metrics_t
-      real(wp) :: force_min = huge(1.0_wp), force_max = -huge(1.0_wp)   !< contact force / shaft torque
-      real(wp) :: torque_min = huge(1.0_wp), torque_max = -huge(1.0_wp) !< torque on the right node
-      real(wp) :: disp_min = huge(1.0_wp), disp_max = -huge(1.0_wp)     !< relative displacement (TE)
-      integer :: impacts = 0, separations = 0, zone_changes = 0
-      real(wp) :: max_approach_velocity = 0.0_wp
-      real(wp) :: max_peak_force = 0.0_wp
-      real(wp) :: time_out_of_contact = 0.0_wp
-      !> peak-to-peak displacement (TE for gears): max - min, and the mean
-      !> swing between successive peaks (trainsim_metrics), after settle_time
-      real(wp) :: p2p_range = 0.0_wp, p2p_mean = 0.0_wp
-      integer :: p2p_swings = 0
-      integer :: open_event = 0        !< index of the event row of the contact in progress
-   end type element_metrics_t
 
    !> What a run returns in memory.
    type :: run_result_t
@@ -354,9 +338,13 @@ contains
       self%res%stats%events = int(self%n_events, i8)
       self%res%stats%t_final = t
       self%res%stats%completed = .true.
-      call sink%close(self%res%events(1:self%n_events), self%res%stats, err)
-      if (allocated(err)) return
       result = self%res
+      do i = 1, size(model%elements)
+         call peak_to_peak(self%res%series_t(1:self%n_series), self%res%series_disp(i, 1:self%n_series), &
+                           self%t_metrics, 0.1_wp, result%el(i)%p2p_range, result%el(i)%p2p_mean, result%el(i)%p2p_swings)
+      end do
+      call sink%close(self%res%events(1:self%n_events), self%res%stats, result%el, err)
+      if (allocated(err)) return
       result%events = self%res%events(1:self%n_events)
       result%y_final = y
       result%t_final = t
@@ -366,9 +354,5 @@ contains
          result%series_theta = result%series_theta(:, 1:self%n_series)
          result%series_omega = result%series_omega(:, 1:self%n_series)
       end if
-      do i = 1, size(model%elements)
-         call peak_to_peak(result%series_t, result%series_disp(i, :), self%t_metrics, 0.1_wp, &
-                           result%el(i)%p2p_range, result%el(i)%p2p_mean, result%el(i)%p2p_swings)
-      end do
    end subroutine obs_finish
 end module trainsim_observer

@@ -41,12 +41,13 @@ contains
       if (model%run%track_energy) write (unit, '(a,es10.3,a,es10.3,a)') 'energy balance: max |residual| ', &
          res%energy_residual_max, ' (energy scale ', res%energy_scale, ')'
       write (unit, '(a)') 'element extremes (torque on the right node, torque units; displacement, its own unit):'
-      write (unit, '(a16,1x,a19,4a15,a9,a13,a15)') 'element', 'type', 'torque min', 'torque max', 'disp min', &
-         'disp max', 'impacts', 'max V_i', 'max peak F'
+      write (unit, '(a16,1x,a19,4a15,a9,a13,a15,a8)') 'element', 'type', 'torque min', 'torque max', 'disp min', &
+         'disp max', 'impacts', 'max V_i', 'max peak F', 'open %'
       do i = 1, size(model%elements)
          associate (e => model%elements(i)%e, m => res%el(i))
-            write (unit, '(a16,1x,a19,4es15.6,i9,es13.4,es15.6)') e%id, e%type_name, m%torque_min, m%torque_max, &
-               m%disp_min, m%disp_max, m%impacts, m%max_approach_velocity, m%max_peak_force
+            write (unit, '(a16,1x,a19,4es15.6,i9,es13.4,es15.6,f8.2)') e%id, e%type_name, m%torque_min, m%torque_max, &
+               m%disp_min, m%disp_max, m%impacts, m%max_approach_velocity, m%max_peak_force, &
+               100.0_wp*m%time_out_of_contact/max(res%t_final - model%run%t_start - model%run%settle_time, tiny(1.0_wp))
          end associate
       end do
       write (unit, '(a)') 'peak-to-peak displacement after settle_time (range max-min; mean swing between peaks):'

@@ -8,7 +8,7 @@ module trainsim_sink
    implicit none
    private
 
-   public :: run_meta_t, param_list_t, sample_t, event_t, run_stats_t, sink_t, null_sink_t
+   public :: run_meta_t, param_list_t, sample_t, event_t, run_stats_t, element_metrics_t, sink_t, null_sink_t
    public :: ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
 
    !> Event kinds (column `kind` of the event table).
@@ -72,6 +72,22 @@ module trainsim_sink
       logical :: completed = .false.
    end type run_stats_t
 
+   !> Per-element figures of a run (over t >= t_start + settle_time).
+   type :: element_metrics_t
+      real(wp) :: force_min = huge(1.0_wp), force_max = -huge(1.0_wp)   !< contact force / shaft torque
+      real(wp) :: torque_min = huge(1.0_wp), torque_max = -huge(1.0_wp) !< torque on the right node
+      real(wp) :: disp_min = huge(1.0_wp), disp_max = -huge(1.0_wp)     !< relative displacement (TE)
+      integer :: impacts = 0, separations = 0, zone_changes = 0
+      real(wp) :: max_approach_velocity = 0.0_wp
+      real(wp) :: max_peak_force = 0.0_wp
+      real(wp) :: time_out_of_contact = 0.0_wp
+      !> peak-to-peak displacement (TE for gears): max - min, and the mean
+      !> swing between successive peaks (trainsim_metrics), after settle_time
+      real(wp) :: p2p_range = 0.0_wp, p2p_mean = 0.0_wp
+      integer :: p2p_swings = 0
+      integer :: open_event = 0        !< index of the event row of the contact in progress
+   end type element_metrics_t
+
    !> An output sink.
    type, abstract :: sink_t
    contains
@@ -96,12 +112,14 @@ module trainsim_sink
          type(sample_t), intent(in) :: s
          type(error_t), allocatable, intent(out) :: err
       end subroutine write_sample_i
-      !> Finish a successful run: write the event table and statistics, publish.
-      subroutine close_i(self, events, stats, err)
-         import :: sink_t, event_t, run_stats_t, error_t
+      !> Finish a successful run: write the event table, statistics and
+      !> per-element metrics, publish.
+      subroutine close_i(self, events, stats, metrics, err)
+         import :: sink_t, event_t, run_stats_t, element_metrics_t, error_t
          class(sink_t), intent(inout) :: self
          type(event_t), intent(in) :: events(:)
          type(run_stats_t), intent(in) :: stats
+         type(element_metrics_t), intent(in) :: metrics(:)
          type(error_t), allocatable, intent(out) :: err
       end subroutine close_i
    end interface
@@ -152,12 +170,13 @@ contains
       end associate
    end subroutine null_sample
 
-   subroutine null_close(self, events, stats, err)
+   subroutine null_close(self, events, stats, metrics, err)
       class(null_sink_t), intent(inout) :: self
       type(event_t), intent(in) :: events(:)
       type(run_stats_t), intent(in) :: stats
+      type(element_metrics_t), intent(in) :: metrics(:)
       type(error_t), allocatable, intent(out) :: err
-      associate (u1 => self, u2 => events, u3 => stats)
+      associate (u1 => self, u2 => events, u3 => stats, u4 => metrics)
       end associate
    end subroutine null_close
 end module trainsim_sink

@@ -20,6 +20,9 @@ EVENT_COLUMNS = ["time", "element", "kind", "kind_name", "approach_velocity",
                  "restitution", "damping", "peak_force", "duration"]
 STATS_INT = ["steps", "rhs_evals", "jac_evals", "root_returns", "error_test_fails",
              "conv_fails", "events", "rejected"]
+METRICS = ["torque_min", "torque_max", "force_min", "force_max", "displacement_min", "displacement_max",
+           "p2p_range", "p2p_mean", "p2p_swings", "impacts", "separations", "zone_changes",
+           "max_approach_velocity", "max_peak_force", "time_out_of_contact"]
 STATS_REAL = ["wall_time", "t_final"]
 
 
@@ -75,7 +78,7 @@ def check(f):
     for a in ROOT_ATTRS:
         c.require(a in f.attrs, f"root attribute '{a}' missing")
 
-    for name in ["time", "states", "energy", "nodes", "elements", "events", "run_stats"]:
+    for name in ["time", "states", "energy", "nodes", "elements", "events", "run_stats", "metrics"]:
         c.require(name in f, f"'/{name}' missing")
     if c.problems:
         return c.problems
@@ -145,6 +148,12 @@ def check(f):
     if "element" in ev and n_el is not None and n_ev:
         e = ev["element"][...]
         c.require(bool(np.all((e >= 0) & (e <= n_el))), f"/events/element out of range: {e}")
+
+    if "metrics" in f:
+        mt = f["metrics"]
+        for col in METRICS:
+            if c.require(col in mt, f"/metrics/{col} missing") and n_el is not None:
+                c.require(mt[col].shape == (n_el,), f"/metrics/{col} has shape {mt[col].shape}, expected ({n_el},)")
 
     rs = f["run_stats"]
     for a in STATS_INT:

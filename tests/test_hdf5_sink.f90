@@ -12,7 +12,7 @@ program test_hdf5_sink
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, err_io, err_internal
    use trainsim_strings, only: string_t, str
-   use trainsim_sink, only: run_meta_t, sample_t, event_t, run_stats_t, param_list_t, &
+   use trainsim_sink, only: run_meta_t, sample_t, event_t, run_stats_t, param_list_t, element_metrics_t, &
       ev_contact_front, ev_separation, ev_zone
    use trainsim_hdf5, only: hdf5_sink_t
    use trainsim_testing, only: check, check_close, suite_begin, suite_end, test_begin
@@ -175,6 +175,7 @@ contains
    ! --------------------------------------------------------------------- tests
 
    subroutine test_write_full_run()
+      type(element_metrics_t) :: metrics(1)   ! one per element of the test meta
       type(hdf5_sink_t) :: sink
       type(run_meta_t) :: meta
       type(sample_t) :: smp
@@ -216,7 +217,7 @@ contains
       stats%wall_time = 1.25_wp
       stats%t_final = 0.599_wp
       stats%completed = .true.
-      call sink%close(events, stats, err)
+      call sink%close(events, stats, metrics, err)
       call check_no_error('close', err)
       call check('final file exists', exists(main_file))
       call check('.part is gone after close', .not. exists(main_file//'.part'))
@@ -364,6 +365,7 @@ contains
 
    !> No elements, empty strings, a tiny block and no events must all work.
    subroutine test_no_elements()
+      type(element_metrics_t) :: metrics(0)   ! no elements
       type(hdf5_sink_t) :: sink
       type(run_meta_t) :: meta
       type(sample_t) :: smp
@@ -399,7 +401,7 @@ contains
       end do
       call check_no_error('write_sample x10', err)
       if (allocated(err)) return
-      call sink%close(events, stats, err)
+      call sink%close(events, stats, metrics, err)
       call check_no_error('close', err)
       if (allocated(err)) return
 
@@ -453,6 +455,7 @@ contains
    end subroutine test_bad_directory
 
    subroutine test_abort()
+      type(element_metrics_t) :: metrics(1)   ! one per element of the test meta
       type(hdf5_sink_t) :: sink
       type(run_meta_t) :: meta
       type(sample_t) :: smp
@@ -487,7 +490,7 @@ contains
       if (allocated(err)) return
       call fill_sample(smp, 1)
       call sink%write_sample(smp, err)
-      call sink%close(events, stats, err)
+      call sink%close(events, stats, metrics, err)
       call check_no_error('close after re-open', err)
       call check('output published after re-open', exists(path))
       call check('no .part after re-open and close', .not. exists(path//'.part'))
@@ -495,6 +498,7 @@ contains
    end subroutine test_abort
 
    subroutine test_misuse()
+      type(element_metrics_t) :: metrics(1)   ! one per element of the test meta
       type(hdf5_sink_t) :: sink
       type(run_meta_t) :: meta
       type(sample_t) :: smp
@@ -509,7 +513,7 @@ contains
       call sink%write_sample(smp, err)
       call check('write_sample before open -> err_internal', allocated(err))
       if (allocated(err)) call check('  code', err%code == err_internal)
-      call sink%close(events, stats, err)
+      call sink%close(events, stats, metrics, err)
       call check('close before open -> err_internal', allocated(err))
       call sink%open(meta, err)
       call check('open without a path -> err_io', allocated(err))
