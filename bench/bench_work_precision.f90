@@ -146,6 +146,10 @@ contains
          call report(name, 'cvode-bdf', rtols(i), f, ref)
          f = run(m0, 'cvode-adams', 0.0_wp, rtols(i), mesh, shaft)
          call report(name, 'cvode-adams', rtols(i), f, ref)
+         f = run(m0, 'arkode-dp', 0.0_wp, rtols(i), mesh, shaft)
+         call report(name, 'arkode-dp', rtols(i), f, ref)
+         f = run(m0, 'arkode-verner', 0.0_wp, rtols(i), mesh, shaft)
+         call report(name, 'arkode-verner', rtols(i), f, ref)
       end do
    end subroutine study
 end program bench_work_precision

@@ -19,7 +19,8 @@ contains
    !> Valid integrator names.
    function integrator_names() result(names)
       type(string_t), allocatable :: names(:)
-      names = [string_t('rk4'), string_t('rk4-thesis'), string_t('cvode-bdf'), string_t('cvode-adams')]
+      names = [string_t('rk4'), string_t('rk4-thesis'), string_t('cvode-bdf'), string_t('cvode-adams'), &
+               string_t('arkode-dp'), string_t('arkode-verner')]
    end function integrator_names
 
    !> Build a model from a parsed deck.

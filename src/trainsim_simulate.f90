@@ -8,7 +8,7 @@ module trainsim_simulate
    use trainsim_sink, only: sink_t, run_stats_t
    use trainsim_observer, only: observer_t, run_result_t
    use trainsim_rk4, only: integrate_rk4
-   use trainsim_cvode, only: integrate_cvode
+   use trainsim_cvode, only: integrate_sundials
    implicit none
    private
 
@@ -43,8 +43,8 @@ contains
          call integrate_rk4(model, obs, sink, t, y, stats, .false., err)
       case ('rk4-thesis')
          call integrate_rk4(model, obs, sink, t, y, stats, .true., err)
-      case ('cvode-bdf', 'cvode-adams')
-         call integrate_cvode(model, obs, sink, t, y, stats, err)
+      case ('cvode-bdf', 'cvode-adams', 'arkode-dp', 'arkode-verner')
+         call integrate_sundials(model, obs, sink, t, y, stats, err)
       case default
          call fatal_error(err, "internal: integrator '"//model%run%integrator//"' not dispatched", err_internal)
       end select
