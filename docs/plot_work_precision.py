@@ -15,7 +15,8 @@ rows = list(csv.DictReader(open(src)))
 cases = sorted({r["case"] for r in rows}, key=lambda c: [r["case"] for r in rows].index(c))
 metrics = [("err_p2p", "peak-to-peak TE"), ("err_impact_times", "first 10 impact times"),
            ("err_peak_torque", "peak shaft torque")]
-style = {"rk4-thesis": ("k", "s"), "rk4": ("C0", "o"), "cvode-bdf": ("C3", "^"), "cvode-adams": ("C2", "v")}
+style = {"rk4-thesis": ("k", "s"), "rk4": ("C0", "o"), "cvode-bdf": ("C3", "^"), "cvode-adams": ("C2", "v"),
+         "arkode-dp": ("C1", "D"), "arkode-verner": ("C4", "P")}
 fig, axes = plt.subplots(len(cases), len(metrics), figsize=(13, 3.6 * len(cases)), squeeze=False)
 for i, case in enumerate(cases):
     for j, (key, label) in enumerate(metrics):

@@ -19,7 +19,7 @@ module trainsim_model
    type :: run_settings_t
       real(wp) :: t_start = 0.0_wp, t_end = 0.0_wp, dt = 0.0_wp
       real(wp) :: output_interval = 0.0_wp      !< 0: every step
-      character(len=:), allocatable :: integrator  !< 'rk4', 'rk4-thesis', 'cvode-bdf', 'cvode-adams'
+      character(len=:), allocatable :: integrator  !< 'rk4', 'rk4-thesis', 'cvode-bdf', 'cvode-adams', 'arkode-dp', 'arkode-verner'
       character(len=:), allocatable :: output      !< HDF5 file name
       real(wp) :: rtol = 1.0e-8_wp
       real(wp) :: atol_angle = 1.0e-10_wp, atol_speed = 1.0e-8_wp, atol_current = 1.0e-8_wp
