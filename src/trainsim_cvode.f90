@@ -816,9 +816,10 @@ contains
          end do
          tstop = t_end
          if (ibp <= size(bp)) tstop = bp(ibp)
-         if (sun_set_stop_time(tstop) /= st_success) &
+         if (sun_set_stop_time(tstop) /= st_success) then
             call fatal_error(err, 'internal: '//prefix//'SetStopTime('//str(tstop)//') failed at t = '// &
                              str(t)//' s', err_internal)
+         end if
       end subroutine set_stop_time
 
       !> Update the modes at (t, yv) for the guards that fired (the roots

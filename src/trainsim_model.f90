@@ -199,8 +199,9 @@ contains
          l = self%elements(i)%e%left
          r = self%elements(i)%e%right
          pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
-         if (self%elements(i)%e%supplies_power) &
+         if (self%elements(i)%e%supplies_power) then
             pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
+         end if
       end do
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin

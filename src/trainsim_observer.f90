@@ -234,8 +234,9 @@ contains
                m%torque_max = max(m%torque_max, self%s%torque_right(i))
                m%disp_min = min(m%disp_min, self%s%displacement(i))
                m%disp_max = max(m%disp_max, self%s%displacement(i))
-               if (self%s%contact(i) == 0 .and. t > self%t_prev) &
+               if (self%s%contact(i) == 0 .and. t > self%t_prev) then
                   m%time_out_of_contact = m%time_out_of_contact + (t - self%t_prev)
+               end if
             end if
          end associate
       end do
