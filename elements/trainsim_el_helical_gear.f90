@@ -12,7 +12,7 @@ module trainsim_el_helical_gear
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_sink, only: param_list_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_clearance_element, only: clearance_element_t
    implicit none
    private

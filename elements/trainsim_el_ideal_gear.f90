@@ -7,7 +7,7 @@ module trainsim_el_ideal_gear
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_sink, only: param_list_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_element, only: element_t
    implicit none
    private

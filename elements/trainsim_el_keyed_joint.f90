@@ -25,7 +25,7 @@ module trainsim_el_keyed_joint
    use trainsim_contact, only: fit_tight, fit_loose, fit_average, key_lineal_stiffness
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_sink, only: param_list_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_clearance_element, only: clearance_element_t
    implicit none
    private

@@ -20,7 +20,8 @@ module trainsim_el_spur_gear
    use trainsim_strings, only: str, string_t, to_lower
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_sink, only: param_list_t, event_t, ev_zone
+   use trainsim_param_list, only: param_list_t
+   use trainsim_event, only: event_t, ev_zone
    use trainsim_clearance_element, only: clearance_element_t
    implicit none
    private

@@ -10,7 +10,7 @@ module trainsim_node_dc_motor
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_signal, only: signal_t, constant_signal
-   use trainsim_sink, only: param_list_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_node, only: node_t
    implicit none
    private

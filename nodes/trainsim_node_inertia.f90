@@ -6,7 +6,7 @@ module trainsim_node_inertia
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_sink, only: param_list_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_node, only: node_t
    implicit none
    private

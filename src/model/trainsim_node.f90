@@ -8,7 +8,7 @@ module trainsim_node
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_signal, only: signal_t
-   use trainsim_sink, only: param_list_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_strings, only: string_t
    implicit none
    private

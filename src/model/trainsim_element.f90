@@ -12,7 +12,8 @@ module trainsim_element
    use trainsim_error, only: error_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_sink, only: event_t, param_list_t
+   use trainsim_param_list, only: param_list_t
+   use trainsim_event, only: event_t
    implicit none
    private
 

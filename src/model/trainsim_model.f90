@@ -9,7 +9,7 @@ module trainsim_model
    use trainsim_signal, only: signal_t
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t
-   use trainsim_sink, only: event_t
+   use trainsim_event, only: event_t
    implicit none
    private
 

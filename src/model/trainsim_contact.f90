@@ -27,7 +27,7 @@ module trainsim_contact
    use trainsim_strings, only: str, to_lower, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_sink, only: event_t, ev_contact_front, ev_contact_rear, ev_separation
+   use trainsim_event, only: event_t, ev_contact_front, ev_contact_rear, ev_separation
    implicit none
    private
 

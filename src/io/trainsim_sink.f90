@@ -5,23 +5,13 @@ module trainsim_sink
    use trainsim_kinds, only: wp, i8
    use trainsim_strings, only: string_t
    use trainsim_error, only: error_t
+   use trainsim_event, only: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
+   use trainsim_param_list, only: param_list_t
    implicit none
    private
 
    public :: run_meta_t, param_list_t, sample_t, event_t, run_stats_t, element_metrics_t, sink_t, null_sink_t
    public :: ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
-
-   !> Event kinds (column `kind` of the event table).
-   integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
-   integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
-   integer, parameter :: ev_separation = 3    !< contact ends
-   integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
-
-   !> Named real parameters of one element or node (derived values included).
-   type :: param_list_t
-      type(string_t), allocatable :: names(:)
-      real(wp), allocatable :: values(:)
-   end type param_list_t
 
    !> Everything that says how a run was made; written as attributes.
    type :: run_meta_t
@@ -51,18 +41,6 @@ module trainsim_sink
       !> kinetic, potential, dissipated, work input, balance residual
       real(wp) :: energy(5) = 0.0_wp
    end type sample_t
-
-   !> One row of the event table.
-   type :: event_t
-      real(wp) :: t = 0.0_wp
-      integer :: element = 0
-      integer :: kind = 0
-      real(wp) :: approach_velocity = 0.0_wp !< V_i captured at contact onset
-      real(wp) :: restitution = 0.0_wp       !< e used for D (contact onsets)
-      real(wp) :: damping = 0.0_wp           !< D of eq. (3.12) used for this contact
-      real(wp) :: peak_force = 0.0_wp        !< largest |force| during this contact
-      real(wp) :: duration = -1.0_wp         !< contact duration (-1 while open)
-   end type event_t
 
    !> Counters and timings of a run.
    type :: run_stats_t
@@ -133,19 +111,6 @@ module trainsim_sink
    end type null_sink_t
 
 contains
-
-   !> Name of an event kind.
-   pure function ev_name(kind) result(name)
-      integer, intent(in) :: kind
-      character(len=:), allocatable :: name
-      select case (kind)
-      case (ev_contact_front); name = 'contact_front'
-      case (ev_contact_rear); name = 'contact_rear'
-      case (ev_separation); name = 'separation'
-      case (ev_zone); name = 'zone'
-      case default; name = 'unknown'
-      end select
-   end function ev_name
 
    !> Default abort: nothing to clean up.
    subroutine sink_abort(self)

@@ -5,7 +5,7 @@
 !> stiffness depends on the mesh position, `factor`, guards and mode updates.
 module trainsim_clearance_element
    use trainsim_kinds, only: wp
-   use trainsim_sink, only: event_t
+   use trainsim_event, only: event_t
    use trainsim_contact, only: clearance_t
    use trainsim_element, only: element_t
    implicit none

@@ -1,0 +1,43 @@
+!> What an element reports when its discrete mode changes: one row of the
+!> event table. Part of the model layer (elements produce events); the
+!> recorder and the output sinks only read them.
+module trainsim_event
+   use trainsim_kinds, only: wp
+   implicit none
+   private
+
+   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
+
+   !> Event kinds (column `kind` of the event table).
+   integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
+   integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
+   integer, parameter :: ev_separation = 3    !< contact ends
+   integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
+
+   !> One row of the event table.
+   type :: event_t
+      real(wp) :: t = 0.0_wp
+      integer :: element = 0
+      integer :: kind = 0
+      real(wp) :: approach_velocity = 0.0_wp !< V_i captured at contact onset
+      real(wp) :: restitution = 0.0_wp       !< e used for D (contact onsets)
+      real(wp) :: damping = 0.0_wp           !< D of eq. (3.12) used for this contact
+      real(wp) :: peak_force = 0.0_wp        !< largest |force| during this contact
+      real(wp) :: duration = -1.0_wp         !< contact duration (-1 while open)
+   end type event_t
+
+contains
+
+   !> Name of an event kind.
+   pure function ev_name(kind) result(name)
+      integer, intent(in) :: kind
+      character(len=:), allocatable :: name
+      select case (kind)
+      case (ev_contact_front); name = 'contact_front'
+      case (ev_contact_rear); name = 'contact_rear'
+      case (ev_separation); name = 'separation'
+      case (ev_zone); name = 'zone'
+      case default; name = 'unknown'
+      end select
+   end function ev_name
+end module trainsim_event
