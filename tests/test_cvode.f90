@@ -8,7 +8,7 @@ program test_cvode
    use trainsim_observer, only: run_result_t
    use trainsim_simulate, only: simulate
    use trainsim_sink, only: null_sink_t, ev_contact_front, ev_contact_rear
-   use trainsim_cvode, only: cvode_max_step, cvode_abstol
+   use trainsim_sundials, only: cvode_max_step, cvode_abstol
    use trainsim_strings, only: str
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: zero_crossings, load_model, load_model_text, run_model, nl

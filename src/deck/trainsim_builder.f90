@@ -9,6 +9,7 @@ module trainsim_builder
    use trainsim_signal, only: signal_t, signal_from_group
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
+   use trainsim_integrator_registry, only: integrator_names
    implicit none
    private
 
@@ -16,12 +17,6 @@ module trainsim_builder
 
 contains
 
-   !> Valid integrator names.
-   function integrator_names() result(names)
-      type(string_t), allocatable :: names(:)
-      names = [string_t('rk4'), string_t('rk4-thesis'), string_t('cvode-bdf'), string_t('cvode-adams'), &
-               string_t('arkode-dp'), string_t('arkode-verner')]
-   end function integrator_names
 
    !> Build a model from a parsed deck.
    subroutine build_model(deck, model, err)

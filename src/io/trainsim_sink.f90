@@ -7,6 +7,7 @@ module trainsim_sink
    use trainsim_error, only: error_t
    use trainsim_event, only: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
    use trainsim_param_list, only: param_list_t
+   use trainsim_run_stats, only: run_stats_t
    implicit none
    private
 
@@ -41,14 +42,6 @@ module trainsim_sink
       !> kinetic, potential, dissipated, work input, balance residual
       real(wp) :: energy(5) = 0.0_wp
    end type sample_t
-
-   !> Counters and timings of a run.
-   type :: run_stats_t
-      integer(i8) :: steps = 0, rhs_evals = 0, jac_evals = 0, root_returns = 0
-      integer(i8) :: error_test_fails = 0, conv_fails = 0, events = 0, rejected = 0
-      real(wp) :: wall_time = 0.0_wp, t_final = 0.0_wp
-      logical :: completed = .false.
-   end type run_stats_t
 
    !> Per-element figures of a run (over t >= t_start + settle_time).
    type :: element_metrics_t

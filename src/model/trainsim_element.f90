@@ -179,7 +179,7 @@ contains
    end subroutine el_init_mode
 
    !> A guard crossed zero (fired(j) for guard j): change mode, report what happened.
-   !> `nev` events are returned in ev(1:nev) (ev must hold at least 2).
+   !> `nev` events are returned in ev(1:nev), nev <= max_update_events (trainsim_event).
    subroutine el_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
       class(element_t), intent(inout) :: self
       real(wp), intent(in) :: t, thl, wl, thr, wr

@@ -6,13 +6,18 @@ module trainsim_event
    implicit none
    private
 
-   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
+   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name, max_update_events
 
    !> Event kinds (column `kind` of the event table).
    integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
    integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
    integer, parameter :: ev_separation = 3    !< contact ends
    integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
+
+   !> Most events one element may report from one mode update (`update_mode`
+   !> writes ev(1:nev) with nev <= this): a face contact or separation per
+   !> face and a zone change, with room to spare.
+   integer, parameter :: max_update_events = 8
 
    !> One row of the event table.
    type :: event_t

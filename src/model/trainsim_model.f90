@@ -5,11 +5,12 @@
 !> allocation, I/O or string work.
 module trainsim_model
    use trainsim_kinds, only: wp
+   use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_signal, only: signal_t
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t
-   use trainsim_event, only: event_t
+   use trainsim_event, only: event_t, max_update_events
    implicit none
    private
 
@@ -69,6 +70,7 @@ module trainsim_model
       procedure :: stored_energy => model_stored_energy
       procedure :: node_index => model_node_index
       procedure :: is_held => model_is_held
+      procedure :: state_label => model_state_label
    end type model_t
 
 contains
@@ -305,7 +307,8 @@ contains
    end subroutine model_init_modes
 
    !> Update the modes of the elements whose guards fired; the events that
-   !> result are appended to events(nev+1:) (with the element index filled in).
+   !> result are appended to events(nev+1:) (with the time and the element
+   !> index filled in; the array grows when full, so no event is dropped).
    !> A mode change that changes the stored energy (a mesh-stiffness switch
    !> while teeth are loaded) is work done on the train: it is booked to the
    !> work-input state, so that the energy balance keeps closing.
@@ -314,10 +317,11 @@ contains
       real(wp), intent(in) :: t
       real(wp), intent(inout) :: y(:)
       logical, intent(in) :: fired(:)
-      type(event_t), intent(inout) :: events(:)
+      type(event_t), allocatable, intent(inout) :: events(:)
       integer, intent(inout) :: nev
       integer :: i, l, r, o, n, k, m
-      type(event_t) :: local(4)
+      type(event_t) :: local(max_update_events)
+      type(event_t), allocatable :: grown(:)
       real(wp) :: e_before
       if (self%run%track_energy) e_before = self%stored_energy(t, y)
       call self%kinematics(t, y)
@@ -330,13 +334,16 @@ contains
          r = self%elements(i)%e%right
          call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
                                              fired(o + 1:o + n), local, m)
+         if (nev + m > size(events)) then
+            allocate (grown(max(2*size(events), nev + m, 16)))
+            grown(1:nev) = events(1:nev)
+            call move_alloc(grown, events)
+         end if
          do k = 1, m
-            if (nev < size(events)) then
-               nev = nev + 1
-               events(nev) = local(k)
-               events(nev)%t = t
-               events(nev)%element = i
-            end if
+            nev = nev + 1
+            events(nev) = local(k)
+            events(nev)%t = t
+            events(nev)%element = i
          end do
       end do
       if (self%run%track_energy) y(self%n_states + 2) = y(self%n_states + 2) + self%stored_energy(t, y) - e_before
@@ -427,4 +434,29 @@ contains
       a = a(1:n)
    end subroutine sort_unique
 
+   !> For messages: "state 2 of node 'gear1' (gear1.speed)" for state index s.
+   function model_state_label(model, s) result(label)
+      class(model_t), intent(in) :: model
+      integer, intent(in) :: s
+      character(len=:), allocatable :: label
+      type(string_t), allocatable :: names(:)
+      integer :: i, o, ns
+      label = 'state '//str(s)
+      if (model%run%track_energy) then
+         if (s == model%n_states + 1) label = 'state '//str(s)//' (energy.dissipated, the dissipated-energy integral)'
+         if (s == model%n_states + 2) label = 'state '//str(s)//' (energy.input, the work-input integral)'
+      end if
+      do i = 1, size(model%nodes)
+         if (model%speed_of(i) /= 0) cycle
+         ns = model%nodes(i)%n%nstates()
+         o = model%nodes(i)%n%offset
+         if (s > o .and. s <= o + ns) then
+            allocate (names(ns))
+            call model%nodes(i)%n%state_names(names)
+            label = 'state '//str(s - o)//" of node '"//model%nodes(i)%n%id//"'"
+            if (allocated(names(s - o)%s)) label = label//' ('//names(s - o)%s//')'
+            return
+         end if
+      end do
+   end function model_state_label
 end module trainsim_model

@@ -34,12 +34,13 @@ module trainsim_observer
       type(sample_t) :: s
       type(run_result_t) :: res
       integer :: n_events = 0
-      real(wp) :: next_out = 0.0_wp, t_prev = 0.0_wp, t_metrics = 0.0_wp
+      real(wp) :: t_prev = 0.0_wp, t_metrics = 0.0_wp
       integer :: n_series = 0
       logical :: track = .false.
    contains
       procedure :: start => obs_start
       procedure :: step => obs_step
+      procedure :: sample => obs_sample
       procedure :: record_events => obs_record_events
       procedure :: finish => obs_finish
       procedure, private :: fill => obs_fill
@@ -115,7 +116,6 @@ contains
       self%n_events = 0
       self%track = model%run%track_energy
       self%t_metrics = model%run%t_start + model%run%settle_time
-      self%next_out = t
       self%t_prev = t
       ! output samples are kept in memory for the peak-to-peak metrics (displacement
       ! only) and, with keep_series, node angles and speeds too
@@ -132,7 +132,8 @@ contains
       end if
       call sink%open(make_meta(model), err)
       if (allocated(err)) return
-      call self%step(model, t, y, sink, err)
+      call self%step(model, t, y)
+      call self%sample(model, t, t, y, sink, err)
    end subroutine obs_start
 
    !> Evaluate the recorded quantities at (t, y) into the sample buffer.
@@ -213,15 +214,12 @@ contains
       call sink%write_sample(self%s, err)
    end subroutine obs_emit
 
-   !> After an accepted step: update metrics; write a sample if an output time is reached.
-   subroutine obs_step(self, model, t, y, sink, err)
+   !> After every step of the integrator: update the metrics at (t, y).
+   subroutine obs_step(self, model, t, y)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
-      class(sink_t), intent(inout) :: sink
-      type(error_t), allocatable, intent(out) :: err
       integer :: i, k
-      real(wp) :: tol
       call self%fill(model, t, y)
       do i = 1, size(model%elements)
          associate (m => self%res%el(i))
@@ -246,19 +244,20 @@ contains
                                      abs(self%s%energy(4)), abs(self%s%energy(3)))
       end if
       self%t_prev = t
-      tol = 1.0e-9_wp*model%run%dt
-      if (t >= self%next_out - tol) then
-         call self%emit(sink, err)
-         if (allocated(err)) return
-         if (model%run%output_interval > 0.0_wp) then
-            do while (self%next_out <= t + tol)
-               self%next_out = self%next_out + model%run%output_interval
-            end do
-         else
-            self%next_out = t
-         end if
-      end if
    end subroutine obs_step
+
+   !> The output sample at output time t_out (the state (t, y), with t within
+   !> the driver's tolerance of t_out): written with the time t_out exactly.
+   subroutine obs_sample(self, model, t_out, t, y, sink, err)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t_out, t, y(:)
+      class(sink_t), intent(inout) :: sink
+      type(error_t), allocatable, intent(out) :: err
+      if (self%s%t /= t) call self%fill(model, t, y)
+      self%s%t = t_out
+      call self%emit(sink, err)
+   end subroutine obs_sample
 
    !> Record events that happened at (t, y) (the state after the mode update).
    subroutine obs_record_events(self, model, t, y, evs, nev, sink, err)

@@ -1,53 +1,84 @@
 !> A run as a library call: model in, metrics and events out (in memory),
 !> histories to whatever sink the caller passes. No global state: any number
 !> of runs per process, on copies of one model.
+!>
+!> `simulate` holds the one driver loop every integrator runs in. The
+!> integrator (trainsim_integrator) only advances the state; the loop owns
+!> - the output grid: sample k at t_start + k*output_interval exactly (the
+!>   last at t_end), computed from k, never accumulated;
+!> - the breakpoints of the inputs (load steps, table knots, duty cycles): the
+!>   integrator's stop times, with a restart after each;
+!> - the events: `settle_events` updates the modes at an instant until no
+!>   guard fires, then the integrator restarts;
+!> - the checks after every advance: a state that blew up, an interrupt, and
+!>   the event budget (an event flood ends the run instead of hanging it).
 module trainsim_simulate
    use trainsim_kinds, only: wp, i8
-   use trainsim_error, only: error_t, fatal_error, err_internal
+   use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric
+   use trainsim_strings, only: str
    use trainsim_model, only: model_t
-   use trainsim_sink, only: sink_t, run_stats_t
+   use trainsim_event, only: event_t, ev_name
+   use trainsim_sink, only: sink_t
+   use trainsim_run_stats, only: run_stats_t
    use trainsim_observer, only: observer_t, run_result_t
-   use trainsim_rk4, only: integrate_rk4
-   use trainsim_cvode, only: integrate_sundials
+   use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
+   use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
+   use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
    implicit none
    private
 
-   public :: simulate
+   public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes
+
+   !> A state beyond this is a blow-up. Far above any physical angle, speed,
+   !> current or energy; its square times any sane coefficient stays finite, so
+   !> the check fires before a floating-point overflow can.
+   real(wp), parameter :: blowup_limit = 1.0e50_wp
+   !> More events than this inside one dt is a flood: a contact that chatters
+   !> faster than the step can resolve (a run past its stability limit).
+   integer, parameter :: max_events_per_dt = 200
+   !> Passes of the mode update at one instant before it counts as not settling.
+   integer, parameter :: max_settle_passes = 16
+
+   !> The loop's own bookkeeping (allocated once per run).
+   type :: drive_t
+      real(wp), allocatable :: g(:), bp(:)
+      logical, allocatable :: fired(:)
+      type(event_t), allocatable :: ev(:)
+      integer :: ibp = 1                   !< next breakpoint
+      real(wp) :: tol = 0.0_wp             !< times closer than this are one instant
+      real(wp) :: t_window = 0.0_wp        !< start of the current event-budget window
+      integer :: window_events = 0         !< events since t_window
+   end type drive_t
 
 contains
 
    !> Integrate `model` from t_start to t_end with its integrator.
    !> On error the sink is aborted (no partial output left as if good).
    subroutine simulate(model, sink, result, err)
-      type(model_t), intent(inout) :: model
+      type(model_t), intent(inout), target :: model
       class(sink_t), intent(inout) :: sink
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
       type(observer_t) :: obs
       type(run_stats_t) :: stats
+      class(integrator_t), allocatable, target :: integ
       real(wp), allocatable :: y(:)
       real(wp) :: t
       integer(i8) :: c0, c1, rate
 
       call system_clock(c0, rate)
+      call make_integrator(model%run%integrator, integ)
+      if (.not. allocated(integ)) then
+         call fatal_error(err, "internal: integrator '"//model%run%integrator//"' is not in the registry", err_internal)
+         return
+      end if
       t = model%run%t_start
       call model%initial_state(y)
       call model%init_modes(t, y)
       call obs%start(model, t, y, sink, err)
-      if (allocated(err)) then
-         call sink%abort()
-         return
-      end if
-      select case (model%run%integrator)
-      case ('rk4')
-         call integrate_rk4(model, obs, sink, t, y, stats, .false., err)
-      case ('rk4-thesis')
-         call integrate_rk4(model, obs, sink, t, y, stats, .true., err)
-      case ('cvode-bdf', 'cvode-adams', 'arkode-dp', 'arkode-verner')
-         call integrate_sundials(model, obs, sink, t, y, stats, err)
-      case default
-         call fatal_error(err, "internal: integrator '"//model%run%integrator//"' not dispatched", err_internal)
-      end select
+      if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, err)
+      call integ%statistics(stats)
+      call integ%finish()
       if (allocated(err)) then
          call sink%abort()
          return
@@ -57,4 +88,284 @@ contains
       call obs%finish(model, t, y, stats, sink, result, err)
       if (allocated(err)) call sink%abort()
    end subroutine simulate
+
+   !> The driver loop: from (t, y) at t_start to t_end.
+   subroutine drive(model, integ, obs, sink, t, y, err)
+      type(model_t), intent(inout), target :: model
+      class(integrator_t), intent(inout), target :: integ
+      type(observer_t), intent(inout) :: obs
+      class(sink_t), intent(inout) :: sink
+      real(wp), intent(inout) :: t, y(:)
+      type(error_t), allocatable, intent(out) :: err
+      type(drive_t) :: d
+      real(wp) :: t0, t_end, dout, t_out, x, n_real
+      integer(i8) :: k, n_out
+
+      t0 = model%run%t_start
+      t_end = model%run%t_end
+      dout = model%run%output_interval
+      if (.not. dout > 0.0_wp) dout = model%run%dt
+      ! output times t0 + k dout, k = 1 .. n_out, the last one moved to t_end
+      x = max((t_end - t0)/dout - 1.0e-6_wp, 0.0_wp)
+      n_real = aint(x)
+      if (x > n_real) n_real = n_real + 1.0_wp
+      n_out = int(min(max(n_real, 1.0_wp), 9.0e18_wp), i8)
+      d%tol = 1.0e-9_wp*model%run%dt
+      d%t_window = t
+      allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
+      call model%breakpoints(t, t_end, d%bp)
+      call set_next_stop(d, integ, t, t_end)
+      call integ%start(model, t, y, err)
+      if (allocated(err)) return
+      ! a guard already negative at t_start: settle it before the first step
+      call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err)
+      if (allocated(err)) return
+
+      do k = 1, n_out
+         t_out = t0 + real(k, wp)*dout
+         if (k == n_out) t_out = t_end
+         call advance_to(model, integ, obs, sink, d, t_out, t_end, t, y, err)
+         if (allocated(err)) return
+         call obs%sample(model, t_out, t, y, sink, err)
+         if (allocated(err)) return
+      end do
+      t = t_end
+   end subroutine drive
+
+   !> Advance (t, y) to the output time t_out: through the breakpoints of the
+   !> inputs and the events on the way, checking the state after every step.
+   subroutine advance_to(model, integ, obs, sink, d, t_out, t_end, t, y, err)
+      type(model_t), intent(inout), target :: model
+      class(integrator_t), intent(inout), target :: integ
+      type(observer_t), intent(inout) :: obs
+      class(sink_t), intent(inout) :: sink
+      type(drive_t), intent(inout) :: d
+      real(wp), intent(in) :: t_out, t_end
+      real(wp), intent(inout) :: t, y(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: t_goal
+      integer :: status
+      do
+         t_goal = min(t_out, integ%t_stop)
+         if (t_goal - t > d%tol) then
+            call integ%advance(model, t_goal, t, y, status, err)
+            if (allocated(err)) return
+            call check_state(model, integ, t, y, err)
+            if (allocated(err)) return
+            call obs%step(model, t, y)
+            if (status == adv_event) then
+               call settle_if_fired(model, integ, obs, sink, d, t, y, .true., err)
+               if (allocated(err)) return
+               cycle
+            end if
+            if (status == adv_step) cycle
+         end if
+         ! t_goal reached: a breakpoint of the inputs, or the output time
+         if (integ%stop_is_breakpoint .and. t_goal >= integ%t_stop - d%tol) then
+            d%ibp = d%ibp + 1
+            call set_next_stop(d, integ, t, t_end)
+            call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err, force_restart=.true.)
+            if (allocated(err)) return
+         else
+            ! a guard below zero that the integrator did not report (safety net)
+            call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err)
+            if (allocated(err)) return
+         end if
+         if (t_goal >= t_out - d%tol) return
+      end do
+   end subroutine advance_to
+
+   !> The next stop of the integrator: the next breakpoint after t, else t_end.
+   subroutine set_next_stop(d, integ, t, t_end)
+      type(drive_t), intent(inout) :: d
+      class(integrator_t), intent(inout) :: integ
+      real(wp), intent(in) :: t, t_end
+      do while (d%ibp <= size(d%bp))
+         if (d%bp(d%ibp) > t + d%tol) exit
+         d%ibp = d%ibp + 1
+      end do
+      if (d%ibp <= size(d%bp)) then
+         call integ%set_stop(d%bp(d%ibp), .true.)
+      else
+         call integ%set_stop(t_end, .false.)
+      end if
+   end subroutine set_next_stop
+
+   !> Settle the modes at (t, y) if any guard fired (`from_integrator`: the
+   !> integrator returned an event and says which guards it saw cross), then
+   !> restart the integrator; with force_restart, restart even without events.
+   subroutine settle_if_fired(model, integ, obs, sink, d, t, y, from_integrator, err, force_restart)
+      type(model_t), intent(inout), target :: model
+      class(integrator_t), intent(inout), target :: integ
+      type(observer_t), intent(inout) :: obs
+      class(sink_t), intent(inout) :: sink
+      type(drive_t), intent(inout) :: d
+      real(wp), intent(in) :: t
+      real(wp), intent(inout) :: y(:)
+      logical, intent(in) :: from_integrator
+      type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: force_restart
+      logical :: restart
+      integer :: nev
+      restart = .false.
+      if (present(force_restart)) restart = force_restart
+      if (model%n_guards > 0) then
+         call model%guards(t, y, d%g)
+         if (from_integrator) then
+            call integ%fired(d%g, d%fired)
+         else
+            d%fired = d%g < 0.0_wp
+         end if
+         if (any(d%fired)) then
+            call settle_events(model, obs, sink, d, t, y, nev, err)
+            if (allocated(err)) return
+            call count_events(model, d, t, nev, err)
+            if (allocated(err)) return
+            restart = .true.
+         end if
+      end if
+      if (restart) call integ%restart(model, t, y, err)
+   end subroutine settle_if_fired
+
+   !> The one routine that settles the events at an instant: update the modes
+   !> of the elements whose guards fired (d%fired on entry), record the events,
+   !> and repeat while a guard of the new modes is below zero (cascades: a zone
+   !> change and a contact at once). Every event is kept (the buffer grows); a
+   !> cascade that does not settle is an error, not a silent drop.
+   subroutine settle_events(model, obs, sink, d, t, y, n_total, err)
+      type(model_t), intent(inout) :: model
+      type(observer_t), intent(inout) :: obs
+      class(sink_t), intent(inout) :: sink
+      type(drive_t), intent(inout) :: d
+      real(wp), intent(in) :: t
+      real(wp), intent(inout) :: y(:)
+      integer, intent(out) :: n_total
+      type(error_t), allocatable, intent(out) :: err
+      integer :: pass, nev, j
+      n_total = 0
+      do pass = 1, max_settle_passes
+         nev = 0
+         call model%apply_events(t, y, d%fired, d%ev, nev)
+         call obs%record_events(model, t, y, d%ev, nev, sink, err)
+         if (allocated(err)) return
+         n_total = n_total + nev
+         call model%guards(t, y, d%g)
+         d%fired = d%g < 0.0_wp
+         if (.not. any(d%fired)) return
+      end do
+      j = findloc(d%fired, .true., 1)
+      call fatal_error(err, 'the modes did not settle at t = '//str(t)//' s: after '//str(max_settle_passes)// &
+                       ' passes of the mode update, a guard of '//guard_owner(model, j)// &
+                       ' is still below zero; the state there is not consistent with any contact state '// &
+                       '(a runaway state, or a time step above the stability limit)', err_numeric)
+   end subroutine settle_events
+
+   !> Event budget: more than max_events_per_dt events inside one dt is a flood.
+   subroutine count_events(model, d, t, nev, err)
+      type(model_t), intent(inout) :: model
+      type(drive_t), intent(inout) :: d
+      real(wp), intent(in) :: t
+      integer, intent(in) :: nev
+      type(error_t), allocatable, intent(out) :: err
+      integer :: last
+      if (t - d%t_window > model%run%dt) then
+         d%t_window = t
+         d%window_events = 0
+      end if
+      d%window_events = d%window_events + nev
+      if (d%window_events <= max_events_per_dt) return
+      last = d%ev(max(nev, 1))%element
+      call fatal_error(err, 'event flood at t = '//str(t)//' s: more than '//str(max_events_per_dt)// &
+                       ' events within dt = '//str(model%run%dt)//" s (the last: '"// &
+                       ev_name(d%ev(max(nev, 1))%kind)//"' of element '"//model%elements(last)%e%id//"'). "// &
+                       stability_advice(model), err_numeric)
+   end subroutine count_events
+
+   !> NaN or runaway state after a step -> an error naming the time, the node
+   !> and quantity, and the likely cause.
+   subroutine check_state(model, integ, t, y, err)
+      type(model_t), intent(inout) :: model
+      class(integrator_t), intent(in) :: integ
+      real(wp), intent(in) :: t, y(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i
+      do i = 1, size(y)
+         if (.not. abs(y(i)) <= blowup_limit) then   ! also true for NaN
+            call fatal_error(err, "integrator '"//model%run%integrator//"': the solution blew up at t = "//str(t)// &
+                             ' s ('//model%state_label(i)//' is '//trim(merge('NaN    ', 'runaway', y(i) /= y(i)))// &
+                             '). '//blowup_advice(model, integ), err_numeric)
+            return
+         end if
+      end do
+   end subroutine check_state
+
+   !> What to try after a blow-up: the step if it is above the stability
+   !> limit (fixed-step methods), else the tolerances, else the inputs.
+   function blowup_advice(model, integ) result(text)
+      type(model_t), intent(inout) :: model
+      class(integrator_t), intent(in) :: integ
+      character(len=:), allocatable :: text
+      type(integrator_entry_t), allocatable :: rows(:)
+      integer :: i
+      associate (unused => integ)
+      end associate
+      rows = integrator_registry()
+      do i = 1, size(rows)
+         if (rows(i)%name == model%run%integrator) exit
+      end do
+      if (i <= size(rows)) then
+         if (.not. rows(i)%fixed_step) then
+            text = 'Tighten rtol and the absolute tolerances, or set a smaller max_step; if that does not help, '// &
+                   'check the loads, stiffnesses and inertias of the deck for values out of proportion'
+            return
+         end if
+      end if
+      text = stability_advice(model)
+   end function blowup_advice
+
+   !> dt against the RK4 stability limit of the highest mode with every
+   !> clearance closed: blame the step if it is above, the inputs if not.
+   function stability_advice(model) result(text)
+      type(model_t), intent(inout) :: model
+      character(len=:), allocatable :: text
+      type(model_t) :: tmp
+      type(modes_t) :: modes
+      type(error_t), allocatable :: err
+      real(wp) :: dt_safe
+      tmp = model
+      call compute_modes(tmp, modes, err, closed=.true.)
+      if (allocated(err)) then
+         text = 'Check the deck for absurd loads or stiffnesses, and try a smaller dt'
+         return
+      end if
+      if (.not. modes%omega_max > 0.0_wp) then
+         text = 'The train has no elastic mode: check the loads and inertias of the deck for absurd values'
+         return
+      end if
+      dt_safe = rk4_stability_limit/modes%omega_max
+      if (model%run%dt > dt_safe) then
+         text = 'The time step dt = '//str(model%run%dt)//' s is above the RK4 stability limit '//str(dt_safe, 4)// &
+                ' s of the highest mode with every clearance closed ('//str(modes%freq_hz(modes%n), 5)// &
+                ' Hz): take dt below that'
+      else
+         text = 'The time step dt = '//str(model%run%dt)//' s is within the RK4 stability limit '//str(dt_safe, 4)// &
+                ' s of the highest mode with every clearance closed: the inputs are more likely to blame; '// &
+                'check the loads, stiffnesses, inertias and initial speeds of the deck for values out of proportion'
+      end if
+   end function stability_advice
+
+   !> "element 'mesh'" for guard index j of the model.
+   function guard_owner(model, j) result(text)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: j
+      character(len=:), allocatable :: text
+      integer :: i
+      text = 'guard '//str(j)
+      do i = size(model%elements), 1, -1
+         if (model%guard_offset(i) < j) then
+            text = "element '"//model%elements(i)%e%id//"'"
+            return
+         end if
+      end do
+   end function guard_owner
 end module trainsim_simulate

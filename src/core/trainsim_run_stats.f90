@@ -1,0 +1,17 @@
+!> Counters and timings of a run: filled by the integrators, printed by the
+!> report and written by the output sinks.
+module trainsim_run_stats
+   use trainsim_kinds, only: wp, i8
+   implicit none
+   private
+
+   public :: run_stats_t
+
+   !> Counters and timings of a run.
+   type :: run_stats_t
+      integer(i8) :: steps = 0, rhs_evals = 0, jac_evals = 0, root_returns = 0
+      integer(i8) :: error_test_fails = 0, conv_fails = 0, events = 0, rejected = 0
+      real(wp) :: wall_time = 0.0_wp, t_final = 0.0_wp
+      logical :: completed = .false.
+   end type run_stats_t
+end module trainsim_run_stats

@@ -1,0 +1,120 @@
+!> The abstract integrator: what the driver loop (trainsim_driver) asks of
+!> every time-stepping method. An integrator only advances the state; the
+!> driver owns the output times, the breakpoints of the inputs, the event
+!> handling at an instant, the budgets and the blow-up check, so that those
+!> are written once for every method.
+!>
+!> The contract:
+!> - `start` is called once with the initial state and the first stop time
+!>   (the next breakpoint of the inputs, or t_end): the integrator must never
+!>   step past the stop time.
+!> - `advance` moves (t, y) towards t_goal (<= the stop time) and returns
+!>   `adv_reached` (t is t_goal, to rounding), `adv_step` (one internal step
+!>   taken, t < t_goal) or `adv_event` (a guard of the current modes went
+!>   negative: t is the located crossing, the modes are not yet updated).
+!> - `restart` is called after the driver changed the modes or passed a
+!>   breakpoint: the right-hand side is not smooth across (t, y), so no history
+!>   may be carried over. It gives the next stop time.
+!> - `statistics` adds the integrator's counters to a run_stats_t.
+!> - `finish` frees what `start` made (also after a failure).
+!> Adding an integrator = one file with an extension of this type and its
+!> factory + one row in trainsim_integrator_registry.
+module trainsim_integrator
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t
+   use trainsim_model, only: model_t
+   use trainsim_run_stats, only: run_stats_t
+   implicit none
+   private
+
+   public :: integrator_t, adv_step, adv_reached, adv_event
+
+   !> Outcomes of `advance`.
+   integer, parameter :: adv_step = 0     !< one internal step taken, t < t_goal
+   integer, parameter :: adv_reached = 1  !< t reached t_goal
+   integer, parameter :: adv_event = 2    !< a guard crossed zero at t (modes not yet updated)
+
+   type, abstract :: integrator_t
+      !> Counters this integrator keeps itself (steps, RHS evaluations, ...).
+      type(run_stats_t) :: stats
+      !> The integrator must not step past t_stop; a step that ends there ends on
+      !> a breakpoint of the inputs when stop_is_breakpoint (a jump or kink).
+      real(wp) :: t_stop = 0.0_wp
+      logical :: stop_is_breakpoint = .false.
+   contains
+      procedure(start_i), deferred :: start
+      procedure(advance_i), deferred :: advance
+      procedure :: restart => integrator_restart
+      procedure :: statistics => integrator_statistics
+      procedure :: finish => integrator_finish
+      procedure :: fired => integrator_fired
+      procedure, non_overridable :: set_stop => integrator_set_stop
+   end type integrator_t
+
+   abstract interface
+      !> Prepare to integrate from (t, y); t_stop and stop_is_breakpoint are set.
+      subroutine start_i(self, model, t, y, err)
+         import :: integrator_t, model_t, wp, error_t
+         class(integrator_t), intent(inout), target :: self
+         type(model_t), intent(inout), target :: model
+         real(wp), intent(in) :: t, y(:)
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine start_i
+      !> Advance (t, y) towards t_goal; status is one of adv_*.
+      subroutine advance_i(self, model, t_goal, t, y, status, err)
+         import :: integrator_t, model_t, wp, error_t
+         class(integrator_t), intent(inout), target :: self
+         type(model_t), intent(inout), target :: model
+         real(wp), intent(in) :: t_goal
+         real(wp), intent(inout) :: t, y(:)
+         integer, intent(out) :: status
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine advance_i
+   end interface
+
+contains
+
+   !> Record the next stop time (the driver calls this before start/restart).
+   subroutine integrator_set_stop(self, t_stop, is_breakpoint)
+      class(integrator_t), intent(inout) :: self
+      real(wp), intent(in) :: t_stop
+      logical, intent(in) :: is_breakpoint
+      self%t_stop = t_stop
+      self%stop_is_breakpoint = is_breakpoint
+   end subroutine integrator_set_stop
+
+   !> Default restart: one-step methods carry no history.
+   subroutine integrator_restart(self, model, t, y, err)
+      class(integrator_t), intent(inout), target :: self
+      type(model_t), intent(inout), target :: model
+      real(wp), intent(in) :: t, y(:)
+      type(error_t), allocatable, intent(out) :: err
+   end subroutine integrator_restart
+
+   !> Add this integrator's counters to stats.
+   subroutine integrator_statistics(self, stats)
+      class(integrator_t), intent(inout) :: self
+      type(run_stats_t), intent(inout) :: stats
+      stats%steps = stats%steps + self%stats%steps
+      stats%rhs_evals = stats%rhs_evals + self%stats%rhs_evals
+      stats%jac_evals = stats%jac_evals + self%stats%jac_evals
+      stats%root_returns = stats%root_returns + self%stats%root_returns
+      stats%error_test_fails = stats%error_test_fails + self%stats%error_test_fails
+      stats%conv_fails = stats%conv_fails + self%stats%conv_fails
+      stats%rejected = stats%rejected + self%stats%rejected
+   end subroutine integrator_statistics
+
+   !> The guards that fired at an event the integrator returned (default: those
+   !> below zero; a root finder may also report a crossing located just above).
+   subroutine integrator_fired(self, g, fired)
+      class(integrator_t), intent(inout) :: self
+      real(wp), intent(in) :: g(:)
+      logical, intent(out) :: fired(:)
+      fired = g < 0.0_wp
+   end subroutine integrator_fired
+
+   !> Default finish: nothing to free.
+   subroutine integrator_finish(self)
+      class(integrator_t), intent(inout) :: self
+   end subroutine integrator_finish
+end module trainsim_integrator

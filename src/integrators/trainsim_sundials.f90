@@ -1,0 +1,633 @@
+!> What the SUNDIALS integrators share: the SUNDIALS context and vectors, the
+!> callbacks (right-hand side, Jacobian, guards as root functions, error
+!> messages), the set-up sequence, the advance/restart cycle and the failure
+!> diagnosis. The backends (trainsim_int_cvode, trainsim_int_arkode) extend
+!> `sundials_integrator_t` and differ only in the SUNDIALS calls they make:
+!> each deferred `sun_*` procedure below is one call of the package.
+!>
+!> Every guard of every element is a root function with direction -1 (a mode
+!> stays valid while its guards are >= 0: only downward crossings are
+!> events). At a root return `advance` returns adv_event; the driver updates
+!> the modes and calls `restart`, which re-initialises the integrator at the
+!> event point: a mode change makes the right-hand side non-smooth there, so no
+!> history (multistep history, or the RK step-size history and interpolant)
+!> is carried across it. The same happens at the breakpoints of the inputs,
+!> which are stop times. Between those the integrator advances in NORMAL mode
+!> to the driver's goal (an output time) and interpolates there.
+!> See docs/integrators.md.
+module trainsim_sundials
+   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_ptr, c_char, c_null_ptr, c_null_char, &
+                                          c_loc, c_funloc, c_f_pointer, c_associated
+   use fsundials_context_mod, only: FSUNContext_Create, FSUNContext_Free
+   use fsundials_nvector_mod, only: N_Vector, FN_VGetArrayPointer, FN_VDestroy
+   use fsundials_matrix_mod, only: SUNMatrix
+   use fnvector_serial_mod, only: FN_VMake_Serial
+   use fsunmatrix_dense_mod, only: FSUNDenseMatrix_Data
+   use trainsim_kinds, only: wp, i8, two_pi
+   use trainsim_error, only: error_t, fatal_error, err_input, err_numeric, err_internal
+   use trainsim_strings, only: str
+   use trainsim_model, only: model_t
+   use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
+   use trainsim_run_stats, only: run_stats_t
+   use trainsim_integrator, only: integrator_t, adv_reached, adv_event
+   implicit none
+   private
+
+   public :: sundials_integrator_t, cv_user_t
+   public :: cv_rhs, cv_jac, cv_roots, cv_error_handler
+   public :: cvode_max_step, cvode_abstol
+   public :: st_success, st_tstop, st_root, st_too_much_work, st_too_much_acc, st_err_failure, &
+             st_conv_failure, st_lin_failure, st_rhs_failure, st_root_failure, st_too_close, st_bad_input, st_other
+
+   !> Fraction of the period of the highest linearised mode (clearances closed)
+   !> used as the default maximum step.
+   real(wp), parameter :: max_step_fraction = 0.1_wp
+   !> Floor of the absolute tolerance of the energy-accounting states, per unit of 1 + E0.
+   real(wp), parameter :: energy_atol_factor = 1.0e-6_wp
+   !> Internal steps allowed per call (per output interval), at least.
+   integer(i8), parameter :: mxstep_min = 1000000_i8
+
+   !> Package-neutral outcome of a SUNDIALS call (each backend's `status` maps
+   !> its CV_* or ARK_* return flags onto these).
+   integer, parameter :: st_success = 0, st_tstop = 1, st_root = 2
+   integer, parameter :: st_too_much_work = -1, st_too_much_acc = -2, st_err_failure = -3, &
+                         st_conv_failure = -4, st_lin_failure = -5, st_rhs_failure = -6, &
+                         st_root_failure = -7, st_too_close = -8, st_bad_input = -9, st_other = -99
+
+   !> What the callbacks see (user data): the caller's model and a few
+   !> diagnostics written without allocation.
+   type :: cv_user_t
+      type(model_t), pointer :: model => null()
+      integer :: ng = 0
+      integer :: bad_state = 0            !< first state whose derivative was NaN
+      real(wp) :: bad_t = 0.0_wp          !< time of that evaluation
+      integer :: msg_len = 0
+      character(len=512) :: msg = ''      !< last message SUNDIALS reported
+   end type cv_user_t
+
+   type, abstract, extends(integrator_t) :: sundials_integrator_t
+      !> the integrator's name, the package ('CVODE', 'ARKODE') and the prefix
+      !> of its functions ('CVode', 'ERKStep'), for messages
+      character(len=:), allocatable :: name, solver, prefix
+      type(cv_user_t) :: ud
+      type(c_ptr) :: ctx = c_null_ptr, mem = c_null_ptr
+      type(N_Vector), pointer :: nv_y => null(), nv_atol => null()
+      real(c_double), allocatable :: yv(:), atol(:)
+      integer(c_int), allocatable :: rootdir(:), rootsfound(:)
+      logical :: root_pending = .false.   !< rootsfound holds the roots of the last return
+      real(wp) :: hmax = 0.0_wp, omega_max = 0.0_wp, t_goal = 0.0_wp
+      real(wp) :: t_init = 0.0_wp          !< where the integration starts
+      integer(i8) :: mxstep = mxstep_min
+      integer :: n = 0, ng = 0
+   contains
+      procedure :: start => sun_start
+      procedure :: advance => sun_advance
+      procedure :: restart => sun_restart
+      procedure :: statistics => sun_statistics
+      procedure :: finish => sun_finish
+      procedure :: fired => sun_fired
+      procedure, private :: accumulate => sun_accumulate
+      procedure, private :: setup_failed => sun_setup_failed
+      procedure, private :: failed => sun_failed
+      ! the package's calls
+      procedure(create_i), deferred :: sun_create
+      procedure(flag_i), deferred :: sun_init
+      procedure(flag_i), deferred :: sun_set_err_handler
+      procedure(flag_i), deferred :: sun_set_user_data
+      procedure(flag_i), deferred :: sun_tolerances
+      procedure(flag_i), deferred :: sun_setup_solver
+      procedure(flag_real_i), deferred :: sun_set_max_step
+      procedure(flag_i), deferred :: sun_set_max_num_steps
+      procedure(flag_i), deferred :: sun_root_init
+      procedure(flag_real_i), deferred :: sun_set_stop_time
+      procedure(evolve_i), deferred :: sun_evolve
+      procedure(flag_i), deferred :: sun_root_info
+      procedure(flag_real_i), deferred :: sun_reinit
+      procedure(counters_i), deferred :: sun_counters
+      procedure(local_errors_i), deferred :: sun_local_errors
+      procedure(where_i), deferred :: sun_where
+      procedure(free_i), deferred :: sun_free
+      procedure(status_i), deferred :: status
+      procedure :: advice_too_much_work => sun_no_advice
+      procedure :: advice_error_failure => sun_no_advice
+      procedure :: describe_conv_failure => sun_describe_conv_failure
+   end type sundials_integrator_t
+
+   abstract interface
+      !> Create the integrator memory (self%mem).
+      subroutine create_i(self, t)
+         import :: sundials_integrator_t, wp
+         class(sundials_integrator_t), intent(inout), target :: self
+         real(wp), intent(in) :: t
+      end subroutine create_i
+      !> One SUNDIALS call; its raw return flag.
+      integer(c_int) function flag_i(self) result(flag)
+         import :: sundials_integrator_t, c_int
+         class(sundials_integrator_t), intent(inout), target :: self
+      end function flag_i
+      !> One SUNDIALS call with a time or step argument; its raw flag.
+      integer(c_int) function flag_real_i(self, x) result(flag)
+         import :: sundials_integrator_t, c_int, wp
+         class(sundials_integrator_t), intent(inout), target :: self
+         real(wp), intent(in) :: x
+      end function flag_real_i
+      !> Advance towards t_to (NORMAL mode); the time reached in tr; raw flag.
+      integer(c_int) function evolve_i(self, t_to, tr) result(flag)
+         import :: sundials_integrator_t, c_int, c_double, wp
+         class(sundials_integrator_t), intent(inout), target :: self
+         real(wp), intent(in) :: t_to
+         real(c_double), intent(out) :: tr
+      end function evolve_i
+      !> Counters since the last (re-)initialisation.
+      subroutine counters_i(self, nst, nfe, nje, netf, ncf, nsf)
+         import :: sundials_integrator_t, i8
+         class(sundials_integrator_t), intent(inout) :: self
+         integer(i8), intent(out) :: nst, nfe, nje, netf, ncf, nsf
+      end subroutine counters_i
+      !> Estimated local errors and error weights of the last step attempt.
+      subroutine local_errors_i(self, nv_ele, nv_ewt)
+         import :: sundials_integrator_t, N_Vector
+         class(sundials_integrator_t), intent(inout) :: self
+         type(N_Vector), intent(inout) :: nv_ele, nv_ewt
+      end subroutine local_errors_i
+      !> The integrator's current time and its last step size.
+      subroutine where_i(self, tcur, hlast)
+         import :: sundials_integrator_t, c_double
+         class(sundials_integrator_t), intent(inout) :: self
+         real(c_double), intent(inout) :: tcur(1), hlast(1)
+      end subroutine where_i
+      !> Free the integrator memory and the package's own solver objects.
+      subroutine free_i(self)
+         import :: sundials_integrator_t
+         class(sundials_integrator_t), intent(inout) :: self
+      end subroutine free_i
+      !> The package-neutral outcome (st_*) of a return flag.
+      pure integer function status_i(self, flag) result(st)
+         import :: sundials_integrator_t, c_int
+         class(sundials_integrator_t), intent(in) :: self
+         integer(c_int), intent(in) :: flag
+      end function status_i
+   end interface
+
+contains
+
+   ! --------------------------------------------------------------- callbacks
+
+   !> dy/dt for CVODE and ERKStep (same signature): model%rhs on the SUNDIALS
+   !> vectors. 1 (recoverable) on NaN.
+   integer(c_int) function cv_rhs(tn, sunvec_y, sunvec_f, user_data) result(ierr) bind(C)
+      real(c_double), value :: tn
+      type(N_Vector) :: sunvec_y, sunvec_f
+      type(c_ptr), value :: user_data
+      type(cv_user_t), pointer :: ud
+      real(c_double), pointer :: yv(:), fv(:)
+      integer :: i
+      call c_f_pointer(user_data, ud)
+      yv => FN_VGetArrayPointer(sunvec_y)
+      fv => FN_VGetArrayPointer(sunvec_f)
+      call ud%model%rhs(tn, yv, fv)
+      ierr = 0
+      do i = 1, size(fv)
+         if (fv(i) /= fv(i)) then
+            if (ud%bad_state == 0) then
+               ud%bad_state = i
+               ud%bad_t = tn
+            end if
+            ierr = 1
+            return
+         end if
+      end do
+   end function cv_rhs
+
+   !> Dense Jacobian for CVODE BDF's Newton iteration: model%jacobian written
+   !> straight into the SUNDIALS matrix (column-major, no copy, no allocation).
+   integer(c_int) function cv_jac(tn, sunvec_y, sunvec_f, sunmat_j, user_data, tmp1, tmp2, tmp3) &
+      result(ierr) bind(C)
+      real(c_double), value :: tn
+      type(N_Vector) :: sunvec_y, sunvec_f, tmp1, tmp2, tmp3
+      type(SUNMatrix) :: sunmat_j
+      type(c_ptr), value :: user_data
+      type(cv_user_t), pointer :: ud
+      real(c_double), pointer :: yv(:), jflat(:), jac(:, :)
+      integer :: n
+      call c_f_pointer(user_data, ud)
+      yv => FN_VGetArrayPointer(sunvec_y)
+      jflat => FSUNDenseMatrix_Data(sunmat_j)
+      n = size(yv)
+      call c_f_pointer(c_loc(jflat(1)), jac, [n, n])
+      call ud%model%jacobian(tn, yv, jac)
+      ierr = 0
+      associate (u1 => sunvec_f, u2 => tmp1, u3 => tmp2, u4 => tmp3)   ! unused by this Jacobian
+      end associate
+   end function cv_jac
+
+   !> The guards as root functions (CVODE and ERKStep alike).
+   integer(c_int) function cv_roots(tn, sunvec_y, gout, user_data) result(ierr) bind(C)
+      real(c_double), value :: tn
+      type(N_Vector) :: sunvec_y
+      real(c_double) :: gout(*)
+      type(c_ptr), value :: user_data
+      type(cv_user_t), pointer :: ud
+      real(c_double), pointer :: yv(:)
+      call c_f_pointer(user_data, ud)
+      yv => FN_VGetArrayPointer(sunvec_y)
+      call ud%model%guards(tn, yv, gout(1:ud%ng))
+      ierr = 0
+   end function cv_roots
+
+   !> CVODE's and ARKODE's error and warning messages: kept (the last one) for
+   !> our own message instead of being printed to stderr.
+   subroutine cv_error_handler(error_code, module, function, msg, user_data) bind(C)
+      integer(c_int), value :: error_code
+      type(c_ptr), value :: module, function, msg, user_data
+      type(cv_user_t), pointer :: ud
+      character(kind=c_char), pointer :: text(:)
+      integer :: i
+      if (error_code > 0) return    ! warnings (e.g. t + h = t) are not kept
+      associate (u1 => module, u2 => function)
+      end associate
+      if (.not. (c_associated(user_data) .and. c_associated(msg))) return
+      call c_f_pointer(user_data, ud)
+      call c_f_pointer(msg, text, [len(ud%msg)])
+      ud%msg_len = 0
+      do i = 1, len(ud%msg)
+         if (text(i) == c_null_char) exit
+         ud%msg(i:i) = text(i)
+         ud%msg_len = i
+      end do
+   end subroutine cv_error_handler
+
+   ! ------------------------------------------------------------ set-up helpers
+
+   !> Maximum step CVODE may take: run%max_step if > 0, else a tenth of the
+   !> period of the highest linearised mode with every clearance closed
+   !> (0: no bound, when the train has no elastic mode).
+   subroutine cvode_max_step(model, hmax, omega_max)
+      type(model_t), intent(in) :: model
+      real(wp), intent(out) :: hmax, omega_max
+      type(model_t) :: tmp
+      type(modes_t) :: modes
+      type(error_t), allocatable :: err
+      omega_max = 0.0_wp
+      tmp = model
+      call compute_modes(tmp, modes, err, closed=.true.)
+      if (.not. allocated(err)) omega_max = modes%omega_max
+      if (model%run%max_step > 0.0_wp) then
+         hmax = model%run%max_step
+      else if (omega_max > 0.0_wp) then
+         hmax = max_step_fraction*two_pi/omega_max
+      else
+         hmax = 0.0_wp
+      end if
+   end subroutine cvode_max_step
+
+   !> Absolute tolerance of each state: node angles atol_angle, speeds
+   !> atol_speed, a motor's current (third state) atol_current; the two
+   !> energy-accounting states max(rtol, 1e-6)*(1 + |E0|) (loose: they are
+   !> diagnostics, and must not set the step at tight rtol). E0 is the stored
+   !> energy at t_start (set by model%init_modes).
+   subroutine cvode_abstol(model, atol)
+      type(model_t), intent(in) :: model
+      real(wp), intent(out) :: atol(:)
+      integer :: i, o, ns
+      atol = model%run%atol_speed
+      do i = 1, size(model%nodes)
+         if (model%speed_of(i) /= 0) cycle
+         ns = model%nodes(i)%n%nstates()
+         o = model%nodes(i)%n%offset
+         if (ns >= 1) atol(o + 1) = model%run%atol_angle
+         if (ns >= 2) atol(o + 2) = model%run%atol_speed
+         if (ns >= 3) atol(o + 3:o + ns) = model%run%atol_current
+      end do
+      if (model%run%track_energy) atol(model%n_states + 1:model%n_states + 2) = &
+         max(model%run%rtol, energy_atol_factor)*(1.0_wp + abs(model%energy0))
+   end subroutine cvode_abstol
+
+   ! ------------------------------------------------------ the shared cycle
+
+   !> Create and set up the SUNDIALS objects for a run from (t, y).
+   subroutine sun_start(self, model, t, y, err)
+      class(sundials_integrator_t), intent(inout), target :: self
+      type(model_t), intent(inout), target :: model
+      real(wp), intent(in) :: t, y(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: dout
+
+      self%name = model%run%integrator
+      self%t_init = t
+      self%n = model%n_y
+      self%ng = model%n_guards
+      if (self%n == 0) then
+         call fatal_error(err, "integrator '"//self%name//"' needs at least one integrated state; "// &
+                          "every node of this train is fixed or has a prescribed speed: use integrator = 'rk4'", err_input)
+         return
+      end if
+      call cvode_max_step(model, self%hmax, self%omega_max)
+      dout = model%run%output_interval
+      if (.not. dout > 0.0_wp) dout = model%run%dt
+      if (self%hmax > 0.0_wp) then
+         if ((model%run%t_end - t)/self%hmax > 1.0e12_wp) then
+            call fatal_error(err, 'max_step = '//str(self%hmax)//' s would need more than 1e12 steps over the run of '// &
+                             str(model%run%t_end - t)//' s: raise max_step (0 chooses it from the highest frequency)', &
+                             err_input)
+            return
+         end if
+         ! steps allowed per call (one output interval): generous, but bounded
+         self%mxstep = max(mxstep_min, int(min(10.0_wp*dout/self%hmax, 1.0e9_wp), i8))
+      end if
+
+      allocate (self%yv(self%n), self%atol(self%n), self%rootdir(max(self%ng, 1)), self%rootsfound(max(self%ng, 1)))
+      self%yv = y
+      call cvode_abstol(model, self%atol)
+      self%rootdir = -1_c_int
+      self%rootsfound = 0
+      self%ud%model => model
+      self%ud%ng = self%ng
+
+      if (FSUNContext_Create(c_null_ptr, self%ctx) /= 0) then
+         call fatal_error(err, 'could not create the SUNDIALS context (out of memory?)', err_internal)
+         return
+      end if
+      self%nv_y => FN_VMake_Serial(int(self%n, c_long), self%yv, self%ctx)
+      self%nv_atol => FN_VMake_Serial(int(self%n, c_long), self%atol, self%ctx)
+      if (.not. (associated(self%nv_y) .and. associated(self%nv_atol))) then
+         call self%setup_failed('N_VMake_Serial', err); return
+      end if
+      call self%sun_create(t)
+      if (.not. c_associated(self%mem)) then
+         call self%setup_failed(self%prefix//'Create', err); return
+      end if
+      if (self%status(self%sun_set_err_handler()) /= st_success) then
+         call self%setup_failed(self%prefix//'SetErrHandlerFn', err); return
+      end if
+      if (self%status(self%sun_init()) /= st_success) then
+         call self%setup_failed(self%prefix//'Init', err); return
+      end if
+      if (self%status(self%sun_set_user_data()) /= st_success) then
+         call self%setup_failed(self%prefix//'SetUserData', err); return
+      end if
+      if (self%status(self%sun_tolerances()) /= st_success) then
+         call self%setup_failed(self%prefix//'SVtolerances', err); return
+      end if
+      if (self%status(self%sun_setup_solver()) /= st_success) then
+         call self%setup_failed('the solver set-up of '//self%solver, err); return
+      end if
+      if (self%hmax > 0.0_wp) then
+         if (self%status(self%sun_set_max_step(self%hmax)) /= st_success) then
+            call self%setup_failed(self%prefix//'SetMaxStep', err); return
+         end if
+      end if
+      if (self%status(self%sun_set_max_num_steps()) /= st_success) then
+         call self%setup_failed(self%prefix//'SetMaxNumSteps', err); return
+      end if
+      if (self%ng > 0) then
+         if (self%status(self%sun_root_init()) /= st_success) then
+            call self%setup_failed(self%prefix//'RootInit', err); return
+         end if
+      end if
+      if (self%status(self%sun_set_stop_time(self%t_stop)) /= st_success) then
+         call self%setup_failed(self%prefix//'SetStopTime', err); return
+      end if
+   end subroutine sun_start
+
+   !> Advance in NORMAL mode to t_goal (interpolated there), or to a root.
+   subroutine sun_advance(self, model, t_goal, t, y, status, err)
+      class(sundials_integrator_t), intent(inout), target :: self
+      type(model_t), intent(inout), target :: model
+      real(wp), intent(in) :: t_goal
+      real(wp), intent(inout) :: t, y(:)
+      integer, intent(out) :: status
+      type(error_t), allocatable, intent(out) :: err
+      integer(c_int) :: flag
+      integer :: st
+      real(c_double) :: tret
+      self%t_goal = t_goal
+      flag = self%sun_evolve(t_goal, tret)
+      st = self%status(flag)
+      if (flag < 0) then
+         call self%failed(model, flag, st, t, err)
+         status = adv_reached
+         return
+      end if
+      t = tret
+      y = self%yv
+      status = adv_reached
+      self%root_pending = .false.
+      if (st == st_root) then
+         self%stats%root_returns = self%stats%root_returns + 1
+         self%rootsfound = 0
+         if (self%status(self%sun_root_info()) == st_success) self%root_pending = .true.
+         status = adv_event
+      end if
+   end subroutine sun_advance
+
+   !> The guards that fired at an event: those below zero and, right after a
+   !> root return, those the root finder reported (located within its
+   !> tolerance, so possibly just above zero).
+   subroutine sun_fired(self, g, fired)
+      class(sundials_integrator_t), intent(inout) :: self
+      real(wp), intent(in) :: g(:)
+      logical, intent(out) :: fired(:)
+      fired = g < 0.0_wp
+      if (self%root_pending) fired = fired .or. self%rootsfound(1:size(g)) /= 0
+      self%root_pending = .false.
+   end subroutine sun_fired
+
+   !> Re-initialise at (t, y) (no history across a mode change or breakpoint).
+   subroutine sun_restart(self, model, t, y, err)
+      class(sundials_integrator_t), intent(inout), target :: self
+      type(model_t), intent(inout), target :: model
+      real(wp), intent(in) :: t, y(:)
+      type(error_t), allocatable, intent(out) :: err
+      call self%accumulate()
+      self%yv = y
+      self%root_pending = .false.
+      if (self%status(self%sun_reinit(t)) /= st_success) then
+         call fatal_error(err, 'internal: '//self%prefix//'ReInit failed at t = '//str(t)//' s: '// &
+                          self%ud%msg(1:self%ud%msg_len), err_internal)
+         return
+      end if
+      if (self%status(self%sun_set_stop_time(self%t_stop)) /= st_success) then
+         call fatal_error(err, 'internal: '//self%prefix//'SetStopTime('//str(self%t_stop)//') failed at t = '// &
+                          str(t)//' s', err_internal)
+      end if
+      associate (unused => model)
+      end associate
+   end subroutine sun_restart
+
+   !> Add the integrator's counters (zeroed by every re-initialisation) to self%stats.
+   subroutine sun_accumulate(self)
+      class(sundials_integrator_t), intent(inout) :: self
+      integer(i8) :: nst, nfe, nje, netf, ncf, nsf
+      if (.not. c_associated(self%mem)) return
+      call self%sun_counters(nst, nfe, nje, netf, ncf, nsf)
+      self%stats%steps = self%stats%steps + nst
+      self%stats%rhs_evals = self%stats%rhs_evals + nfe
+      self%stats%jac_evals = self%stats%jac_evals + nje
+      self%stats%error_test_fails = self%stats%error_test_fails + netf
+      self%stats%conv_fails = self%stats%conv_fails + ncf
+      self%stats%rejected = self%stats%rejected + netf + nsf
+   end subroutine sun_accumulate
+
+   subroutine sun_statistics(self, stats)
+      class(sundials_integrator_t), intent(inout) :: self
+      type(run_stats_t), intent(inout) :: stats
+      call self%accumulate()
+      stats%steps = stats%steps + self%stats%steps
+      stats%rhs_evals = stats%rhs_evals + self%stats%rhs_evals
+      stats%jac_evals = stats%jac_evals + self%stats%jac_evals
+      stats%root_returns = stats%root_returns + self%stats%root_returns
+      stats%error_test_fails = stats%error_test_fails + self%stats%error_test_fails
+      stats%conv_fails = stats%conv_fails + self%stats%conv_fails
+      stats%rejected = stats%rejected + self%stats%rejected
+   end subroutine sun_statistics
+
+   !> Free the SUNDIALS objects (in reverse order of creation).
+   subroutine sun_finish(self)
+      class(sundials_integrator_t), intent(inout) :: self
+      integer(c_int) :: ie
+      call self%sun_free()
+      if (associated(self%nv_atol)) call FN_VDestroy(self%nv_atol)
+      if (associated(self%nv_y)) call FN_VDestroy(self%nv_y)
+      nullify (self%nv_atol, self%nv_y)
+      if (c_associated(self%ctx)) ie = FSUNContext_Free(self%ctx)
+      self%ctx = c_null_ptr
+   end subroutine sun_finish
+
+   !> A SUNDIALS object could not be made or set up.
+   subroutine sun_setup_failed(self, what, err)
+      class(sundials_integrator_t), intent(inout) :: self
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: detail
+      detail = ''
+      if (self%ud%msg_len > 0) detail = ': '//self%ud%msg(1:self%ud%msg_len)
+      call fatal_error(err, "internal: setting up integrator '"//self%name//"' failed in "//what//detail, err_internal)
+   end subroutine sun_setup_failed
+
+   !> Extra advice of a backend for a failure (default: none).
+   function sun_no_advice(self) result(text)
+      class(sundials_integrator_t), intent(in) :: self
+      character(len=:), allocatable :: text
+      associate (unused => self)
+      end associate
+      text = ''
+   end function sun_no_advice
+
+   !> What a convergence failure of the nonlinear iteration means (Newton's by default).
+   subroutine sun_describe_conv_failure(self, rk4_hint, what, advice)
+      class(sundials_integrator_t), intent(in) :: self
+      character(len=*), intent(in) :: rk4_hint
+      character(len=:), allocatable, intent(out) :: what, advice
+      associate (unused => self)
+      end associate
+      what = 'the Newton iteration did not converge'
+      advice = 'lower max_step, loosen rtol/atol, or '//rk4_hint
+   end subroutine sun_describe_conv_failure
+
+   !> The integrator returned flag < 0 (status st): an error naming the time,
+   !> the state with the largest weighted local error, what SUNDIALS said,
+   !> and what to try.
+   subroutine sun_failed(self, model, flag, st, t, err)
+      class(sundials_integrator_t), intent(inout), target :: self
+      type(model_t), intent(in) :: model
+      integer(c_int), intent(in) :: flag
+      integer, intent(in) :: st
+      real(wp), intent(in) :: t
+      type(error_t), allocatable, intent(out) :: err
+      real(c_double), allocatable, target :: ele(:), ewt(:)
+      type(N_Vector), pointer :: nv_ele, nv_ewt
+      real(c_double) :: tcur(1), hlast(1)
+      integer :: worst
+      real(wp) :: wmax
+      character(len=:), allocatable :: what, advice, loc_text, detail, rk4_hint, h_text
+      call self%accumulate()
+      tcur = t; hlast = 0.0_wp
+      call self%sun_where(tcur, hlast)
+      ! the state that limits the step: largest |local error| * weight
+      allocate (ele(self%n), ewt(self%n))
+      ele = 0.0_wp; ewt = 0.0_wp
+      nv_ele => FN_VMake_Serial(int(self%n, c_long), ele, self%ctx)
+      nv_ewt => FN_VMake_Serial(int(self%n, c_long), ewt, self%ctx)
+      worst = 0
+      if (associated(nv_ele) .and. associated(nv_ewt)) then
+         call self%sun_local_errors(nv_ele, nv_ewt)
+         wmax = maxval(abs(ele*ewt))
+         if (st == st_too_much_acc) then
+            ! what limits the accuracy is |y| against its tolerance, not a local error
+            worst = maxloc(abs(self%yv)*ewt, 1)
+            loc_text = 'the tightest tolerance relative to its value is on '//model%state_label(worst)
+         else if (wmax > 0.0_wp .and. wmax == wmax) then
+            worst = maxloc(abs(ele*ewt), 1)
+            loc_text = 'the largest weighted local error estimate is in '//model%state_label(worst)// &
+                       ' (|error|/tolerance = '//str(wmax)//')'
+         else
+            ! no error estimate yet: name the state whose tolerance is tightest for its size
+            worst = maxloc(abs(self%yv)*ewt, 1)
+            loc_text = 'no step was completed; the tightest tolerance relative to its value is on '// &
+                       model%state_label(worst)
+         end if
+      else
+         loc_text = 'the local error estimates are not available'
+      end if
+      if (associated(nv_ele)) call FN_VDestroy(nv_ele)
+      if (associated(nv_ewt)) call FN_VDestroy(nv_ewt)
+      if (self%ud%bad_state > 0 .and. st == st_rhs_failure) then
+         loc_text = 'the right-hand side first gave NaN at t = '//str(self%ud%bad_t)//' s in the derivative of '// &
+                    model%state_label(self%ud%bad_state)
+      end if
+      if (self%omega_max > 0.0_wp) then
+         rk4_hint = "try integrator = 'rk4' with dt below "//str(rk4_stability_limit/self%omega_max)// &
+                    ' s (the RK4 stability limit of the highest mode with the clearances closed)'
+      else
+         rk4_hint = "try integrator = 'rk4' with a small dt"
+      end if
+      h_text = ''
+      if (hlast(1) > 0.0_wp) h_text = ' (last step size '//str(hlast(1))//' s)'
+      select case (st)
+      case (st_too_much_work)
+         what = 'more than '//str(real(self%mxstep, wp))//' internal steps were taken without reaching the next output time '// &
+                str(self%t_goal)//' s'
+         advice = 'the step size collapsed (a stiff contact, chattering, or a discontinuity no guard '// &
+                  'announces): '
+         advice = advice//self%advice_too_much_work()
+         advice = advice//'loosen rtol/atol'
+         if (model%run%max_step > 0.0_wp) advice = advice//', raise max_step (now '//str(model%run%max_step)//' s)'
+         advice = advice//", shorten output_interval, or "//rk4_hint
+      case (st_too_much_acc)
+         what = 'the tolerances ask for more accuracy than double precision can give (rtol = '// &
+                str(model%run%rtol)//')'
+         advice = 'loosen the tolerances: rtol >= 1e-13 and absolute tolerances that are not tiny against '// &
+                  'the states'' values'
+      case (st_err_failure)
+         what = 'the local error test failed repeatedly or with the smallest step'
+         advice = 'the model probably has a discontinuity inside a mode, or the tolerances are too tight: '// &
+                  'loosen rtol/atol, lower max_step, or '//rk4_hint
+         advice = advice//self%advice_error_failure()
+      case (st_conv_failure)
+         call self%describe_conv_failure(rk4_hint, what, advice)
+      case (st_lin_failure)
+         what = 'the dense linear solver failed (singular iteration matrix)'
+         advice = "lower max_step, or use integrator = 'cvode-adams' or 'rk4'"
+      case (st_rhs_failure)
+         what = 'the right-hand side could not be evaluated (NaN derivatives)'
+         advice = 'check the deck for non-physical parameters; tighten the tolerances or lower max_step'
+      case (st_root_failure)
+         what = 'the guard (root) functions failed'
+         advice = 'check the clearance elements of the deck'
+      case (st_too_close)
+         what = 'the next output time is too close to the current time'
+         advice = 'use a larger output_interval (or dt when output_interval = 0)'
+      case (st_bad_input)
+         what = self%solver//' rejected its input'
+         advice = 'check rtol, the absolute tolerances and max_step of the &run group'
+      case default
+         what = self%solver//' returned flag '//str(int(flag))
+         advice = 'loosen rtol/atol, lower max_step, or '//rk4_hint
+      end select
+      detail = ''
+      if (self%ud%msg_len > 0) detail = ' ['//self%solver//': '//self%ud%msg(1:self%ud%msg_len)//']'
+      call fatal_error(err, "integrator '"//model%run%integrator//"' failed at t = "//str(tcur(1))// &
+                       ' s'//h_text//': '//what//'; '//loc_text//'. Advice: '//advice//'.'//detail, err_numeric)
+   end subroutine sun_failed
+end module trainsim_sundials
