@@ -55,6 +55,7 @@ module trainsim_int_arkode
       procedure :: status => ark_status
       procedure :: advice_too_much_work => ark_advice_too_much_work
       procedure :: advice_error_failure => ark_advice_error_failure
+      procedure :: explicit_limit => ark_explicit_limit
    end type arkode_erk_t
 
    !> The layout of SUNDIALS's `struct ARKodeButcherTableMem` (arkode_butcher.h),
@@ -213,6 +214,16 @@ contains
       case default; st = st_other
       end select
    end function ark_status
+
+   !> Imaginary-axis stability limit |h lambda| of the pair: about 3.3 for
+   !> Dormand-Prince 5(4) (Hairer-Wanner, Fig. IV.2.1) and 3.5 for Verner 6(5);
+   !> 3 bounds both from below, which is all the step estimate needs.
+   pure real(wp) function ark_explicit_limit(self) result(r)
+      class(arkode_erk_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      r = 3.0_wp
+   end function ark_explicit_limit
 
    function ark_advice_too_much_work(self) result(text)
       class(arkode_erk_t), intent(in) :: self

@@ -2,6 +2,9 @@
 !> set from the state at the start of each step and frozen over it; there is
 !> no event location: a guard found negative at the start of a step is an
 !> event at that instant. While any clearance is closed the step is dt/10.
+!> Steps end at the breakpoints of the inputs (with the last stage at the left
+!> limit, as in 'rk4'); App. F's program stepped over a load step, which is a
+!> first-order error the driver does not reproduce.
 module trainsim_int_rk4_thesis
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -37,6 +40,7 @@ contains
       integer, intent(out) :: status
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: h
+      logical :: at_bp
       if (self%ng > 0) then
          call model%guards(t, y, self%g0)
          if (any(self%g0 < 0.0_wp)) then
@@ -47,9 +51,10 @@ contains
       h = self%dt
       if (model%any_contact()) h = contact_step_fraction*self%dt
       h = min(h, t_goal - t)
+      at_bp = self%stop_is_breakpoint .and. t + h >= self%t_stop - self%tiny_t
       call model%rhs(t, y, self%k1)
       self%stats%rhs_evals = self%stats%rhs_evals + 1
-      call self%step(model, t, y, h, self%ynew, .false.)
+      call self%step(model, t, y, h, self%ynew, at_bp)
       y = self%ynew
       t = t + h
       self%stats%steps = self%stats%steps + 1

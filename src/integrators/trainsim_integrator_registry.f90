@@ -29,6 +29,7 @@ module trainsim_integrator_registry
       character(len=:), allocatable :: summary  !< one line, for --help and the docs
       integer :: order = 0                      !< nominal order of accuracy
       logical :: fixed_step = .true.            !< on the dt grid (else adaptive: rtol, atol)
+      logical :: locates_events = .true.        !< events at the located crossing (else at the next step)
       procedure(new_integrator_i), pointer, nopass :: make => null()
    end type integrator_entry_t
 
@@ -38,17 +39,17 @@ contains
    function integrator_registry() result(rows)
       type(integrator_entry_t), allocatable :: rows(:)
       rows = [ &
-             integrator_entry_t('rk4', 'classical RK4 on the dt grid with located events (default)', 4, .true., new_rk4), &
+             integrator_entry_t('rk4', 'classical RK4 on the dt grid with located events (default)', 4, .true., .true., new_rk4), &
              integrator_entry_t('rk4-thesis', 'the thesis''s RK4 (App. F): modes frozen per step, dt/10 in contact', &
-                                4, .true., new_rk4_thesis), &
+                                4, .true., .false., new_rk4_thesis), &
              integrator_entry_t('cvode-bdf', 'SUNDIALS CVODE, variable-order BDF with Newton (stiff trains)', &
-                                5, .false., new_cvode_bdf), &
+                                5, .false., .true., new_cvode_bdf), &
              integrator_entry_t('cvode-adams', 'SUNDIALS CVODE, variable-order Adams-Moulton (non-stiff)', &
-                                12, .false., new_cvode_adams), &
-             integrator_entry_t('arkode-dp', 'SUNDIALS ARKODE ERKStep, Dormand-Prince 5(4)', 5, .false., new_arkode_dp), &
-             integrator_entry_t('arkode-verner', 'SUNDIALS ARKODE ERKStep, Verner 6(5)', 6, .false., new_arkode_verner), &
+                                12, .false., .true., new_cvode_adams), &
+             integrator_entry_t('arkode-dp', 'SUNDIALS ARKODE ERKStep, Dormand-Prince 5(4)', 5, .false., .true., new_arkode_dp), &
+             integrator_entry_t('arkode-verner', 'SUNDIALS ARKODE ERKStep, Verner 6(5)', 6, .false., .true., new_arkode_verner), &
              integrator_entry_t('euler', 'explicit Euler with located events (first order; tests and teaching)', &
-                                1, .true., new_euler)]
+                                1, .true., .true., new_euler)]
    end function integrator_registry
 
    !> Allocate the integrator called `name`; unallocated if the name is unknown.

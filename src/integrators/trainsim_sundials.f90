@@ -46,6 +46,10 @@ module trainsim_sundials
    real(wp), parameter :: energy_atol_factor = 1.0e-6_wp
    !> Internal steps allowed per call (per output interval), at least.
    integer(i8), parameter :: mxstep_min = 1000000_i8
+   !> Most steps a run may be forced into by the automatic max_step (or, for an
+   !> explicit method, by its stability limit): beyond this the highest mode is
+   !> out of proportion to the run, and the run would crawl for hours.
+   real(wp), parameter :: implied_step_budget = 1.0e8_wp
 
    !> Package-neutral outcome of a SUNDIALS call (each backend's `status` maps
    !> its CV_* or ARK_* return flags onto these).
@@ -111,6 +115,7 @@ module trainsim_sundials
       procedure :: advice_too_much_work => sun_no_advice
       procedure :: advice_error_failure => sun_no_advice
       procedure :: describe_conv_failure => sun_describe_conv_failure
+      procedure :: explicit_limit => sun_explicit_limit
    end type sundials_integrator_t
 
    abstract interface
@@ -325,11 +330,29 @@ contains
       call cvode_max_step(model, self%hmax, self%omega_max)
       dout = model%run%output_interval
       if (.not. dout > 0.0_wp) dout = model%run%dt
+      if (self%explicit_limit() > 0.0_wp .and. self%omega_max > 0.0_wp) then
+         if ((model%run%t_end - t)*self%omega_max/self%explicit_limit() > implied_step_budget) then
+            call fatal_error(err, "integrator '"//self%name//"' is explicit: its step is held below "// &
+                             str(self%explicit_limit()/self%omega_max, 4)//' s by the highest mode ('// &
+                             str(self%omega_max/two_pi, 4)//' Hz, every clearance closed), so the run of '// &
+                             str(model%run%t_end - t)//' s would take more than '//str(implied_step_budget)// &
+                             " steps: this train is stiff; use integrator = 'cvode-bdf'", err_numeric)
+            return
+         end if
+      end if
       if (self%hmax > 0.0_wp) then
          if ((model%run%t_end - t)/self%hmax > 1.0e12_wp) then
             call fatal_error(err, 'max_step = '//str(self%hmax)//' s would need more than 1e12 steps over the run of '// &
                              str(model%run%t_end - t)//' s: raise max_step (0 chooses it from the highest frequency)', &
                              err_input)
+            return
+         end if
+         if (model%run%max_step <= 0.0_wp .and. (model%run%t_end - t)/self%hmax > implied_step_budget) then
+            call fatal_error(err, "integrator '"//self%name//"': the highest mode with every clearance closed ("// &
+                             str(self%omega_max/two_pi, 4)//' Hz) sets the automatic max_step to '//str(self%hmax, 4)// &
+                             ' s, so the run of '//str(model%run%t_end - t)//' s would take more than '// &
+                             str(implied_step_budget)//' steps. A mode that fast is out of proportion to the train: '// &
+                             'check the stiffnesses and inertias of the deck, or set max_step explicitly', err_numeric)
             return
          end if
          ! steps allowed per call (one output interval): generous, but bounded
@@ -513,6 +536,15 @@ contains
       end associate
       text = ''
    end function sun_no_advice
+
+   !> |h lambda| on the imaginary axis inside which an explicit method is
+   !> stable (0: implicit, no such limit).
+   pure real(wp) function sun_explicit_limit(self) result(r)
+      class(sundials_integrator_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      r = 0.0_wp
+   end function sun_explicit_limit
 
    !> What a convergence failure of the nonlinear iteration means (Newton's by default).
    subroutine sun_describe_conv_failure(self, rk4_hint, what, advice)
