@@ -48,6 +48,7 @@ module trainsim_integrator
       procedure :: statistics => integrator_statistics
       procedure :: finish => integrator_finish
       procedure :: fired => integrator_fired
+      procedure :: may_miss_events => integrator_may_miss_events
       procedure, non_overridable :: set_stop => integrator_set_stop
    end type integrator_t
 
@@ -112,6 +113,16 @@ contains
       logical, intent(out) :: fired(:)
       fired = g < 0.0_wp
    end subroutine integrator_fired
+
+   !> Whether a guard may be below zero at the end of an advance without the
+   !> integrator having reported it (a root finder can miss a crossing that
+   !> goes down and up inside one step): the driver then checks the guards at
+   !> every output time. Default: no (the state at the end of every step was
+   !> checked by `advance` itself).
+   pure logical function integrator_may_miss_events(self) result(may)
+      class(integrator_t), intent(in) :: self
+      may = .false.
+   end function integrator_may_miss_events
 
    !> Default finish: nothing to free.
    subroutine integrator_finish(self)

@@ -90,6 +90,7 @@ module trainsim_sundials
       procedure :: statistics => sun_statistics
       procedure :: finish => sun_finish
       procedure :: fired => sun_fired
+      procedure :: may_miss_events => sun_may_miss_events
       procedure, private :: accumulate => sun_accumulate
       procedure, private :: setup_failed => sun_setup_failed
       procedure, private :: failed => sun_failed
@@ -455,6 +456,14 @@ contains
       if (self%root_pending) fired = fired .or. self%rootsfound(1:size(g)) /= 0
       self%root_pending = .false.
    end subroutine sun_fired
+
+   !> SUNDIALS's root finder checks sign changes between step ends only.
+   pure logical function sun_may_miss_events(self) result(may)
+      class(sundials_integrator_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      may = .true.
+   end function sun_may_miss_events
 
    !> Re-initialise at (t, y) (no history across a mode change or breakpoint).
    subroutine sun_restart(self, model, t, y, err)

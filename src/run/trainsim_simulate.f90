@@ -166,7 +166,7 @@ contains
             call set_next_stop(d, integ, t, t_end)
             call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err, force_restart=.true.)
             if (allocated(err)) return
-         else
+         else if (integ%may_miss_events()) then
             ! a guard below zero that the integrator did not report (safety net)
             call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err)
             if (allocated(err)) return
