@@ -11,10 +11,11 @@ module trainsim_el_clearance_coupling
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
    use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_element, only: element_t
    implicit none
    private
 
-   public :: clearance_coupling_t
+   public :: clearance_coupling_t, new_clearance_coupling
 
    type, extends(clearance_element_t) :: clearance_coupling_t
       real(wp) :: radius = 1.0_wp
@@ -65,4 +66,10 @@ contains
       p%names = [string_t('clearance'), string_t('stiffness'), string_t('contact_damping'), string_t('radius')]
       p%values = [2.0_wp*self%cl%b, self%cl%law%k, self%cl%law%c, self%radius]
    end function cc_params
+
+   !> Registry factory: a new, unconfigured clearance coupling.
+   subroutine new_clearance_coupling(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (clearance_coupling_t :: el)
+   end subroutine new_clearance_coupling
 end module trainsim_el_clearance_coupling

@@ -14,10 +14,11 @@ module trainsim_el_helical_gear
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
    use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_element, only: element_t
    implicit none
    private
 
-   public :: helical_gear_t, helical_contact_length
+   public :: helical_gear_t, new_helical_gear, helical_contact_length
 
    type, extends(clearance_element_t) :: helical_gear_t
       real(wp) :: teeth = 0.0_wp, alpha = 0.0_wp
@@ -141,4 +142,10 @@ contains
       p%values = [self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, self%face, self%youngs, &
                   self%cl%law%k, self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b]
    end function hel_params
+
+   !> Registry factory: a new, unconfigured helical gear pair.
+   subroutine new_helical_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (helical_gear_t :: el)
+   end subroutine new_helical_gear
 end module trainsim_el_helical_gear

@@ -12,7 +12,7 @@ module trainsim_el_ideal_gear
    implicit none
    private
 
-   public :: ideal_gear_t
+   public :: ideal_gear_t, new_ideal_gear
 
    !> Mesh stiffness k (force/length) and base radii of driver (left) and driven (right) gear.
    type, extends(element_t) :: ideal_gear_t
@@ -120,4 +120,10 @@ contains
       p%names = [string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven')]
       p%values = [self%k, self%r1, self%r2]
    end function gear_params
+
+   !> Registry factory: a new, unconfigured ideal gear pair.
+   subroutine new_ideal_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (ideal_gear_t :: el)
+   end subroutine new_ideal_gear
 end module trainsim_el_ideal_gear

@@ -11,7 +11,7 @@ module trainsim_el_shaft
    implicit none
    private
 
-   public :: shaft_t
+   public :: shaft_t, new_shaft
 
    !> Torsional stiffness b (torque/rad) and internal damping d (torque*s/rad).
    type, extends(element_t) :: shaft_t
@@ -85,4 +85,10 @@ contains
       p%names = [string_t('stiffness'), string_t('damping')]
       p%values = [self%k, self%c]
    end function shaft_params
+
+   !> Registry factory: a new, unconfigured shaft.
+   subroutine new_shaft(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (shaft_t :: el)
+   end subroutine new_shaft
 end module trainsim_el_shaft

@@ -15,7 +15,7 @@ module trainsim_node_dc_motor
    implicit none
    private
 
-   public :: dc_motor_node_t
+   public :: dc_motor_node_t, new_dc_motor_node
 
    !> Armature inertia and damping plus the armature circuit.
    type, extends(node_t) :: dc_motor_node_t
@@ -180,4 +180,10 @@ contains
                  string_t('resistance'), string_t('back_emf_constant')]
       p%values = [self%j, self%d, self%alpha, self%l, self%r, self%alpha_e]
    end function motor_params
+
+   !> Registry factory: a new, unconfigured DC motor node.
+   subroutine new_dc_motor_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (dc_motor_node_t :: nd)
+   end subroutine new_dc_motor_node
 end module trainsim_node_dc_motor

@@ -11,7 +11,7 @@ module trainsim_node_inertia
    implicit none
    private
 
-   public :: inertia_node_t
+   public :: inertia_node_t, new_inertia_node
 
    !> A rigid disk: inertia J and external (viscous, to ground) damping d.
    type, extends(node_t) :: inertia_node_t
@@ -96,4 +96,10 @@ contains
       p%names = [string_t('inertia'), string_t('damping')]
       p%values = [self%j, self%d]
    end function inertia_params
+
+   !> Registry factory: a new, unconfigured inertia node.
+   subroutine new_inertia_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (inertia_node_t :: nd)
+   end subroutine new_inertia_node
 end module trainsim_node_inertia
