@@ -21,6 +21,7 @@ module trainsim_registry
    use trainsim_el_keyed_joint, only: new_keyed_joint
    use trainsim_el_clearance_coupling, only: new_clearance_coupling
    use trainsim_el_helical_gear, only: new_helical_gear
+   use trainsim_el_damper, only: new_damper
    implicit none
    private
 
@@ -101,7 +102,9 @@ contains
                          new_helical_gear), &
              element_row('clearance_coupling', '', 'angular dead zone with a spring-damper contact law', &
                          'clearance = 0.02, stiffness = 1.0e4, contact_damping = 3.0, radius = 1.5', &
-                         'stiffness radius', 'clearance contact_damping', new_clearance_coupling) &
+                         'stiffness radius', 'clearance contact_damping', new_clearance_coupling), &
+             element_row('damper', '', 'torsional viscous damper (dashpot), T = c (w_l - w_r)', &
+                         'damping = 40.0', 'damping', '', new_damper) &
              ]
    end subroutine element_table
 
