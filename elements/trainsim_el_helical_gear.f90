@@ -63,8 +63,10 @@ contains
       call grp%get_real('half_backlash', self%cl%b, err); if (allocated(err)) return
       e_default = 30.0e6_wp*units%to_inch**2/units%to_lbf          ! steel, 30e6 psi
       call grp%get_real('youngs_modulus', self%youngs, err, default=e_default); if (allocated(err)) return
-      if (.not. (self%cl%r1 > 0.0_wp .and. self%cl%r2 > 0.0_wp)) then
-         call fatal_error(err, grp%where('rb_driver')//': error: base radii must be > 0', err_input)
+      if (.not. self%cl%r1 > 0.0_wp) then
+         call fatal_error(err, grp%where('rb_driver')//': error: base radius must be > 0, got '//str(self%cl%r1), err_input)
+      else if (.not. self%cl%r2 > 0.0_wp) then
+         call fatal_error(err, grp%where('rb_driven')//': error: base radius must be > 0, got '//str(self%cl%r2), err_input)
       else if (.not. self%teeth > 0.0_wp) then
          call fatal_error(err, grp%where('teeth')//': error: teeth must be > 0, got '//str(self%teeth), err_input)
       else if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
