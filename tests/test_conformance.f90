@@ -233,7 +233,7 @@ contains
       call check('example "'//row%example//'" builds'//message_of(err), .not. allocated(err))
       if (allocated(err)) return
       call check('type_name is the canonical name', m%elements(1)%e%type_name == row%name)
-      call check('docs/elements.md has a section ### `'//row%name//'`', has_doc_section(row%name))
+      call check('docs/elements.md and docs/deck.md have a section ### `'//row%name//'`', has_doc_section(row%name))
       allocate (e, source=m%elements(1)%e)
       call displacement_directions(e, u, v)
       call choose_states(row%name, e, u, v, x, b_c)
@@ -403,7 +403,7 @@ contains
       call check('example "'//row%example//'" builds'//message_of(err), .not. allocated(err))
       if (allocated(err)) return
       call check('type_name is the canonical name', m%nodes(1)%n%type_name == row%name)
-      call check('docs/elements.md has a section ### `'//row%name//'`', has_doc_section(row%name))
+      call check('docs/elements.md and docs/deck.md have a section ### `'//row%name//'`', has_doc_section(row%name))
 
       n = m%nodes(1)%n%nstates()
       if (n > 0) then
@@ -783,21 +783,27 @@ contains
       if (len_trim(fragment) > 0) s = ', '//fragment
    end function with_comma
 
-   !> Whether docs/elements.md has a heading "### `name`".
+   !> Whether both reference pages, docs/elements.md (equations) and docs/deck.md
+   !> (keys), have a heading "### `name`".
    logical function has_doc_section(name)
       character(len=*), intent(in) :: name
+      has_doc_section = has_heading('docs/elements.md', name) .and. has_heading('docs/deck.md', name)
+   end function has_doc_section
+
+   logical function has_heading(path, name)
+      character(len=*), intent(in) :: path, name
       character(len=1024) :: line
       integer :: unit, ios
-      has_doc_section = .false.
-      open (newunit=unit, file='docs/elements.md', status='old', action='read', iostat=ios)
+      has_heading = .false.
+      open (newunit=unit, file=path, status='old', action='read', iostat=ios)
       if (ios /= 0) return
       do
          read (unit, '(a)', iostat=ios) line
          if (ios /= 0) exit
-         if (index(line, '### `'//name//'`') == 1) has_doc_section = .true.
+         if (index(line, '### `'//name//'`') == 1) has_heading = .true.
       end do
       close (unit)
-   end function has_doc_section
+   end function has_heading
 
    pure function lower(s) result(r)
       character(len=*), intent(in) :: s
