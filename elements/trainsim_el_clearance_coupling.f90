@@ -27,6 +27,12 @@ module trainsim_el_clearance_coupling
 
 contains
 
+   !> Registry factory: a new, unconfigured clearance coupling.
+   subroutine new_clearance_coupling(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (clearance_coupling_t :: el)
+   end subroutine new_clearance_coupling
+
    subroutine cc_configure(self, grp, units, err)
       class(clearance_coupling_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -66,10 +72,4 @@ contains
       p%names = [string_t('clearance'), string_t('stiffness'), string_t('contact_damping'), string_t('radius')]
       p%values = [2.0_wp*self%cl%b, self%cl%law%k, self%cl%law%c, self%radius]
    end function cc_params
-
-   !> Registry factory: a new, unconfigured clearance coupling.
-   subroutine new_clearance_coupling(el)
-      class(element_t), allocatable, intent(out) :: el
-      allocate (clearance_coupling_t :: el)
-   end subroutine new_clearance_coupling
 end module trainsim_el_clearance_coupling

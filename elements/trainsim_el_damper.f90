@@ -27,6 +27,12 @@ module trainsim_el_damper
 
 contains
 
+   !> Registry factory: a new, unconfigured damper.
+   subroutine new_damper(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (damper_t :: el)
+   end subroutine new_damper
+
    !> Reads `damping` (required, > 0).
    subroutine damper_configure(self, grp, units, err)
       class(damper_t), intent(inout) :: self
@@ -77,10 +83,4 @@ contains
       p%names(1) = string_t('damping')
       p%values(1) = self%c
    end function damper_params
-
-   !> Registry factory: a new, unconfigured damper.
-   subroutine new_damper(el)
-      class(element_t), allocatable, intent(out) :: el
-      allocate (damper_t :: el)
-   end subroutine new_damper
 end module trainsim_el_damper

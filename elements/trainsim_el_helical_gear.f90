@@ -34,6 +34,12 @@ module trainsim_el_helical_gear
 
 contains
 
+   !> Registry factory: a new, unconfigured helical gear pair.
+   subroutine new_helical_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (helical_gear_t :: el)
+   end subroutine new_helical_gear
+
    !> Total length of the lines of contact at mesh position e (eq. 6.1).
    pure real(wp) function helical_contact_length(e, mp, mf, ptb, zeta) result(lc)
       real(wp), intent(in) :: e, mp, mf, ptb, zeta
@@ -144,10 +150,4 @@ contains
       p%values = [self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, self%face, self%youngs, &
                   self%cl%law%k, self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b]
    end function hel_params
-
-   !> Registry factory: a new, unconfigured helical gear pair.
-   subroutine new_helical_gear(el)
-      class(element_t), allocatable, intent(out) :: el
-      allocate (helical_gear_t :: el)
-   end subroutine new_helical_gear
 end module trainsim_el_helical_gear

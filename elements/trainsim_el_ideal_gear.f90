@@ -31,6 +31,12 @@ module trainsim_el_ideal_gear
 
 contains
 
+   !> Registry factory: a new, unconfigured ideal gear pair.
+   subroutine new_ideal_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (ideal_gear_t :: el)
+   end subroutine new_ideal_gear
+
    subroutine gear_configure(self, grp, units, err)
       class(ideal_gear_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -120,10 +126,4 @@ contains
       p%names = [string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven')]
       p%values = [self%k, self%r1, self%r2]
    end function gear_params
-
-   !> Registry factory: a new, unconfigured ideal gear pair.
-   subroutine new_ideal_gear(el)
-      class(element_t), allocatable, intent(out) :: el
-      allocate (ideal_gear_t :: el)
-   end subroutine new_ideal_gear
 end module trainsim_el_ideal_gear

@@ -50,6 +50,12 @@ module trainsim_el_keyed_joint
 
 contains
 
+   !> Registry factory: a new, unconfigured keyed joint.
+   subroutine new_keyed_joint(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (keyed_joint_t :: el)
+   end subroutine new_keyed_joint
+
    subroutine key_configure(self, grp, units, err)
       class(keyed_joint_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -179,10 +185,4 @@ contains
          p%values = [p%values, real(self%cl%law%fit, wp), self%key_length]
       end if
    end function key_params
-
-   !> Registry factory: a new, unconfigured keyed joint.
-   subroutine new_keyed_joint(el)
-      class(element_t), allocatable, intent(out) :: el
-      allocate (keyed_joint_t :: el)
-   end subroutine new_keyed_joint
 end module trainsim_el_keyed_joint

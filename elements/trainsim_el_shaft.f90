@@ -28,6 +28,12 @@ module trainsim_el_shaft
 
 contains
 
+   !> Registry factory: a new, unconfigured shaft.
+   subroutine new_shaft(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (shaft_t :: el)
+   end subroutine new_shaft
+
    subroutine shaft_configure(self, grp, units, err)
       class(shaft_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -85,10 +91,4 @@ contains
       p%names = [string_t('stiffness'), string_t('damping')]
       p%values = [self%k, self%c]
    end function shaft_params
-
-   !> Registry factory: a new, unconfigured shaft.
-   subroutine new_shaft(el)
-      class(element_t), allocatable, intent(out) :: el
-      allocate (shaft_t :: el)
-   end subroutine new_shaft
 end module trainsim_el_shaft

@@ -53,6 +53,12 @@ module trainsim_el_spur_gear
 
 contains
 
+   !> Registry factory: a new, unconfigured spur gear pair.
+   subroutine new_spur_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (spur_gear_t :: el)
+   end subroutine new_spur_gear
+
    !> Contact ratio of a standard full-depth pair (App. F `Contratio`): radii
    !> r1, r2 of the pitch circles, addendum a, pressure angle phi.
    pure real(wp) function contact_ratio(phi, r1, r2, a) result(mp)
@@ -290,10 +296,4 @@ contains
          p%values = [p%values, self%teeth2, self%pitch_module, self%phi, self%face]
       end if
    end function spur_params
-
-   !> Registry factory: a new, unconfigured spur gear pair.
-   subroutine new_spur_gear(el)
-      class(element_t), allocatable, intent(out) :: el
-      allocate (spur_gear_t :: el)
-   end subroutine new_spur_gear
 end module trainsim_el_spur_gear

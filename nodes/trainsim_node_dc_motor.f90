@@ -47,6 +47,12 @@ module trainsim_node_dc_motor
 
 contains
 
+   !> Registry factory: a new, unconfigured DC motor node.
+   subroutine new_dc_motor_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (dc_motor_node_t :: nd)
+   end subroutine new_dc_motor_node
+
    subroutine motor_configure(self, grp, units, err)
       class(dc_motor_node_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -180,10 +186,4 @@ contains
                  string_t('resistance'), string_t('back_emf_constant')]
       p%values = [self%j, self%d, self%alpha, self%l, self%r, self%alpha_e]
    end function motor_params
-
-   !> Registry factory: a new, unconfigured DC motor node.
-   subroutine new_dc_motor_node(nd)
-      class(node_t), allocatable, intent(out) :: nd
-      allocate (dc_motor_node_t :: nd)
-   end subroutine new_dc_motor_node
 end module trainsim_node_dc_motor

@@ -23,6 +23,12 @@ module trainsim_node_fixed
 
 contains
 
+   !> Registry factory: a new, unconfigured fixed node.
+   subroutine new_fixed_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (fixed_node_t :: nd)
+   end subroutine new_fixed_node
+
    subroutine fixed_configure(self, grp, units, err)
       class(fixed_node_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -71,10 +77,4 @@ contains
       end associate
       f = .true.
    end function fixed_is_fixed
-
-   !> Registry factory: a new, unconfigured fixed node.
-   subroutine new_fixed_node(nd)
-      class(node_t), allocatable, intent(out) :: nd
-      allocate (fixed_node_t :: nd)
-   end subroutine new_fixed_node
 end module trainsim_node_fixed

@@ -29,6 +29,12 @@ module trainsim_node_inertia
 
 contains
 
+   !> Registry factory: a new, unconfigured inertia node.
+   subroutine new_inertia_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (inertia_node_t :: nd)
+   end subroutine new_inertia_node
+
    subroutine inertia_configure(self, grp, units, err)
       class(inertia_node_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -96,10 +102,4 @@ contains
       p%names = [string_t('inertia'), string_t('damping')]
       p%values = [self%j, self%d]
    end function inertia_params
-
-   !> Registry factory: a new, unconfigured inertia node.
-   subroutine new_inertia_node(nd)
-      class(node_t), allocatable, intent(out) :: nd
-      allocate (inertia_node_t :: nd)
-   end subroutine new_inertia_node
 end module trainsim_node_inertia
