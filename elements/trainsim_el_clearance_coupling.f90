@@ -11,10 +11,11 @@ module trainsim_el_clearance_coupling
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
    use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_element, only: element_t
    implicit none
    private
 
-   public :: clearance_coupling_t
+   public :: clearance_coupling_t, new_clearance_coupling
 
    type, extends(clearance_element_t) :: clearance_coupling_t
       real(wp) :: radius = 1.0_wp
@@ -25,6 +26,12 @@ module trainsim_el_clearance_coupling
    end type clearance_coupling_t
 
 contains
+
+   !> Registry factory: a new, unconfigured clearance coupling.
+   subroutine new_clearance_coupling(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (clearance_coupling_t :: el)
+   end subroutine new_clearance_coupling
 
    subroutine cc_configure(self, grp, units, err)
       class(clearance_coupling_t), intent(inout) :: self

@@ -14,10 +14,11 @@ module trainsim_el_helical_gear
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
    use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_element, only: element_t
    implicit none
    private
 
-   public :: helical_gear_t, helical_contact_length
+   public :: helical_gear_t, new_helical_gear, helical_contact_length
 
    type, extends(clearance_element_t) :: helical_gear_t
       real(wp) :: teeth = 0.0_wp, alpha = 0.0_wp
@@ -32,6 +33,12 @@ module trainsim_el_helical_gear
    end type helical_gear_t
 
 contains
+
+   !> Registry factory: a new, unconfigured helical gear pair.
+   subroutine new_helical_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (helical_gear_t :: el)
+   end subroutine new_helical_gear
 
    !> Total length of the lines of contact at mesh position e (eq. 6.1).
    pure real(wp) function helical_contact_length(e, mp, mf, ptb, zeta) result(lc)
@@ -62,8 +69,10 @@ contains
       call grp%get_real('half_backlash', self%cl%b, err); if (allocated(err)) return
       e_default = 30.0e6_wp*units%to_inch**2/units%to_lbf          ! steel, 30e6 psi
       call grp%get_real('youngs_modulus', self%youngs, err, default=e_default); if (allocated(err)) return
-      if (.not. (self%cl%r1 > 0.0_wp .and. self%cl%r2 > 0.0_wp)) then
-         call fatal_error(err, grp%where('rb_driver')//': error: base radii must be > 0', err_input)
+      if (.not. self%cl%r1 > 0.0_wp) then
+         call fatal_error(err, grp%where('rb_driver')//': error: base radius must be > 0, got '//str(self%cl%r1), err_input)
+      else if (.not. self%cl%r2 > 0.0_wp) then
+         call fatal_error(err, grp%where('rb_driven')//': error: base radius must be > 0, got '//str(self%cl%r2), err_input)
       else if (.not. self%teeth > 0.0_wp) then
          call fatal_error(err, grp%where('teeth')//': error: teeth must be > 0, got '//str(self%teeth), err_input)
       else if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then

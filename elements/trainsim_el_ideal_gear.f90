@@ -12,7 +12,7 @@ module trainsim_el_ideal_gear
    implicit none
    private
 
-   public :: ideal_gear_t
+   public :: ideal_gear_t, new_ideal_gear
 
    !> Mesh stiffness k (force/length) and base radii of driver (left) and driven (right) gear.
    type, extends(element_t) :: ideal_gear_t
@@ -30,6 +30,12 @@ module trainsim_el_ideal_gear
    end type ideal_gear_t
 
 contains
+
+   !> Registry factory: a new, unconfigured ideal gear pair.
+   subroutine new_ideal_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (ideal_gear_t :: el)
+   end subroutine new_ideal_gear
 
    subroutine gear_configure(self, grp, units, err)
       class(ideal_gear_t), intent(inout) :: self

@@ -27,10 +27,11 @@ module trainsim_el_keyed_joint
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
    use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_element, only: element_t
    implicit none
    private
 
-   public :: keyed_joint_t
+   public :: keyed_joint_t, new_keyed_joint
 
    type, extends(clearance_element_t) :: keyed_joint_t
       real(wp) :: diameter = 0.0_wp
@@ -48,6 +49,12 @@ module trainsim_el_keyed_joint
    end type keyed_joint_t
 
 contains
+
+   !> Registry factory: a new, unconfigured keyed joint.
+   subroutine new_keyed_joint(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (keyed_joint_t :: el)
+   end subroutine new_keyed_joint
 
    subroutine key_configure(self, grp, units, err)
       class(keyed_joint_t), intent(inout) :: self

@@ -11,7 +11,7 @@ module trainsim_el_shaft
    implicit none
    private
 
-   public :: shaft_t
+   public :: shaft_t, new_shaft
 
    !> Torsional stiffness b (torque/rad) and internal damping d (torque*s/rad).
    type, extends(element_t) :: shaft_t
@@ -27,6 +27,12 @@ module trainsim_el_shaft
    end type shaft_t
 
 contains
+
+   !> Registry factory: a new, unconfigured shaft.
+   subroutine new_shaft(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (shaft_t :: el)
+   end subroutine new_shaft
 
    subroutine shaft_configure(self, grp, units, err)
       class(shaft_t), intent(inout) :: self

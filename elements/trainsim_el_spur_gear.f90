@@ -23,10 +23,11 @@ module trainsim_el_spur_gear
    use trainsim_param_list, only: param_list_t
    use trainsim_event, only: event_t, ev_zone
    use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_element, only: element_t
    implicit none
    private
 
-   public :: spur_gear_t, contact_ratio, mesh_zone
+   public :: spur_gear_t, new_spur_gear, contact_ratio, mesh_zone
 
    type, extends(clearance_element_t) :: spur_gear_t
       real(wp) :: teeth = 0.0_wp          !< teeth on the driver
@@ -51,6 +52,12 @@ module trainsim_el_spur_gear
    end type spur_gear_t
 
 contains
+
+   !> Registry factory: a new, unconfigured spur gear pair.
+   subroutine new_spur_gear(el)
+      class(element_t), allocatable, intent(out) :: el
+      allocate (spur_gear_t :: el)
+   end subroutine new_spur_gear
 
    !> Contact ratio of a standard full-depth pair (App. F `Contratio`): radii
    !> r1, r2 of the pitch circles, addendum a, pressure angle phi.

@@ -15,7 +15,7 @@ module trainsim_node_dc_motor
    implicit none
    private
 
-   public :: dc_motor_node_t
+   public :: dc_motor_node_t, new_dc_motor_node
 
    !> Armature inertia and damping plus the armature circuit.
    type, extends(node_t) :: dc_motor_node_t
@@ -46,6 +46,12 @@ module trainsim_node_dc_motor
    end type dc_motor_node_t
 
 contains
+
+   !> Registry factory: a new, unconfigured DC motor node.
+   subroutine new_dc_motor_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (dc_motor_node_t :: nd)
+   end subroutine new_dc_motor_node
 
    subroutine motor_configure(self, grp, units, err)
       class(dc_motor_node_t), intent(inout) :: self

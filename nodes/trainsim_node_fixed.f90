@@ -8,7 +8,7 @@ module trainsim_node_fixed
    implicit none
    private
 
-   public :: fixed_node_t
+   public :: fixed_node_t, new_fixed_node
 
    !> A fixed node: no states, speed zero.
    type, extends(node_t) :: fixed_node_t
@@ -22,6 +22,12 @@ module trainsim_node_fixed
    end type fixed_node_t
 
 contains
+
+   !> Registry factory: a new, unconfigured fixed node.
+   subroutine new_fixed_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (fixed_node_t :: nd)
+   end subroutine new_fixed_node
 
    subroutine fixed_configure(self, grp, units, err)
       class(fixed_node_t), intent(inout) :: self

@@ -11,7 +11,7 @@ module trainsim_node_inertia
    implicit none
    private
 
-   public :: inertia_node_t
+   public :: inertia_node_t, new_inertia_node
 
    !> A rigid disk: inertia J and external (viscous, to ground) damping d.
    type, extends(node_t) :: inertia_node_t
@@ -28,6 +28,12 @@ module trainsim_node_inertia
    end type inertia_node_t
 
 contains
+
+   !> Registry factory: a new, unconfigured inertia node.
+   subroutine new_inertia_node(nd)
+      class(node_t), allocatable, intent(out) :: nd
+      allocate (inertia_node_t :: nd)
+   end subroutine new_inertia_node
 
    subroutine inertia_configure(self, grp, units, err)
       class(inertia_node_t), intent(inout) :: self

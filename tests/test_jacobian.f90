@@ -1,7 +1,11 @@
-!> The analytic Jacobian (model%jacobian from the nodes' blocks and the
-!> elements' torque partials) matches central differences of the right-hand
-!> side for every element and node type, in contact; and CVODE BDF with it
-!> gives the run of the difference-quotient Jacobian with fewer RHS evaluations.
+!> The assembled analytic Jacobian (model%jacobian from the nodes' blocks and
+!> the elements' torque partials) matches central differences of the
+!> right-hand side on whole decks (chains, prescribed speeds, a motor) and on
+!> contact-law variants that the registry's example fragments do not reach;
+!> and CVODE BDF with it gives the run of the difference-quotient Jacobian
+!> with fewer RHS evaluations. Every node and element type's own Jacobian, in
+!> and out of contact, is checked by test_conformance, which iterates the
+!> registry (so no type list is kept here).
 program test_jacobian
    use trainsim_kinds, only: wp
    use trainsim_model, only: model_t
@@ -18,21 +22,12 @@ program test_jacobian
                                          "&initial node='n2', angle=0.0, speed=-1.0 /"
 
    call suite_begin('analytic Jacobian (issues 3, 4)')
-   call jac_case('shafts (Table 5.1)', '', 'verification/table5_1/table5_1.nml')
-   call jac_case('ideal gear (Table 5.2)', '', 'verification/table5_2/table5_2.nml')
-   call jac_case('spur gear, Yang-Sun, in contact', pair//"&element type='spur_gear', stiffness=1e6, rb_driver=1.0,"// &
-                 " rb_driven=1.0, teeth=20, contact_ratio=1.5, approach_angle=0.1, half_backlash=0.01,"// &
-                 " initial_contact_velocity=2.0 /"//closed, '')
+   call jac_case('chain of shafts (Table 5.1)', '', 'verification/table5_1/table5_1.nml')
    call jac_case('keyed joint, load-dependent fit', pair//"&element type='keyed_joint', diameter=2.0,"// &
                  " half_clearance=0.01, stiffness_fit='tight', key_length=2.0, initial_contact_velocity=1.0 /"// &
                  closed, '')
-   call jac_case('coupling, linear law', pair//"&element type='clearance_coupling', clearance=0.02, stiffness=1e4,"// &
-                 " contact_damping=3.0 /"//closed, '')
    call jac_case('coupling, elasto-backlash', pair//"&element type='clearance_coupling', clearance=0.02,"// &
                  " stiffness=1e4, contact_law='elasto_backlash', contact_damping=3.0 /"//closed, '')
-   call jac_case('helical gear (position-dependent stiffness)', pair//"&element type='helical_gear', rb_driver=1.0,"// &
-                 " rb_driven=1.0, teeth=24, profile_contact_ratio=1.5, base_helix_angle=18.0, face_width=1.3,"// &
-                 " half_backlash=0.01 /"//closed, '')
    call jac_case('keyed joint out of contact, bore friction', pair//"&element type='keyed_joint', diameter=2.0,"// &
                  " half_clearance=0.1, stiffness=1e6, friction=0.3, load_radius=3.0, phi=0.35 /"//nl// &
                  "&load node='n2', kind='constant', value=50.0 /"//nl//"&initial node='n1', speed=1.0005 /"//nl// &
