@@ -3,18 +3,17 @@
 !> integrator is one file and one registry row, and the conformance suite
 !> measures its order) and teaching, not for production runs.
 module trainsim_int_euler
-   use trainsim_kinds, only: wp, i8
+   use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
+   use trainsim_fixed_step, only: fixed_step_t
    implicit none
    private
 
    public :: euler_t, new_euler
 
-   type, extends(integrator_t) :: euler_t
-      real(wp) :: dt = 0.0_wp, t0 = 0.0_wp, t_end = 0.0_wp, tiny_t = 0.0_wp, event_tol = 0.0_wp
-      integer(i8) :: istep = 1
+   type, extends(fixed_step_t) :: euler_t
       real(wp), allocatable :: f(:), ynew(:), g(:)
    contains
       procedure :: start => euler_start
@@ -35,12 +34,7 @@ contains
       real(wp), intent(in) :: t, y(:)
       type(error_t), allocatable, intent(out) :: err
       allocate (self%f(size(y)), self%ynew(size(y)), self%g(model%n_guards))
-      self%dt = model%run%dt
-      self%t0 = t
-      self%t_end = model%run%t_end
-      self%tiny_t = 1.0e-12_wp*self%dt
-      self%event_tol = model%run%event_tol
-      if (self%event_tol <= 0.0_wp) self%event_tol = 1.0e-9_wp*self%dt
+      call self%start_grid(model, t)
    end subroutine euler_start
 
    subroutine euler_advance(self, model, t_goal, t, y, status, err)
@@ -51,7 +45,7 @@ contains
       integer, intent(out) :: status
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_grid, h, a, b
-      t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
+      t_grid = self%grid_target(t)
       h = min(t_grid, t_goal) - t
       call model%rhs(t, y, self%f)
       self%stats%rhs_evals = self%stats%rhs_evals + 1
@@ -82,8 +76,7 @@ contains
       t = t + h
       if (t >= t_grid - self%tiny_t) then
          t = t_grid
-         self%istep = self%istep + 1
-         self%stats%steps = self%stats%steps + 1
+         call self%count_grid_step()
       end if
       if (t >= t_goal - self%tiny_t) status = adv_reached
    end subroutine euler_advance

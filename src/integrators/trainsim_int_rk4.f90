@@ -9,20 +9,17 @@
 !> also ends at the driver's goal (an output time or a breakpoint of the
 !> inputs, where the last stage is taken at the left limit).
 module trainsim_int_rk4
-   use trainsim_kinds, only: wp, i8
+   use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
+   use trainsim_fixed_step, only: fixed_step_t
    implicit none
    private
 
    public :: rk4_t, new_rk4
 
-   type, extends(integrator_t) :: rk4_t
-      real(wp) :: dt = 0.0_wp, t0 = 0.0_wp, t_end = 0.0_wp
-      real(wp) :: tiny_t = 0.0_wp       !< times closer than this are one instant
-      real(wp) :: event_tol = 0.0_wp    !< width of the final bracket of a located event
-      integer(i8) :: istep = 1          !< index of the next grid point t0 + istep dt
+   type, extends(fixed_step_t) :: rk4_t
       integer :: ng = 0
       real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), ytmp(:), ynew(:), ys(:)
       real(wp), allocatable :: g0(:), g1(:), gs(:)
@@ -32,7 +29,6 @@ module trainsim_int_rk4
       procedure :: step => rk4_step
       procedure, private :: locate => rk4_locate
       procedure, private :: end_on_event => rk4_end_on_event
-      procedure, private :: count_grid_step => rk4_count_grid_step
    end type rk4_t
 
 contains
@@ -53,13 +49,7 @@ contains
       self%ng = model%n_guards
       allocate (self%k1(n), self%k2(n), self%k3(n), self%k4(n), self%ytmp(n), self%ynew(n), self%ys(n))
       allocate (self%g0(self%ng), self%g1(self%ng), self%gs(self%ng))
-      self%dt = model%run%dt
-      self%t0 = t
-      self%t_end = model%run%t_end
-      self%tiny_t = 1.0e-12_wp*self%dt
-      self%event_tol = model%run%event_tol
-      if (self%event_tol <= 0.0_wp) self%event_tol = 1.0e-9_wp*self%dt
-      self%istep = 1
+      call self%start_grid(model, t)
    end subroutine rk4_start
 
    !> One classical RK4 step of size h from (t, y) into ynew; k1 = f(t, y) given.
@@ -94,12 +84,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_grid, t_sub, h
       logical :: at_bp
-      t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
-      if (t >= t_grid - self%tiny_t) then
-         ! an event located at the very end of a grid step: that step is complete
-         call self%count_grid_step()
-         t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
-      end if
+      t_grid = self%grid_target(t)
       t_sub = min(t_grid, t_goal)
       at_bp = self%stop_is_breakpoint .and. t_sub >= self%t_stop - self%tiny_t
       h = t_sub - t
@@ -123,13 +108,6 @@ contains
       status = adv_step
       if (t >= t_goal - self%tiny_t) status = adv_reached
    end subroutine rk4_advance
-
-   !> The step to grid point istep is complete.
-   subroutine rk4_count_grid_step(self)
-      class(rk4_t), intent(inout) :: self
-      self%istep = self%istep + 1
-      self%stats%steps = self%stats%steps + 1
-   end subroutine rk4_count_grid_step
 
    !> A guard went negative inside [t, t+h]: locate the earliest zero and end
    !> the step there (t, y at the located point).

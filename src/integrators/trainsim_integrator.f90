@@ -45,7 +45,8 @@ module trainsim_integrator
       procedure(start_i), deferred :: start
       procedure(advance_i), deferred :: advance
       procedure :: restart => integrator_restart
-      procedure :: statistics => integrator_statistics
+      procedure, non_overridable :: statistics => integrator_statistics
+      procedure :: flush_counters => integrator_flush_counters
       procedure :: finish => integrator_finish
       procedure :: fired => integrator_fired
       procedure :: may_miss_events => integrator_may_miss_events
@@ -92,10 +93,17 @@ contains
       type(error_t), allocatable, intent(out) :: err
    end subroutine integrator_restart
 
-   !> Add this integrator's counters to stats.
+   !> Bring self%stats up to date (an integrator whose library keeps counters
+   !> of its own adds them here). Default: self%stats is always current.
+   subroutine integrator_flush_counters(self)
+      class(integrator_t), intent(inout) :: self
+   end subroutine integrator_flush_counters
+
+   !> Add this integrator's counters to stats (call once, at the end of a run).
    subroutine integrator_statistics(self, stats)
       class(integrator_t), intent(inout) :: self
       type(run_stats_t), intent(inout) :: stats
+      call self%flush_counters()
       stats%steps = stats%steps + self%stats%steps
       stats%rhs_evals = stats%rhs_evals + self%stats%rhs_evals
       stats%jac_evals = stats%jac_evals + self%stats%jac_evals

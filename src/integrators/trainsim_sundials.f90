@@ -28,7 +28,6 @@ module trainsim_sundials
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
-   use trainsim_run_stats, only: run_stats_t
    use trainsim_integrator, only: integrator_t, adv_reached, adv_event
    implicit none
    private
@@ -87,11 +86,10 @@ module trainsim_sundials
       procedure :: start => sun_start
       procedure :: advance => sun_advance
       procedure :: restart => sun_restart
-      procedure :: statistics => sun_statistics
       procedure :: finish => sun_finish
       procedure :: fired => sun_fired
       procedure :: may_miss_events => sun_may_miss_events
-      procedure, private :: accumulate => sun_accumulate
+      procedure :: flush_counters => sun_accumulate
       procedure, private :: setup_failed => sun_setup_failed
       procedure, private :: failed => sun_failed
       ! the package's calls
@@ -471,7 +469,7 @@ contains
       type(model_t), intent(inout), target :: model
       real(wp), intent(in) :: t, y(:)
       type(error_t), allocatable, intent(out) :: err
-      call self%accumulate()
+      call self%flush_counters()
       self%yv = y
       self%root_pending = .false.
       if (self%status(self%sun_reinit(t)) /= st_success) then
@@ -500,19 +498,6 @@ contains
       self%stats%conv_fails = self%stats%conv_fails + ncf
       self%stats%rejected = self%stats%rejected + netf + nsf
    end subroutine sun_accumulate
-
-   subroutine sun_statistics(self, stats)
-      class(sundials_integrator_t), intent(inout) :: self
-      type(run_stats_t), intent(inout) :: stats
-      call self%accumulate()
-      stats%steps = stats%steps + self%stats%steps
-      stats%rhs_evals = stats%rhs_evals + self%stats%rhs_evals
-      stats%jac_evals = stats%jac_evals + self%stats%jac_evals
-      stats%root_returns = stats%root_returns + self%stats%root_returns
-      stats%error_test_fails = stats%error_test_fails + self%stats%error_test_fails
-      stats%conv_fails = stats%conv_fails + self%stats%conv_fails
-      stats%rejected = stats%rejected + self%stats%rejected
-   end subroutine sun_statistics
 
    !> Free the SUNDIALS objects (in reverse order of creation).
    subroutine sun_finish(self)
@@ -582,7 +567,7 @@ contains
       integer :: worst
       real(wp) :: wmax
       character(len=:), allocatable :: what, advice, loc_text, detail, rk4_hint, h_text
-      call self%accumulate()
+      call self%flush_counters()
       tcur = t; hlast = 0.0_wp
       call self%sun_where(tcur, hlast)
       ! the state that limits the step: largest |local error| * weight
