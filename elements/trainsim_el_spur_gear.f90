@@ -311,13 +311,16 @@ contains
          old = self%pairs
          lo = self%th_lo; hi = self%th_hi
          call self%set_zone(thl)
-         ! rounding at the boundary: make sure the zone really moves across it
-         if (self%th_lo == lo .and. self%th_hi == hi) then
-            if (fired(4)) then
-               call self%set_zone(hi + 1.0e-12_wp*max(1.0_wp, abs(hi)))
-            else
-               call self%set_zone(lo - 1.0e-12_wp*max(1.0_wp, abs(lo)))
-            end if
+         ! the new zone must lie beyond the bound that fired. A root finder may
+         ! return with the angle still at (or a rounding short of) the bound, and
+         ! with 'truncate' the unbounded zone of u < 0 ends at the same bound as
+         ! the two-pair zone [0, m_p - 1] of u >= 0: without this the zone would
+         ! not change, its guard would stay at zero (an inactive root for CVODE)
+         ! and the change would be seen late (D-26).
+         if (fired(4) .and. self%th_hi <= hi) then
+            call self%set_zone(hi + 1.0e-12_wp*max(1.0_wp, abs(hi)))
+         else if (fired(3) .and. self%th_lo >= lo) then
+            call self%set_zone(lo - 1.0e-12_wp*max(1.0_wp, abs(lo)))
          end if
          if (old /= self%pairs) then
             nev = nev + 1
