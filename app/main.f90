@@ -180,7 +180,7 @@ contains
       if (dt_max < huge(1.0_wp)) then
          write (output_unit, '(a)') 'RK4 stability limit (damped linear system'// &
             trim(merge(', impact damping up to the law''s largest', '                                        ', &
-                       state%contact == lin_contact_closed))//'): dt < '//str(dt_max, 5)//' s, set by '//mode_name(f, om, z)
+                       state%contact == lin_contact_closed))//'): dt < '//str(dt_max)//' s, set by '//mode_name(f, om, z)
       end if
    end subroutine do_modes
 
