@@ -44,7 +44,7 @@ def limit(a):
     big = max(abs(lam))
     h = math.inf
     for l in lam:
-        if abs(l) <= 1e-9 * big:
+        if abs(l) <= 1e-6 * big:
             continue
         d = complex(min(l.real, 0.0), l.imag)
         h = min(h, rk4_radius(d / abs(d)) / abs(l))
