@@ -8,7 +8,9 @@ program trainsim_main
    use trainsim_deck, only: deck_t, read_deck
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
-   use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
+   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
+   use trainsim_element, only: lin_state_t, lin_start, lin_stiffest, lin_contact_closed, &
+                               lin_zone_initial, lin_zone_single, lin_zone_stiffest
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: null_sink_t
@@ -18,6 +20,7 @@ program trainsim_main
 
    character(len=:), allocatable :: cmd, deck_path, out_path
    integer :: nargs, i
+   type(lin_state_t) :: modes_state   ! trainsim modes: --closed, --zone, --stiffest
 
    nargs = command_argument_count()
    if (nargs == 0) then
@@ -50,6 +53,31 @@ program trainsim_main
          end if
          out_path = arg(i + 1)
          i = i + 1
+      case ('--closed', '--stiffest', '--zone')
+         if (cmd /= 'modes') then
+            write (error_unit, '(a)') 'trainsim: error: option '//arg(i)//' only applies to modes (try trainsim --help)'
+            call quit(2)
+         end if
+         if (arg(i) == '--closed') then
+            modes_state%contact = lin_contact_closed
+         else if (arg(i) == '--stiffest') then
+            modes_state%contact = lin_contact_closed
+            modes_state%zone = lin_zone_stiffest
+         else
+            if (i == nargs) then
+               write (error_unit, '(a)') 'trainsim: error: option --zone needs single, two-pair or initial'
+               call quit(2)
+            end if
+            select case (arg(i + 1))
+            case ('single'); modes_state%zone = lin_zone_single
+            case ('two-pair'); modes_state%zone = lin_zone_stiffest
+            case ('initial'); modes_state%zone = lin_zone_initial
+            case default
+               write (error_unit, '(a)') "trainsim: error: unknown --zone '"//arg(i + 1)//"'; valid: single, two-pair, initial"
+               call quit(2)
+            end select
+            i = i + 1
+         end if
       case default
          if (len(deck_path) > 0 .or. index(arg(i), '-') == 1) then
             write (error_unit, '(a)') "trainsim: error: unexpected argument '"//arg(i)//"' (try trainsim --help)"
@@ -66,7 +94,7 @@ program trainsim_main
    if (cmd == 'run') then
       call do_run(deck_path, out_path)
    else
-      call do_modes(deck_path)
+      call do_modes(deck_path, modes_state)
    end if
 
 contains
@@ -87,7 +115,15 @@ contains
          'usage:', &
          '  trainsim run DECK [-o FILE]   integrate the train in DECK; write the HDF5 history', &
          '                                (to FILE, else to the deck''s &run output)', &
-         '  trainsim modes DECK           natural frequencies and mode shapes of the linearised train', &
+         '  trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest]', &
+         '                                natural frequencies and mode shapes of the linearised train,', &
+         '                                and its RK4 step limit. Linearised as the run starts, or:', &
+         '                                --closed    every clearance closed (contact stiffness counts)', &
+         '                                --zone Z    every spur gear in its single-pair or two-pair', &
+         '                                            zone (helical: shortest/longest contact lines),', &
+         '                                            or the zone it starts in (initial, the default)', &
+         '                                --stiffest  = --closed --zone two-pair: the stiffest state a', &
+         '                                            run can reach (what `run` checks dt against)', &
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file', &
@@ -119,28 +155,57 @@ contains
       if (allocated(err)) call fail(err)
    end subroutine load
 
-   subroutine do_modes(path)
+   subroutine do_modes(path, state)
       character(len=*), intent(in) :: path
+      type(lin_state_t), intent(in) :: state
       type(model_t) :: model
       type(modes_t) :: modes
       type(error_t), allocatable :: err
+      real(wp) :: dt_max, om, f, z
+      character(len=:), allocatable :: what
       call load(path, model)
-      call compute_modes(model, modes, err)
+      call compute_modes(model, modes, err, state=state)
       if (allocated(err)) call fail(err)
+      what = 'contacts as at the start'
+      if (state%contact == lin_contact_closed) what = 'every clearance closed'
+      select case (state%zone)
+      case (lin_zone_single); what = what//', single-pair zones (helical: shortest contact lines)'
+      case (lin_zone_stiffest); what = what//', two-pair zones (helical: longest contact lines)'
+      case default; what = what//', mesh zones as at the start'
+      end select
+      write (output_unit, '(a)') 'linearised with '//what
       call print_modes(model, modes, output_unit)
-      if (modes%omega_max > 0.0_wp) write (output_unit, '(a,es11.4,a)') &
-         'RK4 stability limit of the highest mode: dt < ', rk4_stability_limit/modes%omega_max, ' s'
+      call rk4_dt_limit(model, state, dt_max, om, err, freq_hz=f, damping_ratio=z)
+      if (allocated(err)) call fail(err)
+      if (dt_max < huge(1.0_wp)) then
+         write (output_unit, '(a)') 'RK4 stability limit (damped linear system'// &
+            trim(merge(', impact damping up to the law''s largest', '                                        ', &
+                       state%contact == lin_contact_closed))//'): dt < '//str(dt_max)//' s, set by '//mode_name(f, om, z)
+      end if
    end subroutine do_modes
+
+   !> "the mode at 5690.8 Hz (damping ratio 0.00)" for the eigenvalue that limits the RK4 step.
+   function mode_name(f, om, z) result(s)
+      real(wp), intent(in) :: f, om, z
+      character(len=:), allocatable :: s
+      character(len=40) :: a, b
+      if (f > 0.0_wp) then
+         write (a, '(f0.1)') f
+         write (b, '(f4.2)') z
+         s = 'the mode at '//trim(a)//' Hz, damping ratio '//trim(b)
+      else
+         s = 'an overdamped mode, |lambda| = '//str(om, 5)//' 1/s'
+      end if
+   end function mode_name
 
    subroutine do_run(path, out)
       character(len=*), intent(in) :: path, out
       type(model_t) :: model
-      type(modes_t) :: modes
       type(error_t), allocatable :: err
       type(run_result_t) :: res
       type(hdf5_sink_t) :: h5
       type(null_sink_t) :: none
-      real(wp) :: dt_safe
+      real(wp) :: dt_safe, om, f, z
       logical :: warned
 
       call load(path, model)
@@ -148,32 +213,28 @@ contains
       write (output_unit, '(a)') 'trainsim '//version_string//': '//path//'  ('//model%title//')'
       call print_parameters(model, output_unit)
       if (model%run%integrator(1:3) == 'rk4') then
+         ! RK4 step advice from the damped linearised train (D-25): first as it starts
          warned = .false.
-         call compute_modes(model, modes, err)
+         call rk4_dt_limit(model, lin_start, dt_safe, om, err, freq_hz=f, damping_ratio=z)
          if (.not. allocated(err)) then
-            if (modes%omega_max > 0.0_wp) then
-               dt_safe = rk4_stability_limit/modes%omega_max
-               if (model%run%dt > dt_safe) then
-                  write (error_unit, '(a)') 'trainsim: warning: dt = '// &
-                     str(model%run%dt)//' s exceeds the RK4 stability limit of the highest linearised mode ('// &
-                     str(modes%freq_hz(modes%n), 5)//' Hz): dt < '//str(dt_safe, 4)//' s would be safe; the run goes '// &
-                     'on and is only trustworthy if that mode is not excited'
-                  warned = .true.
-               end if
+            if (model%run%dt > dt_safe) then
+               write (error_unit, '(a)') 'trainsim: warning: dt = '// &
+                  str(model%run%dt)//' s exceeds the RK4 stability limit of the linearised train as it starts ('// &
+                  mode_name(f, om, z)//'): dt < '//str(dt_safe, 4)//' s would be safe; the run goes '// &
+                  'on and is only trustworthy if that mode is not excited'
+               warned = .true.
             end if
          end if
          if (allocated(err)) deallocate (err)
-         ! a clearance open at the start hides its contact mode from the check above
+         ! then the stiffest state contacts can reach: every clearance closed, gears
+         ! in their stiffest mesh zone, impact damping anywhere up to the law's largest
          if (.not. warned) then
-            call compute_modes(model, modes, err, closed=.true.)
+            call rk4_dt_limit(model, lin_stiffest, dt_safe, om, err, freq_hz=f, damping_ratio=z)
             if (.not. allocated(err)) then
-               if (modes%omega_max > 0.0_wp) then
-                  dt_safe = rk4_stability_limit/modes%omega_max
-                  if (model%run%dt > dt_safe) write (error_unit, '(a)') 'trainsim: warning: dt = '// &
-                     str(model%run%dt)//' s exceeds the RK4 stability limit of the highest mode with every '// &
-                     'clearance closed ('//str(modes%freq_hz(modes%n), 5)//' Hz): once contacts close, dt < '// &
-                     str(dt_safe, 4)//' s would be safe'
-               end if
+               if (model%run%dt > dt_safe) write (error_unit, '(a)') 'trainsim: warning: dt = '// &
+                  str(model%run%dt)//' s exceeds the RK4 stability limit of the stiffest state the run can reach '// &
+                  '(every clearance closed, gears in their stiffest mesh zone; '//mode_name(f, om, z)// &
+                  '): once contacts close, dt < '//str(dt_safe, 4)//' s would be safe'
             end if
             if (allocated(err)) deallocate (err)
          end if

@@ -13,8 +13,10 @@ module trainsim_el_helical_gear
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
+   use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_element, only: element_t
+   use trainsim_el_spur_gear, only: tooth_phase, max_teeth
    implicit none
    private
 
@@ -27,6 +29,7 @@ module trainsim_el_helical_gear
       procedure :: configure => hel_configure
       procedure :: factor => hel_factor
       procedure :: linear_factor => hel_linear_factor
+      procedure :: state_factor => hel_state_factor
       procedure :: input_power => hel_input_power
       procedure :: factor_derivative => hel_factor_derivative
       procedure :: params => hel_params
@@ -48,7 +51,7 @@ contains
       pure real(wp) function term(m)
          real(wp), intent(in) :: m
          real(wp) :: n
-         n = floor(m - e)
+         n = real_floor(m - e)
          term = (n + 1.0_wp)*(m - e - 0.5_wp*n)
       end function term
    end function helical_contact_length
@@ -73,8 +76,9 @@ contains
          call fatal_error(err, grp%where('rb_driver')//': error: base radius must be > 0, got '//str(self%cl%r1), err_input)
       else if (.not. self%cl%r2 > 0.0_wp) then
          call fatal_error(err, grp%where('rb_driven')//': error: base radius must be > 0, got '//str(self%cl%r2), err_input)
-      else if (.not. self%teeth > 0.0_wp) then
-         call fatal_error(err, grp%where('teeth')//': error: teeth must be > 0, got '//str(self%teeth), err_input)
+      else if (.not. (self%teeth >= 1.0_wp .and. self%teeth <= max_teeth)) then
+         call fatal_error(err, grp%where('teeth')//': error: teeth must be in [1, '//str(max_teeth)//'], got '// &
+                          str(self%teeth), err_input)
       else if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
          call fatal_error(err, grp%where('profile_contact_ratio')//': error: must be in [1, 2], got '//str(self%mp), &
                           err_input)
@@ -92,18 +96,58 @@ contains
       self%zeta = zeta_deg*pi/180.0_wp
       self%ptb = two_pi*self%cl%r1/self%teeth                   ! transverse base pitch
       self%mf = self%face*tan(self%zeta)/self%ptb                ! face contact ratio
+      ! the phase of the pattern lies on the path of contact: 0 <= alpha <= 2 pi (m_p + m_F)/N
+      if (.not. (self%alpha >= 0.0_wp .and. self%alpha <= two_pi*(self%mp + self%mf)/self%teeth)) then
+         call fatal_error(err, grp%where('approach_angle')//': error: approach_angle must be in [0, 2 pi (m_p + m_F)/N] = [0, '// &
+                          str(two_pi*(self%mp + self%mf)/self%teeth)//'] rad (the angle of the path of contact), got '// &
+                          str(self%alpha), err_input)
+         return
+      end if
       self%cl%law%k = self%youngs/17.6_wp                        ! stiffness per unit length of contact line
       self%supplies_power = .true.
       call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
    end subroutine hel_configure
+
+   !> floor(x) in real arithmetic (no default-integer overflow for any finite x).
+   elemental real(wp) function real_floor(x) result(f)
+      real(wp), intent(in) :: x
+      f = aint(x)
+      if (f > x) f = f - 1.0_wp
+   end function real_floor
+
+   !> Stiffness factor in a linearisation state: the mean length at t_start
+   !> (as `linear_factor`), the shortest (single) or the longest (stiffest)
+   !> length of the lines of contact over a mesh period. L_c is piecewise
+   !> linear in e with kinks where m - e is an integer, so its extremes are at
+   !> e = 0 or the fractional parts of m_p, m_F and m_p + m_F.
+   pure real(wp) function hel_state_factor(self, state) result(c)
+      class(helical_gear_t), intent(in) :: self
+      type(lin_state_t), intent(in) :: state
+      real(wp) :: e(4), lc(4)
+      integer :: i
+      if (state%zone /= lin_zone_single .and. state%zone /= lin_zone_stiffest) then
+         c = self%linear_factor()
+         return
+      end if
+      e = [0.0_wp, self%mp - real_floor(self%mp), self%mf - real_floor(self%mf), &
+           self%mp + self%mf - real_floor(self%mp + self%mf)]
+      do i = 1, 4
+         lc(i) = helical_contact_length(e(i), self%mp, self%mf, self%ptb, self%zeta)
+      end do
+      if (state%zone == lin_zone_single) then
+         c = minval(lc)
+      else
+         c = maxval(lc)
+      end if
+   end function hel_state_factor
 
    !> Length of the lines of contact at the driver angle (multiplies E/17.6).
    pure real(wp) function hel_factor(self, thl) result(c)
       class(helical_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl
       real(wp) :: u
-      u = self%teeth*(thl + self%alpha)/two_pi
-      c = helical_contact_length(u - floor(u), self%mp, self%mf, self%ptb, self%zeta)
+      u = tooth_phase(thl, self%alpha, self%teeth)
+      c = helical_contact_length(u - real_floor(u), self%mp, self%mf, self%ptb, self%zeta)
    end function hel_factor
 
    !> dL_c/d theta_driver = dL_c/de * N/(2 pi) (dL_c/de is piecewise constant).
@@ -111,13 +155,13 @@ contains
       class(helical_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl
       real(wp) :: u, e
-      u = self%teeth*(thl + self%alpha)/two_pi
-      e = u - floor(u)
+      u = tooth_phase(thl, self%alpha, self%teeth)
+      e = u - real_floor(u)
       dc = self%ptb*(-dterm(self%mp + self%mf) + dterm(self%mf) + dterm(self%mp))/sin(self%zeta)*self%teeth/two_pi
    contains
       pure real(wp) function dterm(m)
          real(wp), intent(in) :: m
-         dterm = floor(m - e) + 1.0_wp
+         dterm = real_floor(m - e) + 1.0_wp
       end function dterm
    end function hel_factor_derivative
 

@@ -7,7 +7,7 @@ module trainsim_el_shaft
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
-   use trainsim_element, only: element_t
+   use trainsim_element, only: element_t, lin_state_t
    implicit none
    private
 
@@ -20,6 +20,7 @@ module trainsim_el_shaft
       procedure :: configure => shaft_configure
       procedure :: torques => shaft_torques
       procedure :: stiffness_matrix => shaft_stiffness
+      procedure :: linearise => shaft_linearise
       procedure :: potential_energy => shaft_potential
       procedure :: dissipation_power => shaft_dissipation
       procedure :: params => shaft_params
@@ -60,6 +61,18 @@ contains
       real(wp), intent(out) :: k(2, 2)
       k = self%k*reshape([1.0_wp, -1.0_wp, -1.0_wp, 1.0_wp], [2, 2])
    end subroutine shaft_stiffness
+
+   !> k and the shaft's own damping d, in every state (eq. H.1).
+   pure subroutine shaft_linearise(self, state, inv_jl, inv_jr, k, c)
+      class(shaft_t), intent(in) :: self
+      type(lin_state_t), intent(in) :: state
+      real(wp), intent(in) :: inv_jl, inv_jr
+      real(wp), intent(out) :: k(2, 2), c(2, 2)
+      associate (u1 => state, u2 => inv_jl, u3 => inv_jr)
+      end associate
+      k = self%k*reshape([1.0_wp, -1.0_wp, -1.0_wp, 1.0_wp], [2, 2])
+      c = self%c*reshape([1.0_wp, -1.0_wp, -1.0_wp, 1.0_wp], [2, 2])
+   end subroutine shaft_linearise
 
    pure real(wp) function shaft_potential(self, thl, thr) result(e)
       class(shaft_t), intent(in) :: self

@@ -22,12 +22,20 @@ module trainsim_el_spur_gear
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
    use trainsim_event, only: event_t, ev_zone
+   use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_element, only: element_t
    implicit none
    private
 
-   public :: spur_gear_t, new_spur_gear, contact_ratio, mesh_zone
+   public :: spur_gear_t, new_spur_gear, contact_ratio, mesh_zone, tooth_phase, max_teeth
+
+   !> Largest tooth count accepted (a 10 m wheel at module 1 mm); more is a typing error.
+   real(wp), parameter :: max_teeth = 1.0e4_wp
+   !> |driver angle| beyond which the tooth phase is taken at this value: the
+   !> state has run away (the integrators stop at 1e100), and the phase
+   !> arithmetic must not overflow on the way there.
+   real(wp), parameter :: theta_cap = 1.0e250_wp
 
    type, extends(clearance_element_t) :: spur_gear_t
       real(wp) :: teeth = 0.0_wp          !< teeth on the driver
@@ -37,6 +45,7 @@ module trainsim_el_spur_gear
       logical :: truncate = .false.       !< zone_function = 'truncate'
       integer :: pairs = 1                !< current zone: 1 or 2 pairs
       real(wp) :: th_lo = 0.0_wp, th_hi = 0.0_wp   !< driver-angle bounds of the current zone
+      logical :: lo_open = .false.        !< the zone has no lower bound (truncate, u < 0)
       ! geometry (0 when given as TRAIN constants)
       real(wp) :: teeth2 = 0.0_wp, pitch_module = 0.0_wp, phi = 0.0_wp, face = 0.0_wp
    contains
@@ -48,6 +57,7 @@ module trainsim_el_spur_gear
       procedure :: status => spur_status
       procedure :: params => spur_params
       procedure :: factor => spur_factor
+      procedure :: state_factor => spur_state_factor
       procedure, private :: set_zone
    end type spur_gear_t
 
@@ -70,8 +80,17 @@ contains
       mp = lab/(pi*a*cos(phi))   ! length of action / base pitch (p_b = pi m cos phi, module m = addendum a)
    end function contact_ratio
 
+   !> Tooth phase u = N (theta + alpha)/(2 pi) of the driver angle theta, safe
+   !> for any finite theta (|theta| held at theta_cap; D-26).
+   pure real(wp) function tooth_phase(theta, alpha, teeth) result(u)
+      real(wp), intent(in) :: theta, alpha, teeth
+      u = (max(min(theta, theta_cap), -theta_cap) + alpha)*(teeth/two_pi)
+   end function tooth_phase
+
    !> Mesh zone at tooth phase u = N (theta + alpha)/(2 pi): number of pairs and
-   !> the bounds [u_lo, u_hi] of the zone in u.
+   !> the bounds [u_lo, u_hi] of the zone in u. u_lo = -huge marks a zone with
+   !> no lower bound (truncate, u < 0). Real arithmetic throughout: any finite u
+   !> is safe; beyond 2**52 the zone is narrower than u's resolution (D-26).
    pure subroutine mesh_zone(u, mp, truncate, pairs, u_lo, u_hi)
       real(wp), intent(in) :: u, mp
       logical, intent(in) :: truncate
@@ -83,7 +102,8 @@ contains
          pairs = 2; u_lo = -huge(1.0_wp); u_hi = mp - 1.0_wp
          return
       end if
-      m = floor(u)
+      m = aint(u)                 ! floor in real arithmetic (no default-integer overflow)
+      if (m > u) m = m - 1.0_wp
       if (u - m <= mp - 1.0_wp) then
          pairs = 2; u_lo = m; u_hi = m + mp - 1.0_wp
       else
@@ -169,6 +189,25 @@ contains
                           str(self%mp), err_input)
          return
       end if
+      if (.not. (self%teeth >= 1.0_wp .and. self%teeth <= max_teeth)) then
+         call fatal_error(err, grp%where(trim(merge('teeth_driver', 'teeth       ', geometry)))// &
+                          ': error: teeth must be in [1, '//str(max_teeth)//'], got '//str(self%teeth), err_input)
+         return
+      end if
+      if (geometry) then
+         if (.not. (self%teeth2 >= 1.0_wp .and. self%teeth2 <= max_teeth)) then
+            call fatal_error(err, grp%where('teeth_driven')//': error: teeth_driven must be in [1, '// &
+                             str(max_teeth)//'], got '//str(self%teeth2), err_input)
+            return
+         end if
+      end if
+      ! the approach angle lies on the path of contact: 0 <= alpha <= 2 pi m_p / N (App. E: pi m_p / N)
+      if (.not. (self%alpha >= 0.0_wp .and. self%alpha <= two_pi*self%mp/self%teeth)) then
+         call fatal_error(err, grp%where('approach_angle')//': error: approach_angle must be in [0, 2 pi m_p/N] = [0, '// &
+                          str(two_pi*self%mp/self%teeth)//'] rad (the angle of the path of contact), got '// &
+                          str(self%alpha), err_input)
+         return
+      end if
       call grp%get_real('two_pair_factor', self%c2, err, default=1.8_wp); if (allocated(err)) return
       if (.not. (self%c2 >= 1.0_wp .and. self%c2 <= 2.0_wp)) then
          call fatal_error(err, grp%where('two_pair_factor')//': error: two_pair_factor must be in [1, 2], got '// &
@@ -192,10 +231,16 @@ contains
       class(spur_gear_t), intent(inout) :: self
       real(wp), intent(in) :: thl
       real(wp) :: u, u_lo, u_hi
-      u = self%teeth*(thl + self%alpha)/two_pi
+      u = tooth_phase(thl, self%alpha, self%teeth)
       call mesh_zone(u, self%mp, self%truncate, self%pairs, u_lo, u_hi)
-      self%th_lo = max(two_pi*u_lo/self%teeth - self%alpha, -huge(1.0_wp)/4)
-      self%th_hi = two_pi*u_hi/self%teeth - self%alpha
+      ! an unbounded side has no guard value (spur_guards): no huge numbers reach the root finder
+      self%lo_open = u_lo == -huge(1.0_wp)
+      if (self%lo_open) then
+         self%th_lo = -huge(1.0_wp)
+      else
+         self%th_lo = u_lo*(two_pi/self%teeth) - self%alpha
+      end if
+      self%th_hi = u_hi*(two_pi/self%teeth) - self%alpha
    end subroutine set_zone
 
    !> Stiffness factor of the current zone (1 single pair, two_pair_factor two pairs).
@@ -211,7 +256,21 @@ contains
       end if
    end function spur_factor
 
-   !> Linearised in the current contact state and zone (zero when out of contact).
+   !> Stiffness factor in a linearisation state: the zone at t_start, single
+   !> pair (1) or two pairs (two_pair_factor, the stiffest).
+   pure real(wp) function spur_state_factor(self, state) result(c)
+      class(spur_gear_t), intent(in) :: self
+      type(lin_state_t), intent(in) :: state
+      select case (state%zone)
+      case (lin_zone_single)
+         c = 1.0_wp
+      case (lin_zone_stiffest)
+         c = self%c2
+      case default
+         c = self%factor(0.0_wp)
+      end select
+   end function spur_state_factor
+
    pure integer function spur_n_guards(self) result(n)
       class(spur_gear_t), intent(in) :: self
       associate (unused => self)
@@ -227,7 +286,13 @@ contains
       call self%cl%guards(thl, thr, g(1:2))
       associate (u1 => wl, u2 => wr)
       end associate
-      g(3) = thl - self%th_lo
+      ! a zone without lower bound: a constant positive guard (never crosses), as
+      ! the faces not in play; a huge value defeats CVODE's root finding (D-26)
+      if (self%lo_open) then
+         g(3) = 1.0_wp
+      else
+         g(3) = thl - self%th_lo
+      end if
       g(4) = self%th_hi - thl
    end subroutine spur_guards
 
@@ -253,13 +318,16 @@ contains
          old = self%pairs
          lo = self%th_lo; hi = self%th_hi
          call self%set_zone(thl)
-         ! rounding at the boundary: make sure the zone really moves across it
-         if (self%th_lo == lo .and. self%th_hi == hi) then
-            if (fired(4)) then
-               call self%set_zone(hi + 1.0e-12_wp*max(1.0_wp, abs(hi)))
-            else
-               call self%set_zone(lo - 1.0e-12_wp*max(1.0_wp, abs(lo)))
-            end if
+         ! the new zone must lie beyond the bound that fired. A root finder may
+         ! return with the angle still at (or a rounding short of) the bound, and
+         ! with 'truncate' the unbounded zone of u < 0 ends at the same bound as
+         ! the two-pair zone [0, m_p - 1] of u >= 0: without this the zone would
+         ! not change, its guard would stay at zero (an inactive root for CVODE)
+         ! and the change would be seen late (D-26).
+         if (fired(4) .and. self%th_hi <= hi) then
+            call self%set_zone(hi + 1.0e-12_wp*max(1.0_wp, abs(hi)))
+         else if (fired(3) .and. self%th_lo >= lo) then
+            call self%set_zone(lo - 1.0e-12_wp*max(1.0_wp, abs(lo)))
          end if
          if (old /= self%pairs) then
             nev = nev + 1

@@ -1,17 +1,26 @@
 !> Natural frequencies and mode shapes of the linearised train: the
 !> generalised symmetric eigenproblem K phi = omega^2 M phi (LAPACK dsygv)
 !> over the free node angles; fixed and prescribed-speed nodes are held.
-!> Elements with clearances are linearised in their current contact state.
+!> Every element is linearised by its own `linearise` in a state (lin_state_t:
+!> as the run starts, every clearance closed, or the stiffest state a run can
+!> reach), so no element type is known here.
+!>
+!> The RK4 step advice (`rk4_dt_limit`) uses the damped first-order system
+!> dy/dt = A y over the physical states (node angles, speeds, motor currents):
+!> the nodes' own blocks plus the elements' -K, -C, and the eigenvalues of A
+!> (LAPACK dgeev). The largest stable step is the smallest, over the
+!> eigenvalues, of r(arg lambda)/|lambda|, with r the radius of RK4's stability
+!> region |1 + z + z^2/2 + z^3/6 + z^4/24| <= 1 along the ray (D-25).
 module trainsim_modes
    use trainsim_kinds, only: wp, two_pi
    use trainsim_error, only: error_t, fatal_error, err_numeric, err_input
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
-   use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_element, only: lin_state_t, lin_start, lin_closed, lin_contact_closed
    implicit none
    private
 
-   public :: modes_t, compute_modes, rk4_stability_limit
+   public :: modes_t, compute_modes, rk4_stability_limit, rk4_dt_limit, rk4_ray_radius
 
    !> |lambda h| on the imaginary axis inside which classical RK4 is stable (2 sqrt 2).
    real(wp), parameter :: rk4_stability_limit = 2.0_wp*sqrt(2.0_wp)
@@ -25,7 +34,20 @@ module trainsim_modes
       real(wp) :: omega_max = 0.0_wp          !< highest circular frequency, rad/s
    end type modes_t
 
+   !> Impact-damping fractions sampled between none and the law's largest
+   !> when every clearance is closed (RK4's region is not monotone in the
+   !> damping ratio: D-25); the smallest limit is then refined.
+   integer, parameter :: n_scale = 16
+
    interface
+      subroutine dgeev(jobvl, jobvr, n, a, lda, wr, wi, vl, ldvl, vr, ldvr, work, lwork, info)
+         import :: wp
+         character, intent(in) :: jobvl, jobvr
+         integer, intent(in) :: n, lda, ldvl, ldvr, lwork
+         real(wp), intent(inout) :: a(lda, *)
+         real(wp), intent(out) :: wr(*), wi(*), vl(ldvl, *), vr(ldvr, *), work(*)
+         integer, intent(out) :: info
+      end subroutine dgeev
       subroutine dsygv(itype, jobz, uplo, n, a, lda, b, ldb, w, work, lwork, info)
          import :: wp
          integer, intent(in) :: itype, n, lda, ldb, lwork
@@ -38,19 +60,21 @@ module trainsim_modes
 
 contains
 
-   !> Linearised modes of `model` about its initial state. With `closed`, every
-   !> clearance open at the start is linearised as closed (its contact stiffness
-   !> counts: the highest frequency a contact can excite); the modes of the
-   !> model are restored to the initial state afterwards.
-   subroutine compute_modes(model, modes, err, closed)
+   !> Linearised (undamped) modes of `model` about its initial state, every
+   !> element linearised in `state` (default: as the run starts). `closed`
+   !> (kept for callers of the earlier interface) selects `lin_closed`: every
+   !> clearance closed, zones as at t_start. `state` wins if both are given.
+   subroutine compute_modes(model, modes, err, closed, state)
       type(model_t), intent(inout) :: model
       type(modes_t), intent(out) :: modes
       type(error_t), allocatable, intent(out) :: err
       logical, intent(in), optional :: closed
+      type(lin_state_t), intent(in), optional :: state
       integer, allocatable :: dof(:)
-      real(wp), allocatable :: k(:, :), m(:, :), w(:), work(:), y(:)
-      real(wp) :: ke(2, 2), lam_max, big
+      real(wp), allocatable :: k(:, :), m(:, :), w(:), work(:), y(:), inv_j(:)
+      real(wp) :: ke(2, 2), ce(2, 2), lam_max, big
       integer :: i, n, info, il, ir, a, b, j, imax
+      type(lin_state_t) :: st
 
       allocate (dof(size(model%nodes)))
       dof = 0
@@ -70,26 +94,24 @@ contains
       do i = 1, size(model%nodes)
          if (dof(i) > 0) modes%node(dof(i)) = i
       end do
-      ! clearance elements are linearised in the contact state they start in
+      st = lin_start
+      if (present(closed)) then
+         if (closed) st = lin_closed
+      end if
+      if (present(state)) st = state
+      ! the elements' discrete modes (contact face, zone) as the run starts
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
-      if (present(closed)) then
-         if (closed) then
-            do j = 1, size(model%elements)
-               select type (e => model%elements(j)%e)
-               class is (clearance_element_t)
-                  if (e%cl%mode == 0) e%cl%mode = 1
-               end select
-            end do
-         end if
-      end if
+      call inverse_inertias(model, inv_j)
       allocate (k(n, n), m(n, n), w(n), work(max(1, 3*n*n)))
       k = 0.0_wp; m = 0.0_wp
       do i = 1, n
          m(i, i) = model%nodes(modes%node(i))%n%inertia()
       end do
       do j = 1, size(model%elements)
-         call model%elements(j)%e%stiffness_matrix(ke)
+         associate (e => model%elements(j)%e)
+            call e%linearise(st, inv_j(e%left), inv_j(e%right), ke, ce)
+         end associate
          il = dof(model%elements(j)%e%left)
          ir = dof(model%elements(j)%e%right)
          do a = 1, 2
@@ -109,9 +131,6 @@ contains
          end do
       end do
       call dsygv(1, 'V', 'U', n, k, n, m, n, w, work, size(work), info)
-      if (present(closed)) then
-         if (closed) call model%init_modes(model%run%t_start, y)
-      end if
       if (info /= 0) then
          call fatal_error(err, 'the eigenvalue solver (LAPACK dsygv) failed with info = '//str(info), err_numeric)
          return
@@ -130,4 +149,188 @@ contains
       end do
       modes%omega_max = two_pi*maxval(modes%freq_hz)
    end subroutine compute_modes
+
+   !> Inverse inertia of every node (0 for fixed and prescribed-speed nodes).
+   subroutine inverse_inertias(model, inv_j)
+      type(model_t), intent(in) :: model
+      real(wp), allocatable, intent(out) :: inv_j(:)
+      integer :: i
+      allocate (inv_j(size(model%nodes)))
+      inv_j = 0.0_wp
+      do i = 1, size(model%nodes)
+         if (model%is_held(i) .or. model%nodes(i)%n%is_fixed()) cycle
+         if (model%nodes(i)%n%inertia() > 0.0_wp) inv_j(i) = 1.0_wp/model%nodes(i)%n%inertia()
+      end do
+   end subroutine inverse_inertias
+
+   !> |R(z)|^2 - 1 for RK4's amplification factor R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24.
+   pure real(wp) function rk4_growth(z) result(g)
+      complex(wp), intent(in) :: z
+      g = abs(1.0_wp + z*(1.0_wp + z*(0.5_wp + z*(1.0_wp/6.0_wp + z/24.0_wp))))**2 - 1.0_wp
+   end function rk4_growth
+
+   !> Radius of RK4's stability region along the ray z = r d, |d| = 1, Re d <= 0:
+   !> the first r > 0 where |R(r d)| = 1 (2 sqrt 2 on the imaginary axis, 2.785
+   !> on the negative real axis). Stepped to a bracket, then bisected.
+   pure real(wp) function rk4_ray_radius(d) result(r)
+      complex(wp), intent(in) :: d
+      real(wp) :: lo, hi, mid
+      integer :: i
+      lo = 0.0_wp
+      hi = 0.0_wp
+      do i = 1, 400
+         hi = 0.01_wp*i
+         if (rk4_growth(hi*d) > 0.0_wp) exit
+         lo = hi
+      end do
+      do i = 1, 60
+         mid = 0.5_wp*(lo + hi)
+         if (rk4_growth(mid*d) > 0.0_wp) then
+            hi = mid
+         else
+            lo = mid
+         end if
+      end do
+      r = lo
+   end function rk4_ray_radius
+
+   !> The largest step h for which every h lambda of the linearised train in
+   !> `state` lies in RK4's stability region (D-25). With every clearance closed
+   !> the impact damping is swept from none to the law's largest and the
+   !> smallest limit is returned. `omega_crit` is |lambda| of the limiting
+   !> eigenvalue (rad/s); `freq_hz` its damped frequency |Im lambda|/2 pi and
+   !> `damping_ratio` -Re lambda/|lambda|. dt_max = huge when nothing limits it.
+   subroutine rk4_dt_limit(model, state, dt_max, omega_crit, err, freq_hz, damping_ratio)
+      type(model_t), intent(inout) :: model
+      type(lin_state_t), intent(in) :: state
+      real(wp), intent(out) :: dt_max, omega_crit
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), intent(out), optional :: freq_hz, damping_ratio
+      real(wp), allocatable :: y(:), inv_j(:)
+      real(wp) :: h(0:n_scale), a, b, c, d, fc, fd
+      complex(wp) :: lam(0:n_scale), lc, ld
+      type(lin_state_t) :: st
+      integer :: j, jmin, it
+      real(wp), parameter :: gr = 0.6180339887498949_wp   ! golden section
+
+      call model%initial_state(y)
+      call model%init_modes(model%run%t_start, y)
+      call inverse_inertias(model, inv_j)
+      st = state
+      if (state%contact /= lin_contact_closed .or. state%impact_scale == 0.0_wp) then
+         call limit_at(state, dt_max, lam(0), err)
+         if (allocated(err)) return
+      else
+         do j = 0, n_scale
+            st%impact_scale = state%impact_scale*real(j, wp)/n_scale
+            call limit_at(st, h(j), lam(j), err)
+            if (allocated(err)) return
+         end do
+         jmin = minloc(h, 1) - 1
+         dt_max = h(jmin)
+         lam(0) = lam(jmin)
+         ! refine inside the neighbouring samples by golden section
+         a = state%impact_scale*real(max(jmin - 1, 0), wp)/n_scale
+         b = state%impact_scale*real(min(jmin + 1, n_scale), wp)/n_scale
+         c = b - gr*(b - a); d = a + gr*(b - a)
+         st%impact_scale = c; call limit_at(st, fc, lc, err); if (allocated(err)) return
+         st%impact_scale = d; call limit_at(st, fd, ld, err); if (allocated(err)) return
+         do it = 1, 40
+            if (fc < fd) then
+               b = d; d = c; fd = fc; ld = lc
+               c = b - gr*(b - a)
+               st%impact_scale = c; call limit_at(st, fc, lc, err); if (allocated(err)) return
+            else
+               a = c; c = d; fc = fd; lc = ld
+               d = a + gr*(b - a)
+               st%impact_scale = d; call limit_at(st, fd, ld, err); if (allocated(err)) return
+            end if
+         end do
+         if (fc < dt_max) then
+            dt_max = fc; lam(0) = lc
+         end if
+         if (fd < dt_max) then
+            dt_max = fd; lam(0) = ld
+         end if
+      end if
+      omega_crit = abs(lam(0))
+      if (present(freq_hz)) freq_hz = abs(aimag(lam(0)))/two_pi
+      if (present(damping_ratio)) then
+         damping_ratio = 0.0_wp
+         if (omega_crit > 0.0_wp) damping_ratio = max(-real(lam(0), wp), 0.0_wp)/omega_crit
+      end if
+
+   contains
+
+      !> Limit for one state: assemble A, its eigenvalues, the smallest r/|lambda|.
+      subroutine limit_at(s, hmax, lam_crit, err)
+         type(lin_state_t), intent(in) :: s
+         real(wp), intent(out) :: hmax
+         complex(wp), intent(out) :: lam_crit
+         type(error_t), allocatable, intent(out) :: err
+         real(wp), allocatable :: amat(:, :), wr(:), wi(:), work(:)
+         real(wp) :: dtq(3, size(model%nodes)), ke(2, 2), ce(2, 2), jt(2, 4), vl(1, 1), vr(1, 1), big, hl, re
+         integer :: n, i, k, p, q, na, nb, row, ends(2), info
+         complex(wp) :: l
+         n = model%n_states
+         hmax = huge(1.0_wp)
+         lam_crit = (0.0_wp, 0.0_wp)
+         if (n == 0) return
+         allocate (amat(n, n), wr(n), wi(n), work(8*n))
+         amat = 0.0_wp
+         dtq = 0.0_wp
+         do i = 1, size(model%nodes)
+            if (model%is_held(i)) cycle
+            associate (nd => model%nodes(i)%n)
+               if (nd%nstates() > 0) call nd%jacobian(model%run%t_start, y, amat, dtq(1:nd%nstates(), i))
+            end associate
+         end do
+         ! element torques -K theta - C omega on the node rows (as model%jacobian)
+         do i = 1, size(model%elements)
+            associate (e => model%elements(i)%e)
+               call e%linearise(s, inv_j(e%left), inv_j(e%right), ke, ce)
+               ends = [e%left, e%right]
+            end associate
+            jt(:, 1) = -ke(:, 1); jt(:, 2) = -ce(:, 1)
+            jt(:, 3) = -ke(:, 2); jt(:, 4) = -ce(:, 2)
+            do p = 1, 2
+               na = ends(p)
+               if (model%is_held(na)) cycle
+               do k = 1, model%nodes(na)%n%nstates()
+                  if (dtq(k, na) == 0.0_wp) cycle
+                  row = model%nodes(na)%n%offset + k
+                  do q = 1, 2
+                     nb = ends(q)
+                     if (model%is_held(nb) .or. model%nodes(nb)%n%nstates() < 2) cycle
+                     amat(row, model%nodes(nb)%n%offset + 1) = amat(row, model%nodes(nb)%n%offset + 1) + &
+                                                                dtq(k, na)*jt(p, 2*q - 1)
+                     amat(row, model%nodes(nb)%n%offset + 2) = amat(row, model%nodes(nb)%n%offset + 2) + &
+                                                                dtq(k, na)*jt(p, 2*q)
+                  end do
+               end do
+            end do
+         end do
+         call dgeev('N', 'N', n, amat, n, wr, wi, vl, 1, vr, 1, work, size(work), info)
+         if (info /= 0) then
+            call fatal_error(err, 'the eigenvalue solver (LAPACK dgeev) failed with info = '//str(info), err_numeric)
+            return
+         end if
+         big = maxval(abs(cmplx(wr, wi, wp)))
+         do i = 1, n
+            l = cmplx(wr(i), wi(i), wp)
+            ! rigid-body modes (lambda = 0 as a Jordan block: round-off of order
+            ! sqrt(eps) |lambda|max) do not limit the step; nor can any |lambda|
+            ! below 0.88 |lambda|max, as RK4's radius is within [2.62, 2.96]
+            if (abs(l) <= 1.0e-6_wp*big) cycle
+            ! a passive train has Re lambda <= 0: a positive part is round-off
+            re = min(real(l, wp), 0.0_wp)
+            if (abs(cmplx(re, aimag(l), wp)) == 0.0_wp) cycle
+            hl = rk4_ray_radius(cmplx(re, aimag(l), wp)/abs(cmplx(re, aimag(l), wp)))/abs(l)
+            if (hl < hmax) then
+               hmax = hl
+               lam_crit = l
+            end if
+         end do
+      end subroutine limit_at
+   end subroutine rk4_dt_limit
 end module trainsim_modes

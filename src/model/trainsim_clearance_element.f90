@@ -7,7 +7,7 @@ module trainsim_clearance_element
    use trainsim_kinds, only: wp
    use trainsim_event, only: event_t
    use trainsim_contact, only: clearance_t
-   use trainsim_element, only: element_t
+   use trainsim_element, only: element_t, lin_state_t, lin_contact_closed
    implicit none
    private
 
@@ -24,6 +24,8 @@ module trainsim_clearance_element
       procedure :: displacement => ce_displacement
       procedure :: displacement_unit => ce_displacement_unit
       procedure :: stiffness_matrix => ce_stiffness
+      procedure :: linearise => ce_linearise
+      procedure :: state_factor => ce_state_factor
       procedure :: potential_energy => ce_potential
       procedure :: dissipation_power => ce_dissipation
       procedure :: n_guards => ce_n_guards
@@ -100,6 +102,40 @@ contains
       k(2, 1) = k(1, 2)
       k(2, 2) = kk*self%cl%r2**2
    end subroutine ce_stiffness
+
+   !> Stiffness factor in a linearisation state (default: `linear_factor`;
+   !> gears whose stiffness varies with the mesh position override it).
+   pure real(wp) function ce_state_factor(self, state) result(c)
+      class(clearance_element_t), intent(in) :: self
+      type(lin_state_t), intent(in) :: state
+      associate (unused => state)
+      end associate
+      c = self%linear_factor()
+   end function ce_state_factor
+
+   !> Linearised in `state`: a closed contact (closed at t_start, or every one in
+   !> the closed states) has stiffness c k and the damping of its law
+   !> (`linear_damping`, D-25) along g = (r1, -r2): K = c k g g^T, C = d g g^T.
+   !> An open contact contributes nothing.
+   pure subroutine ce_linearise(self, state, inv_jl, inv_jr, k, c)
+      class(clearance_element_t), intent(in) :: self
+      type(lin_state_t), intent(in) :: state
+      real(wp), intent(in) :: inv_jl, inv_jr
+      real(wp), intent(out) :: k(2, 2), c(2, 2)
+      real(wp) :: g(2), f, inv_m, m_eff, cd
+      k = 0.0_wp
+      c = 0.0_wp
+      if (.not. (state%contact == lin_contact_closed .or. self%cl%mode /= 0)) return
+      f = self%state_factor(state)
+      g = [self%cl%r1, -self%cl%r2]
+      ! mass behind the contact along the line: 1/m = r1^2/J_l + r2^2/J_r
+      inv_m = self%cl%r1**2*inv_jl + self%cl%r2**2*inv_jr
+      m_eff = 0.0_wp
+      if (inv_m > 0.0_wp) m_eff = 1.0_wp/inv_m
+      cd = self%cl%law%linear_damping(f, m_eff, state%contact == lin_contact_closed, state%impact_scale)
+      k = self%cl%law%k*f*spread(g, 2, 2)*spread(g, 1, 2)
+      c = cd*spread(g, 2, 2)*spread(g, 1, 2)
+   end subroutine ce_linearise
 
    pure real(wp) function ce_potential(self, thl, thr) result(e)
       class(clearance_element_t), intent(in) :: self

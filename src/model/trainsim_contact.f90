@@ -35,6 +35,11 @@ module trainsim_contact
    public :: law_yang_sun, law_linear, law_elasto, rest_goldsmith, rest_smith, rest_constant
 
    integer, parameter :: law_yang_sun = 1, law_linear = 2, law_elasto = 3
+   public :: v_plausible_ips
+   !> Largest approach velocity (in/s) the linearisation assumes a contact can
+   !> see: 100 in/s (2.54 m/s), about five times the fastest impacts of the
+   !> thesis's cases and above gear-rattle impact speeds (D-25).
+   real(wp), parameter :: v_plausible_ips = 100.0_wp
    integer, parameter :: rest_goldsmith = 1, rest_smith = 2, rest_constant = 3
    public :: fit_none, fit_tight, fit_loose, fit_average, key_lineal_stiffness
    !> Load-dependent keyed-joint stiffness fits, eqs. (4.35)-(4.37)
@@ -67,6 +72,8 @@ module trainsim_contact
       procedure :: elastic_energy => law_elastic_energy
       procedure :: elastic_stiffness => law_elastic_stiffness
       procedure :: force_partials => law_force_partials
+      procedure :: lowest_restitution => law_lowest_restitution
+      procedure :: linear_damping => law_linear_damping
    end type contact_law_t
 
    !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
@@ -171,6 +178,46 @@ contains
       end select
       e = min(max(e, 0.0_wp), 1.0_wp)
    end function law_restitution
+
+   !> The smallest restitution the law gives for approach velocities from the
+   !> floor min_approach_velocity up to the largest plausible one,
+   !> v_plausible_ips (D-25). Both fits are monotone in V_i (goldsmith falls,
+   !> smith rises), so it is the smaller of the two ends; constant is constant.
+   pure real(wp) function law_lowest_restitution(self) result(e)
+      class(contact_law_t), intent(in) :: self
+      if (self%restitution_law == rest_constant) then
+         e = self%e_const
+      else
+         e = min(self%restitution(self%v_min), self%restitution(v_plausible_ips/self%v_to_ips))
+      end if
+   end function law_lowest_restitution
+
+   !> Linearised damping along the contact normal (force per unit rate) of a
+   !> closed contact with stiffness factor c and effective mass m_eff behind it
+   !> (D-25). yang_sun: the force c D p pdot linearises to c D p; at the largest
+   !> compression of an impact at V_i, p = V_i sqrt(m_eff/(c k)), and eq. (3.12)
+   !> gives D V_i = phi(e) k with phi(e) = 6(1-e)/((2e-1)^2+3) <= 3/2, so
+   !>   c D p = phi(e) sqrt(c k m_eff),
+   !> independent of V_i except through e. `largest`: e is the law's lowest
+   !> (any contact that may still begin), else the contact in progress's e.
+   !> `scale` multiplies it (0..1). linear, elasto_backlash: the viscous d.
+   pure real(wp) function law_linear_damping(self, c, m_eff, largest, scale) result(cd)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: c, m_eff, scale
+      logical, intent(in) :: largest
+      real(wp) :: e, phi
+      if (self%law == law_yang_sun) then
+         if (largest) then
+            e = self%lowest_restitution()
+         else
+            e = self%e
+         end if
+         phi = 6.0_wp*(1.0_wp - e)/((2.0_wp*e - 1.0_wp)**2 + 3.0_wp)    ! D V_i / k, eq. (3.12)
+         cd = scale*phi*sqrt(c*self%k*m_eff)
+      else
+         cd = self%c
+      end if
+   end function law_linear_damping
 
    !> A contact begins with approach velocity v_i: fix e and D for its duration.
    !> `initial` marks a contact already closed at t_start (MODEL-NOTES 11).

@@ -18,6 +18,32 @@ module trainsim_element
    private
 
    public :: element_t, element_slot_t
+   public :: lin_state_t, lin_start, lin_closed, lin_stiffest
+   public :: lin_contact_initial, lin_contact_closed
+   public :: lin_zone_initial, lin_zone_single, lin_zone_stiffest
+
+   !> Contact state of a linearisation: as at t_start, or every clearance closed.
+   integer, parameter :: lin_contact_initial = 1, lin_contact_closed = 2
+   !> Mesh position of a linearisation: the zone at t_start, the softest (single
+   !> pair, shortest contact lines) or the stiffest (two pairs, longest lines).
+   integer, parameter :: lin_zone_initial = 1, lin_zone_single = 2, lin_zone_stiffest = 3
+
+   !> The state an element is linearised in (`linearise`, `trainsim modes`, the
+   !> RK4 step advice). `impact_scale` in [0, 1] scales the impact damping a
+   !> closed contact law can give at most (D-25). A later state (linearised about
+   !> the static preload) is a new `contact` value.
+   type :: lin_state_t
+      integer :: contact = lin_contact_initial
+      integer :: zone = lin_zone_initial
+      real(wp) :: impact_scale = 1.0_wp
+   end type lin_state_t
+
+   !> As the run starts: current contact state and mesh zone.
+   type(lin_state_t), parameter :: lin_start = lin_state_t(lin_contact_initial, lin_zone_initial, 1.0_wp)
+   !> Every clearance closed, mesh zones as at t_start.
+   type(lin_state_t), parameter :: lin_closed = lin_state_t(lin_contact_closed, lin_zone_initial, 1.0_wp)
+   !> The stiffest state a run can reach: clearances closed, gears at their largest stiffness factor.
+   type(lin_state_t), parameter :: lin_stiffest = lin_state_t(lin_contact_closed, lin_zone_stiffest, 1.0_wp)
 
    type, abstract :: element_t
       character(len=:), allocatable :: id
@@ -38,6 +64,7 @@ module trainsim_element
       procedure :: displacement => el_displacement
       procedure :: displacement_unit => el_displacement_unit
       procedure :: stiffness_matrix => el_stiffness_matrix
+      procedure :: linearise => el_linearise
       procedure :: potential_energy => el_potential_energy
       procedure :: dissipation_power => el_dissipation_power
       procedure :: input_power => el_input_power
@@ -102,6 +129,23 @@ contains
       end associate
       k = 0.0_wp
    end subroutine el_stiffness_matrix
+
+   !> Linearised stiffness k and damping c in the node angles and speeds
+   !> (thl, thr): the torques are (tl, tr) = -k (thl, thr) - c (wl, wr) about
+   !> the linearisation point, in the given state. inv_jl, inv_jr are the
+   !> inverse inertias of the left and right node (0 when held or fixed), for
+   !> laws whose damping scales with the mass behind the contact.
+   !> Default: `stiffness_matrix` and no damping.
+   pure subroutine el_linearise(self, state, inv_jl, inv_jr, k, c)
+      class(element_t), intent(in) :: self
+      type(lin_state_t), intent(in) :: state
+      real(wp), intent(in) :: inv_jl, inv_jr
+      real(wp), intent(out) :: k(2, 2), c(2, 2)
+      associate (u1 => state, u2 => inv_jl, u3 => inv_jr)
+      end associate
+      call self%stiffness_matrix(k)
+      c = 0.0_wp
+   end subroutine el_linearise
 
    !> Elastic energy stored in the element.
    pure real(wp) function el_potential_energy(self, thl, thr) result(e)
