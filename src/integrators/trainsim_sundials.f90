@@ -27,7 +27,8 @@ module trainsim_sundials
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric, err_internal
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
-   use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
+   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
+   use trainsim_element, only: lin_stiffest
    use trainsim_integrator, only: integrator_t, adv_reached, adv_event
    implicit none
    private
@@ -567,6 +568,9 @@ contains
       integer :: worst
       real(wp) :: wmax
       character(len=:), allocatable :: what, advice, loc_text, detail, rk4_hint, h_text
+      type(model_t) :: tmp
+      type(error_t), allocatable :: lim_err
+      real(wp) :: dt_safe, omega
       call self%flush_counters()
       tcur = t; hlast = 0.0_wp
       call self%sun_where(tcur, hlast)
@@ -602,11 +606,12 @@ contains
          loc_text = 'the right-hand side first gave NaN at t = '//str(self%ud%bad_t)//' s in the derivative of '// &
                     model%state_label(self%ud%bad_state)
       end if
-      if (self%omega_max > 0.0_wp) then
-         rk4_hint = "try integrator = 'rk4' with dt below "//str(rk4_stability_limit/self%omega_max)// &
-                    ' s (the RK4 stability limit of the highest mode with the clearances closed)'
-      else
-         rk4_hint = "try integrator = 'rk4' with a small dt"
+      rk4_hint = "try integrator = 'rk4' with a small dt"
+      tmp = model
+      call rk4_dt_limit(tmp, lin_stiffest, dt_safe, omega, lim_err)
+      if (.not. allocated(lim_err) .and. omega > 0.0_wp) then
+         rk4_hint = "try integrator = 'rk4' with dt below "//str(dt_safe, 4)// &
+                    ' s (the RK4 stability limit of the stiffest state the run can reach)'
       end if
       h_text = ''
       if (hlast(1) > 0.0_wp) h_text = ' (last step size '//str(hlast(1))//' s)'

@@ -23,7 +23,8 @@ module trainsim_simulate
    use trainsim_observer, only: observer_t, run_result_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
-   use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
+   use trainsim_modes, only: rk4_dt_limit
+   use trainsim_element, only: lin_stiffest
    implicit none
    private
 
@@ -323,33 +324,32 @@ contains
       text = stability_advice(model)
    end function blowup_advice
 
-   !> dt against the RK4 stability limit of the highest mode with every
-   !> clearance closed: blame the step if it is above, the inputs if not.
+   !> dt against the RK4 stability limit of the stiffest state the run can
+   !> reach (every clearance closed, gears at their largest stiffness factor,
+   !> the largest impact damping): blame the step if it is above, the inputs if not.
    function stability_advice(model) result(text)
       type(model_t), intent(inout) :: model
       character(len=:), allocatable :: text
       type(model_t) :: tmp
-      type(modes_t) :: modes
       type(error_t), allocatable :: err
-      real(wp) :: dt_safe
+      real(wp) :: dt_safe, omega, f_hz
       tmp = model
-      call compute_modes(tmp, modes, err, closed=.true.)
+      call rk4_dt_limit(tmp, lin_stiffest, dt_safe, omega, err, freq_hz=f_hz)
       if (allocated(err)) then
          text = 'Check the deck for absurd loads or stiffnesses, and try a smaller dt'
          return
       end if
-      if (.not. modes%omega_max > 0.0_wp) then
+      if (.not. omega > 0.0_wp) then
          text = 'The train has no elastic mode: check the loads and inertias of the deck for absurd values'
          return
       end if
-      dt_safe = rk4_stability_limit/modes%omega_max
       if (model%run%dt > dt_safe) then
          text = 'The time step dt = '//str(model%run%dt)//' s is above the RK4 stability limit '//str(dt_safe, 4)// &
-                ' s of the highest mode with every clearance closed ('//str(modes%freq_hz(modes%n), 5)// &
-                ' Hz): take dt below that'
+                ' s of the stiffest state the run can reach (every clearance closed, gears in their two-pair zone; '// &
+                'its mode at '//str(f_hz, 5)//' Hz): take dt below that'
       else
          text = 'The time step dt = '//str(model%run%dt)//' s is within the RK4 stability limit '//str(dt_safe, 4)// &
-                ' s of the highest mode with every clearance closed: the inputs are more likely to blame; '// &
+                ' s of the stiffest state the run can reach: the inputs are more likely to blame; '// &
                 'check the loads, stiffnesses, inertias and initial speeds of the deck for values out of proportion'
       end if
    end function stability_advice
