@@ -8,7 +8,7 @@ module trainsim_int_arkode
    use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_ptr, c_null_ptr, c_loc, c_funloc, &
                                           c_f_pointer, c_associated
    use fsundials_nvector_mod, only: N_Vector
-   use farkode_mod, only: ARK_NORMAL, ARK_SUCCESS, ARK_ROOT_RETURN, ARK_TSTOP_RETURN, &
+   use farkode_mod, only: ARK_ONE_STEP, ARK_SUCCESS, ARK_ROOT_RETURN, ARK_TSTOP_RETURN, &
                           ARK_TOO_MUCH_WORK, ARK_TOO_MUCH_ACC, ARK_ERR_FAILURE, ARK_RHSFUNC_FAIL, &
                           ARK_FIRST_RHSFUNC_ERR, ARK_REPTD_RHSFUNC_ERR, ARK_UNREC_RHSFUNC_ERR, ARK_RTFUNC_FAIL, &
                           ARK_TOO_CLOSE, ARK_MEM_NULL, ARK_ILL_INPUT, ARK_BAD_T, &
@@ -21,7 +21,7 @@ module trainsim_int_arkode
                                   FERKStepRootInit, FERKStepSetRootDirection, FERKStepSetNoInactiveRootWarn, &
                                   FERKStepGetRootInfo, FERKStepGetNumSteps, FERKStepGetNumRhsEvals, &
                                   FERKStepGetNumErrTestFails, FERKStepGetCurrentTime, FERKStepGetLastStep, &
-                                  FERKStepGetEstLocalErrors, FERKStepGetErrWeights
+                                  FERKStepGetEstLocalErrors, FERKStepGetErrWeights, FERKStepGetDky
    use trainsim_kinds, only: wp, i8
    use trainsim_integrator, only: integrator_t
    use trainsim_sundials, only: sundials_integrator_t, cv_rhs, cv_roots, cv_error_handler, &
@@ -48,6 +48,7 @@ module trainsim_int_arkode
       procedure :: sun_evolve => ark_evolve
       procedure :: sun_root_info => ark_root_info
       procedure :: sun_reinit => ark_reinit
+      procedure :: sun_get_y_at => ark_get_y_at
       procedure :: sun_counters => ark_counters
       procedure :: sun_local_errors => ark_local_errors
       procedure :: sun_where => ark_where
@@ -145,7 +146,7 @@ contains
       real(wp), intent(in) :: t_to
       real(c_double), intent(out) :: tr
       real(c_double) :: tr1(1)
-      f = FERKStepEvolve(self%mem, t_to, self%nv_y, tr1, ARK_NORMAL)
+      f = FERKStepEvolve(self%mem, t_to, self%nv_y, tr1, ARK_ONE_STEP)
       tr = tr1(1)
    end function ark_evolve
 
@@ -159,6 +160,13 @@ contains
       real(wp), intent(in) :: x
       f = FERKStepReInit(self%mem, c_funloc(cv_rhs), x, self%nv_y)
    end function ark_reinit
+
+   !> The interpolated state at x (inside the last step) into self%ydky.
+   integer(c_int) function ark_get_y_at(self, x) result(f)
+      class(arkode_erk_t), intent(inout), target :: self
+      real(wp), intent(in) :: x
+      f = FERKStepGetDky(self%mem, x, 0_c_int, self%nv_dky)
+   end function ark_get_y_at
 
    !> Counters since the last (re-)initialisation (no Jacobian, no nonlinear solver).
    subroutine ark_counters(self, nst, nfe, nje, netf, ncf, nsf)

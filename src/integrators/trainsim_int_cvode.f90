@@ -19,8 +19,8 @@ module trainsim_int_cvode
                          FCVodeRootInit, FCVodeSetRootDirection, FCVodeGetRootInfo, &
                          FCVodeGetNumSteps, FCVodeGetNumRhsEvals, FCVodeGetNumLinRhsEvals, FCVodeGetNumJacEvals, &
                          FCVodeGetNumErrTestFails, FCVodeGetNumNonlinSolvConvFails, FCVodeGetNumStepSolveFails, &
-                         FCVodeGetCurrentTime, FCVodeGetLastStep, FCVodeGetEstLocalErrors, FCVodeGetErrWeights, &
-                         CV_BDF, CV_ADAMS, CV_NORMAL, CV_SUCCESS, CV_ROOT_RETURN, CV_TSTOP_RETURN, &
+                         FCVodeGetCurrentTime, FCVodeGetLastStep, FCVodeGetDky, FCVodeGetEstLocalErrors, FCVodeGetErrWeights, &
+                         CV_BDF, CV_ADAMS, CV_ONE_STEP, CV_SUCCESS, CV_ROOT_RETURN, CV_TSTOP_RETURN, &
                          CV_TOO_MUCH_WORK, CV_TOO_MUCH_ACC, CV_ERR_FAILURE, CV_CONV_FAILURE, &
                          CV_LINIT_FAIL, CV_LSETUP_FAIL, CV_LSOLVE_FAIL, CV_RHSFUNC_FAIL, CV_FIRST_RHSFUNC_ERR, &
                          CV_REPTD_RHSFUNC_ERR, CV_UNREC_RHSFUNC_ERR, CV_RTFUNC_FAIL, CV_NLS_FAIL, CV_TOO_CLOSE, &
@@ -55,6 +55,7 @@ module trainsim_int_cvode
       procedure :: sun_evolve => cv_evolve
       procedure :: sun_root_info => cv_root_info
       procedure :: sun_reinit => cv_reinit
+      procedure :: sun_get_y_at => cv_get_y_at
       procedure :: sun_counters => cv_counters
       procedure :: sun_local_errors => cv_local_errors
       procedure :: sun_where => cv_where
@@ -161,7 +162,7 @@ contains
       real(wp), intent(in) :: t_to
       real(c_double), intent(out) :: tr
       real(c_double) :: tr1(1)
-      f = FCVode(self%mem, t_to, self%nv_y, tr1, CV_NORMAL)
+      f = FCVode(self%mem, t_to, self%nv_y, tr1, CV_ONE_STEP)
       tr = tr1(1)
    end function cv_evolve
 
@@ -175,6 +176,13 @@ contains
       real(wp), intent(in) :: x
       f = FCVodeReInit(self%mem, x, self%nv_y)
    end function cv_reinit
+
+   !> The interpolated state at x (inside the last step) into self%ydky.
+   integer(c_int) function cv_get_y_at(self, x) result(f)
+      class(cvode_t), intent(inout), target :: self
+      real(wp), intent(in) :: x
+      f = FCVodeGetDky(self%mem, x, 0_c_int, self%nv_dky)
+   end function cv_get_y_at
 
    !> Counters since the last (re-)initialisation; BDF's RHS count includes the
    !> difference-quotient Jacobian's evaluations.

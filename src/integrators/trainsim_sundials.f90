@@ -29,7 +29,7 @@ module trainsim_sundials
    use trainsim_model, only: model_t
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
    use trainsim_element, only: lin_stiffest
-   use trainsim_integrator, only: integrator_t, adv_reached, adv_event
+   use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    implicit none
    private
 
@@ -76,7 +76,11 @@ module trainsim_sundials
       type(cv_user_t) :: ud
       type(c_ptr) :: ctx = c_null_ptr, mem = c_null_ptr
       type(N_Vector), pointer :: nv_y => null(), nv_atol => null()
-      real(c_double), allocatable :: yv(:), atol(:)
+      real(c_double), allocatable :: yv(:), atol(:), ydky(:)
+      type(N_Vector), pointer :: nv_dky => null()
+      real(wp) :: t_int = 0.0_wp          !< where the last internal step ended (yv holds the state there)
+      real(wp) :: tiny_t = 0.0_wp         !< times closer than this are one instant
+      integer(i8) :: steps_to_goal = 0    !< internal steps since the last goal was reached
       integer(c_int), allocatable :: rootdir(:), rootsfound(:)
       logical :: root_pending = .false.   !< rootsfound holds the roots of the last return
       real(wp) :: hmax = 0.0_wp, omega_max = 0.0_wp, t_goal = 0.0_wp
@@ -107,6 +111,7 @@ module trainsim_sundials
       procedure(evolve_i), deferred :: sun_evolve
       procedure(flag_i), deferred :: sun_root_info
       procedure(flag_real_i), deferred :: sun_reinit
+      procedure(flag_real_i), deferred :: sun_get_y_at
       procedure(counters_i), deferred :: sun_counters
       procedure(local_errors_i), deferred :: sun_local_errors
       procedure(where_i), deferred :: sun_where
@@ -136,7 +141,7 @@ module trainsim_sundials
          class(sundials_integrator_t), intent(inout), target :: self
          real(wp), intent(in) :: x
       end function flag_real_i
-      !> Advance towards t_to (NORMAL mode); the time reached in tr; raw flag.
+      !> One internal step towards t_to (ONE_STEP mode); the time reached in tr; raw flag.
       integer(c_int) function evolve_i(self, t_to, tr) result(flag)
          import :: sundials_integrator_t, c_int, c_double, wp
          class(sundials_integrator_t), intent(inout), target :: self
@@ -359,8 +364,12 @@ contains
          self%mxstep = max(mxstep_min, int(min(10.0_wp*dout/self%hmax, 1.0e9_wp), i8))
       end if
 
-      allocate (self%yv(self%n), self%atol(self%n), self%rootdir(max(self%ng, 1)), self%rootsfound(max(self%ng, 1)))
+      allocate (self%yv(self%n), self%atol(self%n), self%ydky(self%n), self%rootdir(max(self%ng, 1)), &
+                self%rootsfound(max(self%ng, 1)))
       self%yv = y
+      self%ydky = y
+      self%t_int = t
+      self%tiny_t = 1.0e-9_wp*model%run%dt
       call cvode_abstol(model, self%atol)
       self%rootdir = -1_c_int
       self%rootsfound = 0
@@ -373,7 +382,8 @@ contains
       end if
       self%nv_y => FN_VMake_Serial(int(self%n, c_long), self%yv, self%ctx)
       self%nv_atol => FN_VMake_Serial(int(self%n, c_long), self%atol, self%ctx)
-      if (.not. (associated(self%nv_y) .and. associated(self%nv_atol))) then
+      self%nv_dky => FN_VMake_Serial(int(self%n, c_long), self%ydky, self%ctx)
+      if (.not. (associated(self%nv_y) .and. associated(self%nv_atol) .and. associated(self%nv_dky))) then
          call self%setup_failed('N_VMake_Serial', err); return
       end if
       call self%sun_create(t)
@@ -413,7 +423,10 @@ contains
       end if
    end subroutine sun_start
 
-   !> Advance in NORMAL mode to t_goal (interpolated there), or to a root.
+   !> One internal step (ONE_STEP mode: the driver and the observer see every
+   !> step, so extremes are taken at every internal step), or the goal: a step
+   !> that passes t_goal is reported at t_goal, interpolated by the integrator's
+   !> own dense output, and its end on the next call.
    subroutine sun_advance(self, model, t_goal, t, y, status, err)
       class(sundials_integrator_t), intent(inout), target :: self
       type(model_t), intent(inout), target :: model
@@ -425,23 +438,46 @@ contains
       integer :: st
       real(c_double) :: tret
       self%t_goal = t_goal
-      flag = self%sun_evolve(t_goal, tret)
-      st = self%status(flag)
-      if (flag < 0) then
-         call self%failed(model, flag, st, t, err)
-         status = adv_reached
-         return
-      end if
-      t = tret
-      y = self%yv
       status = adv_reached
       self%root_pending = .false.
-      if (st == st_root) then
-         self%stats%root_returns = self%stats%root_returns + 1
-         self%rootsfound = 0
-         if (self%status(self%sun_root_info()) == st_success) self%root_pending = .true.
-         status = adv_event
+      if (self%t_int <= t + self%tiny_t) then
+         ! take one internal step
+         flag = self%sun_evolve(t_goal, tret)
+         st = self%status(flag)
+         if (flag >= 0) self%steps_to_goal = self%steps_to_goal + 1
+         if (flag < 0 .or. self%steps_to_goal > self%mxstep) then
+            if (flag >= 0) st = st_too_much_work
+            call self%failed(model, flag, st, t, err)
+            return
+         end if
+         self%t_int = tret
+         if (st == st_root) then
+            ! yv is the state at the root; the integrator restarts there
+            self%stats%root_returns = self%stats%root_returns + 1
+            self%rootsfound = 0
+            if (self%status(self%sun_root_info()) == st_success) self%root_pending = .true.
+            t = tret
+            y = self%yv
+            status = adv_event
+            return
+         end if
       end if
+      if (self%t_int < t_goal - self%tiny_t) then
+         t = self%t_int                      ! an internal step short of the goal
+         y = self%yv
+         status = adv_step
+      else if (self%t_int > t_goal + self%tiny_t) then
+         if (self%status(self%sun_get_y_at(t_goal)) /= st_success) then
+            call fatal_error(err, 'internal: '//self%prefix//'GetDky failed at t = '//str(t_goal)//' s', err_internal)
+            return
+         end if
+         t = t_goal                          ! the goal, inside the last step
+         y = self%ydky
+      else
+         t = self%t_int                      ! the step ended on the goal (a stop time)
+         y = self%yv
+      end if
+      if (status == adv_reached) self%steps_to_goal = 0
    end subroutine sun_advance
 
    !> The guards that fired at an event: those below zero and, right after a
@@ -472,6 +508,8 @@ contains
       type(error_t), allocatable, intent(out) :: err
       call self%flush_counters()
       self%yv = y
+      self%t_int = t
+      self%steps_to_goal = 0
       self%root_pending = .false.
       if (self%status(self%sun_reinit(t)) /= st_success) then
          call fatal_error(err, 'internal: '//self%prefix//'ReInit failed at t = '//str(t)//' s: '// &
@@ -505,9 +543,10 @@ contains
       class(sundials_integrator_t), intent(inout) :: self
       integer(c_int) :: ie
       call self%sun_free()
+      if (associated(self%nv_dky)) call FN_VDestroy(self%nv_dky)
       if (associated(self%nv_atol)) call FN_VDestroy(self%nv_atol)
       if (associated(self%nv_y)) call FN_VDestroy(self%nv_y)
-      nullify (self%nv_atol, self%nv_y)
+      nullify (self%nv_dky, self%nv_atol, self%nv_y)
       if (c_associated(self%ctx)) ie = FSUNContext_Free(self%ctx)
       self%ctx = c_null_ptr
    end subroutine sun_finish

@@ -41,6 +41,7 @@ module trainsim_observer
       procedure :: start => obs_start
       procedure :: step => obs_step
       procedure :: sample => obs_sample
+      procedure, private :: update_metrics => obs_update_metrics
       procedure :: record_events => obs_record_events
       procedure :: finish => obs_finish
       procedure, private :: fill => obs_fill
@@ -219,8 +220,17 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
-      integer :: i, k
       call self%fill(model, t, y)
+      call self%update_metrics(model, t)
+   end subroutine obs_step
+
+   !> Fold the sample buffer (filled at t) into the running metrics: extremes,
+   !> the open contacts' peak forces, time out of contact, the energy residual.
+   subroutine obs_update_metrics(self, model, t)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: t
+      integer :: i, k
       do i = 1, size(model%elements)
          associate (m => self%res%el(i))
             k = m%open_event
@@ -244,7 +254,7 @@ contains
                                      abs(self%s%energy(4)), abs(self%s%energy(3)))
       end if
       self%t_prev = t
-   end subroutine obs_step
+   end subroutine obs_update_metrics
 
    !> The output sample at output time t_out (the state (t, y), with t within
    !> the driver's tolerance of t_out): written with the time t_out exactly.
@@ -308,6 +318,9 @@ contains
             end select
          end associate
       end do
+      ! the state just after the mode change belongs to the metrics too: a mesh
+      ! force jumps at a zone change, and its peak may be right there
+      call self%update_metrics(model, t)
       call self%emit(sink, err)
    end subroutine obs_record_events
 
