@@ -6,7 +6,8 @@ program test_gear_rigs
    use trainsim_observer, only: run_result_t
    use trainsim_modes, only: modes_t, compute_modes
    use trainsim_el_spur_gear, only: mesh_zone, contact_ratio
-   use trainsim_metrics, only: peak_to_peak
+   use trainsim_metrics, only: peak_to_peak, turning_points_t, peak_to_peak_values
+   use trainsim_observer, only: p2p_hysteresis
    use trainsim_sink, only: ev_zone
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model, run_model
@@ -21,6 +22,8 @@ program test_gear_rigs
    call test_table7_1_initial_angles_are_static_windup_with_1_8()
    call test_ghm_run_energy_balance_closes_with_zone_switching()
    call test_peak_to_peak_of_a_known_signal()
+   call test_turning_points_give_the_same_figures()
+   call test_run_metrics_equal_the_full_series_figures()
    call suite_end()
 
 contains
@@ -159,4 +162,52 @@ contains
       call check('mean swing = 2 x amplitude (+ripple, 0.05 %)', mean, 2.0_wp, abs_tol=0.1_wp + 1.0e-3_wp)
       call check('range = max - min', rng, maxval(x) - minval(x), rel_tol=1.0e-14_wp)
    end subroutine test_peak_to_peak_of_a_known_signal
+
+   !> The peak detector on the turning points alone gives the figures of the
+   !> whole series, bit for bit (what lets a run keep memory independent of length).
+   subroutine test_turning_points_give_the_same_figures()
+      real(wp) :: t(4001), x(4001), r1, m1, r2, m2
+      integer :: i, n1, n2
+      type(turning_points_t) :: tp
+      call test_begin('turning_points_give_the_same_figures')
+      do i = 1, size(t)
+         t(i) = real(i - 1, wp)*1.0e-3_wp
+         ! swings of growing amplitude, a ripple, and a plateau (repeated values)
+         x(i) = (1.0_wp + t(i))*sin(two_pi*2.0_wp*t(i)) + 0.05_wp*sin(two_pi*40.0_wp*t(i))
+         if (i > 1500 .and. i < 1600) x(i) = x(1500)
+      end do
+      call peak_to_peak(t, x, 0.0_wp, 0.1_wp, r1, m1, n1)
+      do i = 1, size(t)
+         call tp%push(x(i))
+      end do
+      call tp%close()
+      call peak_to_peak_values(tp%x(1:tp%n), 0.1_wp, r2, m2, n2)
+      call check('same swing count ('//trim(adjustl(itoa(n1)))//')', n1 == n2 .and. n1 > 0)
+      call check('same range, to the bit', r1 == r2)
+      call check('same mean swing, to the bit', m1 == m2)
+      call check('a small fraction of the samples kept', tp%n < size(x)/5)
+   end subroutine test_turning_points_give_the_same_figures
+
+   !> A real run: the metrics it reports (from turning points) equal the figures
+   !> of its whole output series.
+   subroutine test_run_metrics_equal_the_full_series_figures()
+      type(model_t) :: m
+      type(run_result_t) :: r
+      real(wp) :: rng, mean
+      integer :: n
+      call test_begin('run_metrics_equal_the_full_series_figures')
+      call load_model('inputs/gregory_harris_munro.nml', m)
+      call run_model(m, r)   ! keeps the series
+      call peak_to_peak(r%series_t, r%series_disp(2, :), m%run%t_start + m%run%settle_time, p2p_hysteresis, &
+                        rng, mean, n)
+      call check('mesh p2p range as from the whole series', r%el(2)%p2p_range == rng)
+      call check('mesh p2p mean as from the whole series', r%el(2)%p2p_mean == mean)
+      call check('mesh swings as from the whole series', r%el(2)%p2p_swings == n .and. n > 0)
+   end subroutine test_run_metrics_equal_the_full_series_figures
+
+   function itoa(i) result(s)
+      integer, intent(in) :: i
+      character(len=16) :: s
+      write (s, '(i0)') i
+   end function itoa
 end program test_gear_rigs

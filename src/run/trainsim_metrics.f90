@@ -12,7 +12,25 @@ module trainsim_metrics
    implicit none
    private
 
-   public :: peak_to_peak
+   public :: peak_to_peak, peak_to_peak_values, turning_points_t
+
+   !> The turning points of a sampled signal, kept online: the first sample, every
+   !> sample where the direction changes, and (after `close`) the last one. The
+   !> hysteresis peak detector below only ever looks at the running extreme of
+   !> each monotone stretch, which is its end, so it gives exactly the same
+   !> figures on the turning points as on every sample, for a fraction of the
+   !> memory (two values per oscillation instead of every output sample).
+   type :: turning_points_t
+      real(wp), allocatable :: x(:)
+      integer :: n = 0
+      real(wp) :: last = 0.0_wp
+      integer :: dir = 0
+      logical :: open = .false.
+   contains
+      procedure :: push => tp_push
+      procedure :: close => tp_close
+      procedure, private :: append => tp_append
+   end type turning_points_t
 
 contains
 
@@ -21,10 +39,7 @@ contains
       real(wp), intent(in) :: t(:), x(:), t_from, hyst
       real(wp), intent(out) :: p2p_range, p2p_mean
       integer, intent(out) :: n_swings
-      integer :: i, i0, dir
-      real(wp) :: xmax, xmin, h, cand, last_max, total
-      logical :: have_max
-      p2p_range = 0.0_wp; p2p_mean = 0.0_wp; n_swings = 0
+      integer :: i, i0
       i0 = 0
       do i = 1, size(t)
          if (t(i) >= t_from) then
@@ -32,14 +47,29 @@ contains
             exit
          end if
       end do
-      if (i0 == 0 .or. i0 >= size(t)) return
-      xmax = maxval(x(i0:)); xmin = minval(x(i0:))
-      p2p_range = xmax - xmin
+      if (i0 == 0) then
+         p2p_range = 0.0_wp; p2p_mean = 0.0_wp; n_swings = 0
+         return
+      end if
+      call peak_to_peak_values(x(i0:), hyst, p2p_range, p2p_mean, n_swings)
+   end subroutine peak_to_peak
+
+   !> Peak-to-peak figures of the sample values x (or of their turning points).
+   pure subroutine peak_to_peak_values(x, hyst, p2p_range, p2p_mean, n_swings)
+      real(wp), intent(in) :: x(:), hyst
+      real(wp), intent(out) :: p2p_range, p2p_mean
+      integer, intent(out) :: n_swings
+      integer :: i, dir
+      real(wp) :: h, cand, last_max, total
+      logical :: have_max
+      p2p_range = 0.0_wp; p2p_mean = 0.0_wp; n_swings = 0
+      if (size(x) < 2) return
+      p2p_range = maxval(x) - minval(x)
       if (p2p_range <= 0.0_wp) return
       h = hyst*p2p_range
       ! dir = +1 while rising towards a maximum, -1 while falling towards a minimum
-      dir = 0; cand = x(i0); have_max = .false.; last_max = 0.0_wp; total = 0.0_wp
-      do i = i0 + 1, size(t)
+      dir = 0; cand = x(1); have_max = .false.; last_max = 0.0_wp; total = 0.0_wp
+      do i = 2, size(x)
          select case (dir)
          case (0)
             if (x(i) >= cand + h) then
@@ -67,5 +97,46 @@ contains
          end select
       end do
       if (n_swings > 0) p2p_mean = total/real(n_swings, wp)
-   end subroutine peak_to_peak
+   end subroutine peak_to_peak_values
+
+   !> Take the next sample.
+   subroutine tp_push(self, x)
+      class(turning_points_t), intent(inout) :: self
+      real(wp), intent(in) :: x
+      integer :: d
+      if (.not. self%open) then
+         call self%append(x)
+         self%open = .true.
+         self%last = x
+         return
+      end if
+      d = 0
+      if (x > self%last) d = 1
+      if (x < self%last) d = -1
+      if (d == 0) return
+      if (self%dir /= 0 .and. d /= self%dir) call self%append(self%last)   ! self%last was a turn
+      self%dir = d
+      self%last = x
+   end subroutine tp_push
+
+   !> After the last sample: keep it (the end of the final monotone stretch).
+   subroutine tp_close(self)
+      class(turning_points_t), intent(inout) :: self
+      if (self%open .and. self%dir /= 0) call self%append(self%last)
+      self%open = .false.
+   end subroutine tp_close
+
+   subroutine tp_append(self, x)
+      class(turning_points_t), intent(inout) :: self
+      real(wp), intent(in) :: x
+      real(wp), allocatable :: grown(:)
+      if (.not. allocated(self%x)) allocate (self%x(64))
+      if (self%n == size(self%x)) then
+         allocate (grown(2*self%n))
+         grown(1:self%n) = self%x(1:self%n)
+         call move_alloc(grown, self%x)
+      end if
+      self%n = self%n + 1
+      self%x(self%n) = x
+   end subroutine tp_append
 end module trainsim_metrics

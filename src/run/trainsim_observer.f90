@@ -11,11 +11,14 @@ module trainsim_observer
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_string
-   use trainsim_metrics, only: peak_to_peak
+   use trainsim_metrics, only: peak_to_peak_values, turning_points_t
    implicit none
    private
 
-   public :: observer_t, element_metrics_t, run_result_t, make_meta
+   public :: observer_t, element_metrics_t, run_result_t, make_meta, p2p_hysteresis
+
+   !> Hysteresis of the peak-to-peak detector, as a fraction of the range (D-17).
+   real(wp), parameter :: p2p_hysteresis = 0.1_wp
 
    !> What a run returns in memory.
    type :: run_result_t
@@ -36,6 +39,8 @@ module trainsim_observer
       integer :: n_events = 0
       real(wp) :: t_prev = 0.0_wp, t_metrics = 0.0_wp
       integer :: n_series = 0
+      logical :: keep = .false.                      !< keep the whole series of samples (keep_series)
+      type(turning_points_t), allocatable :: turns(:) !< per element: turning points of the displacement
       logical :: track = .false.
    contains
       procedure :: start => obs_start
@@ -118,19 +123,15 @@ contains
       self%track = model%run%track_energy
       self%t_metrics = model%run%t_start + model%run%settle_time
       self%t_prev = t
-      ! output samples are kept in memory for the peak-to-peak metrics (displacement
-      ! only) and, with keep_series, node angles and speeds too
-      if (model%run%output_interval > 0.0_wp) then
-         nmax = int((model%run%t_end - model%run%t_start)/model%run%output_interval) + 2
-      else
-         nmax = int((model%run%t_end - model%run%t_start)/model%run%dt) + 2
-      end if
+      ! the peak-to-peak metrics keep only the turning points of each element's
+      ! displacement (memory independent of the run length); the whole series of
+      ! samples is kept in memory only when the caller asks (keep_series)
+      allocate (self%turns(ne))
+      self%keep = model%run%keep_series
+      nmax = 0
+      if (self%keep) nmax = 1024
       allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
-      if (model%run%keep_series) then
-         allocate (self%res%series_theta(nn, nmax), self%res%series_omega(nn, nmax))
-      else
-         allocate (self%res%series_theta(nn, 0), self%res%series_omega(nn, 0))
-      end if
+      allocate (self%res%series_theta(nn, nmax), self%res%series_omega(nn, nmax))
       call sink%open(make_meta(model), err)
       if (allocated(err)) return
       call self%step(model, t, y)
@@ -181,34 +182,36 @@ contains
       end do
    end function sum_potential
 
-   !> Write the current sample to the sink (and the in-memory series, which
-   !> grows by doubling: events add samples beyond the output grid).
+   !> Write the current sample to the sink; feed the turning points of the
+   !> peak-to-peak metrics, and the in-memory series when it is kept.
    subroutine obs_emit(self, sink, err)
       class(observer_t), intent(inout) :: self
       class(sink_t), intent(inout) :: sink
       type(error_t), allocatable, intent(out) :: err
       real(wp), allocatable :: t2(:), d2(:, :), th2(:, :), om2(:, :)
-      integer :: n, keep
-      if (self%n_series == size(self%res%series_t)) then
-         n = self%n_series
-         keep = size(self%res%series_theta, 2)
-         allocate (t2(2*n + 16), d2(size(self%res%series_disp, 1), 2*n + 16))
-         t2(1:n) = self%res%series_t(1:n)
-         d2(:, 1:n) = self%res%series_disp(:, 1:n)
-         call move_alloc(t2, self%res%series_t)
-         call move_alloc(d2, self%res%series_disp)
-         if (keep > 0) then
-            allocate (th2(size(self%s%theta), 2*n + 16), om2(size(self%s%theta), 2*n + 16))
+      integer :: n, i
+      if (self%s%t >= self%t_metrics) then
+         do i = 1, size(self%turns)
+            call self%turns(i)%push(self%s%displacement(i))
+         end do
+      end if
+      if (self%keep) then
+         if (self%n_series == size(self%res%series_t)) then
+            n = self%n_series
+            allocate (t2(2*n), d2(size(self%res%series_disp, 1), 2*n))
+            allocate (th2(size(self%s%theta), 2*n), om2(size(self%s%theta), 2*n))
+            t2(1:n) = self%res%series_t(1:n)
+            d2(:, 1:n) = self%res%series_disp(:, 1:n)
             th2(:, 1:n) = self%res%series_theta(:, 1:n)
             om2(:, 1:n) = self%res%series_omega(:, 1:n)
+            call move_alloc(t2, self%res%series_t)
+            call move_alloc(d2, self%res%series_disp)
             call move_alloc(th2, self%res%series_theta)
             call move_alloc(om2, self%res%series_omega)
          end if
-      end if
-      self%n_series = self%n_series + 1
-      self%res%series_t(self%n_series) = self%s%t
-      self%res%series_disp(:, self%n_series) = self%s%displacement
-      if (size(self%res%series_theta, 2) > 0) then
+         self%n_series = self%n_series + 1
+         self%res%series_t(self%n_series) = self%s%t
+         self%res%series_disp(:, self%n_series) = self%s%displacement
          self%res%series_theta(:, self%n_series) = self%s%theta
          self%res%series_omega(:, self%n_series) = self%s%omega
       end if
@@ -353,8 +356,10 @@ contains
       self%res%stats%completed = .true.
       result = self%res
       do i = 1, size(model%elements)
-         call peak_to_peak(self%res%series_t(1:self%n_series), self%res%series_disp(i, 1:self%n_series), &
-                           self%t_metrics, 0.1_wp, result%el(i)%p2p_range, result%el(i)%p2p_mean, result%el(i)%p2p_swings)
+         call self%turns(i)%close()
+         if (self%turns(i)%n > 0) call peak_to_peak_values(self%turns(i)%x(1:self%turns(i)%n), p2p_hysteresis, &
+                                                           result%el(i)%p2p_range, result%el(i)%p2p_mean, &
+                                                           result%el(i)%p2p_swings)
       end do
       call sink%close(self%res%events(1:self%n_events), self%res%stats, result%el, err)
       if (allocated(err)) return
@@ -363,9 +368,7 @@ contains
       result%t_final = t
       result%series_t = result%series_t(1:self%n_series)
       result%series_disp = result%series_disp(:, 1:self%n_series)
-      if (size(result%series_theta, 2) > 0) then
-         result%series_theta = result%series_theta(:, 1:self%n_series)
-         result%series_omega = result%series_omega(:, 1:self%n_series)
-      end if
+      result%series_theta = result%series_theta(:, 1:self%n_series)
+      result%series_omega = result%series_omega(:, 1:self%n_series)
    end subroutine obs_finish
 end module trainsim_observer
