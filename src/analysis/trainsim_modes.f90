@@ -20,7 +20,7 @@ module trainsim_modes
    implicit none
    private
 
-   public :: modes_t, compute_modes, rk4_stability_limit, rk4_dt_limit, rk4_ray_radius
+   public :: modes_t, compute_modes, rk4_stability_limit, rk4_dt_bound, rk4_dt_limit, rk4_ray_radius
 
    !> |lambda h| on the imaginary axis inside which classical RK4 is stable (2 sqrt 2).
    real(wp), parameter :: rk4_stability_limit = 2.0_wp*sqrt(2.0_wp)
@@ -37,7 +37,13 @@ module trainsim_modes
    !> Impact-damping fractions sampled between none and the law's largest
    !> when every clearance is closed (RK4's region is not monotone in the
    !> damping ratio: D-25); the smallest limit is then refined.
-   integer, parameter :: n_scale = 16
+   integer, parameter :: n_scale = 8
+   !> Golden-section steps refining the worst impact-damping fraction (0.618^12:
+   !> the fraction to 0.3 % of its bracket; the limit is flat at its minimum).
+   integer, parameter :: n_golden = 12
+   !> Above this many states the dense eigenvalue problem (O(n^3)) is replaced
+   !> by an O(n) Gershgorin bound on |lambda| (`rk4_dt_bound`).
+   integer, parameter, public :: dense_state_limit = 400
 
    interface
       subroutine dgeev(jobvl, jobvr, n, a, lda, wr, wi, vl, ldvl, vr, ldvr, work, lwork, info)
@@ -194,6 +200,89 @@ contains
       r = lo
    end function rk4_ray_radius
 
+   !> Smallest radius of RK4's stability region over the closed left half-plane
+   !> (about 2.6, in a direction between the imaginary and the real axis).
+   real(wp) function rk4_min_radius() result(r)
+      integer :: i
+      real(wp) :: phi
+      r = huge(1.0_wp)
+      do i = 0, 180
+         phi = 0.5_wp*two_pi*(0.25_wp + real(i, wp)/360.0_wp)   ! pi/2 .. 3 pi/2
+         r = min(r, rk4_ray_radius(cmplx(min(cos(phi), 0.0_wp), sin(phi), wp)))
+      end do
+   end function rk4_min_radius
+
+   !> O(n) step bound for large trains: Gershgorin's theorem on the linearised
+   !> first-order system, scaled by D = diag(s on the angle rows, 1 elsewhere)
+   !> (a similarity, so the eigenvalues do not change). Angle rows sum to s,
+   !> speed rows to G_K/s + (damping and the node's own terms), other node
+   !> states to their own partials; with s = sqrt(G_K), |lambda| <= bound. The
+   !> step is RK4's smallest radius over the left half-plane / bound: safe, and
+   !> for a chain within a few per cent of the dense limit.
+   subroutine rk4_dt_bound(model, state, y, dt_max, bound)
+      type(model_t), intent(inout) :: model
+      type(lin_state_t), intent(in) :: state
+      real(wp), intent(in) :: y(:)
+      real(wp), intent(out) :: dt_max, bound
+      real(wp), allocatable :: inv_j(:), row_k(:), row_c(:), dtq(:), own(:), f0(:), f1(:), yp(:)
+      real(wp) :: ke(2, 2), ce(2, 2), t0, h, g_k, rest
+      integer :: i, k, r, o, ns, p, na, ends(2)
+      t0 = model%run%t_start
+      call inverse_inertias(model, inv_j)
+      allocate (row_k(size(model%nodes)), row_c(size(model%nodes)), dtq(size(model%nodes)))
+      allocate (own(size(y)), f0(size(y)), f1(size(y)), yp(size(y)))
+      row_k = 0.0_wp; row_c = 0.0_wp; dtq = 0.0_wp; own = 0.0_wp
+      ! the nodes' own blocks and d(speed rate)/d(torque), by differences of `derivatives`
+      do i = 1, size(model%nodes)
+         if (model%is_held(i)) cycle
+         associate (nd => model%nodes(i)%n)
+            ns = nd%nstates()
+            if (ns < 2) cycle
+            o = nd%offset
+            f0 = 0.0_wp; f1 = 0.0_wp
+            call nd%derivatives(t0, y, 0.0_wp, f0)
+            call nd%derivatives(t0, y, 1.0_wp, f1)
+            dtq(i) = abs(f1(o + 2) - f0(o + 2))
+            do k = 2, ns                       ! the angle column feeds nothing of the node's own
+               yp = y
+               h = 1.0e-6_wp*max(1.0_wp, abs(y(o + k)))
+               yp(o + k) = y(o + k) + h
+               f1 = 0.0_wp
+               call nd%derivatives(t0, yp, 0.0_wp, f1)
+               do r = 2, ns
+                  own(o + r) = own(o + r) + abs(f1(o + r) - f0(o + r))/h
+               end do
+            end do
+         end associate
+      end do
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e)
+            call e%linearise(state, inv_j(e%left), inv_j(e%right), ke, ce)
+            ends = [e%left, e%right]
+         end associate
+         do p = 1, 2
+            na = ends(p)
+            row_k(na) = row_k(na) + dtq(na)*(abs(ke(p, 1)) + abs(ke(p, 2)))
+            row_c(na) = row_c(na) + dtq(na)*(abs(ce(p, 1)) + abs(ce(p, 2)))
+         end do
+      end do
+      g_k = 0.0_wp
+      if (size(row_k) > 0) g_k = maxval(row_k)
+      rest = 0.0_wp
+      do i = 1, size(model%nodes)
+         if (model%is_held(i) .or. model%nodes(i)%n%nstates() < 2) cycle
+         o = model%nodes(i)%n%offset
+         rest = max(rest, row_c(i) + own(o + 2))
+         do r = 3, model%nodes(i)%n%nstates()
+            ! other states (a motor current): their own row sum must be below the bound too
+            rest = max(rest, own(o + r) - sqrt(g_k))
+         end do
+      end do
+      bound = sqrt(g_k) + rest
+      dt_max = huge(1.0_wp)
+      if (bound > 0.0_wp) dt_max = rk4_min_radius()/bound
+   end subroutine rk4_dt_bound
+
    !> The largest step h for which every h lambda of the linearised train in
    !> `state` lies in RK4's stability region (D-25). With every clearance closed
    !> the impact damping is swept from none to the law's largest and the
@@ -215,9 +304,16 @@ contains
 
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
+      if (model%n_states > dense_state_limit) then
+         call rk4_dt_bound(model, state, y, dt_max, omega_crit)
+         if (present(freq_hz)) freq_hz = omega_crit/two_pi
+         if (present(damping_ratio)) damping_ratio = 0.0_wp
+         return
+      end if
       call inverse_inertias(model, inv_j)
       st = state
-      if (state%contact /= lin_contact_closed .or. state%impact_scale == 0.0_wp) then
+      ! impact damping exists only where there are clearances (guards)
+      if (state%contact /= lin_contact_closed .or. state%impact_scale == 0.0_wp .or. model%n_guards == 0) then
          call limit_at(state, dt_max, lam(0), err)
          if (allocated(err)) return
       else
@@ -235,7 +331,7 @@ contains
          c = b - gr*(b - a); d = a + gr*(b - a)
          st%impact_scale = c; call limit_at(st, fc, lc, err); if (allocated(err)) return
          st%impact_scale = d; call limit_at(st, fd, ld, err); if (allocated(err)) return
-         do it = 1, 40
+         do it = 1, n_golden
             if (fc < fd) then
                b = d; d = c; fd = fc; ld = lc
                c = b - gr*(b - a)
