@@ -163,7 +163,7 @@ contains
             return
          end if
          if (cycles < 1 .or. cycles > max_cycles) then
-            call fatal_error(err, grp%where('cycles')//': error: cycles must be in [1, '//str(max_cycles)//'], got '// &
+            call fatal_error(err, grp%where('cycles')//': error: cycles must be >= 1 and <= '//str(max_cycles)//', got '// &
                              str(cycles), err_input)
             return
          end if

@@ -148,6 +148,51 @@ EXTRA_SEEDS = {
 """,
 }
 
+# Decks that the campaign once failed on (one per distinct cause), run before it with
+# the outcome they must have now: (name, deck, exit, substrings of stderr).
+_TWO = ("&run t_end = 0.01, dt = 1.0e-4 /\n"
+        "&node id = 'a', type = 'inertia', inertia = 5.0 /\n"
+        "&node id = 'b', type = 'inertia', inertia = 11.0 /\n")
+REGRESSIONS = [
+    # SIGFPE in inertia_derivatives (torque/J overflowed): a node parameter below 1e-20
+    ("tiny inertia", "&run t_end = 0.01, dt = 1.0e-4 /\n&node id = 'a', type = 'inertia', inertia = 1.0e-300 /\n"
+     "&node id = 'b', type = 'inertia', inertia = 11.0 /\n&element type = 'shaft', stiffness = 1.0e5 /\n",
+     2, ["deck.nml:2:", "'inertia'", "1.0E-300", "out of range", "1.0E-20"]),
+    # SIGFPE in shaft_torques, law_elastic_energy, ce_linearise: element parameters near 1e300
+    ("huge shaft damping", _TWO + "&element type = 'shaft', stiffness = 1.0e5, damping = 1.0e300 /\n",
+     2, ["deck.nml:4:", "'damping'", "out of range", "1.0E+20"]),
+    ("huge gear base radius", _TWO + "&element type = 'ideal_gear', stiffness = 1.0e6, rb_driver = 1.0,\n"
+     "  rb_driven = 3.7e300 /\n", 2, ["deck.nml:5:", "'rb_driven'", "out of range"]),
+    # SIGFPE in contact_ratio (squares of the radii) before the teeth range was checked
+    ("huge teeth_driven of a geometry spur gear", _TWO + "&element type = 'spur_gear', teeth_driver = 20,\n"
+     "  teeth_driven = 8.0e301, module = 2.0, face_width = 0.02, backlash = 1.0e-4 /\n",
+     2, ["deck.nml:5:", "'teeth_driven'", "teeth_driven must be in [1, "]),
+    ("huge module of a geometry spur gear", _TWO + "&element type = 'spur_gear', teeth_driver = 20,\n"
+     "  teeth_driven = 40, module = 1.0e300, face_width = 0.02, backlash = 1.0e-4 /\n",
+     2, ["deck.nml:5:", "'module'", "out of range"]),
+    # SIGFPE in inertia_dissipation (the state ran from 0 past 1e154 within one step)
+    ("huge sine offset", _TWO + "&element type = 'shaft', stiffness = 1.0e5 /\n"
+     "&load node = 'b', kind = 'sine', offset = -5.0e301, amplitude = 1.0, frequency = 10.0 /\n",
+     2, ["deck.nml:5:", "'offset'", "out of range"]),
+    ("huge table value", _TWO + "&element type = 'shaft', stiffness = 1.0e5 /\n"
+     "&load node = 'b', kind = 'table', times = 0.0, 1.0, values = 0.0, 1.0e300 /\n",
+     2, ["deck.nml:5:", "'times'", "table point 2", "out of range"]),
+    ("huge initial angle", _TWO + "&element type = 'shaft', stiffness = 1.0e5 /\n"
+     "&initial node = 'a', angle = 1.0e300 /\n", 2, ["deck.nml:5:", "'angle'", "out of range"]),
+    ("huge initial motor current", "&run t_end = 0.01, dt = 1.0e-5 /\n&node id = 'm', type = 'dc_motor',"
+     " inertia = 1.0e-3, torque_constant = 0.1,\n  inductance = 1.0e-3, resistance = 1.0, back_emf_constant = 0.1 /\n"
+     "&initial node = 'm', current = 1.0e300 /\n", 2, ["deck.nml:4:", "'current'", "out of range"]),
+    # 4*cycles + 1 knots overflowed the default integer
+    ("start_stop cycles beyond the integer range of the knots", _TWO + "&element type = 'shaft', stiffness = 1.0e5 /\n"
+     "&load node = 'b', kind = 'start_stop', value = 1.0, t_accel = 0.001, t_cruise = 0.0, t_decel = 0.001,\n"
+     "  cycles = 2147483647 /\n", 2, ["deck.nml:6:", "'cycles'", "<= 1000000", "2147483647"]),
+    # 'Fortran runtime error: End of record' writing a mode above 1e38 Hz with f0.1 into 40 characters
+    ("RK4 warning names a mode above 1e38 Hz", "&run t_end = 1.0e-3, dt = 1.0e-4 /\n"
+     "&node id = 'a', type = 'inertia', inertia = 1.0e-20 /\n&node id = 'b', type = 'inertia', inertia = 1.0e-20 /\n"
+     "&element type = 'ideal_gear', stiffness = 1.0e20, rb_driver = 1.0e20, rb_driven = 1.0e20 /\n"
+     "&initial node = 'a', speed = 1.0 /\n", 1, ["warning: dt", "the mode at 2.", "E+39 Hz", "blew up"]),
+]
+
 INTEGRATORS = ["rk4", "rk4-thesis", "cvode-bdf", "cvode-adams", "arkode-dp", "arkode-verner", "euler"]
 
 # Choice keys: the valid names (aliases included) and a few invalid ones.
@@ -519,14 +564,22 @@ def recap(groups, muts):
     runs = [g for g in groups if g[0] == "run"]
     if len(runs) != 1:
         return
+    keys = ("t_start", "t_end", "dt", "output_interval")
     try:
-        get = {e[0]: float(e[1][0]) for e in runs[0][1] if e[0] in ("t_start", "t_end", "dt") and len(e[1]) == 1}
-        t0, t1, dt = get.get("t_start", 0.0), get["t_end"], get["dt"]
+        get = {e[0]: float(e[1][0]) for e in runs[0][1] if e[0] in keys and len(e[1]) == 1}
+        t0, t1, dt, oi = get.get("t_start", 0.0), get["t_end"], get["dt"], get.get("output_interval", 0.0)
     except (KeyError, ValueError):
         return
-    if dt > 0 and t1 > t0 and MAX_STEPS < (t1 - t0) / dt <= 1e12 and math.isfinite(t1 - t0):
-        entry(runs[0], "t_end")[1] = [repr(t0 + MAX_STEPS * dt)]
+    if not (dt > 0 and t1 > t0 and math.isfinite(t1 - t0) and (t1 - t0) / dt <= 1e12):
+        return
+    if (t1 - t0) / dt > MAX_STEPS:
+        t1 = t0 + MAX_STEPS * dt
+        entry(runs[0], "t_end")[1] = [repr(t1)]
         muts.append(f"(t_end cut to {MAX_STEPS} steps)")
+    # output times below dt are steps too (as many as 10 MAX_STEPS)
+    if 0 < oi and 10 * MAX_STEPS < (t1 - t0) / oi <= 1e12:
+        entry(runs[0], "t_end")[1] = [repr(t0 + max(dt, 10 * MAX_STEPS * oi))]
+        muts.append(f"(t_end cut to {10 * MAX_STEPS} output times)")
 
 
 def make_deck(seed, index, seeds):
@@ -560,6 +613,13 @@ def make_deck(seed, index, seeds):
 
 def run_one(exe, seed, index, seeds, timeout):
     data, name, muts = make_deck(seed, index, seeds)
+    res = run_deck(exe, data, timeout)
+    res.update(index=index, seed_deck=name, muts=muts)
+    return res
+
+
+def run_deck(exe, data, timeout):
+    """Run one deck (bytes) in a fresh directory; the outcome and the problems found."""
     tmp = tempfile.mkdtemp(prefix="trainsim_fuzz_")
     try:
         with open(os.path.join(tmp, "deck.nml"), "wb") as f:
@@ -609,8 +669,8 @@ def run_one(exe, seed, index, seeds, timeout):
                     if c.returncode != 0:
                         problems.append("out.h5 unreadable: " + c.stderr.strip()[-200:])
                         kind = kind or "output"
-        return dict(index=index, seed_deck=name, muts=muts, data=data, code=code, stdout=out, stderr=err,
-                    problems=problems, kind=kind, elapsed=elapsed, cmd=" ".join(cmd))
+        return dict(data=data, code=code, stdout=out, stderr=err, problems=problems, kind=kind, elapsed=elapsed,
+                    cmd=" ".join(cmd))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
@@ -665,11 +725,22 @@ def main():
         return 1 if res["problems"] else 0
 
     t0 = time.monotonic()
+    failed = 0
+    for name, deck, code, subs in REGRESSIONS:
+        res = run_deck(exe, deck.encode(), a.timeout)
+        problems = list(res["problems"])
+        if res["code"] != code:
+            problems.append(f"exit {res['code']}, expected {code}")
+        problems += [f"stderr lacks {sub!r}" for sub in subs if sub not in res["stderr"]]
+        if problems:
+            failed += 1
+            print(f"FAIL regression '{name}': {'; '.join(problems)}\n    " +
+                  "\n    ".join(res["stderr"].strip().splitlines()[-3:]))
+    print(f"regressions: {len(REGRESSIONS)} decks, {failed} failed")
     with ThreadPoolExecutor(max_workers=a.jobs) as pool:
         results = list(pool.map(lambda i: run_one(exe, a.seed, i, seeds, a.timeout), range(a.count)))
     exits = {0: 0, 1: 0, 2: 0}
     tally = dict(hang=0, backtrace=0, leftover=0)
-    failed = 0
     elsewhere = 0
     shutil.rmtree(a.failures, ignore_errors=True)
     for res in results:
@@ -691,8 +762,9 @@ def main():
         last = [ln for ln in res["stderr"].splitlines() if ln.strip()][-3:]
         for ln in last:
             print(f"    {ln[:300]}")
-    slow = max(results, key=lambda r: r["elapsed"])
-    print(f"slowest: deck {slow['index']} {slow['elapsed']:.1f} s; total {time.monotonic() - t0:.1f} s")
+    if results:
+        slow = max(results, key=lambda r: r["elapsed"])
+        print(f"slowest: deck {slow['index']} {slow['elapsed']:.1f} s; total {time.monotonic() - t0:.1f} s")
     print(f"fuzz: {len(results)} decks, {exits[0]} exit 0, {exits[1]} exit 1, {exits[2]} exit 2, "
           f"{tally['hang']} hangs, {tally['backtrace']} backtraces, {tally['leftover']} leftover files"
           + (f", {failed} failed" if failed else "")
