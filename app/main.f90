@@ -190,7 +190,8 @@ contains
       character(len=:), allocatable :: s
       character(len=40) :: a, b
       if (f > 0.0_wp) then
-         write (a, '(f0.1)') f
+         a = str(f, 5)                             ! f0.1 would not fit above 1e38 Hz
+         if (f < 1.0e9_wp) write (a, '(f0.1)') f
          write (b, '(f4.2)') z
          s = 'the mode at '//trim(a)//' Hz, damping ratio '//trim(b)
       else

@@ -20,6 +20,7 @@ module trainsim_el_spur_gear
    use trainsim_strings, only: str, string_t, to_lower
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
+   use trainsim_limits, only: check_magnitude
    use trainsim_param_list, only: param_list_t
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
@@ -143,6 +144,13 @@ contains
          call grp%require_positive('teeth_driver', self%teeth, err); if (allocated(err)) return
          call grp%require_positive('teeth_driven', self%teeth2, err); if (allocated(err)) return
          call grp%require_positive('face_width', self%face, err); if (allocated(err)) return
+         ! ranges before the geometry arithmetic (squares of radii): D-26, D-27
+         call check_teeth('teeth_driver', self%teeth)
+         call check_teeth('teeth_driven', self%teeth2)
+         call check_magnitude(grp, 'face_width', self%face, err)
+         if (grp%has('diametral_pitch')) call check_magnitude(grp, 'diametral_pitch', pd, err)
+         if (grp%has('module')) call check_magnitude(grp, 'module', modl, err)
+         if (allocated(err)) return
          if (.not. (self%phi > 0.0_wp .and. self%phi < 45.0_wp)) then
             call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, got '// &
                              str(self%phi), err_input)
@@ -189,18 +197,8 @@ contains
                           str(self%mp), err_input)
          return
       end if
-      if (.not. (self%teeth >= 1.0_wp .and. self%teeth <= max_teeth)) then
-         call fatal_error(err, grp%where(trim(merge('teeth_driver', 'teeth       ', geometry)))// &
-                          ': error: teeth must be in [1, '//str(max_teeth)//'], got '//str(self%teeth), err_input)
-         return
-      end if
-      if (geometry) then
-         if (.not. (self%teeth2 >= 1.0_wp .and. self%teeth2 <= max_teeth)) then
-            call fatal_error(err, grp%where('teeth_driven')//': error: teeth_driven must be in [1, '// &
-                             str(max_teeth)//'], got '//str(self%teeth2), err_input)
-            return
-         end if
-      end if
+      if (.not. geometry) call check_teeth('teeth', self%teeth)
+      if (allocated(err)) return
       ! the approach angle lies on the path of contact: 0 <= alpha <= 2 pi m_p / N (App. E: pi m_p / N)
       if (.not. (self%alpha >= 0.0_wp .and. self%alpha <= two_pi*self%mp/self%teeth)) then
          call fatal_error(err, grp%where('approach_angle')//': error: approach_angle must be in [0, 2 pi m_p/N] = [0, '// &
@@ -224,6 +222,16 @@ contains
          return
       end select
       call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
+   contains
+
+      !> Error unless 1 <= n <= max_teeth (NaN fails).
+      subroutine check_teeth(key, n)
+         character(len=*), intent(in) :: key
+         real(wp), intent(in) :: n
+         if (allocated(err)) return
+         if (.not. (n >= 1.0_wp .and. n <= max_teeth)) call fatal_error(err, grp%where(key)//': error: '//key// &
+            ' must be in [1, '//str(max_teeth)//'], got '//str(n), err_input)
+      end subroutine check_teeth
    end subroutine spur_configure
 
    !> Set the zone from the driver angle.

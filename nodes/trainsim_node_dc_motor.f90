@@ -9,6 +9,7 @@ module trainsim_node_dc_motor
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
+   use trainsim_limits, only: check_magnitude
    use trainsim_signal, only: signal_t, constant_signal
    use trainsim_param_list, only: param_list_t
    use trainsim_node, only: node_t
@@ -110,6 +111,7 @@ contains
       type(deck_group_t), intent(inout) :: grp
       type(error_t), allocatable, intent(out) :: err
       call grp%get_real('current', self%current0, err, default=0.0_wp)
+      call check_magnitude(grp, 'current', self%current0, err)
    end subroutine motor_set_initial_extra
 
    pure real(wp) function motor_stored_energy(self, y) result(e)

@@ -6,6 +6,7 @@ module trainsim_builder
    use trainsim_strings, only: string_t, to_lower, str, join
    use trainsim_units, only: make_units
    use trainsim_deck, only: deck_t, deck_group_t
+   use trainsim_limits, only: check_magnitude, check_params
    use trainsim_signal, only: signal_t, signal_from_group
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
@@ -168,6 +169,7 @@ contains
             end if
             model%nodes(k)%n%id = id
             call model%nodes(k)%n%configure(g, model%units, err); if (allocated(err)) return
+            call check_params(g, model%nodes(k)%n%params(), err); if (allocated(err)) return
             call g%check_unused(err, "node type '"//model%nodes(k)%n%type_name//"'"); if (allocated(err)) return
          end associate
       end do
@@ -237,6 +239,7 @@ contains
                   return
                end if
                call e%configure(g, model%units, err); if (allocated(err)) return
+               call check_params(g, e%params(), err); if (allocated(err)) return
                call g%check_unused(err, "element type '"//e%type_name//"'"); if (allocated(err)) return
             end associate
          end associate
@@ -317,6 +320,7 @@ contains
             call g%get_string('node', nid, err); if (allocated(err)) return
             if (to_lower(nid) /= 'all') cycle
             call g%get_real('speed', speed, err); if (allocated(err)) return
+            call check_magnitude(g, 'speed', speed, err); if (allocated(err)) return
             do j = 1, size(model%nodes)
                if (.not. model%nodes(j)%n%is_fixed()) model%nodes(j)%n%omega0 = speed
             end do
@@ -341,6 +345,8 @@ contains
             associate (nd => model%nodes(inode)%n)
                tmp = nd%theta0; call g%get_real('angle', nd%theta0, err, default=tmp); if (allocated(err)) return
                tmp = nd%omega0; call g%get_real('speed', nd%omega0, err, default=tmp); if (allocated(err)) return
+               call check_magnitude(g, 'angle', nd%theta0, err)
+               call check_magnitude(g, 'speed', nd%omega0, err); if (allocated(err)) return
                call nd%set_initial_extra(g, err); if (allocated(err)) return
                if (nd%is_fixed() .and. nd%omega0 /= 0.0_wp) then
                   call fatal_error(err, g%where('speed')//": error: node '"//nid//"' is fixed; its speed must be 0", &

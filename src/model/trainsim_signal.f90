@@ -8,10 +8,14 @@ module trainsim_signal
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
    use trainsim_strings, only: to_lower, str
    use trainsim_deck, only: deck_group_t
+   use trainsim_limits, only: in_range, check_magnitude
    implicit none
    private
 
-   public :: signal_t, signal_from_group, constant_signal
+   public :: signal_t, signal_from_group, constant_signal, max_cycles
+
+   !> Most cycles of a start-stop profile (a year of 30 s cycles); more is a typing error.
+   integer, parameter :: max_cycles = 1000000
 
    integer, parameter :: sig_constant = 0, sig_table = 1, sig_sine = 2
 
@@ -59,17 +63,25 @@ contains
       select case (kind)
       case ('constant')
          call grp%get_real('value', v0, err); if (allocated(err)) return
+         call check_magnitude(grp, 'value', v0, err); if (allocated(err)) return
          sig = constant_signal(v0)
       case ('step')
          call grp%get_real('value0', v0, err, default=0.0_wp); if (allocated(err)) return
          call grp%get_real('value1', v1, err); if (allocated(err)) return
          call grp%get_real('t_step', t0, err); if (allocated(err)) return
+         call check_magnitude(grp, 'value0', v0, err)
+         call check_magnitude(grp, 'value1', v1, err)
+         call check_magnitude(grp, 't_step', t0, err); if (allocated(err)) return
          call set_table(sig, [t0, t0], [v0, v1])
       case ('ramp')
          call grp%get_real('value0', v0, err, default=0.0_wp); if (allocated(err)) return
          call grp%get_real('value1', v1, err); if (allocated(err)) return
          call grp%get_real('t0', t0, err, default=0.0_wp); if (allocated(err)) return
          call grp%get_real('t1', t1, err); if (allocated(err)) return
+         call check_magnitude(grp, 'value0', v0, err)
+         call check_magnitude(grp, 'value1', v1, err)
+         call check_magnitude(grp, 't0', t0, err)
+         call check_magnitude(grp, 't1', t1, err); if (allocated(err)) return
          if (.not. t1 > t0) then
             call fatal_error(err, grp%where('t1')//': error: ramp end t1 must be later than its start t0 (got t0 = '// &
                              str(t0)//', t1 = '//str(t1)//')', err_input)
@@ -82,6 +94,10 @@ contains
          call grp%get_real('amplitude', sig%amplitude, err); if (allocated(err)) return
          call grp%get_real('frequency', v1, err); if (allocated(err)) return
          call grp%get_real('phase', sig%phase, err, default=0.0_wp); if (allocated(err)) return
+         call check_magnitude(grp, 'offset', sig%value0, err)
+         call check_magnitude(grp, 'amplitude', sig%amplitude, err)
+         call check_magnitude(grp, 'frequency', v1, err)
+         call check_magnitude(grp, 'phase', sig%phase, err); if (allocated(err)) return
          if (.not. v1 > 0.0_wp) then
             call fatal_error(err, grp%where('frequency')//': error: sine frequency must be > 0 Hz, got '//str(v1), err_input)
             return
@@ -111,6 +127,14 @@ contains
                return
             end if
          end if
+         do i = 1, size(tt)
+            if (.not. (in_range(tt(i)) .and. in_range(vv(i)))) then
+               call fatal_error(err, grp%where(trim(merge('table_file', 'times     ', grp%has('table_file'))))// &
+                                ': error: table point '//str(i)//' (time '//str(tt(i))//', value '//str(vv(i))// &
+                                ') is out of range: trainsim accepts 0 or a magnitude in [1e-20, 1e20]', err_input)
+               return
+            end if
+         end do
          do i = 2, size(tt)
             if (tt(i) < tt(i - 1)) then
                call fatal_error(err, grp%where('times')//': error: table times must not decrease (entry '// &
@@ -127,13 +151,20 @@ contains
          call grp%get_real('t_dwell', tw, err, default=0.0_wp); if (allocated(err)) return
          call grp%get_real('t_start', t0, err, default=0.0_wp); if (allocated(err)) return
          call grp%get_int('cycles', cycles, err, default=1); if (allocated(err)) return
+         call check_magnitude(grp, 'value', vc, err)
+         call check_magnitude(grp, 't_accel', ta, err)
+         call check_magnitude(grp, 't_cruise', tc, err)
+         call check_magnitude(grp, 't_decel', td, err)
+         call check_magnitude(grp, 't_dwell', tw, err)
+         call check_magnitude(grp, 't_start', t0, err); if (allocated(err)) return
          if (.not. (ta > 0.0_wp .and. td > 0.0_wp .and. tc >= 0.0_wp .and. tw >= 0.0_wp .and. t0 >= 0.0_wp)) then
             call fatal_error(err, grp%where('t_accel')//': error: start_stop needs t_accel > 0, t_decel > 0 and '// &
                              't_cruise, t_dwell, t_start >= 0', err_input)
             return
          end if
-         if (cycles < 1) then
-            call fatal_error(err, grp%where('cycles')//': error: cycles must be >= 1, got '//str(cycles), err_input)
+         if (cycles < 1 .or. cycles > max_cycles) then
+            call fatal_error(err, grp%where('cycles')//': error: cycles must be >= 1 and <= '//str(max_cycles)//', got '// &
+                             str(cycles), err_input)
             return
          end if
          allocate (tt(4*cycles + 1), vv(4*cycles + 1))
