@@ -144,7 +144,7 @@ contains
          call grp%require_positive('teeth_driver', self%teeth, err); if (allocated(err)) return
          call grp%require_positive('teeth_driven', self%teeth2, err); if (allocated(err)) return
          call grp%require_positive('face_width', self%face, err); if (allocated(err)) return
-         ! ranges before the geometry arithmetic (squares of radii): D-26, D-27
+         ! ranges before the geometry arithmetic (squares of radii): D-26, D-28
          call check_teeth('teeth_driver', self%teeth)
          call check_teeth('teeth_driven', self%teeth2)
          call check_magnitude(grp, 'face_width', self%face, err)
