@@ -562,6 +562,18 @@ contains
       if (.not. allocated(err)) call put_column_r(grp, 'peak_force', rcol, err)
       rcol = events%duration
       if (.not. allocated(err)) call put_column_r(grp, 'duration', rcol, err)
+      rcol = events%theta_left
+      if (.not. allocated(err)) call put_column_r(grp, 'theta_left', rcol, err)
+      rcol = events%omega_left
+      if (.not. allocated(err)) call put_column_r(grp, 'omega_left', rcol, err)
+      rcol = events%theta_right
+      if (.not. allocated(err)) call put_column_r(grp, 'theta_right', rcol, err)
+      rcol = events%omega_right
+      if (.not. allocated(err)) call put_column_r(grp, 'omega_right', rcol, err)
+      rcol = events%displacement
+      if (.not. allocated(err)) call put_column_r(grp, 'displacement', rcol, err)
+      rcol = events%force
+      if (.not. allocated(err)) call put_column_r(grp, 'force', rcol, err)
       call close_group(grp, err)
    end subroutine write_events
 

@@ -29,6 +29,10 @@ module trainsim_event
       real(wp) :: damping = 0.0_wp           !< D of eq. (3.12) used for this contact
       real(wp) :: peak_force = 0.0_wp        !< largest |force| during this contact
       real(wp) :: duration = -1.0_wp         !< contact duration (-1 while open)
+      !> the element's state just after the mode update: its nodes' angles and
+      !> speeds, its relative displacement and its force (filled by the recorder)
+      real(wp) :: theta_left = 0.0_wp, omega_left = 0.0_wp, theta_right = 0.0_wp, omega_right = 0.0_wp
+      real(wp) :: displacement = 0.0_wp, force = 0.0_wp
    end type event_t
 
 contains

@@ -294,6 +294,14 @@ contains
          end if
          self%n_events = self%n_events + 1
          self%res%events(self%n_events) = evs(k)
+         associate (row => self%res%events(self%n_events), e => model%elements(i)%e)
+            row%theta_left = self%s%theta(e%left)
+            row%omega_left = self%s%omega(e%left)
+            row%theta_right = self%s%theta(e%right)
+            row%omega_right = self%s%omega(e%right)
+            row%displacement = self%s%displacement(i)
+            row%force = self%s%force(i)
+         end associate
          associate (m => self%res%el(i))
             select case (evs(k)%kind)
             case (ev_contact_front, ev_contact_rear)
@@ -322,9 +330,10 @@ contains
          end associate
       end do
       ! the state just after the mode change belongs to the metrics too: a mesh
-      ! force jumps at a zone change, and its peak may be right there
+      ! force jumps at a zone change, and its peak may be right there. (No
+      ! sample is written: samples stay on the output grid, and the event
+      ! table holds the state at each event.)
       call self%update_metrics(model, t)
-      call self%emit(sink, err)
    end subroutine obs_record_events
 
    !> End of a successful run: close the sink and fill the result.
