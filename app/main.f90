@@ -5,8 +5,7 @@ program trainsim_main
    use trainsim_error, only: error_t, err_numeric
    use trainsim_strings, only: str
    use trainsim_version, only: version_string
-   use trainsim_deck, only: deck_t, read_deck
-   use trainsim_builder, only: build_model
+   use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_model, only: model_t
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
    use trainsim_element, only: lin_state_t, lin_start, lin_stiffest, lin_contact_closed, &
@@ -16,11 +15,14 @@ program trainsim_main
    use trainsim_sink, only: null_sink_t
    use trainsim_hdf5, only: hdf5_sink_t
    use trainsim_report, only: print_summary, print_modes, print_parameters
+   use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
+   use trainsim_prepare, only: prepare_model
    implicit none
 
    character(len=:), allocatable :: cmd, deck_path, out_path
    integer :: nargs, i
    type(lin_state_t) :: modes_state   ! trainsim modes: --closed, --zone, --stiffest
+   type(override_t), allocatable :: sets(:)   ! --set TARGET.KEY=VALUE, in order
 
    nargs = command_argument_count()
    if (nargs == 0) then
@@ -43,6 +45,7 @@ program trainsim_main
 
    deck_path = ''
    out_path = ''
+   allocate (sets(0))
    i = 2
    do while (i <= nargs)
       select case (arg(i))
@@ -52,6 +55,9 @@ program trainsim_main
             call quit(2)
          end if
          out_path = arg(i + 1)
+         i = i + 1
+      case ('--set')
+         call add_set(i)
          i = i + 1
       case ('--closed', '--stiffest', '--zone')
          if (cmd /= 'modes') then
@@ -108,6 +114,20 @@ contains
       call get_command_argument(k, a)
    end function arg
 
+   !> --set TARGET.KEY=VALUE at argument k (the value is argument k+1).
+   subroutine add_set(k)
+      integer, intent(in) :: k
+      type(override_t) :: ov
+      type(error_t), allocatable :: err
+      if (k == nargs) then
+         write (error_unit, '(a)') 'trainsim: error: option --set needs TARGET.KEY=VALUE (e.g. mesh.half_backlash=2e-4)'
+         call quit(2)
+      end if
+      call parse_set_argument(arg(k + 1), ov, err)
+      if (allocated(err)) call fail(err)
+      sets = [sets, ov]
+   end subroutine add_set
+
    subroutine usage(unit)
       integer, intent(in) :: unit
       write (unit, '(a)') 'trainsim '//version_string//' - drive trains with clearances (successor to TRAIN, Cook 1989)', &
@@ -148,10 +168,14 @@ contains
       character(len=*), intent(in) :: path
       type(model_t), intent(out) :: model
       type(deck_t) :: deck
+      type(deck_group_t), allocatable :: sweeps(:)
       type(error_t), allocatable :: err
       call read_deck(path, deck, err)
       if (allocated(err)) call fail(err)
-      call build_model(deck, model, err)
+      call split_sweep_groups(deck, sweeps)
+      if (size(sweeps) > 0) write (error_unit, '(a)') 'trainsim: note: '//path//' has '//str(size(sweeps))// &
+         ' &sweep group(s); '//cmd//' ignores them and uses the deck''s own values (trainsim sweep runs the sweep)'
+      call prepare_model(deck, sets, model, err)
       if (allocated(err)) call fail(err)
    end subroutine load
 
