@@ -116,7 +116,13 @@ contains
       type(sweep_options_t), intent(in) :: opt
       type(sweep_summary_t), intent(out) :: summary
       type(error_t), allocatable, intent(out) :: err
-      call comm_init()
+      character(len=:), allocatable :: why
+      call comm_init(why)
+      if (len(why) > 0) then
+         call fatal_error(err, 'error: '//why, err_input)
+         summary%exit_code = 2
+         return
+      end if
       summary%root = comm_rank() == 0
       call sweep_body(opt, summary, err)
       call comm_bcast_int(summary%exit_code)

@@ -22,8 +22,10 @@ module trainsim_mpi
 contains
 
    !> Start MPI (a program not started by mpirun is one rank).
-   subroutine comm_init()
+   subroutine comm_init(err)
+      character(len=:), allocatable, intent(out) :: err   !< set if MPI cannot be used
       logical :: flag
+      err = ''
       call MPI_Initialized(flag)
       if (.not. flag) then
          call MPI_Init()

@@ -12,7 +12,19 @@ module trainsim_mpi
 
 contains
 
-   subroutine comm_init()
+   !> Refuse to run as one of several copies started by mpirun: each would write the
+   !> same file as "rank 0".
+   subroutine comm_init(err)
+      character(len=:), allocatable, intent(out) :: err   !< set if MPI cannot be used
+      character(len=32) :: v
+      integer :: n, stat
+      err = ''
+      call get_environment_variable('OMPI_COMM_WORLD_SIZE', v, status=stat)
+      if (stat /= 0) call get_environment_variable('PMI_SIZE', v, status=stat)
+      if (stat /= 0) return
+      read (v, *, iostat=stat) n
+      if (stat == 0 .and. n > 1) err = 'this trainsim was built without MPI, and mpirun started '// &
+         trim(v)//' copies of it; run the sweep without mpirun, or rebuild with MPI'
    end subroutine comm_init
 
    subroutine comm_finalize()
