@@ -10,6 +10,7 @@
 !> Fortran (n, n_runs) arrays appear in h5py as (n_runs, n).
 module trainsim_sweep_file
    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_io, err_input
    use trainsim_strings, only: string_t, str
@@ -363,11 +364,9 @@ contains
    !> A count carried as a real; -1 for NaN (a failed run).
    elemental integer function to_int(x)
       real(wp), intent(in) :: x
-      if (x == x .and. abs(x) < 2.0e9_wp) then
-         to_int = nint(x)
-      else
-         to_int = -1
-      end if
+      to_int = -1
+      if (ieee_is_nan(x)) return        ! (an ordered compare of NaN traps in Debug)
+      if (abs(x) < 2.0e9_wp) to_int = nint(x)
    end function to_int
 
    ! ------------------------------------------------------------------------------------------
