@@ -5,8 +5,7 @@ program trainsim_main
    use trainsim_error, only: error_t, err_numeric
    use trainsim_strings, only: str
    use trainsim_version, only: version_string
-   use trainsim_deck, only: deck_t, read_deck
-   use trainsim_builder, only: build_model
+   use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_model, only: model_t
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
    use trainsim_element, only: lin_state_t, lin_start, lin_stiffest, lin_contact_closed, &
@@ -16,11 +15,16 @@ program trainsim_main
    use trainsim_sink, only: null_sink_t
    use trainsim_hdf5, only: hdf5_sink_t
    use trainsim_report, only: print_summary, print_modes, print_parameters
+   use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
+   use trainsim_prepare, only: prepare_model
+   use trainsim_sweep, only: sweep_options_t, sweep_summary_t, run_sweep
    implicit none
 
    character(len=:), allocatable :: cmd, deck_path, out_path
    integer :: nargs, i
    type(lin_state_t) :: modes_state   ! trainsim modes: --closed, --zone, --stiffest
+   type(override_t), allocatable :: sets(:)   ! --set TARGET.KEY=VALUE, in order
+   type(sweep_options_t) :: sweep_opt         ! trainsim sweep: --resume, --progress
 
    nargs = command_argument_count()
    if (nargs == 0) then
@@ -35,7 +39,7 @@ program trainsim_main
    case ('-V', '--version', 'version')
       write (output_unit, '(a)') 'trainsim '//version_string
       call quit(0)
-   case ('run', 'modes')
+   case ('run', 'modes', 'sweep')
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)
@@ -43,16 +47,22 @@ program trainsim_main
 
    deck_path = ''
    out_path = ''
+   allocate (sets(0))
    i = 2
    do while (i <= nargs)
       select case (arg(i))
       case ('-o', '--output')
-         if (i == nargs .or. cmd /= 'run') then
-            write (error_unit, '(a)') 'trainsim: error: option -o needs a file name (and only applies to run)'
+         if (i == nargs .or. cmd == 'modes') then
+            write (error_unit, '(a)') 'trainsim: error: option -o needs a file name (and only applies to run and sweep)'
             call quit(2)
          end if
          out_path = arg(i + 1)
          i = i + 1
+      case ('--set')
+         call add_set(i)
+         i = i + 1
+      case ('--resume', '--progress')
+         call sweep_option(i)
       case ('--closed', '--stiffest', '--zone')
          if (cmd /= 'modes') then
             write (error_unit, '(a)') 'trainsim: error: option '//arg(i)//' only applies to modes (try trainsim --help)'
@@ -93,6 +103,8 @@ program trainsim_main
    end if
    if (cmd == 'run') then
       call do_run(deck_path, out_path)
+   else if (cmd == 'sweep') then
+      call do_sweep(deck_path, out_path)
    else
       call do_modes(deck_path, modes_state)
    end if
@@ -108,13 +120,77 @@ contains
       call get_command_argument(k, a)
    end function arg
 
+   !> --set TARGET.KEY=VALUE at argument k (the value is argument k+1).
+   subroutine add_set(k)
+      integer, intent(in) :: k
+      type(override_t) :: ov
+      type(error_t), allocatable :: err
+      if (k == nargs) then
+         write (error_unit, '(a)') 'trainsim: error: option --set needs TARGET.KEY=VALUE (e.g. mesh.half_backlash=2e-4)'
+         call quit(2)
+      end if
+      call parse_set_argument(arg(k + 1), ov, err)
+      if (allocated(err)) call fail(err)
+      sets = [sets, ov]
+   end subroutine add_set
+
+   !> trainsim sweep's own options at argument k (advances k past a value).
+   subroutine sweep_option(k)
+      integer, intent(inout) :: k
+      integer :: ios
+      character(len=:), allocatable :: value
+      if (cmd /= 'sweep') then
+         write (error_unit, '(a)') 'trainsim: error: option '//arg(k)//' only applies to sweep (try trainsim --help)'
+         call quit(2)
+      end if
+      if (arg(k) == '--resume') then
+         sweep_opt%resume = .true.
+         return
+      end if
+      ios = 1
+      if (k < nargs) then
+         value = arg(k + 1)
+         read (value, *, iostat=ios) sweep_opt%progress_interval
+      end if
+      if (ios /= 0 .or. .not. sweep_opt%progress_interval >= 0.0_wp) then
+         write (error_unit, '(a)') 'trainsim: error: option --progress needs the seconds between progress lines (>= 0)'
+         call quit(2)
+      end if
+      k = k + 1
+   end subroutine sweep_option
+
+   !> trainsim sweep: every run of the deck's &sweep groups into one HDF5 sweep file.
+   subroutine do_sweep(path, out)
+      character(len=*), intent(in) :: path, out
+      type(sweep_summary_t) :: summary
+      type(error_t), allocatable :: err
+      sweep_opt%deck_path = path
+      sweep_opt%out_path = out
+      sweep_opt%sets = sets
+      sweep_opt%progress_unit = error_unit
+      call run_sweep(sweep_opt, summary, err)
+      if (.not. summary%root) call quit(summary%exit_code)
+      if (allocated(err)) call fail(err)
+      write (output_unit, '(a)') 'sweep: '//str(summary%n_now)//' run(s) made, '//str(summary%n_ok)//' of '// &
+         str(summary%n_runs)//' ok, '//str(summary%n_failed)//' failed; results in '//summary%path
+      call quit(summary%exit_code)
+   end subroutine do_sweep
+
    subroutine usage(unit)
       integer, intent(in) :: unit
       write (unit, '(a)') 'trainsim '//version_string//' - drive trains with clearances (successor to TRAIN, Cook 1989)', &
          '', &
          'usage:', &
-         '  trainsim run DECK [-o FILE]   integrate the train in DECK; write the HDF5 history', &
-         '                                (to FILE, else to the deck''s &run output)', &
+         '  trainsim run DECK [-o FILE] [--set TARGET.KEY=VALUE ...]', &
+         '                                integrate the train in DECK; write the HDF5 history', &
+         '                                (to FILE, else to the deck''s &run output). --set changes a', &
+         '                                deck value (TARGET: node/element id, run, or GROUP#K) or a', &
+         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles)', &
+         '  trainsim sweep DECK [-o FILE] [--set ...] [--resume] [--progress S]', &
+         '                                every run of the deck''s &sweep groups (serial, or under', &
+         '                                mpirun -np N) into one HDF5 sweep file (default DECK_sweep.h5);', &
+         '                                re-running it (or --resume) completes a sweep that was stopped;', &
+         '                                progress on stderr every S seconds (default 5; 0: every run)', &
          '  trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest]', &
          '                                natural frequencies and mode shapes of the linearised train,', &
          '                                and its RK4 step limit. Linearised as the run starts, or:', &
@@ -126,7 +202,7 @@ contains
          '                                            run can reach (what `run` checks dt against)', &
          '  trainsim --help | --version', &
          '', &
-         'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file', &
+         'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file', &
          'deck format: docs/deck.md'
    end subroutine usage
 
@@ -148,10 +224,14 @@ contains
       character(len=*), intent(in) :: path
       type(model_t), intent(out) :: model
       type(deck_t) :: deck
+      type(deck_group_t), allocatable :: sweeps(:)
       type(error_t), allocatable :: err
       call read_deck(path, deck, err)
       if (allocated(err)) call fail(err)
-      call build_model(deck, model, err)
+      call split_sweep_groups(deck, sweeps)
+      if (size(sweeps) > 0) write (error_unit, '(a)') 'trainsim: note: '//path//' has '//str(size(sweeps))// &
+         ' &sweep group(s); '//cmd//' ignores them and uses the deck''s own values (trainsim sweep runs the sweep)'
+      call prepare_model(deck, sets, model, err)
       if (allocated(err)) call fail(err)
    end subroutine load
 

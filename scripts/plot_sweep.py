@@ -1,0 +1,113 @@
+#!/usr/bin/python3
+"""Plot a metric of a trainsim sweep file against the swept parameter.
+
+    /usr/bin/python3 scripts/plot_sweep.py SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean \
+        [--x mesh.mesh_frequency] [--label TEXT ...] [--out fig.png] [--fig5-11]
+
+--metric ID.NAME   an element metric (elements/NAME column ID: p2p_range, p2p_mean,
+                   impacts, time_out_of_contact, max_peak_force, ...) or a node metric
+                   (speed_min, speed_max); runs/NAME (wall_time, steps, ...) with ID 'run'
+--x NAME           the parameter on the x axis (default: the first swept parameter)
+--fig5-11          mark Cook's Fig. 5.11 figures (TRAIN's maximum 0.0022 in at 460 teeth/s,
+                   its separation range 460-500 teeth/s, the experiment's 0.00325 in near 385)
+Failed runs are marked with a red x on the axis; runs whose mesh lost contact (impacts > 0)
+are filled markers when the metric is an element metric.
+"""
+
+import argparse
+import sys
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def strings(ds):
+    return [s.decode() if isinstance(s, bytes) else str(s) for s in ds[:]]
+
+
+def read(path, metric, xname):
+    with h5py.File(path, "r") as f:
+        names = strings(f["parameters/names"]) if "names" in f["parameters"] else []
+        if not names:
+            sys.exit(f"{path}: the sweep has no parameters")
+        xname = xname or names[0]
+        if xname not in names:
+            sys.exit(f"{path}: no parameter '{xname}'; parameters are: {', '.join(names)}")
+        x = f["parameters/values"][:, names.index(xname)]
+        status = f["runs/status"][:]
+        oid, _, key = metric.rpartition(".")
+        impacts = None
+        if oid == "run":
+            y = f["runs"][key][:].astype(float)
+        else:
+            for group in ("elements", "nodes"):
+                ids = strings(f[group]["ids"]) if "ids" in f[group] else []
+                if oid in ids and key in f[group]:
+                    y = f[group][key][:, ids.index(oid)].astype(float)
+                    if group == "elements":
+                        impacts = f["elements/impacts"][:, ids.index(oid)]
+                    break
+            else:
+                el = [k for k in f["elements"] if k not in ("ids", "types")]
+                sys.exit(f"{path}: no metric '{metric}'; element ids: {', '.join(strings(f['elements/ids']))}; "
+                         f"element metrics: {', '.join(el)}; node metrics: speed_min, speed_max")
+        label = f.attrs.get("overrides", b"")
+        label = label.decode() if isinstance(label, bytes) else str(label)
+    return xname, x, y, status, impacts, label
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("files", nargs="+")
+    ap.add_argument("--metric", required=True)
+    ap.add_argument("--x")
+    ap.add_argument("--label", action="append")
+    ap.add_argument("--out", default="sweep.png")
+    ap.add_argument("--fig5-11", dest="fig511", action="store_true")
+    a = ap.parse_args()
+
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for i, path in enumerate(a.files):
+        xname, x, y, status, impacts, label = read(path, a.metric, a.x)
+        if a.label and i < len(a.label):
+            label = a.label[i]
+        label = label or path
+        order = np.argsort(x)
+        ok = status[order] == 1
+        xs, ys = x[order], y[order]
+        line, = ax.plot(xs[ok], ys[ok], "-", lw=1.2, label=label)
+        c = line.get_color()
+        if impacts is not None:
+            lost = (impacts[order] > 0) & ok
+            ax.plot(xs[ok & ~lost], ys[ok & ~lost], "o", mfc="white", mec=c, ms=5)
+            ax.plot(xs[lost], ys[lost], "o", mfc=c, mec=c, ms=5)
+        else:
+            ax.plot(xs[ok], ys[ok], "o", color=c, ms=4)
+        failed = status[order] == 2
+        if failed.any():
+            ax.plot(xs[failed], np.zeros(failed.sum()), "x", color="red", ms=9, mew=2,
+                    label=f"failed run ({failed.sum()})")
+        pending = status[order] == 0
+        if pending.any():
+            print(f"{path}: {pending.sum()} run(s) not made yet", file=sys.stderr)
+    if a.fig511:
+        ax.axvspan(460, 500, color="0.85", zorder=0, label="TRAIN: separation 460-500 teeth/s (Cook 1989)")
+        ax.plot([460], [0.0022], "k+", ms=14, mew=2, label="TRAIN max p2p TE 0.0022 in at 460 (Cook)")
+        ax.plot([385], [0.00325], "kx", ms=10, mew=2, label="experiment max 0.00325 in near 385 (Cook)")
+    ax.set_xlabel(xname)
+    ax.set_ylabel(a.metric)
+    note = "filled: contact lost (impacts > 0)" if impacts is not None else ""
+    ax.set_title(f"{a.metric} vs {xname}" + (f"\n{note}" if note else ""), fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=120)
+    print(a.out)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,292 @@
+!> Parameter overrides on a parsed deck: `--set TARGET.KEY=VALUE` on the command line
+!> and the per-run values of a sweep. An override sets (or adds) the key's entry in one
+!> group of the parsed deck before the model is built, so every plug-in reads and checks
+!> it with its own rules and messages. TARGET is a node or element id, `run`, or
+!> `GROUP#K` (the K-th &GROUP, e.g. `load#2`).
+!>
+!> Messages: an overridden entry carries the line number -k (k = its index in the
+!> override list), and `localize_error` replaces "deck.nml:-k:" in a message by the
+!> override's origin ("--set mesh.half_backlash=abc"), so the user sees what they typed.
+!>
+!> Keys that are not deck keys but derived parameters (`mesh_frequency`,
+!> `settle_cycles`, `measure_cycles` of a gear element) are kept aside here and applied
+!> to the built model by trainsim_derived.
+module trainsim_overrides
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_deck, only: deck_t, deck_group_t, deck_entry_t, parse_deck
+   implicit none
+   private
+
+   public :: override_t, parse_set_argument, make_override, apply_overrides, localize_error
+   public :: split_sweep_groups, derived_keys, is_derived_key, resolve_target
+
+   !> The derived parameters (applied to the model, not to a deck group).
+   character(len=*), parameter :: derived_keys(3) = [character(len=14) :: 'mesh_frequency', 'settle_cycles', &
+                                                     'measure_cycles']
+
+   !> One `TARGET.KEY = VALUE[, VALUE ...]`.
+   type :: override_t
+      character(len=:), allocatable :: target     !< id, 'run' or 'group#k', as written
+      character(len=:), allocatable :: key        !< lower case
+      type(string_t), allocatable :: values(:)    !< raw tokens, strings unquoted
+      logical, allocatable :: quoted(:)
+      !> What a message names instead of "file:line", e.g. "--set mesh.half_backlash=abc"
+      character(len=:), allocatable :: origin
+      logical :: derived = .false.                !< a derived parameter (trainsim_derived)
+   end type override_t
+
+contains
+
+   !> True for the keys of derived parameters.
+   pure logical function is_derived_key(key)
+      character(len=*), intent(in) :: key
+      integer :: i
+      is_derived_key = .false.
+      do i = 1, size(derived_keys)
+         if (to_lower(key) == trim(derived_keys(i))) is_derived_key = .true.
+      end do
+   end function is_derived_key
+
+   !> Parse a `--set` argument `TARGET.KEY=VALUE`. VALUE is read with the deck's own
+   !> lexer (quotes, lists, comments), so `--set "n4.value=-798.8"` and
+   !> `--set "load#1.times=0, 0.1"` read as they would in a deck.
+   subroutine parse_set_argument(arg, ov, err)
+      character(len=*), intent(in) :: arg
+      type(override_t), intent(out) :: ov
+      type(error_t), allocatable, intent(out) :: err
+      integer :: peq
+      character(len=:), allocatable :: lhs, origin
+
+      origin = '--set '//arg
+      peq = index(arg, '=')
+      if (peq == 0) then
+         call fatal_error(err, origin//": error: expected TARGET.KEY=VALUE (e.g. mesh.half_backlash=2e-4), "// &
+                          "found no '='", err_input)
+         return
+      end if
+      lhs = trim(adjustl(arg(1:peq - 1)))
+      call make_override(lhs, arg(peq + 1:), origin, ov, err)
+   end subroutine parse_set_argument
+
+   !> An override of `name` (TARGET.KEY) with the value text `value`; `origin` names it in messages.
+   subroutine make_override(name, value, origin, ov, err)
+      character(len=*), intent(in) :: name, value, origin
+      type(override_t), intent(out) :: ov
+      type(error_t), allocatable, intent(out) :: err
+      type(deck_t) :: tmp
+      integer :: pdot, p
+      character(len=:), allocatable :: msg
+
+      ov%origin = origin
+      pdot = index(name, '.', back=.true.)
+      if (pdot <= 1 .or. pdot == len(name)) then
+         call fatal_error(err, origin//": error: expected TARGET.KEY=VALUE, where TARGET is a node or element id, "// &
+                          "'run', or GROUP#K (e.g. load#2), got '"//name//"'", err_input)
+         return
+      end if
+      ov%target = name(1:pdot - 1)
+      ov%key = to_lower(name(pdot + 1:))
+      if (len_trim(value) == 0) then
+         call fatal_error(err, origin//": error: key '"//ov%key//"' has no value", err_input)
+         return
+      end if
+      ! The value is lexed exactly as in a deck: one group, one entry.
+      call parse_deck('&set '//ov%key//' = '//value//new_line('a')//'/', origin, tmp, err)
+      if (allocated(err)) then
+         msg = err%message
+         p = index(msg, ': error: ')
+         if (p > 0) msg = msg(p + 9:)
+         p = index(msg, '&set #1: ')
+         if (p == 1) msg = msg(10:)
+         err%message = origin//': error: '//msg
+         return
+      end if
+      if (size(tmp%groups) /= 1) then
+         call fatal_error(err, origin//": error: the value holds an unquoted '/' (quote it)", err_input)
+         return
+      end if
+      if (size(tmp%groups(1)%entries) /= 1) then
+         call fatal_error(err, origin//": error: expected one key, got "//str(size(tmp%groups(1)%entries))// &
+                          " (give one --set per key)", err_input)
+         return
+      end if
+      if (tmp%groups(1)%entries(1)%key /= ov%key) then
+         call fatal_error(err, origin//": error: '"//ov%key//"' is not a key name (a letter, then letters, "// &
+                          "digits and '_')", err_input)
+         return
+      end if
+      ov%values = tmp%groups(1)%entries(1)%values
+      ov%quoted = tmp%groups(1)%entries(1)%quoted
+      ov%derived = is_derived_key(ov%key)
+   end subroutine make_override
+
+   !> Set every non-derived override in its deck group (replacing the key's value, or
+   !> adding the key). Later overrides of the same key win.
+   subroutine apply_overrides(deck, ovs, err)
+      type(deck_t), intent(inout) :: deck
+      type(override_t), intent(in) :: ovs(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: k, ig, j
+      type(deck_entry_t) :: e
+      type(deck_entry_t), allocatable :: grown(:)
+
+      do k = 1, size(ovs)
+         call resolve_target(deck, ovs(k), ig, err)
+         if (allocated(err)) return
+         if (ovs(k)%derived) then
+            if (deck%groups(ig)%name /= 'element') then
+               call fatal_error(err, ovs(k)%origin//": error: '"//ovs(k)%key//"' is a parameter of a gear "// &
+                                "element, and '"//ovs(k)%target//"' is a &"//deck%groups(ig)%name//' group', err_input)
+               return
+            end if
+            cycle
+         end if
+         e%key = ovs(k)%key
+         e%values = ovs(k)%values
+         e%quoted = ovs(k)%quoted
+         e%line = -k
+         e%used = .false.
+         associate (g => deck%groups(ig))
+            if (.not. allocated(g%entries)) allocate (g%entries(0))
+            do j = 1, size(g%entries)
+               if (g%entries(j)%key == e%key) exit
+            end do
+            if (j <= size(g%entries)) then
+               g%entries(j) = e
+            else
+               allocate (grown(size(g%entries) + 1))
+               grown(1:size(g%entries)) = g%entries
+               grown(size(grown)) = e
+               call move_alloc(grown, g%entries)
+            end if
+         end associate
+      end do
+   end subroutine apply_overrides
+
+   !> Index in deck%groups of the group `ov%target` names.
+   subroutine resolve_target(deck, ov, ig, err)
+      type(deck_t), intent(in) :: deck
+      type(override_t), intent(in) :: ov
+      integer, intent(out) :: ig
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: gname, tgt, gid
+      type(string_t), allocatable :: ids(:)
+      integer :: p, k, i, ios, n_match, ord(2)
+      character(len=*), parameter :: kinds(2) = ['node   ', 'element']
+
+      ig = 0
+      tgt = ov%target
+      p = index(tgt, '#')
+      if (to_lower(tgt) == 'run') then
+         gname = 'run'
+         k = 1
+         if (deck%count_groups('run') /= 1) then
+            call fatal_error(err, ov%origin//': error: the deck must have exactly one &run group, found '// &
+                             str(deck%count_groups('run')), err_input)
+            return
+         end if
+      else if (p > 1) then
+         gname = to_lower(tgt(1:p - 1))
+         read (tgt(p + 1:), *, iostat=ios) k
+         if (ios /= 0 .or. verify(tgt(p + 1:), '0123456789') /= 0 .or. len(tgt) == p) k = 0
+         if (k < 1 .or. k > deck%count_groups(gname)) then
+            call fatal_error(err, ov%origin//": error: no group '"//tgt//"': the deck has "// &
+                             str(deck%count_groups(gname))//' &'//gname//' group(s)', err_input)
+            return
+         end if
+      else
+         ! a node or element id (given or default: n<k>, e<k>)
+         allocate (ids(0))
+         n_match = 0
+         do i = 1, size(deck%groups)
+            associate (g => deck%groups(i))
+               if (g%name /= 'node' .and. g%name /= 'element') cycle
+               gid = group_id(g)
+               if (gid == tgt) then
+                  n_match = n_match + 1
+                  ig = i
+                  ord(min(n_match, 2)) = i
+               end if
+               call append(ids, gid)
+            end associate
+         end do
+         if (n_match == 1) return
+         if (n_match == 0) then
+            call fatal_error(err, ov%origin//": error: no node or element with id '"//tgt//"'; ids are: "// &
+                             join(ids, ', ')//"; or use 'run' or GROUP#K (e.g. load#1)", err_input)
+         else
+            call fatal_error(err, ov%origin//": error: '"//tgt//"' is the id of a "// &
+                             trim(kinds(merge(1, 2, deck%groups(ord(1))%name == 'node')))//' and of an '// &
+                             trim(kinds(merge(1, 2, deck%groups(ord(2))%name == 'node')))// &
+                             '; name the group as node#K or element#K', err_input)
+         end if
+         ig = 0
+         return
+      end if
+      n_match = 0
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= gname) cycle
+         n_match = n_match + 1
+         if (n_match == k) then
+            ig = i
+            return
+         end if
+      end do
+   end subroutine resolve_target
+
+   subroutine append(list, item)
+      type(string_t), allocatable, intent(inout) :: list(:)
+      character(len=*), intent(in) :: item
+      type(string_t), allocatable :: tmp(:)
+      allocate (tmp(size(list) + 1))
+      tmp(1:size(list)) = list
+      tmp(size(tmp))%s = item
+      call move_alloc(tmp, list)
+   end subroutine append
+
+   !> The id of a &node or &element group: its `id` value, else n<k> / e<k>.
+   function group_id(g) result(id)
+      type(deck_group_t), intent(in) :: g
+      character(len=:), allocatable :: id
+      integer :: j
+      do j = 1, size(g%entries)
+         if (g%entries(j)%key == 'id') then
+            if (size(g%entries(j)%values) > 0) then
+               id = g%entries(j)%values(1)%s
+               return
+            end if
+         end if
+      end do
+      id = g%name(1:1)//str(g%ordinal)
+   end function group_id
+
+   !> Replace "FILE:-k:" in `err` by the origin of override k.
+   subroutine localize_error(err, file, ovs)
+      type(error_t), intent(inout) :: err
+      character(len=*), intent(in) :: file
+      type(override_t), intent(in) :: ovs(:)
+      character(len=:), allocatable :: marker
+      integer :: k, p
+      do k = 1, size(ovs)
+         marker = file//':-'//str(k)//':'
+         p = index(err%message, marker)
+         if (p > 0) err%message = err%message(1:p - 1)//ovs(k)%origin//':'// &
+                                  err%message(p + len(marker):)
+      end do
+   end subroutine localize_error
+
+   !> Move the &sweep groups out of `deck` into `sweeps` (the builder knows none of them).
+   subroutine split_sweep_groups(deck, sweeps)
+      type(deck_t), intent(inout) :: deck
+      type(deck_group_t), allocatable, intent(out) :: sweeps(:)
+      logical, allocatable :: is_sweep(:)
+      integer :: i
+      allocate (is_sweep(size(deck%groups)))
+      do i = 1, size(deck%groups)
+         is_sweep(i) = deck%groups(i)%name == 'sweep'
+      end do
+      sweeps = pack(deck%groups, is_sweep)
+      deck%groups = pack(deck%groups, .not. is_sweep)
+   end subroutine split_sweep_groups
+end module trainsim_overrides

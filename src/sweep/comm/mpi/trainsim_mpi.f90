@@ -1,0 +1,96 @@
+!> The only MPI module (mpi_f08): the few messages of a sweep's dynamic load
+!> balancing. Rank 0 hands out run indices and receives each run's record; the
+!> other ranks ask for work, run it and send the record back. Built when CMake
+!> finds MPI; otherwise comm/serial/trainsim_mpi.f90 has the same interface.
+module trainsim_mpi
+   use, intrinsic :: iso_fortran_env, only: real64
+   use mpi_f08
+   implicit none
+   private
+
+   public :: comm_available, comm_init, comm_finalize, comm_rank, comm_size
+   public :: comm_send_record, comm_poll_record, comm_send_index, comm_recv_index, comm_bcast_int
+
+   !> True in the MPI build.
+   logical, parameter :: comm_available = .true.
+
+   integer, parameter :: tag_record = 11, tag_message = 12, tag_index = 13
+
+   !> Whether comm_init called MPI_Init (then comm_finalize calls MPI_Finalize).
+   logical, save :: started_here = .false.
+
+contains
+
+   !> Start MPI (a program not started by mpirun is one rank).
+   subroutine comm_init(err)
+      character(len=:), allocatable, intent(out) :: err   !< set if MPI cannot be used
+      logical :: flag
+      err = ''
+      call MPI_Initialized(flag)
+      if (.not. flag) then
+         call MPI_Init()
+         started_here = .true.
+      end if
+   end subroutine comm_init
+
+   subroutine comm_finalize()
+      logical :: flag
+      if (.not. started_here) return
+      call MPI_Finalized(flag)
+      if (.not. flag) call MPI_Finalize()
+      started_here = .false.
+   end subroutine comm_finalize
+
+   integer function comm_rank() result(r)
+      call MPI_Comm_rank(MPI_COMM_WORLD, r)
+   end function comm_rank
+
+   integer function comm_size() result(n)
+      call MPI_Comm_size(MPI_COMM_WORLD, n)
+   end function comm_size
+
+   !> Worker -> rank 0: a run's record (numbers) and its message.
+   subroutine comm_send_record(buf, message)
+      real(real64), intent(in) :: buf(:)
+      character(len=*), intent(in) :: message
+      call MPI_Send(buf, size(buf), MPI_DOUBLE_PRECISION, 0, tag_record, MPI_COMM_WORLD)
+      call MPI_Send(message, len(message), MPI_CHARACTER, 0, tag_message, MPI_COMM_WORLD)
+   end subroutine comm_send_record
+
+   !> Rank 0: receive one waiting record if there is one (never blocks for long).
+   subroutine comm_poll_record(buf, found, source, message)
+      real(real64), intent(out) :: buf(:)
+      logical, intent(out) :: found
+      integer, intent(out) :: source
+      character(len=:), allocatable, intent(out) :: message
+      type(MPI_Status) :: st
+      integer :: n
+      source = -1
+      call MPI_Iprobe(MPI_ANY_SOURCE, tag_record, MPI_COMM_WORLD, found, st)
+      if (.not. found) return
+      source = st%MPI_SOURCE
+      call MPI_Recv(buf, size(buf), MPI_DOUBLE_PRECISION, source, tag_record, MPI_COMM_WORLD, st)
+      call MPI_Probe(source, tag_message, MPI_COMM_WORLD, st)
+      call MPI_Get_count(st, MPI_CHARACTER, n)
+      allocate (character(len=n) :: message)
+      call MPI_Recv(message, n, MPI_CHARACTER, source, tag_message, MPI_COMM_WORLD, st)
+   end subroutine comm_poll_record
+
+   !> Rank 0 -> worker: the next run index (0: no more work).
+   subroutine comm_send_index(dest, irun)
+      integer, intent(in) :: dest, irun
+      call MPI_Send(irun, 1, MPI_INTEGER, dest, tag_index, MPI_COMM_WORLD)
+   end subroutine comm_send_index
+
+   !> Worker: wait for the next run index from rank 0.
+   subroutine comm_recv_index(irun)
+      integer, intent(out) :: irun
+      call MPI_Recv(irun, 1, MPI_INTEGER, 0, tag_index, MPI_COMM_WORLD, MPI_STATUS_IGNORE)
+   end subroutine comm_recv_index
+
+   !> Rank 0's value of v on every rank.
+   subroutine comm_bcast_int(v)
+      integer, intent(inout) :: v
+      call MPI_Bcast(v, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+   end subroutine comm_bcast_int
+end module trainsim_mpi

@@ -1,0 +1,240 @@
+!> Derived parameters: values that are not one deck key but set several model
+!> quantities consistently. All are keys of a gear element (spur or helical: one with
+!> `teeth` on its driver):
+!>
+!> - `mesh_frequency` f (teeth/s): the driver gear turns at w = 2 pi f / N. Every node
+!>   joined to it through elements (fixed nodes excepted) gets the kinematically
+!>   consistent initial speed, carried through each element's speed ratio; every
+!>   prescribed (`constant`) speed in that part of the train is set to its node's speed.
+!>   With no prescribed speed there, only the initial speeds are set.
+!> - `settle_cycles` n_s: run%settle_time = n_s / f.
+!> - `measure_cycles` n_m: run%t_end = t_start + settle_time + n_m / f.
+!>
+!> f in the cycle counts is the pair's mesh frequency as the run starts (after any
+!> `mesh_frequency`): from the driver's prescribed speed at t_start, else its initial speed.
+module trainsim_derived
+   use trainsim_kinds, only: wp, two_pi
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, to_lower
+   use trainsim_model, only: model_t
+   use trainsim_element, only: lin_closed
+   use trainsim_signal, only: constant_signal
+   use trainsim_param_list, only: param_list_t
+   use trainsim_overrides, only: override_t, derived_keys
+   implicit none
+   private
+
+   public :: apply_derived, set_mesh_frequency, mesh_frequency_of, speed_ratio
+
+contains
+
+   !> Apply the derived overrides of `ovs` to `model`: every mesh_frequency first (in
+   !> order), then settle_cycles, then measure_cycles.
+   subroutine apply_derived(model, ovs, err)
+      type(model_t), intent(inout) :: model
+      type(override_t), intent(in) :: ovs(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: pass, k, ie
+      real(wp) :: v, f
+
+      do pass = 1, size(derived_keys)
+         do k = 1, size(ovs)
+            if (.not. ovs(k)%derived) cycle
+            if (ovs(k)%key /= trim(derived_keys(pass))) cycle
+            call value_of(ovs(k), v, err); if (allocated(err)) return
+            ie = element_of(model, ovs(k)%target)
+            if (ie == 0) then
+               call fatal_error(err, ovs(k)%origin//": error: no element '"//ovs(k)%target//"'", err_input)
+               return
+            end if
+            select case (pass)
+            case (1)
+               call set_mesh_frequency(model, ie, v, err)
+            case default
+               f = mesh_frequency_of(model, ie)
+               if (.not. f > 0.0_wp) then
+                  call fatal_error(err, "error: the mesh frequency of '"//ovs(k)%target// &
+                                   "' is 0 as the run starts, so a time in mesh cycles is undefined", err_input)
+               else if (pass == 2) then
+                  model%run%settle_time = v/f
+               else
+                  model%run%t_end = model%run%t_start + model%run%settle_time + v/f
+                  if (model%run%dt > model%run%t_end - model%run%t_start) &
+                     call fatal_error(err, 'error: dt = '//str(model%run%dt)//' is longer than the run ('// &
+                                      str(model%run%t_end - model%run%t_start)//' s)', err_input)
+               end if
+            end select
+            if (allocated(err)) then
+               if (index(err%message, 'error: ') == 1) then
+                  err%message = ovs(k)%origin//': '//err%message
+               else
+                  err%message = ovs(k)%origin//': error: '//err%message
+               end if
+               return
+            end if
+         end do
+      end do
+   end subroutine apply_derived
+
+   !> The single positive real value of a derived override.
+   subroutine value_of(ov, v, err)
+      type(override_t), intent(in) :: ov
+      real(wp), intent(out) :: v
+      type(error_t), allocatable, intent(out) :: err
+      integer :: ios
+      v = 0.0_wp
+      if (size(ov%values) /= 1 .or. ov%quoted(1)) then
+         call fatal_error(err, ov%origin//": error: key '"//ov%key//"': expected one real number", err_input)
+         return
+      end if
+      read (ov%values(1)%s, *, iostat=ios) v
+      if (ios /= 0 .or. verify(to_lower(ov%values(1)%s), '0123456789.+-ed') /= 0) then
+         call fatal_error(err, ov%origin//": error: key '"//ov%key//"': expected a real number, got '"// &
+                          ov%values(1)%s//"'", err_input)
+      else if (.not. (v > 0.0_wp .and. v < huge(v))) then
+         call fatal_error(err, ov%origin//": error: "//ov%key//' must be > 0, got '//ov%values(1)%s, err_input)
+      end if
+   end subroutine value_of
+
+   integer function element_of(model, id) result(ie)
+      type(model_t), intent(in) :: model
+      character(len=*), intent(in) :: id
+      integer :: i
+      ie = 0
+      do i = 1, size(model%elements)
+         if (model%elements(i)%e%id == id) ie = i
+      end do
+      if (ie > 0) return
+      ! element#k
+      if (index(id, '#') > 1) then
+         if (to_lower(id(1:index(id, '#') - 1)) == 'element') then
+            read (id(index(id, '#') + 1:), *, iostat=i) ie
+            if (i /= 0 .or. ie < 1 .or. ie > size(model%elements)) ie = 0
+         end if
+      end if
+   end function element_of
+
+   !> Teeth on the driver of element ie (0 if it is not a gear with teeth).
+   real(wp) function driver_teeth(model, ie) result(n)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ie
+      type(param_list_t) :: p
+      integer :: j
+      n = 0.0_wp
+      p = model%elements(ie)%e%params()
+      if (.not. allocated(p%names)) return
+      do j = 1, size(p%names)
+         if (p%names(j)%s == 'teeth') n = p%values(j)
+      end do
+   end function driver_teeth
+
+   !> Speed ratio w_right / w_left of element ie when its clearance is closed and it
+   !> turns rigidly: the null vector of its closed-contact stiffness (shaft 1, gear pair
+   !> r1/r2), else of its damping (a damper: 1). 0 if the element couples no speeds.
+   real(wp) function speed_ratio(model, ie) result(rho)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ie
+      real(wp) :: k(2, 2), c(2, 2)
+      call model%elements(ie)%e%linearise(lin_closed, 1.0_wp, 1.0_wp, k, c)
+      rho = 0.0_wp
+      if (abs(k(2, 2)) > 0.0_wp) then
+         rho = -k(1, 2)/k(2, 2)
+      else if (abs(c(2, 2)) > 0.0_wp) then
+         rho = -c(1, 2)/c(2, 2)
+      end if
+   end function speed_ratio
+
+   !> Set the mesh frequency of gear element ie to f (teeth/s): initial speeds of the
+   !> connected train and its prescribed constant speeds (see the module's note).
+   subroutine set_mesh_frequency(model, ie, f, err)
+      type(model_t), intent(inout) :: model
+      integer, intent(in) :: ie
+      real(wp), intent(in) :: f
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: w(:)
+      logical, allocatable :: known(:)
+      real(wp) :: teeth, rho
+      integer :: nn, i, j, pass
+      logical :: changed
+
+      teeth = driver_teeth(model, ie)
+      associate (e => model%elements(ie)%e)
+         if (.not. teeth > 0.0_wp) then
+            call fatal_error(err, "error: element '"//e%id//"' of type '"//e%type_name// &
+                             "' has no teeth; mesh_frequency needs a gear pair (spur_gear, helical_gear)", err_input)
+            return
+         end if
+         if (model%nodes(e%left)%n%is_fixed()) then
+            call fatal_error(err, "error: the driver of '"//e%id//"' is a fixed node", err_input)
+            return
+         end if
+         nn = size(model%nodes)
+         allocate (w(nn), known(nn))
+         known = .false.
+         w = 0.0_wp
+         w(e%left) = two_pi*f/teeth
+         known(e%left) = .true.
+      end associate
+      ! carry the speed along the elements until nothing changes (the train is small)
+      do pass = 1, size(model%elements) + 1
+         changed = .false.
+         do j = 1, size(model%elements)
+            associate (e => model%elements(j)%e)
+               if (model%nodes(e%left)%n%is_fixed() .or. model%nodes(e%right)%n%is_fixed()) cycle
+               if (.not. (known(e%left) .or. known(e%right))) cycle
+               rho = speed_ratio(model, j)
+               if (rho == 0.0_wp) cycle
+               if (known(e%left) .and. known(e%right)) then
+                  if (abs(w(e%right) - rho*w(e%left)) > 1.0e-9_wp*max(abs(w(e%right)), abs(w(e%left)))) then
+                     call fatal_error(err, "error: the speed ratios around a loop through element '"//e%id// &
+                                      "' do not agree, so no speeds turn the whole train rigidly", err_input)
+                     return
+                  end if
+               else if (known(e%left)) then
+                  w(e%right) = rho*w(e%left)
+                  known(e%right) = .true.
+                  changed = .true.
+               else
+                  w(e%left) = w(e%right)/rho
+                  known(e%left) = .true.
+                  changed = .true.
+               end if
+            end associate
+         end do
+         if (.not. changed) exit
+      end do
+      ! prescribed speeds in the connected part must be constant; set them
+      do i = 1, nn
+         if (.not. known(i)) cycle
+         if (model%speed_of(i) == 0) cycle
+         associate (s => model%speeds(model%speed_of(i)))
+            if (s%label /= 'constant') then
+               call fatal_error(err, "error: node '"//model%nodes(i)%n%id//"' has a prescribed speed of kind '"// &
+                                s%label//"'; mesh_frequency can only set a constant one", err_input)
+               return
+            end if
+         end associate
+      end do
+      do i = 1, nn
+         if (.not. known(i)) cycle
+         model%nodes(i)%n%omega0 = w(i)
+         if (model%speed_of(i) /= 0) model%speeds(model%speed_of(i)) = constant_signal(w(i))
+      end do
+   end subroutine set_mesh_frequency
+
+   !> Mesh frequency (teeth/s) of gear element ie as the run starts: from its driver's
+   !> prescribed speed at t_start, else the driver's initial speed. 0 if not a gear.
+   real(wp) function mesh_frequency_of(model, ie) result(f)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ie
+      real(wp) :: w
+      integer :: nl
+      nl = model%elements(ie)%e%left
+      if (model%speed_of(nl) /= 0) then
+         w = model%speeds(model%speed_of(nl))%value(model%run%t_start)
+      else
+         w = model%nodes(nl)%n%omega0
+      end if
+      f = abs(w)*driver_teeth(model, ie)/two_pi
+   end function mesh_frequency_of
+end module trainsim_derived

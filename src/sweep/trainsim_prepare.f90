@@ -1,0 +1,35 @@
+!> Deck + overrides -> model: the one path from a parsed deck to a model that `run`,
+!> `modes` and every run of a sweep take. The overrides are set in a copy of the deck
+!> (so each plug-in checks them), the model is built, then the derived parameters
+!> (mesh_frequency, settle_cycles, measure_cycles) are applied to it. Messages about an
+!> override name the override ("--set mesh.half_backlash=abc: error: ...").
+module trainsim_prepare
+   use trainsim_error, only: error_t
+   use trainsim_deck, only: deck_t
+   use trainsim_builder, only: build_model
+   use trainsim_model, only: model_t
+   use trainsim_overrides, only: override_t, apply_overrides, localize_error
+   use trainsim_derived, only: apply_derived
+   implicit none
+   private
+
+   public :: prepare_model
+
+contains
+
+   !> Build `model` from `deck` (without &sweep groups) with the overrides `ovs` applied.
+   !> `deck` is not changed.
+   subroutine prepare_model(deck, ovs, model, err)
+      type(deck_t), intent(in) :: deck
+      type(override_t), intent(in) :: ovs(:)
+      type(model_t), intent(out) :: model
+      type(error_t), allocatable, intent(out) :: err
+      type(deck_t) :: work
+
+      work = deck
+      call apply_overrides(work, ovs, err)
+      if (.not. allocated(err)) call build_model(work, model, err)
+      if (.not. allocated(err)) call apply_derived(model, ovs, err)
+      if (allocated(err)) call localize_error(err, deck%file, ovs)
+   end subroutine prepare_model
+end module trainsim_prepare

@@ -1,0 +1,584 @@
+!> `trainsim sweep`: the runs of a deck's &sweep groups, serially or on MPI ranks with
+!> dynamic load balancing, recorded in one HDF5 sweep file as each run completes.
+!>
+!> Load balancing (docs/sweeps.md): rank 0 hands out run indices one at a time, on
+!> request. Each worker sends the record of its finished run, which is also its request
+!> for the next index. Rank 0 computes runs too; while it does, its sink services the
+!> workers' requests every millisecond of wall time (between two output samples), so no
+!> worker waits for rank 0's run to end. Rank 0 alone writes the sweep file.
+!>
+!> A run is `simulate` on a model prepared from the deck with the run's parameter values
+!> (trainsim_prepare); no history is written. A run that fails (blow-up, solver failure)
+!> is recorded with its message and the sweep goes on.
+module trainsim_sweep
+   use, intrinsic :: iso_c_binding, only: c_int
+   use trainsim_kinds, only: wp, i8
+   use trainsim_error, only: error_t, fatal_error, err_input, err_io
+   use trainsim_strings, only: string_t, str, to_lower, join
+   use trainsim_version, only: version_string
+   use trainsim_deck, only: deck_t, deck_group_t, read_deck
+   use trainsim_model, only: model_t
+   use trainsim_overrides, only: override_t, split_sweep_groups
+   use trainsim_prepare, only: prepare_model
+   use trainsim_sweep_spec, only: sweep_spec_t, read_sweep_spec
+   use trainsim_sweep_file, only: sweep_file_t, sweep_layout_t, sweep_record_t, element_metric_names, &
+      node_metric_names, status_pending, status_ok, status_failed, record_size
+   use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t
+   use trainsim_observer, only: run_result_t
+   use trainsim_simulate, only: simulate
+   use trainsim_mpi, only: comm_init, comm_finalize, comm_rank, comm_size, comm_send_record, &
+      comm_poll_record, comm_send_index, comm_recv_index, comm_bcast_int
+   implicit none
+   private
+
+   public :: sweep_options_t, sweep_summary_t, run_sweep, default_sweep_path
+
+   !> What `trainsim sweep` was asked to do.
+   type :: sweep_options_t
+      character(len=:), allocatable :: deck_path
+      character(len=:), allocatable :: out_path        !< '' : default_sweep_path(deck_path)
+      type(override_t), allocatable :: sets(:)         !< --set, applied before each run's values
+      logical :: resume = .false.                      !< the sweep file must exist already
+      integer :: progress_unit = -1                    !< progress lines (rank 0); -1: none
+      real(wp) :: progress_interval = 5.0_wp           !< s between lines when not a terminal; 0: every run
+   end type sweep_options_t
+
+   !> What the sweep did (on rank 0; other ranks know only exit_code and root).
+   type :: sweep_summary_t
+      logical :: root = .true.
+      integer :: exit_code = 0          !< 0 all ok, 1 some run failed, 2 input or file error
+      integer :: n_runs = 0, n_before = 0, n_now = 0, n_ok = 0, n_failed = 0
+      real(wp) :: elapsed = 0.0_wp
+      character(len=:), allocatable :: path
+   end type sweep_summary_t
+
+   !> Rank 0's bookkeeping.
+   type :: master_t
+      type(sweep_file_t) :: file
+      integer, allocatable :: pending(:)
+      integer :: next = 1, stopped = 0, n_ranks = 1, ne = 0, nn = 0
+      integer :: n_now = 0, n_failed_now = 0, n_before = 0, n_runs = 0
+      integer(i8) :: c0 = 0, rate = 1, last_line = 0
+      integer :: last_done = -1             !< runs done at the last progress line
+      integer :: unit = -1
+      real(wp) :: interval = 5.0_wp
+      logical :: tty = .false.
+      type(error_t), allocatable :: err    !< a write error met while servicing
+   contains
+      procedure :: take => master_take
+      procedure :: service => master_service
+      procedure :: record => master_record
+      procedure :: progress => master_progress
+   end type master_t
+
+   !> The sink of a sweep run: no history; the node speed range after settle_time;
+   !> on rank 0 of an MPI sweep, services the workers between samples.
+   type, extends(sink_t) :: sweep_sink_t
+      real(wp) :: t_metrics = 0.0_wp
+      real(wp), allocatable :: wmin(:), wmax(:)
+      type(master_t), pointer :: master => null()
+      integer(i8) :: last_poll = 0, poll_ticks = 0
+   contains
+      procedure :: open => ssink_open
+      procedure :: write_sample => ssink_sample
+      procedure :: close => ssink_close
+   end type sweep_sink_t
+
+   interface
+      function c_usleep(us) bind(C, name='usleep') result(rc)
+         import :: c_int
+         integer(c_int), value :: us
+         integer(c_int) :: rc
+      end function c_usleep
+      function c_isatty(fd) bind(C, name='isatty') result(rc)
+         import :: c_int
+         integer(c_int), value :: fd
+         integer(c_int) :: rc
+      end function c_isatty
+   end interface
+
+contains
+
+   !> Default sweep file: the deck's base name with `_sweep.h5`, in the current directory.
+   function default_sweep_path(deck_path) result(p)
+      character(len=*), intent(in) :: deck_path
+      character(len=:), allocatable :: p
+      integer :: i
+      p = deck_path(index(deck_path, '/', back=.true.) + 1:)
+      i = index(p, '.', back=.true.)
+      if (i > 1) p = p(1:i - 1)
+      p = p//'_sweep.h5'
+   end function default_sweep_path
+
+   !> Run the sweep of `opt%deck_path`. Every rank calls it; MPI is started and stopped here.
+   !> `err` is set on every rank for an input error, on rank 0 for a file error.
+   subroutine run_sweep(opt, summary, err)
+      type(sweep_options_t), intent(in) :: opt
+      type(sweep_summary_t), intent(out) :: summary
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: why
+      call comm_init(why)
+      if (len(why) > 0) then
+         call fatal_error(err, 'error: '//why, err_input)
+         summary%exit_code = 2
+         return
+      end if
+      summary%root = comm_rank() == 0
+      call sweep_body(opt, summary, err)
+      call comm_bcast_int(summary%exit_code)
+      call comm_finalize()
+   end subroutine run_sweep
+
+   subroutine sweep_body(opt, summary, err)
+      type(sweep_options_t), intent(in) :: opt
+      type(sweep_summary_t), intent(inout) :: summary
+      type(error_t), allocatable, intent(out) :: err
+      type(deck_t) :: deck
+      type(sweep_spec_t) :: spec
+      type(sweep_layout_t) :: lay
+      type(master_t), target :: m
+      integer :: i
+
+      call setup(opt, deck, spec, lay, err)
+      if (allocated(err)) then
+         summary%exit_code = 2
+         return
+      end if
+      if (.not. summary%root) then
+         call worker(opt, deck, spec, lay)
+         return
+      end if
+
+      summary%path = opt%out_path
+      if (len(summary%path) == 0) summary%path = default_sweep_path(opt%deck_path)
+      m%n_ranks = comm_size()
+      m%ne = size(lay%element_ids); m%nn = size(lay%node_ids); m%n_runs = lay%n_runs
+      ! every run must build (input errors before any file is touched)
+      call validate_runs(opt, deck, spec, err)
+      if (.not. allocated(err)) call open_file(m, opt, summary%path, lay, err)
+      if (allocated(err)) then
+         summary%exit_code = 2
+         call drain(m)
+         return
+      end if
+      m%pending = pack([(i, i=1, lay%n_runs)], m%file%status == status_pending)
+      m%n_before = lay%n_runs - size(m%pending)
+      m%unit = opt%progress_unit
+      m%interval = opt%progress_interval
+      if (m%unit >= 0) m%tty = c_isatty(2_c_int) == 1 .and. m%unit == 0
+      call system_clock(m%c0, m%rate)
+      m%last_line = m%c0
+      if (m%unit >= 0) then
+         if (m%n_before > 0) then
+            write (m%unit, '(a)') 'sweep: resuming '//summary%path//': '//str(m%n_before)//' of '// &
+               str(lay%n_runs)//' runs already done, '//str(size(m%pending))//' to run on '//str(m%n_ranks)// &
+               ' rank(s)'
+         else
+            write (m%unit, '(a)') 'sweep: '//str(lay%n_runs)//' runs on '//str(m%n_ranks)//' rank(s) -> '// &
+               summary%path
+         end if
+         flush (m%unit)
+      end if
+
+      call master_loop(m, opt, deck, spec, lay)
+      call m%file%close()
+      if (allocated(m%err)) then
+         call move_alloc(m%err, err)
+         summary%exit_code = 2
+         return
+      end if
+      call m%progress(final=.true.)
+      summary%n_runs = lay%n_runs
+      summary%n_before = m%n_before
+      summary%n_now = m%n_now
+      summary%n_ok = count(m%file%status == status_ok)
+      summary%n_failed = count(m%file%status == status_failed)
+      summary%elapsed = elapsed(m)
+      summary%exit_code = merge(1, 0, summary%n_failed > 0)
+   end subroutine sweep_body
+
+   !> Deck, sweep spec and file layout (the same on every rank).
+   subroutine setup(opt, deck, spec, lay, err)
+      type(sweep_options_t), intent(in) :: opt
+      type(deck_t), intent(out) :: deck
+      type(sweep_spec_t), intent(out) :: spec
+      type(sweep_layout_t), intent(out) :: lay
+      type(error_t), allocatable, intent(out) :: err
+      type(deck_group_t), allocatable :: groups(:)
+      type(model_t) :: model
+      type(string_t), allocatable :: sets(:)
+      integer :: i, j, k
+
+      call read_deck(opt%deck_path, deck, err); if (allocated(err)) return
+      call split_sweep_groups(deck, groups)
+      call read_sweep_spec(groups, spec, err); if (allocated(err)) return
+      ! a --set of a swept parameter would be overridden in every run
+      do i = 1, size(opt%sets)
+         do j = 1, size(spec%names)
+            if (to_lower(opt%sets(i)%target//'.'//opt%sets(i)%key) == to_lower(spec%names(j)%s)) then
+               call fatal_error(err, opt%sets(i)%origin//': error: '//spec%names(j)%s//' is swept by '// &
+                                spec%where(j)%s, err_input)
+               return
+            end if
+         end do
+      end do
+      call prepare_model(deck, run_overrides(opt, spec, 1, err), model, err); if (allocated(err)) return
+      lay%version = version_string
+      lay%deck_file = opt%deck_path
+      lay%deck_text = deck%text
+      lay%title = model%title
+      lay%units = model%units%name
+      allocate (sets(size(opt%sets)))
+      do i = 1, size(opt%sets)
+         sets(i)%s = opt%sets(i)%origin
+      end do
+      lay%overrides = join(sets, ' ')
+      lay%param_names = spec%names
+      lay%param_values = spec%values
+      lay%n_runs = spec%n_runs
+      allocate (lay%element_ids(size(model%elements)), lay%element_types(size(model%elements)))
+      do k = 1, size(model%elements)
+         lay%element_ids(k)%s = model%elements(k)%e%id
+         lay%element_types(k)%s = model%elements(k)%e%type_name
+      end do
+      allocate (lay%node_ids(size(model%nodes)))
+      do k = 1, size(model%nodes)
+         lay%node_ids(k)%s = model%nodes(k)%n%id
+      end do
+   end subroutine setup
+
+   !> The overrides of run irun: --set first, then the run's sweep values.
+   function run_overrides(opt, spec, irun, err) result(ovs)
+      type(sweep_options_t), intent(in) :: opt
+      type(sweep_spec_t), intent(in) :: spec
+      integer, intent(in) :: irun
+      type(error_t), allocatable, intent(out) :: err
+      type(override_t), allocatable :: ovs(:)
+      type(override_t), allocatable :: runs(:)
+      integer :: n
+      runs = spec%overrides(irun, err)
+      n = size(opt%sets)
+      allocate (ovs(n + size(runs)))
+      ovs(1:n) = opt%sets
+      ovs(n + 1:) = runs
+   end function run_overrides
+
+   subroutine validate_runs(opt, deck, spec, err)
+      type(sweep_options_t), intent(in) :: opt
+      type(deck_t), intent(in) :: deck
+      type(sweep_spec_t), intent(in) :: spec
+      type(error_t), allocatable, intent(out) :: err
+      type(model_t) :: model
+      type(override_t), allocatable :: ovs(:)
+      integer :: i
+      do i = 1, spec%n_runs
+         ovs = run_overrides(opt, spec, i, err); if (allocated(err)) return
+         call prepare_model(deck, ovs, model, err); if (allocated(err)) return
+      end do
+   end subroutine validate_runs
+
+   subroutine open_file(m, opt, path, lay, err)
+      type(master_t), intent(inout) :: m
+      type(sweep_options_t), intent(in) :: opt
+      character(len=*), intent(in) :: path
+      type(sweep_layout_t), intent(in) :: lay
+      type(error_t), allocatable, intent(out) :: err
+      logical :: exists
+      inquire (file=path, exist=exists)
+      if (exists) then
+         call m%file%open_existing(path, lay, err)
+      else if (opt%resume) then
+         call fatal_error(err, "nothing to resume: sweep file '"//path//"' does not exist", err_io)
+      else
+         call m%file%create(path, lay, err)
+      end if
+   end subroutine open_file
+
+   ! ------------------------------------------------------------------------------------------
+   ! Rank 0
+   ! ------------------------------------------------------------------------------------------
+
+   subroutine master_loop(m, opt, deck, spec, lay)
+      type(master_t), intent(inout), target :: m
+      type(sweep_options_t), intent(in) :: opt
+      type(deck_t), intent(in) :: deck
+      type(sweep_spec_t), intent(in) :: spec
+      type(sweep_layout_t), intent(in) :: lay
+      type(sweep_record_t) :: rec
+      integer :: irun
+      integer(c_int) :: rc
+      do
+         if (m%n_ranks > 1) call m%service()
+         irun = 0
+         if (.not. allocated(m%err)) irun = m%take()
+         if (irun > 0) then
+            call run_one(opt, deck, spec, lay, irun, 0, rec, m)
+            call m%record(rec)
+         else
+            if (m%stopped == m%n_ranks - 1) exit
+            rc = c_usleep(1000_c_int)
+         end if
+      end do
+   end subroutine master_loop
+
+   !> The next run to hand out (0: none left).
+   integer function master_take(self) result(irun)
+      class(master_t), intent(inout) :: self
+      irun = 0
+      if (self%next > size(self%pending)) return
+      irun = self%pending(self%next)
+      self%next = self%next + 1
+   end function master_take
+
+   !> Receive the workers' records, write them, answer each with its next index.
+   subroutine master_service(self)
+      class(master_t), intent(inout) :: self
+      type(sweep_record_t) :: rec
+      real(wp), allocatable :: buf(:)
+      logical :: found
+      integer :: src, irun
+      allocate (buf(record_size(self%ne, self%nn)), rec%el(size(element_metric_names), self%ne), &
+                rec%node(size(node_metric_names), self%nn))
+      do
+         call comm_poll_record(buf, found, src, rec%message)
+         if (.not. found) exit
+         call rec%unpack(buf)
+         if (rec%irun > 0) call self%record(rec)
+         irun = 0
+         if (.not. allocated(self%err)) irun = self%take()
+         call comm_send_index(src, irun)
+         if (irun == 0) self%stopped = self%stopped + 1
+      end do
+   end subroutine master_service
+
+   subroutine master_record(self, rec)
+      class(master_t), intent(inout) :: self
+      type(sweep_record_t), intent(in) :: rec
+      type(error_t), allocatable :: err
+      if (allocated(self%err)) return
+      call self%file%write_run(rec, err)
+      if (allocated(err)) then
+         call move_alloc(err, self%err)
+         return
+      end if
+      self%n_now = self%n_now + 1
+      if (rec%status == status_failed) self%n_failed_now = self%n_failed_now + 1
+      call self%progress(final=.false.)
+   end subroutine master_record
+
+   !> "sweep: 12/27 runs done (1 failed), 3.2 s, ETA 4.1 s"; in place on a terminal,
+   !> else a line every `interval` seconds.
+   subroutine master_progress(self, final)
+      class(master_t), intent(inout) :: self
+      logical, intent(in) :: final
+      integer(i8) :: c
+      real(wp) :: t, since, eta
+      character(len=:), allocatable :: line
+      integer :: done, failed
+      if (self%unit < 0) return
+      call system_clock(c)
+      since = real(c - self%last_line, wp)/real(self%rate, wp)
+      done = self%n_before + self%n_now
+      if (.not. final) then
+         if (self%tty .and. since < 0.2_wp) return
+         if (.not. self%tty .and. since < self%interval) return
+      else if (done == self%last_done .and. .not. self%tty) then
+         return
+      end if
+      self%last_line = c
+      self%last_done = done
+      t = elapsed(self)
+      failed = count(self%file%status == status_failed)
+      line = 'sweep: '//str(done)//'/'//str(self%n_runs)//' runs done'
+      if (failed > 0) line = line//' ('//str(failed)//' failed)'
+      line = line//', '//fixed1(t)//' s elapsed'
+      if (self%n_now > 0 .and. done < self%n_runs) then
+         eta = t/real(self%n_now, wp)*real(self%n_runs - done, wp)
+         line = line//', ETA '//fixed1(eta)//' s'
+      end if
+      if (self%tty) then
+         if (final) then
+            write (self%unit, '(a)') achar(13)//line//'      '
+         else
+            write (self%unit, '(a)', advance='no') achar(13)//line//'      '
+         end if
+      else
+         write (self%unit, '(a)') line
+      end if
+      flush (self%unit)
+   end subroutine master_progress
+
+   function fixed1(x) result(s)
+      real(wp), intent(in) :: x
+      character(len=:), allocatable :: s
+      character(len=32) :: buf
+      write (buf, '(f0.1)') x
+      s = trim(buf)
+      if (s(1:1) == '.') s = '0'//s
+   end function fixed1
+
+   real(wp) function elapsed(m)
+      type(master_t), intent(in) :: m
+      integer(i8) :: c
+      call system_clock(c)
+      elapsed = real(c - m%c0, wp)/real(m%rate, wp)
+   end function elapsed
+
+   !> After an error on rank 0: tell every worker there is no work.
+   subroutine drain(m)
+      type(master_t), intent(inout) :: m
+      type(sweep_record_t) :: rec
+      real(wp), allocatable :: buf(:)
+      logical :: found
+      integer :: src
+      integer(c_int) :: rc
+      if (m%n_ranks <= 1) return
+      allocate (buf(record_size(m%ne, m%nn)))
+      do while (m%stopped < m%n_ranks - 1)
+         call comm_poll_record(buf, found, src, rec%message)
+         if (found) then
+            call comm_send_index(src, 0)
+            m%stopped = m%stopped + 1
+         else
+            rc = c_usleep(1000_c_int)
+         end if
+      end do
+   end subroutine drain
+
+   ! ------------------------------------------------------------------------------------------
+   ! Workers (ranks > 0)
+   ! ------------------------------------------------------------------------------------------
+
+   subroutine worker(opt, deck, spec, lay)
+      type(sweep_options_t), intent(in) :: opt
+      type(deck_t), intent(in) :: deck
+      type(sweep_spec_t), intent(in) :: spec
+      type(sweep_layout_t), intent(in) :: lay
+      type(sweep_record_t) :: rec
+      real(wp), allocatable :: buf(:)
+      integer :: irun
+      allocate (buf(record_size(size(lay%element_ids), size(lay%node_ids))))
+      allocate (rec%el(size(element_metric_names), size(lay%element_ids)), &
+                rec%node(size(node_metric_names), size(lay%node_ids)))
+      rec%el = 0.0_wp; rec%node = 0.0_wp
+      rec%irun = 0
+      rec%message = ''
+      call rec%pack(buf)
+      call comm_send_record(buf, '')          ! "ready"
+      do
+         call comm_recv_index(irun)
+         if (irun == 0) exit
+         call run_one(opt, deck, spec, lay, irun, comm_rank(), rec)
+         call rec%pack(buf)
+         call comm_send_record(buf, rec%message)
+      end do
+   end subroutine worker
+
+   ! ------------------------------------------------------------------------------------------
+   ! One run
+   ! ------------------------------------------------------------------------------------------
+
+   !> Run irun and fill its record. `m` (rank 0 of an MPI sweep) is serviced meanwhile.
+   subroutine run_one(opt, deck, spec, lay, irun, rank, rec, m)
+      type(sweep_options_t), intent(in) :: opt
+      type(deck_t), intent(in) :: deck
+      type(sweep_spec_t), intent(in) :: spec
+      type(sweep_layout_t), intent(in) :: lay
+      integer, intent(in) :: irun, rank
+      type(sweep_record_t), intent(inout) :: rec
+      type(master_t), intent(inout), target, optional :: m
+      type(model_t) :: model
+      type(sweep_sink_t) :: sink
+      type(run_result_t) :: res
+      type(error_t), allocatable :: err
+      type(override_t), allocatable :: ovs(:)
+      integer(i8) :: c0, c1, rate
+      integer :: k, ne, nn
+      real(wp) :: nan
+
+      call system_clock(c0, rate)
+      ne = size(lay%element_ids); nn = size(lay%node_ids)
+      nan = transfer(int(z'7FF8000000000000', kind=8), nan)
+      if (allocated(rec%el)) deallocate (rec%el)
+      if (allocated(rec%node)) deallocate (rec%node)
+      allocate (rec%el(size(element_metric_names), ne), rec%node(size(node_metric_names), nn))
+      rec%el = nan; rec%node = nan; rec%run_values = nan
+      rec%irun = irun
+      rec%rank = rank
+      ovs = run_overrides(opt, spec, irun, err)
+      if (.not. allocated(err)) call prepare_model(deck, ovs, model, err)
+      if (.not. allocated(err)) then
+         model%run%output = ''
+         sink%t_metrics = model%run%t_start + model%run%settle_time
+         if (present(m)) then
+            if (m%n_ranks > 1) then
+               sink%master => m
+               sink%poll_ticks = max(1_i8, rate/1000_i8)
+            end if
+         end if
+         call simulate(model, sink, res, err)
+      end if
+      if (allocated(err)) then
+         rec%status = status_failed
+         rec%message = err%message
+      else
+         rec%status = status_ok
+         rec%message = ''
+         do k = 1, ne
+            associate (e => res%el(k))
+               rec%el(:, k) = [e%force_min, e%force_max, e%torque_min, e%torque_max, e%disp_min, e%disp_max, &
+                               real(e%impacts, wp), real(e%separations, wp), real(e%zone_changes, wp), &
+                               e%max_approach_velocity, e%max_peak_force, e%time_out_of_contact, e%p2p_range, &
+                               e%p2p_mean, real(e%p2p_swings, wp)]
+            end associate
+         end do
+         if (allocated(sink%wmin)) then
+            rec%node(1, :) = sink%wmin
+            rec%node(2, :) = sink%wmax
+         end if
+         rec%run_values(1) = real(res%stats%steps, wp)
+         rec%run_values(2) = real(res%stats%rhs_evals, wp)
+         rec%run_values(3) = real(res%stats%events, wp)
+         rec%run_values(4) = 0.0_wp
+         if (res%energy_scale > 0.0_wp) rec%run_values(4) = res%energy_residual_max/res%energy_scale
+      end if
+      call system_clock(c1)
+      rec%wall = real(c1 - c0, wp)/real(rate, wp)
+   end subroutine run_one
+
+   subroutine ssink_open(self, meta, err)
+      class(sweep_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      type(error_t), allocatable, intent(out) :: err
+      allocate (self%wmin(size(meta%node_ids)), self%wmax(size(meta%node_ids)))
+      self%wmin = huge(1.0_wp)
+      self%wmax = -huge(1.0_wp)
+      call system_clock(self%last_poll)
+   end subroutine ssink_open
+
+   subroutine ssink_sample(self, s, err)
+      class(sweep_sink_t), intent(inout) :: self
+      type(sample_t), intent(in) :: s
+      type(error_t), allocatable, intent(out) :: err
+      integer(i8) :: c
+      if (s%t >= self%t_metrics) then
+         self%wmin = min(self%wmin, s%omega)
+         self%wmax = max(self%wmax, s%omega)
+      end if
+      if (associated(self%master)) then
+         call system_clock(c)
+         if (c - self%last_poll >= self%poll_ticks) then
+            call self%master%service()
+            self%last_poll = c
+         end if
+      end if
+   end subroutine ssink_sample
+
+   subroutine ssink_close(self, events, stats, metrics, err)
+      class(sweep_sink_t), intent(inout) :: self
+      type(event_t), intent(in) :: events(:)
+      type(run_stats_t), intent(in) :: stats
+      type(element_metrics_t), intent(in) :: metrics(:)
+      type(error_t), allocatable, intent(out) :: err
+   end subroutine ssink_close
+end module trainsim_sweep

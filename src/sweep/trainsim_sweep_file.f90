@@ -1,0 +1,599 @@
+!> The sweep file: one HDF5 file per sweep, written by rank 0 only (docs/sweeps.md).
+!>
+!> Every dataset is created at the start with one slot per run (contiguous, space
+!> allocated at once, fill values NaN / -1 / status 0), so recording a finished run
+!> writes raw data into its slot and touches no HDF5 metadata. A run is recorded by
+!> writing its slot, flushing, then writing its status and flushing again: after a
+!> `kill -9` at any moment the file opens, and a run with a non-zero status is
+!> complete. `--resume` runs only the runs whose status is still 0.
+!>
+!> Fortran (n, n_runs) arrays appear in h5py as (n_runs, n).
+module trainsim_sweep_file
+   use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_io, err_input
+   use trainsim_strings, only: string_t, str
+   use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, &
+      h5gcreate_f, h5gclose_f, h5screate_simple_f, h5screate_f, h5sclose_f, h5sselect_hyperslab_f, &
+      h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_type_f, h5dget_space_f, &
+      h5sget_simple_extent_dims_f, h5pcreate_f, h5pclose_f, h5pset_alloc_time_f, h5pset_fill_value_f, &
+      h5pset_obj_track_times_f, h5tcopy_f, h5tset_size_f, h5tset_strpad_f, h5tclose_f, h5tget_size_f, &
+      h5acreate_f, h5aopen_f, h5aclose_f, h5awrite_f, h5aread_f, h5aget_type_f, h5eset_auto_f, &
+      H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_SCOPE_GLOBAL_F, H5S_SCALAR_F, H5S_SELECT_SET_F, &
+      H5P_DATASET_CREATE_F, H5D_ALLOC_TIME_EARLY_F, H5T_FORTRAN_S1, H5T_STR_NULLTERM_F, &
+      H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER
+   implicit none
+   private
+
+   public :: sweep_file_t, sweep_layout_t, sweep_record_t, element_metric_names, node_metric_names
+   public :: status_pending, status_ok, status_failed, record_size, message_len
+
+   integer, parameter :: status_pending = 0, status_ok = 1, status_failed = 2
+   !> Longest run message kept in the file.
+   integer, parameter :: message_len = 400
+
+   !> Per-element metrics (element_metrics_t), in record order; the integer counts are
+   !> stored as integer datasets.
+   character(len=*), parameter :: element_metric_names(15) = [character(len=21) :: &
+      'force_min', 'force_max', 'torque_min', 'torque_max', 'disp_min', 'disp_max', 'impacts', 'separations', &
+      'zone_changes', 'max_approach_velocity', 'max_peak_force', 'time_out_of_contact', 'p2p_range', &
+      'p2p_mean', 'p2p_swings']
+   logical, parameter :: element_metric_is_int(15) = [.false., .false., .false., .false., .false., .false., &
+      .true., .true., .true., .false., .false., .false., .false., .false., .true.]
+   !> Per-node metrics: the speed range after settle_time.
+   character(len=*), parameter :: node_metric_names(2) = [character(len=9) :: 'speed_min', 'speed_max']
+   !> Per-run figures besides the metrics.
+   character(len=*), parameter :: run_value_names(4) = [character(len=15) :: 'steps', 'rhs_evals', 'events', &
+                                                        'energy_residual']
+   integer, parameter :: n_head = 4   ! irun, status, rank, wall time
+
+   !> What the file describes (the same on every rank: built from the deck).
+   type :: sweep_layout_t
+      character(len=:), allocatable :: version, deck_file, deck_text, title, units, overrides
+      type(string_t), allocatable :: param_names(:)
+      real(wp), allocatable :: param_values(:, :)    !< (parameter, run)
+      type(string_t), allocatable :: element_ids(:), element_types(:), node_ids(:)
+      integer :: n_runs = 0
+   end type sweep_layout_t
+
+   !> One finished run, as sent to rank 0 and written to its slot.
+   type :: sweep_record_t
+      integer :: irun = 0, status = status_pending, rank = 0
+      real(wp) :: wall = 0.0_wp
+      real(wp) :: run_values(4) = 0.0_wp
+      real(wp), allocatable :: el(:, :)      !< (element metric, element)
+      real(wp), allocatable :: node(:, :)    !< (node metric, node)
+      character(len=:), allocatable :: message
+   contains
+      procedure :: pack => record_pack
+      procedure :: unpack => record_unpack
+   end type sweep_record_t
+
+   type :: sweep_file_t
+      character(len=:), allocatable :: path
+      integer(hid_t) :: file = -1
+      integer(hid_t) :: d_status = -1, d_wall = -1, d_rank = -1, d_message = -1, t_message = -1
+      integer(hid_t) :: d_run(4) = -1
+      integer(hid_t) :: d_el(15) = -1, d_node(2) = -1
+      integer :: ne = 0, nn = 0, n_runs = 0
+      integer, allocatable :: status(:)      !< as in the file
+   contains
+      procedure :: create => file_create
+      procedure :: open_existing => file_open_existing
+      procedure :: write_run => file_write_run
+      procedure :: close => file_close
+   end type sweep_file_t
+
+   interface
+      function c_rename(old, new) bind(C, name='rename') result(rc)
+         import :: c_char, c_int
+         character(kind=c_char), intent(in) :: old(*), new(*)
+         integer(c_int) :: rc
+      end function c_rename
+   end interface
+
+contains
+
+   !> Length of a packed record.
+   pure integer function record_size(ne, nn) result(n)
+      integer, intent(in) :: ne, nn
+      n = n_head + size(run_value_names) + size(element_metric_names)*ne + size(node_metric_names)*nn
+   end function record_size
+
+   subroutine record_pack(self, buf)
+      class(sweep_record_t), intent(in) :: self
+      real(wp), intent(out) :: buf(:)
+      integer :: k, ne, nn
+      ne = size(self%el, 2); nn = size(self%node, 2)
+      buf(1:n_head) = [real(self%irun, wp), real(self%status, wp), real(self%rank, wp), self%wall]
+      k = n_head
+      buf(k + 1:k + 4) = self%run_values; k = k + 4
+      buf(k + 1:k + size(self%el)) = reshape(self%el, [size(self%el)]); k = k + size(self%el)
+      buf(k + 1:k + size(self%node)) = reshape(self%node, [size(self%node)])
+   end subroutine record_pack
+
+   !> Fill from a packed buffer; el and node must be allocated to their shapes.
+   subroutine record_unpack(self, buf)
+      class(sweep_record_t), intent(inout) :: self
+      real(wp), intent(in) :: buf(:)
+      integer :: k
+      self%irun = nint(buf(1)); self%status = nint(buf(2)); self%rank = nint(buf(3)); self%wall = buf(4)
+      k = n_head
+      self%run_values = buf(k + 1:k + 4); k = k + 4
+      self%el = reshape(buf(k + 1:k + size(self%el)), shape(self%el)); k = k + size(self%el)
+      self%node = reshape(buf(k + 1:k + size(self%node)), shape(self%node))
+   end subroutine record_unpack
+
+   ! ------------------------------------------------------------------------------------------
+
+   !> Create a new sweep file at `path` (written as `path.part`, renamed when complete),
+   !> then open it for the runs.
+   subroutine file_create(self, path, lay, err)
+      class(sweep_file_t), intent(inout) :: self
+      character(len=*), intent(in) :: path
+      type(sweep_layout_t), intent(in) :: lay
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: f, g
+      integer :: h, k
+      character(len=:), allocatable :: part
+      type(string_t), allocatable :: text(:)
+
+      part = path//'.part'
+      call h5open_f(h)
+      call h5eset_auto_f(0, h)
+      call h5fcreate_f(part, H5F_ACC_TRUNC_F, f, h)
+      if (h < 0) then
+         call fatal_error(err, "cannot create sweep file '"//part//"'", err_io)
+         return
+      end if
+      call put_attr(f, 'format', 'trainsim-sweep')
+      call put_attr(f, 'format_version', '1')
+      call put_attr(f, 'trainsim_version', lay%version)
+      call put_attr(f, 'deck_file', lay%deck_file)
+      call put_attr(f, 'title', lay%title)
+      call put_attr(f, 'units', lay%units)
+      call put_attr(f, 'overrides', lay%overrides)
+      call put_attr(f, 'n_runs', str(lay%n_runs))
+      allocate (text(1))
+      text(1)%s = lay%deck_text       ! (an array constructor of string_t here trips gfortran 12)
+      call put_strings(f, 'deck_text', text)
+      call h5gcreate_f(f, 'parameters', g, h)
+      if (size(lay%param_names) > 0) then
+         call put_strings(g, 'names', lay%param_names)
+         call put_reals(g, 'values', lay%param_values)
+      end if
+      call h5gclose_f(g, h)
+      call h5gcreate_f(f, 'runs', g, h)
+      call new_dset(g, 'status', [lay%n_runs], H5T_NATIVE_INTEGER, self%d_status, ifill=status_pending)
+      call new_dset(g, 'rank', [lay%n_runs], H5T_NATIVE_INTEGER, self%d_rank, ifill=-1)
+      call new_dset(g, 'wall_time', [lay%n_runs], H5T_NATIVE_DOUBLE, self%d_wall)
+      do k = 1, size(run_value_names)
+         call new_dset(g, trim(run_value_names(k)), [lay%n_runs], H5T_NATIVE_DOUBLE, self%d_run(k))
+      end do
+      call string_type(message_len, self%t_message)
+      call new_dset(g, 'message', [lay%n_runs], self%t_message, self%d_message)
+      call h5gclose_f(g, h)
+      call h5gcreate_f(f, 'elements', g, h)
+      if (size(lay%element_ids) > 0) then
+         call put_strings(g, 'ids', lay%element_ids)
+         call put_strings(g, 'types', lay%element_types)
+         do k = 1, size(element_metric_names)
+            if (element_metric_is_int(k)) then
+               call new_dset(g, trim(element_metric_names(k)), [size(lay%element_ids), lay%n_runs], &
+                             H5T_NATIVE_INTEGER, self%d_el(k), ifill=-1)
+            else
+               call new_dset(g, trim(element_metric_names(k)), [size(lay%element_ids), lay%n_runs], &
+                             H5T_NATIVE_DOUBLE, self%d_el(k))
+            end if
+         end do
+      end if
+      call h5gclose_f(g, h)
+      call h5gcreate_f(f, 'nodes', g, h)
+      call put_strings(g, 'ids', lay%node_ids)
+      do k = 1, size(node_metric_names)
+         call new_dset(g, trim(node_metric_names(k)), [size(lay%node_ids), lay%n_runs], H5T_NATIVE_DOUBLE, &
+                       self%d_node(k))
+      end do
+      call h5gclose_f(g, h)
+      call close_ids(self)
+      call h5fclose_f(f, h)
+      if (h < 0) then
+         call fatal_error(err, "cannot write sweep file '"//part//"'", err_io)
+         return
+      end if
+      if (c_rename(part//c_null_char, path//c_null_char) /= 0) then
+         call fatal_error(err, "cannot rename '"//part//"' to '"//path//"'", err_io)
+         return
+      end if
+      call self%open_existing(path, lay, err)
+   end subroutine file_create
+
+   !> Open an existing sweep file for the remaining runs; it must hold the same sweep
+   !> (version, deck text, overrides, runs).
+   subroutine file_open_existing(self, path, lay, err)
+      class(sweep_file_t), intent(inout) :: self
+      character(len=*), intent(in) :: path
+      type(sweep_layout_t), intent(in) :: lay
+      type(error_t), allocatable, intent(out) :: err
+      integer :: h, k
+      character(len=:), allocatable :: s, why
+      type(string_t), allocatable :: deck_text(:)
+      real(wp), allocatable :: pv(:, :)
+      logical :: ok
+
+      self%path = path
+      call h5open_f(h)
+      call h5eset_auto_f(0, h)
+      call h5fopen_f(path, H5F_ACC_RDWR_F, self%file, h)
+      if (h < 0) then
+         call fatal_error(err, "cannot open sweep file '"//path//"' for writing (not an HDF5 file, damaged, "// &
+                          'or open in another program)', err_io)
+         return
+      end if
+      why = ''
+      call get_attr(self%file, 'format', s, ok)
+      if (.not. ok .or. s /= 'trainsim-sweep') then
+         why = 'it is not a trainsim sweep file'
+      else
+         call get_attr(self%file, 'trainsim_version', s, ok)
+         if (s /= lay%version) why = 'it was written by trainsim '//s//', this is '//lay%version
+         call get_strings(self%file, 'deck_text', deck_text, ok)
+         if (len(why) == 0 .and. .not. ok) why = 'it has no deck text'
+         if (len(why) == 0) then
+            if (deck_text(1)%s /= lay%deck_text) why = 'its deck text differs from '//lay%deck_file
+         end if
+         call get_attr(self%file, 'overrides', s, ok)
+         if (len(why) == 0 .and. s /= lay%overrides) why = 'its --set options differ ("'//s//'")'
+         call get_attr(self%file, 'n_runs', s, ok)
+         if (len(why) == 0 .and. s /= str(lay%n_runs)) why = 'it has '//s//' runs, this sweep '//str(lay%n_runs)
+         if (len(why) == 0 .and. size(lay%param_names) > 0) then
+            allocate (pv(size(lay%param_names), lay%n_runs))
+            call get_reals(self%file, 'parameters/values', pv, ok)
+            if (.not. ok) then
+               why = 'its parameter table does not match'
+            else if (any(pv /= lay%param_values)) then
+               why = 'its parameter values differ'
+            end if
+         end if
+      end if
+      if (len(why) > 0) then
+         call h5fclose_f(self%file, h)
+         self%file = -1
+         call fatal_error(err, "sweep file '"//path//"' holds another sweep ("//why// &
+                          '): delete it, or write this sweep to another file with -o', err_input)
+         return
+      end if
+      self%ne = size(lay%element_ids); self%nn = size(lay%node_ids); self%n_runs = lay%n_runs
+      call h5dopen_f(self%file, 'runs/status', self%d_status, h)
+      call h5dopen_f(self%file, 'runs/rank', self%d_rank, h)
+      call h5dopen_f(self%file, 'runs/wall_time', self%d_wall, h)
+      call h5dopen_f(self%file, 'runs/message', self%d_message, h)
+      call h5dget_type_f(self%d_message, self%t_message, h)
+      do k = 1, size(run_value_names)
+         call h5dopen_f(self%file, 'runs/'//trim(run_value_names(k)), self%d_run(k), h)
+      end do
+      if (self%ne > 0) then
+         do k = 1, size(element_metric_names)
+            call h5dopen_f(self%file, 'elements/'//trim(element_metric_names(k)), self%d_el(k), h)
+         end do
+      end if
+      do k = 1, size(node_metric_names)
+         call h5dopen_f(self%file, 'nodes/'//trim(node_metric_names(k)), self%d_node(k), h)
+      end do
+      allocate (self%status(self%n_runs))
+      call h5dread_f(self%d_status, H5T_NATIVE_INTEGER, self%status, [int(self%n_runs, hsize_t)], h)
+      if (h < 0) then
+         call fatal_error(err, "cannot read the run status of sweep file '"//path//"'", err_io)
+         return
+      end if
+   end subroutine file_open_existing
+
+   !> Record a finished run: its slot, flush, then its status, flush.
+   subroutine file_write_run(self, rec, err)
+      class(sweep_file_t), intent(inout) :: self
+      type(sweep_record_t), intent(in) :: rec
+      type(error_t), allocatable, intent(out) :: err
+      integer :: h, k, hs
+      character(len=message_len) :: msg(1)
+      real(wp) :: col(max(self%ne, 1))
+
+      hs = 0
+      call put_slot_int(self%d_rank, rec%irun, [rec%rank], h); hs = min(hs, h)
+      call put_slot(self%d_wall, rec%irun, [rec%wall], h); hs = min(hs, h)
+      do k = 1, size(run_value_names)
+         call put_slot(self%d_run(k), rec%irun, [rec%run_values(k)], h); hs = min(hs, h)
+      end do
+      msg(1) = repeat(c_null_char, message_len)
+      msg(1)(1:min(len(rec%message), message_len - 1)) = rec%message
+      call put_message(self, rec%irun, msg, h); hs = min(hs, h)
+      if (self%ne > 0) then
+         do k = 1, size(element_metric_names)
+            if (element_metric_is_int(k)) then
+               call put_slot_int(self%d_el(k), rec%irun, to_int(rec%el(k, :)), h)
+            else
+               col(1:self%ne) = rec%el(k, :)
+               call put_slot(self%d_el(k), rec%irun, col(1:self%ne), h)
+            end if
+            hs = min(hs, h)
+         end do
+      end if
+      do k = 1, size(node_metric_names)
+         call put_slot(self%d_node(k), rec%irun, [rec%node(k, :)], h); hs = min(hs, h)
+      end do
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
+      call put_slot_int(self%d_status, rec%irun, [rec%status], h); hs = min(hs, h)
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
+      if (hs < 0) then
+         call fatal_error(err, "cannot write run "//str(rec%irun)//" to sweep file '"//self%path//"'", err_io)
+         return
+      end if
+      self%status(rec%irun) = rec%status
+   end subroutine file_write_run
+
+   subroutine file_close(self)
+      class(sweep_file_t), intent(inout) :: self
+      integer :: h
+      if (self%file < 0) return
+      call close_ids(self)
+      call h5fclose_f(self%file, h)
+      self%file = -1
+   end subroutine file_close
+
+   subroutine close_ids(self)
+      type(sweep_file_t), intent(inout) :: self
+      integer :: h, k
+      if (self%d_status >= 0) call h5dclose_f(self%d_status, h)
+      if (self%d_rank >= 0) call h5dclose_f(self%d_rank, h)
+      if (self%d_wall >= 0) call h5dclose_f(self%d_wall, h)
+      if (self%d_message >= 0) call h5dclose_f(self%d_message, h)
+      if (self%t_message >= 0) call h5tclose_f(self%t_message, h)
+      do k = 1, size(self%d_run)
+         if (self%d_run(k) >= 0) call h5dclose_f(self%d_run(k), h)
+      end do
+      do k = 1, size(self%d_el)
+         if (self%d_el(k) >= 0) call h5dclose_f(self%d_el(k), h)
+      end do
+      do k = 1, size(self%d_node)
+         if (self%d_node(k) >= 0) call h5dclose_f(self%d_node(k), h)
+      end do
+      self%d_status = -1; self%d_rank = -1; self%d_wall = -1; self%d_message = -1; self%t_message = -1
+      self%d_run = -1; self%d_el = -1; self%d_node = -1
+   end subroutine close_ids
+
+   !> A count carried as a real; -1 for NaN (a failed run).
+   elemental integer function to_int(x)
+      real(wp), intent(in) :: x
+      to_int = -1
+      if (ieee_is_nan(x)) return        ! (an ordered compare of NaN traps in Debug)
+      if (abs(x) < 2.0e9_wp) to_int = nint(x)
+   end function to_int
+
+   ! ------------------------------------------------------------------------------------------
+   ! HDF5 helpers
+   ! ------------------------------------------------------------------------------------------
+
+   !> A fixed-length, NUL-terminated string type of `n` characters (at least 1).
+   subroutine string_type(n, t)
+      integer, intent(in) :: n
+      integer(hid_t), intent(out) :: t
+      integer :: h
+      call h5tcopy_f(H5T_FORTRAN_S1, t, h)
+      call h5tset_size_f(t, int(max(n, 1), size_t), h)
+      call h5tset_strpad_f(t, H5T_STR_NULLTERM_F, h)
+   end subroutine string_type
+
+   !> A dataset with one slot per run: contiguous, allocated now, filled with NaN
+   !> (reals) or `ifill` (integers); no time stamps (metadata stays fixed).
+   subroutine new_dset(loc, name, dims, t, d, ifill)
+      integer(hid_t), intent(in) :: loc, t
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: dims(:)
+      integer(hid_t), intent(out) :: d
+      integer, intent(in), optional :: ifill
+      integer(hid_t) :: sp, pl
+      integer :: h
+      real(wp) :: nan
+      call h5screate_simple_f(size(dims), int(dims, hsize_t), sp, h)
+      call h5pcreate_f(H5P_DATASET_CREATE_F, pl, h)
+      call h5pset_alloc_time_f(pl, H5D_ALLOC_TIME_EARLY_F, h)
+      call h5pset_obj_track_times_f(pl, .false., h)
+      if (t == H5T_NATIVE_DOUBLE) then
+         nan = transfer(int(z'7FF8000000000000', kind=8), nan)
+         call h5pset_fill_value_f(pl, H5T_NATIVE_DOUBLE, nan, h)
+      else if (present(ifill)) then
+         call h5pset_fill_value_f(pl, H5T_NATIVE_INTEGER, ifill, h)
+      end if
+      call h5dcreate_f(loc, name, t, sp, d, h, dcpl_id=pl)
+      call h5pclose_f(pl, h)
+      call h5sclose_f(sp, h)
+   end subroutine new_dset
+
+   !> Write the values of one run (a column (:, irun), or element irun of a 1-D dataset).
+   subroutine put_slot(d, irun, v, h)
+      integer(hid_t), intent(in) :: d
+      integer, intent(in) :: irun
+      real(wp), intent(in) :: v(:)
+      integer, intent(out) :: h
+      integer(hid_t) :: fs, ms
+      integer(hsize_t) :: dims(2), maxd(2)
+      integer :: rank
+      call select_slot(d, irun, size(v), fs, ms, rank, dims, maxd)
+      call h5dwrite_f(d, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], h, mem_space_id=ms, file_space_id=fs)
+      call h5sclose_f(ms, rank); call h5sclose_f(fs, rank)
+   end subroutine put_slot
+
+   subroutine put_slot_int(d, irun, v, h)
+      integer(hid_t), intent(in) :: d
+      integer, intent(in) :: irun
+      integer, intent(in) :: v(:)
+      integer, intent(out) :: h
+      integer(hid_t) :: fs, ms
+      integer(hsize_t) :: dims(2), maxd(2)
+      integer :: rank
+      call select_slot(d, irun, size(v), fs, ms, rank, dims, maxd)
+      call h5dwrite_f(d, H5T_NATIVE_INTEGER, v, [int(size(v), hsize_t)], h, mem_space_id=ms, file_space_id=fs)
+      call h5sclose_f(ms, rank); call h5sclose_f(fs, rank)
+   end subroutine put_slot_int
+
+   subroutine put_message(self, irun, msg, h)
+      type(sweep_file_t), intent(in) :: self
+      integer, intent(in) :: irun
+      character(len=message_len), intent(in) :: msg(1)
+      integer, intent(out) :: h
+      integer(hid_t) :: fs, ms
+      integer(hsize_t) :: dims(2), maxd(2)
+      integer :: rank
+      call select_slot(self%d_message, irun, 1, fs, ms, rank, dims, maxd)
+      call h5dwrite_f(self%d_message, self%t_message, msg, [1_hsize_t], h, mem_space_id=ms, file_space_id=fs)
+      call h5sclose_f(ms, rank); call h5sclose_f(fs, rank)
+   end subroutine put_message
+
+   !> File and memory spaces for the slot of run irun (n values).
+   subroutine select_slot(d, irun, n, fs, ms, rank, dims, maxd)
+      integer(hid_t), intent(in) :: d
+      integer, intent(in) :: irun, n
+      integer(hid_t), intent(out) :: fs, ms
+      integer, intent(out) :: rank
+      integer(hsize_t), intent(out) :: dims(2), maxd(2)
+      integer :: h
+      call h5dget_space_f(d, fs, h)
+      call h5sget_simple_extent_dims_f(fs, dims, maxd, rank)
+      if (rank == 1) then
+         call h5sselect_hyperslab_f(fs, H5S_SELECT_SET_F, [int(irun - 1, hsize_t)], [1_hsize_t], h)
+      else
+         call h5sselect_hyperslab_f(fs, H5S_SELECT_SET_F, [0_hsize_t, int(irun - 1, hsize_t)], &
+                                    [int(n, hsize_t), 1_hsize_t], h)
+      end if
+      call h5screate_simple_f(1, [int(n, hsize_t)], ms, h)
+   end subroutine select_slot
+
+   subroutine put_attr(loc, name, value)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name, value
+      integer(hid_t) :: sp, t, a
+      integer :: h
+      character(len=len(value) + 1) :: buf   ! NUL-terminated, so '' is one byte
+      buf = value//c_null_char
+      call string_type(len(buf), t)
+      call h5screate_f(H5S_SCALAR_F, sp, h)
+      call h5acreate_f(loc, name, t, sp, a, h)
+      call h5awrite_f(a, t, buf, [1_hsize_t], h)
+      call h5aclose_f(a, h); call h5sclose_f(sp, h); call h5tclose_f(t, h)
+   end subroutine put_attr
+
+   subroutine get_attr(loc, name, value, ok)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable, intent(out) :: value
+      logical, intent(out) :: ok
+      integer(hid_t) :: t, a
+      integer(size_t) :: n
+      integer :: h, i
+      value = ''
+      call h5aopen_f(loc, name, a, h)
+      ok = h >= 0
+      if (.not. ok) return
+      call h5aget_type_f(a, t, h)
+      call h5tget_size_f(t, n, h)
+      deallocate (value)
+      allocate (character(len=n) :: value)
+      call h5aread_f(a, t, value, [1_hsize_t], h)
+      ok = h >= 0
+      call h5tclose_f(t, h); call h5aclose_f(a, h)
+      i = index(value, achar(0))
+      if (i > 0) value = value(1:i - 1)
+   end subroutine get_attr
+
+   !> A 1-D dataset of fixed-length strings (the longest item's length).
+   subroutine put_strings(loc, name, items)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      type(string_t), intent(in) :: items(:)
+      character(len=:), allocatable :: buf(:)
+      integer(hid_t) :: sp, t, d
+      integer :: h, i, n
+      n = 1
+      do i = 1, size(items)
+         n = max(n, len(items(i)%s))
+      end do
+      n = n + 1                                   ! room for the NUL
+      allocate (character(len=n) :: buf(size(items)))
+      do i = 1, size(items)
+         buf(i) = repeat(c_null_char, n)
+         buf(i)(1:len(items(i)%s)) = items(i)%s
+      end do
+      call string_type(n, t)
+      call h5screate_simple_f(1, [int(size(items), hsize_t)], sp, h)
+      call h5dcreate_f(loc, name, t, sp, d, h)
+      call h5dwrite_f(d, t, buf, [int(size(items), hsize_t)], h)
+      call h5dclose_f(d, h); call h5sclose_f(sp, h); call h5tclose_f(t, h)
+   end subroutine put_strings
+
+   subroutine get_strings(loc, name, items, ok)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      type(string_t), allocatable, intent(out) :: items(:)
+      logical, intent(out) :: ok
+      character(len=:), allocatable :: buf(:)
+      integer(hid_t) :: d, t, sp
+      integer(size_t) :: n
+      integer(hsize_t) :: dims(1), maxd(1)
+      integer :: h, i, p
+      allocate (items(0))
+      call h5dopen_f(loc, name, d, h)
+      ok = h >= 0
+      if (.not. ok) return
+      call h5dget_type_f(d, t, h)
+      call h5tget_size_f(t, n, h)
+      call h5dget_space_f(d, sp, h)
+      call h5sget_simple_extent_dims_f(sp, dims, maxd, h)
+      allocate (character(len=n) :: buf(dims(1)))
+      call h5dread_f(d, t, buf, dims, h)
+      ok = h >= 0
+      deallocate (items)
+      allocate (items(dims(1)))
+      do i = 1, size(items)
+         p = index(buf(i), achar(0))
+         if (p > 0) then
+            items(i)%s = buf(i)(1:p - 1)
+         else
+            items(i)%s = trim(buf(i))
+         end if
+      end do
+      call h5sclose_f(sp, h); call h5tclose_f(t, h); call h5dclose_f(d, h)
+   end subroutine get_strings
+
+   subroutine put_reals(loc, name, v)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      real(wp), intent(in) :: v(:, :)
+      integer(hid_t) :: sp, d
+      integer :: h
+      call h5screate_simple_f(2, int(shape(v), hsize_t), sp, h)
+      call h5dcreate_f(loc, name, H5T_NATIVE_DOUBLE, sp, d, h)
+      call h5dwrite_f(d, H5T_NATIVE_DOUBLE, v, int(shape(v), hsize_t), h)
+      call h5dclose_f(d, h); call h5sclose_f(sp, h)
+   end subroutine put_reals
+
+   subroutine get_reals(loc, name, v, ok)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      real(wp), intent(inout) :: v(:, :)
+      logical, intent(out) :: ok
+      integer(hid_t) :: d, sp
+      integer(hsize_t) :: dims(2), maxd(2)
+      integer :: h, rank
+      call h5dopen_f(loc, name, d, h)
+      ok = h >= 0
+      if (.not. ok) return
+      call h5dget_space_f(d, sp, h)
+      call h5sget_simple_extent_dims_f(sp, dims, maxd, rank)
+      ok = rank == 2 .and. all(dims == int(shape(v), hsize_t))
+      if (ok) then
+         call h5dread_f(d, H5T_NATIVE_DOUBLE, v, dims, h)
+         ok = h >= 0
+      end if
+      call h5sclose_f(sp, h); call h5dclose_f(d, h)
+   end subroutine get_reals
+end module trainsim_sweep_file
