@@ -9,6 +9,7 @@ module trainsim_builder
    use trainsim_signal, only: signal_t, signal_from_group
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
+   use trainsim_id_table, only: id_table_t
    implicit none
    private
 
@@ -28,6 +29,7 @@ contains
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
+      type(id_table_t) :: node_ids   ! node id -> node index, for look-ups in O(1)
       integer :: i
 
       call deck%check_group_names([string_t('run'), string_t('node'), string_t('element'), string_t('load'), &
@@ -36,11 +38,11 @@ contains
       model%deck_file = deck%file
       model%deck_text = deck%text
       call read_run(deck, model, err); if (allocated(err)) return
-      call read_nodes(deck, model, err); if (allocated(err)) return
-      call read_elements(deck, model, err); if (allocated(err)) return
-      call read_loads(deck, model, err); if (allocated(err)) return
+      call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
+      call read_elements(deck, model, node_ids, err); if (allocated(err)) return
+      call read_loads(deck, model, node_ids, err); if (allocated(err)) return
       call model%finalize()
-      call read_initial(deck, model, err); if (allocated(err)) return
+      call read_initial(deck, model, node_ids, err); if (allocated(err)) return
       do i = 1, size(deck%groups)
          associate (g => deck%groups(i))
             if (g%name == 'run') call g%check_unused(err, 'the &run group')
@@ -138,9 +140,10 @@ contains
       end associate
    end subroutine read_run
 
-   subroutine read_nodes(deck, model, err)
+   subroutine read_nodes(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(inout) :: node_ids
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j
       character(len=:), allocatable :: id, tname
@@ -158,13 +161,12 @@ contains
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default='n'//str(k)); if (allocated(err)) return
             call g%get_string('type', tname, err); if (allocated(err)) return
-            do j = 1, k - 1
-               if (model%nodes(j)%n%id == id) then
-                  call fatal_error(err, g%where('id')//": error: duplicate node id '"//id//"' (already used by node "// &
-                                   str(j)//')', err_input)
-                  return
-               end if
-            end do
+            call node_ids%insert(id, k, j)
+            if (j /= 0) then
+               call fatal_error(err, g%where('id')//": error: duplicate node id '"//id//"' (already used by node "// &
+                                str(j)//')', err_input)
+               return
+            end if
             call make_node(tname, model%nodes(k)%n)
             if (.not. allocated(model%nodes(k)%n)) then
                call fatal_error(err, g%where('type')//": error: unknown node type '"//tname// &
@@ -178,12 +180,14 @@ contains
       end do
    end subroutine read_nodes
 
-   subroutine read_elements(deck, model, err)
+   subroutine read_elements(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(in) :: node_ids
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j, nn
       character(len=:), allocatable :: id, tname, lid, rid, dl, dr
+      type(id_table_t) :: element_ids
 
       allocate (model%elements(deck%count_groups('element')))
       nn = size(model%nodes)
@@ -194,12 +198,11 @@ contains
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default='e'//str(k)); if (allocated(err)) return
             call g%get_string('type', tname, err); if (allocated(err)) return
-            do j = 1, k - 1
-               if (model%elements(j)%e%id == id) then
-                  call fatal_error(err, g%where('id')//": error: duplicate element id '"//id//"'", err_input)
-                  return
-               end if
-            end do
+            call element_ids%insert(id, k, j)
+            if (j /= 0) then
+               call fatal_error(err, g%where('id')//": error: duplicate element id '"//id//"'", err_input)
+               return
+            end if
             call make_element(tname, model%elements(k)%e)
             if (.not. allocated(model%elements(k)%e)) then
                call fatal_error(err, g%where('type')//": error: unknown element type '"//tname// &
@@ -222,8 +225,8 @@ contains
                dl = lid; dr = rid
                call g%get_string('left', lid, err, default=dl); if (allocated(err)) return
                call g%get_string('right', rid, err, default=dr); if (allocated(err)) return
-               e%left = model%node_index(lid)
-               e%right = model%node_index(rid)
+               e%left = node_ids%get(lid)
+               e%right = node_ids%get(rid)
                if (e%left == 0) then
                   call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
                                    "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
@@ -248,23 +251,28 @@ contains
       end do
    end subroutine read_elements
 
-   subroutine read_loads(deck, model, err)
+   subroutine read_loads(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(in) :: node_ids
       type(error_t), allocatable, intent(out) :: err
-      integer :: i, inode
+      integer :: i, inode, nloads, nspeeds
       character(len=:), allocatable :: nid, quantity
       type(signal_t) :: sig
       type(load_t), allocatable :: loads(:)
       type(signal_t), allocatable :: speeds(:)
 
-      allocate (loads(0), speeds(0), model%speed_of(size(model%nodes)))
+      ! at most one load or speed per &load group: size once, trim at the end
+      nloads = deck%count_groups('load')
+      allocate (loads(nloads), speeds(nloads), model%speed_of(size(model%nodes)))
+      nloads = 0
+      nspeeds = 0
       model%speed_of = 0
       do i = 1, size(deck%groups)
          if (deck%groups(i)%name /= 'load') cycle
          associate (g => deck%groups(i))
             call g%get_string('node', nid, err); if (allocated(err)) return
-            inode = model%node_index(nid)
+            inode = node_ids%get(nid)
             if (inode == 0) then
                call fatal_error(err, g%where('node')//": error: load on node '"//nid//"', which is not defined", &
                                 err_input)
@@ -275,7 +283,8 @@ contains
             call signal_from_group(g, sig, err); if (allocated(err)) return
             select case (quantity)
             case ('torque')
-               loads = [loads, load_t(inode, sig)]
+               nloads = nloads + 1
+               loads(nloads) = load_t(inode, sig)
             case ('speed')
                if (.not. model%nodes(inode)%n%can_prescribe_speed()) then
                   call fatal_error(err, g%where('quantity')//": error: node '"//nid//"' of type '"// &
@@ -288,8 +297,9 @@ contains
                                    err_input)
                   return
                end if
-               speeds = [speeds, sig]
-               model%speed_of(inode) = size(speeds)
+               nspeeds = nspeeds + 1
+               speeds(nspeeds) = sig
+               model%speed_of(inode) = nspeeds
             case ('voltage')
                call model%nodes(inode)%n%attach_voltage(sig, g%where('quantity'), err); if (allocated(err)) return
             case default
@@ -299,13 +309,14 @@ contains
             end select
          end associate
       end do
-      call move_alloc(loads, model%loads)
-      call move_alloc(speeds, model%speeds)
+      model%loads = loads(1:nloads)
+      model%speeds = speeds(1:nspeeds)
    end subroutine read_loads
 
-   subroutine read_initial(deck, model, err)
+   subroutine read_initial(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(in) :: node_ids
       type(error_t), allocatable, intent(out) :: err
       integer :: i, inode, j
       character(len=:), allocatable :: nid
@@ -332,7 +343,7 @@ contains
          associate (g => deck%groups(i))
             call g%get_string('node', nid, err); if (allocated(err)) return
             if (to_lower(nid) == 'all') cycle
-            inode = model%node_index(nid)
+            inode = node_ids%get(nid)
             if (inode == 0) then
                call fatal_error(err, g%where('node')//": error: initial conditions for node '"//nid// &
                                 "', which is not defined", err_input)
