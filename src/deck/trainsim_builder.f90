@@ -14,6 +14,16 @@ module trainsim_builder
    private
 
    public :: build_model, integrator_names
+   public :: max_abs_time, max_steps, max_samples
+
+   !> Limits of &run (docs/deck.md): beyond them a run cannot end in reasonable time or
+   !> memory, or time itself is not resolved; each is checked by read_run, naming the key.
+   real(wp), parameter :: max_abs_time = 1.0e12_wp   !< |t_start|, |t_end| in s (~32 000 years)
+   real(wp), parameter :: max_steps = 1.0e12_wp      !< (t_end - t_start)/dt
+   real(wp), parameter :: max_samples = 1.0e9_wp     !< output samples: (t_end - t_start)/output_interval
+   !> dt must exceed this many units of double-precision spacing at the run's largest |t|,
+   !> or t + dt rounds back to t
+   real(wp), parameter :: min_dt_spacings = 1.0e3_wp
 
 contains
 
@@ -24,7 +34,8 @@ contains
                string_t('arkode-dp'), string_t('arkode-verner')]
    end function integrator_names
 
-   !> Build a model from a parsed deck.
+   !> Build a model from a parsed deck. The deck's text moves into the model
+   !> (`deck%text` is deallocated afterwards).
    subroutine build_model(deck, model, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(out) :: model
@@ -36,7 +47,7 @@ contains
                                    string_t('initial')], err)
       if (allocated(err)) return
       model%deck_file = deck%file
-      model%deck_text = deck%text
+      call move_alloc(deck%text, model%deck_text)   ! not copied: a deck may be 100 MB
       call read_run(deck, model, err); if (allocated(err)) return
       call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
       call read_elements(deck, model, node_ids, err); if (allocated(err)) return
@@ -61,7 +72,7 @@ contains
       character(len=:), allocatable :: units_name, jac_kind
       type(string_t), allocatable :: valid(:)
       logical :: ok
-      real(wp) :: tmp
+      real(wp) :: tmp, span
 
       n = deck%count_groups('run')
       if (n /= 1) then
@@ -104,29 +115,58 @@ contains
             return
          end select
 
+         ! Every real is finite here (the deck reader rejects nan, inf and overflow).
+         ! Limits divide by a constant, never by a deck value, so no check can overflow.
+         span = 0.0_wp
+         if (abs(r%t_start) <= max_abs_time .and. abs(r%t_end) <= max_abs_time) span = r%t_end - r%t_start
          if (.not. r%dt > 0.0_wp) then
             call fatal_error(err, g%where('dt')//': error: time step dt must be > 0, got '//str(r%dt), err_input)
+         else if (abs(r%t_start) > max_abs_time) then
+            call fatal_error(err, g%where('t_start')//': error: t_start = '//str(r%t_start)//' is beyond the '// &
+                             'time limit of +-'//str(max_abs_time)//' s', err_input)
+         else if (abs(r%t_end) > max_abs_time) then
+            call fatal_error(err, g%where('t_end')//': error: t_end = '//str(r%t_end)//' is beyond the '// &
+                             'time limit of +-'//str(max_abs_time)//' s', err_input)
          else if (.not. r%t_end > r%t_start) then
             call fatal_error(err, g%where('t_end')//': error: t_end must be later than t_start ('//str(r%t_start)// &
                              '), got '//str(r%t_end), err_input)
-         else if ((r%t_end - r%t_start)/r%dt > 1.0e12_wp) then
+         else if (span/max_steps > r%dt) then
             call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s would take more than '// &
-                             '1e12 steps over the run of '//str(r%t_end - r%t_start)//' s', err_input)
-         else if (r%dt > r%t_end - r%t_start) then
+                             '1e12 steps over the run of '//str(span)//' s', err_input)
+         else if (r%dt > span) then
             call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)// &
-                             ' is longer than the run (t_end - t_start = '//str(r%t_end - r%t_start)//')', err_input)
+                             ' is longer than the run (t_end - t_start = '//str(span)//')', err_input)
+         else if (r%dt < min_dt_spacings*spacing(max(abs(r%t_start), abs(r%t_end)))) then
+            call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s is too fine for '// &
+                             'the times of the run: near t = '//str(max(abs(r%t_start), abs(r%t_end)))// &
+                             ' s double precision resolves only '//str(spacing(max(abs(r%t_start), abs(r%t_end))))// &
+                             ' s (dt must exceed 1000 times that; shift t_start towards 0)', err_input)
          else if (.not. r%output_interval >= 0.0_wp) then
             call fatal_error(err, g%where('output_interval')//': error: output_interval must be >= 0, got '// &
                              str(r%output_interval), err_input)
+         else if (r%output_interval > 0.0_wp .and. span/max_samples > r%output_interval) then
+            call fatal_error(err, g%where('output_interval')//': error: output_interval = '// &
+                             str(r%output_interval)//' s would write more than 1e9 samples over the run of '// &
+                             str(span)//' s (the output limit); raise it', err_input)
+         else if (r%output_interval == 0.0_wp .and. span/max_samples > r%dt) then
+            call fatal_error(err, g%where('output_interval')//': error: output_interval = 0 stores a sample '// &
+                             'every dt = '//str(r%dt)//' s: more than 1e9 samples over the run of '//str(span)// &
+                             ' s (the output limit); give an output_interval of at least '// &
+                             str(span/max_samples)//' s', err_input)
          else if (.not. (r%rtol > 0.0_wp .and. r%rtol < 1.0_wp)) then
             call fatal_error(err, g%where('rtol')//': error: rtol must be in (0, 1), got '//str(r%rtol), err_input)
-         else if (.not. (r%atol_angle > 0.0_wp .and. r%atol_speed > 0.0_wp .and. r%atol_current > 0.0_wp)) then
-            call fatal_error(err, g%where('atol_angle')//': error: absolute tolerances must be > 0', err_input)
-         else if (.not. (r%max_step >= 0.0_wp .and. r%event_tol >= 0.0_wp .and. r%settle_time >= 0.0_wp)) then
-            call fatal_error(err, g%where('max_step')//': error: max_step, event_tol and settle_time must be >= 0', &
-                             err_input)
          end if
          if (allocated(err)) return
+         call g%require_positive('atol_angle', r%atol_angle, err)
+         call g%require_positive('atol_speed', r%atol_speed, err)
+         call g%require_positive('atol_current', r%atol_current, err)
+         call g%require_nonnegative('max_step', r%max_step, err)
+         call g%require_nonnegative('event_tol', r%event_tol, err)
+         call g%require_nonnegative('settle_time', r%settle_time, err)
+         if (allocated(err)) return
+         ! an interval longer than the run means its first and last sample only: say so
+         ! with the run's length, which keeps every sample count derived from it small
+         r%output_interval = min(r%output_interval, span)
          valid = integrator_names()
          ok = .false.
          do n = 1, size(valid)
