@@ -66,7 +66,8 @@ module trainsim_cvode
                                   FERKStepGetNumErrTestFails, FERKStepGetCurrentTime, FERKStepGetLastStep, &
                                   FERKStepGetEstLocalErrors, FERKStepGetErrWeights
    use trainsim_kinds, only: wp, i8, two_pi
-   use trainsim_error, only: error_t, fatal_error, err_input, err_numeric, err_internal
+   use trainsim_error, only: error_t, fatal_error, err_input, err_numeric, err_internal, err_interrupted
+   use trainsim_interrupt, only: interrupt_signal
    use trainsim_strings, only: str, string_t
    use trainsim_model, only: model_t
    use trainsim_modes, only: modes_t, compute_modes, rk4_stability_limit
@@ -610,6 +611,10 @@ contains
             call cleanup(); return
          end if
          if (t >= tout - tol_out) k = k + 1
+         ! interrupt check (SIGINT/SIGTERM; to move into the common driver)
+         if (interrupt_signal() /= 0) call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
+         if (allocated(err)) call cleanup()
+         if (allocated(err)) return
       end do
       t = t_end
       y = yv

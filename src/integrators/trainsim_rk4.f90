@@ -12,7 +12,8 @@
 !> closed the step is dt/10.
 module trainsim_rk4
    use trainsim_kinds, only: wp, i8
-   use trainsim_error, only: error_t, fatal_error, err_numeric
+   use trainsim_error, only: error_t, fatal_error, err_numeric, err_interrupted
+   use trainsim_interrupt, only: interrupt_signal
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_sink, only: sink_t, event_t, run_stats_t
@@ -141,6 +142,9 @@ contains
          stats%steps = stats%steps + 1
          call check_state(model, t, y, dt, err); if (allocated(err)) return
          call obs%step(model, t, y, sink, err); if (allocated(err)) return
+         ! interrupt check (SIGINT/SIGTERM; to move into the common driver)
+         if (interrupt_signal() /= 0) call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
+         if (allocated(err)) return
       end do
 
    contains
@@ -237,6 +241,9 @@ contains
             stats%steps = stats%steps + 1
             call check_state(model, t, y, dt, err); if (allocated(err)) return
             call obs%step(model, t, y, sink, err); if (allocated(err)) return
+            ! interrupt check (SIGINT/SIGTERM; to move into the common driver)
+            if (interrupt_signal() /= 0) call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
+            if (allocated(err)) return
          end do
       end subroutine thesis_loop
    end subroutine integrate_rk4
