@@ -120,9 +120,9 @@ contains
       ! output samples are kept in memory for the peak-to-peak metrics (displacement
       ! only) and, with keep_series, node angles and speeds too
       if (model%run%output_interval > 0.0_wp) then
-         nmax = int(min(model%run%t_end - model%run%t_start, 1.0e9_wp*model%run%output_interval)/model%run%output_interval) + 2
+         nmax = int((model%run%t_end - model%run%t_start)/max(model%run%output_interval, 1.0e-9_wp*(model%run%t_end - model%run%t_start))) + 2
       else
-         nmax = int(min(model%run%t_end - model%run%t_start, 1.0e9_wp*model%run%dt)/model%run%dt) + 2
+         nmax = int((model%run%t_end - model%run%t_start)/max(model%run%dt, 1.0e-9_wp*(model%run%t_end - model%run%t_start))) + 2
       end if
       allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
       if (model%run%keep_series) then
