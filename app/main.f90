@@ -1,8 +1,10 @@
 !> trainsim: drive-train simulation with clearances (successor to TRAIN, Cook 1989).
 program trainsim_main
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+   use, intrinsic :: iso_c_binding, only: c_int
    use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t, err_numeric
+   use trainsim_error, only: error_t, err_numeric, err_interrupted
+   use trainsim_interrupt, only: install_interrupt_handlers, interrupt_signal, signal_name
    use trainsim_strings, only: str
    use trainsim_version, only: version_string
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
@@ -13,7 +15,7 @@ program trainsim_main
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: null_sink_t
-   use trainsim_hdf5, only: hdf5_sink_t
+   use trainsim_hdf5, only: hdf5_sink_t, hdf5_library_stuck
    use trainsim_report, only: print_summary, print_modes, print_parameters
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
@@ -25,6 +27,15 @@ program trainsim_main
    type(lin_state_t) :: modes_state   ! trainsim modes: --closed, --zone, --stiffest
    type(override_t), allocatable :: sets(:)   ! --set TARGET.KEY=VALUE, in order
    type(sweep_options_t) :: sweep_opt         ! trainsim sweep: --resume, --progress
+   logical :: no_output
+
+   interface
+      !> POSIX _exit(2): ends the process without exit handlers (see quit).
+      subroutine c_exit_now(status) bind(C, name='_exit')
+         import :: c_int
+         integer(c_int), value :: status
+      end subroutine c_exit_now
+   end interface
 
    nargs = command_argument_count()
    if (nargs == 0) then
@@ -48,6 +59,7 @@ program trainsim_main
    deck_path = ''
    out_path = ''
    allocate (sets(0))
+   no_output = .false.
    i = 2
    do while (i <= nargs)
       select case (arg(i))
@@ -57,6 +69,12 @@ program trainsim_main
             call quit(2)
          end if
          out_path = arg(i + 1)
+         if (len(out_path) == 0) then
+            write (error_unit, '(a)') "trainsim: error: option -o got an empty file name (use -o - or "// &
+               "--no-output to write no history file)"
+            call quit(2)
+         end if
+         no_output = out_path == '-'
          i = i + 1
       case ('--set')
          call add_set(i)
@@ -88,6 +106,12 @@ program trainsim_main
             end select
             i = i + 1
          end if
+      case ('--no-output')
+         if (cmd /= 'run') then
+            write (error_unit, '(a)') 'trainsim: error: option --no-output only applies to run'
+            call quit(2)
+         end if
+         no_output = .true.
       case default
          if (len(deck_path) > 0 .or. index(arg(i), '-') == 1) then
             write (error_unit, '(a)') "trainsim: error: unexpected argument '"//arg(i)//"' (try trainsim --help)"
@@ -102,7 +126,8 @@ program trainsim_main
       call quit(2)
    end if
    if (cmd == 'run') then
-      call do_run(deck_path, out_path)
+      call install_interrupt_handlers()
+      call do_run(deck_path, out_path, no_output)
    else if (cmd == 'sweep') then
       call do_sweep(deck_path, out_path)
    else
@@ -181,11 +206,12 @@ contains
       write (unit, '(a)') 'trainsim '//version_string//' - drive trains with clearances (successor to TRAIN, Cook 1989)', &
          '', &
          'usage:', &
-         '  trainsim run DECK [-o FILE] [--set TARGET.KEY=VALUE ...]', &
+         '  trainsim run DECK [-o FILE | --no-output] [--set TARGET.KEY=VALUE ...]', &
          '                                integrate the train in DECK; write the HDF5 history', &
          '                                (to FILE, else to the deck''s &run output). --set changes a', &
          '                                deck value (TARGET: node/element id, run, or GROUP#K) or a', &
-         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles)', &
+         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles);', &
+         '                                --no-output (or -o -): no history file, even if the deck names one', &
          '  trainsim sweep DECK [-o FILE] [--set ...] [--resume] [--progress S]', &
          '                                every run of the deck''s &sweep groups (serial, or under', &
          '                                mpirun -np N) into one HDF5 sweep file (default DECK_sweep.h5);', &
@@ -202,19 +228,30 @@ contains
          '                                            run can reach (what `run` checks dt against)', &
          '  trainsim --help | --version', &
          '', &
-         'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file', &
+         'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
+         '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)', &
          'deck format: docs/deck.md'
    end subroutine usage
 
+   !> End the program with exit status `code`, output flushed. When HDF5 holds a file
+   !> it could not close (a full disk), its exit handler would crash: end without it.
    subroutine quit(code)
       integer, intent(in) :: code
+      flush (output_unit)
+      flush (error_unit)
+      if (hdf5_library_stuck()) call c_exit_now(int(code, c_int))
       if (code == 0) stop
-      if (code == 1) stop 1, quiet=.true.
-      stop 2, quiet=.true.
+      stop code, quiet=.true.
    end subroutine quit
 
    subroutine fail(err)
       type(error_t), intent(in) :: err
+      integer :: sig
+      if (err%code == err_interrupted) then
+         sig = interrupt_signal()
+         write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; no history written'
+         call quit(128 + sig)
+      end if
       write (error_unit, '(a)') 'trainsim: '//err%message
       if (err%code == err_numeric) call quit(1)
       call quit(2)
@@ -279,8 +316,9 @@ contains
       end if
    end function mode_name
 
-   subroutine do_run(path, out)
+   subroutine do_run(path, out, no_output)
       character(len=*), intent(in) :: path, out
+      logical, intent(in) :: no_output   !< -o - or --no-output: no history file
       type(model_t) :: model
       type(error_t), allocatable :: err
       type(run_result_t) :: res
@@ -291,8 +329,10 @@ contains
 
       call load(path, model)
       if (len(out) > 0) model%run%output = out
+      if (no_output) model%run%output = ''
       write (output_unit, '(a)') 'trainsim '//version_string//': '//path//'  ('//model%title//')'
       call print_parameters(model, output_unit)
+      flush (output_unit)   ! kept even if the run is interrupted or crashes
       if (model%run%integrator(1:3) == 'rk4') then
          ! RK4 step advice from the damped linearised train (D-25): first as it starts
          warned = .false.
@@ -329,5 +369,6 @@ contains
       if (allocated(err)) call fail(err)
       call print_summary(model, res, output_unit)
       if (len(model%run%output) > 0) write (output_unit, '(a)') 'history written to '//model%run%output
+      flush (output_unit)
    end subroutine do_run
 end program trainsim_main

@@ -26,6 +26,8 @@ program test_deck
    call test_check_group_names()
    call test_read_deck_missing_and_directory()
    call test_read_deck_file()
+   call test_read_deck_large_file_line_ends()
+   call test_text_must_be_utf8_without_nul()
    call test_getter_missing_and_default()
    call test_getter_wrong_type()
    call test_getter_two_values_and_quoted()
@@ -365,6 +367,62 @@ contains
       open (newunit=u, file=path, status='old', iostat=ios)
       if (ios == 0) close (u, status='delete')
    end subroutine test_read_deck_file
+
+   !> A file of more than one read block (1 MiB), with a CR-LF split across the block
+   !> boundary, a lone CR, a byte-order mark and a CR-LF at the end: the text is the file
+   !> without the BOM, without the CRs of CR-LF and without the final line end.
+   subroutine test_read_deck_large_file_line_ends()
+      integer, parameter :: block = 1048576
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      character(len=:), allocatable :: path, body, expected
+      character(len=512) :: tmpdir
+      character(len=3), parameter :: bom = char(239)//char(187)//char(191)
+      integer :: u, ios, stat, pad
+      call test_begin('read_deck: blocks, CR-LF across a block boundary, lone CR, BOM')
+      call get_environment_variable('TMPDIR', tmpdir, status=stat)
+      if (stat /= 0 .or. len_trim(tmpdir) == 0) tmpdir = '/tmp'
+      path = trim(tmpdir)//'/trainsim_test_deck_big.nml'
+      ! the file: BOM, '&run t_end = 1 /', CR LF, a comment up to byte `block`, whose
+      ! last byte is a CR, the LF opening the next block, then a lone CR inside a line
+      body = '&run t_end = 1 /'//achar(13)//nl//'!'
+      pad = block - len(bom) - len(body) - 1
+      body = body//repeat('x', pad)//achar(13)//nl//'&node a = 1'//achar(13)//'b = 2 /'//achar(13)//nl
+      expected = '&run t_end = 1 /'//nl//'!'//repeat('x', pad)//nl//'&node a = 1'//achar(13)//'b = 2 /'
+      open (newunit=u, file=path, access='stream', form='unformatted', status='replace', iostat=ios)
+      call check('temporary file opened', ios == 0)
+      if (ios /= 0) return
+      write (u) bom//body
+      close (u)
+      call read_deck(path, deck, err)
+      open (newunit=u, file=path, status='old', iostat=ios)
+      if (ios == 0) close (u, status='delete')
+      call check('no error', .not. allocated(err))
+      if (allocated(err)) return
+      call check('length of the text', len(deck%text) == len(expected))
+      call check('text as expected', deck%text == expected)
+      call check('two groups', size(deck%groups) == 2)
+   end subroutine test_read_deck_large_file_line_ends
+
+   subroutine test_text_must_be_utf8_without_nul()
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      call test_begin('deck text: NUL and invalid UTF-8 rejected with line and column; UTF-8 accepted')
+      call parse_deck('&run'//nl//"  title = 'ok'"//achar(0)//' /', 'x.nml', deck, err)
+      call check('NUL rejected', allocated(err))
+      if (allocated(err)) call check('NUL: '//err%message, &
+                                     index(err%message, 'x.nml:2: error: NUL byte at column 15') == 1)
+      call parse_deck("&run title = 'M"//char(252)//"ller' /", 'x.nml', deck, err)   ! Latin-1 u-umlaut
+      call check('Latin-1 rejected', allocated(err))
+      if (allocated(err)) call check('Latin-1: '//err%message, &
+                                     index(err%message, 'x.nml:1: error: invalid UTF-8 at column 16 (byte 0xFC)') == 1)
+      call parse_deck("&run title = 'M"//char(195)//char(188)//"ller' /", 'x.nml', deck, err)   ! UTF-8 u-umlaut
+      call check('UTF-8 accepted', .not. allocated(err))
+      call parse_deck("&run title = '"//char(240)//char(159)//char(154)//char(151)//"' /", 'x.nml', deck, err)
+      call check('4-byte UTF-8 accepted', .not. allocated(err))
+      call parse_deck("&run title = '"//char(240)//char(159)//char(154)//"' /", 'x.nml', deck, err)
+      call check('truncated 4-byte sequence rejected', allocated(err))
+   end subroutine test_text_must_be_utf8_without_nul
 
    subroutine test_getter_missing_and_default()
       type(deck_t) :: deck

@@ -191,7 +191,7 @@ contains
       call sink%open(meta, err)
       call check_no_error('open', err)
       if (allocated(err)) return
-      call check('.part exists while writing', exists(main_file//'.part'))
+      call check('.part exists while writing', exists(sink%temp_path()))
       call alloc_sample(smp, 3, 2, 1)
       do k = 1, n_samples
          call fill_sample(smp, k)
@@ -220,7 +220,7 @@ contains
       call sink%close(events, stats, metrics, err)
       call check_no_error('close', err)
       call check('final file exists', exists(main_file))
-      call check('.part is gone after close', .not. exists(main_file//'.part'))
+      call check('.part is gone after close', .not. exists(sink%temp_path()))
    end subroutine test_write_full_run
 
    subroutine test_read_back()
@@ -449,7 +449,7 @@ contains
       call check('error code is err_io', err%code == err_io)
       call check('message names the path', index(err%message, "'"//path//"'") > 0)
       call check('message starts with "cannot write output file"', index(err%message, 'cannot write output file') == 1)
-      call check('no .part file', .not. exists(path//'.part'))
+      call check('no .part file', .not. exists(sink%temp_path()))
       call check('no output file', .not. exists(path))
       call sink%abort()   ! harmless after a failed open
    end subroutine test_bad_directory
@@ -479,9 +479,9 @@ contains
          call fill_sample(smp, k)
          call sink%write_sample(smp, err)
       end do
-      call check('.part exists before abort', exists(path//'.part'))
+      call check('.part exists before abort', exists(sink%temp_path()))
       call sink%abort()
-      call check('.part removed by abort', .not. exists(path//'.part'))
+      call check('.part removed by abort', .not. exists(sink%temp_path()))
       call check('no output file after abort', .not. exists(path))
       call sink%abort()   ! idempotent
 
@@ -493,7 +493,7 @@ contains
       call sink%close(events, stats, metrics, err)
       call check_no_error('close after re-open', err)
       call check('output published after re-open', exists(path))
-      call check('no .part after re-open and close', .not. exists(path//'.part'))
+      call check('no .part after re-open and close', .not. exists(sink%temp_path()))
       call remove_file(path)
    end subroutine test_abort
 
@@ -532,7 +532,7 @@ contains
       call sink%write_sample(smp, err)
       call check('wrong state count -> err_internal', allocated(err))
       if (allocated(err)) call check('  code', err%code == err_internal)
-      call check('.part removed after the error', .not. exists(path//'.part'))
+      call check('.part removed after the error', .not. exists(sink%temp_path()))
       call check('nothing published', .not. exists(path))
    end subroutine test_misuse
 

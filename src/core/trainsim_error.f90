@@ -4,12 +4,13 @@ module trainsim_error
    private
 
    public :: error_t, fatal_error, prefix_error
-   public :: err_input, err_io, err_numeric, err_internal
+   public :: err_input, err_io, err_numeric, err_internal, err_interrupted
 
    integer, parameter :: err_input = 1    !< malformed or non-physical input
    integer, parameter :: err_io = 2       !< missing, unreadable or unwritable file
    integer, parameter :: err_numeric = 3  !< NaN, solver failure, unstable step
    integer, parameter :: err_internal = 4 !< cannot happen
+   integer, parameter :: err_interrupted = 5 !< stopped by SIGINT/SIGTERM (trainsim_interrupt)
 
    !> An error: a human-readable message and a category code.
    type :: error_t

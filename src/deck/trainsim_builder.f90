@@ -11,32 +11,45 @@ module trainsim_builder
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
    use trainsim_integrator_registry, only: integrator_names
+   use trainsim_id_table, only: id_table_t
    implicit none
    private
 
    public :: build_model, integrator_names
+   public :: max_abs_time, max_steps, max_samples
+
+   !> Limits of &run (docs/deck.md): beyond them a run cannot end in reasonable time or
+   !> memory, or time itself is not resolved; each is checked by read_run, naming the key.
+   real(wp), parameter :: max_abs_time = 1.0e12_wp   !< |t_start|, |t_end| in s (~32 000 years)
+   real(wp), parameter :: max_steps = 1.0e12_wp      !< (t_end - t_start)/dt
+   real(wp), parameter :: max_samples = 1.0e9_wp     !< output samples: (t_end - t_start)/output_interval
+   !> dt must exceed this many units of double-precision spacing at the run's largest |t|,
+   !> or t + dt rounds back to t
+   real(wp), parameter :: min_dt_spacings = 1.0e3_wp
 
 contains
 
 
-   !> Build a model from a parsed deck.
+   !> Build a model from a parsed deck. The deck's text moves into the model
+   !> (`deck%text` is deallocated afterwards).
    subroutine build_model(deck, model, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
+      type(id_table_t) :: node_ids   ! node id -> node index, for look-ups in O(1)
       integer :: i
 
       call deck%check_group_names([string_t('run'), string_t('node'), string_t('element'), string_t('load'), &
                                    string_t('initial')], err)
       if (allocated(err)) return
       model%deck_file = deck%file
-      model%deck_text = deck%text
+      call move_alloc(deck%text, model%deck_text)   ! not copied: a deck may be 100 MB
       call read_run(deck, model, err); if (allocated(err)) return
-      call read_nodes(deck, model, err); if (allocated(err)) return
-      call read_elements(deck, model, err); if (allocated(err)) return
-      call read_loads(deck, model, err); if (allocated(err)) return
+      call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
+      call read_elements(deck, model, node_ids, err); if (allocated(err)) return
+      call read_loads(deck, model, node_ids, err); if (allocated(err)) return
       call model%finalize()
-      call read_initial(deck, model, err); if (allocated(err)) return
+      call read_initial(deck, model, node_ids, err); if (allocated(err)) return
       do i = 1, size(deck%groups)
          associate (g => deck%groups(i))
             if (g%name == 'run') call g%check_unused(err, 'the &run group')
@@ -55,7 +68,7 @@ contains
       character(len=:), allocatable :: units_name, jac_kind
       type(string_t), allocatable :: valid(:)
       logical :: ok
-      real(wp) :: tmp
+      real(wp) :: tmp, span
 
       n = deck%count_groups('run')
       if (n /= 1) then
@@ -98,29 +111,58 @@ contains
             return
          end select
 
+         ! Every real is finite here (the deck reader rejects nan, inf and overflow).
+         ! Limits divide by a constant, never by a deck value, so no check can overflow.
+         span = 0.0_wp
+         if (abs(r%t_start) <= max_abs_time .and. abs(r%t_end) <= max_abs_time) span = r%t_end - r%t_start
          if (.not. r%dt > 0.0_wp) then
             call fatal_error(err, g%where('dt')//': error: time step dt must be > 0, got '//str(r%dt), err_input)
+         else if (abs(r%t_start) > max_abs_time) then
+            call fatal_error(err, g%where('t_start')//': error: t_start = '//str(r%t_start)//' is beyond the '// &
+                             'time limit of +-'//str(max_abs_time)//' s', err_input)
+         else if (abs(r%t_end) > max_abs_time) then
+            call fatal_error(err, g%where('t_end')//': error: t_end = '//str(r%t_end)//' is beyond the '// &
+                             'time limit of +-'//str(max_abs_time)//' s', err_input)
          else if (.not. r%t_end > r%t_start) then
             call fatal_error(err, g%where('t_end')//': error: t_end must be later than t_start ('//str(r%t_start)// &
                              '), got '//str(r%t_end), err_input)
-         else if ((r%t_end - r%t_start)/r%dt > 1.0e12_wp) then
+         else if (span/max_steps > r%dt) then
             call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s would take more than '// &
-                             '1e12 steps over the run of '//str(r%t_end - r%t_start)//' s', err_input)
-         else if (r%dt > r%t_end - r%t_start) then
+                             '1e12 steps over the run of '//str(span)//' s', err_input)
+         else if (r%dt > span) then
             call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)// &
-                             ' is longer than the run (t_end - t_start = '//str(r%t_end - r%t_start)//')', err_input)
+                             ' is longer than the run (t_end - t_start = '//str(span)//')', err_input)
+         else if (r%dt < min_dt_spacings*spacing(max(abs(r%t_start), abs(r%t_end)))) then
+            call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s is too fine for '// &
+                             'the times of the run: near t = '//str(max(abs(r%t_start), abs(r%t_end)))// &
+                             ' s double precision resolves only '//str(spacing(max(abs(r%t_start), abs(r%t_end))))// &
+                             ' s (dt must exceed 1000 times that; shift t_start towards 0)', err_input)
          else if (.not. r%output_interval >= 0.0_wp) then
             call fatal_error(err, g%where('output_interval')//': error: output_interval must be >= 0, got '// &
                              str(r%output_interval), err_input)
+         else if (r%output_interval > 0.0_wp .and. span/max_samples > r%output_interval) then
+            call fatal_error(err, g%where('output_interval')//': error: output_interval = '// &
+                             str(r%output_interval)//' s would write more than 1e9 samples over the run of '// &
+                             str(span)//' s (the output limit); raise it', err_input)
+         else if (r%output_interval == 0.0_wp .and. span/max_samples > r%dt) then
+            call fatal_error(err, g%where('output_interval')//': error: output_interval = 0 stores a sample '// &
+                             'every dt = '//str(r%dt)//' s: more than 1e9 samples over the run of '//str(span)// &
+                             ' s (the output limit); give an output_interval of at least '// &
+                             str(span/max_samples)//' s', err_input)
          else if (.not. (r%rtol > 0.0_wp .and. r%rtol < 1.0_wp)) then
             call fatal_error(err, g%where('rtol')//': error: rtol must be in (0, 1), got '//str(r%rtol), err_input)
-         else if (.not. (r%atol_angle > 0.0_wp .and. r%atol_speed > 0.0_wp .and. r%atol_current > 0.0_wp)) then
-            call fatal_error(err, g%where('atol_angle')//': error: absolute tolerances must be > 0', err_input)
-         else if (.not. (r%max_step >= 0.0_wp .and. r%event_tol >= 0.0_wp .and. r%settle_time >= 0.0_wp)) then
-            call fatal_error(err, g%where('max_step')//': error: max_step, event_tol and settle_time must be >= 0', &
-                             err_input)
          end if
          if (allocated(err)) return
+         call g%require_positive('atol_angle', r%atol_angle, err)
+         call g%require_positive('atol_speed', r%atol_speed, err)
+         call g%require_positive('atol_current', r%atol_current, err)
+         call g%require_nonnegative('max_step', r%max_step, err)
+         call g%require_nonnegative('event_tol', r%event_tol, err)
+         call g%require_nonnegative('settle_time', r%settle_time, err)
+         if (allocated(err)) return
+         ! an interval longer than the run means its first and last sample only: say so
+         ! with the run's length, which keeps every sample count derived from it small
+         r%output_interval = min(r%output_interval, span)
          valid = integrator_names()
          ok = .false.
          do n = 1, size(valid)
@@ -134,9 +176,10 @@ contains
       end associate
    end subroutine read_run
 
-   subroutine read_nodes(deck, model, err)
+   subroutine read_nodes(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(inout) :: node_ids
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j
       character(len=:), allocatable :: id, tname
@@ -154,13 +197,12 @@ contains
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default='n'//str(k)); if (allocated(err)) return
             call g%get_string('type', tname, err); if (allocated(err)) return
-            do j = 1, k - 1
-               if (model%nodes(j)%n%id == id) then
-                  call fatal_error(err, g%where('id')//": error: duplicate node id '"//id//"' (already used by node "// &
-                                   str(j)//')', err_input)
-                  return
-               end if
-            end do
+            call node_ids%insert(id, k, j)
+            if (j /= 0) then
+               call fatal_error(err, g%where('id')//": error: duplicate node id '"//id//"' (already used by node "// &
+                                str(j)//')', err_input)
+               return
+            end if
             call make_node(tname, model%nodes(k)%n)
             if (.not. allocated(model%nodes(k)%n)) then
                call fatal_error(err, g%where('type')//": error: unknown node type '"//tname// &
@@ -175,12 +217,14 @@ contains
       end do
    end subroutine read_nodes
 
-   subroutine read_elements(deck, model, err)
+   subroutine read_elements(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(in) :: node_ids
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j, nn
       character(len=:), allocatable :: id, tname, lid, rid, dl, dr
+      type(id_table_t) :: element_ids
 
       allocate (model%elements(deck%count_groups('element')))
       nn = size(model%nodes)
@@ -191,12 +235,11 @@ contains
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default='e'//str(k)); if (allocated(err)) return
             call g%get_string('type', tname, err); if (allocated(err)) return
-            do j = 1, k - 1
-               if (model%elements(j)%e%id == id) then
-                  call fatal_error(err, g%where('id')//": error: duplicate element id '"//id//"'", err_input)
-                  return
-               end if
-            end do
+            call element_ids%insert(id, k, j)
+            if (j /= 0) then
+               call fatal_error(err, g%where('id')//": error: duplicate element id '"//id//"'", err_input)
+               return
+            end if
             call make_element(tname, model%elements(k)%e)
             if (.not. allocated(model%elements(k)%e)) then
                call fatal_error(err, g%where('type')//": error: unknown element type '"//tname// &
@@ -219,8 +262,8 @@ contains
                dl = lid; dr = rid
                call g%get_string('left', lid, err, default=dl); if (allocated(err)) return
                call g%get_string('right', rid, err, default=dr); if (allocated(err)) return
-               e%left = model%node_index(lid)
-               e%right = model%node_index(rid)
+               e%left = node_ids%get(lid)
+               e%right = node_ids%get(rid)
                if (e%left == 0) then
                   call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
                                    "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
@@ -246,23 +289,28 @@ contains
       end do
    end subroutine read_elements
 
-   subroutine read_loads(deck, model, err)
+   subroutine read_loads(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(in) :: node_ids
       type(error_t), allocatable, intent(out) :: err
-      integer :: i, inode
+      integer :: i, inode, nloads, nspeeds
       character(len=:), allocatable :: nid, quantity
       type(signal_t) :: sig
       type(load_t), allocatable :: loads(:)
       type(signal_t), allocatable :: speeds(:)
 
-      allocate (loads(0), speeds(0), model%speed_of(size(model%nodes)))
+      ! at most one load or speed per &load group: size once, trim at the end
+      nloads = deck%count_groups('load')
+      allocate (loads(nloads), speeds(nloads), model%speed_of(size(model%nodes)))
+      nloads = 0
+      nspeeds = 0
       model%speed_of = 0
       do i = 1, size(deck%groups)
          if (deck%groups(i)%name /= 'load') cycle
          associate (g => deck%groups(i))
             call g%get_string('node', nid, err); if (allocated(err)) return
-            inode = model%node_index(nid)
+            inode = node_ids%get(nid)
             if (inode == 0) then
                call fatal_error(err, g%where('node')//": error: load on node '"//nid//"', which is not defined", &
                                 err_input)
@@ -273,7 +321,8 @@ contains
             call signal_from_group(g, sig, err); if (allocated(err)) return
             select case (quantity)
             case ('torque')
-               loads = [loads, load_t(inode, sig)]
+               nloads = nloads + 1
+               loads(nloads) = load_t(inode, sig)
             case ('speed')
                if (.not. model%nodes(inode)%n%can_prescribe_speed()) then
                   call fatal_error(err, g%where('quantity')//": error: node '"//nid//"' of type '"// &
@@ -286,8 +335,9 @@ contains
                                    err_input)
                   return
                end if
-               speeds = [speeds, sig]
-               model%speed_of(inode) = size(speeds)
+               nspeeds = nspeeds + 1
+               speeds(nspeeds) = sig
+               model%speed_of(inode) = nspeeds
             case ('voltage')
                call model%nodes(inode)%n%attach_voltage(sig, g%where('quantity'), err); if (allocated(err)) return
             case default
@@ -297,13 +347,14 @@ contains
             end select
          end associate
       end do
-      call move_alloc(loads, model%loads)
-      call move_alloc(speeds, model%speeds)
+      model%loads = loads(1:nloads)
+      model%speeds = speeds(1:nspeeds)
    end subroutine read_loads
 
-   subroutine read_initial(deck, model, err)
+   subroutine read_initial(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
+      type(id_table_t), intent(in) :: node_ids
       type(error_t), allocatable, intent(out) :: err
       integer :: i, inode, j
       character(len=:), allocatable :: nid
@@ -331,7 +382,7 @@ contains
          associate (g => deck%groups(i))
             call g%get_string('node', nid, err); if (allocated(err)) return
             if (to_lower(nid) == 'all') cycle
-            inode = model%node_index(nid)
+            inode = node_ids%get(nid)
             if (inode == 0) then
                call fatal_error(err, g%where('node')//": error: initial conditions for node '"//nid// &
                                 "', which is not defined", err_input)

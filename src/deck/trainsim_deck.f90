@@ -5,6 +5,8 @@
 !> Values are kept as raw tokens; the typed getters of deck_group_t convert them and
 !> record which keys were read, so that check_unused can report misspelt keys.
 module trainsim_deck
+   use, intrinsic :: iso_fortran_env, only: int64
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
    use trainsim_strings, only: string_t, to_lower, str, join
@@ -64,6 +66,9 @@ module trainsim_deck
    integer, parameter :: tk_word = 5    ! bare token
    integer, parameter :: tk_string = 6  ! quoted string (text = contents, unquoted)
 
+   !> Largest deck file read, in bytes: positions in the text are default integers.
+   integer(int64), parameter :: max_deck_bytes = huge(1)
+
    type :: token_list_t
       integer :: n = 0
       integer, allocatable :: kind(:), line(:)
@@ -78,13 +83,22 @@ contains
 
    !> Read the deck file `path` and parse it. A missing, unreadable or directory path gives
    !> an error with code err_io; syntax errors give err_input.
+   !>
+   !> The file is read twice in blocks (once to measure the text, once to copy it), so
+   !> that the deck text exists once in memory, without CRs of CR-LF line ends, a
+   !> leading UTF-8 byte-order mark or one final line end.
    subroutine read_deck(path, deck, err)
       character(len=*), intent(in) :: path
       type(deck_t), intent(out) :: deck
       type(error_t), allocatable, intent(out) :: err
-      character(len=:), allocatable :: raw, text
+      integer, parameter :: block_len = 1048576
+      character(len=:), allocatable :: text
+      character(len=:), allocatable :: blk
       character(len=512) :: msg
-      integer :: u, ios, sz, i, n
+      integer(int64) :: sz, pos, n, nlen
+      integer :: u, ios, nb, i, skip
+      logical :: pending_cr
+      character(len=1) :: last
 
       msg = ''
       open (newunit=u, file=path, access='stream', form='unformatted', status='old', &
@@ -99,32 +113,103 @@ contains
          call fatal_error(err, "cannot open deck '"//path//"': cannot determine its size", err_io)
          return
       end if
-      allocate (character(len=sz) :: raw)
-      if (sz > 0) then
-         read (u, iostat=ios, iomsg=msg) raw
+      if (sz > max_deck_bytes) then
+         close (u, iostat=ios)
+         call fatal_error(err, "cannot open deck '"//path//"': it has more than "//str(huge(1))// &
+                          ' bytes (the largest deck trainsim reads)', err_io)
+         return
+      end if
+      allocate (character(len=block_len) :: blk)
+      ! A leading byte-order mark is no part of the text.
+      skip = 0
+      if (sz >= 3) then
+         read (u, pos=1, iostat=ios, iomsg=msg) blk(1:3)
          if (ios /= 0) then
-            close (u, iostat=ios)
-            call fatal_error(err, "cannot open deck '"//path//"': "//trim(msg), err_io)
+            call read_failed()
             return
          end if
+         if (blk(1:3) == char(239)//char(187)//char(191)) skip = 3
       end if
-      close (u, iostat=ios)
 
-      ! Drop carriage returns of CR-LF line ends and one final line end.
-      allocate (character(len=sz) :: text)
-      n = 0
-      do i = 1, sz
-         if (raw(i:i) == achar(13)) then
-            if (i == sz) cycle
-            if (raw(i + 1:i + 1) == new_line('a')) cycle
+      ! Pass 1: length of the text without CRs before LFs and without a final line end.
+      nlen = 0
+      last = ' '
+      pending_cr = .false.
+      pos = skip + 1
+      do while (pos <= sz)
+         nb = int(min(int(block_len, int64), sz - pos + 1))
+         read (u, pos=pos, iostat=ios, iomsg=msg) blk(1:nb)
+         if (ios /= 0) then
+            call read_failed()
+            return
          end if
-         n = n + 1
-         text(n:n) = raw(i:i)
+         do i = 1, nb
+            if (blk(i:i) == achar(13)) then
+               if (pending_cr) nlen = nlen + 1   ! a CR not followed by LF is kept
+               pending_cr = .true.
+            else
+               if (pending_cr .and. blk(i:i) /= new_line('a')) nlen = nlen + 1
+               pending_cr = .false.
+               nlen = nlen + 1
+               last = blk(i:i)
+            end if
+         end do
+         pos = pos + nb
       end do
-      if (n > 0) then
-         if (text(n:n) == new_line('a')) n = n - 1
+      if (pending_cr) then
+         nlen = nlen + 1
+         last = achar(13)
       end if
-      call parse_deck(text(1:n), path, deck, err)
+      ! One final line end (LF, CR-LF or a lone CR) is no part of the text: pass 2 stops
+      ! before it.
+      if (nlen > 0 .and. (last == new_line('a') .or. last == achar(13))) nlen = nlen - 1
+      ! Pass 2: copy, dropping the same characters.
+      allocate (character(len=nlen) :: text)
+      n = 0
+      pending_cr = .false.
+      pos = skip + 1
+      do while (pos <= sz .and. n < nlen)
+         nb = int(min(int(block_len, int64), sz - pos + 1))
+         read (u, pos=pos, iostat=ios, iomsg=msg) blk(1:nb)
+         if (ios /= 0) then
+            call read_failed()
+            return
+         end if
+         do i = 1, nb
+            if (blk(i:i) == achar(13)) then
+               if (pending_cr) call put(achar(13))
+               pending_cr = .true.
+            else
+               if (pending_cr .and. blk(i:i) /= new_line('a')) call put(achar(13))
+               pending_cr = .false.
+               call put(blk(i:i))
+            end if
+         end do
+         pos = pos + nb
+      end do
+      if (pending_cr) call put(achar(13))
+      close (u, iostat=ios)
+      if (n < nlen) then
+         call fatal_error(err, "cannot open deck '"//path//"': the file changed while it was read", err_io)
+         return
+      end if
+      call move_alloc(text, deck%text)
+      call parse_into(deck, path, err)
+
+   contains
+
+      subroutine put(c)
+         character(len=1), intent(in) :: c
+         if (n >= nlen) return
+         n = n + 1
+         text(n:n) = c
+      end subroutine put
+
+      subroutine read_failed()
+         close (u, iostat=ios)
+         call fatal_error(err, "cannot open deck '"//path//"': "//trim(msg), err_io)
+      end subroutine read_failed
+
    end subroutine read_deck
 
    !> Parse deck `text` (lines separated by new_line('a')); `file` is used in messages.
@@ -133,17 +218,29 @@ contains
       character(len=*), intent(in) :: file
       type(deck_t), intent(out) :: deck
       type(error_t), allocatable, intent(out) :: err
+      deck%text = text
+      call parse_into(deck, file, err)
+   end subroutine parse_deck
+
+   !> Check and parse `deck%text` into `deck%groups`.
+   subroutine parse_into(deck, file, err)
+      type(deck_t), intent(inout) :: deck
+      character(len=*), intent(in) :: file
+      type(error_t), allocatable, intent(out) :: err
       type(token_list_t) :: toks
       type(deck_group_t), allocatable :: groups(:)
-      integer :: ngroups, i
+      type(string_t), allocatable :: names(:)   ! distinct group names so far ...
+      integer, allocatable :: counts(:)         ! ... and how many groups of each
+      integer :: ngroups, i, k
 
       deck%file = file
-      deck%text = text
       allocate (deck%groups(0))
-      call tokenize(text, file, toks, err)
+      call check_text(deck%text, file, err)
+      if (allocated(err)) return
+      call tokenize(deck%text, file, toks, err)
       if (allocated(err)) return
 
-      allocate (groups(8))
+      allocate (groups(8), names(0), counts(0))
       ngroups = 0
       i = 1
       do while (i <= toks%n)
@@ -151,7 +248,12 @@ contains
          case (tk_group)
             if (ngroups == size(groups)) call grow_groups(groups)
             ngroups = ngroups + 1
-            call parse_group(toks, i, file, groups(1:ngroups - 1), groups(ngroups), err)
+            do k = 1, size(names)
+               if (names(k)%s == toks%text(i)%s) exit
+            end do
+            if (k > size(names)) call add_name(toks%text(i)%s)
+            counts(k) = counts(k) + 1
+            call parse_group(toks, i, file, counts(k), groups(ngroups), err)
             if (allocated(err)) return
          case (tk_end)
             if (toks%text(i)%s == '/') then
@@ -168,8 +270,91 @@ contains
             return
          end select
       end do
-      deck%groups = groups(1:ngroups)
-   end subroutine parse_deck
+      deallocate (deck%groups)
+      if (ngroups < size(groups)) then
+         deck%groups = groups(1:ngroups)
+      else
+         call move_alloc(groups, deck%groups)
+      end if
+
+   contains
+
+      ! (not `names = [names, string_t(name)]`: gfortran 12 loses the deferred-length
+      ! component in that constructor)
+      subroutine add_name(name)
+         character(len=*), intent(in) :: name
+         type(string_t), allocatable :: tmp(:)
+         allocate (tmp(size(names) + 1))
+         tmp(1:size(names)) = names
+         tmp(size(tmp))%s = name
+         call move_alloc(tmp, names)
+         counts = [counts, 0]
+      end subroutine add_name
+
+   end subroutine parse_into
+
+   !> Deck text must be UTF-8 without NUL bytes: anything else is not a text file (or is
+   !> in another encoding) and would end up in the output file's strings.
+   subroutine check_text(text, file, err)
+      character(len=*), intent(in) :: text
+      character(len=*), intent(in) :: file
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, n, line, col0, b, nfollow, k, b2
+      character(len=2) :: hex
+
+      n = len(text)
+      line = 1
+      col0 = 0     ! index of the last line end
+      i = 1
+      do while (i <= n)
+         b = iachar(text(i:i))
+         if (b < 128) then
+            if (b == 10) then
+               line = line + 1
+               col0 = i
+            else if (b == 0) then
+               call fatal_error(err, file//':'//str(line)//': error: NUL byte at column '//str(i - col0)// &
+                                ' (a deck is a text file; is this a binary file?)', err_input)
+               return
+            end if
+            i = i + 1
+            cycle
+         end if
+         ! Multi-byte sequence: lead byte, then 1-3 continuation bytes 10xxxxxx. Overlong
+         ! forms, surrogates (U+D800-DFFF) and code points above U+10FFFF are invalid.
+         if (b >= 194 .and. b <= 223) then
+            nfollow = 1
+         else if (b >= 224 .and. b <= 239) then
+            nfollow = 2
+         else if (b >= 240 .and. b <= 244) then
+            nfollow = 3
+         else
+            nfollow = -1
+         end if
+         if (nfollow > 0) then
+            if (i + nfollow > n) then
+               nfollow = -1
+            else
+               do k = 1, nfollow
+                  b2 = iachar(text(i + k:i + k))
+                  if (b2 < 128 .or. b2 > 191) nfollow = -1
+               end do
+            end if
+         end if
+         if (nfollow > 0) then
+            b2 = iachar(text(i + 1:i + 1))
+            if ((b == 224 .and. b2 < 160) .or. (b == 237 .and. b2 > 159) .or. &
+                (b == 240 .and. b2 < 144) .or. (b == 244 .and. b2 > 143)) nfollow = -1
+         end if
+         if (nfollow < 0) then
+            write (hex, '(z2.2)') b
+            call fatal_error(err, file//':'//str(line)//': error: invalid UTF-8 at column '//str(i - col0)// &
+                             ' (byte 0x'//hex//'); decks must be UTF-8 (or ASCII) text', err_input)
+            return
+         end if
+         i = i + nfollow + 1
+      end do
+   end subroutine check_text
 
    !> Split `text` into tokens, dropping comments and white space.
    subroutine tokenize(text, file, toks, err)
@@ -179,10 +364,10 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: buf
       character(len=1) :: c, q
-      integer :: i, j, n, line, nb
+      integer :: i, j, k, n, line, nb
+      logical :: doubled
 
       allocate (toks%kind(64), toks%line(64), toks%text(64))
-      allocate (character(len=len(text)) :: buf)
       n = len(text)
       line = 1
       i = 1
@@ -230,8 +415,9 @@ contains
             end if
             i = j
          else if (c == "'" .or. c == '"') then
+            ! Find the closing quote; a doubled quote stands for one.
             q = c
-            nb = 0
+            doubled = .false.
             j = i + 1
             do
                if (j > n) exit
@@ -239,16 +425,13 @@ contains
                if (text(j:j) == q) then
                   if (j < n) then
                      if (text(j + 1:j + 1) == q) then
-                        nb = nb + 1
-                        buf(nb:nb) = q
+                        doubled = .true.
                         j = j + 2
                         cycle
                      end if
                   end if
                   exit
                end if
-               nb = nb + 1
-               buf(nb:nb) = text(j:j)
                j = j + 1
             end do
             if (j > n) then
@@ -258,7 +441,21 @@ contains
                call unterminated(text(i:j - 1))
                return
             end if
-            call push(toks, tk_string, buf(1:nb), line)
+            if (doubled) then
+               allocate (character(len=j - i - 1) :: buf)
+               nb = 0
+               k = i + 1
+               do while (k < j)
+                  nb = nb + 1
+                  buf(nb:nb) = text(k:k)
+                  if (text(k:k) == q) k = k + 1
+                  k = k + 1
+               end do
+               call push(toks, tk_string, buf(1:nb), line)
+               deallocate (buf)
+            else
+               call push(toks, tk_string, text(i + 1:j - 1), line)
+            end if
             i = j + 1
          else
             j = i
@@ -282,11 +479,11 @@ contains
    end subroutine tokenize
 
    !> Parse one group starting at token `i` (a tk_group token); on return `i` is past its end.
-   subroutine parse_group(toks, i, file, previous, g, err)
+   subroutine parse_group(toks, i, file, ordinal, g, err)
       type(token_list_t), intent(in) :: toks
       integer, intent(inout) :: i
       character(len=*), intent(in) :: file
-      type(deck_group_t), intent(in) :: previous(:)
+      integer, intent(in) :: ordinal   !< 1 for the first group of its name, 2 for the second...
       type(deck_group_t), intent(inout) :: g
       type(error_t), allocatable, intent(out) :: err
       type(deck_entry_t), allocatable :: entries(:)
@@ -296,10 +493,7 @@ contains
       g%name = toks%text(i)%s
       g%file = file
       g%line = toks%line(i)
-      g%ordinal = 1
-      do k = 1, size(previous)
-         if (previous(k)%name == g%name) g%ordinal = g%ordinal + 1
-      end do
+      g%ordinal = ordinal
       allocate (g%entries(0), g%queried(0))
       allocate (entries(8))
       nent = 0
@@ -650,8 +844,7 @@ contains
       integer, intent(out) :: val
       type(error_t), allocatable, intent(out) :: err
       integer, intent(in), optional :: default
-      integer :: k
-      logical :: ok
+      integer :: k, stat
       val = 0
       call scalar_entry(self, key, 'an integer', present(default), k, err)
       if (allocated(err)) return
@@ -662,8 +855,8 @@ contains
       associate (e => self%entries(k))
          call check_unquoted(self, e, 1, 'an integer', err)
          if (allocated(err)) return
-         call parse_int(e%values(1)%s, val, ok)
-         if (.not. ok) call bad_value(self, e, 1, 'an integer', err)
+         call parse_int(e%values(1)%s, val, stat)
+         if (stat /= 0) call bad_value(self, e, 1, 'an integer', err, stat == 2)
       end associate
    end subroutine group_get_int
 
@@ -930,17 +1123,23 @@ contains
          stat = 1
          return
       end if
+      if (.not. ieee_is_finite(val)) then   ! cannot happen after the checks above; never pass it on
+         val = 0.0_wp
+         stat = 2
+         return
+      end if
       stat = 0
    end subroutine parse_real
 
    !> Strict integer syntax: [sign] digits, within the range of default integer.
-   subroutine parse_int(s, val, ok)
+   !> stat: 0 ok, 1 bad syntax, 2 out of range.
+   subroutine parse_int(s, val, stat)
       character(len=*), intent(in) :: s
       integer, intent(out) :: val
-      logical, intent(out) :: ok
+      integer, intent(out) :: stat
       integer :: i, i0, ios
       val = 0
-      ok = .false.
+      stat = 1
       if (len(s) == 0) return
       i0 = 1
       if (s(1:1) == '+' .or. s(1:1) == '-') i0 = 2
@@ -948,12 +1147,13 @@ contains
       do i = i0, len(s)
          if (.not. is_digit(s(i:i))) return
       end do
+      stat = 2
       read (s, *, iostat=ios) val
       if (ios /= 0) then
          val = 0
          return
       end if
-      ok = .true.
+      stat = 0
    end subroutine parse_int
 
    !> Token text as written (strings re-quoted), for messages.

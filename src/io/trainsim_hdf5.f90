@@ -1,15 +1,20 @@
 !> HDF5 output sink: one file per run, layout documented in docs/output-format.md.
 !>
-!> The file is written as `<path>.part` and renamed to `<path>` only when `close`
-!> succeeds, so a file under the final name is always complete. Samples are buffered
+!> The file is written under a temporary name of its own in the same directory,
+!> `<path>.<pid>.<n>.part`, and renamed to `<path>` only when `close` succeeds, so a
+!> file under the final name is always complete, and runs writing to the same path at
+!> the same time never share a temporary file (the last to finish wins, whole).
+!> `<path>` is only ever replaced if it is a regular file: a directory, a symbolic
+!> link, a device (/dev/null, /dev/full), a pipe or a socket is refused at `open`.
+!> Samples are buffered
 !> in blocks of `block_rows` and appended to extendible, chunked, deflate-compressed
 !> datasets. Every HDF5 call is checked; failures are returned as `error_t` values
 !> (code `err_io`, message naming the output path). HDF5's automatic error printing is
 !> switched off (process-wide) when a sink is opened, so the library never prints.
-!> After any error the sink cleans up after itself (ids closed, `.part` removed) and
+!> After any error the sink cleans up after itself (ids closed, its `.part` removed) and
 !> must be opened again before further use; `abort` is always safe to call.
 module trainsim_hdf5
-   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_null_char
+   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_char, c_null_char
    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, &
       h5fcreate_f, h5fclose_f, H5F_ACC_TRUNC_F, H5F_CLOSE_STRONG_F, H5F_LIBVER_V18_F, &
       h5pcreate_f, h5pclose_f, h5pset_fclose_degree_f, h5pset_libver_bounds_f, &
@@ -19,8 +24,8 @@ module trainsim_hdf5
       H5S_SCALAR_F, H5S_UNLIMITED_F, H5S_SELECT_SET_F, &
       h5dcreate_f, h5dclose_f, h5dset_extent_f, h5dget_space_f, h5dwrite_f, &
       h5gcreate_f, h5gclose_f, h5acreate_f, h5awrite_f, h5aclose_f, &
-      h5tcopy_f, h5tset_size_f, h5tset_strpad_f, h5tclose_f, &
-      H5T_FORTRAN_S1, H5T_STR_NULLTERM_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, &
+      h5tcopy_f, h5tset_size_f, h5tset_strpad_f, h5tset_cset_f, h5tclose_f, &
+      H5T_FORTRAN_S1, H5T_STR_NULLTERM_F, H5T_CSET_UTF8_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, &
       h5kind_to_type, H5_INTEGER_KIND
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_io, err_internal
@@ -30,7 +35,7 @@ module trainsim_hdf5
    implicit none
    private
 
-   public :: hdf5_sink_t
+   public :: hdf5_sink_t, hdf5_library_stuck
 
    !> Deflate level of the sample datasets (1 fast .. 9 small).
    integer, parameter :: deflate_level = 1
@@ -45,6 +50,15 @@ module trainsim_hdf5
 
    !> h5open_f has been called by this module.
    logical :: hdf5_ready = .false.
+   !> Temporary names made by this process (part of each name, so two sinks of one
+   !> process never collide either).
+   integer, save :: n_temp_names = 0
+   !> HDF5 failed to close a file even after its space was freed: the library's own
+   !> clean-up at exit would then crash (HDF5 1.10 closes the half-closed file again).
+   logical, save :: hdf5_stuck = .false.
+
+   !> Kinds of path returned by trainsim_path_kind (src/io/trainsim_fs.c).
+   integer, parameter :: pk_absent = 0, pk_regular = 1, pk_directory = 2, pk_symlink = 3, pk_other = 4
 
    !> Indices into hdf5_sink_t%dset.
    integer, parameter :: ds_time = 1, ds_states = 2, ds_theta = 3, ds_omega = 4, &
@@ -53,7 +67,7 @@ module trainsim_hdf5
 
    !> Writes one run to an HDF5 file (see docs/output-format.md for the layout).
    type, extends(sink_t) :: hdf5_sink_t
-      !> Final file name, set by the caller before `open`; written as `path//'.part'`.
+      !> Final file name, set by the caller before `open`; written under `temp_path()`.
       character(len=:), allocatable :: path
       !> Samples buffered in memory before each write (also the chunk length in time).
       integer :: block_rows = 256
@@ -73,6 +87,7 @@ module trainsim_hdf5
       procedure :: write_sample => h5_write_sample
       procedure :: close => h5_close
       procedure :: abort => h5_abort
+      procedure :: temp_path => h5_temp_path
    end type hdf5_sink_t
 
    interface
@@ -88,6 +103,24 @@ module trainsim_hdf5
          character(kind=c_char), intent(in) :: path(*)
          integer(c_int) :: rc
       end function c_remove
+      !> POSIX truncate(2) (off_t is a C long on the 64-bit Linux trainsim targets).
+      function c_truncate(path, length) bind(C, name='truncate') result(rc)
+         import :: c_int, c_long, c_char
+         character(kind=c_char), intent(in) :: path(*)
+         integer(c_long), value :: length
+         integer(c_int) :: rc
+      end function c_truncate
+      !> POSIX getpid(2).
+      function c_getpid() bind(C, name='getpid') result(pid)
+         import :: c_int
+         integer(c_int) :: pid
+      end function c_getpid
+      !> Kind of a path, not following a final symbolic link (pk_*; src/io/trainsim_fs.c).
+      function c_path_kind(path) bind(C, name='trainsim_path_kind') result(kind)
+         import :: c_int, c_char
+         character(kind=c_char), intent(in) :: path(*)
+         integer(c_int) :: kind
+      end function c_path_kind
    end interface
 
 contains
@@ -213,9 +246,9 @@ contains
          call h5fclose_f(self%file_id, hdferr)
          if (hdferr < 0) then
             call fatal_error(err, 'H5Fclose failed (disk full?)', err_io)
-         else
-            self%file_id = -1
+            hdf5_stuck = .true.   ! HDF5 cannot close this file again (see h5_abort)
          end if
+         self%file_id = -1
       end if
       if (allocated(err)) then
          err%message = "cannot write output file '"//self%path//"': "//err%message
@@ -225,6 +258,13 @@ contains
 
       self%is_open = .false.
       call free_buffers(self)
+      ! rename(2) would replace a directory's entry or a symbolic link itself: check again
+      if (c_path_kind(self%path//c_null_char) > pk_regular) then
+         self%part_made = .false.
+         call fatal_error(err, "cannot write output file '"//self%path//"': "//kind_reason(self%path)// &
+                          "; the complete output was left in '"//self%part//"'", err_io)
+         return
+      end if
       rc = c_rename(self%part//c_null_char, self%path//c_null_char)
       if (rc /= 0) then
          ! The data are complete: keep them under the .part name rather than lose them.
@@ -247,7 +287,14 @@ contains
          self%dset(i) = -1
       end do
       ! The file was created with H5F_CLOSE_STRONG: this also closes any other object.
-      if (self%file_id >= 0) call h5fclose_f(self%file_id, hdferr)
+      if (self%file_id >= 0) then
+         ! The file is discarded: free its space first, so that HDF5 can flush its
+         ! metadata on a full disk. A failed H5Fclose leaves a half-closed file that
+         ! HDF5 1.10 cannot close again (it crashes, also in its exit handler).
+         if (self%part_made .and. allocated(self%part)) rc = c_truncate(self%part//c_null_char, 0_c_long)
+         call h5fclose_f(self%file_id, hdferr)
+         if (hdferr < 0) hdf5_stuck = .true.
+      end if
       self%file_id = -1
       if (self%part_made .and. allocated(self%part)) rc = c_remove(self%part//c_null_char)
       self%part_made = .false.
@@ -257,7 +304,67 @@ contains
       call free_buffers(self)
    end subroutine h5_abort
 
+   !> True if HDF5 holds a file it could not close: the program must then end without
+   !> the library's exit handler (after flushing its own output), or it crashes there.
+   logical function hdf5_library_stuck()
+      hdf5_library_stuck = hdf5_stuck
+   end function hdf5_library_stuck
+
+   !> Name of the temporary file of the current (or last) run, '' before the first open.
+   function h5_temp_path(self) result(path)
+      class(hdf5_sink_t), intent(in) :: self
+      character(len=:), allocatable :: path
+      path = ''
+      if (allocated(self%part)) path = self%part
+   end function h5_temp_path
+
    ! ------------------------------------------------------------- open helpers
+
+   !> Why `path` cannot be the output file ('' if it can: absent or a regular file).
+   function kind_reason(path) result(reason)
+      character(len=*), intent(in) :: path
+      character(len=:), allocatable :: reason
+      select case (c_path_kind(path//c_null_char))
+      case (pk_directory)
+         reason = 'it is a directory'
+      case (pk_symlink)
+         reason = 'it is a symbolic link (trainsim replaces only regular files; give the path of the link''s '// &
+                  'target, or remove the link)'
+      case (pk_other)
+         reason = 'it is not a regular file (a device, pipe or socket); use --no-output to write no file'
+      case default
+         reason = ''
+      end select
+   end function kind_reason
+
+   !> Create the temporary file `<path>.<pid>.<n>.part`, a name no other run uses: the
+   !> pid is unique among running processes, n among the sinks of this process, and the
+   !> file is created only if absent (so not even a stale file is overwritten).
+   subroutine make_temp_file(self, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      character(len=512) :: msg
+      character(len=40) :: tag
+      integer :: unit, ios, attempt
+      logical :: exists
+      ! a stale file of a crashed run whose pid is reused is skipped, not overwritten
+      do attempt = 1, 100
+         n_temp_names = n_temp_names + 1
+         write (tag, '(i0,".",i0)') c_getpid(), n_temp_names
+         self%part = self%path//'.'//trim(tag)//'.part'
+         msg = ''
+         open (newunit=unit, file=self%part, status='new', action='write', iostat=ios, iomsg=msg)
+         if (ios == 0) then
+            close (unit)
+            self%part_made = .true.
+            return
+         end if
+         inquire (file=self%part, exist=exists)
+         if (.not. exists) exit
+      end do
+      ! the operating system's reason (no such directory, permission denied, ...)
+      call fatal_error(err, os_reason(msg), err_io)
+   end subroutine make_temp_file
 
    !> Body of open: errors carry only the reason, h5_open adds the path and cleans up.
    subroutine open_impl(self, meta, err)
@@ -269,7 +376,6 @@ contains
       character(len=512) :: msg
       logical :: deflate, exists
 
-      self%part = self%path//'.part'
       self%n_states = count_of(meta%state_names)
       self%n_nodes = count_of(meta%node_ids)
       self%n_el = count_of(meta%element_ids)
@@ -288,17 +394,13 @@ contains
       end if
       call h5eset_auto_f(0, hdferr)   ! errors are returned as values, never printed
 
-      ! Probe with Fortran I/O: it gives the operating system's reason on failure.
-      msg = ''
-      open (newunit=unit, file=self%part, status='replace', action='write', iostat=ios, iomsg=msg)
-      if (ios /= 0) then
-         call fatal_error(err, os_reason(msg), err_io)
+      ! The final name must be a regular file that can be replaced, or absent:
+      ! say so now rather than after the whole run.
+      if (len(kind_reason(self%path)) > 0) then
+         call fatal_error(err, kind_reason(self%path), err_io)
          return
       end if
-      close (unit, status='delete')
-      ! The final name must be replaceable too (not a directory, not read-only):
-      ! say so now rather than after the whole run.
-      inquire (file=self%path, exist=exists)
+      exists = c_path_kind(self%path//c_null_char) == pk_regular
       if (exists) then
          open (newunit=unit, file=self%path, status='old', action='write', position='append', iostat=ios, iomsg=msg)
          if (ios /= 0) then
@@ -318,7 +420,12 @@ contains
       ! files stay readable by HDF5 1.8 and later.
       if (hdferr >= 0) call h5pset_libver_bounds_f(fapl, H5F_LIBVER_V18_F, H5F_LIBVER_V18_F, hdferr)
       if (hdferr >= 0) then
-         self%part_made = .true.
+         ! created empty by make_temp_file: ours alone, so truncating it is safe
+         call make_temp_file(self, err)
+         if (allocated(err)) then
+            call close_plist(fapl)
+            return
+         end if
          call h5fcreate_f(self%part, H5F_ACC_TRUNC_F, self%file_id, hdferr, access_prp=fapl)
          if (hdferr < 0) self%file_id = -1
       end if
@@ -335,7 +442,13 @@ contains
       ! Root attributes.
       call put_str_attr(self%file_id, 'title', opt_text(meta%title), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'deck_file', opt_text(meta%deck_file), err)
-      if (.not. allocated(err)) call put_str_attr(self%file_id, 'deck', opt_text(meta%deck_text), err)
+      if (.not. allocated(err)) then   ! the deck text may be long: no copy
+         if (allocated(meta%deck_text)) then
+            call put_str_attr(self%file_id, 'deck', meta%deck_text, err)
+         else
+            call put_str_attr(self%file_id, 'deck', '', err)
+         end if
+      end if
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'units', opt_text(meta%units), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'trainsim_version', opt_text(meta%version), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'integrator', opt_text(meta%integrator), err)
@@ -852,6 +965,8 @@ contains
       end if
       call h5tset_size_f(stype, int(width, size_t), hdferr)
       if (hdferr >= 0) call h5tset_strpad_f(stype, H5T_STR_NULLTERM_F, hdferr)
+      ! deck text is checked to be UTF-8 (trainsim_deck), so ids and titles are too
+      if (hdferr >= 0) call h5tset_cset_f(stype, H5T_CSET_UTF8_F, hdferr)
       if (hdferr < 0) then
          call h5tclose_f(stype, hdferr2)
          stype = -1

@@ -14,7 +14,8 @@
 !>   the event budget (an event flood ends the run instead of hanging it).
 module trainsim_simulate
    use trainsim_kinds, only: wp, i8
-   use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric
+   use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric, err_interrupted
+   use trainsim_interrupt, only: interrupt_signal
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_event, only: event_t, ev_name
@@ -153,6 +154,10 @@ contains
             if (allocated(err)) return
             call check_state(model, integ, t, y, err)
             if (allocated(err)) return
+            if (interrupt_signal() /= 0) then   ! SIGINT/SIGTERM: stop at this step
+               call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
+               return
+            end if
             call obs%step(model, t, y)
             if (status == adv_event) then
                call settle_if_fired(model, integ, obs, sink, d, t, y, .true., err)

@@ -13,7 +13,7 @@ and checks:
 * that stderr holds every expected substring (file name, ``deck.nml:<line>:``, the
   offending key/value/group, what was expected);
 * that stderr holds none of the signs of a crash (backtrace, runtime error, signal);
-* that no output file was left behind (neither out.h5 nor out.h5.part).
+* that no output file was left behind (neither out.h5 nor any ``*.part`` file).
 
 One line per case (ok/FAIL), then ``N passed, M failed``; exit status 1 if M > 0.
 """
@@ -399,8 +399,9 @@ def run_case(exe, case):
                 problems.append("out.h5 was not written")
         elif not case.get("keep_out") and os.path.exists(out):
             problems.append("out.h5 was left behind")
-        if os.path.exists(out + ".part"):
-            problems.append("out.h5.part was left behind")
+        parts = [n for n in os.listdir(tmp) if n.endswith(".part")]
+        if parts:
+            problems.append("temporary file(s) left behind: %s" % ", ".join(parts))
         return problems, proc.stdout, proc.stderr
 
 
