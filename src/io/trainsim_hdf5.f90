@@ -371,8 +371,7 @@ contains
       type(hdf5_sink_t), intent(inout) :: self
       type(run_meta_t), intent(in) :: meta
       type(error_t), allocatable, intent(out) :: err
-      integer :: hdferr, unit, ios, i
-      integer(hid_t) :: fapl, grp
+      integer :: hdferr, unit, ios
       character(len=512) :: msg
       logical :: deflate, exists
 
@@ -410,6 +409,42 @@ contains
          close (unit)
       end if
 
+      call create_temp_file(self, err)
+      if (allocated(err)) return
+      call h5zfilter_avail_f(H5Z_FILTER_DEFLATE_F, deflate, hdferr)
+      if (hdferr < 0) deflate = .false.
+
+      call write_root_attributes(self, meta, err)
+      if (allocated(err)) return
+      ! Time series datasets.
+      call make_series(self%file_id, 'time', 1, 0, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_time), err)
+      if (allocated(err)) return
+      call make_series(self%file_id, 'states', 2, self%n_states, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_states), err)
+      if (allocated(err)) return
+      call put_names_attr(self%dset(ds_states), 'names', meta%state_names, self%n_states, err)
+      if (allocated(err)) return
+      call make_series(self%file_id, 'energy', 2, 5, self%rows, H5T_NATIVE_DOUBLE, deflate, &
+                       self%dset(ds_energy), err)
+      if (allocated(err)) return
+      call put_fixed_names_attr(self%dset(ds_energy), 'names', energy_names, err)
+      if (allocated(err)) return
+
+      call make_node_group(self, meta, deflate, err)
+      if (allocated(err)) return
+      call make_element_group(self, meta, deflate, err)
+      if (allocated(err)) return
+      call alloc_buffers(self)
+   end subroutine open_impl
+
+   !> The run's own temporary file, created through a file-access list that closes
+   !> it strongly and keeps the 1.8 format.
+   subroutine create_temp_file(self, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr
+      integer(hid_t) :: fapl
       call h5pcreate_f(H5P_FILE_ACCESS_F, fapl, hdferr)
       if (hdferr < 0) then
          call fatal_error(err, 'H5Pcreate (file access) failed', err_io)
@@ -436,9 +471,13 @@ contains
       end if
       self%is_open = .true.
 
-      call h5zfilter_avail_f(H5Z_FILTER_DEFLATE_F, deflate, hdferr)
-      if (hdferr < 0) deflate = .false.
+   end subroutine create_temp_file
 
+   !> Root attributes: what the run was (title, deck, units, version, integrator).
+   subroutine write_root_attributes(self, meta, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      type(error_t), allocatable, intent(out) :: err
       ! Root attributes.
       call put_str_attr(self%file_id, 'title', opt_text(meta%title), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'deck_file', opt_text(meta%deck_file), err)
@@ -453,23 +492,16 @@ contains
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'trainsim_version', opt_text(meta%version), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'integrator', opt_text(meta%integrator), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'created', iso_now(), err)
-      if (allocated(err)) return
+   end subroutine write_root_attributes
 
-      ! Time series datasets.
-      call make_series(self%file_id, 'time', 1, 0, self%rows, H5T_NATIVE_DOUBLE, deflate, &
-                       self%dset(ds_time), err)
-      if (allocated(err)) return
-      call make_series(self%file_id, 'states', 2, self%n_states, self%rows, H5T_NATIVE_DOUBLE, deflate, &
-                       self%dset(ds_states), err)
-      if (allocated(err)) return
-      call put_names_attr(self%dset(ds_states), 'names', meta%state_names, self%n_states, err)
-      if (allocated(err)) return
-      call make_series(self%file_id, 'energy', 2, 5, self%rows, H5T_NATIVE_DOUBLE, deflate, &
-                       self%dset(ds_energy), err)
-      if (allocated(err)) return
-      call put_fixed_names_attr(self%dset(ds_energy), 'names', energy_names, err)
-      if (allocated(err)) return
-
+   !> /nodes: angle and speed series, ids, types, parameters.
+   subroutine make_node_group(self, meta, deflate, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      logical, intent(in) :: deflate
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: grp
+      integer :: i
       ! /nodes
       call make_group(self%file_id, 'nodes', grp, err)
       if (allocated(err)) return
@@ -492,8 +524,17 @@ contains
          end if
       end if
       call close_group(grp, err)
-      if (allocated(err)) return
+   end subroutine make_node_group
 
+   !> /elements: torque, displacement, force, contact and zone series, ids,
+   !> types, node indices, displacement units, parameters.
+   subroutine make_element_group(self, meta, deflate, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      logical, intent(in) :: deflate
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: grp
+      integer :: i
       ! /elements
       call make_group(self%file_id, 'elements', grp, err)
       if (allocated(err)) return
@@ -536,10 +577,7 @@ contains
          end do
       end if
       call close_group(grp, err)
-      if (allocated(err)) return
-
-      call alloc_buffers(self)
-   end subroutine open_impl
+   end subroutine make_element_group
 
    !> Block buffers, allocated once per run.
    subroutine alloc_buffers(self)
