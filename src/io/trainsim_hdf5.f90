@@ -502,7 +502,6 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: grp
       integer :: i
-      ! /nodes
       call make_group(self%file_id, 'nodes', grp, err)
       if (allocated(err)) return
       call make_series(grp, 'theta', 2, self%n_nodes, self%rows, H5T_NATIVE_DOUBLE, deflate, &
@@ -535,7 +534,6 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: grp
       integer :: i
-      ! /elements
       call make_group(self%file_id, 'elements', grp, err)
       if (allocated(err)) return
       call make_series(grp, 'torque_left', 2, self%n_el, self%rows, H5T_NATIVE_DOUBLE, deflate, &
