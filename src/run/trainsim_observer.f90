@@ -42,11 +42,18 @@ module trainsim_observer
       logical :: keep = .false.                      !< keep the whole series of samples (keep_series)
       type(turning_points_t), allocatable :: turns(:) !< per element: turning points of the displacement
       logical :: track = .false.
+      !> Locate contact-force and displacement peaks inside each step (adaptive
+      !> integrators, whose steps are long): the previous step end is kept.
+      logical :: refine_peaks = .false.
+      real(wp), allocatable :: th_prev(:), om_prev(:), force_prev(:), disp_prev(:), torque_prev(:)
+      integer, allocatable :: contact_prev(:)
    contains
       procedure :: start => obs_start
       procedure :: step => obs_step
       procedure :: sample => obs_sample
       procedure, private :: update_metrics => obs_update_metrics
+      procedure, private :: keep_step_end => obs_keep_step_end
+      procedure, private :: refine => obs_refine
       procedure :: record_events => obs_record_events
       procedure :: finish => obs_finish
       procedure, private :: fill => obs_fill
@@ -132,6 +139,9 @@ contains
       if (self%keep) nmax = 1024
       allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
       allocate (self%res%series_theta(nn, nmax), self%res%series_omega(nn, nmax))
+      allocate (self%th_prev(nn), self%om_prev(nn), self%force_prev(ne), self%disp_prev(ne), self%torque_prev(ne), &
+                self%contact_prev(ne))
+      self%contact_prev = 0
       call sink%open(make_meta(model), err)
       if (allocated(err)) return
       call self%step(model, t, y)
@@ -169,6 +179,19 @@ contains
          self%s%energy(5) = stored + self%s%energy(3) - self%s%energy(4) - model%energy0
       end if
    end subroutine obs_fill
+
+   !> Cubic Hermite interpolation on a step of length h at tau in [0, 1]: the
+   !> value x and its rate v from the values and rates at both ends.
+   pure subroutine hermite(x0, v0, x1, v1, h, tau, x, v)
+      real(wp), intent(in) :: x0, v0, x1, v1, h, tau
+      real(wp), intent(out) :: x, v
+      real(wp) :: t2, t3
+      t2 = tau*tau; t3 = t2*tau
+      x = (2.0_wp*t3 - 3.0_wp*t2 + 1.0_wp)*x0 + (t3 - 2.0_wp*t2 + tau)*h*v0 + (3.0_wp*t2 - 2.0_wp*t3)*x1 + &
+          (t3 - t2)*h*v1
+      v = ((6.0_wp*t2 - 6.0_wp*tau)*x0 + (6.0_wp*tau - 6.0_wp*t2)*x1)/h + (3.0_wp*t2 - 4.0_wp*tau + 1.0_wp)*v0 + &
+          (3.0_wp*t2 - 2.0_wp*tau)*v1
+   end subroutine hermite
 
    !> Elastic energy in the elements at the kinematics currently in the model workspace.
    real(wp) function sum_potential(model) result(e)
@@ -224,8 +247,120 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       call self%fill(model, t, y)
+      if (self%refine_peaks) call self%refine(model, t)
       call self%update_metrics(model, t)
+      if (self%refine_peaks) call self%keep_step_end()
    end subroutine obs_step
+
+   !> The step end just filled, as the start of the next step's interpolation.
+   subroutine obs_keep_step_end(self)
+      class(observer_t), intent(inout) :: self
+      self%th_prev = self%s%theta
+      self%om_prev = self%s%omega
+      self%force_prev = self%s%force
+      self%disp_prev = self%s%displacement
+      self%torque_prev = self%s%torque_right
+      self%contact_prev = self%s%contact
+   end subroutine obs_keep_step_end
+
+   !> Peaks inside the step (t_prev, t] of every element in contact on the same
+   !> face over the whole step (events end steps, so its mode did not change):
+   !> the node angles are interpolated by the cubic Hermite polynomial through
+   !> their angles and speeds at both ends (exact for steady rotation, O(h^4)
+   !> for the vibration), the element's force and displacement evaluated along
+   !> it, and an interior extreme located by golden section. No right-hand side
+   !> is evaluated. Results go to the open contact's peak force and the extremes.
+   subroutine obs_refine(self, model, t)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: t
+      real(wp), parameter :: gr = 0.6180339887498949_wp
+      integer, parameter :: n_golden = 30
+      real(wp) :: h, fm, dm, a, b, c, d, fc, fd, f_best, d_best, tau_best
+      integer :: i, l, r, it, k, q
+      h = t - self%t_prev
+      if (.not. h > 0.0_wp) return
+      do i = 1, size(model%elements)
+         if (self%s%contact(i) == 0 .or. self%s%contact(i) /= self%contact_prev(i)) cycle
+         l = model%elements(i)%e%left
+         r = model%elements(i)%e%right
+         ! 1: |force| maximum, 2: displacement extreme on the contact side,
+         ! 3 and 4: maximum and minimum of the torque on the right node
+         do q = 1, 4
+            call at(0.5_wp, fm, dm)
+            select case (q)
+            case (1)
+               if (.not. abs(fm) > max(abs(self%force_prev(i)), abs(self%s%force(i)))) cycle
+            case (2)
+               if (.not. self%s%contact(i)*dm > max(self%s%contact(i)*self%disp_prev(i), &
+                                                   self%s%contact(i)*self%s%displacement(i))) cycle
+            case (3)
+               if (.not. merit(0.5_wp) > max(self%torque_prev(i), self%s%torque_right(i))) cycle
+            case (4)
+               if (.not. merit(0.5_wp) > max(-self%torque_prev(i), -self%s%torque_right(i))) cycle
+            end select
+            a = 0.0_wp; b = 1.0_wp
+            c = b - gr*(b - a); d = a + gr*(b - a)
+            fc = merit(c); fd = merit(d)
+            do it = 1, n_golden
+               if (fc > fd) then
+                  b = d; d = c; fd = fc; c = b - gr*(b - a); fc = merit(c)
+               else
+                  a = c; c = d; fc = fd; d = a + gr*(b - a); fd = merit(d)
+               end if
+            end do
+            tau_best = 0.5_wp*(a + b)
+            call at(tau_best, f_best, d_best)
+            associate (m => self%res%el(i))
+               k = m%open_event
+               if (q == 1 .and. k > 0) self%res%events(k)%peak_force = max(self%res%events(k)%peak_force, abs(f_best))
+               if (self%t_prev + tau_best*h >= self%t_metrics) then
+                  select case (q)
+                  case (1)
+                     m%force_min = min(m%force_min, f_best)
+                     m%force_max = max(m%force_max, f_best)
+                  case (2)
+                     m%disp_min = min(m%disp_min, d_best)
+                     m%disp_max = max(m%disp_max, d_best)
+                  case (3)
+                     m%torque_max = max(m%torque_max, merit(tau_best))
+                  case (4)
+                     m%torque_min = min(m%torque_min, -merit(tau_best))
+                  end select
+               end if
+            end associate
+         end do
+      end do
+   contains
+      !> What is maximised at tau: |force|, the displacement towards the contact
+      !> face, the torque on the right node, or minus that torque.
+      real(wp) function merit(tau)
+         real(wp), intent(in) :: tau
+         real(wp) :: f, dd, thl, wl, thr, wr, tl, tr
+         select case (q)
+         case (1, 2)
+            call at(tau, f, dd)
+            merit = abs(f)
+            if (q == 2) merit = self%s%contact(i)*dd
+         case default
+            call hermite(self%th_prev(l), self%om_prev(l), self%s%theta(l), self%s%omega(l), h, tau, thl, wl)
+            call hermite(self%th_prev(r), self%om_prev(r), self%s%theta(r), self%s%omega(r), h, tau, thr, wr)
+            call model%elements(i)%e%torques(thl, wl, thr, wr, tl, tr)
+            merit = tr
+            if (q == 4) merit = -tr
+         end select
+      end function merit
+      !> Force and displacement of element i at t_prev + tau h on the interpolant.
+      subroutine at(tau, f, dd)
+         real(wp), intent(in) :: tau
+         real(wp), intent(out) :: f, dd
+         real(wp) :: thl, wl, thr, wr
+         integer :: contact, pairs
+         call hermite(self%th_prev(l), self%om_prev(l), self%s%theta(l), self%s%omega(l), h, tau, thl, wl)
+         call hermite(self%th_prev(r), self%om_prev(r), self%s%theta(r), self%s%omega(r), h, tau, thr, wr)
+         call model%elements(i)%e%status(thl, wl, thr, wr, dd, f, contact, pairs)
+      end subroutine at
+   end subroutine obs_refine
 
    !> Fold the sample buffer (filled at t) into the running metrics: extremes,
    !> the open contacts' peak forces, time out of contact, the energy residual.
@@ -334,6 +469,7 @@ contains
       ! sample is written: samples stay on the output grid, and the event
       ! table holds the state at each event.)
       call self%update_metrics(model, t)
+      if (self%refine_peaks) call self%keep_step_end()
    end subroutine obs_record_events
 
    !> End of a successful run: close the sink and fill the result.

@@ -85,6 +85,7 @@ contains
       t = model%run%t_start
       call model%initial_state(y)
       call model%init_modes(t, y)
+      obs%refine_peaks = .not. is_fixed_step(model%run%integrator)
       call obs%start(model, t, y, sink, err)
       if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, err)
       call integ%statistics(stats)
@@ -366,6 +367,18 @@ contains
                 'check the loads, stiffnesses, inertias and initial speeds of the deck for values out of proportion'
       end if
    end function stability_advice
+
+   !> Whether the registry row of `name` is a fixed-step method.
+   logical function is_fixed_step(name) result(fixed)
+      character(len=*), intent(in) :: name
+      type(integrator_entry_t), allocatable :: rows(:)
+      integer :: i
+      rows = integrator_registry()
+      fixed = .false.
+      do i = 1, size(rows)
+         if (rows(i)%name == name) fixed = rows(i)%fixed_step
+      end do
+   end function is_fixed_step
 
    !> A fixed-step method with dt absurdly far above the stability limit of the
    !> train as it starts, or with every clearance closed and the gears at their
