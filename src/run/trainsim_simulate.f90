@@ -310,7 +310,7 @@ contains
       integer :: i
       associate (unused => integ)
       end associate
-      rows = integrator_registry()
+      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == model%run%integrator) exit
       end do
