@@ -46,6 +46,9 @@ program trainsim_main
    i = 2
    do while (i <= nargs)
       select case (arg(i))
+      case ('-h', '--help')
+         call command_usage(cmd, output_unit)
+         call quit(0)
       case ('-o', '--output')
          if (i == nargs .or. cmd /= 'run') then
             write (error_unit, '(a)') 'trainsim: error: option -o needs a file name (and only applies to run)'
@@ -79,7 +82,7 @@ program trainsim_main
             i = i + 1
          end if
       case default
-         if (len(deck_path) > 0 .or. index(arg(i), '-') == 1) then
+         if (index(arg(i), '-') == 1 .or. len(deck_path) > 0) then
             write (error_unit, '(a)') "trainsim: error: unexpected argument '"//arg(i)//"' (try trainsim --help)"
             call quit(2)
          end if
@@ -127,8 +130,34 @@ contains
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file', &
-         'deck format: docs/deck.md'
+         'deck format: man trainsim; docs/deck.md (installed in share/doc/trainsim)'
    end subroutine usage
+
+   !> `trainsim CMD --help`: the usage of one command.
+   subroutine command_usage(cmd, unit)
+      character(len=*), intent(in) :: cmd
+      integer, intent(in) :: unit
+      select case (cmd)
+      case ('run')
+         write (unit, '(a)') 'usage: trainsim run DECK [-o FILE]', '', &
+            'Integrate the train in DECK from t_start to t_end of its &run group. Prints the', &
+            'element parameters as used, a warning if dt exceeds the RK4 stability limit, and', &
+            'a summary (steps, events, energy balance, element extremes, final state).', '', &
+            '  -o, --output FILE  write the HDF5 history to FILE (else to &run output, if set)', &
+            '  -h, --help         this text', '', &
+            'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file'
+      case ('modes')
+         write (unit, '(a)') 'usage: trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest]', '', &
+            'Natural frequencies and mode shapes of the linearised train, and its RK4 step limit.', &
+            'Linearised as the run starts, or:', '', &
+            '  --closed    every clearance closed (contact stiffness counts)', &
+            '  --zone Z    every spur gear in its single-pair or two-pair zone (helical: shortest/', &
+            '              longest contact lines), or the zone it starts in (initial, the default)', &
+            '  --stiffest  = --closed --zone two-pair: the stiffest state a run can reach', &
+            '  -h, --help  this text', '', &
+            'exit status: 0 success, 2 bad input or file'
+      end select
+   end subroutine command_usage
 
    subroutine quit(code)
       integer, intent(in) :: code
