@@ -522,7 +522,7 @@ contains
       allocate (ja(m%n_y, m%n_y), wr(ns), wi(ns), work(8*ns))
       call m%init_modes(0.0_wp, y)
       call m%jacobian(0.0_wp, y, ja)
-      a = ja(1:ns, 1:ns)
+      allocate (a, source=ja(1:ns, 1:ns))   ! not `a = ...`: gfortran 12 false -Wmaybe-uninitialized (Debug)
       call dgeev('N', 'N', ns, a, ns, wr, wi, vl, 1, vr, 1, work, size(work), info)
       rho = 0.0_wp
       if (info == 0) rho = maxval(hypot(wr, wi))
