@@ -63,6 +63,9 @@ program trainsim_main
    i = 2
    do while (i <= nargs)
       select case (arg(i))
+      case ('-h', '--help')
+         call command_usage(cmd, output_unit)
+         call quit(0)
       case ('-o', '--output')
          if (i == nargs .or. cmd == 'modes') then
             write (error_unit, '(a)') 'trainsim: error: option -o needs a file name (and only applies to run and sweep)'
@@ -113,7 +116,7 @@ program trainsim_main
          end if
          no_output = .true.
       case default
-         if (len(deck_path) > 0 .or. index(arg(i), '-') == 1) then
+         if (index(arg(i), '-') == 1 .or. len(deck_path) > 0) then
             write (error_unit, '(a)') "trainsim: error: unexpected argument '"//arg(i)//"' (try trainsim --help)"
             call quit(2)
          end if
@@ -230,8 +233,51 @@ contains
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
          '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)', &
-         'deck format: docs/deck.md'
+         'deck format: man trainsim; docs/deck.md (installed in share/doc/trainsim)'
    end subroutine usage
+
+   !> `trainsim CMD --help`: the usage of one command.
+   subroutine command_usage(cmd, unit)
+      character(len=*), intent(in) :: cmd
+      integer, intent(in) :: unit
+      select case (cmd)
+      case ('run')
+         write (unit, '(a)') 'usage: trainsim run DECK [-o FILE | --no-output] [--set TARGET.KEY=VALUE ...]', '', &
+            'Integrate the train in DECK from t_start to t_end of its &run group. Prints the', &
+            'element parameters as used, a warning if dt exceeds the RK4 stability limit, and', &
+            'a summary (steps, events, energy balance, element extremes, final state).', '', &
+            '  -o, --output FILE  write the HDF5 history to FILE (else to &run output, if set);', &
+            '                     only a regular file is replaced', &
+            '  --no-output, -o -  write no history file, even if the deck names one', &
+            '  --set T.KEY=VALUE  change a deck value: T is a node or element id, run, or GROUP#K', &
+            '                     (e.g. mesh.half_backlash=2e-4, run.t_end=0.1, load#2.value=-500),', &
+            '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles)', &
+            '  -h, --help         this text', '', &
+            'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file,', &
+            '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)'
+      case ('sweep')
+         write (unit, '(a)') 'usage: trainsim sweep DECK [-o FILE] [--set TARGET.KEY=VALUE ...] [--resume] [--progress S]', '', &
+            'Every run of the &sweep groups of DECK, serially or under mpirun -np N (rank 0 hands', &
+            'out runs on request), into one HDF5 sweep file (default DECK_sweep.h5). Running the', &
+            'same command again (or --resume) makes only the runs still missing.', '', &
+            '  -o, --output FILE  the sweep file', &
+            '  --set T.KEY=VALUE  as for run, applied to every run', &
+            '  --resume           complete the sweep in FILE (the default when FILE holds this sweep)', &
+            '  --progress S       a progress line on stderr every S seconds (0: every run)', &
+            '  -h, --help         this text', '', &
+            'exit status: 0 every run ok, 1 some run failed (recorded in the file), 2 bad input or file'
+      case ('modes')
+         write (unit, '(a)') 'usage: trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest]', '', &
+            'Natural frequencies and mode shapes of the linearised train, and its RK4 step limit.', &
+            'Linearised as the run starts, or:', '', &
+            '  --closed    every clearance closed (contact stiffness counts)', &
+            '  --zone Z    every spur gear in its single-pair or two-pair zone (helical: shortest/', &
+            '              longest contact lines), or the zone it starts in (initial, the default)', &
+            '  --stiffest  = --closed --zone two-pair: the stiffest state a run can reach', &
+            '  -h, --help  this text', '', &
+            'exit status: 0 success, 2 bad input or file'
+      end select
+   end subroutine command_usage
 
    !> End the program with exit status `code`, output flushed. When HDF5 holds a file
    !> it could not close (a full disk), its exit handler would crash: end without it.

@@ -69,7 +69,9 @@ contains
    function cc_params(self) result(p)
       class(clearance_coupling_t), intent(in) :: self
       type(param_list_t) :: p
-      p%names = [string_t('clearance'), string_t('stiffness'), string_t('contact_damping'), string_t('radius')]
-      p%values = [2.0_wp*self%cl%b, self%cl%law%k, self%cl%law%c, self%radius]
+      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
+      ! false -Wuninitialized on the descriptors of the unallocated components.
+      p = param_list_t(names=[string_t('clearance'), string_t('stiffness'), string_t('contact_damping'), string_t('radius')], &
+                       values=[2.0_wp*self%cl%b, self%cl%law%k, self%cl%law%c, self%radius])
    end function cc_params
 end module trainsim_el_clearance_coupling

@@ -123,7 +123,9 @@ contains
    function gear_params(self) result(p)
       class(ideal_gear_t), intent(in) :: self
       type(param_list_t) :: p
-      p%names = [string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven')]
-      p%values = [self%k, self%r1, self%r2]
+      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
+      ! false -Wuninitialized on the descriptors of the unallocated components.
+      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven')], &
+                       values=[self%k, self%r1, self%r2])
    end function gear_params
 end module trainsim_el_ideal_gear

@@ -101,7 +101,9 @@ contains
    function shaft_params(self) result(p)
       class(shaft_t), intent(in) :: self
       type(param_list_t) :: p
-      p%names = [string_t('stiffness'), string_t('damping')]
-      p%values = [self%k, self%c]
+      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
+      ! false -Wuninitialized on the descriptors of the unallocated components.
+      p = param_list_t(names=[string_t('stiffness'), string_t('damping')], &
+                       values=[self%k, self%c])
    end function shaft_params
 end module trainsim_el_shaft

@@ -119,11 +119,14 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: zf
       real(wp) :: pd, modl, kw, bl, r1p, r2p, k, kdef
-      logical :: geometry
+      logical :: geometry, has_pitch, has_module
 
-      geometry = grp%has('diametral_pitch') .or. grp%has('module')
+      ! both asked (has records the query), so neither key is reported as unknown
+      has_pitch = grp%has('diametral_pitch')
+      has_module = grp%has('module')
+      geometry = has_pitch .or. has_module
       if (geometry) then
-         if (grp%has('diametral_pitch') .and. grp%has('module')) then
+         if (has_pitch .and. has_module) then
             call fatal_error(err, grp%where('module')//': error: give diametral_pitch or module, not both', err_input)
             return
          end if
@@ -360,12 +363,14 @@ contains
    function spur_params(self) result(p)
       class(spur_gear_t), intent(in) :: self
       type(param_list_t) :: p
-      p%names = [string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), &
-                 string_t('contact_ratio'), string_t('approach_angle'), string_t('half_backlash'), &
-                 string_t('two_pair_factor'), string_t('truncate_zones'), string_t('min_approach_velocity'), &
-                 string_t('initial_contact_velocity')]
-      p%values = [self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%cl%b, self%c2, &
-                  merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, self%cl%law%v_initial]
+      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
+      ! false -Wuninitialized on the descriptors of the unallocated components.
+      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), &
+                              string_t('contact_ratio'), string_t('approach_angle'), string_t('half_backlash'), &
+                              string_t('two_pair_factor'), string_t('truncate_zones'), string_t('min_approach_velocity'), &
+                              string_t('initial_contact_velocity')], &
+                       values=[self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%cl%b, self%c2, &
+                               merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, self%cl%law%v_initial])
       if (self%pitch_module > 0.0_wp) then
          p%names = [p%names, string_t('teeth_driven'), string_t('module_length'), string_t('pressure_angle_rad'), &
                     string_t('face_width')]

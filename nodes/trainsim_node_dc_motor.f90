@@ -184,8 +184,10 @@ contains
    function motor_params(self) result(p)
       class(dc_motor_node_t), intent(in) :: self
       type(param_list_t) :: p
-      p%names = [string_t('inertia'), string_t('damping'), string_t('torque_constant'), string_t('inductance'), &
-                 string_t('resistance'), string_t('back_emf_constant')]
-      p%values = [self%j, self%d, self%alpha, self%l, self%r, self%alpha_e]
+      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
+      ! false -Wuninitialized on the descriptors of the unallocated components.
+      p = param_list_t(names=[string_t('inertia'), string_t('damping'), string_t('torque_constant'), string_t('inductance'), &
+                              string_t('resistance'), string_t('back_emf_constant')], &
+                       values=[self%j, self%d, self%alpha, self%l, self%r, self%alpha_e])
    end function motor_params
 end module trainsim_node_dc_motor

@@ -99,7 +99,9 @@ contains
    function inertia_params(self) result(p)
       class(inertia_node_t), intent(in) :: self
       type(param_list_t) :: p
-      p%names = [string_t('inertia'), string_t('damping')]
-      p%values = [self%j, self%d]
+      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
+      ! false -Wuninitialized on the descriptors of the unallocated components.
+      p = param_list_t(names=[string_t('inertia'), string_t('damping')], &
+                       values=[self%j, self%d])
    end function inertia_params
 end module trainsim_node_inertia

@@ -74,11 +74,11 @@ contains
       call h5eset_auto_f(0, hdferr)
       tmp_prefix = temp_prefix()
       call test_registry_tables_are_consistent()
-      erows = element_registry()
+      allocate (erows, source=element_registry())   ! not `erows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(erows)
          call element_conformance(erows(i))
       end do
-      nrows = node_registry()
+      allocate (nrows, source=node_registry())
       do i = 1, size(nrows)
          call node_conformance(nrows(i))
       end do
@@ -101,7 +101,7 @@ contains
       call test_begin('registry: names, aliases and factories agree with make_* and the error messages')
       er = element_registry()
       nr = node_registry()
-      names = element_type_names()
+      allocate (names, source=element_type_names())
       ok = size(names) == size(er)
       do i = 1, min(size(names), size(er))
          ok = ok .and. names(i)%s == er(i)%name
@@ -522,7 +522,7 @@ contains
       allocate (ja(m%n_y, m%n_y), wr(ns), wi(ns), work(8*ns))
       call m%init_modes(0.0_wp, y)
       call m%jacobian(0.0_wp, y, ja)
-      a = ja(1:ns, 1:ns)
+      allocate (a, source=ja(1:ns, 1:ns))   ! not `a = ...`: gfortran 12 false -Wmaybe-uninitialized (Debug)
       call dgeev('N', 'N', ns, a, ns, wr, wi, vl, 1, vr, 1, work, size(work), info)
       rho = 0.0_wp
       if (info == 0) rho = maxval(hypot(wr, wi))
@@ -787,7 +787,8 @@ contains
    !> (keys), have a heading "### `name`".
    logical function has_doc_section(name)
       character(len=*), intent(in) :: name
-      has_doc_section = has_heading('docs/elements.md', name) .and. has_heading('docs/deck.md', name)
+      has_doc_section = has_heading('docs/elements.md', name)
+      if (has_doc_section) has_doc_section = has_heading('docs/deck.md', name)
    end function has_doc_section
 
    logical function has_heading(path, name)

@@ -185,7 +185,7 @@ contains
       call check('same swing count ('//trim(adjustl(itoa(n1)))//')', n1 == n2 .and. n1 > 0)
       call check('same range, to the bit', r1 == r2)
       call check('same mean swing, to the bit', m1 == m2)
-      call check('a small fraction of the samples kept', tp%n < size(x)/5)
+      call check('a small fraction of the samples kept', 5*tp%n < size(x))
    end subroutine test_turning_points_give_the_same_figures
 
    !> A real run: the metrics it reports (from turning points) equal the figures

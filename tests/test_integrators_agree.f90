@@ -61,9 +61,11 @@ contains
                        r%events(i)%element == ref%events(i)%element)
             et = max(et, abs(r%events(i)%t - ref%events(i)%t)/ref%events(i)%t)
             if (ref%events(i)%approach_velocity /= 0.0_wp) then
-               if (abs(r%events(i)%approach_velocity - ref%events(i)%approach_velocity)/abs(ref%events(i)%approach_velocity) &
-                   > ev .and. verbose()) write (*, '(a,i0,a,i0,3es14.6)') '      event ', i, ' kind ', ref%events(i)%kind, &
-                   ref%events(i)%t, ref%events(i)%approach_velocity, r%events(i)%approach_velocity
+               if (verbose()) then
+                  if (abs(r%events(i)%approach_velocity - ref%events(i)%approach_velocity)/ &
+                      abs(ref%events(i)%approach_velocity) > ev) write (*, '(a,i0,a,i0,3es14.6)') '      event ', i, &
+                     ' kind ', ref%events(i)%kind, ref%events(i)%t, ref%events(i)%approach_velocity, r%events(i)%approach_velocity
+               end if
                ev = max(ev, abs(r%events(i)%approach_velocity - ref%events(i)%approach_velocity)/ &
                         abs(ref%events(i)%approach_velocity))
             end if

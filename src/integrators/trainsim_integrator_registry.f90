@@ -58,7 +58,7 @@ contains
       class(integrator_t), allocatable, intent(out) :: integ
       type(integrator_entry_t), allocatable :: rows(:)
       integer :: i
-      rows = integrator_registry()
+      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == to_lower(name)) then
             call rows(i)%make(integ)
@@ -72,7 +72,7 @@ contains
       type(string_t), allocatable :: names(:)
       type(integrator_entry_t), allocatable :: rows(:)
       integer :: i
-      rows = integrator_registry()
+      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       allocate (names(size(rows)))
       do i = 1, size(rows)
          names(i)%s = rows(i)%name

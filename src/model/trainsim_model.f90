@@ -323,6 +323,7 @@ contains
       type(event_t) :: local(max_update_events)
       type(event_t), allocatable :: grown(:)
       real(wp) :: e_before
+      e_before = 0.0_wp   ! read below only if track_energy; set so -Wmaybe-uninitialized need not prove that
       if (self%run%track_energy) e_before = self%stored_energy(t, y)
       call self%kinematics(t, y)
       do i = 1, size(self%elements)

@@ -408,13 +408,12 @@ contains
    end subroutine obs_sample
 
    !> Record events that happened at (t, y) (the state after the mode update).
-   subroutine obs_record_events(self, model, t, y, evs, nev, sink, err)
+   subroutine obs_record_events(self, model, t, y, evs, nev, err)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       type(event_t), intent(in) :: evs(:)
       integer, intent(in) :: nev
-      class(sink_t), intent(inout) :: sink
       type(error_t), allocatable, intent(out) :: err
       type(event_t), allocatable :: tmp(:)
       integer :: k, i

@@ -129,13 +129,13 @@ contains
       call integ%start(model, t, y, err)
       if (allocated(err)) return
       ! a guard already negative at t_start: settle it before the first step
-      call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err)
+      call settle_if_fired(model, integ, obs, d, t, y, .false., err)
       if (allocated(err)) return
 
       do k = 1, n_out
          t_out = t0 + real(k, wp)*dout
          if (k == n_out) t_out = t_end
-         call advance_to(model, integ, obs, sink, d, t_out, t_end, t, y, err)
+         call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
@@ -145,11 +145,10 @@ contains
 
    !> Advance (t, y) to the output time t_out: through the breakpoints of the
    !> inputs and the events on the way, checking the state after every step.
-   subroutine advance_to(model, integ, obs, sink, d, t_out, t_end, t, y, err)
+   subroutine advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
-      class(sink_t), intent(inout) :: sink
       type(drive_t), intent(inout) :: d
       real(wp), intent(in) :: t_out, t_end
       real(wp), intent(inout) :: t, y(:)
@@ -169,7 +168,7 @@ contains
             end if
             call obs%step(model, t, y)
             if (status == adv_event) then
-               call settle_if_fired(model, integ, obs, sink, d, t, y, .true., err)
+               call settle_if_fired(model, integ, obs, d, t, y, .true., err)
                if (allocated(err)) return
                cycle
             end if
@@ -179,11 +178,11 @@ contains
          if (integ%stop_is_breakpoint .and. t_goal >= integ%t_stop - d%tol) then
             d%ibp = d%ibp + 1
             call set_next_stop(d, integ, t, t_end)
-            call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err, force_restart=.true.)
+            call settle_if_fired(model, integ, obs, d, t, y, .false., err, force_restart=.true.)
             if (allocated(err)) return
          else if (integ%may_miss_events()) then
             ! a guard below zero that the integrator did not report (safety net)
-            call settle_if_fired(model, integ, obs, sink, d, t, y, .false., err)
+            call settle_if_fired(model, integ, obs, d, t, y, .false., err)
             if (allocated(err)) return
          end if
          if (t_goal >= t_out - d%tol) return
@@ -209,11 +208,10 @@ contains
    !> Settle the modes at (t, y) if any guard fired (`from_integrator`: the
    !> integrator returned an event and says which guards it saw cross), then
    !> restart the integrator; with force_restart, restart even without events.
-   subroutine settle_if_fired(model, integ, obs, sink, d, t, y, from_integrator, err, force_restart)
+   subroutine settle_if_fired(model, integ, obs, d, t, y, from_integrator, err, force_restart)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
-      class(sink_t), intent(inout) :: sink
       type(drive_t), intent(inout) :: d
       real(wp), intent(in) :: t
       real(wp), intent(inout) :: y(:)
@@ -232,7 +230,7 @@ contains
             d%fired = d%g < 0.0_wp
          end if
          if (any(d%fired)) then
-            call settle_events(model, obs, sink, d, t, y, nev, err)
+            call settle_events(model, obs, d, t, y, nev, err)
             if (allocated(err)) return
             call count_events(model, d, t, nev, err)
             if (allocated(err)) return
@@ -247,10 +245,9 @@ contains
    !> and repeat while a guard of the new modes is below zero (cascades: a zone
    !> change and a contact at once). Every event is kept (the buffer grows); a
    !> cascade that does not settle is an error, not a silent drop.
-   subroutine settle_events(model, obs, sink, d, t, y, n_total, err)
+   subroutine settle_events(model, obs, d, t, y, n_total, err)
       type(model_t), intent(inout) :: model
       type(observer_t), intent(inout) :: obs
-      class(sink_t), intent(inout) :: sink
       type(drive_t), intent(inout) :: d
       real(wp), intent(in) :: t
       real(wp), intent(inout) :: y(:)
@@ -261,7 +258,7 @@ contains
       do pass = 1, max_settle_passes
          nev = 0
          call model%apply_events(t, y, d%fired, d%ev, nev)
-         call obs%record_events(model, t, y, d%ev, nev, sink, err)
+         call obs%record_events(model, t, y, d%ev, nev, err)
          if (allocated(err)) return
          n_total = n_total + nev
          call model%guards(t, y, d%g)
@@ -324,7 +321,7 @@ contains
       integer :: i
       associate (unused => integ)
       end associate
-      rows = integrator_registry()
+      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == model%run%integrator) exit
       end do
@@ -373,7 +370,7 @@ contains
       character(len=*), intent(in) :: name
       type(integrator_entry_t), allocatable :: rows(:)
       integer :: i
-      rows = integrator_registry()
+      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       fixed = .false.
       do i = 1, size(rows)
          if (rows(i)%name == name) fixed = rows(i)%fixed_step
@@ -394,7 +391,7 @@ contains
                                                        'the closed contacts']
       real(wp) :: dt_safe, omega, f_hz
       integer :: i, k
-      rows = integrator_registry()
+      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == model%run%integrator) exit
       end do

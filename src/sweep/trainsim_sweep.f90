@@ -256,7 +256,7 @@ contains
       type(override_t), allocatable :: ovs(:)
       type(override_t), allocatable :: runs(:)
       integer :: n
-      runs = spec%overrides(irun, err)
+      allocate (runs, source=spec%overrides(irun, err))   ! not `runs = ...`: gfortran 12 false -Wuninitialized
       n = size(opt%sets)
       allocate (ovs(n + size(runs)))
       ovs(1:n) = opt%sets
@@ -272,7 +272,9 @@ contains
       type(override_t), allocatable :: ovs(:)
       integer :: i
       do i = 1, spec%n_runs
-         ovs = run_overrides(opt, spec, i, err); if (allocated(err)) return
+         if (allocated(ovs)) deallocate (ovs)
+         allocate (ovs, source=run_overrides(opt, spec, i, err))   ! not `ovs = ...`: gfortran 12 false -Wuninitialized
+         if (allocated(err)) return
          call prepare_model(deck, ovs, model, err); if (allocated(err)) return
       end do
    end subroutine validate_runs

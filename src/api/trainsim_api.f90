@@ -1,0 +1,483 @@
+!> The public API of trainsim: one module, `use trainsim`, for programs that build on it.
+!>
+!> A `simulation_t` holds a parsed deck, the model built from it and the result of its
+!> last run. Read a deck (a file or a string), change parameters by their deck path,
+!> build (the plug-ins check every value, as for a deck), run (in memory; an HDF5 history
+!> if asked) and read the per-element metrics and the event table:
+!>
+!>```fortran
+!> use trainsim, only: simulation_t, error_t, wp
+!> type(simulation_t) :: sim
+!> type(error_t), allocatable :: err
+!> call sim%read_file('inputs/gregory_harris_munro.nml', err)
+!> if (.not. allocated(err)) call sim%set('mesh.half_backlash', 0.002_wp, err)
+!> if (.not. allocated(err)) call sim%run(err)              ! builds first if needed
+!> if (.not. allocated(err)) call sim%metric('mesh', 'p2p_mean', x, err)
+!> if (allocated(err)) print '(a)', err%message
+!>```
+!>
+!> Every procedure with an `err` argument returns an allocated `error_t` on failure and
+!> never stops the program; `err%code` is `err_input` (bad deck or value), `err_io`
+!> (unreadable deck, unwritable history), `err_numeric` (the run failed) or `err_internal`.
+!>
+!> A parameter path is `GROUP.KEY`: GROUP is the `id` of a `&node` or `&element` group
+!> (`n<k>`/`e<k>` for the k-th group without an id, as the builder names it) or `run`
+!> for the `&run` group; KEY is any key of that group. The same paths as the command
+!> line's `--set GROUP.KEY=VALUE`.
+module trainsim
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input, err_io, err_numeric, err_internal
+   use trainsim_strings, only: string_t, to_lower, str
+   use trainsim_version, only: version_string
+   use trainsim_deck, only: deck_t, deck_entry_t, read_deck, parse_deck
+   use trainsim_builder, only: build_model
+   use trainsim_model, only: model_t
+   use trainsim_simulate, only: simulate
+   use trainsim_observer, only: run_result_t
+   use trainsim_sink, only: null_sink_t, event_t, element_metrics_t, run_stats_t, ev_name, &
+                            ev_contact_front, ev_contact_rear, ev_separation, ev_zone
+   use trainsim_hdf5, only: hdf5_sink_t
+   implicit none
+   private
+
+   public :: simulation_t
+   public :: wp, error_t, string_t, version_string
+   public :: err_input, err_io, err_numeric, err_internal
+   public :: event_t, element_metrics_t, run_stats_t, run_result_t, model_t
+   public :: ev_name, ev_contact_front, ev_contact_rear, ev_separation, ev_zone
+   public :: metric_names
+
+   !> Names accepted by `simulation_t%metric` (fields of element_metrics_t, in its order).
+   character(len=*), parameter :: metric_list(*) = [character(len=21) :: &
+      'force_min', 'force_max', 'torque_min', 'torque_max', 'disp_min', 'disp_max', &
+      'impacts', 'separations', 'zone_changes', 'max_approach_velocity', 'max_peak_force', &
+      'time_out_of_contact', 'p2p_range', 'p2p_mean', 'p2p_swings']
+
+   !> A deck, the model built from it and the result of its last run.
+   type :: simulation_t
+      private
+      type(deck_t) :: deck
+      type(model_t) :: model
+      type(run_result_t) :: res
+      logical :: has_deck = .false.   ! read_file or read_text succeeded
+      logical :: built = .false.      ! model is up to date with deck
+      logical :: has_run = .false.    ! res is the run of the current model
+   contains
+      procedure :: read_file => sim_read_file
+      procedure :: read_text => sim_read_text
+      procedure, private :: set_text => sim_set_text
+      procedure, private :: set_real => sim_set_real
+      procedure, private :: set_int => sim_set_int
+      !> Set a parameter by its deck path: `set('mesh.half_backlash', 0.002_wp, err)`,
+      !> `set('run.integrator', "'cvode-bdf'", err)` (a character value is deck text).
+      generic :: set => set_text, set_real, set_int
+      procedure :: set_string => sim_set_string
+      procedure :: build => sim_build
+      procedure :: run => sim_run
+      procedure :: get_model => sim_get_model
+      procedure :: result => sim_result
+      procedure :: element_ids => sim_element_ids
+      procedure :: element_index => sim_element_index
+      procedure :: element_metrics => sim_element_metrics
+      procedure :: metric => sim_metric
+      procedure :: events => sim_events
+      procedure :: event_element_id => sim_event_element_id
+      procedure :: stats => sim_stats
+   end type simulation_t
+
+contains
+
+   ! ------------------------------------------------------------------ reading
+
+   !> Read and parse the deck file `path` (nothing is built yet).
+   subroutine sim_read_file(self, path, err)
+      class(simulation_t), intent(inout) :: self
+      character(len=*), intent(in) :: path
+      type(error_t), allocatable, intent(out) :: err
+      call forget(self)
+      call read_deck(path, self%deck, err)
+      self%has_deck = .not. allocated(err)
+   end subroutine sim_read_file
+
+   !> Parse a deck given as text (lines separated by new_line('a')); `name` stands for
+   !> the file name in messages (default '<text>').
+   subroutine sim_read_text(self, text, err, name)
+      class(simulation_t), intent(inout) :: self
+      character(len=*), intent(in) :: text
+      type(error_t), allocatable, intent(out) :: err
+      character(len=*), intent(in), optional :: name
+      call forget(self)
+      if (present(name)) then
+         call parse_deck(text, name, self%deck, err)
+      else
+         call parse_deck(text, '<text>', self%deck, err)
+      end if
+      self%has_deck = .not. allocated(err)
+   end subroutine sim_read_text
+
+   subroutine forget(self)
+      class(simulation_t), intent(inout) :: self
+      self%has_deck = .false.
+      self%built = .false.
+      self%has_run = .false.
+   end subroutine forget
+
+   ! ------------------------------------------------------------------ parameters
+
+   !> Set the key at `path` (GROUP.KEY) to `value`, written in deck syntax (`0.002`,
+   !> `'cvode-bdf'`, `1.0, 2.0`). The key is replaced, or added if the group lacks it;
+   !> the model must then be built again (run does that), which checks the value.
+   subroutine sim_set_text(self, path, value, err)
+      class(simulation_t), intent(inout) :: self
+      character(len=*), intent(in) :: path, value
+      type(error_t), allocatable, intent(out) :: err
+      type(deck_t) :: one
+      character(len=:), allocatable :: group_id, key
+      integer :: ig, ie
+
+      if (.not. self%has_deck) then
+         call fatal_error(err, "set '"//path//"': no deck has been read", err_input)
+         return
+      end if
+      call split_path(path, group_id, key, err); if (allocated(err)) return
+      call find_group(self%deck, group_id, ig, err)
+      if (allocated(err)) then
+         err%message = "set '"//path//"': "//err%message
+         return
+      end if
+      ! The value goes through the deck's own lexer: quoting, lists and comments
+      ! behave exactly as in a deck file.
+      call parse_deck('&set '//key//' = '//value//' /', "set '"//path//"'", one, err)
+      if (allocated(err)) return
+      if (size(one%groups) /= 1) then
+         call fatal_error(err, "set '"//path//"': bad value '"//value//"'", err_input)
+         return
+      end if
+      if (size(one%groups(1)%entries) /= 1) then
+         call fatal_error(err, "set '"//path//"': bad value '"//value//"'", err_input)
+         return
+      end if
+      associate (g => self%deck%groups(ig), new => one%groups(1)%entries(1))
+         ie = 0
+         if (allocated(g%entries)) then
+            do ie = size(g%entries), 1, -1
+               if (g%entries(ie)%key == key) exit
+            end do
+         else
+            allocate (g%entries(0))
+         end if
+         if (ie > 0) then
+            g%entries(ie)%values = new%values
+            g%entries(ie)%quoted = new%quoted
+            g%entries(ie)%used = .false.
+         else
+            g%entries = [g%entries, deck_entry_t(key=key, values=new%values, quoted=new%quoted, line=g%line)]
+         end if
+      end associate
+      self%built = .false.
+      self%has_run = .false.
+   end subroutine sim_set_text
+
+   !> Set a real parameter (written with 17 significant digits, so it reads back exactly).
+   subroutine sim_set_real(self, path, value, err)
+      class(simulation_t), intent(inout) :: self
+      character(len=*), intent(in) :: path
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      character(len=32) :: buf
+      write (buf, '(es26.17e3)') value
+      call self%set_text(path, trim(adjustl(buf)), err)
+   end subroutine sim_set_real
+
+   !> Set an integer parameter.
+   subroutine sim_set_int(self, path, value, err)
+      class(simulation_t), intent(inout) :: self
+      character(len=*), intent(in) :: path
+      integer, intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      call self%set_text(path, str(value), err)
+   end subroutine sim_set_int
+
+   !> Set a string parameter (quoted for you): `set_string('run.integrator', 'cvode-bdf', err)`.
+   subroutine sim_set_string(self, path, value, err)
+      class(simulation_t), intent(inout) :: self
+      character(len=*), intent(in) :: path, value
+      type(error_t), allocatable, intent(out) :: err
+      if (index(value, "'") > 0) then
+         call self%set_text(path, '"'//value//'"', err)
+      else
+         call self%set_text(path, "'"//value//"'", err)
+      end if
+   end subroutine sim_set_string
+
+   !> GROUP.KEY -> GROUP, KEY (split at the last dot: ids may hold dots, keys do not).
+   subroutine split_path(path, group_id, key, err)
+      character(len=*), intent(in) :: path
+      character(len=:), allocatable, intent(out) :: group_id, key
+      type(error_t), allocatable, intent(out) :: err
+      integer :: k
+      group_id = ''
+      key = ''
+      k = index(path, '.', back=.true.)
+      if (k <= 1 .or. k == len_trim(path)) then
+         call fatal_error(err, "bad parameter path '"//path// &
+                          "': expected GROUP.KEY (GROUP a node or element id, or run)", err_input)
+         return
+      end if
+      group_id = trim(adjustl(path(1:k - 1)))
+      key = to_lower(trim(adjustl(path(k + 1:))))
+      if (len(group_id) == 0 .or. len(key) == 0 .or. verify(key, 'abcdefghijklmnopqrstuvwxyz0123456789_') /= 0) then
+         call fatal_error(err, "bad parameter path '"//path//"': expected GROUP.KEY with KEY a deck key", err_input)
+      end if
+   end subroutine split_path
+
+   !> The group a path's GROUP names: the &node or &element group with that id (the
+   !> builder's default id n<k>/e<k> when it has none), or &run for `run`.
+   subroutine find_group(deck, group_id, ig, err)
+      type(deck_t), intent(in) :: deck
+      character(len=*), intent(in) :: group_id
+      integer, intent(out) :: ig
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i, n_found
+      character(len=:), allocatable :: id
+
+      ig = 0
+      n_found = 0
+      do i = 1, size(deck%groups)
+         associate (g => deck%groups(i))
+            select case (g%name)
+            case ('node', 'element')
+               id = group_id_of(g%name, g%ordinal, g%entries)
+            case ('run')
+               id = 'run'
+            case default
+               cycle
+            end select
+            if (id == group_id) then
+               n_found = n_found + 1
+               if (ig == 0) ig = i
+            end if
+         end associate
+      end do
+      if (n_found == 0) then
+         call fatal_error(err, "no node or element with id '"//group_id//"' (nor is it 'run')", err_input)
+      else if (n_found > 1) then
+         call fatal_error(err, "'"//group_id//"' names "//str(n_found)//' groups (a node and an element, '// &
+                          'or the &run group and one of them)', err_input)
+      end if
+   end subroutine find_group
+
+   function group_id_of(name, ordinal, entries) result(id)
+      character(len=*), intent(in) :: name
+      integer, intent(in) :: ordinal
+      type(deck_entry_t), allocatable, intent(in) :: entries(:)
+      character(len=:), allocatable :: id
+      integer :: j
+      id = name(1:1)//str(ordinal)
+      if (.not. allocated(entries)) return
+      do j = 1, size(entries)
+         if (entries(j)%key == 'id' .and. size(entries(j)%values) == 1) then
+            id = entries(j)%values(1)%s
+            return
+         end if
+      end do
+   end function group_id_of
+
+   ! ------------------------------------------------------------------ build and run
+
+   !> Build the model from the deck (every node and element checks its own values).
+   subroutine sim_build(self, err)
+      class(simulation_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      type(deck_t) :: d
+      if (.not. self%has_deck) then
+         call fatal_error(err, 'build: no deck has been read', err_input)
+         return
+      end if
+      d = self%deck                   ! the builder marks keys as read; keep ours clean
+      call build_model(d, self%model, err)
+      self%built = .not. allocated(err)
+      self%has_run = .false.
+   end subroutine sim_build
+
+   !> Run the model (built first if the deck changed since). In memory; with `output`,
+   !> the HDF5 history goes to that file too (docs/output-format.md). The deck's
+   !> `&run output` is not used here: pass it as `output` if you want it.
+   subroutine sim_run(self, err, output)
+      class(simulation_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      character(len=*), intent(in), optional :: output
+      type(model_t) :: m
+      type(hdf5_sink_t) :: h5
+      type(null_sink_t) :: none
+      self%has_run = .false.
+      if (.not. self%built) then
+         call self%build(err); if (allocated(err)) return
+      end if
+      m = self%model                  ! a run changes modes and workspace: run a copy
+      if (present(output)) then
+         h5%path = output
+         call simulate(m, h5, self%res, err)
+      else
+         call simulate(m, none, self%res, err)
+      end if
+      self%has_run = .not. allocated(err)
+   end subroutine sim_run
+
+   ! ------------------------------------------------------------------ results
+
+   !> The model as built (for the lower-level modules: trainsim_modes, ...).
+   subroutine sim_get_model(self, model, err)
+      class(simulation_t), intent(in) :: self
+      type(model_t), intent(out) :: model
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. self%built) then
+         call fatal_error(err, 'get_model: the model has not been built since the deck was read or changed', err_input)
+         return
+      end if
+      model = self%model
+   end subroutine sim_get_model
+
+   !> The whole in-memory result of the last run (stats, events, metrics, final state).
+   subroutine sim_result(self, res, err)
+      class(simulation_t), intent(in) :: self
+      type(run_result_t), intent(out) :: res
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. ran(self, 'result', err)) return
+      res = self%res
+   end subroutine sim_result
+
+   logical function ran(self, what, err)
+      class(simulation_t), intent(in) :: self
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      ran = self%has_run
+      if (.not. ran) call fatal_error(err, what//': no run since the deck was read or changed', err_input)
+   end function ran
+
+   !> Ids of the elements, in deck order (empty before a build). A subroutine, not a
+   !> function: `ids = f()` into an unallocated array of strings trips gfortran 12's
+   !> false -Wuninitialized in the caller.
+   subroutine sim_element_ids(self, ids)
+      class(simulation_t), intent(in) :: self
+      type(string_t), allocatable, intent(out) :: ids(:)
+      integer :: i
+      if (.not. self%built) then
+         allocate (ids(0))
+         return
+      end if
+      allocate (ids(size(self%model%elements)))
+      do i = 1, size(ids)
+         ids(i)%s = self%model%elements(i)%e%id
+      end do
+   end subroutine sim_element_ids
+
+   !> Index of element `id` in deck order (the `element` column of the event table);
+   !> 0 if there is none or the model is not built.
+   integer function sim_element_index(self, id) result(k)
+      class(simulation_t), intent(in) :: self
+      character(len=*), intent(in) :: id
+      integer :: i
+      k = 0
+      if (.not. self%built) return
+      do i = 1, size(self%model%elements)
+         if (self%model%elements(i)%e%id == id) then
+            k = i
+            return
+         end if
+      end do
+   end function sim_element_index
+
+   !> All metrics of element `id` from the last run (extremes, impacts, peak-to-peak).
+   subroutine sim_element_metrics(self, id, metrics, err)
+      class(simulation_t), intent(in) :: self
+      character(len=*), intent(in) :: id
+      type(element_metrics_t), intent(out) :: metrics
+      type(error_t), allocatable, intent(out) :: err
+      integer :: k
+      if (.not. ran(self, 'element_metrics', err)) return
+      k = self%element_index(id)
+      if (k == 0) then
+         call fatal_error(err, "element_metrics: no element with id '"//id//"'", err_input)
+         return
+      end if
+      metrics = self%res%el(k)
+   end subroutine sim_element_metrics
+
+   !> One metric of element `id` by name (see metric_names): 'p2p_mean', 'force_max', ...
+   !> Counts (impacts, separations, zone_changes, p2p_swings) come back as reals.
+   subroutine sim_metric(self, id, name, value, err)
+      class(simulation_t), intent(in) :: self
+      character(len=*), intent(in) :: id, name
+      real(wp), intent(out) :: value
+      type(error_t), allocatable, intent(out) :: err
+      type(element_metrics_t) :: m
+      value = 0.0_wp
+      call self%element_metrics(id, m, err); if (allocated(err)) return
+      select case (to_lower(name))
+      case ('force_min'); value = m%force_min
+      case ('force_max'); value = m%force_max
+      case ('torque_min'); value = m%torque_min
+      case ('torque_max'); value = m%torque_max
+      case ('disp_min'); value = m%disp_min
+      case ('disp_max'); value = m%disp_max
+      case ('impacts'); value = real(m%impacts, wp)
+      case ('separations'); value = real(m%separations, wp)
+      case ('zone_changes'); value = real(m%zone_changes, wp)
+      case ('max_approach_velocity'); value = m%max_approach_velocity
+      case ('max_peak_force'); value = m%max_peak_force
+      case ('time_out_of_contact'); value = m%time_out_of_contact
+      case ('p2p_range'); value = m%p2p_range
+      case ('p2p_mean'); value = m%p2p_mean
+      case ('p2p_swings'); value = real(m%p2p_swings, wp)
+      case default
+         call fatal_error(err, "metric: unknown metric '"//name//"'; valid: "//metric_names(), err_input)
+      end select
+   end subroutine sim_metric
+
+   !> The metric names `metric` accepts, comma separated.
+   function metric_names() result(s)
+      character(len=:), allocatable :: s
+      integer :: i
+      s = trim(metric_list(1))
+      do i = 2, size(metric_list)
+         s = s//', '//trim(metric_list(i))
+      end do
+   end function metric_names
+
+   !> The event table of the last run (time order; `element` is the index in deck order,
+   !> `event_element_id` names it, `ev_name(kind)` names the kind).
+   subroutine sim_events(self, events, err)
+      class(simulation_t), intent(in) :: self
+      type(event_t), allocatable, intent(out) :: events(:)
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. ran(self, 'events', err)) then
+         allocate (events(0))
+         return
+      end if
+      if (allocated(self%res%events)) then
+         events = self%res%events
+      else
+         allocate (events(0))
+      end if
+   end subroutine sim_events
+
+   !> The id of the element an event row belongs to ('' if out of range).
+   function sim_event_element_id(self, ev) result(id)
+      class(simulation_t), intent(in) :: self
+      type(event_t), intent(in) :: ev
+      character(len=:), allocatable :: id
+      id = ''
+      if (.not. self%built) return
+      if (ev%element >= 1 .and. ev%element <= size(self%model%elements)) id = self%model%elements(ev%element)%e%id
+   end function sim_event_element_id
+
+   !> Counters and timings of the last run.
+   subroutine sim_stats(self, stats, err)
+      class(simulation_t), intent(in) :: self
+      type(run_stats_t), intent(out) :: stats
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. ran(self, 'stats', err)) return
+      stats = self%res%stats
+   end subroutine sim_stats
+end module trainsim
