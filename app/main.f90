@@ -332,9 +332,12 @@ contains
       type(preload_info_t), intent(in) :: p
       integer, intent(in) :: unit
       integer :: i
-      write (unit, '(a)') 'static preload (reference node '''//model%nodes(p%reference)%n%id//''', '// &
-         trim(merge('free train, acceleration '//str(p%acceleration, 6)//' rad/s^2', &
-                    'held or fixed                                 ', p%free_train))//'):'
+      if (p%free_train) then
+         write (unit, '(a)') 'static preload (reference node '''//model%nodes(p%reference)%n%id// &
+            ''', free train, acceleration '//str(p%acceleration, 6)//' rad/s^2):'
+      else
+         write (unit, '(a)') 'static preload (reference node '''//model%nodes(p%reference)%n%id//''', held or fixed):'
+      end if
       write (unit, '(8x,a12,3a18)') 'node', 'deck angle', 'preload angle', 'difference'
       do i = 1, size(model%nodes)
          write (unit, '(8x,a12,3f18.9)') model%nodes(i)%n%id, p%theta_deck(i), model%nodes(i)%n%theta0, &
