@@ -19,6 +19,7 @@ program trainsim_main
    use trainsim_report, only: print_summary, print_modes, print_parameters
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
+   use trainsim_preload, only: preload_info_t
    use trainsim_sweep, only: sweep_options_t, sweep_summary_t, run_sweep
    implicit none
 
@@ -84,6 +85,13 @@ program trainsim_main
          i = i + 1
       case ('--resume', '--progress')
          call sweep_option(i)
+      case ('--preload')   ! = --set run.initial_state=preload (trainsim_preload)
+         if (cmd /= 'modes') then
+            write (error_unit, '(a)') 'trainsim: error: option --preload only applies to modes '// &
+               '(for run and sweep: &run initial_state = ''preload'')'
+            call quit(2)
+         end if
+         call add_preload()
       case ('--closed', '--stiffest', '--zone')
          if (cmd /= 'modes') then
             write (error_unit, '(a)') 'trainsim: error: option '//arg(i)//' only applies to modes (try trainsim --help)'
@@ -162,6 +170,16 @@ contains
       sets = [sets, ov]
    end subroutine add_set
 
+   !> --preload of trainsim modes: the override run.initial_state=preload.
+   subroutine add_preload()
+      type(override_t) :: ov
+      type(error_t), allocatable :: err
+      call parse_set_argument('run.initial_state=preload', ov, err)
+      if (allocated(err)) call fail(err)
+      ov%origin = '--preload'
+      sets = [sets, ov]
+   end subroutine add_preload
+
    !> trainsim sweep's own options at argument k (advances k past a value).
    subroutine sweep_option(k)
       integer, intent(inout) :: k
@@ -220,7 +238,7 @@ contains
          '                                mpirun -np N) into one HDF5 sweep file (default DECK_sweep.h5);', &
          '                                re-running it (or --resume) completes a sweep that was stopped;', &
          '                                progress on stderr every S seconds (default 5; 0: every run)', &
-         '  trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest]', &
+         '  trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest] [--preload]', &
          '                                natural frequencies and mode shapes of the linearised train,', &
          '                                and its RK4 step limit. Linearised as the run starts, or:', &
          '                                --closed    every clearance closed (contact stiffness counts)', &
@@ -229,6 +247,8 @@ contains
          '                                            or the zone it starts in (initial, the default)', &
          '                                --stiffest  = --closed --zone two-pair: the stiffest state a', &
          '                                            run can reach (what `run` checks dt against)', &
+         '                                --preload   about the static wind-up under the loads (contacts', &
+         '                                            closed on their loaded faces; its angles printed)', &
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
@@ -303,9 +323,10 @@ contains
       call quit(2)
    end subroutine fail
 
-   subroutine load(path, model)
+   subroutine load(path, model, preload)
       character(len=*), intent(in) :: path
       type(model_t), intent(out) :: model
+      type(preload_info_t), intent(out), optional :: preload
       type(deck_t) :: deck
       type(deck_group_t), allocatable :: sweeps(:)
       type(error_t), allocatable :: err
@@ -314,7 +335,7 @@ contains
       call split_sweep_groups(deck, sweeps)
       if (size(sweeps) > 0) write (error_unit, '(a)') 'trainsim: note: '//path//' has '//str(size(sweeps))// &
          ' &sweep group(s); '//cmd//' ignores them and uses the deck''s own values (trainsim sweep runs the sweep)'
-      call prepare_model(deck, sets, model, err)
+      call prepare_model(deck, sets, model, err, preload)
       if (allocated(err)) call fail(err)
    end subroutine load
 
@@ -326,7 +347,8 @@ contains
       type(error_t), allocatable :: err
       real(wp) :: dt_max, om, f, z
       character(len=:), allocatable :: what
-      call load(path, model)
+      type(preload_info_t) :: preload
+      call load(path, model, preload)
       call compute_modes(model, modes, err, state=state)
       if (allocated(err)) call fail(err)
       what = 'contacts as at the start'
@@ -336,7 +358,9 @@ contains
       case (lin_zone_stiffest); what = what//', two-pair zones (helical: longest contact lines)'
       case default; what = what//', mesh zones as at the start'
       end select
+      if (model%run%preload) what = what//', about the static preload (trainsim_preload)'
       write (output_unit, '(a)') 'linearised with '//what
+      if (model%run%preload) call print_preload(model, preload, output_unit)
       call print_modes(model, modes, output_unit)
       call rk4_dt_limit(model, state, dt_max, om, err, freq_hz=f, damping_ratio=z)
       if (allocated(err)) call fail(err)
@@ -346,6 +370,29 @@ contains
                        state%contact == lin_contact_closed))//'): dt < '//str(dt_max)//' s, set by '//mode_name(f, om, z)
       end if
    end subroutine do_modes
+
+   !> The preloaded initial angles against the deck's, and the equilibrium residuals
+   !> (trainsim modes --preload).
+   subroutine print_preload(model, p, unit)
+      type(model_t), intent(in) :: model
+      type(preload_info_t), intent(in) :: p
+      integer, intent(in) :: unit
+      integer :: i
+      if (p%free_train) then
+         write (unit, '(a)') 'static preload (reference node '''//model%nodes(p%reference)%n%id// &
+            ''', free train, acceleration '//str(p%acceleration, 6)//' rad/s^2):'
+      else
+         write (unit, '(a)') 'static preload (reference node '''//model%nodes(p%reference)%n%id//''', held or fixed):'
+      end if
+      write (unit, '(8x,a12,3a18)') 'node', 'deck angle', 'preload angle', 'difference'
+      do i = 1, size(model%nodes)
+         write (unit, '(8x,a12,3f18.9)') model%nodes(i)%n%id, p%theta_deck(i), model%nodes(i)%n%theta0, &
+            p%theta_deck(i) - model%nodes(i)%n%theta0
+      end do
+      write (unit, '(a)') 'largest net-torque residual: '//str(p%residual, 3)//' at the preload, '// &
+         str(p%deck_residual, 5)//' at the deck''s angles (torque scale '//str(p%torque_scale, 5)//'; '// &
+         str(p%iterations)//' Newton iterations, '//str(p%passes)//' mode passes)'
+   end subroutine print_preload
 
    !> "the mode at 5690.8 Hz (damping ratio 0.00)" for the eigenvalue that limits the RK4 step.
    function mode_name(f, om, z) result(s)

@@ -11,7 +11,9 @@
 --fig5-11          mark Cook's Fig. 5.11 figures (TRAIN's maximum 0.0022 in at 460 teeth/s,
                    its separation range 460-500 teeth/s, the experiment's 0.00325 in near 385)
 Failed runs are marked with a red x on the axis; runs whose mesh lost contact (impacts > 0)
-are filled markers when the metric is an element metric.
+are filled markers when the metric is an element metric. A continuation sweep (runs/branch
+1 up, 2 down) draws each branch as its own curve: up with triangles pointing right, down
+with triangles pointing left, in the order the runs were made.
 """
 
 import argparse
@@ -54,10 +56,28 @@ def read(path, metric, xname):
             else:
                 el = [k for k in f["elements"] if k not in ("ids", "types")]
                 sys.exit(f"{path}: no metric '{metric}'; element ids: {', '.join(strings(f['elements/ids']))}; "
-                         f"element metrics: {', '.join(el)}; node metrics: speed_min, speed_max")
+                         f"element metrics: {', '.join(el)}; node metrics: speed_min, speed_max, end_angle, end_speed")
         label = f.attrs.get("overrides", b"")
         label = label.decode() if isinstance(label, bytes) else str(label)
-    return xname, x, y, status, impacts, label
+        branch = f["runs/branch"][:] if "branch" in f["runs"] else np.zeros(len(x), dtype=int)
+    return xname, x, y, status, impacts, label, branch
+
+
+def draw(ax, x, y, status, impacts, order, name, mark):
+    ok = status[order] == 1
+    xs, ys = x[order], y[order]
+    line, = ax.plot(xs[ok], ys[ok], "-", lw=1.2, label=name)
+    c = line.get_color()
+    if impacts is not None:
+        lost = (impacts[order] > 0) & ok
+        ax.plot(xs[ok & ~lost], ys[ok & ~lost], mark, mfc="white", mec=c, ms=5)
+        ax.plot(xs[lost], ys[lost], mark, mfc=c, mec=c, ms=5)
+    else:
+        ax.plot(xs[ok], ys[ok], mark, color=c, ms=4)
+    failed = status[order] == 2
+    if failed.any():
+        ax.plot(xs[failed], np.zeros(failed.sum()), "x", color="red", ms=9, mew=2,
+                label=f"failed run ({failed.sum()})")
 
 
 def main():
@@ -68,36 +88,32 @@ def main():
     ap.add_argument("--label", action="append")
     ap.add_argument("--out", default="sweep.png")
     ap.add_argument("--fig5-11", dest="fig511", action="store_true")
+    ap.add_argument("--fig7-6", dest="fig76", action="store_true",
+                    help="mark Cook's Ch. VII contact loss, about 335-480 teeth/s")
     a = ap.parse_args()
 
     fig, ax = plt.subplots(figsize=(8, 5))
     for i, path in enumerate(a.files):
-        xname, x, y, status, impacts, label = read(path, a.metric, a.x)
+        xname, x, y, status, impacts, label, branch = read(path, a.metric, a.x)
         if a.label and i < len(a.label):
             label = a.label[i]
         label = label or path
-        order = np.argsort(x)
-        ok = status[order] == 1
-        xs, ys = x[order], y[order]
-        line, = ax.plot(xs[ok], ys[ok], "-", lw=1.2, label=label)
-        c = line.get_color()
-        if impacts is not None:
-            lost = (impacts[order] > 0) & ok
-            ax.plot(xs[ok & ~lost], ys[ok & ~lost], "o", mfc="white", mec=c, ms=5)
-            ax.plot(xs[lost], ys[lost], "o", mfc=c, mec=c, ms=5)
-        else:
-            ax.plot(xs[ok], ys[ok], "o", color=c, ms=4)
-        failed = status[order] == 2
-        if failed.any():
-            ax.plot(xs[failed], np.zeros(failed.sum()), "x", color="red", ms=9, mew=2,
-                    label=f"failed run ({failed.sum()})")
-        pending = status[order] == 0
+        for b in sorted(set(branch.tolist())):
+            runs = np.flatnonzero(branch == b)
+            # fixed starts: by x; a continuation branch: in run order (the path the rig took)
+            order = runs[np.argsort(x[runs])] if b == 0 else runs
+            name = {0: label, 1: f"{label} (up)", 2: f"{label} (down)"}[b]
+            mark = {0: "o", 1: ">", 2: "<"}[b]
+            draw(ax, x, y, status, impacts, order, name, mark)
+        pending = status == 0
         if pending.any():
             print(f"{path}: {pending.sum()} run(s) not made yet", file=sys.stderr)
     if a.fig511:
         ax.axvspan(460, 500, color="0.85", zorder=0, label="TRAIN: separation 460-500 teeth/s (Cook 1989)")
         ax.plot([460], [0.0022], "k+", ms=14, mew=2, label="TRAIN max p2p TE 0.0022 in at 460 (Cook)")
         ax.plot([385], [0.00325], "kx", ms=10, mew=2, label="experiment max 0.00325 in near 385 (Cook)")
+    if a.fig76:
+        ax.axvspan(335, 480, color="0.85", zorder=0, label="TRAIN: contact lost about 335-480 teeth/s (Cook §7.3)")
     ax.set_xlabel(xname)
     ax.set_ylabel(a.metric)
     note = "filled: contact lost (impacts > 0)" if impacts is not None else ""

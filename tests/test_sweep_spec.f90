@@ -12,6 +12,7 @@ program test_sweep_spec
    call suite_begin('sweep specification')
    call test_grid_first_axis_slowest_and_zip_in_step()
    call test_linear_and_log_spacing_end_exactly()
+   call test_continuation_orders_branches_and_chains_runs()
    call suite_end()
 
 contains
@@ -68,4 +69,33 @@ contains
                    "&sweep parameter = 'g.stiffness', values = 3 /", spec, err)
       call check('a parameter swept twice is an error', allocated(err))
    end subroutine test_linear_and_log_spacing_end_exactly
+
+   subroutine test_continuation_orders_branches_and_chains_runs()
+      type(sweep_spec_t) :: spec
+      type(error_t), allocatable :: err
+      character(len=1), parameter :: nl = new_line('a')
+      call test_begin('continuation_orders_branches_and_chains_runs')
+      ! values given out of order, a zipped group riding along, a constant
+      call spec_of("&sweep parameter = 'g.mesh_frequency', values = 300, 100, 200, continuation = 'both' /"//nl// &
+                   "&sweep parameter = 'run.t_end', values = 0.3, 0.1, 0.2, mode = 'zip' /"//nl// &
+                   "&sweep parameter = 'g.settle_cycles', values = 10 /", spec, err)
+      call check('reads', .not. allocated(err))
+      call check('both: up then down, 2 x 3 runs', spec%n_runs == 6)
+      call check('up 100, 200, 300 then down 300, 200, 100', &
+                 all(spec%values(1, :) == [100.0_wp, 200.0_wp, 300.0_wp, 300.0_wp, 200.0_wp, 100.0_wp]))
+      call check('the zipped group goes with its value', &
+                 all(spec%values(2, :) == [0.1_wp, 0.2_wp, 0.3_wp, 0.3_wp, 0.2_wp, 0.1_wp]))
+      call check('branches 1 1 1 2 2 2', all(spec%branch == [1, 1, 1, 2, 2, 2]))
+      call check('each branch starts afresh, then from the run before', all(spec%prev == [0, 1, 2, 0, 4, 5]))
+      call spec_of("&sweep parameter = 'g.mesh_frequency', values = 1, 2, continuation = 'down' /", spec, err)
+      call check('down: descending, one branch', all(spec%values(1, :) == [2.0_wp, 1.0_wp]) .and. &
+                 all(spec%branch == 2) .and. all(spec%prev == [0, 1]))
+      call spec_of("&sweep parameter = 'g.mesh_frequency', values = 1, 2, continuation = 'up' /"//nl// &
+                   "&sweep parameter = 'g.half_backlash', values = 1e-3, 2e-3 /", spec, err)
+      call check('a second axis with several values is an error', allocated(err))
+      call spec_of("&sweep parameter = 'g.mesh_frequency', values = 1, 2, continuation = 'sideways' /", spec, err)
+      call check('an unknown continuation is an error', allocated(err))
+      call spec_of("&sweep parameter = 'g.mesh_frequency', values = 1, 2 /", spec, err)
+      call check('without continuation: no branch, no chain', all(spec%branch == 0) .and. all(spec%prev == 0))
+   end subroutine test_continuation_orders_branches_and_chains_runs
 end program test_sweep_spec

@@ -110,6 +110,15 @@ contains
                              "'; valid: analytic (default), difference_quotient", err_input)
             return
          end select
+         call g%get_string('initial_state', jac_kind, err, default='deck'); if (allocated(err)) return
+         select case (to_lower(jac_kind))
+         case ('deck'); r%preload = .false.
+         case ('preload'); r%preload = .true.
+         case default
+            call fatal_error(err, g%where('initial_state')//": error: unknown initial_state '"//jac_kind// &
+                             "'; valid: deck (default: the &initial angles), preload (the static wind-up)", err_input)
+            return
+         end select
 
          ! Every real is finite here (the deck reader rejects nan, inf and overflow).
          ! Limits divide by a constant, never by a deck value, so no check can overflow.

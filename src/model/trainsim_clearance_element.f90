@@ -31,6 +31,7 @@ module trainsim_clearance_element
       procedure :: n_guards => ce_n_guards
       procedure :: guards => ce_guards
       procedure :: init_mode => ce_init_mode
+      procedure :: preload_mode => ce_preload_mode
       procedure :: update_mode => ce_update_mode
       procedure :: in_contact => ce_in_contact
       procedure :: status => ce_status
@@ -171,6 +172,18 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       call self%cl%init(thl, wl, thr, wr)
    end subroutine ce_init_mode
+
+   !> Static preload: the clearance closed on `face` whatever the angles (the
+   !> Newton solve then finds the penetration), other modes from the angles.
+   !> A closed start has no approach speed (D-13: D = 0 unless initial_contact_velocity).
+   subroutine ce_preload_mode(self, face, thl, wl, thr, wr)
+      class(clearance_element_t), intent(inout) :: self
+      integer, intent(in) :: face
+      real(wp), intent(in) :: thl, wl, thr, wr
+      call self%init_mode(thl, wl, thr, wr)
+      self%cl%mode = face
+      if (face /= 0) call self%cl%law%begin_contact(0.0_wp, .true.)
+   end subroutine ce_preload_mode
 
    subroutine ce_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
       class(clearance_element_t), intent(inout) :: self

@@ -72,6 +72,7 @@ module trainsim_element
       procedure :: n_guards => el_n_guards
       procedure :: guards => el_guards
       procedure :: init_mode => el_init_mode
+      procedure :: preload_mode => el_preload_mode
       procedure :: update_mode => el_update_mode
       procedure :: in_contact => el_in_contact
       procedure :: status => el_status
@@ -221,6 +222,18 @@ contains
       associate (u1 => self, u2 => thl, u3 => wl, u4 => thr, u5 => wr)
       end associate
    end subroutine el_init_mode
+
+   !> Set the discrete mode of a static preload (trainsim_preload): a clearance
+   !> closed on `face` (+1 front, -1 rear, 0 open), other modes (mesh zones) from
+   !> the angles. Default (no clearance): as `init_mode`.
+   subroutine el_preload_mode(self, face, thl, wl, thr, wr)
+      class(element_t), intent(inout) :: self
+      integer, intent(in) :: face
+      real(wp), intent(in) :: thl, wl, thr, wr
+      associate (unused => face)
+      end associate
+      call self%init_mode(thl, wl, thr, wr)
+   end subroutine el_preload_mode
 
    !> A guard crossed zero (fired(j) for guard j): change mode, report what happened.
    !> `nev` events are returned in ev(1:nev), nev <= max_update_events (trainsim_event).

@@ -30,6 +30,7 @@ module trainsim_model
       logical :: track_energy = .true.          !< integrate dissipated energy and work input
       logical :: keep_series = .false.          !< keep displacement series in memory (sweeps)
       logical :: analytic_jacobian = .true.     !< CVODE BDF: model%jacobian, else difference quotients
+      logical :: preload = .false.              !< initial_state = 'preload': angles from the static wind-up
    end type run_settings_t
 
    !> An external torque on a node.

@@ -10,6 +10,7 @@ module trainsim_prepare
    use trainsim_model, only: model_t
    use trainsim_overrides, only: override_t, apply_overrides, localize_error
    use trainsim_derived, only: apply_derived
+   use trainsim_preload, only: preload_info_t, apply_preload
    implicit none
    private
 
@@ -19,17 +20,23 @@ contains
 
    !> Build `model` from `deck` (without &sweep groups) with the overrides `ovs` applied.
    !> `deck` is not changed.
-   subroutine prepare_model(deck, ovs, model, err)
+   !> With &run initial_state = 'preload' the initial angles are the static wind-up
+   !> (trainsim_preload), described by `preload` if present.
+   subroutine prepare_model(deck, ovs, model, err, preload)
       type(deck_t), intent(in) :: deck
       type(override_t), intent(in) :: ovs(:)
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
+      type(preload_info_t), intent(out), optional :: preload
       type(deck_t) :: work
+      type(preload_info_t) :: info
 
       work = deck
       call apply_overrides(work, ovs, err)
       if (.not. allocated(err)) call build_model(work, model, err)
       if (.not. allocated(err)) call apply_derived(model, ovs, err)
+      if (.not. allocated(err) .and. model%run%preload) call apply_preload(model, info, err)
+      if (present(preload)) preload = info
       if (allocated(err)) call localize_error(err, deck%file, ovs)
    end subroutine prepare_model
 end module trainsim_prepare

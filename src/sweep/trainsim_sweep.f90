@@ -26,6 +26,7 @@ module trainsim_sweep
    use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t
    use trainsim_observer, only: run_result_t
    use trainsim_simulate, only: simulate
+   use trainsim_continuation, only: chain_state_t, save_end_state, start_from
    use trainsim_mpi, only: comm_init, comm_finalize, comm_rank, comm_size, comm_send_record, &
       comm_poll_record, comm_send_index, comm_recv_index, comm_bcast_int
    implicit none
@@ -64,6 +65,10 @@ module trainsim_sweep
       real(wp) :: interval = 5.0_wp
       logical :: tty = .false.
       type(error_t), allocatable :: err    !< a write error met while servicing
+      !> continuation: per run, the run it starts from (0: none) and the run that
+      !> starts from it; a successor goes to the rank that made its predecessor
+      integer, allocatable :: prev(:), next_of(:)
+      logical, allocatable :: taken(:)
    contains
       procedure :: take => master_take
       procedure :: service => master_service
@@ -162,6 +167,13 @@ contains
          return
       end if
       m%pending = pack([(i, i=1, lay%n_runs)], m%file%status == status_pending)
+      call setup_chains(m, spec, err)
+      if (allocated(err)) then
+         summary%exit_code = 2
+         call m%file%close()
+         call drain(m)
+         return
+      end if
       m%n_before = lay%n_runs - size(m%pending)
       m%unit = opt%progress_unit
       m%interval = opt%progress_interval
@@ -236,6 +248,7 @@ contains
       lay%param_names = spec%names
       lay%param_values = spec%values
       lay%n_runs = spec%n_runs
+      lay%branch = spec%branch
       allocate (lay%element_ids(size(model%elements)), lay%element_types(size(model%elements)))
       do k = 1, size(model%elements)
          lay%element_ids(k)%s = model%elements(k)%e%id
@@ -307,15 +320,18 @@ contains
       type(sweep_spec_t), intent(in) :: spec
       type(sweep_layout_t), intent(in) :: lay
       type(sweep_record_t) :: rec
-      integer :: irun
+      type(chain_state_t) :: st
+      integer :: irun, last
       integer(c_int) :: rc
+      last = 0
       do
          if (m%n_ranks > 1) call m%service()
          irun = 0
-         if (.not. allocated(m%err)) irun = m%take()
+         if (.not. allocated(m%err)) irun = m%take(last)
          if (irun > 0) then
-            call run_one(opt, deck, spec, lay, irun, 0, rec, m)
+            call run_one(opt, deck, spec, lay, irun, 0, rec, st, m)
             call m%record(rec)
+            last = irun
          else
             if (m%stopped == m%n_ranks - 1) exit
             rc = c_usleep(1000_c_int)
@@ -323,14 +339,59 @@ contains
       end do
    end subroutine master_loop
 
-   !> The next run to hand out (0: none left).
-   integer function master_take(self) result(irun)
+   !> The next run to hand out to a rank that has just made run `after` (0: none):
+   !> in a continuation sweep the run that continues from `after` if there is one,
+   !> else the next run not yet handed out that starts afresh (0: none left).
+   integer function master_take(self, after) result(irun)
       class(master_t), intent(inout) :: self
+      integer, intent(in) :: after
+      integer :: j
       irun = 0
-      if (self%next > size(self%pending)) return
-      irun = self%pending(self%next)
-      self%next = self%next + 1
+      if (allocated(self%next_of) .and. after > 0) then
+         j = self%next_of(after)
+         if (j > 0) then
+            if (.not. self%taken(j) .and. self%file%status(j) == status_pending) then
+               self%taken(j) = .true.
+               irun = j
+               return
+            end if
+         end if
+      end if
+      do while (self%next <= size(self%pending))
+         j = self%pending(self%next)
+         self%next = self%next + 1
+         if (allocated(self%taken)) then
+            if (self%taken(j) .or. self%prev(j) > 0) cycle   ! a successor goes with its chain
+            self%taken(j) = .true.
+         end if
+         irun = j
+         return
+      end do
    end function master_take
+
+   !> Continuation chains from the spec; a branch stopped part-way cannot be resumed
+   !> (its next run would need the end state of a run made in an earlier sweep).
+   subroutine setup_chains(m, spec, err)
+      type(master_t), intent(inout) :: m
+      type(sweep_spec_t), intent(in) :: spec
+      type(error_t), allocatable, intent(out) :: err
+      integer :: j
+      if (.not. any(spec%prev > 0)) return
+      m%prev = spec%prev
+      allocate (m%next_of(size(spec%prev)), m%taken(size(spec%prev)))
+      m%next_of = 0
+      m%taken = .false.
+      do j = 1, size(spec%prev)
+         if (spec%prev(j) > 0) m%next_of(spec%prev(j)) = j
+         if (spec%prev(j) == 0) cycle
+         if (m%file%status(j) == status_pending .and. m%file%status(spec%prev(j)) /= status_pending) then
+            call fatal_error(err, "error: sweep file '"//m%file%path//"': continuation run "//str(j)// &
+                             ' was not made but the run before it in its branch was; a continuation branch '// &
+                             'stopped part-way cannot be resumed (delete the file to make the sweep again)', err_input)
+            return
+         end if
+      end do
+   end subroutine setup_chains
 
    !> Receive the workers' records, write them, answer each with its next index.
    subroutine master_service(self)
@@ -347,13 +408,13 @@ contains
          call rec%unpack(buf)
          if (rec%irun > 0) call self%record(rec)
          irun = 0
-         if (.not. allocated(self%err)) irun = self%take()
+         if (.not. allocated(self%err)) irun = self%take(rec%irun)
          call comm_send_index(src, irun)
          if (irun == 0) self%stopped = self%stopped + 1
       end do
    end subroutine master_service
 
-   subroutine master_record(self, rec)
+   recursive subroutine master_record(self, rec)
       class(master_t), intent(inout) :: self
       type(sweep_record_t), intent(in) :: rec
       type(error_t), allocatable :: err
@@ -366,6 +427,23 @@ contains
       self%n_now = self%n_now + 1
       if (rec%status == status_failed) self%n_failed_now = self%n_failed_now + 1
       call self%progress(final=.false.)
+      ! a failed run breaks its continuation branch: the runs after it fail too
+      if (rec%status == status_failed .and. allocated(self%next_of)) then
+         if (self%next_of(rec%irun) > 0) then
+            if (.not. self%taken(self%next_of(rec%irun))) then
+               self%taken(self%next_of(rec%irun)) = .true.
+               block
+                  type(sweep_record_t) :: next
+                  next = rec
+                  next%irun = self%next_of(rec%irun)
+                  next%wall = 0.0_wp
+                  next%message = 'not made: run '//str(rec%irun)//', the run before it in its continuation '// &
+                                 'branch, failed'
+                  call self%record(next)
+               end block
+            end if
+         end if
+      end if
    end subroutine master_record
 
    !> "sweep: 12/27 runs done (1 failed), 3.2 s, ETA 4.1 s"; in place on a terminal,
@@ -457,6 +535,7 @@ contains
       type(sweep_spec_t), intent(in) :: spec
       type(sweep_layout_t), intent(in) :: lay
       type(sweep_record_t) :: rec
+      type(chain_state_t) :: st
       real(wp), allocatable :: buf(:)
       integer :: irun
       allocate (buf(record_size(size(lay%element_ids), size(lay%node_ids))))
@@ -470,7 +549,7 @@ contains
       do
          call comm_recv_index(irun)
          if (irun == 0) exit
-         call run_one(opt, deck, spec, lay, irun, comm_rank(), rec)
+         call run_one(opt, deck, spec, lay, irun, comm_rank(), rec, st)
          call rec%pack(buf)
          call comm_send_record(buf, rec%message)
       end do
@@ -481,13 +560,16 @@ contains
    ! ------------------------------------------------------------------------------------------
 
    !> Run irun and fill its record. `m` (rank 0 of an MPI sweep) is serviced meanwhile.
-   subroutine run_one(opt, deck, spec, lay, irun, rank, rec, m)
+   !> `st` is this rank's last end state: a continuation run starts from it (its
+   !> predecessor was made here, trainsim_continuation) and leaves its own in it.
+   subroutine run_one(opt, deck, spec, lay, irun, rank, rec, st, m)
       type(sweep_options_t), intent(in) :: opt
       type(deck_t), intent(in) :: deck
       type(sweep_spec_t), intent(in) :: spec
       type(sweep_layout_t), intent(in) :: lay
       integer, intent(in) :: irun, rank
       type(sweep_record_t), intent(inout) :: rec
+      type(chain_state_t), intent(inout) :: st
       type(master_t), intent(inout), target, optional :: m
       type(model_t) :: model
       type(sweep_sink_t) :: sink
@@ -509,6 +591,15 @@ contains
       rec%rank = rank
       ovs = run_overrides(opt, spec, irun, err)
       if (.not. allocated(err)) call prepare_model(deck, ovs, model, err)
+      if (.not. allocated(err) .and. spec%prev(irun) > 0) then
+         if (st%irun == spec%prev(irun)) then
+            call start_from(model, st)
+         else
+            call fatal_error(err, 'internal error: continuation run '//str(irun)//' given to a rank without the '// &
+                             'end state of run '//str(spec%prev(irun)), err_input)
+         end if
+      end if
+      st%irun = 0
       if (.not. allocated(err)) then
          model%run%output = ''
          sink%t_metrics = model%run%t_start + model%run%settle_time
@@ -538,6 +629,9 @@ contains
             rec%node(1, :) = sink%wmin
             rec%node(2, :) = sink%wmax
          end if
+         call save_end_state(model, res%t_final, res%y_final, irun, st)
+         rec%node(3, :) = st%theta
+         rec%node(4, :) = st%omega
          rec%run_values(1) = real(res%stats%steps, wp)
          rec%run_values(2) = real(res%stats%rhs_evals, wp)
          rec%run_values(3) = real(res%stats%events, wp)

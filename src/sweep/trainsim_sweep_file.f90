@@ -41,8 +41,10 @@ module trainsim_sweep_file
       'p2p_mean', 'p2p_swings']
    logical, parameter :: element_metric_is_int(15) = [.false., .false., .false., .false., .false., .false., &
       .true., .true., .true., .false., .false., .false., .false., .false., .true.]
-   !> Per-node metrics: the speed range after settle_time.
-   character(len=*), parameter :: node_metric_names(2) = [character(len=9) :: 'speed_min', 'speed_max']
+   !> Per-node metrics: the speed range after settle_time, and the angle and speed at
+   !> the end of the run (where a continuation run starts: trainsim_continuation).
+   character(len=*), parameter :: node_metric_names(4) = [character(len=9) :: 'speed_min', 'speed_max', &
+                                                          'end_angle', 'end_speed']
    !> Per-run figures besides the metrics.
    character(len=*), parameter :: run_value_names(4) = [character(len=15) :: 'steps', 'rhs_evals', 'events', &
                                                         'energy_residual']
@@ -55,6 +57,7 @@ module trainsim_sweep_file
       real(wp), allocatable :: param_values(:, :)    !< (parameter, run)
       type(string_t), allocatable :: element_ids(:), element_types(:), node_ids(:)
       integer :: n_runs = 0
+      integer, allocatable :: branch(:)             !< per run: 0 fixed start, 1 up, 2 down (continuation)
    end type sweep_layout_t
 
    !> One finished run, as sent to rank 0 and written to its slot.
@@ -75,7 +78,7 @@ module trainsim_sweep_file
       integer(hid_t) :: file = -1
       integer(hid_t) :: d_status = -1, d_wall = -1, d_rank = -1, d_message = -1, t_message = -1
       integer(hid_t) :: d_run(4) = -1
-      integer(hid_t) :: d_el(15) = -1, d_node(2) = -1
+      integer(hid_t) :: d_el(15) = -1, d_node(4) = -1
       integer :: ne = 0, nn = 0, n_runs = 0
       integer, allocatable :: status(:)      !< as in the file
    contains
@@ -134,7 +137,7 @@ contains
       character(len=*), intent(in) :: path
       type(sweep_layout_t), intent(in) :: lay
       type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: f, g
+      integer(hid_t) :: f, g, d_branch
       integer :: h, k
       character(len=:), allocatable :: part
       type(string_t), allocatable :: text(:)
@@ -173,6 +176,13 @@ contains
       end do
       call string_type(message_len, self%t_message)
       call new_dset(g, 'message', [lay%n_runs], self%t_message, self%d_message)
+      call new_dset(g, 'branch', [lay%n_runs], H5T_NATIVE_INTEGER, d_branch, ifill=0)
+      if (allocated(lay%branch)) then
+         do k = 1, lay%n_runs
+            call put_slot_int(d_branch, k, [lay%branch(k)], h)
+         end do
+      end if
+      call h5dclose_f(d_branch, h)
       call h5gclose_f(g, h)
       call h5gcreate_f(f, 'elements', g, h)
       if (size(lay%element_ids) > 0) then

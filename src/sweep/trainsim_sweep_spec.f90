@@ -29,6 +29,10 @@ module trainsim_sweep_spec
       integer, allocatable :: axis(:)              !< grid axis of each parameter
       real(wp), allocatable :: values(:, :)        !< (parameter, run)
       integer :: n_runs = 1
+      !> Continuation (`continuation = 'up'|'down'|'both'` on one group): per run, its
+      !> branch (0 fixed start, 1 up, 2 down) and the run whose end state it starts
+      !> from (0: the deck's initial state). Without continuation all 0.
+      integer, allocatable :: branch(:), prev(:)
    contains
       procedure :: overrides => spec_overrides
    end type sweep_spec_t
@@ -40,18 +44,18 @@ contains
       type(deck_group_t), intent(inout) :: groups(:)
       type(sweep_spec_t), intent(out) :: spec
       type(error_t), allocatable, intent(out) :: err
-      type(string_t), allocatable :: mode_s(:)
+      type(string_t), allocatable :: mode_s(:), cont_s(:)
       real(wp), allocatable :: vals(:, :), v(:)
       integer, allocatable :: counts(:), axis_len(:)
       integer :: np, i, j, k, n_axes, irun, rem, idx
       real(wp) :: total
 
       np = size(groups)
-      allocate (spec%names(np), spec%where(np), spec%axis(np), counts(np), mode_s(np))
+      allocate (spec%names(np), spec%where(np), spec%axis(np), counts(np), mode_s(np), cont_s(np))
       allocate (vals(1, np))
       n_axes = 0
       do i = 1, np
-         call read_group(groups(i), spec%names(i)%s, mode_s(i)%s, v, err)
+         call read_group(groups(i), spec%names(i)%s, mode_s(i)%s, cont_s(i)%s, v, err)
          if (allocated(err)) return
          spec%where(i)%s = groups(i)%where()
          do j = 1, i - 1
@@ -107,6 +111,10 @@ contains
             end do
          end do
       end do
+      allocate (spec%branch(spec%n_runs), spec%prev(spec%n_runs))
+      spec%branch = 0
+      spec%prev = 0
+      call continuation_order(groups, spec, cont_s, axis_len, err)
    end subroutine read_sweep_spec
 
    subroutine grow(a, n)
@@ -120,9 +128,76 @@ contains
    end subroutine grow
 
    !> One &sweep group: its parameter, mode and values.
-   subroutine read_group(g, name, mode, v, err)
+   !> With `continuation` on group ic: the runs in ascending (up), descending (down) or
+   !> ascending-then-descending (both) order of its values, each run after the first of
+   !> its branch starting from the one before it. The group must be the sweep's only
+   !> axis with more than one value (the others constants or zipped with it).
+   subroutine continuation_order(groups, spec, cont_s, axis_len, err)
+      type(deck_group_t), intent(in) :: groups(:)
+      type(sweep_spec_t), intent(inout) :: spec
+      type(string_t), intent(in) :: cont_s(:)
+      integer, intent(in) :: axis_len(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer, allocatable :: up(:), order(:), br(:)
+      integer :: ic, i, j, n, t
+      ic = 0
+      do i = 1, size(cont_s)
+         if (cont_s(i)%s == 'none') cycle
+         if (ic > 0) then
+            call fatal_error(err, groups(i)%where('continuation')//': error: only one &sweep group can set '// &
+                             'continuation; '//spec%where(ic)%s//' does already', err_input)
+            return
+         end if
+         ic = i
+      end do
+      if (ic == 0) return
+      if (mode_is_zip(ic)) then
+         call fatal_error(err, groups(ic)%where('continuation')//": error: continuation needs a grid axis "// &
+                          "(mode = 'grid'), not a zipped group", err_input)
+         return
+      end if
+      do i = 1, size(axis_len)
+         if (i /= spec%axis(ic) .and. axis_len(i) > 1) then
+            call fatal_error(err, groups(ic)%where('continuation')//': error: continuation sweeps one axis; '// &
+                             'another &sweep group has '//str(axis_len(i))//' values on an axis of its own '// &
+                             "(give it one value, or mode = 'zip')", err_input)
+            return
+         end if
+      end do
+      n = spec%n_runs
+      up = [(i, i=1, n)]
+      do i = 2, n                  ! insertion sort of the runs by the continued value
+         t = up(i)
+         j = i - 1
+         do while (j >= 1)
+            if (spec%values(ic, up(j)) <= spec%values(ic, t)) exit
+            up(j + 1) = up(j)
+            j = j - 1
+         end do
+         up(j + 1) = t
+      end do
+      select case (cont_s(ic)%s)
+      case ('up')
+         order = up; br = [(1, i=1, n)]
+      case ('down')
+         order = up(n:1:-1); br = [(2, i=1, n)]
+      case default
+         order = [up, up(n:1:-1)]; br = [[(1, i=1, n)], [(2, i=1, n)]]
+      end select
+      spec%values = spec%values(:, order)
+      spec%n_runs = size(order)
+      spec%branch = br
+      spec%prev = [(merge(0, i - 1, i == 1 .or. br(max(i - 1, 1)) /= br(i)), i=1, size(order))]
+   contains
+      logical function mode_is_zip(k)
+         integer, intent(in) :: k
+         mode_is_zip = k > 1 .and. spec%axis(k) == spec%axis(max(k - 1, 1))
+      end function mode_is_zip
+   end subroutine continuation_order
+
+   subroutine read_group(g, name, mode, cont, v, err)
       type(deck_group_t), intent(inout) :: g
-      character(len=:), allocatable, intent(out) :: name, mode
+      character(len=:), allocatable, intent(out) :: name, mode, cont
       real(wp), allocatable, intent(out) :: v(:)
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: scale
@@ -142,6 +217,13 @@ contains
          return
       end if
       ! ask for every key (has() records the valid keys for the unknown-key message)
+      call g%get_string('continuation', cont, err, default='none'); if (allocated(err)) return
+      cont = to_lower(cont)
+      if (cont /= 'none' .and. cont /= 'up' .and. cont /= 'down' .and. cont /= 'both') then
+         call fatal_error(err, g%where('continuation')//": error: unknown continuation '"//cont// &
+                          "'; valid: none (default), up, down, both", err_input)
+         return
+      end if
       has_range(1) = g%has('from'); has_range(2) = g%has('to')
       has_range(3) = g%has('count'); has_range(4) = g%has('scale')
       if (g%has('values')) then

@@ -1,0 +1,382 @@
+!> Static preload: the wound-up state of the train under its loads at t_start,
+!> found by Newton's method on the model's own torques (the elements' `torques`
+!> and `torque_jacobian`, the nodes' own terms through `derivatives`), instead of
+!> hand-computed initial angles (docs/decisions.md D-30).
+!>
+!> "Equilibrium" of a running train is steady rigid rotation: every node turns with
+!> the kinematic speed ratio kappa_i of the train (1 across a shaft, r1/r2 across a
+!> gear pair) and the same reference acceleration a, so node i needs the net torque
+!> J_i kappa_i a. Then
+!> - a node held at a prescribed speed (or a fixed node) is the reference: a is its
+!>   acceleration at t_start (0 for a constant speed: the thesis decks), and the held
+!>   drive supplies whatever torque balances the loads;
+!> - with no held or fixed node the train turns freely: the reference is its first
+!>   free node, whose angle is kept, and a is one more unknown (the loads accelerate
+!>   the whole train; the wind-up is the one that accelerates every inertia alike).
+!> The residual of free node i is R_i = J_i (dw_i/dt - kappa_i a), with dw_i/dt from
+!> `model_rhs` at the initial speeds (damping at those speeds counts).
+!>
+!> Discrete modes: every clearance is closed, first on its front face; a spur mesh
+!> takes the zone of its driver's angle. After each converged solve the guards are
+!> checked: a zone left is re-set from the new angles, a clearance in tension is
+!> closed on its other face, and the solve is repeated until the modes agree with
+!> the angles.
+module trainsim_preload
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
+   use trainsim_strings, only: str
+   use trainsim_model, only: model_t
+   use trainsim_element, only: lin_closed
+   implicit none
+   private
+
+   public :: preload_info_t, apply_preload, preload_residual
+
+   !> How the preload was found.
+   type :: preload_info_t
+      integer :: reference = 0            !< node whose angle is kept
+      logical :: free_train = .false.     !< no held or fixed node: a is solved for
+      real(wp) :: acceleration = 0.0_wp   !< reference acceleration a (rad/s^2)
+      real(wp) :: residual = 0.0_wp       !< max |R_i| at the solution (torque units)
+      real(wp) :: torque_scale = 0.0_wp   !< largest load or element torque at the solution
+      integer :: iterations = 0           !< Newton iterations, all passes
+      integer :: passes = 0               !< mode passes (solves)
+      integer, allocatable :: face(:)     !< per element: +1 front, -1 rear, 0 no clearance
+      real(wp), allocatable :: theta_deck(:)   !< per node: the initial angle before the preload
+      real(wp) :: deck_residual = 0.0_wp  !< max |R_i| at the deck's angles (modes from those angles)
+   end type preload_info_t
+
+   integer, parameter :: max_newton = 50, max_passes = 20
+   !> Newton stops when max |R| <= tol_residual * torque scale (round-off of the
+   !> torque sums is about 1e-16 of the scale, times the stiffness ratio of the train).
+   real(wp), parameter :: tol_residual = 1.0e-11_wp
+
+   interface
+      subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
+         import :: wp
+         integer, intent(in) :: n, nrhs, lda, ldb
+         real(wp), intent(inout) :: a(lda, *), b(ldb, *)
+         integer, intent(out) :: ipiv(*), info
+      end subroutine dgesv
+   end interface
+
+contains
+
+   !> Replace the initial angles of the free nodes of `model` by the static preload
+   !> (held and fixed nodes, the reference of a free train, all speeds kept).
+   subroutine apply_preload(model, info, err)
+      type(model_t), intent(inout) :: model
+      type(preload_info_t), intent(out) :: info
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: kappa(:), y(:)
+      integer, allocatable :: dof(:)
+      integer :: n, i, pass, ne
+      logical :: changed
+
+      ne = size(model%elements)
+      call reference_node(model, info)
+      if (info%reference == 0) then
+         call fatal_error(err, 'static preload: the train has no node with an inertia, a prescribed speed or '// &
+                          'a fixed angle to refer the wind-up to', err_input)
+         return
+      end if
+      call kinematic_ratios(model, info%reference, kappa, err); if (allocated(err)) return
+      info%theta_deck = [(model%nodes(i)%n%theta0, i=1, size(model%nodes))]
+      call preload_residual(model, info%deck_residual, info%torque_scale, info%acceleration, kappa, info%reference)
+      ! unknowns: the angles of the free nodes (not the reference of a free train), then a
+      allocate (dof(size(model%nodes)))
+      dof = 0
+      n = 0
+      do i = 1, size(model%nodes)
+         if (.not. is_free(model, i)) cycle
+         if (info%free_train .and. i == info%reference) cycle
+         n = n + 1
+         dof(i) = n
+      end do
+      if (info%free_train) n = n + 1
+      call model%initial_state(y)
+      allocate (info%face(ne))
+      info%face = 1
+      do pass = 1, max_passes
+         info%passes = pass
+         call set_modes(model, y, info%face)
+         call newton(model, y, dof, n, kappa, info, err); if (allocated(err)) return
+         call check_modes(model, y, info%face, changed)
+         if (.not. changed) exit
+         if (pass == max_passes) then
+            call fatal_error(err, 'static preload: the contact faces and mesh zones do not settle after '// &
+                             str(max_passes)//' solves (the wound-up state lies on a zone boundary?)', err_numeric)
+            return
+         end if
+      end do
+      do i = 1, size(model%nodes)
+         if (dof(i) > 0) model%nodes(i)%n%theta0 = y(model%nodes(i)%n%offset + 1)
+      end do
+      call preload_residual(model, info%residual, info%torque_scale, info%acceleration, kappa, info%reference)
+   end subroutine apply_preload
+
+   !> Max |J_i (dw_i/dt - kappa_i a)| over the free nodes at the model's initial state
+   !> (its modes as `init_modes` sets them), and the torque scale (the largest load or
+   !> element torque). `kappa`/`ref` default to the train's own kinematic ratios from
+   !> the reference node; `a` to the reference's own acceleration.
+   subroutine preload_residual(model, residual, scale, a, kappa, ref)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(out) :: residual, scale
+      real(wp), intent(in), optional :: a
+      real(wp), intent(in), optional :: kappa(:)
+      integer, intent(in), optional :: ref
+      real(wp), allocatable :: y(:), k(:), r(:)
+      type(preload_info_t) :: info
+      type(error_t), allocatable :: err
+      real(wp) :: acc
+      call model%initial_state(y)
+      call model%init_modes(model%run%t_start, y)
+      if (present(kappa)) then
+         k = kappa
+         info%reference = ref
+      else
+         call reference_node(model, info)
+         call kinematic_ratios(model, info%reference, k, err)
+         if (allocated(err)) k = spread(1.0_wp, 1, size(model%nodes))
+      end if
+      acc = info%acceleration
+      if (present(a)) acc = a
+      call node_residuals(model, y, k, acc, r, scale)
+      residual = 0.0_wp
+      if (size(r) > 0) residual = maxval(abs(r))
+   end subroutine preload_residual
+
+   ! ------------------------------------------------------------------------------------------
+
+   logical function is_free(model, i)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: i
+      is_free = .not. (model%is_held(i) .or. model%nodes(i)%n%is_fixed()) .and. &
+                model%nodes(i)%n%nstates() >= 2 .and. model%nodes(i)%n%inertia() > 0.0_wp
+   end function is_free
+
+   !> The first held node (its acceleration at t_start), else the first fixed node
+   !> (a = 0), else the first free node of a free train.
+   subroutine reference_node(model, info)
+      type(model_t), intent(in) :: model
+      type(preload_info_t), intent(inout) :: info
+      integer :: i
+      info%reference = 0
+      info%free_train = .false.
+      info%acceleration = 0.0_wp
+      do i = 1, size(model%nodes)
+         if (model%is_held(i)) then
+            info%reference = i
+            info%acceleration = model%speeds(model%speed_of(i))%derivative(model%run%t_start)
+            return
+         end if
+      end do
+      do i = 1, size(model%nodes)
+         if (model%nodes(i)%n%is_fixed()) then
+            info%reference = i
+            return
+         end if
+      end do
+      do i = 1, size(model%nodes)
+         if (is_free(model, i)) then
+            info%reference = i
+            info%free_train = .true.
+            return
+         end if
+      end do
+   end subroutine reference_node
+
+   !> Speed of each node per unit speed of node `ref` when the train turns rigidly,
+   !> carried along the elements' closed-contact speed ratios (the null vector of
+   !> their stiffness; as trainsim_derived). Fixed nodes and parts not joined: 0.
+   subroutine kinematic_ratios(model, ref, kappa, err)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ref
+      real(wp), allocatable, intent(out) :: kappa(:)
+      type(error_t), allocatable, intent(out) :: err
+      logical, allocatable :: known(:)
+      real(wp) :: k(2, 2), c(2, 2), rho
+      integer :: pass, j, l, r
+      logical :: changed
+      allocate (kappa(size(model%nodes)), known(size(model%nodes)))
+      kappa = 0.0_wp
+      known = .false.
+      if (model%nodes(ref)%n%is_fixed()) return
+      kappa(ref) = 1.0_wp
+      known(ref) = .true.
+      do pass = 1, size(model%elements) + 1
+         changed = .false.
+         do j = 1, size(model%elements)
+            l = model%elements(j)%e%left
+            r = model%elements(j)%e%right
+            if (model%nodes(l)%n%is_fixed() .or. model%nodes(r)%n%is_fixed()) cycle
+            if (known(l) .eqv. known(r)) cycle
+            call model%elements(j)%e%linearise(lin_closed, 1.0_wp, 1.0_wp, k, c)
+            rho = 0.0_wp
+            if (abs(k(2, 2)) > 0.0_wp) then
+               rho = -k(1, 2)/k(2, 2)
+            else if (abs(c(2, 2)) > 0.0_wp) then
+               rho = -c(1, 2)/c(2, 2)
+            end if
+            if (rho == 0.0_wp) cycle
+            if (known(l)) then
+               kappa(r) = rho*kappa(l); known(r) = .true.
+            else
+               kappa(l) = kappa(r)/rho; known(l) = .true.
+            end if
+            changed = .true.
+         end do
+         if (.not. changed) exit
+      end do
+      associate (unused => err)
+      end associate
+   end subroutine kinematic_ratios
+
+   !> Every element's preload mode at the angles of y: faces as given, zones from the angles.
+   subroutine set_modes(model, y, face)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:)
+      integer, intent(inout) :: face(:)
+      integer :: j, l, r
+      call model%kinematics(model%run%t_start, y)
+      do j = 1, size(model%elements)
+         l = model%elements(j)%e%left
+         r = model%elements(j)%e%right
+         call model%elements(j)%e%preload_mode(face(j), model%theta(l), model%omega(l), model%theta(r), model%omega(r))
+         if (.not. model%elements(j)%e%in_contact()) face(j) = 0   ! no clearance
+      end do
+   end subroutine set_modes
+
+   !> After a solve: elements whose guards went negative get their zones re-set
+   !> from the angles; if a guard is still negative the clearance is in tension and
+   !> is closed on its other face. `changed` if any mode changed.
+   subroutine check_modes(model, y, face, changed)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:)
+      integer, intent(inout) :: face(:)
+      logical, intent(out) :: changed
+      real(wp), allocatable :: g(:)
+      real(wp) :: tol
+      integer :: j, o, n, l, r
+      changed = .false.
+      if (model%n_guards == 0) return
+      allocate (g(model%n_guards))
+      tol = 1.0e-12_wp*max(1.0_wp, maxval(abs(y(1:model%n_states))))
+      call model%guards(model%run%t_start, y, g)
+      do j = 1, size(model%elements)
+         n = model%elements(j)%e%n_guards()
+         o = model%guard_offset(j)
+         if (n == 0) cycle
+         if (minval(g(o + 1:o + n)) >= -tol) cycle
+         changed = .true.
+         l = model%elements(j)%e%left
+         r = model%elements(j)%e%right
+         call model%elements(j)%e%preload_mode(face(j), model%theta(l), model%omega(l), model%theta(r), model%omega(r))
+         call model%elements(j)%e%guards(model%theta(l), model%omega(l), model%theta(r), model%omega(r), g(o + 1:o + n))
+         if (minval(g(o + 1:o + n)) < -tol .and. face(j) /= 0) face(j) = -face(j)
+      end do
+   end subroutine check_modes
+
+   !> Net-torque residuals R_i = J_i (dw_i/dt - kappa_i a) of the free nodes at y,
+   !> in node order, and the torque scale.
+   subroutine node_residuals(model, y, kappa, a, res, scale)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:), kappa(:), a
+      real(wp), allocatable, intent(out) :: res(:)
+      real(wp), intent(out) :: scale
+      real(wp), allocatable :: dydt(:)
+      real(wp) :: tl, tr
+      integer :: i, j, l, r
+      allocate (dydt(size(y)), res(0))
+      dydt = 0.0_wp
+      scale = 0.0_wp
+      call model%apply_loads(model%run%t_start)
+      scale = maxval([0.0_wp, abs(model%torque)])
+      do j = 1, size(model%elements)
+         l = model%elements(j)%e%left
+         r = model%elements(j)%e%right
+         call model%kinematics(model%run%t_start, y)
+         call model%elements(j)%e%torques(model%theta(l), model%omega(l), model%theta(r), model%omega(r), tl, tr)
+         scale = max(scale, abs(tl), abs(tr))
+      end do
+      call model%rhs(model%run%t_start, y, dydt)
+      do i = 1, size(model%nodes)
+         if (.not. is_free(model, i)) cycle
+         res = [res, model%nodes(i)%n%inertia()*(dydt(model%nodes(i)%n%offset + 2) - kappa(i)*a)]
+      end do
+   end subroutine node_residuals
+
+   !> Newton's method on R(theta, a) = 0 in the current modes.
+   subroutine newton(model, y, dof, n, kappa, info, err)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(inout) :: y(:)
+      integer, intent(in) :: dof(:), n
+      real(wp), intent(in) :: kappa(:)
+      type(preload_info_t), intent(inout) :: info
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: jac(:, :), rhs(:, :), res(:), ra(:)
+      integer, allocatable :: ipiv(:), row(:)
+      real(wp) :: scale, jt(2, 4), rmax
+      integer :: it, i, j, a, b, na, nb, info_la, ends(2), k
+      allocate (jac(n, n), rhs(n, 1), ipiv(n), row(size(model%nodes)))
+      ! residual rows: every free node (the reference of a free train too)
+      row = 0
+      k = 0
+      do i = 1, size(model%nodes)
+         if (.not. is_free(model, i)) cycle
+         k = k + 1
+         row(i) = k
+      end do
+      if (k /= n) then
+         call fatal_error(err, 'static preload: internal error: '//str(k)//' equations for '//str(n)//' unknowns', &
+                          err_numeric)
+         return
+      end if
+      if (n == 0) return
+      do it = 0, max_newton
+         call node_residuals(model, y, kappa, info%acceleration, ra, scale)
+         res = ra
+         rmax = maxval(abs(res))
+         if (rmax <= tol_residual*max(scale, tiny(1.0_wp))) return
+         if (it == max_newton) exit
+         info%iterations = info%iterations + 1
+         jac = 0.0_wp
+         call model%kinematics(model%run%t_start, y)
+         do j = 1, size(model%elements)
+            associate (e => model%elements(j)%e)
+               ends = [e%left, e%right]
+               call e%torque_jacobian(model%theta(e%left), model%omega(e%left), model%theta(e%right), &
+                                      model%omega(e%right), jt)
+            end associate
+            do a = 1, 2
+               na = ends(a)
+               if (row(na) == 0) cycle
+               do b = 1, 2
+                  nb = ends(b)
+                  if (dof(nb) == 0) cycle
+                  jac(row(na), dof(nb)) = jac(row(na), dof(nb)) + jt(a, 2*b - 1)
+               end do
+            end do
+         end do
+         if (info%free_train) then
+            do i = 1, size(model%nodes)
+               if (row(i) > 0) jac(row(i), n) = -model%nodes(i)%n%inertia()*kappa(i)
+            end do
+         end if
+         rhs(:, 1) = -res
+         call dgesv(n, 1, jac, n, ipiv, rhs, n, info_la)
+         if (info_la /= 0) then
+            call fatal_error(err, 'static preload: the stiffness matrix is singular (a part of the train is held '// &
+                             'by nothing: no element, load or fixed node ties it; LAPACK dgesv info = '// &
+                             str(info_la)//')', err_numeric)
+            return
+         end if
+         do i = 1, size(model%nodes)
+            if (dof(i) > 0) y(model%nodes(i)%n%offset + 1) = y(model%nodes(i)%n%offset + 1) + rhs(dof(i), 1)
+         end do
+         if (info%free_train) info%acceleration = info%acceleration + rhs(n, 1)
+      end do
+      call fatal_error(err, 'static preload: Newton did not converge in '//str(max_newton)//' iterations '// &
+                       '(residual '//str(rmax)//' against a torque scale '//str(scale)//')', err_numeric)
+   end subroutine newton
+end module trainsim_preload
