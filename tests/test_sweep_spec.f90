@@ -46,7 +46,7 @@ contains
       call check('run 2: the last axis moves first', all(spec%values(:, 2) == [100.0_wp, 2.0e-3_wp, 0.2_wp]))
       call check('run 4: then the first', all(spec%values(:, 4) == [200.0_wp, 1.0e-3_wp, 0.1_wp]))
       call check('run 6', all(spec%values(:, 6) == [200.0_wp, 3.0e-3_wp, 0.3_wp]))
-      ovs = spec%overrides(5, err)
+      allocate (ovs, source=spec%overrides(5, err))   ! not `ovs = ...`: gfortran 12 false -Wuninitialized
       call check('run 5 overrides: three, naming group, run and value', size(ovs) == 3 .and. &
                  ovs(2)%origin == "s.nml:3: &sweep #2 (run 5: g.half_backlash = 0.002)")
       call check('... the value as a deck token that reads back exactly', ovs(2)%values(1)%s == '0.002')
