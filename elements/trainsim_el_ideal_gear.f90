@@ -123,7 +123,8 @@ contains
    function gear_params(self) result(p)
       class(ideal_gear_t), intent(in) :: self
       type(param_list_t) :: p
-      p%names = [string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven')]
-      p%values = [self%k, self%r1, self%r2]
+      ! derived: gear_ratio = omega_driver / omega_driven = r2 / r1
+      p%names = [string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), string_t('gear_ratio')]
+      p%values = [self%k, self%r1, self%r2, self%r2/self%r1]
    end function gear_params
 end module trainsim_el_ideal_gear

@@ -177,9 +177,12 @@ contains
       type(param_list_t) :: p
       p%names = [string_t('diameter'), string_t('half_clearance'), string_t('stiffness'), string_t('friction'), &
                  string_t('phi'), string_t('load_radius'), string_t('friction_angle'), string_t('min_approach_velocity'), &
-                 string_t('friction_velocity'), string_t('friction_capacity_per_hub_torque')]
+                 string_t('friction_velocity'), string_t('friction_capacity_per_hub_torque'), &
+                 string_t('angular_stiffness')]
+      ! derived: angular stiffness k (d/2)^2 (torque/rad)
       p%values = [self%diameter, self%cl%b, self%cl%law%k, self%mu, self%phi, self%load_radius, &
-                  self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor]
+                  self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor, &
+                  self%cl%law%k*(0.5_wp*self%diameter)**2]
       if (self%cl%law%fit /= 0) then
          p%names = [p%names, string_t('stiffness_fit'), string_t('key_length')]
          p%values = [p%values, real(self%cl%law%fit, wp), self%key_length]
