@@ -1,7 +1,7 @@
 !> trainsim: drive-train simulation with clearances (successor to TRAIN, Cook 1989).
 program trainsim_main
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
-   use, intrinsic :: iso_c_binding, only: c_int
+   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_long, c_size_t, c_null_char
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, err_numeric, err_interrupted
    use trainsim_interrupt, only: install_interrupt_handlers, interrupt_signal, signal_name
@@ -39,6 +39,14 @@ program trainsim_main
          import :: c_int
          integer(c_int), value :: status
       end subroutine c_exit_now
+      !> POSIX readlink(2) (ssize_t is a C long on the 64-bit Linux targets).
+      function c_readlink(path, buf, n) bind(C, name='readlink') result(r)
+         import :: c_char, c_long, c_size_t
+         character(kind=c_char), intent(in) :: path(*)
+         character(kind=c_char), intent(out) :: buf(*)
+         integer(c_size_t), value :: n
+         integer(c_long) :: r
+      end function c_readlink
    end interface
 
    nargs = command_argument_count()
@@ -59,6 +67,8 @@ program trainsim_main
       call do_gear()
    case ('key')
       call do_key()
+   case ('export', 'plot')
+      call do_script()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)
@@ -238,6 +248,10 @@ contains
          '                                spur gear constants (App. E) and a deck fragment', &
          '  trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', &
          '                                keyed-joint stiffness curve (Ch. IV) and a deck fragment', &
+         '  trainsim export FILE.h5 QUANTITY ... | --events | --metrics | --summary json | --spectrum', &
+         '                                CSV/JSON of a history (scripts/trainsim_export.py --help)', &
+         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR  -o OUT.png|pdf|svg', &
+         '                                figures of a history (scripts/trainsim_plot.py --help)', &
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
@@ -532,4 +546,97 @@ contains
       call key_report(q, r, output_unit)
       call quit(0)
    end subroutine do_key
+
+   ! ------------------------------------------ trainsim export / trainsim plot
+
+   !> trainsim export|plot ARGS: run scripts/trainsim_<cmd>.py ARGS with Python
+   !> (docs/output-format.md, "Export and plots"): $TRAINSIM_PYTHON or /usr/bin/python3.
+   !> The exit status is the script's.
+   subroutine do_script()
+      character(len=:), allocatable :: script, line, python
+      integer :: k, stat, cstat
+      script = find_script('trainsim_'//cmd//'.py')
+      if (len(script) == 0) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: cannot find trainsim_'//cmd//'.py (looked in '// &
+            '$TRAINSIM_SCRIPTS, <prefix>/share/trainsim/scripts and <build>/../scripts beside the executable)'
+         call quit(2)
+      end if
+      python = env_text('TRAINSIM_PYTHON')
+      if (len(python) == 0) python = '/usr/bin/python3'
+      line = quoted(python)//' '//quoted(script)
+      do k = 2, nargs
+         line = line//' '//quoted(arg(k))
+      end do
+      flush (output_unit)
+      call execute_command_line(line, exitstat=stat, cmdstat=cstat)
+      if (cstat /= 0) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: cannot run '//python//' '//script
+         call quit(2)
+      end if
+      call quit(stat)
+   end subroutine do_script
+
+   !> The first existing `name` in $TRAINSIM_SCRIPTS, the installed share directory
+   !> (<prefix>/bin/trainsim -> <prefix>/share/trainsim/scripts) or the source tree
+   !> (<source>/build/trainsim -> <source>/scripts); '' if none.
+   function find_script(name) result(path)
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable :: path, dir, candidates(:)
+      logical :: there
+      integer :: k
+      dir = exe_dir()
+      candidates = [character(len=4096) :: env_text('TRAINSIM_SCRIPTS')//'/'//name, &
+                    dir//'/../share/trainsim/scripts/'//name, dir//'/../scripts/'//name]
+      if (len(env_text('TRAINSIM_SCRIPTS')) == 0) candidates(1) = ''
+      path = ''
+      do k = 1, size(candidates)
+         if (len_trim(candidates(k)) == 0) cycle
+         inquire (file=trim(candidates(k)), exist=there)
+         if (there) then
+            path = trim(candidates(k))
+            return
+         end if
+      end do
+   end function find_script
+
+   !> Directory of the running executable (/proc/self/exe), '.' if unknown.
+   function exe_dir() result(dir)
+      character(len=:), allocatable :: dir
+      character(kind=c_char, len=4096) :: buf
+      integer(c_long) :: n
+      integer :: k
+      n = c_readlink('/proc/self/exe'//c_null_char, buf, int(len(buf), c_size_t))
+      dir = '.'
+      if (n <= 0 .or. n >= len(buf)) return
+      k = index(buf(1:n), '/', back=.true.)
+      if (k > 1) dir = buf(1:k - 1)
+   end function exe_dir
+
+   !> An environment variable's value ('' when unset).
+   function env_text(name) result(v)
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable :: v
+      integer :: n, st
+      call get_environment_variable(name, length=n, status=st)
+      v = ''
+      if (st /= 0 .or. n == 0) return
+      allocate (character(len=n) :: v)
+      call get_environment_variable(name, v)
+   end function env_text
+
+   !> `s` as one POSIX shell word: single-quoted, each ' written as '\''.
+   function quoted(s) result(q)
+      character(len=*), intent(in) :: s
+      character(len=:), allocatable :: q
+      integer :: k
+      q = "'"
+      do k = 1, len(s)
+         if (s(k:k) == "'") then
+            q = q//"'\''"
+         else
+            q = q//s(k:k)
+         end if
+      end do
+      q = q//"'"
+   end function quoted
 end program trainsim_main
