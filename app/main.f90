@@ -1,7 +1,7 @@
 !> trainsim: drive-train simulation with clearances (successor to TRAIN, Cook 1989).
 program trainsim_main
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
-   use, intrinsic :: iso_c_binding, only: c_int
+   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_long, c_size_t, c_null_char
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, err_numeric, err_interrupted
    use trainsim_interrupt, only: install_interrupt_handlers, interrupt_signal, signal_name
@@ -21,6 +21,10 @@ program trainsim_main
    use trainsim_prepare, only: prepare_model
    use trainsim_preload, only: preload_info_t
    use trainsim_sweep, only: sweep_options_t, sweep_summary_t, run_sweep
+   use trainsim_gear_calc, only: gear_input_t, gear_result_t, gear_calc, gear_report, &
+                                 key_input_t, key_result_t, key_calc, key_report
+   use trainsim_units, only: units_t, make_units
+   use trainsim_contact, only: fit_tight, fit_loose, fit_average
    implicit none
 
    character(len=:), allocatable :: cmd, deck_path, out_path
@@ -36,6 +40,14 @@ program trainsim_main
          import :: c_int
          integer(c_int), value :: status
       end subroutine c_exit_now
+      !> POSIX readlink(2) (ssize_t is a C long on the 64-bit Linux targets).
+      function c_readlink(path, buf, n) bind(C, name='readlink') result(r)
+         import :: c_char, c_long, c_size_t
+         character(kind=c_char), intent(in) :: path(*)
+         character(kind=c_char), intent(out) :: buf(*)
+         integer(c_size_t), value :: n
+         integer(c_long) :: r
+      end function c_readlink
    end interface
 
    nargs = command_argument_count()
@@ -52,6 +64,18 @@ program trainsim_main
       write (output_unit, '(a)') 'trainsim '//version_string
       call quit(0)
    case ('run', 'modes', 'sweep')
+   case ('gear', 'key')
+      if (nargs >= 2) then
+         select case (arg(2))
+         case ('-h', '--help')
+            call command_usage(cmd, output_unit)
+            call quit(0)
+         end select
+      end if
+      if (cmd == 'gear') call do_gear()
+      if (cmd == 'key') call do_key()
+   case ('export', 'plot')
+      call do_script()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)
@@ -249,6 +273,14 @@ contains
          '                                            run can reach (what `run` checks dt against)', &
          '                                --preload   about the static wind-up under the loads (contacts', &
          '                                            closed on their loaded faces; its angles printed)', &
+         '  trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', &
+         '                                spur gear constants (App. E) and a deck fragment', &
+         '  trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', &
+         '                                keyed-joint stiffness curve (Ch. IV) and a deck fragment', &
+         '  trainsim export FILE.h5 QUANTITY ... | --events | --metrics | --summary json | --spectrum', &
+         '                                CSV/JSON of a history (scripts/trainsim_export.py --help)', &
+         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR  -o OUT.png|pdf|svg', &
+         '                                figures of a history (scripts/trainsim_plot.py --help)', &
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
@@ -296,6 +328,36 @@ contains
             '  --stiffest  = --closed --zone two-pair: the stiffest state a run can reach', &
             '  -h, --help  this text', '', &
             'exit status: 0 success, 2 bad input or file'
+      case ('gear')
+         write (unit, '(a)') 'usage: trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', '', &
+            'Spur gear constants from the geometry (App. E, eqs. 3.9 and 3.12): radii, addendum, length of', &
+            'action, base pitch, contact ratio, approach angle, gear ratio, pitch-disk inertias, mesh', &
+            'stiffness, and a deck fragment in TRAIN''s seven constants. Implausible geometry (a unit slip)', &
+            'is an error that names the likely slip.', '', &
+            '  --teeth N1 [N2]            teeth of the driver (and the driven gear)', &
+            '  --diametral-pitch P        1/in; or --module M in mm', &
+            '  --pressure-angle DEG       default 20', &
+            '  --face-width F             face width', &
+            '  --backlash B               total backlash along the line of action', &
+            '  --youngs-modulus E, --density RHO   material (steel by default)', &
+            '  --stiffness-per-width KW, --stiffness K   the mesh stiffness instead of eq. 3.9', &
+            '  --frequency HZ             the inertias that put each gear at HZ on the mesh', &
+            '  --approach-velocity V      Goldsmith''s e and the damping D of eq. 3.12 at V', &
+            '  --id ID, --units U         the fragment''s element id; in-lbf-s (default) or si', &
+            '  -h, --help                 this text', '', &
+            'exit status: 0 success, 2 bad input'
+      case ('key')
+         write (unit, '(a)') 'usage: trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', '', &
+            'The keyed-joint stiffness curve of Ch. IV (eqs. 4.35-4.37): torque, key force, lineal and', &
+            'angular stiffness for each fit, and a deck fragment.', '', &
+            '  --diameter D               shaft diameter', &
+            '  --key-length L             key length', &
+            '  --key-width W, --key-height H, --clearance C   key section and play', &
+            '  --fit F                    tight, loose, average or all (default)', &
+            '  --torque-max T, --points N the range and resolution of the table', &
+            '  --id ID, --units U         the fragment''s element id; in-lbf-s (default) or si', &
+            '  -h, --help                 this text', '', &
+            'exit status: 0 success, 2 bad input'
       end select
    end subroutine command_usage
 
@@ -464,4 +526,248 @@ contains
       if (len(model%run%output) > 0) write (output_unit, '(a)') 'history written to '//model%run%output
       flush (output_unit)
    end subroutine do_run
+
+   ! ------------------------------------------------ trainsim gear / trainsim key
+
+   !> Value of option arg(k) read from arg(k+1) as a real (exit 2 naming the option if it is not one).
+   real(wp) function real_value(k) result(x)
+      integer, intent(in) :: k
+      integer :: ios
+      character(len=:), allocatable :: text
+      if (k >= nargs) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: option '//arg(k)//' needs a number'
+         call quit(2)
+      end if
+      text = arg(k + 1)
+      read (text, *, iostat=ios) x
+      if (ios /= 0 .or. verify(trim(text), '0123456789+-.eEdD') > 0 .or. len_trim(text) == 0) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: option '//arg(k)//" needs a number, got '"// &
+            arg(k + 1)//"'"
+         call quit(2)
+      end if
+   end function real_value
+
+   !> Value of option arg(k) as text (exit 2 if it is missing).
+   function text_value(k) result(s)
+      integer, intent(in) :: k
+      character(len=:), allocatable :: s
+      if (k >= nargs) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: option '//arg(k)//' needs a value'
+         call quit(2)
+      end if
+      s = arg(k + 1)
+   end function text_value
+
+   !> --units NAME for the calculators.
+   subroutine calc_units(k, units)
+      integer, intent(in) :: k
+      type(units_t), intent(out) :: units
+      type(error_t), allocatable :: err
+      call make_units(text_value(k), units, err)
+      if (allocated(err)) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: --units: '//err%message
+         call quit(2)
+      end if
+   end subroutine calc_units
+
+   !> in-lbf-s, the calculators' default.
+   subroutine default_units(units)
+      type(units_t), intent(out) :: units
+      type(error_t), allocatable :: err
+      call make_units('in-lbf-s', units, err)
+   end subroutine default_units
+
+   !> trainsim gear: spur gear constants from the geometry (App. E) and a deck fragment.
+   subroutine do_gear()
+      type(gear_input_t) :: g
+      type(gear_result_t) :: r
+      type(error_t), allocatable :: err
+      integer :: k, j
+      call default_units(g%units)
+      k = 2
+      do while (k <= nargs)
+         select case (arg(k))
+         case ('--teeth')
+            g%teeth1 = real_value(k)
+            g%teeth2 = g%teeth1
+            k = k + 1
+            if (k < nargs) then   ! a second number: the driven gear's teeth
+               if (verify(trim(arg(k + 1)), '0123456789.eE+') == 0) then
+                  g%teeth2 = real_value(k)
+                  k = k + 1
+               end if
+            end if
+         case ('--diametral-pitch'); g%diametral_pitch = real_value(k); k = k + 1
+         case ('--module'); g%module_mm = real_value(k); k = k + 1
+         case ('--pressure-angle'); g%pressure_angle_deg = real_value(k); k = k + 1
+         case ('--face-width'); g%face_width = real_value(k); k = k + 1
+         case ('--backlash'); g%backlash = real_value(k); k = k + 1
+         case ('--youngs-modulus'); g%youngs_modulus = real_value(k); k = k + 1
+         case ('--density'); g%density = real_value(k); k = k + 1
+         case ('--stiffness-per-width'); g%stiffness_per_width = real_value(k); k = k + 1
+         case ('--stiffness'); g%stiffness = real_value(k); k = k + 1
+         case ('--frequency'); g%target_frequency = real_value(k); k = k + 1
+         case ('--approach-velocity'); g%approach_velocity = real_value(k); k = k + 1
+         case ('--id'); g%id = text_value(k); k = k + 1
+         case ('--units'); call calc_units(k, g%units); k = k + 1
+         case default
+            write (error_unit, '(a)') "trainsim: gear: error: unknown option '"//arg(k)//"'; valid: --teeth N1 [N2], "// &
+               '--diametral-pitch P | --module M, --pressure-angle DEG, --face-width F, --backlash B, --units U, '// &
+               '--youngs-modulus E, --density RHO, --stiffness-per-width KW, --stiffness K, --frequency HZ, '// &
+               '--approach-velocity V, --id ID'
+            call quit(2)
+         end select
+         k = k + 1
+      end do
+      call gear_calc(g, r, err)
+      if (allocated(err)) call fail(err)
+      do j = 1, size(r%warnings)
+         write (error_unit, '(a)') 'trainsim: '//r%warnings(j)%s
+      end do
+      call gear_report(g, r, output_unit)
+      call quit(0)
+   end subroutine do_gear
+
+   !> trainsim key: the keyed joint's stiffness curve (Ch. IV) and a deck fragment.
+   subroutine do_key()
+      type(key_input_t) :: q
+      type(key_result_t) :: r
+      type(error_t), allocatable :: err
+      integer :: k, j
+      call default_units(q%units)
+      k = 2
+      do while (k <= nargs)
+         select case (arg(k))
+         case ('--diameter'); q%diameter = real_value(k); k = k + 1
+         case ('--key-length'); q%key_length = real_value(k); k = k + 1
+         case ('--key-width'); q%key_width = real_value(k); k = k + 1
+         case ('--key-height'); q%key_height = real_value(k); k = k + 1
+         case ('--clearance'); q%clearance = real_value(k); k = k + 1
+         case ('--torque-max'); q%torque_max = real_value(k); k = k + 1
+         case ('--points'); q%points = nint(real_value(k)); k = k + 1
+         case ('--id'); q%id = text_value(k); k = k + 1
+         case ('--units'); call calc_units(k, q%units); k = k + 1
+         case ('--fit')
+            select case (text_value(k))
+            case ('tight'); q%fit = fit_tight
+            case ('loose'); q%fit = fit_loose
+            case ('average'); q%fit = fit_average
+            case ('all'); q%fit = 0
+            case default
+               write (error_unit, '(a)') "trainsim: key: error: unknown --fit '"//arg(k + 1)// &
+                  "'; valid: tight (eq. 4.35), loose (4.36), average (4.37), all"
+               call quit(2)
+            end select
+            k = k + 1
+         case default
+            write (error_unit, '(a)') "trainsim: key: error: unknown option '"//arg(k)//"'; valid: --diameter D, "// &
+               '--key-length L, --key-width W, --key-height H, --clearance C, --fit tight|loose|average|all, '// &
+               '--torque-max T, --points N, --units U, --id ID'
+            call quit(2)
+         end select
+         k = k + 1
+      end do
+      call key_calc(q, r, err)
+      if (allocated(err)) call fail(err)
+      do j = 1, size(r%warnings)
+         write (error_unit, '(a)') 'trainsim: '//r%warnings(j)%s
+      end do
+      call key_report(q, r, output_unit)
+      call quit(0)
+   end subroutine do_key
+
+   ! ------------------------------------------ trainsim export / trainsim plot
+
+   !> trainsim export|plot ARGS: run scripts/trainsim_<cmd>.py ARGS with Python
+   !> (docs/output-format.md, "Export and plots"): $TRAINSIM_PYTHON or /usr/bin/python3.
+   !> The exit status is the script's.
+   subroutine do_script()
+      character(len=:), allocatable :: script, line, python
+      integer :: k, stat, cstat
+      script = find_script('trainsim_'//cmd//'.py')
+      if (len(script) == 0) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: cannot find trainsim_'//cmd//'.py (looked in '// &
+            '$TRAINSIM_SCRIPTS, <prefix>/share/trainsim/scripts and <build>/../scripts beside the executable)'
+         call quit(2)
+      end if
+      python = env_text('TRAINSIM_PYTHON')
+      if (len(python) == 0) python = '/usr/bin/python3'
+      line = quoted(python)//' '//quoted(script)
+      do k = 2, nargs
+         line = line//' '//quoted(arg(k))
+      end do
+      flush (output_unit)
+      call execute_command_line(line, exitstat=stat, cmdstat=cstat)
+      if (cstat /= 0) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: cannot run '//python//' '//script
+         call quit(2)
+      end if
+      call quit(stat)
+   end subroutine do_script
+
+   !> The first existing `name` in $TRAINSIM_SCRIPTS, the installed share directory
+   !> (<prefix>/bin/trainsim -> <prefix>/share/trainsim/scripts) or the source tree
+   !> (<source>/build/trainsim -> <source>/scripts); '' if none.
+   function find_script(name) result(path)
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable :: path, dir
+      character(len=4096) :: candidates(3)
+      logical :: there
+      integer :: k
+      dir = exe_dir()
+      candidates(1) = env_text('TRAINSIM_SCRIPTS')//'/'//name
+      candidates(2) = dir//'/../share/trainsim/scripts/'//name
+      candidates(3) = dir//'/../scripts/'//name
+      if (len(env_text('TRAINSIM_SCRIPTS')) == 0) candidates(1) = ''
+      path = ''
+      do k = 1, size(candidates)
+         if (len_trim(candidates(k)) == 0) cycle
+         inquire (file=trim(candidates(k)), exist=there)
+         if (there) then
+            path = trim(candidates(k))
+            return
+         end if
+      end do
+   end function find_script
+
+   !> Directory of the running executable (/proc/self/exe), '.' if unknown.
+   function exe_dir() result(dir)
+      character(len=:), allocatable :: dir
+      character(kind=c_char, len=4096) :: buf
+      integer(c_long) :: n
+      integer :: k
+      n = c_readlink('/proc/self/exe'//c_null_char, buf, int(len(buf), c_size_t))
+      dir = '.'
+      if (n <= 0 .or. n >= len(buf)) return
+      k = index(buf(1:n), '/', back=.true.)
+      if (k > 1) dir = buf(1:k - 1)
+   end function exe_dir
+
+   !> An environment variable's value ('' when unset).
+   function env_text(name) result(v)
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable :: v
+      integer :: n, st
+      call get_environment_variable(name, length=n, status=st)
+      v = ''
+      if (st /= 0 .or. n == 0) return
+      allocate (character(len=n) :: v)
+      call get_environment_variable(name, v)
+   end function env_text
+
+   !> `s` as one POSIX shell word: single-quoted, each ' written as '\''.
+   function quoted(s) result(q)
+      character(len=*), intent(in) :: s
+      character(len=:), allocatable :: q
+      integer :: k
+      q = "'"
+      do k = 1, len(s)
+         if (s(k:k) == "'") then
+            q = q//"'\''"
+         else
+            q = q//s(k:k)
+         end if
+      end do
+      q = q//"'"
+   end function quoted
 end program trainsim_main

@@ -187,13 +187,16 @@ contains
    function hel_params(self) result(p)
       class(helical_gear_t), intent(in) :: self
       type(param_list_t) :: p
-      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
-      ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), string_t('profile_contact_ratio'), &
-                              string_t('face_contact_ratio'), string_t('base_helix_angle_rad'), string_t('transverse_base_pitch'), &
-                              string_t('face_width'), string_t('youngs_modulus'), string_t('stiffness_per_length'), &
-                              string_t('mean_mesh_stiffness'), string_t('approach_angle'), string_t('half_backlash')], &
-                       values=[self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, self%face, self%youngs, &
-                               self%cl%law%k, self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b])
+      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
+      p = param_list_t(names=[string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), &
+                       string_t('profile_contact_ratio'), string_t('face_contact_ratio'), &
+                       string_t('base_helix_angle_rad'), string_t('transverse_base_pitch'), &
+                       string_t('face_width'), string_t('youngs_modulus'), string_t('stiffness_per_length'), &
+                       string_t('mean_mesh_stiffness'), string_t('approach_angle'), &
+                       string_t('half_backlash'), string_t('gear_ratio'), string_t('total_contact_ratio')], &
+                       values=[self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, &
+                        self%face, self%youngs, self%cl%law%k, &
+                        self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b, &
+                        self%cl%r2/self%cl%r1, self%mp + self%mf])
    end function hel_params
 end module trainsim_el_helical_gear

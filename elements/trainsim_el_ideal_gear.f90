@@ -123,9 +123,10 @@ contains
    function gear_params(self) result(p)
       class(ideal_gear_t), intent(in) :: self
       type(param_list_t) :: p
-      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
-      ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven')], &
-                       values=[self%k, self%r1, self%r2])
+      ! derived: gear_ratio = omega_driver / omega_driven = r2 / r1
+      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
+      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), &
+                       string_t('gear_ratio')], &
+                       values=[self%k, self%r1, self%r2, self%r2/self%r1])
    end function gear_params
 end module trainsim_el_ideal_gear

@@ -175,13 +175,16 @@ contains
    function key_params(self) result(p)
       class(keyed_joint_t), intent(in) :: self
       type(param_list_t) :: p
-      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
-      ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('diameter'), string_t('half_clearance'), string_t('stiffness'), string_t('friction'), &
-                              string_t('phi'), string_t('load_radius'), string_t('friction_angle'), string_t('min_approach_velocity'), &
-                              string_t('friction_velocity'), string_t('friction_capacity_per_hub_torque')], &
+      ! derived: angular stiffness k (d/2)^2 (torque/rad)
+      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
+      p = param_list_t(names=[string_t('diameter'), string_t('half_clearance'), string_t('stiffness'), &
+                       string_t('friction'), string_t('phi'), string_t('load_radius'), &
+                       string_t('friction_angle'), string_t('min_approach_velocity'), &
+                       string_t('friction_velocity'), string_t('friction_capacity_per_hub_torque'), &
+                       string_t('angular_stiffness')], &
                        values=[self%diameter, self%cl%b, self%cl%law%k, self%mu, self%phi, self%load_radius, &
-                               self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor])
+                        self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor, &
+                        self%cl%law%k*(0.5_wp*self%diameter)**2])
       if (self%cl%law%fit /= 0) then
          p%names = [p%names, string_t('stiffness_fit'), string_t('key_length')]
          p%values = [p%values, real(self%cl%law%fit, wp), self%key_length]

@@ -363,14 +363,19 @@ contains
    function spur_params(self) result(p)
       class(spur_gear_t), intent(in) :: self
       type(param_list_t) :: p
-      ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
-      ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), &
-                              string_t('contact_ratio'), string_t('approach_angle'), string_t('half_backlash'), &
-                              string_t('two_pair_factor'), string_t('truncate_zones'), string_t('min_approach_velocity'), &
-                              string_t('initial_contact_velocity')], &
-                       values=[self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%cl%b, self%c2, &
-                               merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, self%cl%law%v_initial])
+      ! derived: gear_ratio = omega_driver / omega_driven = r2 / r1; base pitch 2 pi r1 / N;
+      ! c2 k; the driver angle of one tooth, 2 pi / N
+      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
+      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), &
+                       string_t('teeth'), string_t('contact_ratio'), string_t('approach_angle'), &
+                       string_t('half_backlash'), string_t('two_pair_factor'), string_t('truncate_zones'), &
+                       string_t('min_approach_velocity'), string_t('initial_contact_velocity'), &
+                       string_t('gear_ratio'), string_t('base_pitch'), string_t('two_pair_stiffness'), &
+                       string_t('mesh_period_angle')], &
+                       values=[self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, &
+                        self%cl%b, self%c2, merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, &
+                        self%cl%law%v_initial, self%cl%r2/self%cl%r1, two_pi*self%cl%r1/self%teeth, &
+                        self%c2*self%cl%law%k, two_pi/self%teeth])
       if (self%pitch_module > 0.0_wp) then
          p%names = [p%names, string_t('teeth_driven'), string_t('module_length'), string_t('pressure_angle_rad'), &
                     string_t('face_width')]

@@ -164,7 +164,41 @@ def check(f):
     if c.require("completed" in rs.attrs, "/run_stats@completed missing"):
         c.require(int(rs.attrs["completed"]) in (0, 1), "/run_stats@completed is not 0/1")
 
+    check_self_description(f, c, n)
     return c.problems
+
+
+def check_self_description(f, c, n):
+    """Every dataset has a `units` str; every 2-D series has column names and units and
+    /time attached as the dimension scale of its rows; every string reads as str."""
+    def visit(name, obj):
+        for k, v in obj.attrs.items():
+            if name == "time" and k in ("CLASS", "NAME"):
+                continue   # written by HDF5's dimension-scale library (H5DS) as fixed-length strings
+            if isinstance(v, (bytes, np.bytes_)):
+                c.require(False, f"/{name}@{k} reads as bytes, not str (fixed-length string)")
+            elif isinstance(v, np.ndarray) and v.dtype.kind in "SO" and k != "DIMENSION_LIST" \
+                    and k != "REFERENCE_LIST":
+                c.require(all(isinstance(x, str) for x in v.tolist()), f"/{name}@{k} entries are not str")
+        if not isinstance(obj, h5py.Dataset):
+            return
+        u = obj.attrs.get("units")
+        c.require(isinstance(u, str) and len(u) > 0, f"/{name} has no units attribute (str)")
+        if obj.dtype.kind in "SO":
+            c.require(h5py.check_string_dtype(obj.dtype) is not None and
+                      h5py.check_string_dtype(obj.dtype).length is None,
+                      f"/{name} is not a variable-length string dataset")
+            c.require(all(isinstance(x, str) for x in obj.asstr()[...].tolist()), f"/{name} strings are not str")
+        if obj.ndim == 2 and name != "time":
+            cols = obj.shape[1]
+            for a in ("column_names", "column_units"):
+                if c.require(a in obj.attrs, f"/{name}@{a} missing"):
+                    c.require(len(obj.attrs[a]) == cols, f"/{name}@{a} has {len(obj.attrs[a])} entries for {cols}")
+            c.require(len(obj.dims[0]) == 1 and obj.dims[0][0].name == "/time",
+                      f"/time is not the dimension scale of the rows of /{name}")
+    visit("", f)
+    f.visititems(visit)
+    c.require(h5py.h5ds.is_scale(f["time"].id), "/time is not a dimension scale")
 
 
 def main(argv):

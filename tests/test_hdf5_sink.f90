@@ -1,12 +1,12 @@
 !> Tests of the HDF5 output sink: write a small run, read it back with the HDF5 Fortran
 !> API, and check the error paths (bad directory, abort, misuse).
 program test_hdf5_sink
-   use, intrinsic :: iso_c_binding, only: c_int
+   use, intrinsic :: iso_c_binding, only: c_int, c_ptr, c_char, c_size_t, c_loc, c_f_pointer, c_associated
    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5fopen_f, h5fclose_f, H5F_ACC_RDONLY_F, &
       h5dopen_f, h5dclose_f, h5dread_f, h5dget_space_f, h5dget_type_f, h5dget_create_plist_f, &
       h5sget_simple_extent_ndims_f, h5sget_simple_extent_dims_f, h5sclose_f, H5S_UNLIMITED_F, &
       h5aopen_by_name_f, h5aread_f, h5aclose_f, h5aget_type_f, h5aget_space_f, &
-      h5tget_size_f, h5tclose_f, h5pget_nfilters_f, h5pclose_f, h5eset_auto_f, &
+      h5tget_size_f, h5tclose_f, h5tis_variable_str_f, h5tget_cset_f, H5T_CSET_UTF8_F, h5pget_nfilters_f, h5pclose_f, h5eset_auto_f, &
       h5fget_obj_count_f, H5F_OBJ_ALL_F, &
       H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, h5kind_to_type, H5_INTEGER_KIND
    use trainsim_kinds, only: wp, i8
@@ -23,6 +23,11 @@ program test_hdf5_sink
          import :: c_int
          integer(c_int) :: pid
       end function c_getpid
+      function c_strlen(p) bind(C, name='strlen') result(n)
+         import :: c_ptr, c_size_t
+         type(c_ptr), value :: p
+         integer(c_size_t) :: n
+      end function c_strlen
    end interface
 
    integer, parameter :: n_samples = 600   ! crosses the 256-row block boundary twice
@@ -735,87 +740,110 @@ contains
    end function until_nul
 
    !> Scalar fixed-length string attribute.
+   !> Texts behind an array of C string pointers (variable-length strings as read).
+   function from_pointers(ptrs) result(list)
+      type(c_ptr), intent(in) :: ptrs(:)
+      type(string_t), allocatable :: list(:)
+      character(kind=c_char), pointer :: chars(:)
+      integer :: i, j, n
+      allocate (list(size(ptrs)))
+      do i = 1, size(ptrs)
+         n = 0
+         if (c_associated(ptrs(i))) n = int(c_strlen(ptrs(i)))
+         if (n == 0) then
+            list(i)%s = ''
+            cycle
+         end if
+         call c_f_pointer(ptrs(i), chars, [n])
+         allocate (character(len=n) :: list(i)%s)
+         do j = 1, n
+            list(i)%s(j:j) = chars(j)
+         end do
+      end do
+   end function from_pointers
+
+   !> Scalar variable-length string attribute (the writer's only string form).
    subroutine read_str_attr(fid, obj, name, txt)
       integer(hid_t), intent(in) :: fid
       character(len=*), intent(in) :: obj, name
       character(len=:), allocatable, intent(out) :: txt
-      integer(hid_t) :: a, t
-      integer(size_t) :: sz
-      integer :: hdferr
+      type(string_t), allocatable :: list(:)
+      call read_vlen(fid, obj, name, .true., list)
       txt = '<missing>'
-      call h5aopen_by_name_f(fid, obj, name, a, hdferr)
-      call check('attribute '//obj//'@'//name//' exists', hdferr >= 0)
-      if (hdferr < 0) return
-      call h5aget_type_f(a, t, hdferr)
-      call h5tget_size_f(t, sz, hdferr)
-      block
-         character(len=sz) :: raw
-         call h5aread_f(a, t, raw, [1_hsize_t], hdferr)
-         call check('read '//obj//'@'//name, hdferr >= 0)
-         txt = until_nul(raw)
-      end block
-      call h5tclose_f(t, hdferr)
-      call h5aclose_f(a, hdferr)
+      if (size(list) == 1) txt = list(1)%s
    end subroutine read_str_attr
 
-   !> 1-D fixed-length string attribute.
+   !> 1-D variable-length string attribute.
    subroutine read_str_list(fid, obj, name, list)
       integer(hid_t), intent(in) :: fid
       character(len=*), intent(in) :: obj, name
       type(string_t), allocatable, intent(out) :: list(:)
-      integer(hid_t) :: a, t, sp
-      integer(size_t) :: sz
-      integer(hsize_t) :: dims(1), maxdims(1)
-      integer :: hdferr, i
-      call h5aopen_by_name_f(fid, obj, name, a, hdferr)
-      call check('attribute '//obj//'@'//name//' exists', hdferr >= 0)
-      if (hdferr < 0) return
-      call h5aget_type_f(a, t, hdferr)
-      call h5tget_size_f(t, sz, hdferr)
-      call h5aget_space_f(a, sp, hdferr)
-      call h5sget_simple_extent_dims_f(sp, dims, maxdims, hdferr)
-      call h5sclose_f(sp, hdferr)
-      allocate (list(dims(1)))
-      if (dims(1) > 0) then
-         block
-            character(len=sz) :: raw(dims(1))
-            call h5aread_f(a, t, raw, dims, hdferr)
-            call check('read '//obj//'@'//name, hdferr >= 0)
-            do i = 1, size(raw)
-               list(i)%s = until_nul(raw(i))
-            end do
-         end block
-      end if
-      call h5tclose_f(t, hdferr)
-      call h5aclose_f(a, hdferr)
+      call read_vlen(fid, obj, name, .true., list)
    end subroutine read_str_list
 
-   !> 1-D fixed-length string dataset.
+   !> 1-D variable-length string dataset.
    subroutine read_str_dset(fid, name, list)
       integer(hid_t), intent(in) :: fid
       character(len=*), intent(in) :: name
       type(string_t), allocatable, intent(out) :: list(:)
-      integer(hid_t) :: d, t
-      integer(size_t) :: sz
-      integer(hsize_t), allocatable :: dims(:), maxdims(:)
-      integer :: hdferr, i
-      call dset_dims(fid, name, dims, maxdims)
-      if (size(dims) /= 1) return
-      call h5dopen_f(fid, name, d, hdferr)
-      call h5dget_type_f(d, t, hdferr)
-      call h5tget_size_f(t, sz, hdferr)
-      allocate (list(dims(1)))
-      block
-         character(len=sz) :: raw(dims(1))
-         call h5dread_f(d, t, raw, dims, hdferr)
-         call check('read '//name, hdferr >= 0)
-         do i = 1, size(raw)
-            list(i)%s = until_nul(raw(i))
-         end do
-      end block
-      call h5tclose_f(t, hdferr)
-      call h5dclose_f(d, hdferr)
+      call read_vlen(fid, name, '', .false., list)
    end subroutine read_str_dset
+
+   !> Variable-length UTF-8 strings of an attribute `obj@name` or a dataset `obj`.
+   subroutine read_vlen(fid, obj, name, is_attr, list)
+      integer(hid_t), intent(in) :: fid
+      character(len=*), intent(in) :: obj, name
+      logical, intent(in) :: is_attr
+      type(string_t), allocatable, intent(out) :: list(:)
+      integer(hid_t) :: h, t, sp
+      integer(hsize_t) :: dims(1), maxdims(1)
+      integer :: hdferr, rank, cset
+      logical :: vlen
+      type(c_ptr), allocatable, target :: ptrs(:)
+      type(c_ptr) :: buf
+      allocate (list(0))
+      if (is_attr) then
+         call h5aopen_by_name_f(fid, obj, name, h, hdferr)
+         call check('attribute '//obj//'@'//name//' exists', hdferr >= 0)
+         if (hdferr < 0) return
+         call h5aget_type_f(h, t, hdferr)
+         call h5aget_space_f(h, sp, hdferr)
+      else
+         call h5dopen_f(fid, obj, h, hdferr)
+         call check('dataset '//obj//' exists', hdferr >= 0)
+         if (hdferr < 0) return
+         call h5dget_type_f(h, t, hdferr)
+         call h5dget_space_f(h, sp, hdferr)
+      end if
+      call h5tis_variable_str_f(t, vlen, hdferr)
+      call check(obj//'@'//name//' is a variable-length string (h5py reads str)', vlen)
+      call h5tget_cset_f(t, cset, hdferr)
+      call check(obj//'@'//name//' is marked UTF-8', cset == H5T_CSET_UTF8_F)
+      call h5sget_simple_extent_ndims_f(sp, rank, hdferr)
+      dims = 1
+      if (rank == 1) call h5sget_simple_extent_dims_f(sp, dims, maxdims, hdferr)
+      call h5sclose_f(sp, hdferr)
+      allocate (ptrs(dims(1)))
+      if (vlen .and. dims(1) > 0) then
+         buf = c_loc(ptrs)
+         if (is_attr) then
+            call h5aread_f(h, t, buf, hdferr)
+         else
+            call h5dread_f(h, t, buf, hdferr)
+         end if
+         call check('read '//obj//'@'//name, hdferr >= 0)
+         if (hdferr >= 0) list = from_pointers(ptrs)
+      else if (vlen) then
+         deallocate (list)
+         allocate (list(0))
+      end if
+      call h5tclose_f(t, hdferr)
+      if (is_attr) then
+         call h5aclose_f(h, hdferr)
+      else
+         call h5dclose_f(h, hdferr)
+      end if
+   end subroutine read_vlen
 
    subroutine read_int_attr(fid, obj, name, buf)
       integer(hid_t), intent(in) :: fid

@@ -14,7 +14,7 @@
 !> After any error the sink cleans up after itself (ids closed, its `.part` removed) and
 !> must be opened again before further use; `abort` is always safe to call.
 module trainsim_hdf5
-   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_char, c_null_char
+   use, intrinsic :: iso_c_binding, only: c_int, c_long, c_char, c_null_char, c_ptr, c_loc
    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, &
       h5fcreate_f, h5fclose_f, H5F_ACC_TRUNC_F, H5F_CLOSE_STRONG_F, H5F_LIBVER_V18_F, &
       h5pcreate_f, h5pclose_f, h5pset_fclose_degree_f, h5pset_libver_bounds_f, &
@@ -25,8 +25,9 @@ module trainsim_hdf5
       h5dcreate_f, h5dclose_f, h5dset_extent_f, h5dget_space_f, h5dwrite_f, &
       h5gcreate_f, h5gclose_f, h5acreate_f, h5awrite_f, h5aclose_f, &
       h5tcopy_f, h5tset_size_f, h5tset_strpad_f, h5tset_cset_f, h5tclose_f, &
-      H5T_FORTRAN_S1, H5T_STR_NULLTERM_F, H5T_CSET_UTF8_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, &
+      H5T_STRING, H5T_STR_NULLTERM_F, H5T_CSET_UTF8_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, &
       h5kind_to_type, H5_INTEGER_KIND
+   use h5ds, only: h5dsset_scale_f, h5dsattach_scale_f
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_io, err_internal
    use trainsim_strings, only: string_t, str
@@ -77,6 +78,10 @@ module trainsim_hdf5
       integer(hid_t), private :: file_id = -1
       integer(hid_t), private :: dset(n_ds) = -1
       integer, private :: n_states = 0, n_nodes = 0, n_el = 0, rows = 0
+      !> Units of the run (length, force, torque, energy) and of each element's
+      !> displacement and force columns (for the `units` attributes).
+      character(len=:), allocatable, private :: u_len, u_force, u_torque, u_energy
+      type(string_t), allocatable, private :: el_disp_units(:), el_force_units(:)
       integer, private :: n_buf = 0                ! samples in the block buffers
       integer(hsize_t), private :: n_written = 0   ! samples already in the file
       real(wp), allocatable, private :: b_time(:), b_states(:, :), b_theta(:, :), &
@@ -229,8 +234,8 @@ contains
          return
       end if
       call flush_block(self, err)
-      if (.not. allocated(err)) call write_events(self%file_id, events, err)
-      if (.not. allocated(err)) call write_metrics(self%file_id, metrics, err)
+      if (.not. allocated(err)) call write_events(self, events, err)
+      if (.not. allocated(err)) call write_metrics(self, metrics, err)
       if (.not. allocated(err)) call write_stats(self%file_id, stats, err)
       if (.not. allocated(err)) then
          do i = 1, n_ds
@@ -378,6 +383,7 @@ contains
       self%n_states = count_of(meta%state_names)
       self%n_nodes = count_of(meta%node_ids)
       self%n_el = count_of(meta%element_ids)
+      call set_units(self, meta)
       self%rows = self%block_rows
       self%n_buf = 0
       self%n_written = 0
@@ -420,23 +426,104 @@ contains
       call make_series(self%file_id, 'time', 1, 0, self%rows, H5T_NATIVE_DOUBLE, deflate, &
                        self%dset(ds_time), err)
       if (allocated(err)) return
+      call put_str_attr(self%dset(ds_time), 'units', 's', err)
+      if (allocated(err)) return
       call make_series(self%file_id, 'states', 2, self%n_states, self%rows, H5T_NATIVE_DOUBLE, deflate, &
                        self%dset(ds_states), err)
       if (allocated(err)) return
       call put_names_attr(self%dset(ds_states), 'names', meta%state_names, self%n_states, err)
+      if (allocated(err)) return
+      call label_columns(self%dset(ds_states), meta%state_names, state_units(self, meta%state_names), '1', err)
       if (allocated(err)) return
       call make_series(self%file_id, 'energy', 2, 5, self%rows, H5T_NATIVE_DOUBLE, deflate, &
                        self%dset(ds_energy), err)
       if (allocated(err)) return
       call put_fixed_names_attr(self%dset(ds_energy), 'names', energy_names, err)
       if (allocated(err)) return
+      call label_columns(self%dset(ds_energy), to_list(energy_names), same_units(5, self%u_energy), &
+                         self%u_energy, err)
+      if (allocated(err)) return
 
       call make_node_group(self, meta, deflate, err)
       if (allocated(err)) return
       call make_element_group(self, meta, deflate, err)
       if (allocated(err)) return
+      call attach_time_scale(self, err)
+      if (allocated(err)) return
       call alloc_buffers(self)
    end subroutine open_impl
+
+   !> Units of the run's unit system and of each element's displacement and force.
+   subroutine set_units(self, meta)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      integer :: i
+      character(len=:), allocatable :: d
+      if (opt_text(meta%units) == 'si') then
+         self%u_len = 'm'; self%u_force = 'N'; self%u_torque = 'N*m'; self%u_energy = 'J'
+      else
+         self%u_len = 'in'; self%u_force = 'lbf'; self%u_torque = 'lbf*in'; self%u_energy = 'lbf*in'
+      end if
+      self%el_disp_units = same_units(self%n_el, '')
+      self%el_force_units = same_units(self%n_el, '')
+      do i = 1, self%n_el
+         d = member_text(meta%element_disp_units, i)
+         if (len(d) == 0) d = 'rad'
+         self%el_disp_units(i)%s = d
+         ! an element whose displacement is an angle has a torque for its force (shaft, coupling)
+         if (d == 'rad') then
+            self%el_force_units(i)%s = self%u_torque
+         else
+            self%el_force_units(i)%s = self%u_force
+         end if
+      end do
+   end subroutine set_units
+
+   !> Unit of each state from its name (node.angle, node.speed, motor.current, energy.*).
+   function state_units(self, names) result(u)
+      type(hdf5_sink_t), intent(in) :: self
+      type(string_t), allocatable, intent(in) :: names(:)
+      type(string_t), allocatable :: u(:)
+      character(len=:), allocatable :: nm
+      integer :: i
+      allocate (u(self%n_states))
+      do i = 1, self%n_states
+         nm = member_text(names, i)
+         if (ends_with(nm, '.angle')) then
+            u(i)%s = 'rad'
+         else if (ends_with(nm, '.speed')) then
+            u(i)%s = 'rad/s'
+         else if (ends_with(nm, '.current')) then
+            u(i)%s = 'A'
+         else if (index(nm, 'energy.') == 1) then
+            u(i)%s = self%u_energy
+         else
+            u(i)%s = '1'
+         end if
+      end do
+   end function state_units
+
+   !> /time is the dimension scale of the time axis of every series.
+   subroutine attach_time_scale(self, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr, i
+      call h5dsset_scale_f(self%dset(ds_time), hdferr, 'time')
+      if (hdferr < 0) then
+         call fatal_error(err, 'cannot make /time a dimension scale', err_io)
+         return
+      end if
+      do i = 1, n_ds
+         if (i == ds_time) cycle
+         ! idx 1: the first C dimension (the rows, h5py's axis 0); the Fortran
+         ! wrapper of HDF5 1.10 passes idx - 1 unchanged (tests/check_h5_layout.py checks it)
+         call h5dsattach_scale_f(self%dset(i), self%dset(ds_time), 1, hdferr)
+         if (hdferr < 0) then
+            call fatal_error(err, 'cannot attach the /time dimension scale', err_io)
+            return
+         end if
+      end do
+   end subroutine attach_time_scale
 
    !> The run's own temporary file, created through a file-access list that closes
    !> it strongly and keeps the 1.8 format.
@@ -508,6 +595,10 @@ contains
                        self%dset(ds_theta), err)
       if (.not. allocated(err)) call make_series(grp, 'omega', 2, self%n_nodes, self%rows, &
                                                  H5T_NATIVE_DOUBLE, deflate, self%dset(ds_omega), err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_theta), meta%node_ids, same_units(self%n_nodes, 'rad'), &
+                                                   'rad', err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_omega), meta%node_ids, &
+                                                   same_units(self%n_nodes, 'rad/s'), 'rad/s', err)
       if (.not. allocated(err)) call put_names_attr(grp, 'ids', meta%node_ids, self%n_nodes, err)
       if (.not. allocated(err)) call put_names_attr(grp, 'types', meta%node_types, self%n_nodes, err)
       if (.not. allocated(err) .and. allocated(meta%node_params)) then
@@ -548,6 +639,18 @@ contains
                                                  H5T_NATIVE_INTEGER, deflate, self%dset(ds_contact), err)
       if (.not. allocated(err)) call make_series(grp, 'pairs', 2, self%n_el, self%rows, &
                                                  H5T_NATIVE_INTEGER, deflate, self%dset(ds_pairs), err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_tl), meta%element_ids, &
+                                                   same_units(self%n_el, self%u_torque), self%u_torque, err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_tr), meta%element_ids, &
+                                                   same_units(self%n_el, self%u_torque), self%u_torque, err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_disp), meta%element_ids, self%el_disp_units, &
+                                                   self%u_len, err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_force), meta%element_ids, self%el_force_units, &
+                                                   self%u_force, err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_contact), meta%element_ids, same_units(self%n_el, '1'), &
+                                                   '1', err)
+      if (.not. allocated(err)) call label_columns(self%dset(ds_pairs), meta%element_ids, same_units(self%n_el, '1'), &
+                                                   '1', err)
       if (.not. allocated(err)) call put_names_attr(grp, 'ids', meta%element_ids, self%n_el, err)
       if (.not. allocated(err)) call put_names_attr(grp, 'types', meta%element_types, self%n_el, err)
       if (.not. allocated(err)) call put_index_attr(grp, 'left', meta%element_left, self%n_el, err)
@@ -643,86 +746,98 @@ contains
    !> /events: one 1-D dataset per column (zero length when there are no events).
    !> /metrics: one 1-D dataset per figure, one entry per element (the order of
    !> /elements/ids), over t >= t_start + settle_time.
-   subroutine write_metrics(file_id, m, err)
-      integer(hid_t), intent(in) :: file_id
+   subroutine write_metrics(self, m, err)
+      type(hdf5_sink_t), intent(in) :: self
       type(element_metrics_t), intent(in) :: m(:)
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: grp
       real(wp) :: r(size(m))
       integer :: k(size(m))
-      call make_group(file_id, 'metrics', grp, err)
+      type(string_t), allocatable :: vel(:), tq(:), cnt(:), sec(:)
+      vel = per_second(self%el_disp_units)
+      tq = same_units(self%n_el, self%u_torque)
+      cnt = same_units(self%n_el, '1')
+      sec = same_units(self%n_el, 's')
+      call make_group(self%file_id, 'metrics', grp, err)
       if (allocated(err)) return
-      r = m%torque_min; call put_column_r(grp, 'torque_min', r, err)
-      r = m%torque_max; if (.not. allocated(err)) call put_column_r(grp, 'torque_max', r, err)
-      r = m%force_min; if (.not. allocated(err)) call put_column_r(grp, 'force_min', r, err)
-      r = m%force_max; if (.not. allocated(err)) call put_column_r(grp, 'force_max', r, err)
-      r = m%disp_min; if (.not. allocated(err)) call put_column_r(grp, 'displacement_min', r, err)
-      r = m%disp_max; if (.not. allocated(err)) call put_column_r(grp, 'displacement_max', r, err)
-      r = m%p2p_range; if (.not. allocated(err)) call put_column_r(grp, 'p2p_range', r, err)
-      r = m%p2p_mean; if (.not. allocated(err)) call put_column_r(grp, 'p2p_mean', r, err)
-      k = m%p2p_swings; if (.not. allocated(err)) call put_column_i(grp, 'p2p_swings', k, err)
-      k = m%impacts; if (.not. allocated(err)) call put_column_i(grp, 'impacts', k, err)
-      k = m%separations; if (.not. allocated(err)) call put_column_i(grp, 'separations', k, err)
-      k = m%zone_changes; if (.not. allocated(err)) call put_column_i(grp, 'zone_changes', k, err)
-      r = m%max_approach_velocity; if (.not. allocated(err)) call put_column_r(grp, 'max_approach_velocity', r, err)
-      r = m%max_peak_force; if (.not. allocated(err)) call put_column_r(grp, 'max_peak_force', r, err)
-      r = m%time_out_of_contact; if (.not. allocated(err)) call put_column_r(grp, 'time_out_of_contact', r, err)
+      r = m%torque_min; call put_column_r(grp, 'torque_min', r, err, tq)
+      r = m%torque_max; if (.not. allocated(err)) call put_column_r(grp, 'torque_max', r, err, tq)
+      r = m%force_min; if (.not. allocated(err)) call put_column_r(grp, 'force_min', r, err, self%el_force_units)
+      r = m%force_max; if (.not. allocated(err)) call put_column_r(grp, 'force_max', r, err, self%el_force_units)
+      r = m%disp_min; if (.not. allocated(err)) call put_column_r(grp, 'displacement_min', r, err, self%el_disp_units)
+      r = m%disp_max; if (.not. allocated(err)) call put_column_r(grp, 'displacement_max', r, err, self%el_disp_units)
+      r = m%p2p_range; if (.not. allocated(err)) call put_column_r(grp, 'p2p_range', r, err, self%el_disp_units)
+      r = m%p2p_mean; if (.not. allocated(err)) call put_column_r(grp, 'p2p_mean', r, err, self%el_disp_units)
+      k = m%p2p_swings; if (.not. allocated(err)) call put_column_i(grp, 'p2p_swings', k, err, cnt)
+      k = m%impacts; if (.not. allocated(err)) call put_column_i(grp, 'impacts', k, err, cnt)
+      k = m%separations; if (.not. allocated(err)) call put_column_i(grp, 'separations', k, err, cnt)
+      k = m%zone_changes; if (.not. allocated(err)) call put_column_i(grp, 'zone_changes', k, err, cnt)
+      r = m%max_approach_velocity; if (.not. allocated(err)) call put_column_r(grp, 'max_approach_velocity', r, err, vel)
+      r = m%max_peak_force; if (.not. allocated(err)) call put_column_r(grp, 'max_peak_force', r, err, self%el_force_units)
+      r = m%time_out_of_contact; if (.not. allocated(err)) call put_column_r(grp, 'time_out_of_contact', r, err, sec)
       call close_group(grp, err)
    end subroutine write_metrics
 
-   subroutine write_events(file_id, events, err)
-      integer(hid_t), intent(in) :: file_id
+   subroutine write_events(self, events, err)
+      type(hdf5_sink_t), intent(in) :: self
       type(event_t), intent(in) :: events(:)
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: grp
-      integer :: n, i, width
+      integer :: n, i
       real(wp) :: rcol(size(events))   ! contiguous copies of the columns
       integer :: icol(size(events))
+      type(string_t) :: names(size(events))
+      type(string_t), allocatable :: disp(:), force(:), vel(:), damp(:), one(:), sec(:), rad(:), rads(:)
 
       n = size(events)
-      call make_group(file_id, 'events', grp, err)
+      ! per-row units: each row takes its element's displacement and force units
+      allocate (disp(n), force(n), vel(n), damp(n))
+      do i = 1, n
+         if (events(i)%element >= 1 .and. events(i)%element <= self%n_el) then
+            disp(i) = self%el_disp_units(events(i)%element)
+            force(i) = self%el_force_units(events(i)%element)
+         else
+            disp(i)%s = '1'; force(i)%s = '1'
+         end if
+         vel(i)%s = disp(i)%s//'/s'
+         ! D of eq. (3.12) (force per displacement^2 per speed); a linear law's c is force*s/displacement
+         damp(i)%s = force(i)%s//'*s/'//disp(i)%s//'^2 (yang_sun D) or '//force(i)%s//'*s/'//disp(i)%s//' (linear c)'
+      end do
+      one = same_units(n, '1'); sec = same_units(n, 's'); rad = same_units(n, 'rad'); rads = same_units(n, 'rad/s')
+      call make_group(self%file_id, 'events', grp, err)
       if (allocated(err)) return
       rcol = events%t
-      call put_column_r(grp, 'time', rcol, err)
+      call put_column_r(grp, 'time', rcol, err, sec)
       icol = events%element
-      if (.not. allocated(err)) call put_column_i(grp, 'element', icol, err)
+      if (.not. allocated(err)) call put_column_i(grp, 'element', icol, err, one)
       icol = events%kind
-      if (.not. allocated(err)) call put_column_i(grp, 'kind', icol, err)
-      if (.not. allocated(err)) then
-         width = 1
-         do i = 1, n
-            width = max(width, len(ev_name(events(i)%kind)) + 1)
-         end do
-         block
-            character(len=width) :: names(n)
-            do i = 1, n
-               names(i) = null_padded(ev_name(events(i)%kind), width)
-            end do
-            call put_column_s(grp, 'kind_name', names, width, err)
-         end block
-      end if
+      if (.not. allocated(err)) call put_column_i(grp, 'kind', icol, err, one)
+      do i = 1, n
+         names(i)%s = ev_name(events(i)%kind)
+      end do
+      if (.not. allocated(err)) call put_column_s(grp, 'kind_name', names, err)
       rcol = events%approach_velocity
-      if (.not. allocated(err)) call put_column_r(grp, 'approach_velocity', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'approach_velocity', rcol, err, vel)
       rcol = events%restitution
-      if (.not. allocated(err)) call put_column_r(grp, 'restitution', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'restitution', rcol, err, one)
       rcol = events%damping
-      if (.not. allocated(err)) call put_column_r(grp, 'damping', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'damping', rcol, err, damp)
       rcol = events%peak_force
-      if (.not. allocated(err)) call put_column_r(grp, 'peak_force', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'peak_force', rcol, err, force)
       rcol = events%duration
-      if (.not. allocated(err)) call put_column_r(grp, 'duration', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'duration', rcol, err, sec)
       rcol = events%theta_left
-      if (.not. allocated(err)) call put_column_r(grp, 'theta_left', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'theta_left', rcol, err, rad)
       rcol = events%omega_left
-      if (.not. allocated(err)) call put_column_r(grp, 'omega_left', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'omega_left', rcol, err, rads)
       rcol = events%theta_right
-      if (.not. allocated(err)) call put_column_r(grp, 'theta_right', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'theta_right', rcol, err, rad)
       rcol = events%omega_right
-      if (.not. allocated(err)) call put_column_r(grp, 'omega_right', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'omega_right', rcol, err, rads)
       rcol = events%displacement
-      if (.not. allocated(err)) call put_column_r(grp, 'displacement', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'displacement', rcol, err, disp)
       rcol = events%force
-      if (.not. allocated(err)) call put_column_r(grp, 'force', rcol, err)
+      if (.not. allocated(err)) call put_column_r(grp, 'force', rcol, err, force)
       call close_group(grp, err)
    end subroutine write_events
 
@@ -939,74 +1054,205 @@ contains
       if (write_err < 0 .or. hdferr < 0) call fatal_error(err, 'cannot write events/'//name, err_io)
    end subroutine finish_column
 
-   subroutine put_column_r(loc, name, values, err)
+   !> 1-D column with its `units` (the common unit of `entry_units`, or `mixed`) and,
+   !> when the entries differ, one unit per entry in `entry_units`.
+   subroutine put_column_r(loc, name, values, err, entry_units)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
       real(wp), contiguous, intent(in) :: values(:)
       type(error_t), allocatable, intent(out) :: err
+      type(string_t), intent(in) :: entry_units(:)
       integer(hid_t) :: dset
       integer :: hdferr
       call make_column(loc, name, H5T_NATIVE_DOUBLE, size(values), dset, err)
       if (allocated(err)) return
       hdferr = 0
       if (size(values) > 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, values, [int(size(values), hsize_t)], hdferr)
+      if (hdferr >= 0) call put_entry_units(dset, entry_units, err)
+      if (allocated(err)) hdferr = -1
       call finish_column(dset, hdferr, name, err)
    end subroutine put_column_r
 
-   subroutine put_column_i(loc, name, values, err)
+   subroutine put_column_i(loc, name, values, err, entry_units)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
       integer, contiguous, intent(in) :: values(:)
       type(error_t), allocatable, intent(out) :: err
+      type(string_t), intent(in) :: entry_units(:)
       integer(hid_t) :: dset
       integer :: hdferr
       call make_column(loc, name, H5T_NATIVE_INTEGER, size(values), dset, err)
       if (allocated(err)) return
       hdferr = 0
       if (size(values) > 0) call h5dwrite_f(dset, H5T_NATIVE_INTEGER, values, [int(size(values), hsize_t)], hdferr)
+      if (hdferr >= 0) call put_entry_units(dset, entry_units, err)
+      if (allocated(err)) hdferr = -1
       call finish_column(dset, hdferr, name, err)
    end subroutine put_column_i
 
-   !> Column of fixed-length NULLTERM strings (`names` already null padded to `width`).
-   subroutine put_column_s(loc, name, names, width, err)
+   !> Column of variable-length UTF-8 strings (units '1').
+   subroutine put_column_s(loc, name, texts, err)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
-      character(len=*), contiguous, intent(in) :: names(:)
-      integer, intent(in) :: width
+      type(string_t), intent(in) :: texts(:)
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: dset, stype
       integer :: hdferr, hdferr2
-      call make_string_type(width, stype, err)
+      character(kind=c_char), allocatable, target :: pool(:)
+      type(c_ptr), allocatable, target :: ptrs(:)
+      call make_string_type(stype, err)
       if (allocated(err)) return
-      call make_column(loc, name, stype, size(names), dset, err)
+      call make_column(loc, name, stype, size(texts), dset, err)
       if (.not. allocated(err)) then
          hdferr = 0
-         if (size(names) > 0) call h5dwrite_f(dset, stype, names, [int(size(names), hsize_t)], hdferr)
+         if (size(texts) > 0) then
+            call vlen_pointers(texts, pool, ptrs)
+            call h5dwrite_f(dset, stype, c_loc(ptrs), hdferr)
+         end if
+         if (hdferr >= 0) call put_str_attr(dset, 'units', '1', err)
+         if (allocated(err)) hdferr = -1
          call finish_column(dset, hdferr, name, err)
       end if
       call h5tclose_f(stype, hdferr2)
    end subroutine put_column_s
 
-   !> Fixed-length, null-terminated C string type of `width` bytes (terminator included).
-   subroutine make_string_type(width, stype, err)
-      integer, intent(in) :: width
+   !> `units` = the entries' common unit ('mixed: see entry_units' when they differ,
+   !> with `entry_units` then listing them; '1' for an empty column).
+   subroutine put_entry_units(dset, units, err)
+      integer(hid_t), intent(in) :: dset
+      type(string_t), intent(in) :: units(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i
+      logical :: same
+      same = .true.
+      do i = 2, size(units)
+         if (units(i)%s /= units(1)%s) same = .false.
+      end do
+      if (size(units) == 0) then
+         call put_str_attr(dset, 'units', '1', err)
+      else if (same) then
+         call put_str_attr(dset, 'units', units(1)%s, err)
+      else
+         call put_str_attr(dset, 'units', 'mixed: see entry_units', err)
+         if (.not. allocated(err)) call put_list_attr(dset, 'entry_units', units, err)
+      end if
+   end subroutine put_entry_units
+
+   !> `column_names` and `column_units` of a 2-D series (one per column) and its `units`:
+   !> the columns' common unit, `mixed: see column_units`, or `empty_unit` with no columns.
+   subroutine label_columns(dset, names, units, empty_unit, err)
+      integer(hid_t), intent(in) :: dset
+      type(string_t), allocatable, intent(in) :: names(:)
+      type(string_t), intent(in) :: units(:)
+      character(len=*), intent(in) :: empty_unit
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i
+      logical :: same
+      call put_names_attr(dset, 'column_names', names, size(units), err)
+      if (allocated(err)) return
+      call put_list_attr(dset, 'column_units', units, err)
+      if (allocated(err)) return
+      same = .true.
+      do i = 2, size(units)
+         if (units(i)%s /= units(1)%s) same = .false.
+      end do
+      if (size(units) == 0) then
+         call put_str_attr(dset, 'units', empty_unit, err)
+      else if (same) then
+         call put_str_attr(dset, 'units', units(1)%s, err)
+      else
+         call put_str_attr(dset, 'units', 'mixed: see column_units', err)
+      end if
+   end subroutine label_columns
+
+   !> `n` copies of one unit.
+   pure function same_units(n, unit) result(list)
+      integer, intent(in) :: n
+      character(len=*), intent(in) :: unit
+      type(string_t) :: list(n)
+      integer :: i
+      do i = 1, n
+         list(i)%s = unit
+      end do
+   end function same_units
+
+   !> Each unit per second (speeds of displacements).
+   pure function per_second(units) result(list)
+      type(string_t), intent(in) :: units(:)
+      type(string_t) :: list(size(units))
+      integer :: i
+      do i = 1, size(units)
+         list(i)%s = units(i)%s//'/s'
+      end do
+   end function per_second
+
+   !> A character array as a list (trailing blanks dropped).
+   pure function to_list(names) result(list)
+      character(len=*), intent(in) :: names(:)
+      type(string_t), allocatable :: list(:)
+      integer :: i
+      allocate (list(size(names)))
+      do i = 1, size(names)
+         list(i)%s = trim(names(i))
+      end do
+   end function to_list
+
+   pure logical function ends_with(text, tail)
+      character(len=*), intent(in) :: text, tail
+      ends_with = .false.
+      if (len(text) >= len(tail)) ends_with = text(len(text) - len(tail) + 1:) == tail
+   end function ends_with
+
+   !> One buffer holding every text NUL-terminated, and a pointer to each (the
+   !> memory layout of an array of variable-length C strings).
+   subroutine vlen_pointers(texts, pool, ptrs)
+      type(string_t), intent(in) :: texts(:)
+      character(kind=c_char), allocatable, target, intent(out) :: pool(:)
+      type(c_ptr), allocatable, intent(out) :: ptrs(:)
+      integer :: i, j, k, total
+      total = 0
+      do i = 1, size(texts)
+         total = total + text_len(texts(i)) + 1
+      end do
+      allocate (pool(max(total, 1)), ptrs(size(texts)))
+      k = 1
+      do i = 1, size(texts)
+         ptrs(i) = c_loc(pool(k))
+         do j = 1, text_len(texts(i))
+            pool(k) = texts(i)%s(j:j)
+            k = k + 1
+         end do
+         pool(k) = c_null_char
+         k = k + 1
+      end do
+   end subroutine vlen_pointers
+
+   pure integer function text_len(t)
+      type(string_t), intent(in) :: t
+      text_len = 0
+      if (allocated(t%s)) text_len = len(t%s)
+   end function text_len
+
+   !> Variable-length, UTF-8 C string type (h5py reads it as str). The deck reader
+   !> accepts only UTF-8 text without NUL, so titles, ids and the deck are valid.
+   subroutine make_string_type(stype, err)
       integer(hid_t), intent(out) :: stype
       type(error_t), allocatable, intent(out) :: err
       integer :: hdferr, hdferr2
-      call h5tcopy_f(H5T_FORTRAN_S1, stype, hdferr)
+      call h5tcopy_f(H5T_STRING, stype, hdferr)
       if (hdferr < 0) then
          stype = -1
          call fatal_error(err, 'H5Tcopy failed for a string type', err_io)
          return
       end if
-      call h5tset_size_f(stype, int(width, size_t), hdferr)
-      if (hdferr >= 0) call h5tset_strpad_f(stype, H5T_STR_NULLTERM_F, hdferr)
-      ! deck text is checked to be UTF-8 (trainsim_deck), so ids and titles are too
+      ! the Fortran H5T_STRING is already a variable-length C string (setting its
+      ! size to H5T_VARIABLE again through h5tset_size_f breaks the VL writes)
+      call h5tset_strpad_f(stype, H5T_STR_NULLTERM_F, hdferr)
       if (hdferr >= 0) call h5tset_cset_f(stype, H5T_CSET_UTF8_F, hdferr)
       if (hdferr < 0) then
          call h5tclose_f(stype, hdferr2)
          stype = -1
-         call fatal_error(err, 'cannot set up a string type of '//str(width)//' bytes', err_io)
+         call fatal_error(err, 'cannot set up a variable-length string type', err_io)
       end if
    end subroutine make_string_type
 
@@ -1048,23 +1294,14 @@ contains
       if (write_err < 0 .or. hdferr < 0) call fatal_error(err, "cannot write attribute '"//name//"'", err_io)
    end subroutine finish_attr
 
-   !> Scalar string attribute (fixed length, NULLTERM; '' allowed).
+   !> Scalar string attribute (variable length, UTF-8; '' allowed).
    subroutine put_str_attr(loc, name, value, err)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name, value
       type(error_t), allocatable, intent(out) :: err
-      character(len=:), allocatable :: buf
-      integer(hid_t) :: stype, attr
-      integer :: hdferr, hdferr2
-      buf = value//c_null_char
-      call make_string_type(len(buf), stype, err)
-      if (allocated(err)) return
-      call make_attr(loc, name, stype, -1, attr, err)
-      if (.not. allocated(err)) then
-         call h5awrite_f(attr, stype, buf, [1_hsize_t], hdferr)
-         call finish_attr(attr, hdferr, name, err)
-      end if
-      call h5tclose_f(stype, hdferr2)
+      type(string_t) :: one(1)
+      one(1)%s = value
+      call write_str_attr(loc, name, one, .true., err)
    end subroutine put_str_attr
 
    !> 1-D string attribute from a list of `n` names (unallocated list: `n` empty strings).
@@ -1074,7 +1311,8 @@ contains
       type(string_t), allocatable, intent(in) :: list(:)
       integer, intent(in) :: n
       type(error_t), allocatable, intent(out) :: err
-      integer :: i, width
+      type(string_t) :: texts(n)
+      integer :: i
       if (allocated(list)) then
          if (size(list) /= n) then
             call fatal_error(err, 'run description: '//name//' has '//str(size(list))// &
@@ -1082,18 +1320,20 @@ contains
             return
          end if
       end if
-      width = 1
       do i = 1, n
-         width = max(width, len(member_text(list, i)) + 1)
+         texts(i)%s = member_text(list, i)
       end do
-      block
-         character(len=width) :: buf(n)
-         do i = 1, n
-            buf(i) = null_padded(member_text(list, i), width)
-         end do
-         call put_fixed_names_attr(loc, name, buf, err)
-      end block
+      call write_str_attr(loc, name, texts, .false., err)
    end subroutine put_names_attr
+
+   !> 1-D string attribute from a list.
+   subroutine put_list_attr(loc, name, texts, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      type(string_t), intent(in) :: texts(:)
+      type(error_t), allocatable, intent(out) :: err
+      call write_str_attr(loc, name, texts, .false., err)
+   end subroutine put_list_attr
 
    !> 1-D string attribute from a character array (trailing blanks dropped).
    subroutine put_fixed_names_attr(loc, name, names, err)
@@ -1101,22 +1341,33 @@ contains
       character(len=*), intent(in) :: name
       character(len=*), contiguous, intent(in) :: names(:)
       type(error_t), allocatable, intent(out) :: err
-      character(len=len(names) + 1) :: buf(size(names))
+      call write_str_attr(loc, name, to_list(names), .false., err)
+   end subroutine put_fixed_names_attr
+
+   !> A variable-length string attribute: scalar (one text) or 1-D.
+   subroutine write_str_attr(loc, name, texts, scalar, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      type(string_t), intent(in) :: texts(:)
+      logical, intent(in) :: scalar
+      type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: stype, attr
-      integer :: hdferr, hdferr2, i
-      do i = 1, size(names)
-         buf(i) = null_padded(trim(names(i)), len(buf))
-      end do
-      call make_string_type(len(buf), stype, err)
+      integer :: hdferr, hdferr2
+      character(kind=c_char), allocatable, target :: pool(:)
+      type(c_ptr), allocatable, target :: ptrs(:)
+      call make_string_type(stype, err)
       if (allocated(err)) return
-      call make_attr(loc, name, stype, size(buf), attr, err)
+      call make_attr(loc, name, stype, merge(-1, size(texts), scalar), attr, err)
       if (.not. allocated(err)) then
          hdferr = 0
-         if (size(buf) > 0) call h5awrite_f(attr, stype, buf, [int(size(buf), hsize_t)], hdferr)
+         if (size(texts) > 0) then
+            call vlen_pointers(texts, pool, ptrs)
+            call h5awrite_f(attr, stype, c_loc(ptrs), hdferr)
+         end if
          call finish_attr(attr, hdferr, name, err)
       end if
       call h5tclose_f(stype, hdferr2)
-   end subroutine put_fixed_names_attr
+   end subroutine write_str_attr
 
    !> 1-D integer attribute of `n` node indices (the list must be allocated when n > 0).
    subroutine put_index_attr(loc, name, list, n, err)
@@ -1263,15 +1514,6 @@ contains
    end subroutine close_plist
 
    ! ------------------------------------------------------------ small utilities
-
-   !> `text` followed by NUL characters up to `width`.
-   pure function null_padded(text, width) result(buf)
-      character(len=*), intent(in) :: text
-      integer, intent(in) :: width
-      character(len=width) :: buf
-      buf = repeat(c_null_char, width)
-      buf(1:min(len(text), width)) = text
-   end function null_padded
 
    !> Number of entries of an optional list.
    pure integer function count_of(list)
