@@ -517,6 +517,7 @@ contains
       end if
       if (len(model%run%output) > 0) then
          h5%path = model%run%output
+         h5%compression = model%run%compression
          call simulate(model, h5, res, err)
       else
          call simulate(model, none, res, err)

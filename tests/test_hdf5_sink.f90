@@ -193,6 +193,7 @@ contains
       call write_text_file(main_file, 'an older file that must be replaced')
       meta = small_meta()
       sink%path = main_file
+      sink%compression = 1   ! this file checks that compression works (the default is none)
       call sink%open(meta, err)
       call check_no_error('open', err)
       if (allocated(err)) return
@@ -263,7 +264,7 @@ contains
       call check('/elements/contact is 1 x 600', same(dims, [1, 600]))
       call dset_dims(fid, '/energy', dims, maxdims)
       call check('/energy is 5 x 600', same(dims, [5, 600]))
-      call check('/states is compressed', n_filters(fid, '/states') >= 1)
+      call check('/states is compressed (level 1 asked for)', n_filters(fid, '/states') >= 1)
 
       ! values on both sides of the block boundaries (256, 512) and the last, partial block
       call read_r1(fid, '/time', r1)
@@ -725,19 +726,6 @@ contains
       call check('read '//name, hdferr >= 0)
       call h5dclose_f(d, hdferr)
    end subroutine read_i2
-
-   !> Text up to the first NUL.
-   function until_nul(raw) result(txt)
-      character(len=*), intent(in) :: raw
-      character(len=:), allocatable :: txt
-      integer :: k
-      k = index(raw, achar(0))
-      if (k == 0) then
-         txt = raw
-      else
-         txt = raw(1:k - 1)
-      end if
-   end function until_nul
 
    !> Scalar fixed-length string attribute.
    !> Texts behind an array of C string pointers (variable-length strings as read).

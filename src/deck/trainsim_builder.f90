@@ -101,6 +101,12 @@ contains
          call g%get_real('event_tol', r%event_tol, err, default=0.0_wp); if (allocated(err)) return
          call g%get_real('settle_time', r%settle_time, err, default=0.0_wp); if (allocated(err)) return
          call g%get_logical('track_energy', r%track_energy, err, default=.true.); if (allocated(err)) return
+         call g%get_int('compression', r%compression, err, default=0); if (allocated(err)) return
+         if (r%compression < 0 .or. r%compression > 9) then
+            call fatal_error(err, g%where('compression')//': error: compression must be a zlib level in [0, 9] '// &
+                             '(0: none), got '//str(r%compression), err_input)
+            return
+         end if
          call g%get_string('jacobian', jac_kind, err, default='analytic'); if (allocated(err)) return
          select case (to_lower(jac_kind))
          case ('analytic'); r%analytic_jacobian = .true.
