@@ -8,13 +8,39 @@ module trainsim_model
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_signal, only: signal_t
-   use trainsim_node, only: node_slot_t
-   use trainsim_element, only: element_slot_t
+   use trainsim_node, only: node_t, node_slot_t
+   use trainsim_element, only: element_t, element_slot_t
    use trainsim_event, only: event_t, max_update_events
    implicit none
    private
 
    public :: model_t, run_settings_t, load_t
+
+   !> Kinds of node on the hot path.
+   integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
+
+   !> A node on the hot path: its kind, state offset and, for a plain inertia,
+   !> J and d; for a held node with a constant speed, that speed.
+   type :: fast_node_t
+      integer :: kind = nk_other
+      integer :: off = 0
+      logical :: const_speed = .false.
+      real(wp) :: j = 1.0_wp, d = 0.0_wp, w = 0.0_wp
+   end type fast_node_t
+
+   !> An element on the hot path: its nodes and, for a linear spring, k, c, r1, r2.
+   type :: fast_element_t
+      integer :: l = 0, r = 0, ng = 0
+      logical :: linear = .false.
+      real(wp) :: k = 0.0_wp, c = 0.0_wp, r1 = 1.0_wp, r2 = 1.0_wp
+   end type fast_element_t
+
+   !> A load on the hot path: its node and, when constant, its value.
+   type :: fast_load_t
+      integer :: node = 0
+      logical :: const = .false.
+      real(wp) :: v = 0.0_wp
+   end type fast_load_t
 
    !> Run conditions from the &run group.
    type :: run_settings_t
@@ -55,6 +81,17 @@ module trainsim_model
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
+      ! The hot path (`build_fast_path`, redone by `finalize` and at the start of
+      ! every run in `init_modes`, so a re-parameterised copy is current): nodes
+      ! that are plain inertias and elements that are linear springs (their
+      ! optional capabilities, checked against their own procedures) are
+      ! evaluated from these arrays, without calls through the polymorphic
+      ! objects; every other node and element is asked as before.
+      type(fast_node_t), allocatable, private :: fn(:)
+      type(fast_element_t), allocatable, private :: fe(:)
+      type(fast_load_t), allocatable, private :: fl(:)
+      integer, allocatable, private :: guard_els(:)        !< the elements that have guards
+      logical, private :: all_plain = .false.              !< every node is a free plain inertia
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -64,6 +101,9 @@ module trainsim_model
       procedure :: apply_loads => model_apply_loads
       procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
+      procedure :: element_guards => model_element_guards
+      procedure :: guard_element => model_guard_element
+      procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
       procedure :: apply_events => model_apply_events
       procedure :: any_contact => model_any_contact
@@ -110,7 +150,120 @@ contains
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
+      call self%build_fast_path()
    end subroutine model_finalize
+
+   !> Tables of the hot path from the nodes' and elements' current parameters.
+   !> A node that says it is a plain inertia (`plain_inertia`) or an element
+   !> that says it is a linear spring (`linear_spring`) is taken at its word
+   !> only if its own procedures agree at two probe points (a type extended
+   !> from one of them that changes its physics but not the claim is then
+   !> still asked through its procedures).
+   subroutine model_build_fast_path(self)
+      class(model_t), intent(inout) :: self
+      integer :: i, nn, ne
+      real(wp) :: j, d, k, c, r1, r2
+      logical :: plain, lin
+      real(wp), allocatable :: y(:), dydt(:)
+      nn = size(self%nodes)
+      ne = size(self%elements)
+      if (allocated(self%fn)) deallocate (self%fn)
+      allocate (self%fn(nn))
+      allocate (y(max(self%n_y, 1)), dydt(max(self%n_y, 1)))
+      self%all_plain = .true.
+      do i = 1, nn
+         self%fn(i)%off = self%nodes(i)%n%offset
+         if (self%speed_of(i) /= 0) then
+            self%fn(i)%kind = nk_held
+            self%fn(i)%const_speed = self%speeds(self%speed_of(i))%is_constant()
+            self%fn(i)%w = self%speeds(self%speed_of(i))%value(0.0_wp)
+         else
+            call self%nodes(i)%n%plain_inertia(plain, j, d)
+            if (plain) plain = plain_node_agrees(self%nodes(i)%n, j, d)
+            if (plain) then
+               self%fn(i)%kind = nk_plain
+               self%fn(i)%j = j
+               self%fn(i)%d = d
+            end if
+         end if
+         if (self%fn(i)%kind /= nk_plain) self%all_plain = .false.
+      end do
+      if (allocated(self%fe)) deallocate (self%fe)
+      allocate (self%fe(ne))
+      do i = 1, ne
+         associate (e => self%elements(i)%e)
+            self%fe(i)%l = e%left
+            self%fe(i)%r = e%right
+            self%fe(i)%ng = e%n_guards()
+            call e%linear_spring(lin, k, c, r1, r2)
+            if (lin) lin = linear_element_agrees(e, k, c, r1, r2)
+            self%fe(i)%linear = lin
+            if (lin) then
+               self%fe(i)%k = k; self%fe(i)%c = c; self%fe(i)%r1 = r1; self%fe(i)%r2 = r2
+            end if
+         end associate
+      end do
+      self%guard_els = pack([(i, i=1, ne)], self%fe(:)%ng > 0)
+      if (allocated(self%fl)) deallocate (self%fl)
+      allocate (self%fl(size(self%loads)))
+      do i = 1, size(self%loads)
+         self%fl(i)%node = self%loads(i)%node
+         self%fl(i)%const = self%loads(i)%torque%is_constant()
+         self%fl(i)%v = self%loads(i)%torque%value(0.0_wp)
+      end do
+   contains
+
+      !> The node's own procedures give what a plain inertia (J, d) would.
+      logical function plain_node_agrees(nd, jj, dd) result(ok)
+         class(node_t), intent(in) :: nd
+         real(wp), intent(in) :: jj, dd
+         real(wp) :: th, om, w
+         integer :: p, o
+         ok = nd%nstates() == 2 .and. jj > 0.0_wp .and. dd >= 0.0_wp
+         if (.not. ok) return
+         o = nd%offset
+         do p = 1, 2
+            y = 0.0_wp
+            y(o + 1) = 0.37_wp*p
+            y(o + 2) = -1.3_wp/p
+            w = y(o + 2)
+            dydt = 0.0_wp
+            call nd%derivatives(0.25_wp*p, y, 2.5_wp*p, dydt)
+            call nd%kinematics(y, th, om)
+            ok = ok .and. th == y(o + 1) .and. om == w .and. dydt(o + 1) == w &
+                 .and. close_to(dydt(o + 2), (2.5_wp*p - dd*w)/jj) &
+                 .and. close_to(nd%stored_energy(y), 0.5_wp*jj*w**2) &
+                 .and. close_to(nd%dissipation_power(y), dd*w**2) &
+                 .and. nd%input_power(0.25_wp*p, y) == 0.0_wp
+         end do
+      end function plain_node_agrees
+
+      !> The element's own procedures give what a linear spring (k, c, r1, r2) would.
+      logical function linear_element_agrees(e, kk, cc, rr1, rr2) result(ok)
+         class(element_t), intent(in) :: e
+         real(wp), intent(in) :: kk, cc, rr1, rr2
+         real(wp) :: x(4), tl, tr, dl, dv, f
+         integer :: p
+         ok = e%n_guards() == 0 .and. .not. e%needs_loads .and. .not. e%supplies_power
+         do p = 1, 2
+            if (.not. ok) return
+            x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]*real(p, wp)**[1, -1, 2, 1]
+            call e%torques(x(1), x(2), x(3), x(4), tl, tr)
+            dl = rr1*x(1) - rr2*x(3)
+            dv = rr1*x(2) - rr2*x(4)
+            f = kk*dl + cc*dv
+            ok = close_to(tl, -rr1*f) .and. close_to(tr, rr2*f) &
+                 .and. close_to(e%potential_energy(x(1), x(3)), 0.5_wp*kk*dl**2) &
+                 .and. close_to(e%dissipation_power(x(1), x(2), x(3), x(4)), cc*dv**2)
+         end do
+      end function linear_element_agrees
+
+      !> Equal to rounding (the claim and the procedure may order operations differently).
+      pure logical function close_to(a, b)
+         real(wp), intent(in) :: a, b
+         close_to = abs(a - b) <= 1.0e-12_wp*max(abs(a), abs(b)) + tiny(1.0_wp)
+      end function close_to
+   end subroutine model_build_fast_path
 
    !> Whether node i has a prescribed speed.
    pure logical function model_is_held(self, i) result(held)
@@ -149,76 +302,144 @@ contains
    subroutine model_kinematics(self, t, y)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
-      integer :: i, s
-      do i = 1, size(self%nodes)
-         s = self%speed_of(i)
-         if (s == 0) then
-            call self%nodes(i)%n%kinematics(y, self%theta(i), self%omega(i))
-         else
-            self%theta(i) = self%nodes(i)%n%theta0 + self%speeds(s)%integral(t)
-            self%omega(i) = self%speeds(s)%value(t)
-         end if
-      end do
+      call kinematics_all(self, t, y)
    end subroutine model_kinematics
 
+   !> `model_kinematics` without the dispatch (the hot path calls it directly).
+   subroutine kinematics_all(self, t, y)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      integer :: i, o
+      if (self%all_plain) then
+         do i = 1, size(self%fn)
+            o = self%fn(i)%off
+            self%theta(i) = y(o + 1)
+            self%omega(i) = y(o + 2)
+         end do
+      else
+         do i = 1, size(self%fn)
+            call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         end do
+      end if
+   end subroutine kinematics_all
+
    !> dy/dt at (t, y). Leaves node kinematics and net node torques in the workspace.
+   !> Linear-spring elements and plain-inertia nodes come from the hot-path
+   !> tables; the others are asked through their procedures, in the same order.
    subroutine model_rhs(self, t, y, dydt)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
-      integer :: i, l, r, s
-      real(wp) :: tl, tr, pdiss, pin
-      call self%kinematics(t, y)
-      call self%apply_loads(t)
-      do i = 1, size(self%elements)
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
-         call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+      call rhs_fast(self, t, y, dydt)
+   end subroutine model_rhs
+
+   !> `model_rhs` without the dispatch.
+   subroutine rhs_fast(self, t, y, dydt)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
+      integer :: i, l, r, s, o
+      real(wp) :: tl, tr, f, pdiss, pin
+      call kinematics_all(self, t, y)
+      call loads_at(self, t)
+      do i = 1, size(self%fe)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear) then
+               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))  ! eqs. (H.1), (H.15)
+               tl = -(f*e%r1)
+               tr = f*e%r2
+            else
+               call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+            end if
+         end associate
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
-      do i = 1, size(self%nodes)
-         if (self%speed_of(i) == 0) call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            select case (nd%kind)
+            case (nk_plain)
+               o = nd%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               dydt(o + 2) = (self%torque(i) - nd%d*y(o + 2))/nd%j          ! eq. (G.2)
+            case (nk_other)
+               call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+            end select
+         end associate
       end do
       if (.not. self%run%track_energy) return
       pdiss = 0.0_wp
       pin = 0.0_wp
-      do i = 1, size(self%nodes)
-         s = self%speed_of(i)
-         if (s == 0) then
+      do i = 1, size(self%fn)
+         select case (self%fn(i)%kind)
+         case (nk_plain)
+            if (self%fn(i)%d /= 0.0_wp) pdiss = pdiss + self%fn(i)%d*self%omega(i)**2
+         case (nk_held)
+            ! torque the drive must supply: J*alpha minus what acts on the node
+            s = self%speed_of(i)
+            if (self%fn(i)%const_speed) then
+               pin = pin + (self%nodes(i)%n%inertia()*0.0_wp - self%torque(i))*self%omega(i)
+            else
+               pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
+            end if
+         case default
             pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
             pin = pin + self%nodes(i)%n%input_power(t, y)
-         else
-            ! torque the drive must supply: J*alpha minus what acts on the node
-            pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
+         end select
+      end do
+      do i = 1, size(self%fl)
+         l = self%fl(i)%node
+         if (self%fn(l)%kind /= nk_held) then
+            if (self%fl(i)%const) then
+               pin = pin + self%fl(i)%v*self%omega(l)
+            else
+               pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+            end if
          end if
       end do
-      do i = 1, size(self%loads)
-         l = self%loads(i)%node
-         if (self%speed_of(l) == 0) pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
-      end do
-      do i = 1, size(self%elements)
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
-         pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
-         if (self%elements(i)%e%supplies_power) then
-            pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
-         end if
+      do i = 1, size(self%fe)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear) then
+               if (e%c /= 0.0_wp) pdiss = pdiss + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))**2
+            else
+               pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                    self%omega(r))
+               if (self%elements(i)%e%supplies_power) then
+                  pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                             self%omega(r))
+               end if
+            end if
+         end associate
       end do
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
-   end subroutine model_rhs
+   end subroutine rhs_fast
 
    !> External load torques at t into self%torque, and published to the
    !> elements that read their nodes' loads.
    subroutine model_apply_loads(self, t)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t
+      call loads_at(self, t)
+   end subroutine model_apply_loads
+
+   !> `model_apply_loads` without the dispatch.
+   subroutine loads_at(self, t)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
       integer :: i, l
-      self%torque = 0.0_wp
-      do i = 1, size(self%loads)
-         l = self%loads(i)%node
-         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      self%torque(:) = 0.0_wp
+      do i = 1, size(self%fl)
+         l = self%fl(i)%node
+         if (self%fl(i)%const) then
+            self%torque(l) = self%torque(l) + self%fl(i)%v
+         else
+            self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+         end if
       end do
       if (.not. self%any_needs_loads) return
       do i = 1, size(self%elements)
@@ -226,7 +447,7 @@ contains
          self%elements(i)%e%ext_left = self%torque(self%elements(i)%e%left)
          self%elements(i)%e%ext_right = self%torque(self%elements(i)%e%right)
       end do
-   end subroutine model_apply_loads
+   end subroutine loads_at
 
    !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes, assembled from
    !> the nodes' own blocks and the elements' torque partials. The rows of the
@@ -279,24 +500,80 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      integer :: i, l, r, o, n
+      integer :: k, i, l, r, o, n
       if (self%n_guards == 0) return
-      call self%kinematics(t, y)
-      do i = 1, size(self%elements)
-         n = self%elements(i)%e%n_guards()
-         if (n == 0) cycle
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
+      call kinematics_all(self, t, y)
+      do k = 1, size(self%guard_els)
+         i = self%guard_els(k)
+         n = self%fe(i)%ng
+         l = self%fe(i)%l
+         r = self%fe(i)%r
          o = self%guard_offset(i)
          call self%elements(i)%e%guards(self%theta(l), self%omega(l), self%theta(r), self%omega(r), g(o + 1:o + n))
       end do
    end subroutine model_guards
+
+   !> The guards of element i alone at (t, y), into g(1:n_guards of i): only the
+   !> kinematics of its two nodes are evaluated (for event location, where one
+   !> guard is followed on a trial state; a node's kinematics reads only its own
+   !> states y(offset+1:offset+nstates)).
+   subroutine model_element_guards(self, i, t, y, g)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: g(:)
+      real(wp) :: thl, wl, thr, wr
+      call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+      call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+      call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
+   end subroutine model_element_guards
+
+   !> The element that owns guard j (0 if none).
+   pure integer function model_guard_element(self, j) result(owner)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: j
+      integer :: k, i
+      owner = 0
+      do k = 1, size(self%guard_els)
+         i = self%guard_els(k)
+         if (j > self%guard_offset(i) .and. j <= self%guard_offset(i) + self%fe(i)%ng) then
+            owner = i
+            return
+         end if
+      end do
+   end function model_guard_element
+
+   !> Angle and speed of node i at (t, y).
+   pure subroutine node_kinematics(self, i, t, y, th, om)
+      type(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: th, om
+      integer :: s
+      select case (self%fn(i)%kind)
+      case (nk_plain)
+         th = y(self%fn(i)%off + 1)
+         om = y(self%fn(i)%off + 2)
+      case (nk_held)
+         if (self%fn(i)%const_speed) then
+            th = self%nodes(i)%n%theta0 + self%fn(i)%w*t
+            om = self%fn(i)%w
+         else
+            s = self%speed_of(i)
+            th = self%nodes(i)%n%theta0 + self%speeds(s)%integral(t)
+            om = self%speeds(s)%value(t)
+         end if
+      case default
+         call self%nodes(i)%n%kinematics(y, th, om)
+      end select
+   end subroutine node_kinematics
 
    !> Set every element's discrete mode from the state at t_start.
    subroutine model_init_modes(self, t, y)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       integer :: i, l, r
+      call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
       call self%kinematics(t, y)
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left
@@ -367,19 +644,26 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       integer :: i, l, r
-      call self%kinematics(t, y)
+      call kinematics_all(self, t, y)
       e = 0.0_wp
       do i = 1, size(self%nodes)
-         if (self%speed_of(i) == 0) then
-            e = e + self%nodes(i)%n%stored_energy(y)
-         else
+         select case (self%fn(i)%kind)
+         case (nk_plain)
+            e = e + 0.5_wp*self%fn(i)%j*self%omega(i)**2
+         case (nk_held)
             e = e + 0.5_wp*self%nodes(i)%n%inertia()*self%omega(i)**2
-         end if
+         case default
+            e = e + self%nodes(i)%n%stored_energy(y)
+         end select
       end do
       do i = 1, size(self%elements)
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
-         e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+         l = self%fe(i)%l
+         r = self%fe(i)%r
+         if (self%fe(i)%linear) then
+            e = e + 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
+         else
+            e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+         end if
       end do
    end function model_stored_energy
    !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed or a
