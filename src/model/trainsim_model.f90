@@ -25,7 +25,8 @@ module trainsim_model
       integer :: kind = nk_other
       integer :: off = 0
       logical :: const_speed = .false.
-      real(wp) :: j = 1.0_wp, d = 0.0_wp, w = 0.0_wp
+      real(wp) :: j = 1.0_wp, d = 0.0_wp, w = 0.0_wp, theta0 = 0.0_wp
+      real(wp) :: load0 = 0.0_wp   !< sum of its loads if all are constant (else 0: summed at t)
    end type fast_node_t
 
    !> An element on the hot path: its nodes and, for a linear spring, k, c, r1, r2.
@@ -91,7 +92,7 @@ module trainsim_model
       type(fast_element_t), allocatable, private :: fe(:)
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
-      logical, private :: all_plain = .false.              !< every node is a free plain inertia
+      integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -170,13 +171,13 @@ contains
       if (allocated(self%fn)) deallocate (self%fn)
       allocate (self%fn(nn))
       allocate (y(max(self%n_y, 1)), dydt(max(self%n_y, 1)))
-      self%all_plain = .true.
       do i = 1, nn
          self%fn(i)%off = self%nodes(i)%n%offset
          if (self%speed_of(i) /= 0) then
             self%fn(i)%kind = nk_held
             self%fn(i)%const_speed = self%speeds(self%speed_of(i))%is_constant()
             self%fn(i)%w = self%speeds(self%speed_of(i))%value(0.0_wp)
+            self%fn(i)%theta0 = self%nodes(i)%n%theta0
          else
             call self%nodes(i)%n%plain_inertia(plain, j, d)
             if (plain) plain = plain_node_agrees(self%nodes(i)%n, j, d)
@@ -186,7 +187,6 @@ contains
                self%fn(i)%d = d
             end if
          end if
-         if (self%fn(i)%kind /= nk_plain) self%all_plain = .false.
       end do
       if (allocated(self%fe)) deallocate (self%fe)
       allocate (self%fe(ne))
@@ -211,6 +211,21 @@ contains
          self%fl(i)%const = self%loads(i)%torque%is_constant()
          self%fl(i)%v = self%loads(i)%torque%value(0.0_wp)
       end do
+      ! a node whose loads are all constant starts each RHS from their sum (in
+      ! load order, as summing them at t would); the others sum theirs at t
+      do i = 1, size(self%loads)
+         if (.not. self%fl(i)%const) self%fn(self%fl(i)%node)%load0 = huge(1.0_wp)
+      end do
+      do i = 1, size(self%loads)
+         associate (nd => self%fn(self%fl(i)%node))
+            if (nd%load0 /= huge(1.0_wp)) nd%load0 = nd%load0 + self%fl(i)%v
+         end associate
+      end do
+      do i = 1, nn
+         if (self%fn(i)%load0 == huge(1.0_wp)) self%fn(i)%load0 = 0.0_wp
+      end do
+      self%dyn_loads = pack([(i, i=1, size(self%loads))], [(self%fn(self%fl(i)%node)%load0 == 0.0_wp .and. &
+                                                             .not. all_const_on(self%fl(i)%node), i=1, size(self%loads))])
    contains
 
       !> The node's own procedures give what a plain inertia (J, d) would.
@@ -257,6 +272,16 @@ contains
                  .and. close_to(e%dissipation_power(x(1), x(2), x(3), x(4)), cc*dv**2)
          end do
       end function linear_element_agrees
+
+      !> Whether every load on node nd is constant.
+      logical function all_const_on(nd) result(c)
+         integer, intent(in) :: nd
+         integer :: q
+         c = .true.
+         do q = 1, size(self%fl)
+            if (self%fl(q)%node == nd .and. .not. self%fl(q)%const) c = .false.
+         end do
+      end function all_const_on
 
       !> Equal to rounding (the claim and the procedure may order operations differently).
       pure logical function close_to(a, b)
@@ -310,17 +335,20 @@ contains
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       integer :: i, o
-      if (self%all_plain) then
-         do i = 1, size(self%fn)
-            o = self%fn(i)%off
-            self%theta(i) = y(o + 1)
-            self%omega(i) = y(o + 2)
-         end do
-      else
-         do i = 1, size(self%fn)
-            call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
-         end do
-      end if
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            if (nd%kind == nk_plain) then
+               o = nd%off
+               self%theta(i) = y(o + 1)
+               self%omega(i) = y(o + 2)
+            else if (nd%kind == nk_held .and. nd%const_speed) then
+               self%theta(i) = nd%theta0 + nd%w*t
+               self%omega(i) = nd%w
+            else
+               call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+            end if
+         end associate
+      end do
    end subroutine kinematics_all
 
    !> dy/dt at (t, y). Leaves node kinematics and net node torques in the workspace.
@@ -339,19 +367,60 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
       integer :: i, l, r, s, o
-      real(wp) :: tl, tr, f, pdiss, pin
-      call kinematics_all(self, t, y)
-      call loads_at(self, t)
+      real(wp) :: tl, tr, f, dv, pdiss, pin
+      logical :: track
+      track = self%run%track_energy
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      ! kinematics and constant loads in one pass
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            if (nd%kind == nk_plain) then
+               o = nd%off
+               self%theta(i) = y(o + 1)
+               self%omega(i) = y(o + 2)
+            else if (nd%kind == nk_held .and. nd%const_speed) then
+               self%theta(i) = nd%theta0 + nd%w*t
+               self%omega(i) = nd%w
+            else
+               call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+            end if
+            self%torque(i) = nd%load0
+         end associate
+      end do
+      if (size(self%dyn_loads) > 0 .or. self%any_needs_loads) call loads_varying(self, t)
+      if (track) then
+         ! power of the external loads on free nodes (before the elements add to self%torque)
+         do i = 1, size(self%fl)
+            l = self%fl(i)%node
+            if (self%fn(l)%kind == nk_held) cycle
+            if (self%fl(i)%const) then
+               pin = pin + self%fl(i)%v*self%omega(l)
+            else
+               pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+            end if
+         end do
+      end if
       do i = 1, size(self%fe)
          associate (e => self%fe(i))
             l = e%l
             r = e%r
             if (e%linear) then
-               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))  ! eqs. (H.1), (H.15)
+               dv = e%r1*self%omega(l) - e%r2*self%omega(r)
+               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*dv     ! eqs. (H.1), (H.15)
                tl = -(f*e%r1)
                tr = f*e%r2
+               if (track .and. e%c /= 0.0_wp) pdiss = pdiss + e%c*dv**2
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+               if (track) then
+                  pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                       self%omega(r))
+                  if (self%elements(i)%e%supplies_power) then
+                     pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                self%omega(r))
+                  end if
+               end if
             end if
          end associate
          self%torque(l) = self%torque(l) + tl
@@ -364,57 +433,27 @@ contains
                o = nd%off
                dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
                dydt(o + 2) = (self%torque(i) - nd%d*y(o + 2))/nd%j          ! eq. (G.2)
-            case (nk_other)
+               if (track .and. nd%d /= 0.0_wp) pdiss = pdiss + nd%d*self%omega(i)**2
+            case (nk_held)
+               if (track) then
+                  ! torque the drive must supply: J*alpha minus what acts on the node
+                  if (nd%const_speed) then
+                     pin = pin - self%torque(i)*self%omega(i)   ! alpha = 0
+                  else
+                     s = self%speed_of(i)
+                     pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
+                  end if
+               end if
+            case default
                call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+               if (track) then
+                  pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
+                  pin = pin + self%nodes(i)%n%input_power(t, y)
+               end if
             end select
          end associate
       end do
-      if (.not. self%run%track_energy) return
-      pdiss = 0.0_wp
-      pin = 0.0_wp
-      do i = 1, size(self%fn)
-         select case (self%fn(i)%kind)
-         case (nk_plain)
-            if (self%fn(i)%d /= 0.0_wp) pdiss = pdiss + self%fn(i)%d*self%omega(i)**2
-         case (nk_held)
-            ! torque the drive must supply: J*alpha minus what acts on the node
-            s = self%speed_of(i)
-            if (self%fn(i)%const_speed) then
-               pin = pin + (self%nodes(i)%n%inertia()*0.0_wp - self%torque(i))*self%omega(i)
-            else
-               pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
-            end if
-         case default
-            pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
-            pin = pin + self%nodes(i)%n%input_power(t, y)
-         end select
-      end do
-      do i = 1, size(self%fl)
-         l = self%fl(i)%node
-         if (self%fn(l)%kind /= nk_held) then
-            if (self%fl(i)%const) then
-               pin = pin + self%fl(i)%v*self%omega(l)
-            else
-               pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
-            end if
-         end if
-      end do
-      do i = 1, size(self%fe)
-         associate (e => self%fe(i))
-            l = e%l
-            r = e%r
-            if (e%linear) then
-               if (e%c /= 0.0_wp) pdiss = pdiss + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))**2
-            else
-               pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), &
-                                                                    self%omega(r))
-               if (self%elements(i)%e%supplies_power) then
-                  pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), &
-                                                             self%omega(r))
-               end if
-            end if
-         end associate
-      end do
+      if (.not. track) return
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
    end subroutine rhs_fast
@@ -431,15 +470,23 @@ contains
    subroutine loads_at(self, t)
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t
-      integer :: i, l
-      self%torque(:) = 0.0_wp
-      do i = 1, size(self%fl)
+      integer :: i
+      do i = 1, size(self%fn)
+         self%torque(i) = self%fn(i)%load0
+      end do
+      call loads_varying(self, t)
+   end subroutine loads_at
+
+   !> The loads that vary with t, and the loads published to the elements that
+   !> read them (after the constant sums are in self%torque).
+   subroutine loads_varying(self, t)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer :: i, k, l
+      do k = 1, size(self%dyn_loads)
+         i = self%dyn_loads(k)
          l = self%fl(i)%node
-         if (self%fl(i)%const) then
-            self%torque(l) = self%torque(l) + self%fl(i)%v
-         else
-            self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
-         end if
+         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
       end do
       if (.not. self%any_needs_loads) return
       do i = 1, size(self%elements)
@@ -447,7 +494,7 @@ contains
          self%elements(i)%e%ext_left = self%torque(self%elements(i)%e%left)
          self%elements(i)%e%ext_right = self%torque(self%elements(i)%e%right)
       end do
-   end subroutine loads_at
+   end subroutine loads_varying
 
    !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes, assembled from
    !> the nodes' own blocks and the elements' torque partials. The rows of the
@@ -500,16 +547,17 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      integer :: k, i, l, r, o, n
+      integer :: k, i, o, n
+      real(wp) :: thl, wl, thr, wr
       if (self%n_guards == 0) return
-      call kinematics_all(self, t, y)
+      ! only the nodes of elements with guards (a long train has few of them)
       do k = 1, size(self%guard_els)
          i = self%guard_els(k)
          n = self%fe(i)%ng
-         l = self%fe(i)%l
-         r = self%fe(i)%r
          o = self%guard_offset(i)
-         call self%elements(i)%e%guards(self%theta(l), self%omega(l), self%theta(r), self%omega(r), g(o + 1:o + n))
+         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+         call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
       end do
    end subroutine model_guards
 
@@ -556,7 +604,7 @@ contains
          om = y(self%fn(i)%off + 2)
       case (nk_held)
          if (self%fn(i)%const_speed) then
-            th = self%nodes(i)%n%theta0 + self%fn(i)%w*t
+            th = self%fn(i)%theta0 + self%fn(i)%w*t
             om = self%fn(i)%w
          else
             s = self%speed_of(i)
