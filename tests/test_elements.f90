@@ -81,6 +81,7 @@ program test_elements
    call test_key_bore_friction_capacity_from_hub_load()
    call test_model_rhs_is_the_plug_ins_own_torques_and_derivatives()
    call test_hot_path_asks_an_extension_that_changes_the_physics()
+   call test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
    call suite_end()
 
 contains
@@ -447,4 +448,43 @@ contains
       call check('node 2 feels it and the extended node''s own extra torque', dydt(4), (tr + 1.0_wp)/2.0_wp, &
                  rel_tol=1.0e-14_wp)
    end subroutine test_hot_path_asks_an_extension_that_changes_the_physics
+   !> Event location on a long train steps only the part a guard sees
+   !> (`model%rhs_part`); for the nodes it covers it must give exactly what
+   !> `model%rhs` gives (the same torque sums, in the same order), or located
+   !> times would differ from those of the whole train. Six disks: shafts, a
+   !> spur gear in contact (element 3), a damped shaft, a keyed joint; the part:
+   !> nodes 3 and 4 (the gear's) with their elements 2, 3, 4.
+   subroutine test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), full(:), part(:)
+      integer :: i
+      call test_begin('rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs')
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6 /"//nl// &
+                           "&node id='a', type='inertia', inertia=1.0 /"//nl// &
+                           "&node id='b', type='inertia', inertia=0.3, damping=0.2 /"//nl// &
+                           "&node id='c', type='inertia', inertia=0.7 /"//nl// &
+                           "&node id='d', type='inertia', inertia=0.4 /"//nl// &
+                           "&node id='e', type='inertia', inertia=1.5 /"//nl// &
+                           "&node id='f', type='inertia', inertia=2.0 /"//nl// &
+                           "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
+                           "&element type='shaft', stiffness=2e3, damping=0.1, left='b', right='c' /"//nl// &
+                           "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
+                           "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001, left='c', right='d' /"//nl// &
+                           "&element type='shaft', stiffness=3e3, left='d', right='e' /"//nl// &
+                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, "// &
+                           "left='e', right='f' /"//nl// &
+                           "&load node='f', value=-3.0 /"//nl, m)
+      call m%initial_state(y)
+      do i = 1, 12
+         y(i) = 0.01_wp*sin(1.7_wp*i) + merge(0.05_wp, 0.0_wp, i == 5)
+      end do
+      call m%init_modes(0.0_wp, y)
+      allocate (full(size(y)), part(size(y)))
+      call m%rhs(0.1_wp, y, full)
+      part = huge(1.0_wp)
+      call m%rhs_part(0.1_wp, y, part, [2, 3, 4, 5], [2, 3, 4], [3, 4])
+      call check('the gear is in contact (its torques take part)', m%elements(3)%e%in_contact())
+      call check('derivatives of nodes c and d: identical to the bit', all(part(5:8) == full(5:8)))
+      call check('no other entry written', all(part(1:4) == huge(1.0_wp)) .and. all(part(9:) == huge(1.0_wp)))
+   end subroutine test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs
 end program test_elements

@@ -30,6 +30,17 @@ module trainsim_int_rk4
    !> resolution when it is coarser than event_tol (late in long runs).
    real(wp), parameter :: t_res = 64.0_wp*epsilon(1.0_wp)
 
+   !> The part of the train one element's guards depend on through an RK4 step:
+   !> the last stage needs the element's nodes (d4) and their neighbours (k4),
+   !> the third stage those (d3 = k4) and theirs (k3), the second stage those
+   !> (d2 = k3) and theirs (k2); n*: node lists, e*: element lists, s*: state
+   !> indices of the node lists (held nodes have none).
+   type :: part_t
+      logical :: used = .false.
+      integer, allocatable :: k2(:), e2(:), d2(:), k3(:), e3(:), d3(:), k4(:), e4(:), d4(:)
+      integer, allocatable :: sk2(:), sk3(:), sk4(:), sd4(:)
+   end type part_t
+
    type, extends(fixed_step_t) :: rk4_t
       integer :: ng = 0
       real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), ytmp(:), ynew(:), ys(:)
@@ -41,6 +52,8 @@ module trainsim_int_rk4
       integer, allocatable :: g_el(:), g_loc(:)     !< per guard: owner element, index in its guards
       integer, allocatable :: el_states(:, :)       !< per element: state ranges of its left, right node
       real(wp) :: t_loc = 0.0_wp, h_loc = 0.0_wp    !< the step being located
+      type(part_t), allocatable :: part(:)          !< per element (guard elements of long trains)
+      logical :: on_part = .false.                  !< ys holds only the part's states (not a full step)
    contains
       procedure :: start => rk4_start
       procedure :: advance => rk4_advance
@@ -50,6 +63,7 @@ module trainsim_int_rk4
       procedure, private :: map_guard => rk4_map_guard
       procedure, private :: dense_root => rk4_dense_root
       procedure, private :: refine => rk4_refine
+      procedure, private :: step_part => rk4_step_part
    end type rk4_t
 
 contains
@@ -93,10 +107,146 @@ contains
             self%el_states(2*side, e) = i + model%nodes(nd)%n%nstates()
          end do
       end do
+      call build_parts(self, model)
       call self%start_grid(model, t)
       associate (unused => y)
       end associate
    end subroutine rk4_start
+
+   !> For each element with guards in a long train: the part of the train its
+   !> guards see through one RK4 step (type part_t). Used when that part has
+   !> fewer than half the nodes: the step map is then evaluated on the part
+   !> only while an event is located, and stays bit for bit the full step's.
+   subroutine build_parts(self, model)
+      type(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      integer :: nn, ne, e, i
+      integer, allocatable :: first(:), list(:), fill(:)
+      nn = size(model%nodes)
+      ne = size(model%elements)
+      allocate (self%part(ne))
+      if (self%ng == 0) return
+      ! node -> elements (compressed rows, elements in increasing order)
+      allocate (first(nn + 1), fill(nn))
+      first = 0
+      do e = 1, ne
+         first(model%elements(e)%e%left + 1) = first(model%elements(e)%e%left + 1) + 1
+         first(model%elements(e)%e%right + 1) = first(model%elements(e)%e%right + 1) + 1
+      end do
+      first(1) = 1
+      do i = 1, nn
+         first(i + 1) = first(i + 1) + first(i)
+      end do
+      allocate (list(first(nn + 1) - 1))
+      fill = first(1:nn)
+      do e = 1, ne
+         associate (l => model%elements(e)%e%left, r => model%elements(e)%e%right)
+            list(fill(l)) = e; fill(l) = fill(l) + 1
+            if (r /= l) then
+               list(fill(r)) = e; fill(r) = fill(r) + 1
+            end if
+         end associate
+      end do
+      do e = 1, ne
+         if (model%elements(e)%e%n_guards() == 0) cycle
+         associate (p => self%part(e))
+            p%d4 = unique([model%elements(e)%e%left, model%elements(e)%e%right])
+            call grow(p%d4, p%e4, p%k4)
+            p%d3 = p%k4
+            call grow(p%d3, p%e3, p%k3)
+            p%d2 = p%k3
+            call grow(p%d2, p%e2, p%k2)
+            p%used = 2*size(p%k2) < nn
+            p%sk2 = states_of(p%k2)
+            p%sk3 = states_of(p%k3)
+            p%sk4 = states_of(p%k4)
+            p%sd4 = states_of(p%d4)
+         end associate
+      end do
+   contains
+
+      !> The elements of nodes d (increasing) and d with their other ends.
+      subroutine grow(d, els, k)
+         integer, intent(in) :: d(:)
+         integer, allocatable, intent(out) :: els(:), k(:)
+         integer :: a, q
+         allocate (els(0), k(0))
+         do a = 1, size(d)
+            do q = first(d(a)), first(d(a) + 1) - 1
+               els = [els, list(q)]
+            end do
+         end do
+         els = unique(els)
+         k = d
+         do a = 1, size(els)
+            k = [k, model%elements(els(a))%e%left, model%elements(els(a))%e%right]
+         end do
+         k = unique(k)
+      end subroutine grow
+
+      !> Sorted, without repeats.
+      function unique(a) result(u)
+         integer, intent(in) :: a(:)
+         integer, allocatable :: u(:)
+         integer :: q
+         logical, allocatable :: seen(:)
+         allocate (seen(max(nn, ne)))
+         seen = .false.
+         do q = 1, size(a)
+            seen(a(q)) = .true.
+         end do
+         u = pack([(q, q=1, size(seen))], seen)
+      end function unique
+
+      !> State indices of the free nodes in nodes(:).
+      function states_of(nodes) result(st)
+         integer, intent(in) :: nodes(:)
+         integer, allocatable :: st(:)
+         integer :: a, o, q
+         allocate (st(0))
+         do a = 1, size(nodes)
+            if (model%is_held(nodes(a))) cycle
+            o = model%nodes(nodes(a))%n%offset
+            st = [st, (o + q, q=1, model%nodes(nodes(a))%n%nstates())]
+         end do
+      end function states_of
+   end subroutine build_parts
+
+   !> The RK4 step of size s from (t_loc, y) on the part of element e only: ys
+   !> on the states of e's nodes, bit for bit the full step's (k1 of the full
+   !> step, the same torque sums per node). k2..k4 and ytmp are scratch.
+   subroutine rk4_step_part(self, model, y, e, s)
+      class(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:), s
+      integer, intent(in) :: e
+      real(wp) :: hh, h6, t
+      integer :: q, i
+      t = self%t_loc
+      hh = 0.5_wp*s
+      associate (p => self%part(e))
+         do q = 1, size(p%sk2)
+            i = p%sk2(q)
+            self%ytmp(i) = y(i) + hh*self%k1(i)
+         end do
+         call model%rhs_part(t + 0.5_wp*s, self%ytmp, self%k2, p%k2, p%e2, p%d2)
+         do q = 1, size(p%sk3)
+            i = p%sk3(q)
+            self%ytmp(i) = y(i) + hh*self%k2(i)
+         end do
+         call model%rhs_part(t + 0.5_wp*s, self%ytmp, self%k3, p%k3, p%e3, p%d3)
+         do q = 1, size(p%sk4)
+            i = p%sk4(q)
+            self%ytmp(i) = y(i) + s*self%k3(i)
+         end do
+         call model%rhs_part(t + s, self%ytmp, self%k4, p%k4, p%e4, p%d4)
+         h6 = s/6.0_wp
+         do q = 1, size(p%sd4)
+            i = p%sd4(q)
+            self%ys(i) = y(i) + h6*(self%k1(i) + 2.0_wp*(self%k2(i) + self%k3(i)) + self%k4(i))
+         end do
+      end associate
+   end subroutine rk4_step_part
 
    !> One classical RK4 step of size h from (t, y) into ynew; k1 = f(t, y) given.
    !> A step that ends on a breakpoint of the inputs takes its last stage at the
@@ -248,14 +398,19 @@ contains
       g = self%ge(self%g_loc(j))
    end function rk4_dense_guard
 
-   !> Guard j at t_loc + s on the step map: ys = RK4(y, s).
+   !> Guard j at t_loc + s on the step map: ys = RK4(y, s), on the part of the
+   !> train the guard sees (on_part) when that is small.
    real(wp) function rk4_map_guard(self, model, y, j, s) result(g)
       class(rk4_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: y(:), s
       integer, intent(in) :: j
+      self%on_part = .false.
       if (s == self%h_loc) then
          self%ys = self%ynew
+      else if (self%part(self%g_el(j))%used) then
+         call self%step_part(model, y, self%g_el(j), s)
+         self%on_part = .true.
       else
          call self%step(model, self%t_loc, y, s, self%ys, .false.)
       end if
@@ -309,11 +464,12 @@ contains
       real(wp) :: a, fa, fb, sc, gc, sp, gp, r, dl, slope, tol, tol_acc
       real(wp), allocatable :: swap(:)
       integer :: it, side
-      logical :: have_b, have_r
+      logical :: have_b, have_r, b_full
       tol = self%event_tol
       a = 0.0_wp; fa = ga0; b = b0; fb = gb0; side = 0
       sc = min(max(s0, a + 0.5_wp*tol), b)
-      have_b = .false.   ! yb holds RK4(y, b)
+      have_b = .false.   ! yb holds RK4(y, b) (all of it when b_full)
+      b_full = .false.
       sp = 0.0_wp; gp = 0.0_wp; r = 0.0_wp
       do it = 1, 200
          gc = self%map_guard(model, y, j, sc)
@@ -321,6 +477,7 @@ contains
             b = sc; fb = gc
             call move_alloc(self%ys, swap); call move_alloc(self%yb, self%ys); call move_alloc(swap, self%yb)
             have_b = .true.
+            b_full = .not. self%on_part
             if (side == -1) fa = 0.5_wp*fa
             side = -1
          else
@@ -360,10 +517,13 @@ contains
             sc = min(max(sc, a + 0.01_wp*(b - a)), b - 0.01_wp*(b - a))
          end if
       end do
-      if (have_b) then
+      if (have_b .and. b_full) then
          call move_alloc(self%ys, swap); call move_alloc(self%yb, self%ys); call move_alloc(swap, self%yb)
+      else if (b == self%h_loc) then
+         self%ys = self%ynew
       else
-         gc = self%map_guard(model, y, j, b)
+         ! the whole train to the located time (the part's states are bit for bit these)
+         call self%step(model, self%t_loc, y, b, self%ys, .false.)
       end if
    end function rk4_refine
 end module trainsim_int_rk4

@@ -98,6 +98,7 @@ module trainsim_model
       procedure :: initial_state => model_initial_state
       procedure :: kinematics => model_kinematics
       procedure :: rhs => model_rhs
+      procedure :: rhs_part => model_rhs_part
       procedure :: jacobian => model_jacobian
       procedure :: apply_loads => model_apply_loads
       procedure :: breakpoints => model_breakpoints
@@ -457,6 +458,68 @@ contains
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
    end subroutine rhs_fast
+
+   !> dy/dt at (t, y) for the states of the nodes der(:) only (event location on
+   !> a part of a long train). kin(:) must hold der and every node of the
+   !> elements els(:), and els every element of a node in der, in increasing
+   !> order: the torques then add up in the same order as in `rhs`, and the
+   !> derivatives of der are bit for bit those of `rhs`. Other entries of dydt
+   !> are left as they were; no energy rates.
+   subroutine model_rhs_part(self, t, y, dydt, kin, els, der)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: dydt(:)
+      integer, intent(in) :: kin(:), els(:), der(:)
+      integer :: k, i, l, r, o
+      real(wp) :: tl, tr, f
+      do k = 1, size(kin)
+         i = kin(k)
+         call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         self%torque(i) = self%fn(i)%load0
+      end do
+      do k = 1, size(self%dyn_loads)
+         i = self%dyn_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      if (self%any_needs_loads) then
+         do k = 1, size(els)
+            i = els(k)
+            if (.not. self%elements(i)%e%needs_loads) cycle
+            self%elements(i)%e%ext_left = self%torque(self%fe(i)%l)
+            self%elements(i)%e%ext_right = self%torque(self%fe(i)%r)
+         end do
+      end if
+      do k = 1, size(els)
+         i = els(k)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear) then
+               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
+               tl = -(f*e%r1)
+               tr = f*e%r2
+            else
+               call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+            end if
+         end associate
+         self%torque(l) = self%torque(l) + tl
+         self%torque(r) = self%torque(r) + tr
+      end do
+      do k = 1, size(der)
+         i = der(k)
+         associate (nd => self%fn(i))
+            select case (nd%kind)
+            case (nk_plain)
+               o = nd%off
+               dydt(o + 1) = y(o + 2)
+               dydt(o + 2) = (self%torque(i) - nd%d*y(o + 2))/nd%j
+            case (nk_other)
+               call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+            end select
+         end associate
+      end do
+   end subroutine model_rhs_part
 
    !> External load torques at t into self%torque, and published to the
    !> elements that read their nodes' loads.
