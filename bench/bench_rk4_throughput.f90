@@ -1,14 +1,21 @@
-!> RK4 throughput benchmark: steps per second of `simulate` with the fixed-step
-!> event-located RK4 ('rk4'), for
-!>   1. the 4-node Table 5.5 rig with its gear pair replaced by an ideal gear,
-!>      without output (energy tracking on / off) and with HDF5 output (every
-!>      step / every 10th step);
-!>   2. uniform serial chains of 10, 100 and 1000 nodes without output.
+!> RK4 throughput benchmark of `simulate` with the fixed-step event-located
+!> RK4 ('rk4'), no output (null sink):
+!>   1. the Table 5.5 rig (4 nodes; shaft - gear pair - shaft, dt = 8e-6 s,
+!>      2e6 steps) with an ideal gear and with the spur gear with backlash,
+!>      energy tracking off and on, against a hand-specialised loop of the same
+!>      equations (bench_reference), timed in the same run, interleaved; the
+!>      final states are compared so the two are known to be the same equations;
+!>   2. uniform serial chains of 10 .. 5000 nodes, all shafts, and with a spur
+!>      gear with backlash as every 10th element: ns per node-step, events,
+!>      RHS evaluations per event;
+!>   3. peak resident memory against run length (child processes of this program).
+!> With `--hdf5` it also times HDF5 output on the rig (every step, every 10th);
+!> with `rig`, `chain` or `rss` it runs that section only.
 !>
 !> Decks are built as strings, parsed and built outside the timed region; the
-!> timed region is one call to `simulate` (sink open/close included). Each
-!> figure is the fastest of `n_rep` runs; the run length is calibrated so that
-!> every timed run takes at least `min_wall` seconds. See docs/benchmarks.md.
+!> timed region is one call of `simulate` (sink open/close included). Each
+!> figure is the fastest of n_rep runs; the A/B pairs are interleaved (A, B, A,
+!> B, ...) so machine load hits both alike. See docs/benchmarks.md.
 program bench_rk4_throughput
    use, intrinsic :: iso_fortran_env, only: compiler_version, compiler_options, output_unit, error_unit, int64
    use trainsim_kinds, only: wp, i8
@@ -22,117 +29,50 @@ program bench_rk4_throughput
    use trainsim_hdf5, only: hdf5_sink_t
    use trainsim_version, only: version_string
    use bench_build_info, only: build_type
+   use bench_reference, only: ref_result_t, ref_rig
    implicit none
 
-   !> Every timed run lasts at least this long (s of wall time) ...
-   real(wp), parameter :: min_wall = 0.5_wp
-   !> ... the calibration aims at this much, to stay above min_wall despite noise.
-   real(wp), parameter :: target_wall = 0.6_wp
-   !> Pilot runs grow until they take this long; the run length is extrapolated from them.
-   real(wp), parameter :: pilot_wall = 0.05_wp
    !> Repetitions per figure (the minimum is reported).
    integer, parameter :: n_rep = 3
+   !> Steps of a rig run (the issue's figure: 2e6 steps of 8e-6 s).
+   integer(i8), parameter :: rig_steps = 2000000_i8
+   real(wp), parameter :: rig_dt = 8.0e-6_wp, chain_dt = 5.0e-3_wp
+   character(len=*), parameter :: hrule = repeat('-', 100)
 
-   integer, parameter :: rig = 1, chain = 2
-
-   !> One benchmark configuration.
-   type :: config_t
-      character(len=:), allocatable :: label
-      integer :: kind = rig
-      integer :: n_nodes = 4
-      logical :: track_energy = .true.
-      logical :: hdf5 = .false.
-      real(wp) :: output_interval = 0.0_wp
-      real(wp) :: dt = 0.0_wp
-   end type config_t
-
-   !> What a measurement found (best of n_rep).
-   type :: timing_t
-      integer(i8) :: steps = 0
-      real(wp) :: best = huge(1.0_wp)     !< s, fastest repetition
-      real(wp) :: worst = 0.0_wp          !< s, slowest repetition
-      real(wp) :: t_end = 0.0_wp          !< simulated time of each run
-      integer(i8) :: file_bytes = -1      !< size of the HDF5 file (HDF5 cases)
-   end type timing_t
-
-   character(len=:), allocatable :: h5_path
-   type(config_t) :: cfg(4), ccfg
-   type(timing_t) :: tm(4), tc(2, 3)
+   character(len=:), allocatable :: h5_path, arg
    integer(int64) :: c_start, c_stop, c_rate
-   integer :: i, j, sizes(3)
-   real(wp) :: ns(2, 3)
-   character(len=*), parameter :: hrule = repeat('-', 96)
+   integer :: nargs
+   integer(i8) :: n_rss
+
+   nargs = command_argument_count()
+   if (nargs >= 2) then
+      call get_arg(1, arg)
+      if (arg == '--rss') then
+         ! child mode: one run of the backlash rig, then print the peak RSS
+         call get_arg(2, arg)
+         read (arg, *) n_rss
+         call rss_child(n_rss)
+         stop
+      end if
+   end if
 
    call system_clock(c_start, c_rate)
    h5_path = temp_h5_path()
-
    write (output_unit, '(a)') 'trainsim RK4 throughput benchmark (bench/bench_rk4_throughput.f90)'
    write (output_unit, '(a)') '  trainsim version : '//version_string
    write (output_unit, '(a)') '  build type       : '//build_type
    write (output_unit, '(a)') '  compiler         : '//compiler_version()
    write (output_unit, '(a)') '  compiler options : '//compiler_options()
-   write (output_unit, '(a,i0,a,f4.2,a)') '  method           : best of ', n_rep, &
-      ' timed calls of simulate(), each >= ', min_wall, ' s wall (system_clock, int64)'
-   write (output_unit, '(a)') '  HDF5 temp file   : '//h5_path
+   write (output_unit, '(a,i0,a)') '  method           : best of ', n_rep, &
+      ' timed calls, A/B interleaved (system_clock, int64); null sink'
    write (output_unit, '(a)') ''
 
-   ! ------------------------------------------------------------------ 1. the rig
-   cfg(1) = config_t('(a) no output, energy tracking on ', rig, 4, .true., .false., 0.0_wp, 8.0e-6_wp)
-   cfg(2) = config_t('(b) no output, energy tracking off', rig, 4, .false., .false., 0.0_wp, 8.0e-6_wp)
-   cfg(3) = config_t('(c) HDF5 every step               ', rig, 4, .true., .true., 0.0_wp, 8.0e-6_wp)
-   cfg(4) = config_t('(d) HDF5 every 10th step          ', rig, 4, .true., .true., 8.0e-5_wp, 8.0e-6_wp)
-
-   write (output_unit, '(a)') '1. Table 5.5 rig, gear pair -> ideal gear (4 nodes, 3 elements), rk4, dt = 8e-6 s'
-   write (output_unit, '(a)') hrule
-   write (output_unit, '(a)') 'case                                   sim.time[s]      steps   best[s]'// &
-      '     steps/s   ns/step   vs (a)'
-   write (output_unit, '(a)') hrule
-   do i = 1, size(cfg)
-      call measure(cfg(i), tm(i))
-      write (output_unit, '(a36,f14.4,i11,f10.3,es12.4,f10.1,a9)') cfg(i)%label, tm(i)%t_end, tm(i)%steps, &
-         tm(i)%best, real(tm(i)%steps, wp)/tm(i)%best, ns_per_step(tm(i)), &
-         pct(ns_per_step(tm(i)), ns_per_step(tm(1)))
-      flush (output_unit)
-   end do
-   write (output_unit, '(a)') hrule
-   write (output_unit, '(a)') '  energy tracking overhead, (a) vs (b): '// &
-      trim(adjustl(pct(ns_per_step(tm(1)), ns_per_step(tm(2)))))
-   do i = 3, 4
-      write (output_unit, '(a,f8.1,a,f6.1,a,f7.2,a)') '  '//cfg(i)%label(1:3)//' HDF5 file: ', &
-         real(tm(i)%file_bytes, wp)/1.0e6_wp, ' MB, ', &
-         real(tm(i)%file_bytes, wp)/real(max(samples_of(cfg(i), tm(i)), 1_i8), wp), &
-         ' bytes/sample; cost over (a): ', &
-         (ns_per_step(tm(i)) - ns_per_step(tm(1)))*real(tm(i)%steps, wp)/ &
-         real(max(samples_of(cfg(i), tm(i)), 1_i8), wp)/1.0e3_wp, ' us per sample written'
-   end do
-   write (output_unit, '(a)') ''
-
-   ! ------------------------------------------------------------------ 2. chains
-   sizes = [10, 100, 1000]
-   write (output_unit, '(a)') '2. Uniform serial chain: J = 1, shafts k = 1e4, no output, rk4, dt = 5e-3 s'
-   write (output_unit, '(a)') hrule
-   write (output_unit, '(a)') ' nodes  energy   sim.time[s]      steps   best[s]     steps/s     ns/step'// &
-      '  ns/step/node'
-   write (output_unit, '(a)') hrule
-   do j = 1, size(sizes)
-      do i = 1, 2
-         ccfg = config_t('chain', chain, sizes(j), i == 2, .false., 0.0_wp, 5.0e-3_wp)
-         call measure(ccfg, tc(i, j))
-         ns(i, j) = ns_per_step(tc(i, j))
-         write (output_unit, '(i6,a8,f14.1,i11,f10.3,es12.4,f12.1,f14.2)') sizes(j), &
-            merge('    on', '   off', i == 2), tc(i, j)%t_end, tc(i, j)%steps, tc(i, j)%best, &
-            real(tc(i, j)%steps, wp)/tc(i, j)%best, ns(i, j), ns(i, j)/real(sizes(j), wp)
-         flush (output_unit)
-      end do
-   end do
-   write (output_unit, '(a)') hrule
-   write (output_unit, '(a)') '  energy tracking overhead (on vs off):'
-   do j = 1, size(sizes)
-      write (output_unit, '(a,i5,a,a)') '    ', sizes(j), ' nodes: ', trim(adjustl(pct(ns(2, j), ns(1, j))))
-   end do
-   write (output_unit, '(a)') '  scaling, ns/step ratio (energy off):'
-   write (output_unit, '(a,f6.2,a,f6.2,a)') '    100/10 nodes: ', ns(1, 2)/ns(1, 1), &
-      ' (ideal 10),  1000/100 nodes: ', ns(1, 3)/ns(1, 2), ' (ideal 10)'
+   arg = ''
+   if (nargs >= 1) call get_arg(1, arg)
+   if (arg == '' .or. arg == '--hdf5' .or. arg == 'rig') call rig_section()
+   if (arg == '' .or. arg == '--hdf5' .or. arg == 'chain') call chain_section()
+   if (arg == '' .or. arg == '--hdf5' .or. arg == 'rss') call rss_section()
+   if (arg == '--hdf5') call hdf5_section()
 
    call system_clock(c_stop)
    write (output_unit, '(a)') ''
@@ -140,106 +80,242 @@ program bench_rk4_throughput
 
 contains
 
-   !> Calibrate the run length of `c`, then time it n_rep times; keep the fastest.
-   subroutine measure(c, r)
-      type(config_t), intent(in) :: c
-      type(timing_t), intent(out) :: r
-      integer(i8) :: nsteps, steps, bytes
-      real(wp) :: secs
-      integer :: rep, attempt
+   !> 1. The rig: trainsim against the reference, ideal and backlash gear.
+   subroutine rig_section()
+      type(model_t) :: m_off, m_on
+      type(run_result_t) :: r_off, r_on
+      type(ref_result_t) :: ref, ref_short
+      type(run_result_t) :: r_short
+      real(wp) :: t_ref, t_off, t_on, secs, t_end, dy, dshort
+      integer :: variant, rep
+      logical :: bl
+      character(len=8) :: names(2) = ['ideal   ', 'backlash']
 
-      ! Pilot: grow the run until it is long enough to extrapolate from.
-      nsteps = 256
-      do
-         call run_once(c, nsteps, secs, steps, bytes)
-         if (secs >= pilot_wall) exit
-         nsteps = nsteps*min(100_i8, max(2_i8, int(pilot_wall/max(secs, 1.0e-6_wp), i8)))
-      end do
-      nsteps = max(1_i8, ceiling(real(nsteps, wp)*target_wall/secs, i8))
-
-      do attempt = 1, 4
-         r = timing_t()
+      t_end = real(rig_steps, wp)*rig_dt
+      write (output_unit, '(a,i0,a)') '1. Table 5.5 rig (4 nodes, node 1 held at 80 rad/s), rk4, dt = 8e-6 s, ', &
+         rig_steps, ' steps, no output'
+      write (output_unit, '(a)') hrule
+      write (output_unit, '(a)') 'gear      reference  trainsim   trainsim   ref/ts     ref/ts    energy   '// &
+         'events  RHS/event  max|dy| vs ref'
+      write (output_unit, '(a)') '          [Msteps/s] off [Ms/s] on [Ms/s]  (off)      (on)      cost            '// &
+         '(extra)    final / 0.1 s run'
+      write (output_unit, '(a)') hrule
+      do variant = 1, 2
+         bl = variant == 2
+         t_ref = huge(1.0_wp); t_off = huge(1.0_wp); t_on = huge(1.0_wp)
          do rep = 1, n_rep
-            call run_once(c, nsteps, secs, steps, bytes)
-            r%best = min(r%best, secs)
-            r%worst = max(r%worst, secs)
+            call time_ref(bl, t_end, ref, secs); t_ref = min(t_ref, secs)
+            call load(rig_deck(t_end, rig_dt, .false., bl), m_off)
+            call time_run(m_off, r_off, secs); t_off = min(t_off, secs)
+            call load(rig_deck(t_end, rig_dt, .true., bl), m_on)
+            call time_run(m_on, r_on, secs); t_on = min(t_on, secs)
          end do
-         r%steps = steps
-         r%file_bytes = bytes
-         r%t_end = real(nsteps, wp)*c%dt
-         if (r%best >= min_wall) exit
-         ! machine got faster (other load went away): lengthen the run and repeat
-         nsteps = ceiling(real(nsteps, wp)*target_wall/r%best, i8)
+         if (r_off%stats%steps /= rig_steps .or. ref%steps /= rig_steps) call die('rig: unexpected number of steps')
+         dy = maxval(abs(r_off%y_final(1:6) - ref%y))
+         ! a short run as well: a rattling gear amplifies differences of 1e-9 dt in
+         ! the event times over 2e6 steps, so the equations are compared on 0.1 s
+         call ref_rig(bl, 0.1_wp, rig_dt, ref_short)
+         call load(rig_deck(0.1_wp, rig_dt, .false., bl), m_off)
+         call time_run(m_off, r_short, secs)
+         dshort = maxval(abs(r_short%y_final(1:6) - ref_short%y))
+         write (output_unit, '(a8,3f10.3,2f10.3,a9,i9,f9.2,es11.2,a,es9.2)') names(variant), &
+            1.0e-6_wp*real(rig_steps, wp)/t_ref, 1.0e-6_wp*real(rig_steps, wp)/t_off, &
+            1.0e-6_wp*real(rig_steps, wp)/t_on, t_ref/t_off, t_ref/t_on, pct(t_on, t_off), r_off%stats%events, &
+            extra_rhs_per_event(r_off), dy, ' /', dshort
+         if (bl) write (output_unit, '(a,i0,a,f6.2,a)') '          reference: ', ref%events, &
+            ' events, ', real(ref%located, wp)/real(max(ref%events, 1_i8), wp), &
+            ' RHS per event spent locating (step map)'
+         flush (output_unit)
       end do
-   end subroutine measure
+      write (output_unit, '(a)') hrule
+      write (output_unit, '(a)') '  ref/ts: trainsim steps/s over the reference''s (1 = as fast as the hand-written loop);'
+      write (output_unit, '(a)') '  energy cost: trainsim with track_energy on against off; RHS/event (extra): '// &
+         '(RHS - 4 steps)/events'
+      write (output_unit, '(a)') ''
+   end subroutine rig_section
 
-   !> Build the model for `c` with `nsteps` steps and time one call of simulate.
-   subroutine run_once(c, nsteps, secs, steps, bytes)
-      type(config_t), intent(in) :: c
-      integer(i8), intent(in) :: nsteps
-      real(wp), intent(out) :: secs
-      integer(i8), intent(out) :: steps, bytes
-      character(len=:), allocatable :: text
-      type(deck_t) :: deck
-      type(model_t) :: model
-      type(run_result_t) :: res
-      type(error_t), allocatable :: err
-      type(null_sink_t) :: none
+   !> 2. Serial chains: shafts only, and a backlash gear as every 10th element.
+   subroutine chain_section()
+      integer, parameter :: sizes(4) = [10, 100, 1000, 5000]
+      type(model_t) :: m
+      type(run_result_t) :: rs, rb
+      real(wp) :: ts, tb, secs, t_end
+      integer :: j, rep, n
+      integer(i8) :: nsteps
+      write (output_unit, '(a)') '2. Serial chains: J = 1, shafts k = 1e4 (every 10th element a spur gear with backlash, '// &
+         'k = 1e4, half backlash 1e-3), node 1 starts at 1 rad/s, rk4, dt = 5e-3 s, energy off'
+      write (output_unit, '(a)') hrule
+      write (output_unit, '(a)') ' nodes    steps   shafts [ns/node-step]  backlash [ns/node-step]   ratio    events  '// &
+         'events/step  RHS/event'
+      write (output_unit, '(a)') hrule
+      do j = 1, size(sizes)
+         n = sizes(j)
+         nsteps = max(200_i8, int(3.0e6_wp/real(n, wp), i8))
+         t_end = real(nsteps, wp)*chain_dt
+         ts = huge(1.0_wp); tb = huge(1.0_wp)
+         do rep = 1, n_rep
+            call load(chain_deck(n, t_end, chain_dt, .false.), m)
+            call time_run(m, rs, secs); ts = min(ts, secs)
+            call load(chain_deck(n, t_end, chain_dt, .true.), m)
+            call time_run(m, rb, secs); tb = min(tb, secs)
+         end do
+         write (output_unit, '(i6,i9,f16.1,f25.1,f13.2,i10,f12.3,f11.2)') n, nsteps, &
+            1.0e9_wp*ts/real(nsteps*n, wp), 1.0e9_wp*tb/real(nsteps*n, wp), tb/ts, rb%stats%events, &
+            real(rb%stats%events, wp)/real(nsteps, wp), extra_rhs_per_event(rb)
+         flush (output_unit)
+      end do
+      write (output_unit, '(a)') hrule
+      write (output_unit, '(a)') '  ratio: backlash chain over shaft chain, per node-step'
+      write (output_unit, '(a)') ''
+   end subroutine chain_section
+
+   !> 3. Peak RSS of a whole process running the backlash rig for n steps.
+   subroutine rss_section()
+      integer(i8), parameter :: lens(4) = [10000_i8, 100000_i8, 1000000_i8, 4000000_i8]
+      character(len=:), allocatable :: exe, out
+      character(len=256) :: line
+      integer :: i, u, ios, cstat
+      call get_arg(0, exe)
+      out = h5_path//'.rss'
+      write (output_unit, '(a)') '3. Peak resident memory (VmHWM of a child process) against run length, backlash rig, '// &
+         'null sink, energy on'
+      write (output_unit, '(a)') hrule
+      write (output_unit, '(a)') '     steps     events   peak RSS [MB]'
+      do i = 1, size(lens)
+         write (line, '(a,i0,a)') '"'//exe//'" --rss ', lens(i), ' > "'//out//'"'
+         call execute_command_line(trim(line), exitstat=ios, cmdstat=cstat)
+         if (ios /= 0 .or. cstat /= 0) then
+            write (output_unit, '(a)') '   (child failed)'
+            cycle
+         end if
+         open (newunit=u, file=out, status='old', action='read', iostat=ios)
+         if (ios /= 0) cycle
+         read (u, '(a)', iostat=ios) line
+         close (u, status='delete')
+         write (output_unit, '(a)') '  '//trim(line)
+      end do
+      write (output_unit, '(a)') hrule
+      write (output_unit, '(a)') ''
+   end subroutine rss_section
+
+   !> Child of rss_section: one run, then "steps events peak-RSS-MB".
+   subroutine rss_child(n)
+      integer(i8), intent(in) :: n
+      type(model_t) :: m
+      type(run_result_t) :: r
+      real(wp) :: secs
+      call load(rig_deck(real(n, wp)*rig_dt, rig_dt, .true., .true.), m)
+      call time_run(m, r, secs)
+      write (output_unit, '(i10,i11,f16.2)') r%stats%steps, r%stats%events, real(vm_hwm_kb(), wp)/1024.0_wp
+   end subroutine rss_child
+
+   !> Optional: HDF5 output on the rig (ideal gear, energy on).
+   subroutine hdf5_section()
+      type(model_t) :: m
+      type(run_result_t) :: r
       type(hdf5_sink_t) :: h5
+      type(error_t), allocatable :: err
+      real(wp) :: t_end, interval(2), best, secs
+      integer(i8) :: nsteps, bytes
       integer(int64) :: c0, c1, rate
-      real(wp) :: t_end
+      integer :: i, rep
+      character(len=:), allocatable :: text
+      nsteps = 100000_i8
+      t_end = real(nsteps, wp)*rig_dt
+      interval = [0.0_wp, 10.0_wp*rig_dt]
+      write (output_unit, '(a)') '4. HDF5 output, ideal-gear rig, energy on, 1e5 steps'
+      do i = 1, 2
+         best = huge(1.0_wp)
+         do rep = 1, n_rep
+            text = rig_deck(t_end, rig_dt, .true., .false.)
+            text = text(1:index(text, '/') - 1)//", output = '"//h5_path//"', output_interval = "// &
+                   r2s(interval(i))//' '//text(index(text, '/'):)
+            call load(text, m)
+            call remove_file(h5_path)
+            h5%path = m%run%output
+            call system_clock(c0, rate)
+            call simulate(m, h5, r, err)
+            call system_clock(c1)
+            if (allocated(err)) call die(err%message)
+            secs = real(c1 - c0, wp)/real(rate, wp)
+            best = min(best, secs)
+            inquire (file=h5_path, size=bytes)
+            call remove_file(h5_path)
+         end do
+         write (output_unit, '(a,es10.3,a,f9.1,a,f8.2,a)') '  output_interval = ', interval(i), ': ', &
+            1.0e9_wp*best/real(nsteps, wp), ' ns/step, ', real(bytes, wp)/1.0e6_wp, ' MB'
+      end do
+   end subroutine hdf5_section
 
-      t_end = real(nsteps, wp)*c%dt
-      select case (c%kind)
-      case (rig)
-         text = rig_deck(t_end, c%dt, c%track_energy, c%hdf5, c%output_interval)
-      case default
-         text = chain_deck(c%n_nodes, t_end, c%dt, c%track_energy)
-      end select
-      call parse_deck(text, 'bench:'//c%label, deck, err)
+   !> Parse and build a model from deck text.
+   subroutine load(text, m)
+      character(len=*), intent(in) :: text
+      type(model_t), intent(out) :: m
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      call parse_deck(text, 'bench', deck, err)
       if (allocated(err)) call die(err%message)
-      call build_model(deck, model, err)
+      call build_model(deck, m, err)
       if (allocated(err)) call die(err%message)
+   end subroutine load
 
-      bytes = -1
-      if (c%hdf5) then
-         call remove_file(h5_path)
-         h5%path = model%run%output
-         call system_clock(c0, rate)
-         call simulate(model, h5, res, err)
-         call system_clock(c1)
-         if (allocated(err)) call die(err%message)
-         inquire (file=h5_path, size=bytes)
-         call remove_file(h5_path)
-      else
-         call system_clock(c0, rate)
-         call simulate(model, none, res, err)
-         call system_clock(c1)
-         if (allocated(err)) call die(err%message)
-      end if
+   !> One timed call of simulate with a null sink.
+   subroutine time_run(m, r, secs)
+      type(model_t), intent(inout) :: m
+      type(run_result_t), intent(out) :: r
+      real(wp), intent(out) :: secs
+      type(null_sink_t) :: none
+      type(error_t), allocatable :: err
+      integer(int64) :: c0, c1, rate
+      call system_clock(c0, rate)
+      call simulate(m, none, r, err)
+      call system_clock(c1)
+      if (allocated(err)) call die(err%message)
       secs = real(c1 - c0, wp)/real(rate, wp)
-      steps = res%stats%steps
-      if (steps /= nsteps) call die('run of '//c%label//' took an unexpected number of steps')
-   end subroutine run_once
+   end subroutine time_run
 
-   !> The Table 5.5 rig (Cook 1989) with its gear pair replaced by an ideal gear.
-   function rig_deck(t_end, dt, track, hdf5, interval) result(text)
-      real(wp), intent(in) :: t_end, dt, interval
-      logical, intent(in) :: track, hdf5
+   !> One timed run of the reference loop.
+   subroutine time_ref(backlash, t_end, ref, secs)
+      logical, intent(in) :: backlash
+      real(wp), intent(in) :: t_end
+      type(ref_result_t), intent(out) :: ref
+      real(wp), intent(out) :: secs
+      integer(int64) :: c0, c1, rate
+      call system_clock(c0, rate)
+      call ref_rig(backlash, t_end, rig_dt, ref)
+      call system_clock(c1)
+      secs = real(c1 - c0, wp)/real(rate, wp)
+   end subroutine time_ref
+
+   !> RHS evaluations beyond 4 per grid step, per event.
+   real(wp) function extra_rhs_per_event(r) result(x)
+      type(run_result_t), intent(in) :: r
+      x = 0.0_wp
+      if (r%stats%events > 0) x = real(r%stats%rhs_evals - 4*r%stats%steps, wp)/real(r%stats%events, wp)
+   end function extra_rhs_per_event
+
+   !> The Table 5.5 rig (Cook 1989) at 80 rad/s: ideal gear, or the spur gear with backlash.
+   function rig_deck(t_end, dt, track, backlash) result(text)
+      real(wp), intent(in) :: t_end, dt
+      logical, intent(in) :: track, backlash
       character(len=:), allocatable :: text
       character(len=*), parameter :: nl = new_line('a')
-      text = "&run title = 'bench: Table 5.5 rig, ideal gear', t_end = "//r2s(t_end)//', dt = '//r2s(dt)// &
-             ", integrator = 'rk4', track_energy = "//merge('.true. ', '.false.', track)
-      if (hdf5) text = text//", output = '"//h5_path//"', output_interval = "//r2s(interval)
-      text = text//' /'//nl// &
+      text = "&run title = 'bench: Table 5.5 rig', t_end = "//r2s(t_end)//', dt = '//r2s(dt)// &
+             ", integrator = 'rk4', track_energy = "//merge('.true. ', '.false.', track)//' /'//nl// &
              "&node id = 'n1', type = 'inertia', inertia = 100.0 /"//nl// &
              "&node id = 'n2', type = 'inertia', inertia = 0.987 /"//nl// &
              "&node id = 'n3', type = 'inertia', inertia = 0.987 /"//nl// &
              "&node id = 'n4', type = 'inertia', inertia = 100.0 /"//nl// &
-             "&element id = 'e1', type = 'shaft', stiffness = 32000.0 /"//nl// &
-             "&element id = 'e2', type = 'ideal_gear', stiffness = 234500.0, rb_driver = 3.7588, "// &
-             'rb_driven = 3.7588 /'//nl// &
-             "&element id = 'e3', type = 'shaft', stiffness = 32000.0 /"//nl// &
+             "&element id = 'e1', type = 'shaft', stiffness = 32000.0 /"//nl
+      if (backlash) then
+         text = text//"&element id = 'e2', type = 'spur_gear', stiffness = 234500.0, rb_driver = 3.7588, "// &
+                'rb_driven = 3.7588, teeth = 32, contact_ratio = 1.6676, approach_angle = 0.1637, '// &
+                'half_backlash = 0.005 /'//nl
+      else
+         text = text//"&element id = 'e2', type = 'ideal_gear', stiffness = 234500.0, rb_driver = 3.7588, "// &
+                'rb_driven = 3.7588 /'//nl
+      end if
+      text = text//"&element id = 'e3', type = 'shaft', stiffness = 32000.0 /"//nl// &
              "&initial node = 'all', speed = 80.0 /"//nl// &
              "&initial node = 'n1', angle = -0.187847 /"//nl// &
              "&initial node = 'n2', angle = -0.212810 /"//nl// &
@@ -249,34 +325,41 @@ contains
              "&load node = 'n4', kind = 'constant', value = -798.8 /"
    end function rig_deck
 
-   !> A uniform serial chain of n unit inertias joined by shafts of stiffness 1e4,
-   !> free at both ends; node 1 starts at speed 1.
-   function chain_deck(n, t_end, dt, track) result(text)
+   !> A serial chain of n unit inertias joined by shafts of stiffness 1e4, free at
+   !> both ends; with `backlash`, every 10th element is a spur gear pair with unit
+   !> base radii, the same stiffness and half backlash 1e-3. Node 1 starts at
+   !> 1 rad/s, the others at rest: a wave runs down the chain and back, and each
+   !> gear it reaches rattles.
+   function chain_deck(n, t_end, dt, backlash) result(text)
       integer, intent(in) :: n
       real(wp), intent(in) :: t_end, dt
-      logical, intent(in) :: track
+      logical, intent(in) :: backlash
       character(len=:), allocatable :: text
       character(len=:), allocatable :: buf
-      character(len=64) :: line
+      character(len=256) :: line
       integer :: i, k
-      ! One buffer large enough for every line (the deck grows linearly with n).
-      allocate (character(len=512 + 64*(2*n + 1)) :: buf)
+      allocate (character(len=512 + 256*(3*n + 1)) :: buf)
       k = 0
       call append(buf, k, "&run title = 'bench: serial chain', t_end = "//r2s(t_end)//', dt = '//r2s(dt)// &
-                  ", integrator = 'rk4', track_energy = "//merge('.true. ', '.false.', track)//' /')
+                  ", integrator = 'rk4', track_energy = .false. /")
       do i = 1, n
          write (line, '(a,i0,a)') "&node id = 'n", i, "', type = 'inertia', inertia = 1.0 /"
          call append(buf, k, trim(line))
       end do
       do i = 1, n - 1
-         write (line, '(a,i0,a)') "&element id = 'e", i, "', type = 'shaft', stiffness = 1.0e4 /"
+         if (backlash .and. mod(i, 10) == 0) then
+            write (line, '(a,i0,a)') "&element id = 'e", i, "', type = 'spur_gear', stiffness = 1.0e4, "// &
+               'rb_driver = 1.0, rb_driven = 1.0, teeth = 32, contact_ratio = 1.6, approach_angle = 0.1, '// &
+               'half_backlash = 1.0e-3 /'
+         else
+            write (line, '(a,i0,a)') "&element id = 'e", i, "', type = 'shaft', stiffness = 1.0e4 /"
+         end if
          call append(buf, k, trim(line))
       end do
       call append(buf, k, "&initial node = 'n1', speed = 1.0 /")
-      text = buf(1:k - 1)   ! without the last new line
+      text = buf(1:k - 1)
    end function chain_deck
 
-   !> Append line `s` and a new line to buf(1:k).
    subroutine append(buf, k, s)
       character(len=*), intent(inout) :: buf
       integer, intent(inout) :: k
@@ -285,21 +368,23 @@ contains
       k = k + len(s) + 1
    end subroutine append
 
-   !> Output samples written in an HDF5 case (initial sample + one per interval).
-   integer(i8) function samples_of(c, r) result(n)
-      type(config_t), intent(in) :: c
-      type(timing_t), intent(in) :: r
-      if (c%output_interval > 0.0_wp) then
-         n = 1 + nint(r%t_end/c%output_interval, i8)
-      else
-         n = 1 + r%steps
-      end if
-   end function samples_of
-
-   real(wp) function ns_per_step(r)
-      type(timing_t), intent(in) :: r
-      ns_per_step = 1.0e9_wp*r%best/real(max(r%steps, 1_i8), wp)
-   end function ns_per_step
+   !> Peak resident set (VmHWM, kB) of this process from /proc/self/status (-1 if unknown).
+   integer function vm_hwm_kb() result(kb)
+      character(len=256) :: line
+      integer :: u, ios
+      kb = -1
+      open (newunit=u, file='/proc/self/status', status='old', action='read', iostat=ios)
+      if (ios /= 0) return
+      do
+         read (u, '(a)', iostat=ios) line
+         if (ios /= 0) exit
+         if (line(1:6) == 'VmHWM:') then
+            read (line(7:), *, iostat=ios) kb
+            exit
+         end if
+      end do
+      close (u)
+   end function vm_hwm_kb
 
    !> "+12.3%" : x relative to ref.
    function pct(x, ref) result(s)
@@ -316,6 +401,15 @@ contains
       write (buf, '(es24.16e3)') x
       s = trim(adjustl(buf))
    end function r2s
+
+   subroutine get_arg(i, a)
+      integer, intent(in) :: i
+      character(len=:), allocatable, intent(out) :: a
+      integer :: n
+      call get_command_argument(i, length=n)
+      allocate (character(len=n) :: a)
+      if (n > 0) call get_command_argument(i, a)
+   end subroutine get_arg
 
    !> $TMPDIR (or /tmp) / trainsim_bench_<clock>.h5
    function temp_h5_path() result(path)
@@ -345,7 +439,6 @@ contains
       character(len=*), intent(in) :: msg
       write (error_unit, '(a)') 'bench_rk4_throughput: '//msg
       call remove_file(h5_path)
-      call remove_file(h5_path//'.part')
       error stop 1
    end subroutine die
 end program bench_rk4_throughput

@@ -27,6 +27,7 @@ module trainsim_el_ideal_gear
       procedure :: status => gear_status
       procedure :: params => gear_params
       procedure :: torque_jacobian => gear_jacobian
+      procedure :: linear_spring => gear_linear_spring
    end type ideal_gear_t
 
 contains
@@ -67,6 +68,15 @@ contains
       tl = -f*self%r1
       tr = f*self%r2
    end subroutine gear_torques
+
+   !> A linear spring along the line of action, no damping (the model's fast path).
+   pure subroutine gear_linear_spring(self, linear, k, c, r1, r2)
+      class(ideal_gear_t), intent(in) :: self
+      logical, intent(out) :: linear
+      real(wp), intent(out) :: k, c, r1, r2
+      k = self%k; c = 0.0_wp; r1 = self%r1; r2 = self%r2
+      linear = .true.
+   end subroutine gear_linear_spring
 
    pure real(wp) function gear_displacement(self, thl, thr) result(d)
       class(ideal_gear_t), intent(in) :: self

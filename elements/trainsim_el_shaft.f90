@@ -25,6 +25,7 @@ module trainsim_el_shaft
       procedure :: dissipation_power => shaft_dissipation
       procedure :: params => shaft_params
       procedure :: torque_jacobian => shaft_jacobian
+      procedure :: linear_spring => shaft_linear_spring
    end type shaft_t
 
 contains
@@ -55,6 +56,15 @@ contains
       tr = self%k*(thl - thr) + self%c*(wl - wr)   ! eq. (H.1)/(H.2)
       tl = -tr
    end subroutine shaft_torques
+
+   !> A linear spring-damper with unit lever arms (the model's fast path).
+   pure subroutine shaft_linear_spring(self, linear, k, c, r1, r2)
+      class(shaft_t), intent(in) :: self
+      logical, intent(out) :: linear
+      real(wp), intent(out) :: k, c, r1, r2
+      k = self%k; c = self%c; r1 = 1.0_wp; r2 = 1.0_wp
+      linear = .true.
+   end subroutine shaft_linear_spring
 
    pure subroutine shaft_stiffness(self, k)
       class(shaft_t), intent(in) :: self

@@ -25,6 +25,7 @@ module trainsim_node_inertia
       procedure :: can_prescribe_speed => inertia_can_prescribe
       procedure :: params => inertia_params
       procedure :: jacobian => inertia_jacobian
+      procedure :: plain_inertia => inertia_plain
    end type inertia_node_t
 
 contains
@@ -75,6 +76,16 @@ contains
       real(wp), intent(in) :: y(:)
       p = self%d*y(self%offset + 2)**2
    end function inertia_dissipation
+
+   !> A plain rigid disk: the model's fast path integrates it from (J, d).
+   pure subroutine inertia_plain(self, plain, j, d)
+      class(inertia_node_t), intent(in) :: self
+      logical, intent(out) :: plain
+      real(wp), intent(out) :: j, d
+      j = self%j
+      d = self%d
+      plain = .true.
+   end subroutine inertia_plain
 
    pure logical function inertia_can_prescribe(self) result(f)
       class(inertia_node_t), intent(in) :: self

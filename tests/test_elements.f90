@@ -1,6 +1,48 @@
+!> Types for the hot-path tests: a shaft and an inertia extended to change
+!> their physics but not their hot-path claims (`linear_spring`,
+!> `plain_inertia`), as a careless plug-in might.
+module test_elements_doubles
+   use trainsim_kinds, only: wp
+   use trainsim_el_shaft, only: shaft_t
+   use trainsim_node_inertia, only: inertia_node_t
+   implicit none
+   private
+   public :: stiffening_shaft_t, pushed_inertia_t
+
+   !> A shaft whose torque grows with the cube of the twist.
+   type, extends(shaft_t) :: stiffening_shaft_t
+   contains
+      procedure :: torques => stiffening_torques
+   end type stiffening_shaft_t
+
+   !> A disk with a constant extra torque of 1 on it.
+   type, extends(inertia_node_t) :: pushed_inertia_t
+   contains
+      procedure :: derivatives => pushed_derivatives
+   end type pushed_inertia_t
+
+contains
+
+   pure subroutine stiffening_torques(self, thl, wl, thr, wr, tl, tr)
+      class(stiffening_shaft_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      tr = self%k*(thl - thr)*(1.0_wp + (thl - thr)**2) + self%c*(wl - wr)
+      tl = -tr
+   end subroutine stiffening_torques
+
+   pure subroutine pushed_derivatives(self, t, y, torque, dydt)
+      class(pushed_inertia_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:), torque
+      real(wp), intent(inout) :: dydt(:)
+      call self%inertia_node_t%derivatives(t, y, torque + 1.0_wp, dydt)
+   end subroutine pushed_derivatives
+end module test_elements_doubles
+
 !> Unit tests of the element and node plug-ins: torques inside the clearance,
 !> at contact onset, action and reaction, each contact law's promises, unit
-!> conversion of the empirical fits, and a DC motor starting a geared load.
+!> conversion of the empirical fits, a DC motor starting a geared load, and
+!> the model's hot path against the plug-ins' own procedures.
 program test_elements
    use trainsim_kinds, only: wp
    use trainsim_model, only: model_t
@@ -13,6 +55,9 @@ program test_elements
    use trainsim_el_keyed_joint, only: keyed_joint_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
+   use trainsim_el_shaft, only: shaft_t
+   use trainsim_node_inertia, only: inertia_node_t
+   use test_elements_doubles, only: stiffening_shaft_t, pushed_inertia_t
    implicit none
 
    character(len=*), parameter :: two_disks = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
@@ -34,6 +79,9 @@ program test_elements
    call test_key_fit_force_solves_implicit_stiffness()
    call test_varying_stiffness_work_keeps_energy_balance()
    call test_key_bore_friction_capacity_from_hub_load()
+   call test_model_rhs_is_the_plug_ins_own_torques_and_derivatives()
+   call test_hot_path_asks_an_extension_that_changes_the_physics()
+   call test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
    call suite_end()
 
 contains
@@ -328,4 +376,115 @@ contains
       character(len=16) :: s
       write (s, '(es9.2)') x
    end function rstr
+   !> The model's right-hand side (hot path for shafts, ideal gears and
+   !> inertias; calls through the objects for the rest) equals what the
+   !> element's `torques`, `dissipation_power` and the nodes' `derivatives` give,
+   !> to rounding: the hot path is the same physics, only faster. Two disks
+   !> (J = 1 with damping 0.3, J = 2) joined by each element type, energy on.
+   subroutine test_model_rhs_is_the_plug_ins_own_torques_and_derivatives()
+      type(model_t) :: m
+      character(len=200) :: el(5)
+      real(wp), allocatable :: y(:), dydt(:), ref(:)
+      real(wp) :: x(4), tl, tr, pd
+      integer :: i
+      call test_begin('model_rhs_is_the_plug_ins_own_torques_and_derivatives')
+      el(1) = "type='shaft', stiffness=3e3, damping=0.7"
+      el(2) = "type='ideal_gear', stiffness=1e5, rb_driver=0.4, rb_driven=0.9"
+      el(3) = "type='damper', damping=2.5"
+      el(4) = "type='spur_gear', stiffness=1e6, rb_driver=1.0, rb_driven=2.0, teeth=20, contact_ratio=1.5,"// &
+              " approach_angle=0.1, half_backlash=0.001"
+      el(5) = "type='clearance_coupling', clearance=0.002, stiffness=1e4, contact_damping=1.0"
+      x = [0.013_wp, 3.0_wp, -0.002_wp, -1.0_wp]   ! thl, wl, thr, wr: in contact for the clearances
+      do i = 1, size(el)
+         call load_model_text("&run t_end = 1e-3, dt = 1e-6 /"//nl// &
+                              "&node type='inertia', inertia=1.0, damping=0.3 /"//nl// &
+                              "&node type='inertia', inertia=2.0 /"//nl//'&element '//trim(el(i))//' /', m)
+         call m%initial_state(y)
+         y(1:4) = [x(1), x(2), x(3), x(4)]
+         call m%init_modes(0.0_wp, y)
+         allocate (dydt(size(y)), ref(size(y)))
+         call m%rhs(0.0_wp, y, dydt)
+         call m%elements(1)%e%torques(x(1), x(2), x(3), x(4), tl, tr)
+         pd = m%elements(1)%e%dissipation_power(x(1), x(2), x(3), x(4)) + 0.3_wp*x(2)**2
+         ref(1:4) = [x(2), (tl - 0.3_wp*x(2))/1.0_wp, x(4), tr/2.0_wp]
+         call check(trim(el(i)(1:30))//': torque on each node nonzero', abs(tl) > 0.0_wp .and. abs(tr) > 0.0_wp)
+         call check(trim(el(i)(1:30))//': speeds and accelerations', maxval(abs(dydt(1:4) - ref(1:4))) <= &
+                    1.0e-13_wp*maxval(abs(ref(1:4))))
+         call check(trim(el(i)(1:30))//': dissipated power', dydt(5), pd, rel_tol=1.0e-13_wp)
+         deallocate (dydt, ref)
+      end do
+   end subroutine test_model_rhs_is_the_plug_ins_own_torques_and_derivatives
+
+   !> A type extended from a shaft or an inertia that overrides the physics but
+   !> keeps the parent's hot-path claim must still be asked through its own
+   !> procedures (the model checks each claim at the start of a run).
+   subroutine test_hot_path_asks_an_extension_that_changes_the_physics()
+      type(model_t) :: m
+      type(stiffening_shaft_t) :: s2
+      type(pushed_inertia_t) :: n2
+      real(wp), allocatable :: y(:), dydt(:)
+      real(wp) :: tl, tr
+      call test_begin('hot_path_asks_an_extension_that_changes_the_physics')
+      call load_model_text(two_disks//"&element type='shaft', stiffness=100.0 /", m)
+      select type (e => m%elements(1)%e)
+      type is (shaft_t)
+         s2%shaft_t = e
+      end select
+      select type (nd => m%nodes(2)%n)
+      type is (inertia_node_t)
+         n2%inertia_node_t = nd
+      end select
+      deallocate (m%elements(1)%e, m%nodes(2)%n)
+      allocate (m%elements(1)%e, source=s2)
+      allocate (m%nodes(2)%n, source=n2)
+      call m%initial_state(y)
+      y(1:4) = [0.5_wp, 0.0_wp, -0.5_wp, 0.0_wp]
+      call m%init_modes(0.0_wp, y)
+      allocate (dydt(size(y)))
+      call m%rhs(0.0_wp, y, dydt)
+      call s2%torques(0.5_wp, 0.0_wp, -0.5_wp, 0.0_wp, tl, tr)
+      call check('the extended shaft''s own torque (twice the linear one)', tl, -200.0_wp, rel_tol=1.0e-14_wp)
+      call check('node 1 feels it', dydt(2), tl/1.0_wp, rel_tol=1.0e-14_wp)
+      call check('node 2 feels it and the extended node''s own extra torque', dydt(4), (tr + 1.0_wp)/2.0_wp, &
+                 rel_tol=1.0e-14_wp)
+   end subroutine test_hot_path_asks_an_extension_that_changes_the_physics
+   !> Event location on a long train steps only the part a guard sees
+   !> (`model%rhs_part`); for the nodes it covers it must give exactly what
+   !> `model%rhs` gives (the same torque sums, in the same order), or located
+   !> times would differ from those of the whole train. Six disks: shafts, a
+   !> spur gear in contact (element 3), a damped shaft, a keyed joint; the part:
+   !> nodes 3 and 4 (the gear's) with their elements 2, 3, 4.
+   subroutine test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), full(:), part(:)
+      integer :: i
+      call test_begin('rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs')
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6 /"//nl// &
+                           "&node id='a', type='inertia', inertia=1.0 /"//nl// &
+                           "&node id='b', type='inertia', inertia=0.3, damping=0.2 /"//nl// &
+                           "&node id='c', type='inertia', inertia=0.7 /"//nl// &
+                           "&node id='d', type='inertia', inertia=0.4 /"//nl// &
+                           "&node id='e', type='inertia', inertia=1.5 /"//nl// &
+                           "&node id='f', type='inertia', inertia=2.0 /"//nl// &
+                           "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
+                           "&element type='shaft', stiffness=2e3, damping=0.1, left='b', right='c' /"//nl// &
+                           "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
+                           "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001, left='c', right='d' /"//nl// &
+                           "&element type='shaft', stiffness=3e3, left='d', right='e' /"//nl// &
+                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, "// &
+                           "left='e', right='f' /"//nl// &
+                           "&load node='f', value=-3.0 /"//nl, m)
+      call m%initial_state(y)
+      do i = 1, 12
+         y(i) = 0.01_wp*sin(1.7_wp*i) + merge(0.05_wp, 0.0_wp, i == 5)
+      end do
+      call m%init_modes(0.0_wp, y)
+      allocate (full(size(y)), part(size(y)))
+      call m%rhs(0.1_wp, y, full)
+      part = huge(1.0_wp)
+      call m%rhs_part(0.1_wp, y, part, [2, 3, 4, 5], [2, 3, 4], [3, 4])
+      call check('the gear is in contact (its torques take part)', m%elements(3)%e%in_contact())
+      call check('derivatives of nodes c and d: identical to the bit', all(part(5:8) == full(5:8)))
+      call check('no other entry written', all(part(1:4) == huge(1.0_wp)) .and. all(part(9:) == huge(1.0_wp)))
+   end subroutine test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs
 end program test_elements

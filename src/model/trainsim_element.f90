@@ -77,6 +77,7 @@ module trainsim_element
       procedure :: in_contact => el_in_contact
       procedure :: status => el_status
       procedure :: params => el_params
+      procedure :: linear_spring => el_linear_spring
    end type element_t
 
    !> A slot in the model's element list (arrays of polymorphic objects).
@@ -269,6 +270,23 @@ contains
       contact = 1
       pairs = 0
    end subroutine el_status
+
+   !> Whether the element is a linear spring-damper along a line with lever arms
+   !> r1, r2 (optional capability, default no): delta = r1 thl - r2 thr,
+   !> F = k delta + c delta', tl = -r1 F, tr = r2 F, potential k delta^2/2,
+   !> dissipation c delta'^2, no guards, no input power, no loads read. The
+   !> model then evaluates such elements from arrays without calls through the
+   !> element (the hot path); it checks the claim against `torques` at the start
+   !> of every run.
+   pure subroutine el_linear_spring(self, linear, k, c, r1, r2)
+      class(element_t), intent(in) :: self
+      logical, intent(out) :: linear
+      real(wp), intent(out) :: k, c, r1, r2
+      associate (unused => self)
+      end associate
+      k = 0.0_wp; c = 0.0_wp; r1 = 1.0_wp; r2 = 1.0_wp
+      linear = .false.
+   end subroutine el_linear_spring
 
    !> Parameters as used (derived values included), for the output file.
    function el_params(self) result(p)

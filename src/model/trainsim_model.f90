@@ -8,13 +8,40 @@ module trainsim_model
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_signal, only: signal_t
-   use trainsim_node, only: node_slot_t
-   use trainsim_element, only: element_slot_t
+   use trainsim_node, only: node_t, node_slot_t
+   use trainsim_element, only: element_t, element_slot_t
    use trainsim_event, only: event_t, max_update_events
    implicit none
    private
 
    public :: model_t, run_settings_t, load_t
+
+   !> Kinds of node on the hot path.
+   integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
+
+   !> A node on the hot path: its kind, state offset and, for a plain inertia,
+   !> J and d; for a held node with a constant speed, that speed.
+   type :: fast_node_t
+      integer :: kind = nk_other
+      integer :: off = 0
+      logical :: const_speed = .false.
+      real(wp) :: j = 1.0_wp, d = 0.0_wp, w = 0.0_wp, theta0 = 0.0_wp
+      real(wp) :: load0 = 0.0_wp   !< sum of its loads if all are constant (else 0: summed at t)
+   end type fast_node_t
+
+   !> An element on the hot path: its nodes and, for a linear spring, k, c, r1, r2.
+   type :: fast_element_t
+      integer :: l = 0, r = 0, ng = 0
+      logical :: linear = .false.
+      real(wp) :: k = 0.0_wp, c = 0.0_wp, r1 = 1.0_wp, r2 = 1.0_wp
+   end type fast_element_t
+
+   !> A load on the hot path: its node and, when constant, its value.
+   type :: fast_load_t
+      integer :: node = 0
+      logical :: const = .false.
+      real(wp) :: v = 0.0_wp
+   end type fast_load_t
 
    !> Run conditions from the &run group.
    type :: run_settings_t
@@ -57,15 +84,30 @@ module trainsim_model
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
+      ! The hot path (`build_fast_path`, redone by `finalize` and at the start of
+      ! every run in `init_modes`, so a re-parameterised copy is current): nodes
+      ! that are plain inertias and elements that are linear springs (their
+      ! optional capabilities, checked against their own procedures) are
+      ! evaluated from these arrays, without calls through the polymorphic
+      ! objects; every other node and element is asked as before.
+      type(fast_node_t), allocatable, private :: fn(:)
+      type(fast_element_t), allocatable, private :: fe(:)
+      type(fast_load_t), allocatable, private :: fl(:)
+      integer, allocatable, private :: guard_els(:)        !< the elements that have guards
+      integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
       procedure :: kinematics => model_kinematics
       procedure :: rhs => model_rhs
+      procedure :: rhs_part => model_rhs_part
       procedure :: jacobian => model_jacobian
       procedure :: apply_loads => model_apply_loads
       procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
+      procedure :: element_guards => model_element_guards
+      procedure :: guard_element => model_guard_element
+      procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
       procedure :: apply_events => model_apply_events
       procedure :: any_contact => model_any_contact
@@ -112,7 +154,144 @@ contains
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
+      call self%build_fast_path()
    end subroutine model_finalize
+
+   !> Tables of the hot path from the nodes' and elements' current parameters.
+   !> A node that says it is a plain inertia (`plain_inertia`) or an element
+   !> that says it is a linear spring (`linear_spring`) is taken at its word
+   !> only if its own procedures agree at two probe points (a type extended
+   !> from one of them that changes its physics but not the claim is then
+   !> still asked through its procedures).
+   subroutine model_build_fast_path(self)
+      class(model_t), intent(inout) :: self
+      integer :: i, nn, ne
+      real(wp) :: j, d, k, c, r1, r2
+      logical :: plain, lin
+      real(wp), allocatable :: y(:), dydt(:)
+      nn = size(self%nodes)
+      ne = size(self%elements)
+      if (allocated(self%fn)) deallocate (self%fn)
+      allocate (self%fn(nn))
+      allocate (y(max(self%n_y, 1)), dydt(max(self%n_y, 1)))
+      do i = 1, nn
+         self%fn(i)%off = self%nodes(i)%n%offset
+         if (self%speed_of(i) /= 0) then
+            self%fn(i)%kind = nk_held
+            self%fn(i)%const_speed = self%speeds(self%speed_of(i))%is_constant()
+            self%fn(i)%w = self%speeds(self%speed_of(i))%value(0.0_wp)
+            self%fn(i)%theta0 = self%nodes(i)%n%theta0
+         else
+            call self%nodes(i)%n%plain_inertia(plain, j, d)
+            if (plain) plain = plain_node_agrees(self%nodes(i)%n, j, d)
+            if (plain) then
+               self%fn(i)%kind = nk_plain
+               self%fn(i)%j = j
+               self%fn(i)%d = d
+            end if
+         end if
+      end do
+      if (allocated(self%fe)) deallocate (self%fe)
+      allocate (self%fe(ne))
+      do i = 1, ne
+         associate (e => self%elements(i)%e)
+            self%fe(i)%l = e%left
+            self%fe(i)%r = e%right
+            self%fe(i)%ng = e%n_guards()
+            call e%linear_spring(lin, k, c, r1, r2)
+            if (lin) lin = linear_element_agrees(e, k, c, r1, r2)
+            self%fe(i)%linear = lin
+            if (lin) then
+               self%fe(i)%k = k; self%fe(i)%c = c; self%fe(i)%r1 = r1; self%fe(i)%r2 = r2
+            end if
+         end associate
+      end do
+      self%guard_els = pack([(i, i=1, ne)], self%fe(:)%ng > 0)
+      if (allocated(self%fl)) deallocate (self%fl)
+      allocate (self%fl(size(self%loads)))
+      do i = 1, size(self%loads)
+         self%fl(i)%node = self%loads(i)%node
+         self%fl(i)%const = self%loads(i)%torque%is_constant()
+         self%fl(i)%v = self%loads(i)%torque%value(0.0_wp)
+      end do
+      ! a node whose loads are all constant starts each RHS from their sum (in
+      ! load order, as summing them at t would); the others sum theirs at t
+      do i = 1, size(self%loads)
+         if (.not. self%fl(i)%const) self%fn(self%fl(i)%node)%load0 = huge(1.0_wp)
+      end do
+      do i = 1, size(self%loads)
+         associate (nd => self%fn(self%fl(i)%node))
+            if (nd%load0 /= huge(1.0_wp)) nd%load0 = nd%load0 + self%fl(i)%v
+         end associate
+      end do
+      do i = 1, nn
+         if (self%fn(i)%load0 == huge(1.0_wp)) self%fn(i)%load0 = 0.0_wp
+      end do
+      self%dyn_loads = pack([(i, i=1, size(self%loads))], [(self%fn(self%fl(i)%node)%load0 == 0.0_wp .and. &
+                                                             .not. all_const_on(self%fl(i)%node), i=1, size(self%loads))])
+   contains
+
+      !> The node's own procedures give what a plain inertia (J, d) would.
+      logical function plain_node_agrees(nd, jj, dd) result(ok)
+         class(node_t), intent(in) :: nd
+         real(wp), intent(in) :: jj, dd
+         real(wp) :: th, om, w
+         integer :: p, o
+         ok = nd%nstates() == 2 .and. jj > 0.0_wp .and. dd >= 0.0_wp
+         if (.not. ok) return
+         o = nd%offset
+         do p = 1, 2
+            y = 0.0_wp
+            y(o + 1) = 0.37_wp*p
+            y(o + 2) = -1.3_wp/p
+            w = y(o + 2)
+            dydt = 0.0_wp
+            call nd%derivatives(0.25_wp*p, y, 2.5_wp*p, dydt)
+            call nd%kinematics(y, th, om)
+            ok = ok .and. th == y(o + 1) .and. om == w .and. dydt(o + 1) == w &
+                 .and. close_to(dydt(o + 2), (2.5_wp*p - dd*w)/jj) &
+                 .and. close_to(nd%stored_energy(y), 0.5_wp*jj*w**2) &
+                 .and. close_to(nd%dissipation_power(y), dd*w**2) &
+                 .and. nd%input_power(0.25_wp*p, y) == 0.0_wp
+         end do
+      end function plain_node_agrees
+
+      !> The element's own procedures give what a linear spring (k, c, r1, r2) would.
+      logical function linear_element_agrees(e, kk, cc, rr1, rr2) result(ok)
+         class(element_t), intent(in) :: e
+         real(wp), intent(in) :: kk, cc, rr1, rr2
+         real(wp) :: x(4), tl, tr, dl, dv, f
+         integer :: p
+         ok = e%n_guards() == 0 .and. .not. e%needs_loads .and. .not. e%supplies_power
+         do p = 1, 2
+            if (.not. ok) return
+            x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]*real(p, wp)**[1, -1, 2, 1]
+            call e%torques(x(1), x(2), x(3), x(4), tl, tr)
+            dl = rr1*x(1) - rr2*x(3)
+            dv = rr1*x(2) - rr2*x(4)
+            f = kk*dl + cc*dv
+            ok = close_to(tl, -rr1*f) .and. close_to(tr, rr2*f) &
+                 .and. close_to(e%potential_energy(x(1), x(3)), 0.5_wp*kk*dl**2) &
+                 .and. close_to(e%dissipation_power(x(1), x(2), x(3), x(4)), cc*dv**2)
+         end do
+      end function linear_element_agrees
+
+      !> Whether every load on node nd is constant.
+      logical function all_const_on(nd) result(c)
+         integer, intent(in) :: nd
+         integer :: q
+         c = .true.
+         do q = 1, size(self%fl)
+            if (self%fl(q)%node == nd .and. .not. self%fl(q)%const) c = .false.
+         end do
+      end function all_const_on
+
+      !> Equal to rounding (the claim and the procedure may order operations differently).
+      pure logical function close_to(a, b)
+         real(wp), intent(in) :: a, b
+         close_to = abs(a - b) <= 1.0e-12_wp*max(abs(a), abs(b)) + tiny(1.0_wp)
+      end function close_to
+   end subroutine model_build_fast_path
 
    !> Whether node i has a prescribed speed.
    pure logical function model_is_held(self, i) result(held)
@@ -151,75 +330,227 @@ contains
    subroutine model_kinematics(self, t, y)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
-      integer :: i, s
-      do i = 1, size(self%nodes)
-         s = self%speed_of(i)
-         if (s == 0) then
-            call self%nodes(i)%n%kinematics(y, self%theta(i), self%omega(i))
-         else
-            self%theta(i) = self%nodes(i)%n%theta0 + self%speeds(s)%integral(t)
-            self%omega(i) = self%speeds(s)%value(t)
-         end if
-      end do
+      call kinematics_all(self, t, y)
    end subroutine model_kinematics
 
+   !> `model_kinematics` without the dispatch (the hot path calls it directly).
+   subroutine kinematics_all(self, t, y)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      integer :: i, o
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            if (nd%kind == nk_plain) then
+               o = nd%off
+               self%theta(i) = y(o + 1)
+               self%omega(i) = y(o + 2)
+            else if (nd%kind == nk_held .and. nd%const_speed) then
+               self%theta(i) = nd%theta0 + nd%w*t
+               self%omega(i) = nd%w
+            else
+               call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+            end if
+         end associate
+      end do
+   end subroutine kinematics_all
+
    !> dy/dt at (t, y). Leaves node kinematics and net node torques in the workspace.
+   !> Linear-spring elements and plain-inertia nodes come from the hot-path
+   !> tables; the others are asked through their procedures, in the same order.
    subroutine model_rhs(self, t, y, dydt)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
-      integer :: i, l, r, s
-      real(wp) :: tl, tr, pdiss, pin
-      call self%kinematics(t, y)
-      call self%apply_loads(t)
-      do i = 1, size(self%elements)
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
-         call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+      call rhs_fast(self, t, y, dydt)
+   end subroutine model_rhs
+
+   !> `model_rhs` without the dispatch.
+   subroutine rhs_fast(self, t, y, dydt)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
+      integer :: i, l, r, s, o
+      real(wp) :: tl, tr, f, dv, pdiss, pin
+      logical :: track
+      track = self%run%track_energy
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      ! kinematics and constant loads in one pass
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            if (nd%kind == nk_plain) then
+               o = nd%off
+               self%theta(i) = y(o + 1)
+               self%omega(i) = y(o + 2)
+            else if (nd%kind == nk_held .and. nd%const_speed) then
+               self%theta(i) = nd%theta0 + nd%w*t
+               self%omega(i) = nd%w
+            else
+               call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+            end if
+            self%torque(i) = nd%load0
+         end associate
+      end do
+      if (size(self%dyn_loads) > 0 .or. self%any_needs_loads) call loads_varying(self, t)
+      if (track) then
+         ! power of the external loads on free nodes (before the elements add to self%torque)
+         do i = 1, size(self%fl)
+            l = self%fl(i)%node
+            if (self%fn(l)%kind == nk_held) cycle
+            if (self%fl(i)%const) then
+               pin = pin + self%fl(i)%v*self%omega(l)
+            else
+               pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+            end if
+         end do
+      end if
+      do i = 1, size(self%fe)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear) then
+               dv = e%r1*self%omega(l) - e%r2*self%omega(r)
+               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*dv     ! eqs. (H.1), (H.15)
+               tl = -(f*e%r1)
+               tr = f*e%r2
+               if (track .and. e%c /= 0.0_wp) pdiss = pdiss + e%c*dv**2
+            else
+               call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+               if (track) then
+                  pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                       self%omega(r))
+                  if (self%elements(i)%e%supplies_power) then
+                     pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                self%omega(r))
+                  end if
+               end if
+            end if
+         end associate
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
-      do i = 1, size(self%nodes)
-         if (self%speed_of(i) == 0) call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            select case (nd%kind)
+            case (nk_plain)
+               o = nd%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               dydt(o + 2) = (self%torque(i) - nd%d*y(o + 2))/nd%j          ! eq. (G.2)
+               if (track .and. nd%d /= 0.0_wp) pdiss = pdiss + nd%d*self%omega(i)**2
+            case (nk_held)
+               if (track) then
+                  ! torque the drive must supply: J*alpha minus what acts on the node
+                  if (nd%const_speed) then
+                     pin = pin - self%torque(i)*self%omega(i)   ! alpha = 0
+                  else
+                     s = self%speed_of(i)
+                     pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
+                  end if
+               end if
+            case default
+               call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+               if (track) then
+                  pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
+                  pin = pin + self%nodes(i)%n%input_power(t, y)
+               end if
+            end select
+         end associate
       end do
-      if (.not. self%run%track_energy) return
-      pdiss = 0.0_wp
-      pin = 0.0_wp
-      do i = 1, size(self%nodes)
-         s = self%speed_of(i)
-         if (s == 0) then
-            pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
-            pin = pin + self%nodes(i)%n%input_power(t, y)
-         else
-            ! torque the drive must supply: J*alpha minus what acts on the node
-            pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
-         end if
-      end do
-      do i = 1, size(self%loads)
-         l = self%loads(i)%node
-         if (self%speed_of(l) == 0) pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
-      end do
-      do i = 1, size(self%elements)
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
-         pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
-         if (self%elements(i)%e%supplies_power) then
-            pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
-         end if
-      end do
+      if (.not. track) return
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
-   end subroutine model_rhs
+   end subroutine rhs_fast
+
+   !> dy/dt at (t, y) for the states of the nodes der(:) only (event location on
+   !> a part of a long train). kin(:) must hold der and every node of the
+   !> elements els(:), and els every element of a node in der, in increasing
+   !> order: the torques then add up in the same order as in `rhs`, and the
+   !> derivatives of der are bit for bit those of `rhs`. Other entries of dydt
+   !> are left as they were; no energy rates.
+   subroutine model_rhs_part(self, t, y, dydt, kin, els, der)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: dydt(:)
+      integer, intent(in) :: kin(:), els(:), der(:)
+      integer :: k, i, l, r, o
+      real(wp) :: tl, tr, f
+      do k = 1, size(kin)
+         i = kin(k)
+         call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         self%torque(i) = self%fn(i)%load0
+      end do
+      do k = 1, size(self%dyn_loads)
+         i = self%dyn_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      if (self%any_needs_loads) then
+         do k = 1, size(els)
+            i = els(k)
+            if (.not. self%elements(i)%e%needs_loads) cycle
+            self%elements(i)%e%ext_left = self%torque(self%fe(i)%l)
+            self%elements(i)%e%ext_right = self%torque(self%fe(i)%r)
+         end do
+      end if
+      do k = 1, size(els)
+         i = els(k)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear) then
+               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
+               tl = -(f*e%r1)
+               tr = f*e%r2
+            else
+               call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+            end if
+         end associate
+         self%torque(l) = self%torque(l) + tl
+         self%torque(r) = self%torque(r) + tr
+      end do
+      do k = 1, size(der)
+         i = der(k)
+         associate (nd => self%fn(i))
+            select case (nd%kind)
+            case (nk_plain)
+               o = nd%off
+               dydt(o + 1) = y(o + 2)
+               dydt(o + 2) = (self%torque(i) - nd%d*y(o + 2))/nd%j
+            case (nk_other)
+               call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+            end select
+         end associate
+      end do
+   end subroutine model_rhs_part
 
    !> External load torques at t into self%torque, and published to the
    !> elements that read their nodes' loads.
    subroutine model_apply_loads(self, t)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t
-      integer :: i, l
-      self%torque = 0.0_wp
-      do i = 1, size(self%loads)
-         l = self%loads(i)%node
+      call loads_at(self, t)
+   end subroutine model_apply_loads
+
+   !> `model_apply_loads` without the dispatch.
+   subroutine loads_at(self, t)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer :: i
+      do i = 1, size(self%fn)
+         self%torque(i) = self%fn(i)%load0
+      end do
+      call loads_varying(self, t)
+   end subroutine loads_at
+
+   !> The loads that vary with t, and the loads published to the elements that
+   !> read them (after the constant sums are in self%torque).
+   subroutine loads_varying(self, t)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer :: i, k, l
+      do k = 1, size(self%dyn_loads)
+         i = self%dyn_loads(k)
+         l = self%fl(i)%node
          self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
       end do
       if (.not. self%any_needs_loads) return
@@ -228,7 +559,7 @@ contains
          self%elements(i)%e%ext_left = self%torque(self%elements(i)%e%left)
          self%elements(i)%e%ext_right = self%torque(self%elements(i)%e%right)
       end do
-   end subroutine model_apply_loads
+   end subroutine loads_varying
 
    !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes, assembled from
    !> the nodes' own blocks and the elements' torque partials. The rows of the
@@ -281,24 +612,81 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      integer :: i, l, r, o, n
+      integer :: k, i, o, n
+      real(wp) :: thl, wl, thr, wr
       if (self%n_guards == 0) return
-      call self%kinematics(t, y)
-      do i = 1, size(self%elements)
-         n = self%elements(i)%e%n_guards()
-         if (n == 0) cycle
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
+      ! only the nodes of elements with guards (a long train has few of them)
+      do k = 1, size(self%guard_els)
+         i = self%guard_els(k)
+         n = self%fe(i)%ng
          o = self%guard_offset(i)
-         call self%elements(i)%e%guards(self%theta(l), self%omega(l), self%theta(r), self%omega(r), g(o + 1:o + n))
+         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+         call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
       end do
    end subroutine model_guards
+
+   !> The guards of element i alone at (t, y), into g(1:n_guards of i): only the
+   !> kinematics of its two nodes are evaluated (for event location, where one
+   !> guard is followed on a trial state; a node's kinematics reads only its own
+   !> states y(offset+1:offset+nstates)).
+   subroutine model_element_guards(self, i, t, y, g)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: g(:)
+      real(wp) :: thl, wl, thr, wr
+      call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+      call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+      call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
+   end subroutine model_element_guards
+
+   !> The element that owns guard j (0 if none).
+   pure integer function model_guard_element(self, j) result(owner)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: j
+      integer :: k, i
+      owner = 0
+      do k = 1, size(self%guard_els)
+         i = self%guard_els(k)
+         if (j > self%guard_offset(i) .and. j <= self%guard_offset(i) + self%fe(i)%ng) then
+            owner = i
+            return
+         end if
+      end do
+   end function model_guard_element
+
+   !> Angle and speed of node i at (t, y).
+   pure subroutine node_kinematics(self, i, t, y, th, om)
+      type(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: th, om
+      integer :: s
+      select case (self%fn(i)%kind)
+      case (nk_plain)
+         th = y(self%fn(i)%off + 1)
+         om = y(self%fn(i)%off + 2)
+      case (nk_held)
+         if (self%fn(i)%const_speed) then
+            th = self%fn(i)%theta0 + self%fn(i)%w*t
+            om = self%fn(i)%w
+         else
+            s = self%speed_of(i)
+            th = self%nodes(i)%n%theta0 + self%speeds(s)%integral(t)
+            om = self%speeds(s)%value(t)
+         end if
+      case default
+         call self%nodes(i)%n%kinematics(y, th, om)
+      end select
+   end subroutine node_kinematics
 
    !> Set every element's discrete mode from the state at t_start.
    subroutine model_init_modes(self, t, y)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       integer :: i, l, r
+      call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
       call self%kinematics(t, y)
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left
@@ -370,19 +758,26 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       integer :: i, l, r
-      call self%kinematics(t, y)
+      call kinematics_all(self, t, y)
       e = 0.0_wp
       do i = 1, size(self%nodes)
-         if (self%speed_of(i) == 0) then
-            e = e + self%nodes(i)%n%stored_energy(y)
-         else
+         select case (self%fn(i)%kind)
+         case (nk_plain)
+            e = e + 0.5_wp*self%fn(i)%j*self%omega(i)**2
+         case (nk_held)
             e = e + 0.5_wp*self%nodes(i)%n%inertia()*self%omega(i)**2
-         end if
+         case default
+            e = e + self%nodes(i)%n%stored_energy(y)
+         end select
       end do
       do i = 1, size(self%elements)
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
-         e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+         l = self%fe(i)%l
+         r = self%fe(i)%r
+         if (self%fe(i)%linear) then
+            e = e + 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
+         else
+            e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+         end if
       end do
    end function model_stored_energy
    !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed or a

@@ -39,6 +39,7 @@ module trainsim_node
       procedure :: params => nd_params
       procedure :: jacobian => nd_jacobian
       procedure :: breakpoints => nd_breakpoints
+      procedure :: plain_inertia => nd_plain_inertia
    end type node_t
 
    !> A slot in the model's node list.
@@ -136,6 +137,23 @@ contains
       end associate
       p = 0.0_wp
    end function nd_input_power
+
+   !> Whether the node is a plain rigid disk (optional capability, default no):
+   !> kinematics (angle, speed) = its states 1 and 2, derivatives x1' = x2,
+   !> J x2' = -d x2 + T (eqs. G.1-G.2), stored energy J x2^2/2, dissipation
+   !> d x2^2, no input power. The model then integrates such nodes from arrays
+   !> without calls through the node (the hot path); it checks the claim
+   !> against `derivatives` at the start of every run.
+   pure subroutine nd_plain_inertia(self, plain, j, d)
+      class(node_t), intent(in) :: self
+      logical, intent(out) :: plain
+      real(wp), intent(out) :: j, d
+      associate (unused => self)
+      end associate
+      j = 0.0_wp
+      d = 0.0_wp
+      plain = .false.
+   end subroutine nd_plain_inertia
 
    !> Whether the node is ground.
    pure logical function nd_is_fixed(self) result(f)

@@ -32,6 +32,7 @@ module trainsim_signal
       procedure :: integral => signal_integral
       procedure :: derivative => signal_derivative
       procedure :: breakpoints => signal_breakpoints
+      procedure :: is_constant => signal_is_constant
    end type signal_t
 
 contains
@@ -278,6 +279,12 @@ contains
          f = table_antiderivative(self, t) - self%integral_at_zero
       end select
    end function signal_integral
+
+   !> Whether the signal is the same at every t (value0; integral value0 t).
+   pure logical function signal_is_constant(self) result(c)
+      class(signal_t), intent(in) :: self
+      c = self%kind == sig_constant
+   end function signal_is_constant
 
    !> Time derivative at t (right derivative at table knots).
    pure real(wp) function signal_derivative(self, t) result(d)
