@@ -12,7 +12,7 @@ module trainsim_el_helical_gear
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t
+   use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_element, only: element_t
@@ -197,6 +197,6 @@ contains
                        values=[self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, &
                         self%face, self%youngs, self%cl%law%k, &
                         self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b, &
-                        self%cl%r2/self%cl%r1, self%mp + self%mf])
+                        guarded_ratio(self%cl%r2, self%cl%r1), self%mp + self%mf])
    end function hel_params
 end module trainsim_el_helical_gear

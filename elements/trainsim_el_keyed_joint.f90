@@ -25,7 +25,7 @@ module trainsim_el_keyed_joint
    use trainsim_contact, only: fit_tight, fit_loose, fit_average, key_lineal_stiffness
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t
+   use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_element, only: element_t
    implicit none
@@ -184,7 +184,7 @@ contains
                        string_t('angular_stiffness')], &
                        values=[self%diameter, self%cl%b, self%cl%law%k, self%mu, self%phi, self%load_radius, &
                         self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor, &
-                        self%cl%law%k*(0.5_wp*self%diameter)**2])
+                        guarded_product(self%cl%law%k, guarded_product(0.5_wp*self%diameter, 0.5_wp*self%diameter))])
       if (self%cl%law%fit /= 0) then
          p%names = [p%names, string_t('stiffness_fit'), string_t('key_length')]
          p%values = [p%values, real(self%cl%law%fit, wp), self%key_length]

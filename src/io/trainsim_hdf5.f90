@@ -760,7 +760,7 @@ contains
       real(wp) :: r(size(m))
       integer :: k(size(m))
       type(string_t), allocatable :: vel(:), tq(:), cnt(:), sec(:)
-      vel = per_second(self%el_disp_units)
+      allocate (vel, source=per_second(self%el_disp_units))   ! not `vel = ...`: gfortran 12 false -Wmaybe-uninitialized
       tq = same_units(self%n_el, self%u_torque)
       cnt = same_units(self%n_el, '1')
       sec = same_units(self%n_el, 's')
