@@ -96,7 +96,8 @@ contains
          ng_max = max(ng_max, self%g_loc(j))
       end do
       allocate (self%ge(max(ng_max, 1)))
-      self%el_states = 0
+      self%el_states(1:3:2, :) = 1   ! empty ranges (1:0) for held nodes
+      self%el_states(2:4:2, :) = 0
       do e = 1, size(model%elements)
          do side = 1, 2
             nd = model%elements(e)%e%left
