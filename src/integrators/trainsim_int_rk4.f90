@@ -110,8 +110,6 @@ contains
       end do
       call build_parts(self, model)
       call self%start_grid(model, t)
-      associate (unused => y)
-      end associate
    end subroutine rk4_start
 
    !> For each element with guards in a long train: the part of the train its
