@@ -33,7 +33,7 @@ program bench_rk4_throughput
    implicit none
 
    !> Repetitions per figure (the minimum is reported).
-   integer, parameter :: n_rep = 3
+   integer, parameter :: n_rep = 5
    !> Steps of a rig run (the issue's figure: 2e6 steps of 8e-6 s).
    integer(i8), parameter :: rig_steps = 2000000_i8
    real(wp), parameter :: rig_dt = 8.0e-6_wp, chain_dt = 5.0e-3_wp

@@ -96,8 +96,7 @@ contains
          ng_max = max(ng_max, self%g_loc(j))
       end do
       allocate (self%ge(max(ng_max, 1)))
-      ! empty ranges (1:0) for nodes without states (held at a prescribed speed)
-      self%el_states(1:3:2, :) = 1
+      self%el_states(1:3:2, :) = 1   ! empty ranges (1:0) for held nodes
       self%el_states(2:4:2, :) = 0
       do e = 1, size(model%elements)
          do side = 1, 2
@@ -111,8 +110,6 @@ contains
       end do
       call build_parts(self, model)
       call self%start_grid(model, t)
-      associate (unused => y)
-      end associate
    end subroutine rk4_start
 
    !> For each element with guards in a long train: the part of the train its

@@ -101,6 +101,8 @@ module trainsim_model
       procedure :: kinematics => model_kinematics
       procedure :: rhs => model_rhs
       procedure :: rhs_part => model_rhs_part
+      procedure :: element_torques => model_element_torques
+      procedure :: potential_energy => model_potential_energy
       procedure :: jacobian => model_jacobian
       procedure :: apply_loads => model_apply_loads
       procedure :: breakpoints => model_breakpoints
@@ -460,6 +462,43 @@ contains
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
    end subroutine rhs_fast
+
+   !> Torques of element i on its left and right node at the kinematics in the
+   !> workspace (after `kinematics`): the hot path for linear springs.
+   subroutine model_element_torques(self, i, tl, tr)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(out) :: tl, tr
+      real(wp) :: f
+      integer :: l, r
+      associate (e => self%fe(i))
+         l = e%l
+         r = e%r
+         if (e%linear) then
+            f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
+            tl = -(f*e%r1)
+            tr = f*e%r2
+         else
+            call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+         end if
+      end associate
+   end subroutine model_element_torques
+
+   !> Elastic energy in all elements at the kinematics in the workspace.
+   real(wp) function model_potential_energy(self) result(e)
+      class(model_t), intent(in) :: self
+      integer :: i, l, r
+      e = 0.0_wp
+      do i = 1, size(self%fe)
+         l = self%fe(i)%l
+         r = self%fe(i)%r
+         if (self%fe(i)%linear) then
+            e = e + 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
+         else
+            e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+         end if
+      end do
+   end function model_potential_energy
 
    !> dy/dt at (t, y) for the states of the nodes der(:) only (event location on
    !> a part of a long train). kin(:) must hold der and every node of the

@@ -164,16 +164,15 @@ contains
       do i = 1, size(model%elements)
          associate (e => model%elements(i)%e)
             l = e%left; r = e%right
-            call e%torques(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
-                           self%s%torque_left(i), self%s%torque_right(i))
+            call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
             call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
                           self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
          end associate
       end do
       if (self%track) then
          stored = model%stored_energy(t, y)
-         self%s%energy(1) = stored - sum_potential(model)
-         self%s%energy(2) = sum_potential(model)
+         self%s%energy(2) = model%potential_energy()
+         self%s%energy(1) = stored - self%s%energy(2)
          self%s%energy(3) = y(model%n_states + 1)
          self%s%energy(4) = y(model%n_states + 2)
          self%s%energy(5) = stored + self%s%energy(3) - self%s%energy(4) - model%energy0
@@ -192,18 +191,6 @@ contains
       v = ((6.0_wp*t2 - 6.0_wp*tau)*x0 + (6.0_wp*tau - 6.0_wp*t2)*x1)/h + (3.0_wp*t2 - 4.0_wp*tau + 1.0_wp)*v0 + &
           (3.0_wp*t2 - 2.0_wp*tau)*v1
    end subroutine hermite
-
-   !> Elastic energy in the elements at the kinematics currently in the model workspace.
-   real(wp) function sum_potential(model) result(e)
-      type(model_t), intent(in) :: model
-      integer :: i
-      e = 0.0_wp
-      do i = 1, size(model%elements)
-         associate (el => model%elements(i)%e)
-            e = e + el%potential_energy(model%theta(el%left), model%theta(el%right))
-         end associate
-      end do
-   end function sum_potential
 
    !> Write the current sample to the sink; feed the turning points of the
    !> peak-to-peak metrics, and the in-memory series when it is kept.
