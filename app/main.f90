@@ -6,7 +6,7 @@ program trainsim_main
    use trainsim_error, only: error_t, err_numeric, err_interrupted
    use trainsim_interrupt, only: install_interrupt_handlers, interrupt_signal, signal_name
    use trainsim_strings, only: str
-   use trainsim_version, only: version_string
+   use trainsim_version, only: version_string, version_full
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_model, only: model_t
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
@@ -61,7 +61,7 @@ program trainsim_main
       call usage(output_unit)
       call quit(0)
    case ('-V', '--version', 'version')
-      write (output_unit, '(a)') 'trainsim '//version_string
+      write (output_unit, '(a)') 'trainsim '//version_full()
       call quit(0)
    case ('run', 'modes', 'sweep')
    case ('gear', 'key')
@@ -485,7 +485,7 @@ contains
       call load(path, model)
       if (len(out) > 0) model%run%output = out
       if (no_output) model%run%output = ''
-      write (output_unit, '(a)') 'trainsim '//version_string//': '//path//'  ('//model%title//')'
+      write (output_unit, '(a)') 'trainsim '//version_full()//': '//path//'  ('//model%title//')'
       call print_parameters(model, output_unit)
       flush (output_unit)   ! kept even if the run is interrupted or crashes
       if (model%run%integrator(1:3) == 'rk4') then

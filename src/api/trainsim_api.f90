@@ -28,7 +28,7 @@ module trainsim
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_io, err_numeric, err_internal
    use trainsim_strings, only: string_t, to_lower, str
-   use trainsim_version, only: version_string
+   use trainsim_version, only: version_string, version_full, git_revision
    use trainsim_deck, only: deck_t, deck_entry_t, read_deck, parse_deck
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
@@ -41,7 +41,7 @@ module trainsim
    private
 
    public :: simulation_t
-   public :: wp, error_t, string_t, version_string
+   public :: wp, error_t, string_t, version_string, version_full, git_revision
    public :: err_input, err_io, err_numeric, err_internal
    public :: event_t, element_metrics_t, run_stats_t, run_result_t, model_t
    public :: ev_name, ev_contact_front, ev_contact_rear, ev_separation, ev_zone

@@ -4,7 +4,7 @@ module trainsim_strings
    implicit none
    private
 
-   public :: string_t, to_lower, str, join
+   public :: string_t, to_lower, str, join, invalid_text_byte
 
    !> A variable-length string, for arrays of names.
    type :: string_t
@@ -91,4 +91,55 @@ contains
          s = s//items(i)%s
       end do
    end function join
+   !> Index of the first byte of `text` that makes it not UTF-8 text: a NUL byte, or a
+   !> byte that does not start or continue a valid UTF-8 sequence (overlong forms,
+   !> surrogates U+D800-DFFF and code points above U+10FFFF are invalid). 0 if valid.
+   pure function invalid_text_byte(text) result(pos)
+      character(len=*), intent(in) :: text
+      integer :: pos
+      integer :: i, n, b, b2, nfollow, k
+      n = len(text)
+      i = 1
+      pos = 0
+      do while (i <= n)
+         b = iachar(text(i:i))
+         if (b < 128) then
+            if (b == 0) then
+               pos = i
+               return
+            end if
+            i = i + 1
+            cycle
+         end if
+         if (b >= 194 .and. b <= 223) then
+            nfollow = 1
+         else if (b >= 224 .and. b <= 239) then
+            nfollow = 2
+         else if (b >= 240 .and. b <= 244) then
+            nfollow = 3
+         else
+            nfollow = -1
+         end if
+         if (nfollow > 0) then
+            if (i + nfollow > n) then
+               nfollow = -1
+            else
+               do k = 1, nfollow
+                  b2 = iachar(text(i + k:i + k))
+                  if (b2 < 128 .or. b2 > 191) nfollow = -1
+               end do
+            end if
+         end if
+         if (nfollow > 0) then
+            b2 = iachar(text(i + 1:i + 1))
+            if ((b == 224 .and. b2 < 160) .or. (b == 237 .and. b2 > 159) .or. &
+                (b == 240 .and. b2 < 144) .or. (b == 244 .and. b2 > 143)) nfollow = -1
+         end if
+         if (nfollow < 0) then
+            pos = i
+            return
+         end if
+         i = i + nfollow + 1
+      end do
+   end function invalid_text_byte
 end module trainsim_strings

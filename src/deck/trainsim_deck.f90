@@ -9,7 +9,7 @@ module trainsim_deck
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
-   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_strings, only: string_t, to_lower, str, join, invalid_text_byte
    implicit none
    private
 
@@ -299,61 +299,30 @@ contains
       character(len=*), intent(in) :: text
       character(len=*), intent(in) :: file
       type(error_t), allocatable, intent(out) :: err
-      integer :: i, n, line, col0, b, nfollow, k, b2
+      integer :: pos, line, col0
       character(len=2) :: hex
 
-      n = len(text)
-      line = 1
-      col0 = 0     ! index of the last line end
-      i = 1
-      do while (i <= n)
-         b = iachar(text(i:i))
-         if (b < 128) then
-            if (b == 10) then
-               line = line + 1
-               col0 = i
-            else if (b == 0) then
-               call fatal_error(err, file//':'//str(line)//': error: NUL byte at column '//str(i - col0)// &
-                                ' (a deck is a text file; is this a binary file?)', err_input)
-               return
-            end if
-            i = i + 1
-            cycle
-         end if
-         ! Multi-byte sequence: lead byte, then 1-3 continuation bytes 10xxxxxx. Overlong
-         ! forms, surrogates (U+D800-DFFF) and code points above U+10FFFF are invalid.
-         if (b >= 194 .and. b <= 223) then
-            nfollow = 1
-         else if (b >= 224 .and. b <= 239) then
-            nfollow = 2
-         else if (b >= 240 .and. b <= 244) then
-            nfollow = 3
-         else
-            nfollow = -1
-         end if
-         if (nfollow > 0) then
-            if (i + nfollow > n) then
-               nfollow = -1
-            else
-               do k = 1, nfollow
-                  b2 = iachar(text(i + k:i + k))
-                  if (b2 < 128 .or. b2 > 191) nfollow = -1
-               end do
-            end if
-         end if
-         if (nfollow > 0) then
-            b2 = iachar(text(i + 1:i + 1))
-            if ((b == 224 .and. b2 < 160) .or. (b == 237 .and. b2 > 159) .or. &
-                (b == 240 .and. b2 < 144) .or. (b == 244 .and. b2 > 143)) nfollow = -1
-         end if
-         if (nfollow < 0) then
-            write (hex, '(z2.2)') b
-            call fatal_error(err, file//':'//str(line)//': error: invalid UTF-8 at column '//str(i - col0)// &
-                             ' (byte 0x'//hex//'); decks must be UTF-8 (or ASCII) text', err_input)
-            return
-         end if
-         i = i + nfollow + 1
-      end do
+      pos = invalid_text_byte(text)
+      if (pos == 0) return
+      line = 1 + count_newlines(text(1:pos - 1))
+      col0 = index(text(1:pos - 1), new_line('a'), back=.true.)
+      if (iachar(text(pos:pos)) == 0) then
+         call fatal_error(err, file//':'//str(line)//': error: NUL byte at column '//str(pos - col0)// &
+                          ' (a deck is a text file; is this a binary file?)', err_input)
+      else
+         write (hex, '(z2.2)') iachar(text(pos:pos))
+         call fatal_error(err, file//':'//str(line)//': error: invalid UTF-8 at column '//str(pos - col0)// &
+                          ' (byte 0x'//hex//'); decks must be UTF-8 (or ASCII) text', err_input)
+      end if
+   contains
+      pure integer function count_newlines(t) result(c)
+         character(len=*), intent(in) :: t
+         integer :: k
+         c = 0
+         do k = 1, len(t)
+            if (t(k:k) == new_line('a')) c = c + 1
+         end do
+      end function count_newlines
    end subroutine check_text
 
    !> Split `text` into tokens, dropping comments and white space.

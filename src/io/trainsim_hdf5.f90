@@ -31,6 +31,7 @@ module trainsim_hdf5
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_io, err_internal
    use trainsim_strings, only: string_t, str
+   use trainsim_version, only: git_revision
    use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t, &
       param_list_t, ev_name
    implicit none
@@ -583,9 +584,31 @@ contains
       end if
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'units', opt_text(meta%units), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'trainsim_version', opt_text(meta%version), err)
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'git_revision', git_revision(), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'integrator', opt_text(meta%integrator), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'created', iso_now(), err)
+      if (.not. allocated(err)) call write_deck_files(self%file_id, meta, err)
    end subroutine write_root_attributes
+
+   !> /deck_files: the files the deck read (table_file), beside the deck text, so the
+   !> file holds every input of the run. Attributes `paths` (as the deck wrote them),
+   !> `files` (as opened) and `texts` (their contents), one entry per file.
+   subroutine write_deck_files(loc, meta, err)
+      integer(hid_t), intent(in) :: loc
+      type(run_meta_t), intent(in) :: meta
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: grp
+      integer :: n, hdferr
+      n = 0
+      if (allocated(meta%input_files)) n = size(meta%input_files)
+      if (n == 0) return
+      call make_group(loc, 'deck_files', grp, err)
+      if (allocated(err)) return
+      call put_names_attr(grp, 'paths', meta%input_keys, n, err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'files', meta%input_files, n, err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'texts', meta%input_texts, n, err)
+      call h5gclose_f(grp, hdferr)
+   end subroutine write_deck_files
 
    !> /nodes: angle and speed series, ids, types, parameters.
    subroutine make_node_group(self, meta, level, err)

@@ -25,6 +25,9 @@ module trainsim_sink
       type(param_list_t), allocatable :: node_params(:)
       !> Unit of each element's relative displacement, e.g. "in" or "rad".
       type(string_t), allocatable :: element_disp_units(:)
+      !> Files the deck read (table_file): the path as the deck wrote it, the path
+      !> opened, and the text, embedded beside the deck (unallocated: none).
+      type(string_t), allocatable :: input_keys(:), input_files(:), input_texts(:)
    end type run_meta_t
 
    !> One output sample (all arrays sized at run start; no allocation per sample).

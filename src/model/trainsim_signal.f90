@@ -6,7 +6,7 @@
 module trainsim_signal
    use trainsim_kinds, only: wp, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
-   use trainsim_strings, only: to_lower, str
+   use trainsim_strings, only: to_lower, str, invalid_text_byte
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: in_range, check_magnitude
    implicit none
@@ -27,6 +27,9 @@ module trainsim_signal
       real(wp) :: amplitude = 0.0_wp, omega = 0.0_wp, phase = 0.0_wp
       real(wp), allocatable :: times(:), values(:), cum(:)
       real(wp) :: integral_at_zero = 0.0_wp
+      !> A table read from a file: the path as the deck wrote it, the path opened,
+      !> and the file's text, so the output can embed it beside the deck.
+      character(len=:), allocatable :: source_key, source_file, source_text
    contains
       procedure :: value => signal_value
       procedure :: integral => signal_integral
@@ -108,12 +111,14 @@ contains
       case ('table')
          if (grp%has('table_file')) then
             call grp%get_string('table_file', path, err); if (allocated(err)) return
+            sig%source_key = path
             path = relative_to_deck(path, grp%file)
-            call read_table_file(path, tt, vv, err)
+            call read_table_file(path, tt, vv, sig%source_text, err)
             if (allocated(err)) then
                err%message = grp%where('table_file')//': error: '//err%message
                return
             end if
+            sig%source_file = path
          else
             call grp%get_real_array('times', tt, err); if (allocated(err)) return
             call grp%get_real_array('values', vv, err); if (allocated(err)) return
@@ -330,33 +335,61 @@ contains
    end function relative_to_deck
 
    !> Read a two-column (time, value) text table; '#' or '!' lines are comments.
-   subroutine read_table_file(path, tt, vv, err)
+   !> `text` receives the file's bytes as read (embedded in the output).
+   subroutine read_table_file(path, tt, vv, text, err)
       character(len=*), intent(in) :: path
       real(wp), allocatable, intent(out) :: tt(:), vv(:)
+      character(len=:), allocatable, intent(out) :: text
       type(error_t), allocatable, intent(out) :: err
-      integer :: u, ios, n, lineno
-      character(len=512) :: line, msg
+      integer :: u, ios, n, lineno, first, last, nbytes, k
+      character(len=512) :: msg
+      character(len=:), allocatable :: line
       real(wp) :: a, b
       real(wp), allocatable :: tmp_t(:), tmp_v(:)
-      open (newunit=u, file=path, status='old', action='read', iostat=ios, iomsg=msg)
+      open (newunit=u, file=path, status='old', action='read', access='stream', form='unformatted', &
+            iostat=ios, iomsg=msg)
       if (ios /= 0) then
          call fatal_error(err, "cannot open table file '"//path//"': "//trim(msg), err_io)
          return
       end if
+      inquire (unit=u, size=nbytes)
+      allocate (character(len=max(nbytes, 0)) :: text)
+      if (nbytes > 0) read (u, iostat=ios, iomsg=msg) text
+      close (u)
+      if (nbytes < 0 .or. ios /= 0) then
+         call fatal_error(err, "cannot read table file '"//path//"': "//trim(msg), err_io)
+         return
+      end if
+      n = invalid_text_byte(text)   ! the text is embedded in the output: it must be text
+      if (n > 0) then
+         write (msg, '(z2.2)') iachar(text(n:n))
+         call fatal_error(err, "table file '"//path//"' line "// &
+                          str(1 + count([(text(k:k) == new_line('a'), k=1, n - 1)]))// &
+                          ': not UTF-8 text (byte 0x'//trim(msg)//' at offset '//str(n)// &
+                          '); a table file must be UTF-8 or ASCII text', err_input)
+         return
+      end if
       allocate (tt(64), vv(64))
-      n = 0; lineno = 0
-      do
-         read (u, '(a)', iostat=ios) line
-         if (ios /= 0) exit
+      n = 0; lineno = 0; first = 1
+      do while (first <= len(text))
+         last = index(text(first:), new_line('a'))
+         if (last == 0) then
+            last = len(text)
+         else
+            last = first + last - 2
+         end if
+         line = adjustl(text(first:last))
+         first = last + 2
          lineno = lineno + 1
-         line = adjustl(line)
+         if (len_trim(line) > 0) then
+            if (line(len_trim(line):len_trim(line)) == achar(13)) line = line(1:len_trim(line) - 1)   ! CRLF
+         end if
          if (len_trim(line) == 0) cycle
          if (line(1:1) == '#' .or. line(1:1) == '!') cycle
          read (line, *, iostat=ios) a, b
          if (ios /= 0 .or. a /= a .or. b /= b) then
             call fatal_error(err, "table file '"//path//"' line "//str(lineno)//": expected two numbers, got '"// &
                              trim(line)//"'", err_input)
-            close (u)
             return
          end if
          n = n + 1
@@ -367,7 +400,6 @@ contains
          end if
          tt(n) = a; vv(n) = b
       end do
-      close (u)
       if (n == 0) then
          call fatal_error(err, "table file '"//path//"' holds no data rows", err_input)
          return

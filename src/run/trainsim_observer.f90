@@ -8,9 +8,10 @@ module trainsim_observer
    use trainsim_error, only: error_t
    use trainsim_strings, only: string_t
    use trainsim_model, only: model_t
+   use trainsim_signal, only: signal_t
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
-   use trainsim_version, only: version_string
+   use trainsim_version, only: version_full
    use trainsim_metrics, only: peak_to_peak_values, turning_points_t
    implicit none
    private
@@ -73,7 +74,7 @@ contains
       meta%deck_file = model%deck_file
       meta%deck_text = model%deck_text
       meta%units = model%units%name
-      meta%version = version_string
+      meta%version = version_full()
       meta%integrator = model%run%integrator
       allocate (meta%state_names(model%n_y))
       k = 0
@@ -111,6 +112,35 @@ contains
             if (meta%element_disp_units(i)%s == 'length') meta%element_disp_units(i)%s = model%units%length
          end associate
       end do
+      allocate (meta%input_keys(0), meta%input_files(0), meta%input_texts(0))
+      do i = 1, size(model%loads)
+         call add_input_file(model%loads(i)%torque)
+      end do
+      do i = 1, size(model%speeds)
+         call add_input_file(model%speeds(i))
+      end do
+   contains
+      !> The table file behind `sig`, once per file opened.
+      subroutine add_input_file(sig)
+         type(signal_t), intent(in) :: sig
+         integer :: j
+         if (.not. allocated(sig%source_file)) return
+         do j = 1, size(meta%input_files)
+            if (meta%input_files(j)%s == sig%source_file) return
+         end do
+         call append(meta%input_keys, sig%source_key)
+         call append(meta%input_files, sig%source_file)
+         call append(meta%input_texts, sig%source_text)
+      end subroutine add_input_file
+      subroutine append(list, text)
+         type(string_t), allocatable, intent(inout) :: list(:)
+         character(len=*), intent(in) :: text
+         type(string_t), allocatable :: tmp(:)
+         allocate (tmp(size(list) + 1))
+         tmp(1:size(list)) = list
+         tmp(size(tmp))%s = text
+         call move_alloc(tmp, list)
+      end subroutine append
    end function make_meta
 
    !> Begin a run at (t, y): open the sink and record the first sample.

@@ -15,7 +15,7 @@ module trainsim_sweep
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
    use trainsim_strings, only: string_t, str, to_lower, join
-   use trainsim_version, only: version_string
+   use trainsim_version, only: version_full
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_model, only: model_t
    use trainsim_overrides, only: override_t, split_sweep_groups
@@ -235,7 +235,7 @@ contains
          end do
       end do
       call prepare_model(deck, run_overrides(opt, spec, 1, err), model, err); if (allocated(err)) return
-      lay%version = version_string
+      lay%version = version_full()
       lay%deck_file = opt%deck_path
       lay%deck_text = deck%text
       lay%title = model%title

@@ -8,7 +8,11 @@ coupling, DC motor, SI units):
 - tests/check_h5_layout.py passes: every string attribute reads as str in h5py (no
   .decode()), string datasets are variable-length UTF-8, every 2-D series has
   column_names/column_units and /time as the dimension scale of its rows;
-- derived constants are stored: the spur gear's gear_ratio = rb_driven / rb_driver.
+- derived constants are stored: the spur gear's gear_ratio = rb_driven / rb_driver;
+- the file holds every input: the deck, and the text of every table_file it read
+  (/deck_files): the deck and tables written back from the file into an empty
+  folder reproduce the run's /metrics exactly;
+- the version names the git revision the executable was built from.
 
 usage: check_h5_self_describing.py TRAINSIM_EXE
 """
@@ -63,5 +67,57 @@ with tempfile.TemporaryDirectory() as tmp:
         missing = [p.split('"')[1] for p in ds_parts if 'ATTRIBUTE "units"' not in p]
         check(f"{deck}: h5dump -A shows {len(ds_parts)} datasets (h5py: {len(n_sets)}), each with a units "
               f"attribute (missing: {missing[:5]})", not missing and len(ds_parts) == len(n_sets))
+
+
+def git_revision():
+    try:
+        r = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True, timeout=60)
+    except OSError:
+        return None
+    return r.stdout.strip() if r.returncode == 0 else None
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    deck = os.path.join(ROOT, "inputs/loads_table_ramp.nml")
+    out = os.path.join(tmp, "orig.h5")
+    r = subprocess.run([EXE, "run", deck, "-o", out], capture_output=True, text=True, timeout=600)
+    check("loads_table_ramp runs", r.returncode == 0)
+    with h5py.File(out) as f:
+        rev = f.attrs["git_revision"]
+        head = git_revision()
+        if head is None:
+            check(f"git_revision is 'unknown' outside a git work tree ({rev!r})", rev == "unknown")
+        else:
+            # the build may predate the last commit: the revision is a hex prefix of some commit
+            # (HEAD when built from it), and the version string carries it
+            check(f"git_revision {rev!r} is an abbreviated commit hash",
+                  re.fullmatch(r"[0-9a-f]{12}(-dirty)?", rev) is not None)
+            check("trainsim_version names the revision", f"(git {rev})" in f.attrs["trainsim_version"])
+        v = subprocess.run([EXE, "--version"], capture_output=True, text=True).stdout
+        check(f"trainsim --version names the revision ({v.strip()})", rev in v or rev == "unknown")
+        g = f["deck_files"].attrs
+        paths, files, texts = list(g["paths"]), list(g["files"]), list(g["texts"])
+        check(f"/deck_files lists the one table file ({paths})", paths == ["wind_load.txt"] and len(texts) == 1)
+        with open(os.path.join(ROOT, "inputs", "wind_load.txt"), encoding="utf-8") as t:
+            check("/deck_files text is the table file, byte for byte", texts[0] == t.read())
+        # write the inputs back from the file alone, run them, compare the metrics
+        again = os.path.join(tmp, "again")
+        os.mkdir(again)
+        with open(os.path.join(again, "deck.nml"), "w", encoding="utf-8") as d:
+            d.write(f.attrs["deck"])
+        for p_, t_ in zip(paths, texts):
+            with open(os.path.join(again, p_), "w", encoding="utf-8") as d:
+                d.write(t_)
+        out2 = os.path.join(tmp, "again.h5")
+        r = subprocess.run([EXE, "run", os.path.join(again, "deck.nml"), "-o", out2], capture_output=True,
+                           text=True, timeout=600)
+        check("the deck and tables taken from the file run", r.returncode == 0)
+        if r.returncode == 0:
+            with h5py.File(out2) as f2:
+                a, b = f["metrics"], f2["metrics"]
+                same = sorted(a.keys()) == sorted(b.keys()) and all(
+                    (a[k][()] == b[k][()]).all() for k in a.keys() if isinstance(a[k], h5py.Dataset))
+                check("the run from the file's own inputs has the same /metrics, bit for bit", same)
+                check("its states are the same, bit for bit", (f["states"][()] == f2["states"][()]).all())
 
 sys.exit(1 if failures else 0)

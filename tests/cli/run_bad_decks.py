@@ -288,6 +288,14 @@ CASES = [
     dict(name="table_file that does not exist",
          deck=load("node = 'b', kind = 'table', table_file = 'no-such-table.txt'"),
          exit=2, stderr=["deck.nml:5:", "table_file", "no-such-table.txt"]),
+    dict(name="table_file that is not UTF-8 text (a Latin-1 degree sign in a comment)",
+         deck=load("node = 'b', kind = 'table', table_file = 'latin1.txt'"),
+         files={"latin1.txt": b"# torque at 20\xb0C\n0.0 1.0\n1.0 2.0\n"},
+         exit=2, stderr=["deck.nml:5:", "table_file", "latin1.txt", "line 1", "UTF-8", "0xB0"]),
+    dict(name="table_file with a row that is not two numbers",
+         deck=load("node = 'b', kind = 'table', table_file = 'rows.txt'"),
+         files={"rows.txt": b"0.0 1.0\r\n1.0 2.0\r\n2.0 x\r\n"},
+         exit=2, stderr=["deck.nml:5:", "table_file", "rows.txt", "line 3", "expected two numbers"]),
     dict(name="ramp ending before it starts",
          deck=load("node = 'b', kind = 'ramp', value1 = 5.0, t0 = 0.5, t1 = 0.2"),
          exit=2, stderr=["deck.nml:5:", "t1", "later than its start"]),
@@ -374,6 +382,9 @@ def run_case(exe, case):
         if case.get("deck") is not None:
             with open(os.path.join(tmp, "deck.nml"), "w") as f:
                 f.write(case["deck"])
+        for name, data in case.get("files", {}).items():   # extra input files (bytes)
+            with open(os.path.join(tmp, name), "wb") as f:
+                f.write(data)
         if case.get("mkdir"):
             os.mkdir(os.path.join(tmp, case["mkdir"]))
         args = case.get("args", ["run", "deck.nml", "-o", "{out}"])

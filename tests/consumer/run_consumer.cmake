@@ -79,6 +79,9 @@ if(STEP STREQUAL "install")
             ${CMAKE_INSTALL_DATADIR}/trainsim/inputs/gregory_harris_munro.nml
             ${CMAKE_INSTALL_DATADIR}/trainsim/scripts/plot_history.py
             ${CMAKE_INSTALL_DATADIR}/trainsim/scripts/export_events.py
+            ${CMAKE_INSTALL_DATADIR}/trainsim/scripts/trainsim_export.py
+            ${CMAKE_INSTALL_DATADIR}/trainsim/scripts/trainsim_plot.py
+            ${CMAKE_INSTALL_DATADIR}/trainsim/scripts/plot_sweep.py
             ${CMAKE_INSTALL_DOCDIR}/LICENSE
             ${CMAKE_INSTALL_DOCDIR}/deck.md)
     if(NOT EXISTS ${prefix}/${f})
@@ -92,6 +95,12 @@ if(STEP STREQUAL "install")
   # The installed program runs an installed deck (relative table files resolve).
   run("installed trainsim runs an installed deck" ${prefix}/${CMAKE_INSTALL_BINDIR}/trainsim run
       ${prefix}/${CMAKE_INSTALL_DATADIR}/trainsim/inputs/loads_table_ramp.nml -o ${WORK_DIR}/installed_run.h5)
+  # ... and its export command finds the installed script (not the source tree's).
+  run("installed trainsim export" ${CMAKE_COMMAND} -E env --unset=TRAINSIM_SCRIPTS
+      ${prefix}/${CMAKE_INSTALL_BINDIR}/trainsim export ${WORK_DIR}/installed_run.h5 --summary json)
+  if(NOT run_output MATCHES "\"metrics\"")
+    message(FATAL_ERROR "installed trainsim export --summary json printed: ${run_output}")
+  endif()
 
 elseif(STEP STREQUAL "find_package")
   install_dirs()
