@@ -25,6 +25,7 @@ program test_gear_rigs
    call test_online_detector_gives_the_same_figures()
    call test_online_detector_on_random_signals()
    call test_online_detector_says_when_not_exact()
+   call test_every_bundled_deck_metrics_equal_the_full_series_figures()
    call test_run_metrics_equal_the_full_series_figures()
    call suite_end()
 
@@ -282,6 +283,43 @@ contains
       call check('and the detector says its figures are not exact', .not. det%exact)
       call check('the range is exact all the same', r1 == r2)
    end subroutine test_online_detector_says_when_not_exact
+
+   !> Every bundled deck, every element: the p2p figures of the run (online
+   !> detector) are those of its whole output series, to the bit. Among them
+   !> start-up runs whose range grows for a long time (dc motor, start-stop,
+   !> helical pair), where the detector has to re-run over its logged extremes.
+   subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures()
+      character(len=*), parameter :: decks(*) = [character(len=40) :: 'inputs/branched_train.nml', &
+         'inputs/dc_motor_geared_load.nml', 'inputs/gregory_harris_munro.nml', 'inputs/helical_pair.nml', &
+         'inputs/loads_table_ramp.nml', 'inputs/start_stop_two_clearances.nml', 'inputs/two_clearance.nml', &
+         'verification/chapter3/case1.nml', 'verification/chapter3/case2.nml', 'verification/chapter3/case3.nml', &
+         'verification/table5_1/table5_1.nml', 'verification/table5_4/table5_4.nml']
+      type(model_t) :: m
+      type(run_result_t) :: r
+      real(wp) :: rng, mean
+      integer :: k, i, n, n_el, n_swung
+      logical :: same, exact
+      call test_begin('every_bundled_deck_metrics_equal_the_full_series_figures')
+      n_el = 0; n_swung = 0; same = .true.; exact = .true.
+      do k = 1, size(decks)
+         call load_model(trim(decks(k)), m)
+         call run_model(m, r)   ! keeps the series
+         do i = 1, size(r%el)
+            call peak_to_peak(r%series_t, r%series_disp(i, :), m%run%t_start + m%run%settle_time, p2p_hysteresis, &
+                              rng, mean, n)
+            n_el = n_el + 1
+            if (n > 0) n_swung = n_swung + 1
+            if (.not. (r%el(i)%p2p_range == rng .and. r%el(i)%p2p_mean == mean .and. r%el(i)%p2p_swings == n)) then
+               same = .false.
+               write (*, '(a,i0,a,2es24.16)') '    '//trim(decks(k))//' element ', i, ': ', r%el(i)%p2p_mean, mean
+            end if
+            exact = exact .and. r%el(i)%p2p_exact
+         end do
+      end do
+      write (*, '(a,i0,a,i0,a)') '    ', n_el, ' elements, ', n_swung, ' with swings'
+      call check('p2p range, mean and swings as from the whole series, to the bit', same .and. n_swung >= 20)
+      call check('the detector says so too (p2p_exact)', exact)
+   end subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures
 
    !> A real run: the metrics it reports (from turning points) equal the figures
    !> of its whole output series.
