@@ -21,7 +21,7 @@ module trainsim_hdf5
    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, &
       h5fcreate_f, h5fclose_f, H5F_ACC_TRUNC_F, H5F_CLOSE_STRONG_F, H5F_LIBVER_V18_F, &
       h5pcreate_f, h5pclose_f, h5pset_fclose_degree_f, h5pset_libver_bounds_f, &
-      h5pset_chunk_f, h5pset_deflate_f, H5P_FILE_ACCESS_F, H5P_DATASET_CREATE_F, &
+      h5pset_chunk_f, h5pset_deflate_f, h5pset_cache_f, H5P_FILE_ACCESS_F, H5P_DATASET_CREATE_F, &
       h5zfilter_avail_f, H5Z_FILTER_DEFLATE_F, &
       h5screate_simple_f, h5screate_f, h5sclose_f, h5sselect_hyperslab_f, &
       H5S_SCALAR_F, H5S_UNLIMITED_F, H5S_SELECT_SET_F, &
@@ -586,6 +586,11 @@ contains
       ! 1.8 format: large attributes (the deck text) go to dense storage;
       ! files stay readable by HDF5 1.8 and later.
       if (hdferr >= 0) call h5pset_libver_bounds_f(fapl, H5F_LIBVER_V18_F, H5F_LIBVER_V18_F, hdferr)
+      ! No raw-data chunk cache: every block is written as whole chunks, and a
+      ! rewritten event row is one read-modify-write of its chunk. (HDF5's
+      ! default, 1 MiB per dataset, made a run's memory grow with its length
+      ! until every one of the 26 datasets had filled its cache.)
+      if (hdferr >= 0) call h5pset_cache_f(fapl, 0, 0_size_t, 0_size_t, 0.75, hdferr)
       if (hdferr >= 0) then
          ! created empty by make_temp_file: ours alone, so truncating it is safe
          call make_temp_file(self, err)
