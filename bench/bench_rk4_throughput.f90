@@ -43,6 +43,7 @@ program bench_rk4_throughput
    integer(int64) :: c_start, c_stop, c_rate
    integer :: nargs
    integer(i8) :: n_rss
+   character(len=:), allocatable :: rss_file
 
    nargs = command_argument_count()
    if (nargs >= 2) then
@@ -51,7 +52,9 @@ program bench_rk4_throughput
          ! child mode: one run of the backlash rig, then print the peak RSS
          call get_arg(2, arg)
          read (arg, *) n_rss
-         call rss_child(n_rss)
+         rss_file = ''
+         if (nargs >= 3) call get_arg(3, rss_file)
+         call rss_child(n_rss, rss_file)
          stop
       end if
    end if
@@ -169,44 +172,73 @@ contains
       write (output_unit, '(a)') ''
    end subroutine chain_section
 
-   !> 3. Peak RSS of a whole process running the backlash rig for n steps.
+   !> 3. Peak RSS of a whole process running the backlash rig for n steps,
+   !> without an output file (null sink) and with one (a sample every 100
+   !> steps, every event): the run's memory must not grow with its length.
    subroutine rss_section()
-      integer(i8), parameter :: lens(4) = [10000_i8, 100000_i8, 1000000_i8, 4000000_i8]
-      character(len=:), allocatable :: exe, out
+      integer(i8), parameter :: lens(3) = [200000_i8, 2000000_i8, 20000000_i8]
+      character(len=:), allocatable :: exe, out, h5
       character(len=256) :: line
-      integer :: i, u, ios, cstat
+      integer :: i, j, u, ios, cstat
       call get_arg(0, exe)
       out = h5_path//'.rss'
+      h5 = h5_path//'.rss.h5'
       write (output_unit, '(a)') '3. Peak resident memory (VmHWM of a child process) against run length, backlash rig, '// &
-         'null sink, energy on'
+         'energy on; without a file (null sink) and with one (a sample every 100 steps, every event)'
       write (output_unit, '(a)') hrule
-      write (output_unit, '(a)') '     steps     events   peak RSS [MB]'
-      do i = 1, size(lens)
-         write (line, '(a,i0,a)') '"'//exe//'" --rss ', lens(i), ' > "'//out//'"'
-         call execute_command_line(trim(line), exitstat=ios, cmdstat=cstat)
-         if (ios /= 0 .or. cstat /= 0) then
-            write (output_unit, '(a)') '   (child failed)'
-            cycle
-         end if
-         open (newunit=u, file=out, status='old', action='read', iostat=ios)
-         if (ios /= 0) cycle
-         read (u, '(a)', iostat=ios) line
-         close (u, status='delete')
-         write (output_unit, '(a)') '  '//trim(line)
+      write (output_unit, '(a)') '     steps     events   peak RSS [MB]   file [MB]'
+      do j = 1, 2
+         do i = 1, size(lens)
+            if (j == 1) then
+               write (line, '(a,i0,a)') '"'//exe//'" --rss ', lens(i), ' > "'//out//'"'
+            else
+               write (line, '(a,i0,a)') '"'//exe//'" --rss ', lens(i), ' "'//h5//'" > "'//out//'"'
+            end if
+            call execute_command_line(trim(line), exitstat=ios, cmdstat=cstat)
+            call remove_file(h5)
+            if (ios /= 0 .or. cstat /= 0) then
+               write (output_unit, '(a)') '   (child failed)'
+               cycle
+            end if
+            open (newunit=u, file=out, status='old', action='read', iostat=ios)
+            if (ios /= 0) cycle
+            read (u, '(a)', iostat=ios) line
+            close (u, status='delete')
+            write (output_unit, '(a)') '  '//trim(line)
+            flush (output_unit)
+         end do
       end do
       write (output_unit, '(a)') hrule
       write (output_unit, '(a)') ''
    end subroutine rss_section
 
-   !> Child of rss_section: one run, then "steps events peak-RSS-MB".
-   subroutine rss_child(n)
+   !> Child of rss_section: one run (to `file` if not ''), then
+   !> "steps events peak-RSS-MB [file-MB]".
+   subroutine rss_child(n, file)
       integer(i8), intent(in) :: n
+      character(len=*), intent(in) :: file
       type(model_t) :: m
       type(run_result_t) :: r
+      type(hdf5_sink_t) :: h5
+      type(error_t), allocatable :: err
       real(wp) :: secs
-      call load(rig_deck(real(n, wp)*rig_dt, rig_dt, .true., .true.), m)
-      call time_run(m, r, secs)
-      write (output_unit, '(i10,i11,f16.2)') r%stats%steps, r%stats%events, real(vm_hwm_kb(), wp)/1024.0_wp
+      integer(i8) :: bytes
+      character(len=:), allocatable :: text
+      if (len(file) == 0) then
+         call load(rig_deck(real(n, wp)*rig_dt, rig_dt, .true., .true.), m)
+         call time_run(m, r, secs)
+         write (output_unit, '(i10,i11,f16.2)') r%stats%steps, r%stats%events, real(vm_hwm_kb(), wp)/1024.0_wp
+      else
+         text = rig_deck(real(n, wp)*rig_dt, rig_dt, .true., .true.)
+         text = text(1:index(text, '/') - 1)//', output_interval = '//r2s(100.0_wp*rig_dt)//' '//text(index(text, '/'):)
+         call load(text, m)
+         h5%path = file
+         call simulate(m, h5, r, err)
+         if (allocated(err)) call die(err%message)
+         inquire (file=file, size=bytes)
+         write (output_unit, '(i10,i11,f16.2,f12.1)') r%stats%steps, r%stats%events, real(vm_hwm_kb(), wp)/1024.0_wp, &
+            real(bytes, wp)/1.0e6_wp
+      end if
    end subroutine rss_child
 
    !> Optional: HDF5 output on the rig (ideal gear, energy on).

@@ -82,6 +82,7 @@ contains
          m%run%atol_speed = rtol*1.0e-1_wp
       end if
       call m%finalize()
+      m%run%keep_events = .true.   ! the impact times are read from the table
       call simulate(m, none, r, err)
       if (allocated(err)) then
          write (error_unit, '(a)') '  skipped '//integrator//': '//err%message

@@ -579,8 +579,8 @@ contains
       call simulate(m, h5, res, err)
       call check('the run completes'//message_of(err), .not. allocated(err))
       if (allocated(err)) return
-      write (*, '(a,es10.3,a,es10.3,a,i0,a)') '    rho = ', rho, ' 1/s, dt = ', dt, ' s, ', size(res%events), ' events'
-      if (closes) call check('the clearance closed during the run', size(res%events) >= 1)
+      write (*, '(a,es10.3,a,es10.3,a,i0,a)') '    rho = ', rho, ' 1/s, dt = ', dt, ' s, ', res%stats%events, ' events'
+      if (closes) call check('the clearance closed during the run', res%stats%events >= 1)
       ! RK4's local error for y' = lambda y is (lambda dt)^5/120 |y|; the energy,
       ! quadratic, errs twice that; n_steps steps: n_steps (rho dt)^5 / 60 = 5e-8.
       ! Allowed: 10 times that for the nonlinear contact laws.

@@ -6,7 +6,7 @@ program test_gear_rigs
    use trainsim_observer, only: run_result_t
    use trainsim_modes, only: modes_t, compute_modes
    use trainsim_el_spur_gear, only: mesh_zone, contact_ratio
-   use trainsim_metrics, only: peak_to_peak, turning_points_t, peak_to_peak_values
+   use trainsim_metrics, only: peak_to_peak, p2p_detector_t, peak_to_peak_values
    use trainsim_observer, only: p2p_hysteresis
    use trainsim_sink, only: ev_zone
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
@@ -22,7 +22,10 @@ program test_gear_rigs
    call test_table7_1_initial_angles_are_static_windup_with_1_8()
    call test_ghm_run_energy_balance_closes_with_zone_switching()
    call test_peak_to_peak_of_a_known_signal()
-   call test_turning_points_give_the_same_figures()
+   call test_online_detector_gives_the_same_figures()
+   call test_online_detector_on_random_signals()
+   call test_online_detector_says_when_not_exact()
+   call test_every_bundled_deck_metrics_equal_the_full_series_figures()
    call test_run_metrics_equal_the_full_series_figures()
    call suite_end()
 
@@ -163,30 +166,160 @@ contains
       call check('range = max - min', rng, maxval(x) - minval(x), rel_tol=1.0e-14_wp)
    end subroutine test_peak_to_peak_of_a_known_signal
 
-   !> The peak detector on the turning points alone gives the figures of the
-   !> whole series, bit for bit (what lets a run keep memory independent of length).
-   subroutine test_turning_points_give_the_same_figures()
+   !> The online peak detector (O(1) memory) gives the figures of the whole
+   !> series, bit for bit (what lets a run keep memory independent of length).
+   subroutine test_online_detector_gives_the_same_figures()
       real(wp) :: t(4001), x(4001), r1, m1, r2, m2
       integer :: i, n1, n2
-      type(turning_points_t) :: tp
-      call test_begin('turning_points_give_the_same_figures')
+      type(p2p_detector_t) :: det
+      call test_begin('online_detector_gives_the_same_figures')
       do i = 1, size(t)
          t(i) = real(i - 1, wp)*1.0e-3_wp
-         ! swings of growing amplitude, a ripple, and a plateau (repeated values)
+         ! swings of growing amplitude (the threshold rises all along), a
+         ! ripple, and a plateau (repeated values)
          x(i) = (1.0_wp + t(i))*sin(two_pi*2.0_wp*t(i)) + 0.05_wp*sin(two_pi*40.0_wp*t(i))
          if (i > 1500 .and. i < 1600) x(i) = x(1500)
       end do
       call peak_to_peak(t, x, 0.0_wp, 0.1_wp, r1, m1, n1)
+      det%hyst = 0.1_wp
       do i = 1, size(t)
-         call tp%push(x(i))
+         call det%push(x(i))
       end do
-      call tp%close()
-      call peak_to_peak_values(tp%x(1:tp%n), 0.1_wp, r2, m2, n2)
+      call det%figures(r2, m2, n2)
       call check('same swing count ('//trim(adjustl(itoa(n1)))//')', n1 == n2 .and. n1 > 0)
       call check('same range, to the bit', r1 == r2)
       call check('same mean swing, to the bit', m1 == m2)
-      call check('a small fraction of the samples kept', 5*tp%n < size(x))
-   end subroutine test_turning_points_give_the_same_figures
+      call check('the detector says its figures are exact', det%exact)
+   end subroutine test_online_detector_gives_the_same_figures
+
+   !> 3000 random signals: random walks, noisy sines of growing amplitude and
+   !> noise with late bursts (2 to 400 samples: the range grows after short
+   !> edges, so the detector re-runs over its logged extremes), and long sines
+   !> of slowly growing amplitude (2000 to 6000 samples, up to ~1900 extremes:
+   !> the log folds its older half). Whenever the detector says `exact`, its
+   !> figures are those of peak_to_peak_values on the whole signal, to the bit;
+   !> with fewer extremes than the log holds it is always exact.
+   subroutine test_online_detector_on_random_signals()
+      integer, parameter :: n_sig = 3000
+      real(wp) :: x(6000), u(6000), r1, m1, r2, m2, a
+      integer :: k, i, n, n1, n2, n_exact, n_bad, n_short_inexact, n_long, n_replayed
+      integer, allocatable :: seed(:)
+      type(p2p_detector_t) :: det
+      call test_begin('online_detector_on_random_signals')
+      call random_seed(size=n)
+      allocate (seed(n))
+      seed = 20261123
+      call random_seed(put=seed)
+      n_exact = 0; n_bad = 0; n_short_inexact = 0; n_long = 0; n_replayed = 0
+      do k = 1, n_sig
+         call random_number(u)
+         call random_number(a)
+         n = 2 + int(a*398.0_wp)
+         select case (mod(k, 4))
+         case (0)   ! random walk: the range grows now and then, by steps of any size
+            x(1) = 0.0_wp
+            do i = 2, n
+               x(i) = x(i - 1) + (u(i) - 0.5_wp)
+            end do
+         case (1)   ! growing sine plus noise
+            do i = 1, n
+               x(i) = (1.0_wp + 0.01_wp*i)*sin(0.3_wp*i) + 0.3_wp*(u(i) - 0.5_wp)
+            end do
+         case (2)   ! noise with rare bursts: the range jumps late
+            do i = 1, n
+               x(i) = u(i) - 0.5_wp
+               if (u(i) > 0.97_wp) x(i) = 8.0_wp*(u(i) - 0.96_wp)*merge(1, -1, mod(i, 2) == 0)
+            end do
+         case default   ! long: more extremes than the log holds
+            n = 2000 + int(a*4000.0_wp)
+            n_long = n_long + 1
+            do i = 1, n
+               x(i) = (1.0_wp + 1.0e-4_wp*i)*sin(1.1_wp*i) + 0.3_wp*(u(i) - 0.5_wp)
+            end do
+         end select
+         det = p2p_detector_t(hyst=0.1_wp)
+         do i = 1, n
+            call det%push(x(i))
+         end do
+         call det%figures(r2, m2, n2)
+         call peak_to_peak_values(x(1:n), 0.1_wp, r1, m1, n1)
+         if (det%replays > 0) n_replayed = n_replayed + 1
+         if (det%exact) then
+            n_exact = n_exact + 1
+            if (.not. (r1 == r2 .and. m1 == m2 .and. n1 == n2)) n_bad = n_bad + 1
+         else if (n <= 400) then
+            n_short_inexact = n_short_inexact + 1
+         end if
+      end do
+      write (*, '(a,i0,a,i0,a,i0,a,i0,a)') '    ', n_exact, ' of ', n_sig, ' signals exact (', n_long, &
+         ' long ones), ', n_replayed, ' re-run over the log'
+      call check('every signal the detector calls exact has the whole-series figures, to the bit', n_bad == 0)
+      call check('every short signal is exact (fewer extremes than the log holds)', n_short_inexact == 0)
+      call check('the re-run was exercised (> 100 signals)', n_replayed > 100)
+      call check('the long signals are exact too (folded edges far above the threshold)', n_exact == n_sig)
+   end subroutine test_online_detector_on_random_signals
+
+   !> Swings of 1 for 3000 samples (more extremes than the log holds), then the
+   !> range grows to 20 (threshold 2): the swings already folded would not be
+   !> swings with the final threshold. The detector cannot re-decide them
+   !> without the series, and says so.
+   subroutine test_online_detector_says_when_not_exact()
+      type(p2p_detector_t) :: det
+      real(wp) :: x(3001), r1, m1, r2, m2
+      integer :: i, n1, n2
+      call test_begin('online_detector_says_when_not_exact')
+      do i = 1, 3000
+         x(i) = merge(1.0_wp, 0.0_wp, mod(i, 2) == 0)
+      end do
+      x(3001) = 20.0_wp
+      det%hyst = 0.1_wp
+      do i = 1, size(x)
+         call det%push(x(i))
+      end do
+      call det%figures(r2, m2, n2)
+      call peak_to_peak_values(x, 0.1_wp, r1, m1, n1)
+      call check('whole series: no swing of 2 or more', n1 == 0)
+      call check('online: swings of 1 were counted', n2 > 0)
+      call check('and the detector says its figures are not exact', .not. det%exact)
+      call check('the range is exact all the same', r1 == r2)
+   end subroutine test_online_detector_says_when_not_exact
+
+   !> Every bundled deck, every element: the p2p figures of the run (online
+   !> detector) are those of its whole output series, to the bit. Among them
+   !> start-up runs whose range grows for a long time (dc motor, start-stop,
+   !> helical pair), where the detector has to re-run over its logged extremes.
+   subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures()
+      character(len=*), parameter :: decks(*) = [character(len=40) :: 'inputs/branched_train.nml', &
+         'inputs/dc_motor_geared_load.nml', 'inputs/gregory_harris_munro.nml', 'inputs/helical_pair.nml', &
+         'inputs/loads_table_ramp.nml', 'inputs/start_stop_two_clearances.nml', 'inputs/two_clearance.nml', &
+         'verification/chapter3/case1.nml', 'verification/chapter3/case2.nml', 'verification/chapter3/case3.nml', &
+         'verification/table5_1/table5_1.nml', 'verification/table5_4/table5_4.nml']
+      type(model_t) :: m
+      type(run_result_t) :: r
+      real(wp) :: rng, mean
+      integer :: k, i, n, n_el, n_swung
+      logical :: same, exact
+      call test_begin('every_bundled_deck_metrics_equal_the_full_series_figures')
+      n_el = 0; n_swung = 0; same = .true.; exact = .true.
+      do k = 1, size(decks)
+         call load_model(trim(decks(k)), m)
+         call run_model(m, r)   ! keeps the series
+         do i = 1, size(r%el)
+            call peak_to_peak(r%series_t, r%series_disp(i, :), m%run%t_start + m%run%settle_time, p2p_hysteresis, &
+                              rng, mean, n)
+            n_el = n_el + 1
+            if (n > 0) n_swung = n_swung + 1
+            if (.not. (r%el(i)%p2p_range == rng .and. r%el(i)%p2p_mean == mean .and. r%el(i)%p2p_swings == n)) then
+               same = .false.
+               write (*, '(a,i0,a,2es24.16)') '    '//trim(decks(k))//' element ', i, ': ', r%el(i)%p2p_mean, mean
+            end if
+            exact = exact .and. r%el(i)%p2p_exact
+         end do
+      end do
+      write (*, '(a,i0,a,i0,a)') '    ', n_el, ' elements, ', n_swung, ' with swings'
+      call check('p2p range, mean and swings as from the whole series, to the bit', same .and. n_swung >= 20)
+      call check('the detector says so too (p2p_exact)', exact)
+   end subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures
 
    !> A real run: the metrics it reports (from turning points) equal the figures
    !> of its whole output series.

@@ -13,8 +13,12 @@ program test_hdf5_sink
    use trainsim_error, only: error_t, err_io, err_internal
    use trainsim_strings, only: string_t, str
    use trainsim_sink, only: run_meta_t, sample_t, event_t, run_stats_t, param_list_t, element_metrics_t, &
-      ev_contact_front, ev_separation, ev_zone
+      ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name
    use trainsim_hdf5, only: hdf5_sink_t
+   use trainsim_model, only: model_t
+   use trainsim_observer, only: run_result_t
+   use trainsim_simulate, only: simulate
+   use trainsim_test_support, only: load_model
    use trainsim_testing, only: check, check_close, suite_begin, suite_end, test_begin
    implicit none
 
@@ -48,6 +52,8 @@ program test_hdf5_sink
    call test_write_full_run()
    call test_read_back()
    call test_no_elements()
+   call test_streamed_events()
+   call test_run_file_events_equal_the_table()
    call test_abort()
    call test_misuse()
    call test_python_layout()
@@ -437,6 +443,285 @@ contains
       call check('run_stats@completed = 0', read_int_scalar(fid, '/run_stats', 'completed') == 0)
       call h5fclose_f(fid, hdferr)
    end subroutine test_no_elements
+
+   !> Event rows streamed as a run makes them (write_event, update_event), in
+   !> blocks of 4: a contact of g1 open from row 2 to row 10, across two block
+   !> boundaries (its row rewritten in the file), one of b1 closed in the next
+   !> block (rewritten), one closed while still buffered, one still open at the
+   !> end; two elements with different units. Read back: every column equals
+   !> the table the rows describe, to the bit, and the per-row units are listed.
+   subroutine test_streamed_events()
+      integer, parameter :: n = 12
+      type(element_metrics_t) :: metrics(2)
+      type(hdf5_sink_t) :: sink
+      type(run_meta_t) :: meta
+      type(sample_t) :: smp
+      type(event_t) :: ex(n), no_rows(0)
+      type(run_stats_t) :: stats
+      type(error_t), allocatable :: err
+      integer(hid_t) :: fid
+      integer :: k, hdferr, row
+      integer, parameter :: el(n) = [1, 1, 1, 2, 2, 2, 2, 2, 2, 1, 2, 1]
+      integer, parameter :: kinds(n) = [ev_zone, ev_contact_front, ev_zone, ev_contact_front, ev_separation, &
+                                        ev_zone, ev_zone, ev_zone, ev_contact_rear, ev_separation, ev_separation, &
+                                        ev_contact_front]
+      real(wp), allocatable :: r1(:)
+      integer, allocatable :: i1(:)
+      type(string_t), allocatable :: names(:), units(:)
+      character(len=:), allocatable :: path, txt
+      logical :: same_all
+
+      call test_begin('events streamed in blocks of 4, open contacts rewritten in place')
+      path = tmp//'_events.h5'
+      meta = small_meta()
+      call set_names(meta%element_ids, [character(len=2) :: 'g1', 'b1'])
+      call set_names(meta%element_types, [character(len=9) :: 'gear_pair', 'backlash'])
+      meta%element_left = [1, 1]
+      meta%element_right = [2, 2]
+      call set_names(meta%element_disp_units, [character(len=3) :: 'in', 'rad'])
+      deallocate (meta%element_params)
+      allocate (meta%element_params(2))
+      call set_params(meta%element_params(1), ['ratio'], [2.5_wp])
+      call set_params(meta%element_params(2), ['gap'], [0.01_wp])
+      sink%path = path
+      sink%event_block_rows = 4
+      call sink%open(meta, err)
+      call check_no_error('open', err)
+      if (allocated(err)) return
+      call alloc_sample(smp, 3, 2, 2)
+      smp%t = 0.0_wp; smp%y(:) = 1.0_wp; smp%theta(:) = 0.0_wp; smp%omega(:) = 0.0_wp
+      smp%torque_left(:) = 0.0_wp; smp%torque_right(:) = 0.0_wp; smp%displacement(:) = 0.0_wp
+      smp%force(:) = 0.0_wp; smp%contact(:) = 0; smp%pairs(:) = 0; smp%energy = 0.0_wp
+      call sink%write_sample(smp, err)
+      do k = 1, n
+         ex(k) = event_t(t=1.0e-3_wp*k, element=el(k), kind=kinds(k), approach_velocity=k + 0.5_wp, &
+                         restitution=0.01_wp*k, damping=1.0e5_wp + k, peak_force=10.0_wp*k, duration=-1.0_wp, &
+                         theta_left=0.1_wp*k, omega_left=-0.2_wp*k, theta_right=0.3_wp*k, omega_right=-0.4_wp*k, &
+                         displacement=1.0e-6_wp*k, force=100.0_wp + k)
+      end do
+      ! as the observer does: a row goes out when it happens; a contact's row
+      ! again (final peak force and duration) when it ends
+      do k = 1, n
+         if (.not. allocated(err)) call sink%write_event(k, ex(k), err)
+         row = 0
+         select case (k)
+         case (5)    ! b1 separates: row 4, flushed with the block of rows 1-4
+            row = 4; ex(row)%peak_force = 7.5_wp
+         case (10)   ! g1 separates: row 2, open across the blocks of rows 1-4 and 5-8
+            row = 2; ex(row)%peak_force = 99.0_wp
+         case (11)   ! b1 separates: row 9, still in the buffer
+            row = 9; ex(row)%peak_force = 3.25_wp
+         end select
+         if (row > 0) then
+            ex(row)%duration = ex(k)%t - ex(row)%t
+            if (.not. allocated(err)) call sink%update_event(row, ex(row), err)
+         end if
+      end do
+      ! row 12 still open at the end: its peak force so far, duration -1
+      ex(12)%peak_force = 555.0_wp
+      if (.not. allocated(err)) call sink%update_event(12, ex(12), err)
+      call check_no_error('write_event and update_event', err)
+      if (allocated(err)) return
+      stats%events = int(n, i8)
+      stats%completed = .true.
+      call sink%close(no_rows, stats, metrics, err)
+      call check_no_error('close', err)
+      if (allocated(err)) return
+
+      call h5fopen_f(path, H5F_ACC_RDONLY_F, fid, hdferr)
+      call check('file opens', hdferr >= 0)
+      if (hdferr < 0) return
+      same_all = .true.
+      call read_r1(fid, '/events/time', r1); same_all = same_all .and. same_r(r1, ex%t)
+      call read_i1(fid, '/events/element', i1); same_all = same_all .and. size(i1) == n .and. all(i1 == ex%element)
+      call read_i1(fid, '/events/kind', i1); same_all = same_all .and. size(i1) == n .and. all(i1 == ex%kind)
+      call read_str_dset(fid, '/events/kind_name', names)
+      same_all = same_all .and. size(names) == n
+      if (size(names) == n) then
+         do k = 1, n
+            same_all = same_all .and. names(k)%s == ev_name(ex(k)%kind)
+         end do
+      end if
+      call read_r1(fid, '/events/approach_velocity', r1); same_all = same_all .and. same_r(r1, ex%approach_velocity)
+      call read_r1(fid, '/events/restitution', r1); same_all = same_all .and. same_r(r1, ex%restitution)
+      call read_r1(fid, '/events/damping', r1); same_all = same_all .and. same_r(r1, ex%damping)
+      call read_r1(fid, '/events/theta_left', r1); same_all = same_all .and. same_r(r1, ex%theta_left)
+      call read_r1(fid, '/events/omega_left', r1); same_all = same_all .and. same_r(r1, ex%omega_left)
+      call read_r1(fid, '/events/theta_right', r1); same_all = same_all .and. same_r(r1, ex%theta_right)
+      call read_r1(fid, '/events/omega_right', r1); same_all = same_all .and. same_r(r1, ex%omega_right)
+      call read_r1(fid, '/events/displacement', r1); same_all = same_all .and. same_r(r1, ex%displacement)
+      call read_r1(fid, '/events/force', r1); same_all = same_all .and. same_r(r1, ex%force)
+      call check('every column but peak_force and duration as written, to the bit', same_all)
+      call read_r1(fid, '/events/peak_force', r1)
+      call check('peak_force: final values, rewritten in the file (rows 2, 4) and in the buffer (9, 12)', &
+                 same_r(r1, ex%peak_force))
+      call read_r1(fid, '/events/duration', r1)
+      call check('duration: final values, -1 for the contact still open', same_r(r1, ex%duration))
+      call read_str_attr(fid, '/events/displacement', 'units', txt)
+      call check('displacement units are mixed', txt == 'mixed: see entry_units')
+      call read_vlen(fid, '/events/displacement', 'entry_units', .true., units)
+      same_all = size(units) == n
+      if (same_all) then
+         do k = 1, n
+            same_all = same_all .and. units(k)%s == trim(merge('in ', 'rad', el(k) == 1))
+         end do
+      end if
+      call check('displacement entry_units: the element of each row', same_all)
+      call read_str_attr(fid, '/events/time', 'units', txt)
+      call check('time units s', txt == 's')
+      call h5fclose_f(fid, hdferr)
+      call remove_file(path)
+   end subroutine test_streamed_events
+
+   !> A run with ~1300 events (contacts open across many blocks of 64 rows):
+   !> /events in the file is the run's in-memory table, column by column, to the
+   !> bit. The same run without the in-memory table (the default: what the CLI
+   !> and the sweeps do) writes the same file table and the same metrics.
+   subroutine test_run_file_events_equal_the_table()
+      type(model_t) :: base, m
+      type(run_result_t) :: r1, r2
+      type(hdf5_sink_t) :: h5
+      type(error_t), allocatable :: err
+      integer(hid_t) :: fid
+      integer :: hdferr, k
+      type(string_t), allocatable :: names(:)
+      character(len=:), allocatable :: p1, p2
+      logical :: same_all, same_files
+      call test_begin('a run with a file: /events is the in-memory event table, to the bit')
+      p1 = tmp//'_run_events1.h5'; p2 = tmp//'_run_events2.h5'
+      call load_model('inputs/dc_motor_geared_load.nml', base)
+      m = base
+      m%run%keep_events = .true.
+      h5%path = p1
+      h5%event_block_rows = 64
+      call simulate(m, h5, r1, err)
+      call check_no_error('run keeping the table', err)
+      if (allocated(err)) return
+      m = base
+      h5%path = p2
+      h5%event_block_rows = 256
+      call simulate(m, h5, r2, err)
+      call check_no_error('run without the table', err)
+      if (allocated(err)) return
+      call check('more than 1000 events (many blocks)', size(r1%events) > 1000 .and. &
+                 r1%stats%events == int(size(r1%events), i8))
+      call check('no table in memory by default, the same event count', size(r2%events) == 0 .and. &
+                 r2%stats%events == r1%stats%events)
+      same_all = size(r1%el) == size(r2%el)
+      if (same_all) then
+         do k = 1, size(r1%el)
+            associate (a => r1%el(k), b => r2%el(k))
+               same_all = same_all .and. a%max_peak_force == b%max_peak_force .and. a%impacts == b%impacts .and. &
+                          a%p2p_mean == b%p2p_mean .and. a%p2p_swings == b%p2p_swings .and. a%force_max == b%force_max
+            end associate
+         end do
+      end if
+      call check('the same metrics either way', same_all)
+
+      same_all = .true.; same_files = .true.
+      call column_r(p1, p2, 'time', same_all, same_files, r1%events%t)
+      call column_i(p1, p2, 'element', same_all, same_files, r1%events%element)
+      call column_i(p1, p2, 'kind', same_all, same_files, r1%events%kind)
+      call column_r(p1, p2, 'approach_velocity', same_all, same_files, r1%events%approach_velocity)
+      call column_r(p1, p2, 'restitution', same_all, same_files, r1%events%restitution)
+      call column_r(p1, p2, 'damping', same_all, same_files, r1%events%damping)
+      call column_r(p1, p2, 'peak_force', same_all, same_files, r1%events%peak_force)
+      call column_r(p1, p2, 'duration', same_all, same_files, r1%events%duration)
+      call column_r(p1, p2, 'theta_left', same_all, same_files, r1%events%theta_left)
+      call column_r(p1, p2, 'omega_left', same_all, same_files, r1%events%omega_left)
+      call column_r(p1, p2, 'theta_right', same_all, same_files, r1%events%theta_right)
+      call column_r(p1, p2, 'omega_right', same_all, same_files, r1%events%omega_right)
+      call column_r(p1, p2, 'displacement', same_all, same_files, r1%events%displacement)
+      call column_r(p1, p2, 'force', same_all, same_files, r1%events%force)
+      call h5fopen_f(p1, H5F_ACC_RDONLY_F, fid, hdferr)
+      if (hdferr >= 0) then
+         call read_str_dset(fid, '/events/kind_name', names)
+         call h5fclose_f(fid, hdferr)
+         same_all = same_all .and. size(names) == size(r1%events)
+         if (same_all) then
+            do k = 1, size(names)
+               same_all = same_all .and. names(k)%s == ev_name(r1%events(k)%kind)
+            end do
+         end if
+      end if
+      call check('every column of /events equals the table, to the bit', same_all)
+      call check('the file without the in-memory table has the same /events', same_files)
+      call check('some contacts lasted over a block of 64 rows', any(r1%events%duration > 0.0_wp) .and. &
+                 long_contact(r1))
+      call remove_file(p1)
+      call remove_file(p2)
+   end subroutine test_run_file_events_equal_the_table
+
+   !> Column `name` of /events in file p1 against `want`, and in p2 against p1's.
+   subroutine column_r(p1, p2, name, same_all, same_files, want)
+      character(len=*), intent(in) :: p1, p2, name
+      real(wp), intent(in) :: want(:)
+      logical, intent(inout) :: same_all, same_files
+      real(wp), allocatable :: c(:), other(:)
+      integer(hid_t) :: fid
+      integer :: hdferr
+      call h5fopen_f(p1, H5F_ACC_RDONLY_F, fid, hdferr)
+      if (hdferr < 0) then
+         same_all = .false.; return
+      end if
+      call read_r1(fid, '/events/'//name, c)
+      call h5fclose_f(fid, hdferr)
+      same_all = same_all .and. same_r(c, want)
+      call h5fopen_f(p2, H5F_ACC_RDONLY_F, fid, hdferr)
+      if (hdferr < 0) then
+         same_files = .false.; return
+      end if
+      call read_r1(fid, '/events/'//name, other)
+      call h5fclose_f(fid, hdferr)
+      same_files = same_files .and. same_r(other, c)
+   end subroutine column_r
+
+   subroutine column_i(p1, p2, name, same_all, same_files, want)
+      character(len=*), intent(in) :: p1, p2, name
+      integer, intent(in) :: want(:)
+      logical, intent(inout) :: same_all, same_files
+      integer, allocatable :: ic(:), other(:)
+      integer(hid_t) :: fid
+      integer :: hdferr
+      call h5fopen_f(p1, H5F_ACC_RDONLY_F, fid, hdferr)
+      if (hdferr < 0) then
+         same_all = .false.; return
+      end if
+      call read_i1(fid, '/events/'//name, ic)
+      call h5fclose_f(fid, hdferr)
+      same_all = same_all .and. size(ic) == size(want)
+      if (same_all) same_all = all(ic == want)
+      call h5fopen_f(p2, H5F_ACC_RDONLY_F, fid, hdferr)
+      if (hdferr < 0) then
+         same_files = .false.; return
+      end if
+      call read_i1(fid, '/events/'//name, other)
+      call h5fclose_f(fid, hdferr)
+      same_files = same_files .and. size(other) == size(ic)
+      if (same_files) same_files = all(other == ic)
+   end subroutine column_i
+
+   !> A contact whose row was flushed before it ended: more than 64 rows between
+   !> a contact and its separation.
+   logical function long_contact(r)
+      type(run_result_t), intent(in) :: r
+      integer :: i, j
+      long_contact = .false.
+      do i = 1, size(r%events)
+         if (r%events(i)%kind /= ev_contact_front .and. r%events(i)%kind /= ev_contact_rear) cycle
+         do j = i + 1, size(r%events)
+            if (r%events(j)%element == r%events(i)%element .and. r%events(j)%kind == ev_separation) exit
+         end do
+         if (j - i > 64 .and. j <= size(r%events)) long_contact = .true.
+      end do
+   end function long_contact
+
+   !> Two float64 columns equal to the bit (and of one length).
+   logical function same_r(a, b)
+      real(wp), intent(in) :: a(:), b(:)
+      same_r = size(a) == size(b)
+      if (same_r) same_r = all(a == b)
+   end function same_r
 
    subroutine test_bad_directory()
       type(hdf5_sink_t) :: sink

@@ -86,7 +86,7 @@ contains
          call simulate(m, h5, r, err)
          if (allocated(err)) exit
          inquire (file=trim(path), exist=exists)
-         if (exists .and. size(r%events) == 2) ok = ok + 1
+         if (exists .and. r%stats%events == 2) ok = ok + 1
          open (newunit=u, file=trim(path), iostat=ios)
          if (ios == 0) close (u, status='delete')
       end do

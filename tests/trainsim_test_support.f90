@@ -48,13 +48,14 @@ contains
       model%run%output = ''
    end subroutine load_model_text
 
-   !> Run without output; keep the in-memory series.
+   !> Run without output; keep the in-memory series and event table.
    subroutine run_model(model, res)
       type(model_t), intent(inout) :: model
       type(run_result_t), intent(out) :: res
       type(null_sink_t) :: none
       type(error_t), allocatable :: err
       model%run%keep_series = .true.
+      model%run%keep_events = .true.
       call simulate(model, none, res, err)
       if (allocated(err)) then
          write (*, '(a)') 'run failed: '//err%message

@@ -303,10 +303,13 @@ contains
    !> Run the model (built first if the deck changed since). In memory; with `output`,
    !> the HDF5 history goes to that file too (docs/output-format.md). The deck's
    !> `&run output` is not used here: pass it as `output` if you want it.
-   subroutine sim_run(self, err, output)
+   !> The event table is kept for `events` unless `keep_events = .false.`: then
+   !> memory does not grow with the run (the table is in `output` only, if given).
+   subroutine sim_run(self, err, output, keep_events)
       class(simulation_t), intent(inout) :: self
       type(error_t), allocatable, intent(out) :: err
       character(len=*), intent(in), optional :: output
+      logical, intent(in), optional :: keep_events
       type(model_t) :: m
       type(hdf5_sink_t) :: h5
       type(null_sink_t) :: none
@@ -315,6 +318,8 @@ contains
          call self%build(err); if (allocated(err)) return
       end if
       m = self%model                  ! a run changes modes and workspace: run a copy
+      m%run%keep_events = .true.
+      if (present(keep_events)) m%run%keep_events = keep_events
       if (present(output)) then
          h5%path = output
          call simulate(m, h5, self%res, err)
@@ -446,7 +451,8 @@ contains
    end function metric_names
 
    !> The event table of the last run (time order; `element` is the index in deck order,
-   !> `event_element_id` names it, `ev_name(kind)` names the kind).
+   !> `event_element_id` names it, `ev_name(kind)` names the kind). Empty if the run
+   !> was made with `keep_events = .false.`.
    subroutine sim_events(self, events, err)
       class(simulation_t), intent(in) :: self
       type(event_t), allocatable, intent(out) :: events(:)

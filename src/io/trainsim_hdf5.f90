@@ -8,7 +8,10 @@
 !> link, a device (/dev/null, /dev/full), a pipe or a socket is refused at `open`.
 !> Samples are buffered
 !> in blocks of `block_rows` and appended to extendible, chunked (optionally deflate-compressed)
-!> datasets. Every HDF5 call is checked; failures are returned as `error_t` values
+!> datasets. Event rows are streamed the same way (sink_t%write_event): buffered in
+!> blocks of `event_block_rows`, appended to the chunked columns of /events; a row
+!> already written is rewritten in place (one-row hyperslabs of peak_force and
+!> duration) when its contact ends. Every HDF5 call is checked; failures are returned as `error_t` values
 !> (code `err_io`, message naming the output path). HDF5's automatic error printing is
 !> switched off (process-wide) when a sink is opened, so the library never prints.
 !> After any error the sink cleans up after itself (ids closed, its `.part` removed) and
@@ -18,11 +21,11 @@ module trainsim_hdf5
    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5eset_auto_f, &
       h5fcreate_f, h5fclose_f, H5F_ACC_TRUNC_F, H5F_CLOSE_STRONG_F, H5F_LIBVER_V18_F, &
       h5pcreate_f, h5pclose_f, h5pset_fclose_degree_f, h5pset_libver_bounds_f, &
-      h5pset_chunk_f, h5pset_deflate_f, H5P_FILE_ACCESS_F, H5P_DATASET_CREATE_F, &
+      h5pset_chunk_f, h5pset_deflate_f, h5pset_cache_f, H5P_FILE_ACCESS_F, H5P_DATASET_CREATE_F, &
       h5zfilter_avail_f, H5Z_FILTER_DEFLATE_F, &
       h5screate_simple_f, h5screate_f, h5sclose_f, h5sselect_hyperslab_f, &
       H5S_SCALAR_F, H5S_UNLIMITED_F, H5S_SELECT_SET_F, &
-      h5dcreate_f, h5dclose_f, h5dset_extent_f, h5dget_space_f, h5dwrite_f, &
+      h5dcreate_f, h5dclose_f, h5dset_extent_f, h5dget_space_f, h5dwrite_f, h5dread_f, &
       h5gcreate_f, h5gclose_f, h5acreate_f, h5awrite_f, h5aclose_f, &
       h5tcopy_f, h5tset_size_f, h5tset_strpad_f, h5tset_cset_f, h5tclose_f, &
       H5T_STRING, H5T_STR_NULLTERM_F, H5T_CSET_UTF8_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, &
@@ -66,6 +69,15 @@ module trainsim_hdf5
       ds_energy = 5, ds_tl = 6, ds_tr = 7, ds_disp = 8, ds_force = 9, ds_contact = 10, &
       ds_pairs = 11, n_ds = 11
 
+   !> Columns of /events, in the order they are created (docs/output-format.md).
+   integer, parameter :: n_evc = 15
+   character(len=*), parameter :: ev_columns(n_evc) = [character(len=17) :: 'time', 'element', 'kind', &
+      'kind_name', 'approach_velocity', 'restitution', 'damping', 'peak_force', 'duration', 'theta_left', &
+      'omega_left', 'theta_right', 'omega_right', 'displacement', 'force']
+   integer, parameter :: evc_time = 1, evc_element = 2, evc_kind = 3, evc_kind_name = 4, evc_velocity = 5, &
+      evc_restitution = 6, evc_damping = 7, evc_peak = 8, evc_duration = 9, evc_theta_left = 10, &
+      evc_omega_left = 11, evc_theta_right = 12, evc_omega_right = 13, evc_disp = 14, evc_force = 15
+
    !> Writes one run to an HDF5 file (see docs/output-format.md for the layout).
    type, extends(sink_t) :: hdf5_sink_t
       !> Final file name, set by the caller before `open`; written under `temp_path()`.
@@ -76,6 +88,8 @@ module trainsim_hdf5
       !> rig, one sample per step: 0.97 us of CPU and 300 B per sample (the raw
       !> size) without compression, 5.7 us and 197 B at level 1 (docs/benchmarks.md).
       integer :: compression = 0
+      !> Event rows buffered in memory before each write (also the chunk length of /events).
+      integer :: event_block_rows = 256
       character(len=:), allocatable, private :: part
       logical, private :: is_open = .false.       ! between a successful open and close
       logical, private :: part_made = .false.     ! the .part file may exist
@@ -91,11 +105,20 @@ module trainsim_hdf5
       real(wp), allocatable, private :: b_time(:), b_states(:, :), b_theta(:, :), &
          b_omega(:, :), b_energy(:, :), b_tl(:, :), b_tr(:, :), b_disp(:, :), b_force(:, :)
       integer, allocatable, private :: b_contact(:, :), b_pairs(:, :)
+      integer(hid_t), private :: ev_grp = -1, ev_dset(n_evc) = -1
+      type(event_t), allocatable, private :: ev_buf(:)
+      integer, private :: ev_n_buf = 0, ev_written = 0   ! event rows buffered, in the file
+      !> Element of the first event row, and whether later rows' displacement or
+      !> force units differ from its (then the columns list a unit per row).
+      integer, private :: ev_el1 = 0
+      logical, private :: ev_disp_mixed = .false., ev_force_mixed = .false.
    contains
       procedure :: open => h5_open
       procedure :: write_sample => h5_write_sample
       procedure :: close => h5_close
       procedure :: abort => h5_abort
+      procedure :: write_event => h5_write_event
+      procedure :: update_event => h5_update_event
       procedure :: temp_path => h5_temp_path
    end type hdf5_sink_t
 
@@ -155,9 +178,10 @@ contains
          call fatal_error(err, "cannot write output file '': no output path set", err_io)
          return
       end if
-      if (self%block_rows < 1) then
+      if (self%block_rows < 1 .or. self%event_block_rows < 1) then
          call fatal_error(err, "cannot write output file '"//shown// &
-                          "': block_rows must be positive, got "//str(self%block_rows), err_internal)
+                          "': block_rows and event_block_rows must be positive, got "//str(self%block_rows)// &
+                          ' and '//str(self%event_block_rows), err_internal)
          return
       end if
       call open_impl(self, meta, err)
@@ -238,7 +262,12 @@ contains
          return
       end if
       call flush_block(self, err)
-      if (.not. allocated(err)) call write_events(self, events, err)
+      do i = 1, size(events)   ! rows given only now, after the streamed ones
+         if (allocated(err)) exit
+         call h5_write_event(self, self%ev_written + self%ev_n_buf + 1, events(i), err)
+      end do
+      if (.not. self%is_open) return   ! write_event failed and aborted
+      if (.not. allocated(err)) call finish_events(self, err)
       if (.not. allocated(err)) call write_metrics(self, metrics, err)
       if (.not. allocated(err)) call write_stats(self%file_id, stats, err)
       if (.not. allocated(err)) then
@@ -295,6 +324,14 @@ contains
          if (self%dset(i) >= 0) call h5dclose_f(self%dset(i), hdferr)
          self%dset(i) = -1
       end do
+      do i = 1, n_evc
+         if (self%ev_dset(i) >= 0) call h5dclose_f(self%ev_dset(i), hdferr)
+         self%ev_dset(i) = -1
+      end do
+      if (self%ev_grp >= 0) call h5gclose_f(self%ev_grp, hdferr)
+      self%ev_grp = -1
+      self%ev_n_buf = 0
+      self%ev_written = 0
       ! The file was created with H5F_CLOSE_STRONG: this also closes any other object.
       if (self%file_id >= 0) then
          ! The file is discarded: free its space first, so that HDF5 can flush its
@@ -457,6 +494,8 @@ contains
       if (allocated(err)) return
       call attach_time_scale(self, err)
       if (allocated(err)) return
+      call make_event_columns(self, err)
+      if (allocated(err)) return
       call alloc_buffers(self)
    end subroutine open_impl
 
@@ -548,6 +587,11 @@ contains
       ! 1.8 format: large attributes (the deck text) go to dense storage;
       ! files stay readable by HDF5 1.8 and later.
       if (hdferr >= 0) call h5pset_libver_bounds_f(fapl, H5F_LIBVER_V18_F, H5F_LIBVER_V18_F, hdferr)
+      ! No raw-data chunk cache: every block is written as whole chunks, and a
+      ! rewritten event row is one read-modify-write of its chunk. (HDF5's
+      ! default, 1 MiB per dataset, made a run's memory grow with its length
+      ! until every one of the 26 datasets had filled its cache.)
+      if (hdferr >= 0) call h5pset_cache_f(fapl, 0, 0_size_t, 0_size_t, 0.75, hdferr)
       if (hdferr >= 0) then
          ! created empty by make_temp_file: ours alone, so truncating it is safe
          call make_temp_file(self, err)
@@ -720,6 +764,7 @@ contains
       allocate (self%b_theta(self%n_nodes, r), self%b_omega(self%n_nodes, r))
       allocate (self%b_tl(self%n_el, r), self%b_tr(self%n_el, r), self%b_disp(self%n_el, r), &
                 self%b_force(self%n_el, r), self%b_contact(self%n_el, r), self%b_pairs(self%n_el, r))
+      allocate (self%ev_buf(self%event_block_rows))
    end subroutine alloc_buffers
 
    subroutine free_buffers(self)
@@ -735,6 +780,7 @@ contains
       if (allocated(self%b_force)) deallocate (self%b_force)
       if (allocated(self%b_contact)) deallocate (self%b_contact)
       if (allocated(self%b_pairs)) deallocate (self%b_pairs)
+      if (allocated(self%ev_buf)) deallocate (self%ev_buf)
    end subroutine free_buffers
 
    !> Write the buffered samples: extend every series and write one hyperslab each.
@@ -807,68 +853,219 @@ contains
       call close_group(grp, err)
    end subroutine write_metrics
 
-   subroutine write_events(self, events, err)
-      type(hdf5_sink_t), intent(in) :: self
-      type(event_t), intent(in) :: events(:)
+   !> /events: the group and its columns, extendible and chunked (rows come in blocks).
+   subroutine make_event_columns(self, err)
+      type(hdf5_sink_t), intent(inout) :: self
       type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: grp
-      integer :: n, i
-      real(wp) :: rcol(size(events))   ! contiguous copies of the columns
-      integer :: icol(size(events))
-      type(string_t) :: names(size(events))
-      type(string_t), allocatable :: disp(:), force(:), vel(:), damp(:), one(:), sec(:), rad(:), rads(:)
-
-      n = size(events)
-      ! per-row units: each row takes its element's displacement and force units
-      allocate (disp(n), force(n), vel(n), damp(n))
-      do i = 1, n
-         if (events(i)%element >= 1 .and. events(i)%element <= self%n_el) then
-            disp(i) = self%el_disp_units(events(i)%element)
-            force(i) = self%el_force_units(events(i)%element)
-         else
-            disp(i)%s = '1'; force(i)%s = '1'
-         end if
-         vel(i)%s = disp(i)%s//'/s'
-         ! D of eq. (3.12) (force per displacement^2 per speed); a linear law's c is force*s/displacement
-         damp(i)%s = force(i)%s//'*s/'//disp(i)%s//'^2 (yang_sun D) or '//force(i)%s//'*s/'//disp(i)%s//' (linear c)'
-      end do
-      one = same_units(n, '1'); sec = same_units(n, 's'); rad = same_units(n, 'rad'); rads = same_units(n, 'rad/s')
-      call make_group(self%file_id, 'events', grp, err)
+      integer(hid_t) :: stype, dtype
+      integer :: k, hdferr
+      self%ev_n_buf = 0; self%ev_written = 0; self%ev_el1 = 0
+      self%ev_disp_mixed = .false.; self%ev_force_mixed = .false.
+      call make_group(self%file_id, 'events', self%ev_grp, err)
       if (allocated(err)) return
-      rcol = events%t
-      call put_column_r(grp, 'time', rcol, err, sec)
-      icol = events%element
-      if (.not. allocated(err)) call put_column_i(grp, 'element', icol, err, one)
-      icol = events%kind
-      if (.not. allocated(err)) call put_column_i(grp, 'kind', icol, err, one)
-      do i = 1, n
-         names(i)%s = ev_name(events(i)%kind)
+      call make_string_type(stype, err)
+      if (allocated(err)) return
+      do k = 1, n_evc
+         select case (k)
+         case (evc_element, evc_kind); dtype = H5T_NATIVE_INTEGER
+         case (evc_kind_name); dtype = stype
+         case default; dtype = H5T_NATIVE_DOUBLE
+         end select
+         call make_series(self%ev_grp, trim(ev_columns(k)), 1, 0, self%event_block_rows, dtype, 0, &
+                          self%ev_dset(k), err)
+         if (allocated(err)) exit
       end do
-      if (.not. allocated(err)) call put_column_s(grp, 'kind_name', names, err)
-      rcol = events%approach_velocity
-      if (.not. allocated(err)) call put_column_r(grp, 'approach_velocity', rcol, err, vel)
-      rcol = events%restitution
-      if (.not. allocated(err)) call put_column_r(grp, 'restitution', rcol, err, one)
-      rcol = events%damping
-      if (.not. allocated(err)) call put_column_r(grp, 'damping', rcol, err, damp)
-      rcol = events%peak_force
-      if (.not. allocated(err)) call put_column_r(grp, 'peak_force', rcol, err, force)
-      rcol = events%duration
-      if (.not. allocated(err)) call put_column_r(grp, 'duration', rcol, err, sec)
-      rcol = events%theta_left
-      if (.not. allocated(err)) call put_column_r(grp, 'theta_left', rcol, err, rad)
-      rcol = events%omega_left
-      if (.not. allocated(err)) call put_column_r(grp, 'omega_left', rcol, err, rads)
-      rcol = events%theta_right
-      if (.not. allocated(err)) call put_column_r(grp, 'theta_right', rcol, err, rad)
-      rcol = events%omega_right
-      if (.not. allocated(err)) call put_column_r(grp, 'omega_right', rcol, err, rads)
-      rcol = events%displacement
-      if (.not. allocated(err)) call put_column_r(grp, 'displacement', rcol, err, disp)
-      rcol = events%force
-      if (.not. allocated(err)) call put_column_r(grp, 'force', rcol, err, force)
-      call close_group(grp, err)
-   end subroutine write_events
+      call h5tclose_f(stype, hdferr)
+   end subroutine make_event_columns
+
+   !> Buffer event row `row` (rows come in order); write a block when the buffer is full.
+   subroutine h5_write_event(self, row, ev, err)
+      class(hdf5_sink_t), intent(inout) :: self
+      integer, intent(in) :: row
+      type(event_t), intent(in) :: ev
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: d1, f1, d, f
+      if (.not. self%is_open) then
+         call fatal_error(err, 'HDF5 sink: write_event called while not open', err_internal)
+         return
+      end if
+      if (row /= self%ev_written + self%ev_n_buf + 1) then
+         call fatal_error(err, "HDF5 sink '"//self%path//"': event row "//str(row)//' out of order (expected '// &
+                          str(self%ev_written + self%ev_n_buf + 1)//')', err_internal)
+         call self%abort()
+         return
+      end if
+      if (row == 1) then
+         self%ev_el1 = ev%element
+      else
+         call row_units(self, self%ev_el1, d1, f1)
+         call row_units(self, ev%element, d, f)
+         if (d /= d1) self%ev_disp_mixed = .true.
+         if (f /= f1) self%ev_force_mixed = .true.
+      end if
+      self%ev_n_buf = self%ev_n_buf + 1
+      self%ev_buf(self%ev_n_buf) = ev
+      if (self%ev_n_buf == size(self%ev_buf)) then
+         call flush_events(self, err)
+         if (allocated(err)) then
+            err%message = "cannot write output file '"//self%path//"': "//err%message
+            call self%abort()
+         end if
+      end if
+   end subroutine h5_write_event
+
+   !> Row `row` again with its final peak force and duration: in the buffer if it
+   !> is still there, else rewritten in the file (one row of those two columns).
+   subroutine h5_update_event(self, row, ev, err)
+      class(hdf5_sink_t), intent(inout) :: self
+      integer, intent(in) :: row
+      type(event_t), intent(in) :: ev
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. self%is_open) then
+         call fatal_error(err, 'HDF5 sink: update_event called while not open', err_internal)
+         return
+      end if
+      if (row < 1 .or. row > self%ev_written + self%ev_n_buf) then
+         call fatal_error(err, "HDF5 sink '"//self%path//"': update of event row "//str(row)// &
+                          ' not written yet', err_internal)
+         call self%abort()
+         return
+      end if
+      if (row > self%ev_written) then
+         self%ev_buf(row - self%ev_written)%peak_force = ev%peak_force
+         self%ev_buf(row - self%ev_written)%duration = ev%duration
+         return
+      end if
+      call write_r_at(self%ev_dset(evc_peak), ev%peak_force, row, '/events/peak_force', err)
+      if (.not. allocated(err)) call write_r_at(self%ev_dset(evc_duration), ev%duration, row, '/events/duration', err)
+      if (allocated(err)) then
+         err%message = "cannot write output file '"//self%path//"': "//err%message
+         call self%abort()
+      end if
+   end subroutine h5_update_event
+
+   !> Append the buffered event rows to every column.
+   subroutine flush_events(self, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer :: nb, i, k
+      real(wp), allocatable :: r(:)
+      integer, allocatable :: iv(:)
+      type(string_t), allocatable :: names(:)
+      integer(hsize_t) :: row0
+      nb = self%ev_n_buf
+      if (nb == 0) return
+      row0 = int(self%ev_written, hsize_t)
+      allocate (r(nb), iv(nb), names(nb))
+      do k = 1, n_evc
+         associate (b => self%ev_buf(1:nb), what => '/events/'//trim(ev_columns(k)))
+            select case (k)
+            case (evc_element, evc_kind)
+               if (k == evc_element) iv = b%element
+               if (k == evc_kind) iv = b%kind
+               call append_i1(self%ev_dset(k), iv, row0, what, err)
+            case (evc_kind_name)
+               do i = 1, nb
+                  names(i)%s = ev_name(b(i)%kind)
+               end do
+               call append_s1(self%ev_dset(k), names, row0, what, err)
+            case default
+               select case (k)
+               case (evc_time); r = b%t
+               case (evc_velocity); r = b%approach_velocity
+               case (evc_restitution); r = b%restitution
+               case (evc_damping); r = b%damping
+               case (evc_peak); r = b%peak_force
+               case (evc_duration); r = b%duration
+               case (evc_theta_left); r = b%theta_left
+               case (evc_omega_left); r = b%omega_left
+               case (evc_theta_right); r = b%theta_right
+               case (evc_omega_right); r = b%omega_right
+               case (evc_disp); r = b%displacement
+               case (evc_force); r = b%force
+               end select
+               call append_r1(self%ev_dset(k), r, row0, what, err)
+            end select
+         end associate
+         if (allocated(err)) return
+      end do
+      self%ev_written = self%ev_written + nb
+      self%ev_n_buf = 0
+   end subroutine flush_events
+
+   !> Last block of events, the columns' units, close /events. Each row takes
+   !> its element's displacement and force units; a column whose rows differ
+   !> lists them per row (`entry_units`, read back from /events/element).
+   subroutine finish_events(self, err)
+      type(hdf5_sink_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer :: n, i, k, hdferr
+      integer, allocatable :: el(:)
+      character(len=:), allocatable :: d, f
+      type(string_t), allocatable :: disp(:), force(:), vel(:), damp(:), u(:)
+      call flush_events(self, err)
+      if (allocated(err)) return
+      n = self%ev_written
+      if (self%ev_disp_mixed .or. self%ev_force_mixed) then
+         allocate (el(n))
+         call h5dread_f(self%ev_dset(evc_element), H5T_NATIVE_INTEGER, el, [int(n, hsize_t)], hdferr)
+         if (hdferr < 0) then
+            call fatal_error(err, 'cannot read back /events/element', err_io)
+            return
+         end if
+      else
+         allocate (el(min(n, 1)))
+         if (n > 0) el = self%ev_el1
+      end if
+      ! per-row units (one entry when they are all the same; none without rows)
+      allocate (disp(size(el)), force(size(el)), vel(size(el)), damp(size(el)))
+      do i = 1, size(el)
+         call row_units(self, el(i), d, f)
+         disp(i)%s = d; force(i)%s = f
+         vel(i)%s = d//'/s'
+         ! D of eq. (3.12) (force per displacement^2 per speed); a linear law's c is force*s/displacement
+         damp(i)%s = f//'*s/'//d//'^2 (yang_sun D) or '//f//'*s/'//d//' (linear c)'
+      end do
+      do k = 1, n_evc
+         select case (k)
+         case (evc_time, evc_duration); u = same_units(min(n, 1), 's')
+         case (evc_theta_left, evc_theta_right); u = same_units(min(n, 1), 'rad')
+         case (evc_omega_left, evc_omega_right); u = same_units(min(n, 1), 'rad/s')
+         case (evc_velocity); u = vel
+         case (evc_damping); u = damp
+         case (evc_peak, evc_force); u = force
+         case (evc_disp); u = disp
+         case default; u = same_units(min(n, 1), '1')
+         end select
+         if (k == evc_kind_name) then
+            call put_str_attr(self%ev_dset(k), 'units', '1', err)
+         else
+            call put_entry_units(self%ev_dset(k), u, err)
+         end if
+         if (allocated(err)) return
+         call h5dclose_f(self%ev_dset(k), hdferr)
+         self%ev_dset(k) = -1
+         if (hdferr < 0) then
+            call fatal_error(err, 'cannot write events/'//trim(ev_columns(k)), err_io)
+            return
+         end if
+      end do
+      call close_group(self%ev_grp, err)
+      self%ev_grp = -1
+   end subroutine finish_events
+
+   !> Displacement and force units of an event row of element `el` ('1' out of range).
+   subroutine row_units(self, el, d, f)
+      type(hdf5_sink_t), intent(in) :: self
+      integer, intent(in) :: el
+      character(len=:), allocatable, intent(out) :: d, f
+      if (el >= 1 .and. el <= self%n_el) then
+         d = self%el_disp_units(el)%s
+         f = self%el_force_units(el)%s
+      else
+         d = '1'; f = '1'
+      end if
+   end subroutine row_units
 
    !> /run_stats: counters (64-bit), timings and the completion flag as attributes.
    subroutine write_stats(file_id, stats, err)
@@ -1049,6 +1246,71 @@ contains
       call end_append(fspace, mspace, hdferr, what, err)
    end subroutine append_i2
 
+   subroutine append_i1(dset, buf, row0, what, err)
+      integer(hid_t), intent(in) :: dset
+      integer, contiguous, intent(in) :: buf(:)
+      integer(hsize_t), intent(in) :: row0
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: fspace, mspace
+      integer :: hdferr
+      call begin_append(dset, 1, 0, row0, size(buf), fspace, mspace, what, err)
+      if (allocated(err)) return
+      call h5dwrite_f(dset, H5T_NATIVE_INTEGER, buf, [int(size(buf), hsize_t)], hdferr, &
+                      mem_space_id=mspace, file_space_id=fspace)
+      call end_append(fspace, mspace, hdferr, what, err)
+   end subroutine append_i1
+
+   !> Append variable-length UTF-8 strings.
+   subroutine append_s1(dset, texts, row0, what, err)
+      integer(hid_t), intent(in) :: dset
+      type(string_t), intent(in) :: texts(:)
+      integer(hsize_t), intent(in) :: row0
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: fspace, mspace, stype
+      integer :: hdferr, hdferr2
+      character(kind=c_char), allocatable, target :: pool(:)
+      type(c_ptr), allocatable, target :: ptrs(:)
+      call make_string_type(stype, err)
+      if (allocated(err)) return
+      call begin_append(dset, 1, 0, row0, size(texts), fspace, mspace, what, err)
+      if (.not. allocated(err)) then
+         call vlen_pointers(texts, pool, ptrs)
+         call h5dwrite_f(dset, stype, c_loc(ptrs), hdferr, mem_space_id=mspace, file_space_id=fspace)
+         call end_append(fspace, mspace, hdferr, what, err)
+      end if
+      call h5tclose_f(stype, hdferr2)
+   end subroutine append_s1
+
+   !> Rewrite entry `row` (1-based) of a 1-D float64 dataset.
+   subroutine write_r_at(dset, value, row, what, err)
+      integer(hid_t), intent(in) :: dset
+      real(wp), intent(in) :: value
+      integer, intent(in) :: row
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: fspace, mspace
+      integer :: hdferr, hdferr2
+      real(wp) :: v(1)
+      v(1) = value
+      call h5dget_space_f(dset, fspace, hdferr)
+      if (hdferr < 0) then
+         call fatal_error(err, 'H5Dget_space failed for '//what, err_io)
+         return
+      end if
+      call h5sselect_hyperslab_f(fspace, H5S_SELECT_SET_F, [int(row - 1, hsize_t)], [1_hsize_t], hdferr)
+      if (hdferr >= 0) then
+         call h5screate_simple_f(1, [1_hsize_t], mspace, hdferr)
+         if (hdferr >= 0) then
+            call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, v, [1_hsize_t], hdferr, mem_space_id=mspace, file_space_id=fspace)
+            call h5sclose_f(mspace, hdferr2)
+         end if
+      end if
+      call h5sclose_f(fspace, hdferr2)
+      if (hdferr < 0) call fatal_error(err, 'cannot rewrite a row of '//what//' (disk full?)', err_io)
+   end subroutine write_r_at
+
    !> Fixed-size 1-D dataset (contiguous; may have zero length).
    subroutine make_column(loc, name, dtype, n, dset, err)
       integer(hid_t), intent(in) :: loc, dtype
@@ -1118,32 +1380,6 @@ contains
       if (allocated(err)) hdferr = -1
       call finish_column(dset, hdferr, name, err)
    end subroutine put_column_i
-
-   !> Column of variable-length UTF-8 strings (units '1').
-   subroutine put_column_s(loc, name, texts, err)
-      integer(hid_t), intent(in) :: loc
-      character(len=*), intent(in) :: name
-      type(string_t), intent(in) :: texts(:)
-      type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: dset, stype
-      integer :: hdferr, hdferr2
-      character(kind=c_char), allocatable, target :: pool(:)
-      type(c_ptr), allocatable, target :: ptrs(:)
-      call make_string_type(stype, err)
-      if (allocated(err)) return
-      call make_column(loc, name, stype, size(texts), dset, err)
-      if (.not. allocated(err)) then
-         hdferr = 0
-         if (size(texts) > 0) then
-            call vlen_pointers(texts, pool, ptrs)
-            call h5dwrite_f(dset, stype, c_loc(ptrs), hdferr)
-         end if
-         if (hdferr >= 0) call put_str_attr(dset, 'units', '1', err)
-         if (allocated(err)) hdferr = -1
-         call finish_column(dset, hdferr, name, err)
-      end if
-      call h5tclose_f(stype, hdferr2)
-   end subroutine put_column_s
 
    !> `units` = the entries' common unit ('mixed: see entry_units' when they differ,
    !> with `entry_units` then listing them; '1' for an empty column).

@@ -1,6 +1,14 @@
 !> What a run hands to an output sink: the run's description, samples at the
 !> output interval, the event table and the run statistics. Sinks (HDF5 file,
 !> in-memory, none) extend sink_t; the integrators never see a file format.
+!>
+!> The event table is streamed: each row goes to `write_event` as it happens
+!> (row numbers 1, 2, ... in time order), so neither the run nor the sink needs
+!> the whole table in memory. A contact row is handed over at its onset with the
+!> peak force so far and duration -1; when the contact ends (or the run ends with
+!> it still open) `update_event` gives the row again with its final peak_force
+!> and duration (the only fields that change). Sinks that store no events keep
+!> the default no-op procedures.
 module trainsim_sink
    use trainsim_kinds, only: wp, i8
    use trainsim_strings, only: string_t
@@ -59,7 +67,12 @@ module trainsim_sink
       !> swing between successive peaks (trainsim_metrics), after settle_time
       real(wp) :: p2p_range = 0.0_wp, p2p_mean = 0.0_wp
       integer :: p2p_swings = 0
-      integer :: open_event = 0        !< index of the event row of the contact in progress
+      !> the online peak detector could confirm p2p_mean/p2p_swings are the
+      !> whole-series figures (D-17); .false. if the range grew after a swing
+      !> to over ten times that swing (memory only, not in the file)
+      logical :: p2p_exact = .true.
+      !> contact in progress: its slot in the observer's table of open rows (0: none)
+      integer :: open_event = 0
    end type element_metrics_t
 
    !> An output sink.
@@ -69,6 +82,8 @@ module trainsim_sink
       procedure(write_sample_i), deferred :: write_sample
       procedure(close_i), deferred :: close
       procedure :: abort => sink_abort
+      procedure :: write_event => sink_write_event
+      procedure :: update_event => sink_update_event
    end type sink_t
 
    abstract interface
@@ -86,8 +101,9 @@ module trainsim_sink
          type(sample_t), intent(in) :: s
          type(error_t), allocatable, intent(out) :: err
       end subroutine write_sample_i
-      !> Finish a successful run: write the event table, statistics and
-      !> per-element metrics, publish.
+      !> Finish a successful run: write the statistics and per-element metrics,
+      !> publish. `events`: rows appended to the event table after those given to
+      !> `write_event` (the observer streams every row and passes none here).
       subroutine close_i(self, events, stats, metrics, err)
          import :: sink_t, event_t, run_stats_t, element_metrics_t, error_t
          class(sink_t), intent(inout) :: self
@@ -114,6 +130,26 @@ contains
       associate (unused => self)
       end associate
    end subroutine sink_abort
+
+   !> Default: events are not stored.
+   subroutine sink_write_event(self, row, ev, err)
+      class(sink_t), intent(inout) :: self
+      integer, intent(in) :: row        !< row number (1, 2, ... in time order)
+      type(event_t), intent(in) :: ev
+      type(error_t), allocatable, intent(out) :: err
+      associate (u1 => self, u2 => row, u3 => ev)
+      end associate
+   end subroutine sink_write_event
+
+   !> Default: events are not stored.
+   subroutine sink_update_event(self, row, ev, err)
+      class(sink_t), intent(inout) :: self
+      integer, intent(in) :: row        !< a row already given to write_event
+      type(event_t), intent(in) :: ev   !< that row with its final peak_force and duration
+      type(error_t), allocatable, intent(out) :: err
+      associate (u1 => self, u2 => row, u3 => ev)
+      end associate
+   end subroutine sink_update_event
 
    subroutine null_open(self, meta, err)
       class(null_sink_t), intent(inout) :: self

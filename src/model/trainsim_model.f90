@@ -56,6 +56,7 @@ module trainsim_model
       real(wp) :: settle_time = 0.0_wp          !< metrics ignore t < t_start + settle_time
       logical :: track_energy = .true.          !< integrate dissipated energy and work input
       logical :: keep_series = .false.          !< keep displacement series in memory (sweeps)
+      logical :: keep_events = .false.          !< keep the whole event table in the result (else streamed to the sink only)
       integer :: compression = 0                !< zlib level of the HDF5 history (0: none)
       logical :: analytic_jacobian = .true.     !< CVODE BDF: model%jacobian, else difference quotients
       logical :: preload = .false.              !< initial_state = 'preload': angles from the static wind-up

@@ -12,25 +12,59 @@ module trainsim_metrics
    implicit none
    private
 
-   public :: peak_to_peak, peak_to_peak_values, turning_points_t
+   public :: peak_to_peak, peak_to_peak_values, p2p_detector_t
 
-   !> The turning points of a sampled signal, kept online: the first sample, every
-   !> sample where the direction changes, and (after `close`) the last one. The
-   !> hysteresis peak detector below only ever looks at the running extreme of
-   !> each monotone stretch, which is its end, so it gives exactly the same
-   !> figures on the turning points as on every sample, for a fraction of the
-   !> memory (two values per oscillation instead of every output sample).
-   type :: turning_points_t
-      real(wp), allocatable :: x(:)
-      integer :: n = 0
-      real(wp) :: last = 0.0_wp
-      integer :: dir = 0
-      logical :: open = .false.
+   !> State of the hysteresis peak detector (as in peak_to_peak_values).
+   type :: p2p_state_t
+      integer :: dir = 0                     !< 0 none yet, +1 rising, -1 falling
+      real(wp) :: cand = 0.0_wp              !< running extreme of the current edge
+      real(wp) :: last_ext = 0.0_wp          !< last confirmed extreme (the first sample before)
+      logical :: have_max = .false.
+      real(wp) :: last_max = 0.0_wp, total = 0.0_wp
+      integer :: n_swings = 0
+   end type p2p_state_t
+
+   !> Extremes kept for a replay, per signal (8 B each); half are folded when full.
+   integer, parameter :: p2p_log_size = 512
+
+   !> The peak-to-peak figures of a sampled signal, computed online in bounded
+   !> memory: the hysteresis peak detector of peak_to_peak_values run sample by
+   !> sample with the threshold h = hyst * (range so far), which never
+   !> decreases and ends at the definition's hyst * (whole range).
+   !>
+   !> When the range grows, h rises to h'. The detector's state is still the
+   !> state of a detector run with h' from the start if every edge between
+   !> confirmed extremes (the first from the first sample) is at least h':
+   !> such a detector confirms the same extremes, only later in each edge. The
+   !> edge still growing (last confirmed extreme to the running extreme) is
+   !> checked as the detector would with h'. If either fails, the detector is
+   !> run again with h' over the extremes confirmed so far (the detector on
+   !> those alone gives what it gives on every sample, for any threshold at
+   !> least the ones they were found with), from a folded state: the log holds
+   !> the last p2p_log_size extremes, and when full its older half is folded
+   !> (run through the detector) into that state. The replay is exact if the
+   !> folded part's edges are all at least h'; if not (the range grew, after
+   !> more than p2p_log_size/2 extremes, past ten times an edge already
+   !> folded), the past cannot be re-decided without the whole series: the
+   !> detector goes on with h', and `exact` becomes .false. Edges are compared
+   !> with a margin of a few ulps of the signal, so `exact` = .true. guarantees
+   !> the whole-series figures, to the bit.
+   type :: p2p_detector_t
+      real(wp) :: hyst = 0.1_wp
+      integer :: n = 0                       !< samples seen
+      real(wp) :: x1 = 0.0_wp, xmin = 0.0_wp, xmax = 0.0_wp, h = 0.0_wp
+      logical :: exact = .true.
+      type(p2p_state_t) :: s                 !< the detector now
+      type(p2p_state_t) :: f                 !< the detector before the log (folded part)
+      real(wp) :: e_min = huge(1.0_wp)       !< shortest confirmed edge
+      real(wp) :: e_min_f = huge(1.0_wp)     !< shortest edge of the folded part
+      real(wp), allocatable :: log(:)        !< extremes confirmed after f%cand
+      integer :: n_log = 0
+      integer :: replays = 0                 !< diagnostics: replays made
    contains
-      procedure :: push => tp_push
-      procedure :: close => tp_close
-      procedure, private :: append => tp_append
-   end type turning_points_t
+      procedure :: push => det_push
+      procedure :: figures => det_figures
+   end type p2p_detector_t
 
 contains
 
@@ -99,44 +133,141 @@ contains
       if (n_swings > 0) p2p_mean = total/real(n_swings, wp)
    end subroutine peak_to_peak_values
 
+   !> One sample through the detector with threshold h (the loop body of
+   !> peak_to_peak_values). On return `confirmed` says whether an extreme was
+   !> confirmed (its value: st%last_ext) and `edge` its distance from the one before.
+   pure subroutine feed(st, x, h, confirmed, edge)
+      type(p2p_state_t), intent(inout) :: st
+      real(wp), intent(in) :: x, h
+      logical, intent(out) :: confirmed
+      real(wp), intent(out) :: edge
+      confirmed = .false.; edge = 0.0_wp
+      select case (st%dir)
+      case (0)
+         if (x >= st%cand + h) then
+            st%dir = 1; st%cand = x
+         else if (x <= st%cand - h) then
+            st%dir = -1; st%cand = x
+         end if
+      case (1)
+         if (x > st%cand) then
+            st%cand = x
+         else if (x <= st%cand - h) then   ! cand was a maximum
+            confirmed = .true.; edge = abs(st%cand - st%last_ext); st%last_ext = st%cand
+            st%have_max = .true.; st%last_max = st%cand
+            st%dir = -1; st%cand = x
+         end if
+      case (-1)
+         if (x < st%cand) then
+            st%cand = x
+         else if (x >= st%cand + h) then   ! cand was a minimum
+            confirmed = .true.; edge = abs(st%cand - st%last_ext); st%last_ext = st%cand
+            if (st%have_max) then
+               st%total = st%total + (st%last_max - st%cand)
+               st%n_swings = st%n_swings + 1
+            end if
+            st%dir = 1; st%cand = x
+         end if
+      end select
+   end subroutine feed
+
    !> Take the next sample.
-   subroutine tp_push(self, x)
-      class(turning_points_t), intent(inout) :: self
+   subroutine det_push(self, x)
+      class(p2p_detector_t), intent(inout) :: self
       real(wp), intent(in) :: x
-      integer :: d
-      if (.not. self%open) then
-         call self%append(x)
-         self%open = .true.
-         self%last = x
+      real(wp) :: h_new, edge, margin
+      logical :: confirmed, redo
+      self%n = self%n + 1
+      if (self%n == 1) then
+         self%x1 = x; self%xmin = x; self%xmax = x
+         self%s%cand = x; self%s%last_ext = x
+         self%f = self%s
          return
       end if
-      d = 0
-      if (x > self%last) d = 1
-      if (x < self%last) d = -1
-      if (d == 0) return
-      if (self%dir /= 0 .and. d /= self%dir) call self%append(self%last)   ! self%last was a turn
-      self%dir = d
-      self%last = x
-   end subroutine tp_push
-
-   !> After the last sample: keep it (the end of the final monotone stretch).
-   subroutine tp_close(self)
-      class(turning_points_t), intent(inout) :: self
-      if (self%open .and. self%dir /= 0) call self%append(self%last)
-      self%open = .false.
-   end subroutine tp_close
-
-   subroutine tp_append(self, x)
-      class(turning_points_t), intent(inout) :: self
-      real(wp), intent(in) :: x
-      real(wp), allocatable :: grown(:)
-      if (.not. allocated(self%x)) allocate (self%x(64))
-      if (self%n == size(self%x)) then
-         allocate (grown(2*self%n))
-         grown(1:self%n) = self%x(1:self%n)
-         call move_alloc(grown, self%x)
+      if (x < self%xmin .or. x > self%xmax) then
+         self%xmin = min(self%xmin, x); self%xmax = max(self%xmax, x)
+         h_new = self%hyst*(self%xmax - self%xmin)
+         if (h_new > self%h) then
+            margin = 16.0_wp*epsilon(1.0_wp)*max(abs(self%xmin), abs(self%xmax))
+            ! the confirmed edges, and the edge still growing as the detector would see it with h_new
+            redo = self%e_min < h_new + margin
+            if (self%s%dir > 0) redo = redo .or. .not. (self%s%cand >= self%s%last_ext + h_new)
+            if (self%s%dir < 0) redo = redo .or. .not. (self%s%cand <= self%s%last_ext - h_new)
+            self%h = h_new
+            if (redo) then
+               if (self%e_min_f < h_new + margin) self%exact = .false.
+               call replay(self)
+            end if
+         end if
       end if
-      self%n = self%n + 1
-      self%x(self%n) = x
-   end subroutine tp_append
+      if (.not. self%h > 0.0_wp) return   ! all samples so far equal: nothing to decide
+      call feed(self%s, x, self%h, confirmed, edge)
+      if (confirmed) then
+         self%e_min = min(self%e_min, edge)
+         call keep(self, self%s%last_ext)
+      end if
+   contains
+      !> The detector again with threshold self%h: from the folded state over
+      !> the logged extremes and the running extreme (the log is rewritten with
+      !> the extremes confirmed now, never more than before).
+      subroutine replay(d)
+         type(p2p_detector_t), intent(inout) :: d
+         real(wp) :: c, v
+         integer :: i, n_old
+         logical :: conf
+         real(wp) :: e
+         d%replays = d%replays + 1
+         c = d%s%cand
+         n_old = d%n_log
+         d%s = d%f
+         d%e_min = d%e_min_f
+         d%n_log = 0
+         do i = 1, n_old + 1
+            v = c
+            if (i <= n_old) v = d%log(i)
+            call feed(d%s, v, d%h, conf, e)
+            if (conf) then
+               d%e_min = min(d%e_min, e)
+               d%n_log = d%n_log + 1
+               d%log(d%n_log) = d%s%last_ext
+            end if
+         end do
+      end subroutine replay
+   end subroutine det_push
+
+   !> Log a confirmed extreme; when the log is full, fold its older half into
+   !> the folded state (run through the detector with the threshold now).
+   subroutine keep(self, v)
+      type(p2p_detector_t), intent(inout) :: self
+      real(wp), intent(in) :: v
+      integer :: i, m
+      logical :: conf
+      real(wp) :: e
+      if (.not. allocated(self%log)) allocate (self%log(p2p_log_size))
+      if (self%n_log == size(self%log)) then
+         m = size(self%log)/2
+         do i = 1, m
+            call feed(self%f, self%log(i), self%h, conf, e)
+            if (conf) self%e_min_f = min(self%e_min_f, e)
+         end do
+         if (self%f%dir /= 0) self%e_min_f = min(self%e_min_f, abs(self%f%cand - self%f%last_ext))
+         self%log(1:self%n_log - m) = self%log(m + 1:self%n_log)
+         self%n_log = self%n_log - m
+      end if
+      self%n_log = self%n_log + 1
+      self%log(self%n_log) = v
+   end subroutine keep
+
+   !> The figures of the samples pushed so far (see peak_to_peak_values).
+   pure subroutine det_figures(self, p2p_range, p2p_mean, n_swings)
+      class(p2p_detector_t), intent(in) :: self
+      real(wp), intent(out) :: p2p_range, p2p_mean
+      integer, intent(out) :: n_swings
+      p2p_range = 0.0_wp; p2p_mean = 0.0_wp; n_swings = 0
+      if (self%n < 2) return
+      p2p_range = self%xmax - self%xmin
+      if (p2p_range <= 0.0_wp) return
+      n_swings = self%s%n_swings
+      if (n_swings > 0) p2p_mean = self%s%total/real(n_swings, wp)
+   end subroutine det_figures
 end module trainsim_metrics

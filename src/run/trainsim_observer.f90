@@ -3,6 +3,13 @@
 !> impacts, approach velocities, peak contact forces, loss of contact), the
 !> event table (with each contact's peak force and duration), and hands
 !> samples to the sink at the output interval and at every event.
+!>
+!> Memory does not grow with the run: event rows are streamed to the sink as
+!> they happen (sink_t%write_event; a contact's row again with its final peak
+!> force and duration when it ends, sink_t%update_event), only the rows of the
+!> contacts in progress are kept (one per element), and the peak-to-peak
+!> figures come from an online detector (trainsim_metrics). The whole event
+!> table is kept in the result only when run%keep_events asks for it.
 module trainsim_observer
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
@@ -12,7 +19,7 @@ module trainsim_observer
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_full
-   use trainsim_metrics, only: peak_to_peak_values, turning_points_t
+   use trainsim_metrics, only: p2p_detector_t
    implicit none
    private
 
@@ -24,6 +31,9 @@ module trainsim_observer
    !> What a run returns in memory.
    type :: run_result_t
       type(run_stats_t) :: stats
+      !> the event table, in time order (only if run%keep_events; else size 0).
+      !> During a run, the observer's own copy holds instead the row of each
+      !> element's contact in progress (slot el(i)%open_event = i).
       type(event_t), allocatable :: events(:)
       type(element_metrics_t), allocatable :: el(:)
       real(wp), allocatable :: y_final(:)
@@ -37,11 +47,15 @@ module trainsim_observer
    type :: observer_t
       type(sample_t) :: s
       type(run_result_t) :: res
-      integer :: n_events = 0
+      integer :: n_events = 0                        !< rows handed to the sink so far
+      integer, allocatable :: open_row(:)            !< per element: row number of its contact in progress
+      logical :: keep_events = .false.               !< keep the whole table in `kept` (run%keep_events)
+      type(event_t), allocatable :: kept(:)
+      class(sink_t), pointer :: out => null()       !< the run's sink (set by start)
       real(wp) :: t_prev = 0.0_wp, t_metrics = 0.0_wp
       integer :: n_series = 0
       logical :: keep = .false.                      !< keep the whole series of samples (keep_series)
-      type(turning_points_t), allocatable :: turns(:) !< per element: turning points of the displacement
+      type(p2p_detector_t), allocatable :: turns(:)  !< per element: peak-to-peak detector of the displacement
       logical :: track = .false.
       !> Locate contact-force and displacement peaks inside each step (adaptive
       !> integrators, whose steps are long): the previous step end is kept.
@@ -148,22 +162,27 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
-      class(sink_t), intent(inout) :: sink
+      class(sink_t), intent(inout), target :: sink   !< kept by the observer until finish (events)
       type(error_t), allocatable, intent(out) :: err
       integer :: nn, ne, nmax
       nn = size(model%nodes); ne = size(model%elements)
       allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
       allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
       allocate (self%s%contact(ne), self%s%pairs(ne))
-      allocate (self%res%el(ne), self%res%events(256))
+      allocate (self%res%el(ne), self%res%events(ne), self%open_row(ne))
+      self%open_row = 0
+      self%out => sink
       self%n_events = 0
+      self%keep_events = model%run%keep_events
+      if (self%keep_events) allocate (self%kept(256))
       self%track = model%run%track_energy
       self%t_metrics = model%run%t_start + model%run%settle_time
       self%t_prev = t
-      ! the peak-to-peak metrics keep only the turning points of each element's
-      ! displacement (memory independent of the run length); the whole series of
-      ! samples is kept in memory only when the caller asks (keep_series)
+      ! the peak-to-peak metrics are computed online (memory independent of the
+      ! run length); the whole series of samples is kept in memory only when the
+      ! caller asks (keep_series)
       allocate (self%turns(ne))
+      self%turns%hyst = p2p_hysteresis
       self%keep = model%run%keep_series
       nmax = 0
       if (self%keep) nmax = 1024
@@ -424,7 +443,10 @@ contains
       call self%emit(sink, err)
    end subroutine obs_sample
 
-   !> Record events that happened at (t, y) (the state after the mode update).
+   !> Record events that happened at (t, y) (the state after the mode update):
+   !> each row goes to the sink now; a contact's row is kept (slot i of
+   !> self%res%events for element i) until the contact ends, then handed over
+   !> again with its peak force and duration.
    subroutine obs_record_events(self, model, t, y, evs, nev, err)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
@@ -432,20 +454,15 @@ contains
       type(event_t), intent(in) :: evs(:)
       integer, intent(in) :: nev
       type(error_t), allocatable, intent(out) :: err
-      type(event_t), allocatable :: tmp(:)
+      type(event_t) :: row
       integer :: k, i
       if (nev == 0) return
       call self%fill(model, t, y)
       do k = 1, nev
          i = evs(k)%element
-         if (self%n_events == size(self%res%events)) then
-            allocate (tmp(2*size(self%res%events)))
-            tmp(1:self%n_events) = self%res%events(1:self%n_events)
-            call move_alloc(tmp, self%res%events)
-         end if
          self%n_events = self%n_events + 1
-         self%res%events(self%n_events) = evs(k)
-         associate (row => self%res%events(self%n_events), e => model%elements(i)%e)
+         row = evs(k)
+         associate (e => model%elements(i)%e)
             row%theta_left = self%s%theta(e%left)
             row%omega_left = self%s%omega(e%left)
             row%theta_right = self%s%theta(e%right)
@@ -456,22 +473,30 @@ contains
          associate (m => self%res%el(i))
             select case (evs(k)%kind)
             case (ev_contact_front, ev_contact_rear)
-               if (m%open_event > 0) self%res%events(m%open_event)%duration = t - self%res%events(m%open_event)%t
-               m%open_event = self%n_events
-               self%res%events(self%n_events)%peak_force = abs(self%s%force(i))
+               if (m%open_event > 0) then   ! a new contact ends the one in progress
+                  self%res%events(i)%duration = t - self%res%events(i)%t
+                  call close_row(i)
+                  if (allocated(err)) return
+               end if
+               row%peak_force = abs(self%s%force(i))
+               self%res%events(i) = row
+               self%open_row(i) = self%n_events
+               m%open_event = i
                if (t >= self%t_metrics) then
                   m%impacts = m%impacts + 1
                   m%max_approach_velocity = max(m%max_approach_velocity, abs(evs(k)%approach_velocity))
                end if
             case (ev_separation)
                if (m%open_event > 0) then
-                  associate (o => self%res%events(m%open_event))
+                  associate (o => self%res%events(i))
                      o%duration = t - o%t
                      o%peak_force = max(o%peak_force, abs(self%s%force(i)))
                      if (o%t >= self%t_metrics) m%max_peak_force = max(m%max_peak_force, o%peak_force)
+                     row%peak_force = o%peak_force
+                     row%duration = o%duration
                   end associate
-                  self%res%events(self%n_events)%peak_force = self%res%events(m%open_event)%peak_force
-                  self%res%events(self%n_events)%duration = self%res%events(m%open_event)%duration
+                  call close_row(i)
+                  if (allocated(err)) return
                end if
                m%open_event = 0
                if (t >= self%t_metrics) m%separations = m%separations + 1
@@ -479,6 +504,9 @@ contains
                if (t >= self%t_metrics) m%zone_changes = m%zone_changes + 1
             end select
          end associate
+         call self%out%write_event(self%n_events, row, err)
+         if (allocated(err)) return
+         if (self%keep_events) call keep_row(self%n_events, row)
       end do
       ! the state just after the mode change belongs to the metrics too: a mesh
       ! force jumps at a zone change, and its peak may be right there. (No
@@ -486,9 +514,29 @@ contains
       ! table holds the state at each event.)
       call self%update_metrics(model, t)
       if (self%refine_peaks) call self%keep_step_end()
+   contains
+      !> Element j's contact ended: its row, final, to the sink (and the kept table).
+      subroutine close_row(j)
+         integer, intent(in) :: j
+         call self%out%update_event(self%open_row(j), self%res%events(j), err)
+         if (self%keep_events) self%kept(self%open_row(j)) = self%res%events(j)
+         self%open_row(j) = 0
+      end subroutine close_row
+      subroutine keep_row(n, r)
+         integer, intent(in) :: n
+         type(event_t), intent(in) :: r
+         type(event_t), allocatable :: tmp(:)
+         if (n > size(self%kept)) then
+            allocate (tmp(2*size(self%kept)))
+            tmp(1:n - 1) = self%kept(1:n - 1)
+            call move_alloc(tmp, self%kept)
+         end if
+         self%kept(n) = r
+      end subroutine keep_row
    end subroutine obs_record_events
 
-   !> End of a successful run: close the sink and fill the result.
+   !> End of a successful run: the rows of contacts still open to the sink,
+   !> close the sink and fill the result.
    subroutine obs_finish(self, model, t, y, stats, sink, result, err)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
@@ -497,13 +545,18 @@ contains
       class(sink_t), intent(inout) :: sink
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
+      type(event_t) :: no_rows(0)
       integer :: i
-      ! contacts still open at the end count towards the peak force
+      ! contacts still open at the end count towards the peak force; their rows
+      ! get the peak force so far (duration stays -1)
       do i = 1, size(model%elements)
          if (self%res%el(i)%open_event > 0) then
-            associate (o => self%res%events(self%res%el(i)%open_event))
+            associate (o => self%res%events(i))
                if (o%t >= self%t_metrics) self%res%el(i)%max_peak_force = max(self%res%el(i)%max_peak_force, o%peak_force)
             end associate
+            call sink%update_event(self%open_row(i), self%res%events(i), err)
+            if (allocated(err)) return
+            if (self%keep_events) self%kept(self%open_row(i)) = self%res%events(i)
          end if
       end do
       if (self%s%t < t) then   ! make sure the final state is in the file
@@ -515,16 +568,21 @@ contains
       self%res%stats%events = int(self%n_events, i8)
       self%res%stats%t_final = t
       self%res%stats%completed = .true.
-      result = self%res
+      deallocate (self%res%events)
+      if (self%keep_events) then
+         self%res%events = self%kept(1:self%n_events)
+         deallocate (self%kept)
+      else
+         allocate (self%res%events(0))
+      end if
       do i = 1, size(model%elements)
-         call self%turns(i)%close()
-         if (self%turns(i)%n > 0) call peak_to_peak_values(self%turns(i)%x(1:self%turns(i)%n), p2p_hysteresis, &
-                                                           result%el(i)%p2p_range, result%el(i)%p2p_mean, &
-                                                           result%el(i)%p2p_swings)
+         call self%turns(i)%figures(self%res%el(i)%p2p_range, self%res%el(i)%p2p_mean, self%res%el(i)%p2p_swings)
+         self%res%el(i)%p2p_exact = self%turns(i)%exact
       end do
-      call sink%close(self%res%events(1:self%n_events), self%res%stats, result%el, err)
+      self%out => null()
+      call sink%close(no_rows, self%res%stats, self%res%el, err)
       if (allocated(err)) return
-      result%events = self%res%events(1:self%n_events)
+      result = self%res
       result%y_final = y
       result%t_final = t
       result%series_t = result%series_t(1:self%n_series)

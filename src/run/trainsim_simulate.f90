@@ -64,7 +64,7 @@ contains
    !> On error the sink is aborted (no partial output left as if good).
    subroutine simulate(model, sink, result, err)
       type(model_t), intent(inout), target :: model
-      class(sink_t), intent(inout) :: sink
+      class(sink_t), intent(inout), target :: sink   ! the observer streams the event rows to it
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
       type(observer_t) :: obs
