@@ -169,7 +169,7 @@ contains
 
    subroutine long_chain()
       integer, parameter :: n = 200
-      real(wp), parameter :: dt = 1.0e-3_wp, t_end = 2.0_wp
+      real(wp), parameter :: dt = 1.0e-3_wp, t_end = 2.4_wp
       character(len=:), allocatable :: deck
       type(run_t) :: ref, g1, m1, m2
       real(wp) :: et_g, ey_g, et_m, ey_m, et_m2, ey_m2, et_gm, ey_gm

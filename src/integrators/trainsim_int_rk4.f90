@@ -471,7 +471,7 @@ contains
          else
             call self%mr_step(model, y, s)
          end if
-         self%on_part = .true.
+         ! (ys holds all of L's step: refine may keep it)
       else if (s == self%h_loc) then
          self%ys = self%ynew
       else if (self%part(self%g_el(j))%used) then
@@ -969,7 +969,16 @@ contains
             self%yc(self%sl(q)) = y(self%sl(q))
          end do
          call self%mr_bnd(self%yc, self%mt_c)
-         call self%mr_rhs(model, self%mt_c, self%yc, self%k1, self%pk1)
+         if (self%mt_c == self%mt0) then
+            ! at the start of the step: L's part of the unsplit step's k1 (the same
+            ! state, modes and sums: bit for bit) and of its energy rates
+            do q = 1, self%n_sl
+               self%k1(self%sl(q)) = self%mk1(self%sl(q))
+            end do
+            self%pk1 = self%pr(:, 1)
+         else
+            call self%mr_rhs(model, self%mt_c, self%yc, self%k1, self%pk1)
+         end if
          call self%mr_step(model, y, self%h_loc)
          self%pw_full = self%pw_step
          call move_alloc(self%ys, swap); call move_alloc(self%ynew, self%ys); call move_alloc(swap, self%ynew)
