@@ -517,7 +517,13 @@ contains
       real(wp) :: tl, tr, f
       do k = 1, size(kin)
          i = kin(k)
-         call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         if (self%fn(i)%kind == nk_plain) then   ! (node_kinematics written out: as in rhs_fast)
+            o = self%fn(i)%off
+            self%theta(i) = y(o + 1)
+            self%omega(i) = y(o + 2)
+         else
+            call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         end if
          self%torque(i) = self%fn(i)%load0
       end do
       do k = 1, size(self%dyn_loads)
