@@ -9,6 +9,11 @@
 !> step completes the grid step. Steps stay on the t_start + k dt grid; a step
 !> also ends at the driver's goal (an output time or a breakpoint of the
 !> inputs, where the last stage is taken at the left limit).
+!>
+!> On a long train an event does not split the step of the whole train: the
+!> step stays unsplit, and only the region around the event's element is
+!> integrated again through its events (local event steps, `mr_begin`,
+!> docs/decisions.md D-31).
 module trainsim_int_rk4
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
