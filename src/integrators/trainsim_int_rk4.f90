@@ -9,8 +9,13 @@
 !> step completes the grid step. Steps stay on the t_start + k dt grid; a step
 !> also ends at the driver's goal (an output time or a breakpoint of the
 !> inputs, where the last stage is taken at the left limit).
+!>
+!> On a long train an event does not split the step of the whole train: the
+!> step stays unsplit, and only the region around the event's element is
+!> integrated again through its events (local event steps, `mr_begin`,
+!> docs/decisions.md D-32).
 module trainsim_int_rk4
-   use trainsim_kinds, only: wp
+   use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
@@ -23,6 +28,21 @@ module trainsim_int_rk4
    !> Step-map evaluations of the secant/Newton refinement before it falls back
    !> to Illinois false position on the bracket.
    integer, parameter :: max_secant = 8
+   !> Local event steps: the region around an event's element holds the nodes
+   !> within this many elements of its nodes. A change of the element's torque
+   !> reaches, through the four stages of one RK4 step, the derivatives of its
+   !> own nodes (k1), of their neighbours (k2), two elements out (k3) and three
+   !> (k4): the unsplit step of every node farther out does not depend on the
+   !> element at all.
+   integer, parameter :: mr_depth = 3
+   !> A local event step is taken only when the region and its boundary hold at
+   !> most 1/mr_small of the nodes (a proper, small part of the train).
+   integer, parameter :: mr_small = 4
+   !> ... and only on trains of at least mr_min_nodes nodes: below that, splitting the
+   !> whole train's step costs little (100 nodes: 1.4-1.55x the shaft chain per node-step)
+   !> and a train stays on the global path, bit for bit what another tool that splits
+   !> every event's step computes (D-32).
+   integer, parameter :: mr_min_nodes = 100
    !> Time resolution of a located event, relative to t: the angles grow like
    !> omega t, so a guard that differences them (a clearance) carries rounding
    !> noise of order eps |theta| / (relative speed); some 64 ulps of t on the
@@ -54,6 +74,22 @@ module trainsim_int_rk4
       real(wp) :: t_loc = 0.0_wp, h_loc = 0.0_wp    !< the step being located
       type(part_t), allocatable :: part(:)          !< per element (guard elements of long trains)
       logical :: on_part = .false.                  !< ys holds only the part's states (not a full step)
+      ! local (multirate) event steps, see `mr_begin`: the unsplit step of the
+      ! whole train (start y0, stages, end) and the local region L (nodes within
+      ! mr_depth elements of the elements whose guards fired), its boundary B, the
+      ! elements with a node in L, their guard elements, the states of L and B
+      logical :: multirate = .true.                 !< off: every event splits the whole train's step
+      logical :: mr_on = .false.                    !< inside a local event step
+      real(wp) :: mt0 = 0.0_wp, mh = 0.0_wp, mt1 = 0.0_wp, mt_grid = 0.0_wp, mt_c = 0.0_wp
+      real(wp), allocatable :: my0(:), mk1(:), md2(:), md3(:), md4(:), mynew(:), yc(:)
+      integer, allocatable :: adj_first(:), adj_list(:), el_nodes(:, :)
+      logical, allocatable :: has_guards(:), in_l(:), in_kin(:), el_in(:), gel_in(:)
+      integer, allocatable :: depth(:), stack(:), l_nodes(:), b_nodes(:), kin(:), els(:), gels(:), sl(:), sb(:)
+      integer :: n_l = 0, n_b = 0, n_kin = 0, n_els = 0, n_gels = 0, n_sl = 0, n_sb = 0
+      real(wp) :: pr(2, 4) = 0.0_wp                 !< energy rates of L's terms at the unsplit stages
+      real(wp) :: pk1(2) = 0.0_wp, pw_step(2) = 0.0_wp, pw_full(2) = 0.0_wp
+      real(wp) :: e_acc(2) = 0.0_wp, e_book(2) = 0.0_wp, e_shown(2) = 0.0_wp
+      integer(i8) :: mr_steps = 0, mr_events = 0, mr_collapses = 0, mr_node_rhs = 0   !< diagnostics
    contains
       procedure :: start => rk4_start
       procedure :: advance => rk4_advance
@@ -64,6 +100,12 @@ module trainsim_int_rk4
       procedure, private :: dense_root => rk4_dense_root
       procedure, private :: refine => rk4_refine
       procedure, private :: step_part => rk4_step_part
+      procedure, private :: mr_begin => rk4_mr_begin
+      procedure, private :: mr_continue => rk4_mr_continue
+      procedure, private :: mr_locate => rk4_mr_locate
+      procedure, private :: mr_step => rk4_mr_step
+      procedure, private :: mr_bnd => rk4_mr_bnd
+      procedure, private :: mr_rhs => rk4_mr_rhs
    end type rk4_t
 
 contains
@@ -109,6 +151,8 @@ contains
          end do
       end do
       call build_parts(self, model)
+      call build_graph(self, model)
+      self%mr_on = .false.
       call self%start_grid(model, t)
    end subroutine rk4_start
 
@@ -289,7 +333,12 @@ contains
       integer, intent(out) :: status
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_grid, t_sub, h
-      logical :: at_bp
+      logical :: at_bp, done
+      if (self%mr_on) then
+         ! inside a local event step: the next event of the region, or its end
+         call self%mr_continue(model, t_goal, t, y, status, done)
+         if (done) return
+      end if
       t_grid = self%grid_target(t)
       t_sub = min(t_grid, t_goal)
       at_bp = self%stop_is_breakpoint .and. t_sub >= self%t_stop - self%tiny_t
@@ -300,6 +349,13 @@ contains
       if (self%ng > 0) then
          call model%guards(t + h, self%ynew, self%g1)
          if (any(self%g1 < 0.0_wp)) then
+            if (.not. at_bp) then
+               call self%mr_begin(model, t, y, h, t_grid, done)
+               if (done) then
+                  call self%mr_continue(model, t_goal, t, y, status, done)
+                  return
+               end if
+            end if
             call self%end_on_event(model, h, t, y)
             status = adv_event
             return
@@ -380,7 +436,7 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: y(:), s
       integer, intent(in) :: j
-      real(wp) :: th, b1, b2, b4, h
+      real(wp) :: th, b1, b2, b4, h, c1, c2, c4
       integer :: e, k, i
       h = self%h_loc
       th = s/h
@@ -389,6 +445,19 @@ contains
       b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
       e = self%g_el(j)
       do k = 1, 3, 2
+         if (self%mr_on) then
+            if (.not. self%in_l(self%el_nodes((k + 1)/2, e))) then
+               ! a node of B in a local event step: the unsplit step's dense output
+               th = (self%t_loc + s - self%mt0)/self%mh
+               c1 = th*(1.0_wp - th*(1.5_wp - th*(2.0_wp/3.0_wp)))
+               c2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
+               c4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
+               do i = self%el_states(k, e), self%el_states(k + 1, e)
+                  self%yi(i) = self%my0(i) + self%mh*(c1*self%mk1(i) + c2*(self%md2(i) + self%md3(i)) + c4*self%md4(i))
+               end do
+               cycle
+            end if
+         end if
          do i = self%el_states(k, e), self%el_states(k + 1, e)
             self%yi(i) = y(i) + h*(b1*self%k1(i) + b2*(self%d2(i) + self%d3(i)) + b4*self%d4(i))
          end do
@@ -405,7 +474,15 @@ contains
       real(wp), intent(in) :: y(:), s
       integer, intent(in) :: j
       self%on_part = .false.
-      if (s == self%h_loc) then
+      if (self%mr_on) then
+         ! a local event step: L's step map
+         if (s == self%h_loc) then
+            call mr_end_copy(self)
+         else
+            call self%mr_step(model, y, s)
+         end if
+         ! (ys holds all of L's step: refine may keep it)
+      else if (s == self%h_loc) then
          self%ys = self%ynew
       else if (self%part(self%g_el(j))%used) then
          call self%step_part(model, y, self%g_el(j), s)
@@ -518,6 +595,12 @@ contains
       end do
       if (have_b .and. b_full) then
          call move_alloc(self%ys, swap); call move_alloc(self%yb, self%ys); call move_alloc(swap, self%yb)
+      else if (self%mr_on) then
+         if (b == self%h_loc) then
+            call mr_end_copy(self)
+         else
+            call self%mr_step(model, y, b)
+         end if
       else if (b == self%h_loc) then
          self%ys = self%ynew
       else
@@ -525,4 +608,523 @@ contains
          call self%step(model, self%t_loc, y, b, self%ys, .false.)
       end if
    end function rk4_refine
+   !> The node graph for local event steps: node -> elements (compressed rows),
+   !> each element's nodes, which elements have guards; the marks and lists of
+   !> a region, sized once.
+   subroutine build_graph(self, model)
+      type(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      integer :: nn, ne, n, e, i, side, nd
+      integer, allocatable :: fill(:)
+      nn = size(model%nodes)
+      ne = size(model%elements)
+      n = size(self%k1)
+      allocate (self%adj_first(nn + 1), self%el_nodes(2, ne), self%has_guards(ne), fill(nn))
+      self%adj_first = 0
+      do e = 1, ne
+         self%el_nodes(1, e) = model%elements(e)%e%left
+         self%el_nodes(2, e) = model%elements(e)%e%right
+         self%has_guards(e) = model%elements(e)%e%n_guards() > 0
+         do side = 1, 2
+            nd = self%el_nodes(side, e)
+            if (side == 2 .and. nd == self%el_nodes(1, e)) cycle
+            self%adj_first(nd + 1) = self%adj_first(nd + 1) + 1
+         end do
+      end do
+      self%adj_first(1) = 1
+      do i = 1, nn
+         self%adj_first(i + 1) = self%adj_first(i + 1) + self%adj_first(i)
+      end do
+      allocate (self%adj_list(self%adj_first(nn + 1) - 1))
+      fill = self%adj_first(1:nn)
+      do e = 1, ne
+         do side = 1, 2
+            nd = self%el_nodes(side, e)
+            if (side == 2 .and. nd == self%el_nodes(1, e)) cycle
+            self%adj_list(fill(nd)) = e
+            fill(nd) = fill(nd) + 1
+         end do
+      end do
+      allocate (self%in_l(nn), self%in_kin(nn), self%el_in(ne), self%gel_in(ne), self%depth(nn))
+      self%in_l = .false.; self%in_kin = .false.; self%el_in = .false.; self%gel_in = .false.
+      self%depth = huge(1)
+      allocate (self%stack(4*nn + 4), self%l_nodes(nn), self%b_nodes(nn), self%kin(nn), self%els(ne), self%gels(ne))
+      allocate (self%sl(n), self%sb(n))
+      allocate (self%my0(n), self%mk1(n), self%md2(n), self%md3(n), self%md4(n), self%mynew(n), self%yc(n))
+      self%n_l = 0; self%n_b = 0; self%n_kin = 0; self%n_els = 0; self%n_gels = 0; self%n_sl = 0; self%n_sb = 0
+      self%mr_steps = 0; self%mr_events = 0; self%mr_collapses = 0; self%mr_node_rhs = 0
+   end subroutine build_graph
+
+   !> Start a local event step, or say that this step is not one (ok false:
+   !> the whole train's step is split as before). The guards g1 at the end of
+   !> the unsplit step (ynew, stages k1..k4) fired. The region L holds the nodes
+   !> within mr_depth elements of the nodes of every element whose guard fired,
+   !> and, so that every event in L has its whole reach in L, of every element
+   !> with guards that has a node in L (repeated until no such element is
+   !> left). Only a region that with its boundary B (the nodes next to L) holds
+   !> at most 1/mr_small of the train is used. The unsplit step is kept (its
+   !> start, stages and end): every node outside L ends the step at its unsplit
+   !> value, which does not depend on any element of L that has guards (see
+   !> mr_depth); L alone is integrated again through its events (`mr_continue`),
+   !> with the states of B from the unsplit step's dense output.
+   subroutine rk4_mr_begin(self, model, t, y, h, t_grid, ok)
+      class(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:), h, t_grid
+      logical, intent(out) :: ok
+      real(wp), allocatable :: swap(:)
+      integer :: j, k, q, nn, nd, e2, other, top, next_seed, st
+      real(wp) :: ts
+      ok = .false.
+      nn = size(model%nodes)
+      if (.not. self%multirate .or. nn < mr_min_nodes .or. mr_small*(2*mr_depth + 4) > nn) return
+      ! clear the marks of the last region
+      do k = 1, self%n_l
+         self%in_l(self%l_nodes(k)) = .false.
+         self%depth(self%l_nodes(k)) = huge(1)
+      end do
+      do k = 1, self%n_kin
+         self%in_kin(self%kin(k)) = .false.
+      end do
+      do k = 1, self%n_els
+         self%el_in(self%els(k)) = .false.
+      end do
+      do k = 1, self%n_gels
+         self%gel_in(self%gels(k)) = .false.
+      end do
+      self%n_l = 0; self%n_b = 0; self%n_kin = 0; self%n_els = 0; self%n_gels = 0
+      ! the region: nodes within mr_depth of the seeds (a stack; a node is pushed
+      ! again when a shorter path to it is found)
+      do j = 1, self%ng
+         if (self%g1(j) < 0.0_wp) call add_seed(self%g_el(j))
+      end do
+      top = 0
+      next_seed = 1
+      do
+         if (top > 0) then
+            nd = self%stack(top)
+            top = top - 1
+            do q = self%adj_first(nd), self%adj_first(nd + 1) - 1
+               e2 = self%adj_list(q)
+               other = self%el_nodes(1, e2)
+               if (other == nd) other = self%el_nodes(2, e2)
+               call relax(other, self%depth(nd) + 1)
+            end do
+         else if (next_seed <= self%n_gels) then
+            call relax(self%el_nodes(1, self%gels(next_seed)), 0)
+            call relax(self%el_nodes(2, self%gels(next_seed)), 0)
+            next_seed = next_seed + 1
+         else
+            exit
+         end if
+         if (mr_small*self%n_l > nn) return
+      end do
+      ! its boundary and elements
+      do k = 1, self%n_l
+         nd = self%l_nodes(k)
+         self%in_kin(nd) = .true.
+         self%n_kin = self%n_kin + 1
+         self%kin(self%n_kin) = nd
+      end do
+      do k = 1, self%n_l
+         nd = self%l_nodes(k)
+         do q = self%adj_first(nd), self%adj_first(nd + 1) - 1
+            e2 = self%adj_list(q)
+            if (.not. self%el_in(e2)) then
+               self%el_in(e2) = .true.
+               self%n_els = self%n_els + 1
+               self%els(self%n_els) = e2
+            end if
+            other = self%el_nodes(1, e2)
+            if (other == nd) other = self%el_nodes(2, e2)
+            if (.not. self%in_kin(other)) then
+               self%in_kin(other) = .true.
+               self%n_kin = self%n_kin + 1
+               self%kin(self%n_kin) = other
+               self%n_b = self%n_b + 1
+               self%b_nodes(self%n_b) = other
+            end if
+         end do
+      end do
+      if (mr_small*self%n_kin > nn) return
+      call sort_int(self%l_nodes(1:self%n_l))
+      call sort_int(self%b_nodes(1:self%n_b))
+      call sort_int(self%kin(1:self%n_kin))
+      call sort_int(self%els(1:self%n_els))
+      call states(self%l_nodes(1:self%n_l), self%sl, self%n_sl)
+      call states(self%b_nodes(1:self%n_b), self%sb, self%n_sb)
+      ok = .true.
+      ! keep the unsplit step: start, stages (swapped, not copied), end
+      self%mr_on = .true.
+      self%mt0 = t; self%mh = h; self%mt1 = t + h; self%mt_grid = t_grid; self%mt_c = t
+      self%my0 = y
+      call move_alloc(self%k1, swap); call move_alloc(self%mk1, self%k1); call move_alloc(swap, self%mk1)
+      call move_alloc(self%k2, swap); call move_alloc(self%md2, self%k2); call move_alloc(swap, self%md2)
+      call move_alloc(self%k3, swap); call move_alloc(self%md3, self%k3); call move_alloc(swap, self%md3)
+      call move_alloc(self%k4, swap); call move_alloc(self%md4, self%k4); call move_alloc(swap, self%md4)
+      call move_alloc(self%ynew, swap); call move_alloc(self%mynew, self%ynew); call move_alloc(swap, self%mynew)
+      self%e_acc = 0.0_wp; self%e_book = 0.0_wp; self%pr = 0.0_wp
+      self%mr_steps = self%mr_steps + 1
+      if (.not. model%run%track_energy) return
+      ! the energy rates of L's terms (elements with a node in L, nodes of L, their
+      ! loads) at the four stages of the unsplit step, to be replaced by L's own
+      do k = 1, 4
+         ts = t
+         if (k == 2 .or. k == 3) ts = t + 0.5_wp*h
+         if (k == 4) ts = t + h
+         do q = 1, self%n_sl + self%n_sb
+            if (q <= self%n_sl) then
+               st = self%sl(q)
+            else
+               st = self%sb(q - self%n_sl)
+            end if
+            select case (k)
+            case (1)
+               self%ytmp(st) = y(st)
+            case (2)
+               self%ytmp(st) = y(st) + 0.5_wp*h*self%mk1(st)
+            case (3)
+               self%ytmp(st) = y(st) + 0.5_wp*h*self%md2(st)
+            case (4)
+               self%ytmp(st) = y(st) + h*self%md3(st)
+            end select
+         end do
+         call self%mr_rhs(model, ts, self%ytmp, self%k4, self%pr(:, k))
+      end do
+   contains
+
+      subroutine add_seed(e)
+         integer, intent(in) :: e
+         if (self%gel_in(e)) return
+         self%gel_in(e) = .true.
+         self%n_gels = self%n_gels + 1
+         self%gels(self%n_gels) = e
+      end subroutine add_seed
+
+      subroutine relax(nd, d)
+         integer, intent(in) :: nd, d
+         integer :: qq
+         if (d >= self%depth(nd)) return
+         if (.not. self%in_l(nd)) then
+            self%in_l(nd) = .true.
+            self%n_l = self%n_l + 1
+            self%l_nodes(self%n_l) = nd
+            do qq = self%adj_first(nd), self%adj_first(nd + 1) - 1
+               if (self%has_guards(self%adj_list(qq))) call add_seed(self%adj_list(qq))
+            end do
+         end if
+         self%depth(nd) = d
+         if (d < mr_depth) then
+            top = top + 1
+            self%stack(top) = nd
+         end if
+      end subroutine relax
+
+      subroutine states(nodes, st, ns)
+         integer, intent(in) :: nodes(:)
+         integer, intent(inout) :: st(:)
+         integer, intent(out) :: ns
+         integer :: a, o, b
+         ns = 0
+         do a = 1, size(nodes)
+            if (model%is_held(nodes(a))) cycle
+            o = model%nodes(nodes(a))%n%offset
+            do b = 1, model%nodes(nodes(a))%n%nstates()
+               ns = ns + 1
+               st(ns) = o + b
+            end do
+         end do
+      end subroutine states
+   end subroutine rk4_mr_begin
+
+   !> ys = the end of L's step (L's and B's states) in a local event step.
+   subroutine mr_end_copy(self)
+      type(rk4_t), intent(inout) :: self
+      integer :: q
+      do q = 1, self%n_sl
+         self%ys(self%sl(q)) = self%ynew(self%sl(q))
+      end do
+      do q = 1, self%n_sb
+         self%ys(self%sb(q)) = self%ynew(self%sb(q))
+      end do
+   end subroutine mr_end_copy
+
+   !> Insertion sort (short lists).
+   pure subroutine sort_int(a)
+      integer, intent(inout) :: a(:)
+      integer :: i, j, x
+      do i = 2, size(a)
+         x = a(i)
+         j = i - 1
+         do while (j >= 1)
+            if (a(j) <= x) exit
+            a(j + 1) = a(j)
+            j = j - 1
+         end do
+         a(j + 1) = x
+      end do
+   end subroutine sort_int
+
+   !> The states of B at t (in the unsplit step) into v, from the unsplit
+   !> step's dense output (the RK4 continuous extension, see dense_guard).
+   subroutine rk4_mr_bnd(self, v, t)
+      class(rk4_t), intent(inout) :: self
+      real(wp), intent(inout) :: v(:)
+      real(wp), intent(in) :: t
+      real(wp) :: th, b1, b2, b4
+      integer :: q, i
+      th = (t - self%mt0)/self%mh
+      b1 = th*(1.0_wp - th*(1.5_wp - th*(2.0_wp/3.0_wp)))
+      b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
+      b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
+      do q = 1, self%n_sb
+         i = self%sb(q)
+         v(i) = self%my0(i) + self%mh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+      end do
+   end subroutine rk4_mr_bnd
+
+   !> dy/dt of L's states at (t, v) (v holds L and B), and with energy tracking
+   !> the energy rates of L's terms.
+   subroutine rk4_mr_rhs(self, model, t, v, dydt, p)
+      class(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, v(:)
+      real(wp), intent(inout) :: dydt(:)
+      real(wp), intent(out) :: p(2)
+      call model%rhs_part(t, v, dydt, self%kin(1:self%n_kin), self%els(1:self%n_els), self%l_nodes(1:self%n_l))
+      self%mr_node_rhs = self%mr_node_rhs + self%n_l
+      p = 0.0_wp
+      if (model%run%track_energy) call model%part_power(t, v, self%els(1:self%n_els), self%l_nodes(1:self%n_l), &
+                                                      self%in_l, p(1), p(2))
+   end subroutine rk4_mr_rhs
+
+   !> The RK4 step of L of size s from (t_loc, y) into ys (L's states; B's at
+   !> t_loc + s from the unsplit step), k1 (L's, at t_loc) given; its energy
+   !> rates' integral into pw_step. k2..k4 and ytmp are scratch.
+   subroutine rk4_mr_step(self, model, y, s)
+      class(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:), s
+      real(wp) :: hh, h6, t, p2(2), p3(2), p4(2)
+      integer :: q, i
+      t = self%t_loc
+      hh = 0.5_wp*s
+      do q = 1, self%n_sl
+         i = self%sl(q)
+         self%ytmp(i) = y(i) + hh*self%k1(i)
+      end do
+      call self%mr_bnd(self%ytmp, t + hh)
+      call self%mr_rhs(model, t + hh, self%ytmp, self%k2, p2)
+      do q = 1, self%n_sl
+         i = self%sl(q)
+         self%ytmp(i) = y(i) + hh*self%k2(i)
+      end do
+      call self%mr_rhs(model, t + hh, self%ytmp, self%k3, p3)
+      do q = 1, self%n_sl
+         i = self%sl(q)
+         self%ytmp(i) = y(i) + s*self%k3(i)
+      end do
+      call self%mr_bnd(self%ytmp, t + s)
+      call self%mr_rhs(model, t + s, self%ytmp, self%k4, p4)
+      h6 = s/6.0_wp
+      do q = 1, self%n_sl
+         i = self%sl(q)
+         self%ys(i) = y(i) + h6*(self%k1(i) + 2.0_wp*(self%k2(i) + self%k3(i)) + self%k4(i))
+      end do
+      do q = 1, self%n_sb
+         i = self%sb(q)
+         self%ys(i) = self%ytmp(i)
+      end do
+      self%pw_step = h6*(self%pk1 + 2.0_wp*(p2 + p3) + p4)
+   end subroutine rk4_mr_step
+
+   !> Inside a local event step (t = mt_c, L's states in y at t): step L to
+   !> the end of the unsplit step, or to L's next event. At an event, (t, y)
+   !> is the located time with L's states from its own steps and every other
+   !> state from the unsplit step's dense output (for the driver's use at the
+   !> instant: the observer, the mode update; the step still ends with the
+   !> unsplit values outside L). At the end, y is the unsplit step's end
+   !> outside L and L's own inside; the energy states are the unsplit step's
+   !> with L's terms replaced by L's own (and the driver's bookings at the
+   !> events added). done is false (and the local step dropped) when the
+   !> driver asks for something else than the rest of this step.
+   subroutine rk4_mr_continue(self, model, t_goal, t, y, status, done)
+      class(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t_goal
+      real(wp), intent(inout) :: t, y(:)
+      integer, intent(out) :: status
+      logical, intent(out) :: done
+      real(wp), allocatable :: swap(:)
+      real(wp) :: s_ev, th, b1, b2, b4, hh
+      integer :: q, i, k, j, ne, nst
+      logical :: track, far_fired
+      done = .false.
+      status = adv_step
+      if (abs(t - self%mt_c) > self%tiny_t .or. t_goal < self%mt1 - self%tiny_t) then
+         self%mr_on = .false.
+         self%mr_collapses = self%mr_collapses + 1
+         return
+      end if
+      done = .true.
+      track = model%run%track_energy
+      nst = model%n_states
+      if (track .and. self%mt_c > self%mt0) self%e_book = self%e_book + (y(nst + 1:nst + 2) - self%e_shown)
+      self%pw_full = 0.0_wp
+      if (self%mt1 - self%mt_c > self%tiny_t) then
+         ! L's step from mt_c to the end (its dense output: k1, d2..d4)
+         self%t_loc = self%mt_c
+         self%h_loc = self%mt1 - self%mt_c
+         do q = 1, self%n_sl
+            self%yc(self%sl(q)) = y(self%sl(q))
+         end do
+         call self%mr_bnd(self%yc, self%mt_c)
+         if (self%mt_c == self%mt0) then
+            ! at the start of the step: L's part of the unsplit step's k1 (the same
+            ! state, modes and sums: bit for bit) and of its energy rates
+            do q = 1, self%n_sl
+               self%k1(self%sl(q)) = self%mk1(self%sl(q))
+            end do
+            self%pk1 = self%pr(:, 1)
+         else
+            call self%mr_rhs(model, self%mt_c, self%yc, self%k1, self%pk1)
+         end if
+         call self%mr_step(model, y, self%h_loc)
+         self%pw_full = self%pw_step
+         call move_alloc(self%ys, swap); call move_alloc(self%ynew, self%ys); call move_alloc(swap, self%ynew)
+         call move_alloc(self%k2, swap); call move_alloc(self%d2, self%k2); call move_alloc(swap, self%d2)
+         call move_alloc(self%k3, swap); call move_alloc(self%d3, self%k3); call move_alloc(swap, self%d3)
+         call move_alloc(self%k4, swap); call move_alloc(self%d4, self%k4); call move_alloc(swap, self%d4)
+         far_fired = .false.
+         do k = 1, self%n_gels
+            ne = self%gels(k)
+            call model%element_guards(ne, self%mt1, self%ynew, self%ge)
+            do j = 1, model%elements(ne)%e%n_guards()
+               self%g1(model%guard_offset(ne) + j) = self%ge(j)
+               if (self%ge(j) < 0.0_wp) far_fired = .true.
+            end do
+         end do
+         if (far_fired) then
+            ! an event of L inside the rest of the step
+            s_ev = self%mr_locate(model, y)
+            if (track) call self%mr_step(model, y, s_ev)   ! its energy integral (ys unchanged: the same step)
+            t = self%mt_c + s_ev
+            ! the state at the instant: the unsplit step's dense output, L's own
+            th = (t - self%mt0)/self%mh
+            b1 = th*(1.0_wp - th*(1.5_wp - th*(2.0_wp/3.0_wp)))
+            b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
+            b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
+            hh = self%mh
+            do i = 1, size(y)
+               y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+            end do
+            do q = 1, self%n_sl
+               y(self%sl(q)) = self%ys(self%sl(q))
+            end do
+            if (track) then
+               y(nst + 1:nst + 2) = y(nst + 1:nst + 2) - hh*(b1*self%pr(:, 1) + b2*(self%pr(:, 2) + self%pr(:, 3)) + &
+                                    b4*self%pr(:, 4)) + self%e_acc + self%pw_step + self%e_book
+               self%e_acc = self%e_acc + self%pw_step
+               self%e_shown = y(nst + 1:nst + 2)
+            end if
+            self%mt_c = t
+            self%mr_events = self%mr_events + 1
+            self%stats%root_returns = self%stats%root_returns + 1
+            status = adv_event
+            ! a guard outside L below zero on the dense output (it dips inside the
+            ! step): the state shown becomes the state, the local step ends here
+            call model%guards(t, y, self%gs)
+            do j = 1, self%ng
+               if (self%gs(j) < 0.0_wp .and. .not. self%gel_in(self%g_el(j))) then
+                  self%mr_on = .false.
+                  self%mr_collapses = self%mr_collapses + 1
+                  exit
+               end if
+            end do
+            return
+         end if
+      else
+         do q = 1, self%n_sl
+            self%ynew(self%sl(q)) = y(self%sl(q))
+         end do
+      end if
+      ! the end of the step: outside L the unsplit step's, L its own
+      do q = 1, self%n_sl
+         self%ys(self%sl(q)) = self%ynew(self%sl(q))
+      end do
+      y = self%mynew
+      do q = 1, self%n_sl
+         y(self%sl(q)) = self%ys(self%sl(q))
+      end do
+      if (track) y(nst + 1:nst + 2) = y(nst + 1:nst + 2) - (self%mh/6.0_wp)*(self%pr(:, 1) + &
+                                      2.0_wp*(self%pr(:, 2) + self%pr(:, 3)) + self%pr(:, 4)) + self%e_acc + &
+                                      self%pw_full + self%e_book
+      self%mr_on = .false.
+      t = self%mt1
+      if (t >= self%mt_grid - self%tiny_t) then
+         t = self%mt_grid
+         call self%count_grid_step()
+      end if
+      status = adv_step
+      if (t >= t_goal - self%tiny_t) status = adv_reached
+   end subroutine rk4_mr_continue
+
+   !> L's earliest event in its step from (t_loc, y) (guards g1 at its end):
+   !> as `end_on_event`, on L's step map and dense output, for L's guard
+   !> elements. Returns the step to it; ys = L's step to it.
+   real(wp) function rk4_mr_locate(self, model, y) result(s_ev)
+      class(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:)
+      real(wp) :: sj, gd, h
+      integer :: k, j, jb, jl, pass, ne, jj, o
+      h = self%h_loc
+      ! the guards at t_loc (L's state, B's from the unsplit step: in yc)
+      do k = 1, self%n_gels
+         ne = self%gels(k)
+         o = model%guard_offset(ne)
+         call model%element_guards(ne, self%t_loc, self%yc, self%ge)
+         self%g0(o + 1:o + model%elements(ne)%e%n_guards()) = self%ge(1:model%elements(ne)%e%n_guards())
+      end do
+      jb = 0
+      s_ev = h
+      do k = 1, self%n_gels
+         ne = self%gels(k)
+         o = model%guard_offset(ne)
+         do jj = 1, model%elements(ne)%e%n_guards()
+            j = o + jj
+            if (.not. self%g1(j) < 0.0_wp) cycle
+            sj = self%dense_root(model, y, j, max(self%g0(j), 0.0_wp), h, self%g1(j))
+            if (jb == 0 .or. sj < s_ev) then
+               s_ev = sj
+               jb = j
+            end if
+         end do
+      end do
+      s_ev = self%refine(model, y, jb, s_ev, max(self%g0(jb), 0.0_wp), h, self%g1(jb))
+      ! another guard of L below zero there may have crossed earlier still
+      do pass = 1, self%ng
+         jl = jb
+         jb = 0
+         outer: do k = 1, self%n_gels
+            ne = self%gels(k)
+            o = model%guard_offset(ne)
+            call model%element_guards(ne, self%t_loc + s_ev, self%ys, self%ge)
+            do jj = 1, model%elements(ne)%e%n_guards()
+               j = o + jj
+               self%gs(j) = self%ge(jj)
+               if (j == jl .or. .not. self%gs(j) < 0.0_wp) cycle
+               gd = self%dense_guard(model, y, j, s_ev)
+               if (.not. gd < 0.0_wp) gd = self%gs(j)
+               sj = self%dense_root(model, y, j, max(self%g0(j), 0.0_wp), s_ev, gd)
+               if (sj < s_ev - self%event_tol) then
+                  jb = j
+                  exit outer
+               end if
+            end do
+         end do outer
+         if (jb == 0) exit
+         s_ev = self%refine(model, y, jb, sj, max(self%g0(jb), 0.0_wp), s_ev, self%gs(jb))
+      end do
+   end function rk4_mr_locate
 end module trainsim_int_rk4

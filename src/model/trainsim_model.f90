@@ -102,6 +102,7 @@ module trainsim_model
       procedure :: kinematics => model_kinematics
       procedure :: rhs => model_rhs
       procedure :: rhs_part => model_rhs_part
+      procedure :: part_power => model_part_power
       procedure :: element_torques => model_element_torques
       procedure :: potential_energy => model_potential_energy
       procedure :: jacobian => model_jacobian
@@ -517,7 +518,13 @@ contains
       real(wp) :: tl, tr, f
       do k = 1, size(kin)
          i = kin(k)
-         call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         if (self%fn(i)%kind == nk_plain) then   ! (node_kinematics written out: as in rhs_fast)
+            o = self%fn(i)%off
+            self%theta(i) = y(o + 1)
+            self%omega(i) = y(o + 2)
+         else
+            call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         end if
          self%torque(i) = self%fn(i)%load0
       end do
       do k = 1, size(self%dyn_loads)
@@ -563,6 +570,67 @@ contains
          end associate
       end do
    end subroutine model_rhs_part
+
+   !> The energy rates of a part of the train at the kinematics and torques
+   !> `rhs_part` just left in the workspace (same t, kin, els, der): pdiss and pin
+   !> of the elements els, of the nodes der (in_der: the same set as a mask over
+   !> the nodes) and of the loads on them; the terms are those of `rhs`, so the
+   !> rates of a partition of the train add up to the whole train's.
+   subroutine model_part_power(self, t, y, els, der, in_der, pdiss, pin)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      integer, intent(in) :: els(:), der(:)
+      logical, intent(in) :: in_der(:)
+      real(wp), intent(out) :: pdiss, pin
+      integer :: k, i, l, r, s
+      real(wp) :: dv
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      do i = 1, size(self%fl)
+         l = self%fl(i)%node
+         if (.not. in_der(l) .or. self%fn(l)%kind == nk_held) cycle
+         if (self%fl(i)%const) then
+            pin = pin + self%fl(i)%v*self%omega(l)
+         else
+            pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+         end if
+      end do
+      do k = 1, size(els)
+         i = els(k)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear) then
+               dv = e%r1*self%omega(l) - e%r2*self%omega(r)
+               pdiss = pdiss + e%c*dv**2
+            else
+               pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                    self%omega(r))
+               if (self%elements(i)%e%supplies_power) pin = pin + self%elements(i)%e%input_power(self%theta(l), &
+                                                             self%omega(l), self%theta(r), self%omega(r))
+            end if
+         end associate
+      end do
+      do k = 1, size(der)
+         i = der(k)
+         associate (nd => self%fn(i))
+            select case (nd%kind)
+            case (nk_plain)
+               pdiss = pdiss + nd%d*self%omega(i)**2
+            case (nk_held)
+               if (nd%const_speed) then
+                  pin = pin - self%torque(i)*self%omega(i)
+               else
+                  s = self%speed_of(i)
+                  pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
+               end if
+            case default
+               pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
+               pin = pin + self%nodes(i)%n%input_power(t, y)
+            end select
+         end associate
+      end do
+   end subroutine model_part_power
 
    !> External load torques at t into self%torque, and published to the
    !> elements that read their nodes' loads.
