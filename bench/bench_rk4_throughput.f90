@@ -10,7 +10,9 @@
 !>      RHS evaluations per event;
 !>   3. peak resident memory against run length (child processes of this program).
 !> With `--hdf5` it also times HDF5 output on the rig (every step, every 10th);
-!> with `rig`, `chain` or `rss` it runs that section only.
+!> with `rig`, `chain` or `rss` it runs that section only; `--profile CASE`
+!> (ideal-off, ideal-on, backlash-off, backlash-on) runs one trainsim rig run
+!> alone, for `perf record`.
 !>
 !> Decks are built as strings, parsed and built outside the timed region; the
 !> timed region is one call of `simulate` (sink open/close included). Each
@@ -47,6 +49,12 @@ program bench_rk4_throughput
    nargs = command_argument_count()
    if (nargs >= 2) then
       call get_arg(1, arg)
+      if (arg == '--profile') then
+         ! profiling mode (perf record): one trainsim run of the rig, no reference
+         call get_arg(2, arg)
+         call profile_run(arg)
+         stop
+      end if
       if (arg == '--rss') then
          ! child mode: one run of the backlash rig, then print the peak RSS
          call get_arg(2, arg)
@@ -197,6 +205,19 @@ contains
       write (output_unit, '(a)') hrule
       write (output_unit, '(a)') ''
    end subroutine rss_section
+
+   !> Profiling mode: one trainsim run of the rig (2e6 steps), the case named
+   !> by `which`: ideal-off, ideal-on, backlash-off or backlash-on.
+   subroutine profile_run(which)
+      character(len=*), intent(in) :: which
+      type(model_t) :: m
+      type(run_result_t) :: r
+      real(wp) :: secs
+      call load(rig_deck(real(rig_steps, wp)*rig_dt, rig_dt, index(which, '-on') > 0, &
+                         index(which, 'backlash') > 0), m)
+      call time_run(m, r, secs)
+      write (output_unit, '(a,f8.3,a,f8.1,a)') which//': ', secs, ' s, ', 1.0e9_wp*secs/real(rig_steps, wp), ' ns/step'
+   end subroutine profile_run
 
    !> Child of rss_section: one run, then "steps events peak-RSS-MB".
    subroutine rss_child(n)

@@ -20,7 +20,7 @@ module trainsim_model
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
 
    !> A node on the hot path: its kind, state offset and, for a plain inertia,
-   !> J and d; for a held node with a constant speed, that speed.
+   !> J and d; for a held node its inertia J and, with a constant speed, that speed.
    type :: fast_node_t
       integer :: kind = nk_other
       integer :: off = 0
@@ -84,6 +84,15 @@ module trainsim_model
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
+      real(wp), allocatable :: el_tl(:), el_tr(:)   !< per element: its torques on its left, right node (last full RHS)
+      !> The workspace (theta, omega, torque, el_tl, el_tr) holds the full RHS at
+      !> (ws_t, the state an integrator has just returned): set by the integrator
+      !> right after it evaluated the RHS there (RK4's end-of-step evaluation,
+      !> which is the next step's first stage); cleared by every other use of
+      !> the workspace (`rhs`, `rhs_part`, `kinematics`, `apply_events`, ...).
+      !> The observer then reads the element torques instead of recomputing them.
+      logical :: ws_step_end = .false.
+      real(wp) :: ws_t = 0.0_wp
       ! The hot path (`build_fast_path`, redone by `finalize` and at the start of
       ! every run in `init_modes`, so a re-parameterised copy is current): nodes
       ! that are plain inertias and elements that are linear springs (their
@@ -95,6 +104,9 @@ module trainsim_model
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
+      !> Every node a plain inertia or held at a constant speed, every load
+      !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
+      logical, private :: simple = .false.
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -114,6 +126,7 @@ module trainsim_model
       procedure :: apply_events => model_apply_events
       procedure :: any_contact => model_any_contact
       procedure :: stored_energy => model_stored_energy
+      procedure :: workspace_energy => model_workspace_energy
       procedure :: node_index => model_node_index
       procedure :: is_held => model_is_held
       procedure :: state_label => model_state_label
@@ -156,6 +169,9 @@ contains
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
+      if (allocated(self%el_tl)) deallocate (self%el_tl, self%el_tr)
+      allocate (self%el_tl(ne), self%el_tr(ne))
+      self%el_tl = 0.0_wp; self%el_tr = 0.0_wp
       call self%build_fast_path()
    end subroutine model_finalize
 
@@ -183,6 +199,7 @@ contains
             self%fn(i)%const_speed = self%speeds(self%speed_of(i))%is_constant()
             self%fn(i)%w = self%speeds(self%speed_of(i))%value(0.0_wp)
             self%fn(i)%theta0 = self%nodes(i)%n%theta0
+            self%fn(i)%j = self%nodes(i)%n%inertia()
          else
             call self%nodes(i)%n%plain_inertia(plain, j, d)
             if (plain) plain = plain_node_agrees(self%nodes(i)%n, j, d)
@@ -231,6 +248,9 @@ contains
       end do
       self%dyn_loads = pack([(i, i=1, size(self%loads))], [(self%fn(self%fl(i)%node)%load0 == 0.0_wp .and. &
                                                              .not. all_const_on(self%fl(i)%node), i=1, size(self%loads))])
+      self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
+                    .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0
+      self%ws_step_end = .false.
    contains
 
       !> The node's own procedures give what a plain inertia (J, d) would.
@@ -340,6 +360,7 @@ contains
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       integer :: i, o
+      self%ws_step_end = .false.
       do i = 1, size(self%fn)
          associate (nd => self%fn(i))
             if (nd%kind == nk_plain) then
@@ -375,6 +396,13 @@ contains
       real(wp) :: tl, tr, f, dv, pdiss, pin
       logical :: track
       track = self%run%track_energy
+      self%ws_step_end = .false.
+      self%ws_t = t
+      if (self%simple) then
+         call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
+                         self%theta, self%omega, self%torque, self%el_tl, self%el_tr, t, y, dydt, track, self%n_states)
+         return
+      end if
       pdiss = 0.0_wp
       pin = 0.0_wp
       ! kinematics and constant loads in one pass (the branch of kinematics_all, written
@@ -429,6 +457,8 @@ contains
                end if
             end if
          end associate
+         self%el_tl(i) = tl
+         self%el_tr(i) = tr
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
@@ -463,6 +493,78 @@ contains
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
    end subroutine rhs_fast
+
+   !> `rhs_fast` for a simple model (component `simple`): the same arithmetic in
+   !> the same order (bit for bit), on explicit-shape arrays, which the
+   !> compiler knows do not alias (it keeps their addresses in registers
+   !> instead of reloading them from the model after every store).
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, tle, tre, t, y, dydt, track, ns)
+      integer, intent(in) :: nn, ne, nl, ns
+      type(fast_node_t), intent(in) :: fn(nn)
+      type(fast_element_t), intent(in) :: fe(ne)
+      type(fast_load_t), intent(in) :: fl(nl)
+      type(element_slot_t), intent(in) :: els(ne)
+      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), tle(ne), tre(ne)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: dydt(:)
+      logical, intent(in) :: track
+      integer :: i, l, r, o
+      real(wp) :: tl, tr, f, dv, pdiss, pin, pw
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      do i = 1, nn
+         if (fn(i)%kind == nk_plain) then
+            o = fn(i)%off
+            theta(i) = y(o + 1)
+            omega(i) = y(o + 2)
+         else                                   ! held at a constant speed
+            theta(i) = fn(i)%theta0 + fn(i)%w*t
+            omega(i) = fn(i)%w
+         end if
+         torque(i) = fn(i)%load0
+      end do
+      if (track) then
+         do i = 1, nl
+            l = fl(i)%node
+            if (fn(l)%kind == nk_held) cycle
+            pin = pin + fl(i)%v*omega(l)
+         end do
+      end if
+      do i = 1, ne
+         l = fe(i)%l
+         r = fe(i)%r
+         if (fe(i)%linear) then
+            dv = fe(i)%r1*omega(l) - fe(i)%r2*omega(r)
+            f = fe(i)%k*(fe(i)%r1*theta(l) - fe(i)%r2*theta(r)) + fe(i)%c*dv     ! eqs. (H.1), (H.15)
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
+            if (track .and. fe(i)%c /= 0.0_wp) pdiss = pdiss + fe(i)%c*dv**2
+         else if (track) then
+            call els(i)%e%torques_dissipation(theta(l), omega(l), theta(r), omega(r), tl, tr, pw)
+            pdiss = pdiss + pw
+            if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(theta(l), omega(l), theta(r), omega(r))
+         else
+            call els(i)%e%torques(theta(l), omega(l), theta(r), omega(r), tl, tr)
+         end if
+         tle(i) = tl
+         tre(i) = tr
+         torque(l) = torque(l) + tl
+         torque(r) = torque(r) + tr
+      end do
+      do i = 1, nn
+         if (fn(i)%kind == nk_plain) then
+            o = fn(i)%off
+            dydt(o + 1) = y(o + 2)                                         ! eq. (G.1)
+            dydt(o + 2) = (torque(i) - fn(i)%d*y(o + 2))/fn(i)%j             ! eq. (G.2)
+            if (track .and. fn(i)%d /= 0.0_wp) pdiss = pdiss + fn(i)%d*omega(i)**2
+         else if (track) then
+            pin = pin - torque(i)*omega(i)      ! the drive's torque (alpha = 0) times the speed
+         end if
+      end do
+      if (.not. track) return
+      dydt(ns + 1) = pdiss
+      dydt(ns + 2) = pin
+   end subroutine rhs_simple
 
    !> Torques of element i on its left and right node at the kinematics in the
    !> workspace (after `kinematics`): the hot path for linear springs.
@@ -514,6 +616,7 @@ contains
       integer, intent(in) :: kin(:), els(:), der(:)
       integer :: k, i, l, r, o
       real(wp) :: tl, tr, f
+      self%ws_step_end = .false.
       do k = 1, size(kin)
          i = kin(k)
          call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
@@ -797,15 +900,28 @@ contains
    real(wp) function model_stored_energy(self, t, y) result(e)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
-      integer :: i, l, r
+      real(wp) :: pot
       call kinematics_all(self, t, y)
+      call self%workspace_energy(y, e, pot)
+   end function model_stored_energy
+
+   !> Stored energy (kinetic + elastic (+ magnetic)) and the elastic part alone,
+   !> at the kinematics in the workspace and the state y (for nodes with states
+   !> of their own); the stored energy is bit for bit `stored_energy`'s.
+   subroutine model_workspace_energy(self, y, e, pot)
+      class(model_t), intent(in) :: self
+      real(wp), intent(in) :: y(:)
+      real(wp), intent(out) :: e, pot
+      integer :: i, l, r
+      real(wp) :: pe
       e = 0.0_wp
+      pot = 0.0_wp
       do i = 1, size(self%nodes)
          select case (self%fn(i)%kind)
          case (nk_plain)
             e = e + 0.5_wp*self%fn(i)%j*self%omega(i)**2
          case (nk_held)
-            e = e + 0.5_wp*self%nodes(i)%n%inertia()*self%omega(i)**2
+            e = e + 0.5_wp*self%fn(i)%j*self%omega(i)**2     ! j: the held node's inertia
          case default
             e = e + self%nodes(i)%n%stored_energy(y)
          end select
@@ -814,12 +930,15 @@ contains
          l = self%fe(i)%l
          r = self%fe(i)%r
          if (self%fe(i)%linear) then
-            e = e + 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
+            pe = 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
          else
-            e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+            pe = self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
          end if
+         e = e + pe
+         pot = pot + pe
       end do
-   end function model_stored_energy
+   end subroutine model_workspace_energy
+
    !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed or a
    !> node's own input (motor voltage) jumps or kinks: integrators end steps there.
    subroutine model_breakpoints(model, t0, t1, bp)
