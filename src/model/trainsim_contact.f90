@@ -66,10 +66,10 @@ module trainsim_contact
       procedure :: configure => law_configure
       procedure :: begin_contact => law_begin_contact
       procedure :: restitution => law_restitution
-      procedure :: force => law_force
-      procedure :: fit_elastic_force => law_fit_elastic_force
-      procedure :: elastic_force => law_elastic_force
-      procedure :: elastic_energy => law_elastic_energy
+      procedure, non_overridable :: force => law_force
+      procedure, non_overridable :: fit_elastic_force => law_fit_elastic_force
+      procedure, non_overridable :: elastic_force => law_elastic_force
+      procedure, non_overridable :: elastic_energy => law_elastic_energy
       procedure :: elastic_stiffness => law_elastic_stiffness
       procedure :: force_partials => law_force_partials
       procedure :: lowest_restitution => law_lowest_restitution
@@ -77,19 +77,22 @@ module trainsim_contact
    end type contact_law_t
 
    !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
+   !> (The procedures of the right-hand side, its energy and guards are
+   !> non_overridable here and in contact_law_t: they then call one another
+   !> without dispatch, on the RHS's hot path.)
    type :: clearance_t
       real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp, b = 0.0_wp
       type(contact_law_t) :: law
       integer :: mode = 0               !< +1 front face, 0 free, -1 rear face
    contains
-      procedure :: delta => cl_delta
+      procedure, non_overridable :: delta => cl_delta
       procedure :: init => cl_init
-      procedure :: guards => cl_guards
+      procedure, non_overridable :: guards => cl_guards
       procedure :: update => cl_update
-      procedure :: contact_force => cl_contact_force
-      procedure :: torques => cl_torques
-      procedure :: potential => cl_potential
-      procedure :: dissipation => cl_dissipation
+      procedure, non_overridable :: contact_force => cl_contact_force
+      procedure, non_overridable :: torques => cl_torques
+      procedure, non_overridable :: potential => cl_potential
+      procedure, non_overridable :: dissipation => cl_dissipation
       procedure :: torque_jacobian => cl_torque_jacobian
    end type clearance_t
 

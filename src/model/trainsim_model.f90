@@ -34,7 +34,17 @@ module trainsim_model
       integer :: l = 0, r = 0, ng = 0
       logical :: linear = .false.
       real(wp) :: k = 0.0_wp, c = 0.0_wp, r1 = 1.0_wp, r2 = 1.0_wp
+      !> The form of a linear spring in `rhs_simple` (lf_*), and the state index
+      !> of the angle of its left and right node if a plain inertia, else 0
+      !> (`rhs_simple` and `guards` read those straight from y).
+      integer :: form = 0, yl = 0, yr = 0
    end type fast_element_t
+
+   !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
+   !> or exactly a factor 1 are left out (the same values, fewer operations on
+   !> the RHS's critical path): general, undamped (c = 0), undamped with unit
+   !> lever arms (a shaft: c = 0, r1 = r2 = 1).
+   integer, parameter :: lf_general = 1, lf_undamped = 2, lf_unit = 3
 
    !> A load on the hot path: its node and, when constant, its value.
    type :: fast_load_t
@@ -84,8 +94,9 @@ module trainsim_model
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
-      real(wp), allocatable :: el_tl(:), el_tr(:)   !< per element: its torques on its left, right node (last full RHS)
-      !> The workspace (theta, omega, torque, el_tl, el_tr) holds the full RHS at
+      !> Per element: its torque on its left (1) and right (2) node at the last full RHS.
+      real(wp), allocatable :: el_torque(:, :)
+      !> The workspace (theta, omega, torque, el_torque) holds the full RHS at
       !> (ws_t, the state an integrator has just returned): set by the integrator
       !> right after it evaluated the RHS there (RK4's end-of-step evaluation,
       !> which is the next step's first stage); cleared by every other use of
@@ -107,6 +118,10 @@ module trainsim_model
       !> Every node a plain inertia or held at a constant speed, every load
       !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
       logical, private :: simple = .false.
+      !> Per node i: the element torques acting on it, node_inc(node_first(i) :
+      !> node_first(i+1) - 1), as indices into el_torque (2 (e - 1) + side), in
+      !> the order the generic RHS adds them (elements in order, left side first).
+      integer, allocatable, private :: node_first(:), node_inc(:)
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -169,9 +184,9 @@ contains
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
-      if (allocated(self%el_tl)) deallocate (self%el_tl, self%el_tr)
-      allocate (self%el_tl(ne), self%el_tr(ne))
-      self%el_tl = 0.0_wp; self%el_tr = 0.0_wp
+      if (allocated(self%el_torque)) deallocate (self%el_torque)
+      allocate (self%el_torque(2, ne))
+      self%el_torque = 0.0_wp
       call self%build_fast_path()
    end subroutine model_finalize
 
@@ -187,6 +202,7 @@ contains
       real(wp) :: j, d, k, c, r1, r2
       logical :: plain, lin
       real(wp), allocatable :: y(:), dydt(:)
+      integer, allocatable :: inc_n(:)
       nn = size(self%nodes)
       ne = size(self%elements)
       if (allocated(self%fn)) deallocate (self%fn)
@@ -220,9 +236,17 @@ contains
             call e%linear_spring(lin, k, c, r1, r2)
             if (lin) lin = linear_element_agrees(e, k, c, r1, r2)
             self%fe(i)%linear = lin
+            self%fe(i)%form = 0
             if (lin) then
                self%fe(i)%k = k; self%fe(i)%c = c; self%fe(i)%r1 = r1; self%fe(i)%r2 = r2
+               self%fe(i)%form = lf_general
+               if (c == 0.0_wp) self%fe(i)%form = lf_undamped
+               if (c == 0.0_wp .and. r1 == 1.0_wp .and. r2 == 1.0_wp) self%fe(i)%form = lf_unit
             end if
+            self%fe(i)%yl = 0
+            self%fe(i)%yr = 0
+            if (self%fn(e%left)%kind == nk_plain) self%fe(i)%yl = self%fn(e%left)%off + 1
+            if (self%fn(e%right)%kind == nk_plain) self%fe(i)%yr = self%fn(e%right)%off + 1
          end associate
       end do
       self%guard_els = pack([(i, i=1, ne)], self%fe(:)%ng > 0)
@@ -248,6 +272,25 @@ contains
       end do
       self%dyn_loads = pack([(i, i=1, size(self%loads))], [(self%fn(self%fl(i)%node)%load0 == 0.0_wp .and. &
                                                              .not. all_const_on(self%fl(i)%node), i=1, size(self%loads))])
+      allocate (inc_n(nn + 1))
+      inc_n = 0
+      do i = 1, ne
+         inc_n(self%fe(i)%l) = inc_n(self%fe(i)%l) + 1
+         inc_n(self%fe(i)%r) = inc_n(self%fe(i)%r) + 1
+      end do
+      if (allocated(self%node_first)) deallocate (self%node_first, self%node_inc)
+      allocate (self%node_first(nn + 1), self%node_inc(2*ne))
+      self%node_first(1) = 1
+      do i = 1, nn
+         self%node_first(i + 1) = self%node_first(i) + inc_n(i)
+      end do
+      inc_n(1:nn) = self%node_first(1:nn)
+      do i = 1, ne
+         self%node_inc(inc_n(self%fe(i)%l)) = 2*i - 1
+         inc_n(self%fe(i)%l) = inc_n(self%fe(i)%l) + 1
+         self%node_inc(inc_n(self%fe(i)%r)) = 2*i
+         inc_n(self%fe(i)%r) = inc_n(self%fe(i)%r) + 1
+      end do
       self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
                     .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0
       self%ws_step_end = .false.
@@ -400,7 +443,8 @@ contains
       self%ws_t = t
       if (self%simple) then
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
-                         self%theta, self%omega, self%torque, self%el_tl, self%el_tr, t, y, dydt, track, self%n_states)
+                         self%theta, self%omega, self%torque, self%el_torque, self%node_first, self%node_inc, t, y, &
+                         dydt, track, self%n_states)
          return
       end if
       pdiss = 0.0_wp
@@ -457,8 +501,8 @@ contains
                end if
             end if
          end associate
-         self%el_tl(i) = tl
-         self%el_tr(i) = tr
+         self%el_torque(1, i) = tl
+         self%el_torque(2, i) = tr
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
@@ -494,22 +538,26 @@ contains
       dydt(self%n_states + 2) = pin
    end subroutine rhs_fast
 
-   !> `rhs_fast` for a simple model (component `simple`): the same arithmetic in
-   !> the same order (bit for bit), on explicit-shape arrays, which the
+   !> `rhs_fast` for a simple model (component `simple`): the same values (bit
+   !> for bit, but for the sign of a zero: terms that are exactly 0 or factors
+   !> exactly 1 are left out, see lf_*), on explicit-shape arrays, which the
    !> compiler knows do not alias (it keeps their addresses in registers
-   !> instead of reloading them from the model after every store).
-   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, tle, tre, t, y, dydt, track, ns)
+   !> instead of reloading them from the model after every store). The element
+   !> torques go to et first; each node then adds its own (node_inc) in a
+   !> register, in the order `rhs_fast` adds them to self%torque.
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, et, first, inc, t, y, dydt, track, ns)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
-      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), tle(ne), tre(ne)
+      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne)
+      integer, intent(in) :: first(nn + 1), inc(2*ne)
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: dydt(:)
       logical, intent(in) :: track
-      integer :: i, l, r, o
-      real(wp) :: tl, tr, f, dv, pdiss, pin, pw
+      integer :: i, l, r, o, k
+      real(wp) :: f, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
       pdiss = 0.0_wp
       pin = 0.0_wp
       do i = 1, nn
@@ -521,7 +569,6 @@ contains
             theta(i) = fn(i)%theta0 + fn(i)%w*t
             omega(i) = fn(i)%w
          end if
-         torque(i) = fn(i)%load0
       end do
       if (track) then
          do i = 1, nl
@@ -533,32 +580,63 @@ contains
       do i = 1, ne
          l = fe(i)%l
          r = fe(i)%r
-         if (fe(i)%linear) then
-            dv = fe(i)%r1*omega(l) - fe(i)%r2*omega(r)
-            f = fe(i)%k*(fe(i)%r1*theta(l) - fe(i)%r2*theta(r)) + fe(i)%c*dv     ! eqs. (H.1), (H.15)
-            tl = -(f*fe(i)%r1)
-            tr = f*fe(i)%r2
-            if (track .and. fe(i)%c /= 0.0_wp) pdiss = pdiss + fe(i)%c*dv**2
-         else if (track) then
-            call els(i)%e%torques_dissipation(theta(l), omega(l), theta(r), omega(r), tl, tr, pw)
-            pdiss = pdiss + pw
-            if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(theta(l), omega(l), theta(r), omega(r))
+         ! the angles and speeds from y where it holds them (one load fewer on the critical path)
+         if (fe(i)%yl > 0) then
+            thl = y(fe(i)%yl)
+            wl = y(fe(i)%yl + 1)
          else
-            call els(i)%e%torques(theta(l), omega(l), theta(r), omega(r), tl, tr)
+            thl = theta(l)
+            wl = omega(l)
          end if
-         tle(i) = tl
-         tre(i) = tr
-         torque(l) = torque(l) + tl
-         torque(r) = torque(r) + tr
+         if (fe(i)%yr > 0) then
+            thr = y(fe(i)%yr)
+            wr = y(fe(i)%yr + 1)
+         else
+            thr = theta(r)
+            wr = omega(r)
+         end if
+         select case (fe(i)%form)
+         case (lf_unit)                                                    ! eq. (H.1), c = 0
+            f = fe(i)%k*(thl - thr)
+            et(2*i - 1) = -f
+            et(2*i) = f
+         case (lf_undamped)                                                ! eq. (H.15)
+            f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr)
+            et(2*i - 1) = -(f*fe(i)%r1)
+            et(2*i) = f*fe(i)%r2
+         case (lf_general)
+            dv = fe(i)%r1*wl - fe(i)%r2*wr
+            f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr) + fe(i)%c*dv
+            et(2*i - 1) = -(f*fe(i)%r1)
+            et(2*i) = f*fe(i)%r2
+            if (track) pdiss = pdiss + fe(i)%c*dv**2
+         case default
+            if (track) then
+               call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
+               pdiss = pdiss + pw
+               if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
+            else
+               call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
+            end if
+         end select
       end do
       do i = 1, nn
+         tq = fn(i)%load0
+         do k = first(i), first(i + 1) - 1
+            tq = tq + et(inc(k))
+         end do
+         torque(i) = tq
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
             dydt(o + 1) = y(o + 2)                                         ! eq. (G.1)
-            dydt(o + 2) = (torque(i) - fn(i)%d*y(o + 2))/fn(i)%j             ! eq. (G.2)
-            if (track .and. fn(i)%d /= 0.0_wp) pdiss = pdiss + fn(i)%d*omega(i)**2
+            if (fn(i)%d == 0.0_wp) then
+               dydt(o + 2) = tq/fn(i)%j                                      ! eq. (G.2), d = 0
+            else
+               dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j                 ! eq. (G.2)
+               if (track) pdiss = pdiss + fn(i)%d*omega(i)**2
+            end if
          else if (track) then
-            pin = pin - torque(i)*omega(i)      ! the drive's torque (alpha = 0) times the speed
+            pin = pin - tq*omega(i)             ! the drive's torque (alpha = 0) times the speed
          end if
       end do
       if (.not. track) return
@@ -763,8 +841,19 @@ contains
          i = self%guard_els(k)
          n = self%fe(i)%ng
          o = self%guard_offset(i)
-         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
-         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+         ! a plain inertia's angle and speed straight from y (no call on every step)
+         if (self%fe(i)%yl > 0) then
+            thl = y(self%fe(i)%yl)
+            wl = y(self%fe(i)%yl + 1)
+         else
+            call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+         end if
+         if (self%fe(i)%yr > 0) then
+            thr = y(self%fe(i)%yr)
+            wr = y(self%fe(i)%yr + 1)
+         else
+            call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+         end if
          call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
       end do
    end subroutine model_guards

@@ -169,8 +169,8 @@ contains
       self%s%theta = model%theta
       self%s%omega = model%omega
       if (ws) then
-         self%s%torque_left = model%el_tl
-         self%s%torque_right = model%el_tr
+         self%s%torque_left = model%el_torque(1, :)
+         self%s%torque_right = model%el_torque(2, :)
       else
          do i = 1, size(model%elements)
             call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
