@@ -96,6 +96,11 @@ module trainsim_model
       real(wp), allocatable :: theta(:), omega(:), torque(:)
       !> Per element: its torque on its left (1) and right (2) node at the last full RHS.
       real(wp), allocatable :: el_torque(:, :)
+      !> Per element whose `status` is known to be (delta, F, 1, 0) of its linear
+      !> spring (status_in_ws, checked bit for bit at build time, simple models
+      !> only): delta = r1 thl - r2 thr and F, at the last full RHS.
+      real(wp), allocatable :: el_disp(:), el_force(:)
+      logical, allocatable :: status_in_ws(:)
       !> The workspace (theta, omega, torque, el_torque) holds the full RHS at
       !> (ws_t, the state an integrator has just returned): set by the integrator
       !> right after it evaluated the RHS there (RK4's end-of-step evaluation,
@@ -184,9 +189,9 @@ contains
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
-      if (allocated(self%el_torque)) deallocate (self%el_torque)
-      allocate (self%el_torque(2, ne))
-      self%el_torque = 0.0_wp
+      if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force)
+      allocate (self%el_torque(2, ne), self%el_disp(ne), self%el_force(ne))
+      self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp
       call self%build_fast_path()
    end subroutine model_finalize
 
@@ -293,8 +298,43 @@ contains
       end do
       self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
                     .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0
+      ! elements whose recorded status the observer may take from the workspace
+      if (allocated(self%status_in_ws)) deallocate (self%status_in_ws)
+      allocate (self%status_in_ws(ne))
+      do i = 1, ne
+         self%status_in_ws(i) = self%simple .and. self%fe(i)%form /= 0
+         if (self%status_in_ws(i)) self%status_in_ws(i) = status_agrees(self%elements(i)%e, self%fe(i))
+      end do
       self%ws_step_end = .false.
    contains
+
+      !> The element's own `status` gives, bit for bit at two probe points, the
+      !> displacement and force `rhs_simple` computes for its form of linear
+      !> spring, contact 1 and pairs 0 (an element that records something else,
+      !> e.g. a gear pair's force without its damping, is asked as before).
+      logical function status_agrees(e, q) result(ok)
+         class(element_t), intent(in) :: e
+         type(fast_element_t), intent(in) :: q
+         real(wp) :: x(4), disp, force, d, f
+         integer :: p, contact, pairs
+         ok = .true.
+         do p = 1, 2
+            x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]*real(p, wp)**[1, -1, 2, 1]
+            call e%status(x(1), x(2), x(3), x(4), disp, force, contact, pairs)
+            select case (q%form)
+            case (lf_unit)
+               d = x(1) - x(3)
+               f = q%k*d
+            case (lf_undamped)
+               d = q%r1*x(1) - q%r2*x(3)
+               f = q%k*d
+            case default
+               d = q%r1*x(1) - q%r2*x(3)
+               f = q%k*d + q%c*(q%r1*x(2) - q%r2*x(4))
+            end select
+            ok = ok .and. disp == d .and. force == f .and. contact == 1 .and. pairs == 0
+         end do
+      end function status_agrees
 
       !> The node's own procedures give what a plain inertia (J, d) would.
       logical function plain_node_agrees(nd, jj, dd) result(ok)
@@ -443,8 +483,8 @@ contains
       self%ws_t = t
       if (self%simple) then
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
-                         self%theta, self%omega, self%torque, self%el_torque, self%node_first, self%node_inc, t, y, &
-                         dydt, track, self%n_states)
+                         self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, &
+                         self%node_first, self%node_inc, t, y, dydt, track, self%n_states)
          return
       end if
       pdiss = 0.0_wp
@@ -545,19 +585,20 @@ contains
    !> instead of reloading them from the model after every store). The element
    !> torques go to et first; each node then adds its own (node_inc) in a
    !> register, in the order `rhs_fast` adds them to self%torque.
-   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, et, first, inc, t, y, dydt, track, ns)
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
+                         track, ns)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
-      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne)
+      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: dydt(:)
       logical, intent(in) :: track
       integer :: i, l, r, o, k
-      real(wp) :: f, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
       pdiss = 0.0_wp
       pin = 0.0_wp
       do i = 1, nn
@@ -597,18 +638,27 @@ contains
          end if
          select case (fe(i)%form)
          case (lf_unit)                                                    ! eq. (H.1), c = 0
-            f = fe(i)%k*(thl - thr)
+            d = thl - thr
+            f = fe(i)%k*d
             et(2*i - 1) = -f
             et(2*i) = f
+            disp(i) = d
+            force(i) = f
          case (lf_undamped)                                                ! eq. (H.15)
-            f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr)
+            d = fe(i)%r1*thl - fe(i)%r2*thr
+            f = fe(i)%k*d
             et(2*i - 1) = -(f*fe(i)%r1)
             et(2*i) = f*fe(i)%r2
+            disp(i) = d
+            force(i) = f
          case (lf_general)
             dv = fe(i)%r1*wl - fe(i)%r2*wr
-            f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr) + fe(i)%c*dv
+            d = fe(i)%r1*thl - fe(i)%r2*thr
+            f = fe(i)%k*d + fe(i)%c*dv
             et(2*i - 1) = -(f*fe(i)%r1)
             et(2*i) = f*fe(i)%r2
+            disp(i) = d
+            force(i) = f
             if (track) pdiss = pdiss + fe(i)%c*dv**2
          case default
             if (track) then

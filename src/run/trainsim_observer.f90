@@ -165,18 +165,27 @@ contains
          if (model%any_needs_loads) call model%apply_loads(t)   ! torques of elements that read their nodes' loads
       end if
       self%s%t = t
-      self%s%y = y
-      self%s%theta = model%theta
-      self%s%omega = model%omega
+      self%s%y(:) = y
+      self%s%theta(:) = model%theta
+      self%s%omega(:) = model%omega
       if (ws) then
-         self%s%torque_left = model%el_torque(1, :)
-         self%s%torque_right = model%el_torque(2, :)
+         self%s%torque_left(:) = model%el_torque(1, :)
+         self%s%torque_right(:) = model%el_torque(2, :)
       else
          do i = 1, size(model%elements)
             call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
          end do
       end if
       do i = 1, size(model%elements)
+         if (ws) then
+            if (model%status_in_ws(i)) then   ! a linear spring's status, computed by the RHS
+               self%s%displacement(i) = model%el_disp(i)
+               self%s%force(i) = model%el_force(i)
+               self%s%contact(i) = 1
+               self%s%pairs(i) = 0
+               cycle
+            end if
+         end if
          associate (e => model%elements(i)%e)
             l = e%left; r = e%right
             call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
