@@ -75,7 +75,10 @@ contains
       class(clearance_element_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: tl, tr
-      call self%cl%torques(self%factor(thl), thl, wl, thr, wr, tl, tr)   ! eqs. (3.15)-(3.17), (H.3)-(H.25)
+      real(wp) :: fs
+      fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)   ! eqs. (3.15)-(3.17), (H.3)-(H.25)
+      tl = -fs*self%cl%r1                                            ! as cl_torques, one call fewer
+      tr = fs*self%cl%r2
    end subroutine ce_torques
 
    pure real(wp) function ce_displacement(self, thl, thr) result(d)
@@ -164,7 +167,7 @@ contains
       tr = fs*self%cl%r2
       p = 0.0_wp
       if (self%cl%mode == 0) return
-      pen = self%cl%mode*self%cl%delta(thl, thr) - self%cl%b
+      pen = self%cl%mode*(self%cl%r1*thl - self%cl%r2*thr) - self%cl%b
       pdot = self%cl%mode*(self%cl%r1*wl - self%cl%r2*wr)
       p = (self%cl%mode*fs - c*self%cl%law%elastic_force(pen))*pdot
    end subroutine ce_torques_dissipation

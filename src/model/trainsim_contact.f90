@@ -443,7 +443,7 @@ contains
       real(wp), intent(in) :: thl, thr
       real(wp), intent(out) :: g(2)
       real(wp) :: d
-      d = self%delta(thl, thr)
+      d = self%r1*thl - self%r2*thr
       select case (self%mode)
       case (1)
          g(1) = d - self%b; g(2) = 1.0_wp
@@ -507,7 +507,7 @@ contains
          fs = 0.0_wp
          return
       end if
-      d = self%delta(thl, thr)
+      d = self%r1*thl - self%r2*thr
       dd = self%r1*wl - self%r2*wr
       if (self%mode == 1) then
          fs = self%law%force(c, d - self%b, dd)
@@ -552,7 +552,7 @@ contains
       real(wp) :: p
       e = 0.0_wp
       if (self%mode == 0) return
-      p = self%mode*self%delta(thl, thr) - self%b
+      p = self%mode*(self%r1*thl - self%r2*thr) - self%b
       e = c*self%law%elastic_energy(p)
    end function cl_potential
 
@@ -563,7 +563,7 @@ contains
       real(wp) :: p, pdot, f
       pw = 0.0_wp
       if (self%mode == 0) return
-      p = self%mode*self%delta(thl, thr) - self%b
+      p = self%mode*(self%r1*thl - self%r2*thr) - self%b
       pdot = self%mode*(self%r1*wl - self%r2*wr)
       f = self%mode*self%contact_force(c, thl, wl, thr, wr)
       pw = (f - c*self%law%elastic_force(p))*pdot
