@@ -10,12 +10,15 @@
 !>      RHS evaluations per event;
 !>   3. peak resident memory against run length (child processes of this program).
 !> With `--hdf5` it also times HDF5 output on the rig (every step, every 10th);
-!> with `rig`, `chain` or `rss` it runs that section only.
+!> with `rig`, `chain` or `rss` it runs that section only; `--profile CASE`
+!> (ideal-off, ideal-on, backlash-off, backlash-on, ref-ideal, ref-backlash)
+!> runs one rig run alone, for `perf record`.
 !>
 !> Decks are built as strings, parsed and built outside the timed region; the
-!> timed region is one call of `simulate` (sink open/close included). Each
-!> figure is the fastest of n_rep runs; the A/B pairs are interleaved (A, B, A,
-!> B, ...) so machine load hits both alike. See docs/benchmarks.md.
+!> timed region is one call of `simulate` (sink open/close included), timed in
+!> CPU time (the HDF5 section in wall time). Each figure is the fastest of
+!> n_rep runs; the A/B pairs are interleaved (A, B, A, B, ...) so machine load
+!> hits both alike. See docs/benchmarks.md.
 program bench_rk4_throughput
    use, intrinsic :: iso_fortran_env, only: compiler_version, compiler_options, output_unit, error_unit, int64
    use trainsim_kinds, only: wp, i8
@@ -48,6 +51,12 @@ program bench_rk4_throughput
    nargs = command_argument_count()
    if (nargs >= 2) then
       call get_arg(1, arg)
+      if (arg == '--profile') then
+         ! profiling mode (perf record): one trainsim run of the rig, no reference
+         call get_arg(2, arg)
+         call profile_run(arg)
+         stop
+      end if
       if (arg == '--rss') then
          ! child mode: one run of the backlash rig, then print the peak RSS
          call get_arg(2, arg)
@@ -67,7 +76,7 @@ program bench_rk4_throughput
    write (output_unit, '(a)') '  compiler         : '//compiler_version()
    write (output_unit, '(a)') '  compiler options : '//compiler_options()
    write (output_unit, '(a,i0,a)') '  method           : best of ', n_rep, &
-      ' timed calls, A/B interleaved (system_clock, int64); null sink'
+      ' timed calls, A/B interleaved; CPU time of this process (cpu_time); null sink'
    write (output_unit, '(a)') ''
 
    arg = ''
@@ -212,6 +221,26 @@ contains
       write (output_unit, '(a)') ''
    end subroutine rss_section
 
+   !> Profiling mode: one trainsim run of the rig (2e6 steps), the case named
+   !> by `which`: ideal-off, ideal-on, backlash-off or backlash-on; or one run
+   !> of the reference loop: ref-ideal, ref-backlash.
+   subroutine profile_run(which)
+      character(len=*), intent(in) :: which
+      type(model_t) :: m
+      type(run_result_t) :: r
+      type(ref_result_t) :: ref
+      real(wp) :: secs
+      if (index(which, 'ref-') == 1) then
+         call time_ref(index(which, 'backlash') > 0, real(rig_steps, wp)*rig_dt, ref, secs)
+         write (output_unit, '(a,f8.3,a,f8.1,a)') which//': ', secs, ' s, ', 1.0e9_wp*secs/real(rig_steps, wp), ' ns/step'
+         return
+      end if
+      call load(rig_deck(real(rig_steps, wp)*rig_dt, rig_dt, index(which, '-on') > 0, &
+                         index(which, 'backlash') > 0), m)
+      call time_run(m, r, secs)
+      write (output_unit, '(a,f8.3,a,f8.1,a)') which//': ', secs, ' s, ', 1.0e9_wp*secs/real(rig_steps, wp), ' ns/step'
+   end subroutine profile_run
+
    !> Child of rss_section: one run (to `file` if not ''), then
    !> "steps events peak-RSS-MB [file-MB]".
    subroutine rss_child(n, file)
@@ -291,19 +320,21 @@ contains
       if (allocated(err)) call die(err%message)
    end subroutine load
 
-   !> One timed call of simulate with a null sink.
+   !> One timed call of simulate with a null sink. Timed in CPU time: on a
+   !> shared machine the wall time also counts the time the process waits for
+   !> a core, which hits long runs more often than short ones.
    subroutine time_run(m, r, secs)
       type(model_t), intent(inout) :: m
       type(run_result_t), intent(out) :: r
       real(wp), intent(out) :: secs
       type(null_sink_t) :: none
       type(error_t), allocatable :: err
-      integer(int64) :: c0, c1, rate
-      call system_clock(c0, rate)
+      real(wp) :: c0, c1
+      call cpu_time(c0)
       call simulate(m, none, r, err)
-      call system_clock(c1)
+      call cpu_time(c1)
       if (allocated(err)) call die(err%message)
-      secs = real(c1 - c0, wp)/real(rate, wp)
+      secs = c1 - c0
    end subroutine time_run
 
    !> One timed run of the reference loop.
@@ -312,11 +343,11 @@ contains
       real(wp), intent(in) :: t_end
       type(ref_result_t), intent(out) :: ref
       real(wp), intent(out) :: secs
-      integer(int64) :: c0, c1, rate
-      call system_clock(c0, rate)
+      real(wp) :: c0, c1
+      call cpu_time(c0)
       call ref_rig(backlash, t_end, rig_dt, ref)
-      call system_clock(c1)
-      secs = real(c1 - c0, wp)/real(rate, wp)
+      call cpu_time(c1)
+      secs = c1 - c0
    end subroutine time_ref
 
    !> RHS evaluations beyond 4 per grid step, per event.

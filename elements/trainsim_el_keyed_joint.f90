@@ -45,6 +45,7 @@ module trainsim_el_keyed_joint
       procedure :: torques => key_torques
       procedure :: torque_jacobian => key_torque_jacobian
       procedure :: dissipation_power => key_dissipation
+      procedure :: torques_dissipation => key_torques_dissipation
       procedure, private :: friction => key_friction
    end type keyed_joint_t
 
@@ -171,6 +172,16 @@ contains
       call self%friction(wl, wr, tf, dtf)
       p = self%cl%dissipation(1.0_wp, thl, wl, thr, wr) + tf*(wl - wr)
    end function key_dissipation
+
+   !> Its own `torques` and `dissipation_power` (not the clearance element's
+   !> combined form: both add the bore friction).
+   pure subroutine key_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
+      class(keyed_joint_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, p
+      call self%torques(thl, wl, thr, wr, tl, tr)
+      p = self%dissipation_power(thl, wl, thr, wr)
+   end subroutine key_torques_dissipation
 
    function key_params(self) result(p)
       class(keyed_joint_t), intent(in) :: self

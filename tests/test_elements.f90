@@ -7,13 +7,20 @@ module test_elements_doubles
    use trainsim_node_inertia, only: inertia_node_t
    implicit none
    private
-   public :: stiffening_shaft_t, pushed_inertia_t
+   public :: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t
 
    !> A shaft whose torque grows with the cube of the twist.
    type, extends(shaft_t) :: stiffening_shaft_t
    contains
       procedure :: torques => stiffening_torques
    end type stiffening_shaft_t
+
+   !> A shaft that records its force in other units (its status is not the
+   !> linear spring's (delta, F), though its torques are).
+   type, extends(shaft_t) :: recording_shaft_t
+   contains
+      procedure :: status => recording_status
+   end type recording_shaft_t
 
    !> A disk with a constant extra torque of 1 on it.
    type, extends(inertia_node_t) :: pushed_inertia_t
@@ -30,6 +37,15 @@ contains
       tr = self%k*(thl - thr)*(1.0_wp + (thl - thr)**2) + self%c*(wl - wr)
       tl = -tr
    end subroutine stiffening_torques
+
+   pure subroutine recording_status(self, thl, wl, thr, wr, disp, force, contact, pairs)
+      class(recording_shaft_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      call self%shaft_t%status(thl, wl, thr, wr, disp, force, contact, pairs)
+      force = 4.448_wp*force
+   end subroutine recording_status
 
    pure subroutine pushed_derivatives(self, t, y, torque, dydt)
       class(pushed_inertia_t), intent(in) :: self
@@ -57,7 +73,7 @@ program test_elements
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
    use trainsim_el_shaft, only: shaft_t
    use trainsim_node_inertia, only: inertia_node_t
-   use test_elements_doubles, only: stiffening_shaft_t, pushed_inertia_t
+   use test_elements_doubles, only: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t
    implicit none
 
    character(len=*), parameter :: two_disks = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
@@ -82,6 +98,8 @@ program test_elements
    call test_model_rhs_is_the_plug_ins_own_torques_and_derivatives()
    call test_hot_path_asks_an_extension_that_changes_the_physics()
    call test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
+   call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.false.)
+   call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.true.)
    call suite_end()
 
 contains
@@ -487,4 +505,88 @@ contains
       call check('derivatives of nodes c and d: identical to the bit', all(part(5:8) == full(5:8)))
       call check('no other entry written', all(part(1:4) == huge(1.0_wp)) .and. all(part(9:) == huge(1.0_wp)))
    end subroutine test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs
+   !> A model of plain inertias, nodes held at constant speeds and constant
+   !> loads runs the RHS kernel `rhs_simple`; the same train with one load
+   !> given as a sine of zero amplitude (the same value) runs the generic RHS.
+   !> Both must give the same derivatives to the bit (energy rates included),
+   !> and the kernel must leave in the workspace each element's torques as
+   !> `element_torques` gives them, and for the elements whose `status` it
+   !> takes over (status_in_ws: the shafts, damped or not, and the ideal gear)
+   !> that status: the observer reads these instead of recomputing them.
+   subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(track)
+      logical, intent(in) :: track
+      type(model_t) :: ms, mg
+      real(wp), allocatable :: y(:), ds(:), dg(:)
+      real(wp) :: tl, tr, disp, force
+      integer :: i, contact, pairs
+      logical :: torques_ok, status_ok
+      character(len=:), allocatable :: train
+      call test_begin('simple_rhs_kernel_is_bit_for_bit_the_generic_rhs_and_fills_the_workspace, track_energy = '// &
+                      merge('on ', 'off', track))
+      train = "&node id='a', type='inertia', inertia=1.0 /"//nl// &
+              "&node id='b', type='inertia', inertia=0.3, damping=0.2 /"//nl// &
+              "&node id='c', type='inertia', inertia=0.7 /"//nl// &
+              "&node id='d', type='inertia', inertia=0.4 /"//nl// &
+              "&node id='e', type='inertia', inertia=1.5 /"//nl// &
+              "&node id='f', type='inertia', inertia=2.0 /"//nl// &
+              "&node id='g', type='inertia', inertia=0.9 /"//nl// &
+              "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
+              "&element type='shaft', stiffness=2e3, damping=0.1, left='b', right='c' /"//nl// &
+              "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
+              "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001, left='c', right='d' /"//nl// &
+              "&element type='ideal_gear', stiffness=2e4, rb_driver=0.7, rb_driven=1.1, left='d', right='e' /"//nl// &
+              "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, left='e', right='f' /"//nl// &
+              "&element type='shaft', stiffness=3e3, left='f', right='g' /"//nl// &
+              "&load node='a', quantity='speed', kind='constant', value=5.0 /"//nl// &
+              "&load node='c', value=0.5 /"//nl
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = "//merge('.true. ', '.false.', track)//' /'// &
+                           nl//train//"&load node='g', value=-3.0 /"//nl, ms)
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = "//merge('.true. ', '.false.', track)//' /'// &
+                           nl//train//"&load node='g', kind='sine', offset=-3.0, amplitude=0.0, frequency=7.0 /"//nl, mg)
+      ! the last shaft records its force in other units: its status stays its own
+      call swap_in_recording_shaft(ms)
+      call swap_in_recording_shaft(mg)
+      call ms%initial_state(y)
+      do i = 1, 12
+         y(i) = 0.01_wp*sin(1.7_wp*i) + merge(0.05_wp, 0.0_wp, i == 3)
+      end do
+      call ms%init_modes(0.1_wp, y)
+      call mg%init_modes(0.1_wp, y)
+      allocate (ds(size(y)), dg(size(y)))
+      ds = huge(1.0_wp); dg = -huge(1.0_wp)
+      call ms%rhs(0.1_wp, y, ds)
+      call mg%rhs(0.1_wp, y, dg)
+      call check('the gear is in contact (its torques take part)', ms%elements(3)%e%in_contact())
+      call check('derivatives (energy rates too): identical to the bit', all(ds == dg))
+      torques_ok = .true.
+      status_ok = .true.
+      do i = 1, size(ms%elements)
+         call ms%element_torques(i, tl, tr)
+         torques_ok = torques_ok .and. tl == ms%el_torque(1, i) .and. tr == ms%el_torque(2, i)
+         if (.not. ms%status_in_ws(i)) cycle
+         associate (e => ms%elements(i)%e)
+            call e%status(ms%theta(e%left), ms%omega(e%left), ms%theta(e%right), ms%omega(e%right), disp, force, &
+                          contact, pairs)
+         end associate
+         status_ok = status_ok .and. disp == ms%el_disp(i) .and. force == ms%el_force(i) .and. contact == 1 .and. &
+                     pairs == 0
+      end do
+      call check('workspace: every element''s torques, identical to the bit', torques_ok)
+      call check('status taken over for the shafts and the ideal gear, not the clearance elements nor a shaft '// &
+                 'with a status of its own', all(ms%status_in_ws .eqv. [.true., .true., .false., .true., .false., .false.]))
+      call check('the other model runs the generic RHS (no status taken over)', .not. any(mg%status_in_ws))
+      call check('workspace: their displacement and force, identical to the bit', status_ok)
+   end subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace
+
+   !> Element 6 (a shaft) replaced by a recording_shaft_t with its parameters.
+   subroutine swap_in_recording_shaft(m)
+      type(model_t), intent(inout) :: m
+      type(recording_shaft_t) :: rs
+      select type (sh => m%elements(6)%e)
+      type is (shaft_t)
+         rs%shaft_t = sh
+      end select
+      deallocate (m%elements(6)%e)
+      allocate (m%elements(6)%e, source=rs)
+   end subroutine swap_in_recording_shaft
 end program test_elements

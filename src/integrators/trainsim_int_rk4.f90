@@ -90,6 +90,11 @@ module trainsim_int_rk4
       real(wp) :: pk1(2) = 0.0_wp, pw_step(2) = 0.0_wp, pw_full(2) = 0.0_wp
       real(wp) :: e_acc(2) = 0.0_wp, e_book(2) = 0.0_wp, e_shown(2) = 0.0_wp
       integer(i8) :: mr_steps = 0, mr_events = 0, mr_collapses = 0, mr_node_rhs = 0   !< diagnostics
+      !> k1 holds f(t_k1, ynew), evaluated at the end of the last plain step (the
+      !> next step's first stage; used if the model's workspace is still that
+      !> evaluation's, i.e. nothing changed the modes or the state since).
+      logical :: k1_next = .false.
+      real(wp) :: t_k1 = 0.0_wp
    contains
       procedure :: start => rk4_start
       procedure :: advance => rk4_advance
@@ -124,6 +129,7 @@ contains
       integer :: n, j, i, e, side, nd, ng_max
       n = size(y)
       self%ng = model%n_guards
+      self%k1_next = .false.
       allocate (self%k1(n), self%k2(n), self%k3(n), self%k4(n), self%ytmp(n), self%ynew(n), self%ys(n))
       allocate (self%g0(self%ng), self%g1(self%ng), self%gs(self%ng))
       allocate (self%d2(n), self%d3(n), self%d4(n), self%yi(n), self%yb(n))
@@ -343,8 +349,14 @@ contains
       t_sub = min(t_grid, t_goal)
       at_bp = self%stop_is_breakpoint .and. t_sub >= self%t_stop - self%tiny_t
       h = t_sub - t
-      call model%rhs(t, y, self%k1)
-      self%stats%rhs_evals = self%stats%rhs_evals + 1
+      if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
+         call model%rhs(t, y, self%k1)
+         self%stats%rhs_evals = self%stats%rhs_evals + 1
+      else if (any(y /= self%ynew)) then
+         call model%rhs(t, y, self%k1)
+         self%stats%rhs_evals = self%stats%rhs_evals + 1
+      end if
+      self%k1_next = .false.
       call self%step(model, t, y, h, self%ynew, at_bp)
       if (self%ng > 0) then
          call model%guards(t + h, self%ynew, self%g1)
@@ -367,6 +379,14 @@ contains
          t = t_grid
          call self%count_grid_step()
       end if
+      ! the RHS at the step's end is the next step's first stage: evaluated now,
+      ! it leaves the end state's kinematics and element torques in the model's
+      ! workspace for the observer (which then does not recompute them)
+      call model%rhs(t, y, self%k1)
+      self%stats%rhs_evals = self%stats%rhs_evals + 1
+      model%ws_step_end = .true.
+      self%k1_next = .true.
+      self%t_k1 = t
       status = adv_step
       if (t >= t_goal - self%tiny_t) status = adv_reached
    end subroutine rk4_advance

@@ -66,10 +66,10 @@ module trainsim_contact
       procedure :: configure => law_configure
       procedure :: begin_contact => law_begin_contact
       procedure :: restitution => law_restitution
-      procedure :: force => law_force
-      procedure :: fit_elastic_force => law_fit_elastic_force
-      procedure :: elastic_force => law_elastic_force
-      procedure :: elastic_energy => law_elastic_energy
+      procedure, non_overridable :: force => law_force
+      procedure, non_overridable :: fit_elastic_force => law_fit_elastic_force
+      procedure, non_overridable :: elastic_force => law_elastic_force
+      procedure, non_overridable :: elastic_energy => law_elastic_energy
       procedure :: elastic_stiffness => law_elastic_stiffness
       procedure :: force_partials => law_force_partials
       procedure :: lowest_restitution => law_lowest_restitution
@@ -77,19 +77,22 @@ module trainsim_contact
    end type contact_law_t
 
    !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
+   !> (The procedures of the right-hand side, its energy and guards are
+   !> non_overridable here and in contact_law_t: they then call one another
+   !> without dispatch, on the RHS's hot path.)
    type :: clearance_t
       real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp, b = 0.0_wp
       type(contact_law_t) :: law
       integer :: mode = 0               !< +1 front face, 0 free, -1 rear face
    contains
-      procedure :: delta => cl_delta
+      procedure, non_overridable :: delta => cl_delta
       procedure :: init => cl_init
-      procedure :: guards => cl_guards
+      procedure, non_overridable :: guards => cl_guards
       procedure :: update => cl_update
-      procedure :: contact_force => cl_contact_force
-      procedure :: torques => cl_torques
-      procedure :: potential => cl_potential
-      procedure :: dissipation => cl_dissipation
+      procedure, non_overridable :: contact_force => cl_contact_force
+      procedure, non_overridable :: torques => cl_torques
+      procedure, non_overridable :: potential => cl_potential
+      procedure, non_overridable :: dissipation => cl_dissipation
       procedure :: torque_jacobian => cl_torque_jacobian
    end type clearance_t
 
@@ -440,7 +443,7 @@ contains
       real(wp), intent(in) :: thl, thr
       real(wp), intent(out) :: g(2)
       real(wp) :: d
-      d = self%delta(thl, thr)
+      d = self%r1*thl - self%r2*thr
       select case (self%mode)
       case (1)
          g(1) = d - self%b; g(2) = 1.0_wp
@@ -499,14 +502,26 @@ contains
    pure real(wp) function cl_contact_force(self, c, thl, wl, thr, wr) result(fs)
       class(clearance_t), intent(in) :: self
       real(wp), intent(in) :: c, thl, wl, thr, wr
-      real(wp) :: d, dd
+      real(wp) :: d, dd, p, pdot
       if (self%mode == 0) then
          fs = 0.0_wp
          return
       end if
-      d = self%delta(thl, thr)
+      d = self%r1*thl - self%r2*thr
       dd = self%r1*wl - self%r2*wr
-      if (self%mode == 1) then
+      if (self%law%law == law_yang_sun .and. self%law%fit == fit_none) then
+         ! law_force's yang_sun case written out (the RHS's hot path; the same operations)
+         if (self%mode == 1) then
+            p = d - self%b
+            pdot = dd
+         else
+            p = -d - self%b
+            pdot = -dd
+         end if
+         fs = c*(self%law%k*p + self%law%d*p*pdot)                    ! eqs. (3.18)-(3.19)
+         if (self%law%no_tension) fs = max(fs, 0.0_wp)
+         if (self%mode /= 1) fs = -fs
+      else if (self%mode == 1) then
          fs = self%law%force(c, d - self%b, dd)
       else
          fs = -self%law%force(c, -d - self%b, -dd)
@@ -549,7 +564,7 @@ contains
       real(wp) :: p
       e = 0.0_wp
       if (self%mode == 0) return
-      p = self%mode*self%delta(thl, thr) - self%b
+      p = self%mode*(self%r1*thl - self%r2*thr) - self%b
       e = c*self%law%elastic_energy(p)
    end function cl_potential
 
@@ -560,7 +575,7 @@ contains
       real(wp) :: p, pdot, f
       pw = 0.0_wp
       if (self%mode == 0) return
-      p = self%mode*self%delta(thl, thr) - self%b
+      p = self%mode*(self%r1*thl - self%r2*thr) - self%b
       pdot = self%mode*(self%r1*wl - self%r2*wr)
       f = self%mode*self%contact_force(c, thl, wl, thr, wr)
       pw = (f - c*self%law%elastic_force(p))*pdot

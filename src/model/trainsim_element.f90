@@ -67,6 +67,7 @@ module trainsim_element
       procedure :: linearise => el_linearise
       procedure :: potential_energy => el_potential_energy
       procedure :: dissipation_power => el_dissipation_power
+      procedure :: torques_dissipation => el_torques_dissipation
       procedure :: input_power => el_input_power
       procedure :: torque_jacobian => el_torque_jacobian
       procedure :: n_guards => el_n_guards
@@ -166,6 +167,19 @@ contains
       end associate
       p = 0.0_wp
    end function el_dissipation_power
+
+   !> `torques` and `dissipation_power` at one state (the energy-tracking RHS
+   !> asks both): elements that share work between the two override it, with
+   !> results bit for bit those of the two calls. A type that overrides
+   !> `torques` or `dissipation_power` of a parent that overrides this one
+   !> overrides this one too (as the keyed joint does).
+   pure subroutine el_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, p
+      call self%torques(thl, wl, thr, wr, tl, tr)
+      p = self%dissipation_power(thl, wl, thr, wr)
+   end subroutine el_torques_dissipation
 
    !> Power fed in by the element itself (e.g. a mesh stiffness that varies with
    !> position does work (1/2) p^2 dk/dt on the loaded teeth).

@@ -20,7 +20,7 @@ module trainsim_model
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
 
    !> A node on the hot path: its kind, state offset and, for a plain inertia,
-   !> J and d; for a held node with a constant speed, that speed.
+   !> J and d; for a held node its inertia J and, with a constant speed, that speed.
    type :: fast_node_t
       integer :: kind = nk_other
       integer :: off = 0
@@ -34,7 +34,17 @@ module trainsim_model
       integer :: l = 0, r = 0, ng = 0
       logical :: linear = .false.
       real(wp) :: k = 0.0_wp, c = 0.0_wp, r1 = 1.0_wp, r2 = 1.0_wp
+      !> The form of a linear spring in `rhs_simple` (lf_*), and the state index
+      !> of the angle of its left and right node if a plain inertia, else 0
+      !> (`rhs_simple` and `guards` read those straight from y).
+      integer :: form = 0, yl = 0, yr = 0
    end type fast_element_t
+
+   !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
+   !> or exactly a factor 1 are left out (the same values, fewer operations on
+   !> the RHS's critical path): general, undamped (c = 0), undamped with unit
+   !> lever arms (a shaft: c = 0, r1 = r2 = 1).
+   integer, parameter :: lf_general = 1, lf_undamped = 2, lf_unit = 3
 
    !> A load on the hot path: its node and, when constant, its value.
    type :: fast_load_t
@@ -85,6 +95,21 @@ module trainsim_model
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
+      !> Per element: its torque on its left (1) and right (2) node at the last full RHS.
+      real(wp), allocatable :: el_torque(:, :)
+      !> Per element whose `status` is known to be (delta, F, 1, 0) of its linear
+      !> spring (status_in_ws, checked bit for bit at build time, simple models
+      !> only): delta = r1 thl - r2 thr and F, at the last full RHS.
+      real(wp), allocatable :: el_disp(:), el_force(:)
+      logical, allocatable :: status_in_ws(:)
+      !> The workspace (theta, omega, torque, el_torque) holds the full RHS at
+      !> (ws_t, the state an integrator has just returned): set by the integrator
+      !> right after it evaluated the RHS there (RK4's end-of-step evaluation,
+      !> which is the next step's first stage); cleared by every other use of
+      !> the workspace (`rhs`, `rhs_part`, `kinematics`, `apply_events`, ...).
+      !> The observer then reads the element torques instead of recomputing them.
+      logical :: ws_step_end = .false.
+      real(wp) :: ws_t = 0.0_wp
       ! The hot path (`build_fast_path`, redone by `finalize` and at the start of
       ! every run in `init_modes`, so a re-parameterised copy is current): nodes
       ! that are plain inertias and elements that are linear springs (their
@@ -96,6 +121,13 @@ module trainsim_model
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
+      !> Every node a plain inertia or held at a constant speed, every load
+      !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
+      logical, private :: simple = .false.
+      !> Per node i: the element torques acting on it, node_inc(node_first(i) :
+      !> node_first(i+1) - 1), as indices into el_torque (2 (e - 1) + side), in
+      !> the order the generic RHS adds them (elements in order, left side first).
+      integer, allocatable, private :: node_first(:), node_inc(:)
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -116,6 +148,7 @@ module trainsim_model
       procedure :: apply_events => model_apply_events
       procedure :: any_contact => model_any_contact
       procedure :: stored_energy => model_stored_energy
+      procedure :: workspace_energy => model_workspace_energy
       procedure :: node_index => model_node_index
       procedure :: is_held => model_is_held
       procedure :: state_label => model_state_label
@@ -158,6 +191,9 @@ contains
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
+      if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force)
+      allocate (self%el_torque(2, ne), self%el_disp(ne), self%el_force(ne))
+      self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp
       call self%build_fast_path()
    end subroutine model_finalize
 
@@ -173,6 +209,7 @@ contains
       real(wp) :: j, d, k, c, r1, r2
       logical :: plain, lin
       real(wp), allocatable :: y(:), dydt(:)
+      integer, allocatable :: inc_n(:)
       nn = size(self%nodes)
       ne = size(self%elements)
       if (allocated(self%fn)) deallocate (self%fn)
@@ -185,6 +222,7 @@ contains
             self%fn(i)%const_speed = self%speeds(self%speed_of(i))%is_constant()
             self%fn(i)%w = self%speeds(self%speed_of(i))%value(0.0_wp)
             self%fn(i)%theta0 = self%nodes(i)%n%theta0
+            self%fn(i)%j = self%nodes(i)%n%inertia()
          else
             call self%nodes(i)%n%plain_inertia(plain, j, d)
             if (plain) plain = plain_node_agrees(self%nodes(i)%n, j, d)
@@ -205,9 +243,17 @@ contains
             call e%linear_spring(lin, k, c, r1, r2)
             if (lin) lin = linear_element_agrees(e, k, c, r1, r2)
             self%fe(i)%linear = lin
+            self%fe(i)%form = 0
             if (lin) then
                self%fe(i)%k = k; self%fe(i)%c = c; self%fe(i)%r1 = r1; self%fe(i)%r2 = r2
+               self%fe(i)%form = lf_general
+               if (c == 0.0_wp) self%fe(i)%form = lf_undamped
+               if (c == 0.0_wp .and. r1 == 1.0_wp .and. r2 == 1.0_wp) self%fe(i)%form = lf_unit
             end if
+            self%fe(i)%yl = 0
+            self%fe(i)%yr = 0
+            if (self%fn(e%left)%kind == nk_plain) self%fe(i)%yl = self%fn(e%left)%off + 1
+            if (self%fn(e%right)%kind == nk_plain) self%fe(i)%yr = self%fn(e%right)%off + 1
          end associate
       end do
       self%guard_els = pack([(i, i=1, ne)], self%fe(:)%ng > 0)
@@ -233,7 +279,64 @@ contains
       end do
       self%dyn_loads = pack([(i, i=1, size(self%loads))], [(self%fn(self%fl(i)%node)%load0 == 0.0_wp .and. &
                                                              .not. all_const_on(self%fl(i)%node), i=1, size(self%loads))])
+      allocate (inc_n(nn + 1))
+      inc_n = 0
+      do i = 1, ne
+         inc_n(self%fe(i)%l) = inc_n(self%fe(i)%l) + 1
+         inc_n(self%fe(i)%r) = inc_n(self%fe(i)%r) + 1
+      end do
+      if (allocated(self%node_first)) deallocate (self%node_first, self%node_inc)
+      allocate (self%node_first(nn + 1), self%node_inc(2*ne))
+      self%node_first(1) = 1
+      do i = 1, nn
+         self%node_first(i + 1) = self%node_first(i) + inc_n(i)
+      end do
+      inc_n(1:nn) = self%node_first(1:nn)
+      do i = 1, ne
+         self%node_inc(inc_n(self%fe(i)%l)) = 2*i - 1
+         inc_n(self%fe(i)%l) = inc_n(self%fe(i)%l) + 1
+         self%node_inc(inc_n(self%fe(i)%r)) = 2*i
+         inc_n(self%fe(i)%r) = inc_n(self%fe(i)%r) + 1
+      end do
+      self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
+                    .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0
+      ! elements whose recorded status the observer may take from the workspace
+      if (allocated(self%status_in_ws)) deallocate (self%status_in_ws)
+      allocate (self%status_in_ws(ne))
+      do i = 1, ne
+         self%status_in_ws(i) = self%simple .and. self%fe(i)%form /= 0
+         if (self%status_in_ws(i)) self%status_in_ws(i) = status_agrees(self%elements(i)%e, self%fe(i))
+      end do
+      self%ws_step_end = .false.
    contains
+
+      !> The element's own `status` gives, bit for bit at two probe points, the
+      !> displacement and force `rhs_simple` computes for its form of linear
+      !> spring, contact 1 and pairs 0 (an element that records something else,
+      !> e.g. a gear pair's force without its damping, is asked as before).
+      logical function status_agrees(e, q) result(ok)
+         class(element_t), intent(in) :: e
+         type(fast_element_t), intent(in) :: q
+         real(wp) :: x(4), disp, force, d, f
+         integer :: p, contact, pairs
+         ok = .true.
+         do p = 1, 2
+            x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]*real(p, wp)**[1, -1, 2, 1]
+            call e%status(x(1), x(2), x(3), x(4), disp, force, contact, pairs)
+            select case (q%form)
+            case (lf_unit)
+               d = x(1) - x(3)
+               f = q%k*d
+            case (lf_undamped)
+               d = q%r1*x(1) - q%r2*x(3)
+               f = q%k*d
+            case default
+               d = q%r1*x(1) - q%r2*x(3)
+               f = q%k*d + q%c*(q%r1*x(2) - q%r2*x(4))
+            end select
+            ok = ok .and. disp == d .and. force == f .and. contact == 1 .and. pairs == 0
+         end do
+      end function status_agrees
 
       !> The node's own procedures give what a plain inertia (J, d) would.
       logical function plain_node_agrees(nd, jj, dd) result(ok)
@@ -342,6 +445,7 @@ contains
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       integer :: i, o
+      self%ws_step_end = .false.
       do i = 1, size(self%fn)
          associate (nd => self%fn(i))
             if (nd%kind == nk_plain) then
@@ -377,6 +481,14 @@ contains
       real(wp) :: tl, tr, f, dv, pdiss, pin
       logical :: track
       track = self%run%track_energy
+      self%ws_step_end = .false.
+      self%ws_t = t
+      if (self%simple) then
+         call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
+                         self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, &
+                         self%node_first, self%node_inc, t, y, dydt, track, self%n_states)
+         return
+      end if
       pdiss = 0.0_wp
       pin = 0.0_wp
       ! kinematics and constant loads in one pass (the branch of kinematics_all, written
@@ -431,6 +543,8 @@ contains
                end if
             end if
          end associate
+         self%el_torque(1, i) = tl
+         self%el_torque(2, i) = tr
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
@@ -465,6 +579,122 @@ contains
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
    end subroutine rhs_fast
+
+   !> `rhs_fast` for a simple model (component `simple`): the same values (bit
+   !> for bit, but for the sign of a zero: terms that are exactly 0 or factors
+   !> exactly 1 are left out, see lf_*), on explicit-shape arrays, which the
+   !> compiler knows do not alias (it keeps their addresses in registers
+   !> instead of reloading them from the model after every store). The element
+   !> torques go to et first; each node then adds its own (node_inc) in a
+   !> register, in the order `rhs_fast` adds them to self%torque.
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
+                         track, ns)
+      integer, intent(in) :: nn, ne, nl, ns
+      type(fast_node_t), intent(in) :: fn(nn)
+      type(fast_element_t), intent(in) :: fe(ne)
+      type(fast_load_t), intent(in) :: fl(nl)
+      type(element_slot_t), intent(in) :: els(ne)
+      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne)
+      integer, intent(in) :: first(nn + 1), inc(2*ne)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: dydt(:)
+      logical, intent(in) :: track
+      integer :: i, l, r, o, k
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      do i = 1, nn
+         if (fn(i)%kind == nk_plain) then
+            o = fn(i)%off
+            theta(i) = y(o + 1)
+            omega(i) = y(o + 2)
+         else                                   ! held at a constant speed
+            theta(i) = fn(i)%theta0 + fn(i)%w*t
+            omega(i) = fn(i)%w
+         end if
+      end do
+      if (track) then
+         do i = 1, nl
+            l = fl(i)%node
+            if (fn(l)%kind == nk_held) cycle
+            pin = pin + fl(i)%v*omega(l)
+         end do
+      end if
+      do i = 1, ne
+         l = fe(i)%l
+         r = fe(i)%r
+         ! the angles and speeds from y where it holds them (one load fewer on the critical path)
+         if (fe(i)%yl > 0) then
+            thl = y(fe(i)%yl)
+            wl = y(fe(i)%yl + 1)
+         else
+            thl = theta(l)
+            wl = omega(l)
+         end if
+         if (fe(i)%yr > 0) then
+            thr = y(fe(i)%yr)
+            wr = y(fe(i)%yr + 1)
+         else
+            thr = theta(r)
+            wr = omega(r)
+         end if
+         select case (fe(i)%form)
+         case (lf_unit)                                                    ! eq. (H.1), c = 0
+            d = thl - thr
+            f = fe(i)%k*d
+            et(2*i - 1) = -f
+            et(2*i) = f
+            disp(i) = d
+            force(i) = f
+         case (lf_undamped)                                                ! eq. (H.15)
+            d = fe(i)%r1*thl - fe(i)%r2*thr
+            f = fe(i)%k*d
+            et(2*i - 1) = -(f*fe(i)%r1)
+            et(2*i) = f*fe(i)%r2
+            disp(i) = d
+            force(i) = f
+         case (lf_general)
+            dv = fe(i)%r1*wl - fe(i)%r2*wr
+            d = fe(i)%r1*thl - fe(i)%r2*thr
+            f = fe(i)%k*d + fe(i)%c*dv
+            et(2*i - 1) = -(f*fe(i)%r1)
+            et(2*i) = f*fe(i)%r2
+            disp(i) = d
+            force(i) = f
+            if (track) pdiss = pdiss + fe(i)%c*dv**2
+         case default
+            if (track) then
+               call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
+               pdiss = pdiss + pw
+               if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
+            else
+               call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
+            end if
+         end select
+      end do
+      do i = 1, nn
+         tq = fn(i)%load0
+         do k = first(i), first(i + 1) - 1
+            tq = tq + et(inc(k))
+         end do
+         torque(i) = tq
+         if (fn(i)%kind == nk_plain) then
+            o = fn(i)%off
+            dydt(o + 1) = y(o + 2)                                         ! eq. (G.1)
+            if (fn(i)%d == 0.0_wp) then
+               dydt(o + 2) = tq/fn(i)%j                                      ! eq. (G.2), d = 0
+            else
+               dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j                 ! eq. (G.2)
+               if (track) pdiss = pdiss + fn(i)%d*omega(i)**2
+            end if
+         else if (track) then
+            pin = pin - tq*omega(i)             ! the drive's torque (alpha = 0) times the speed
+         end if
+      end do
+      if (.not. track) return
+      dydt(ns + 1) = pdiss
+      dydt(ns + 2) = pin
+   end subroutine rhs_simple
 
    !> Torques of element i on its left and right node at the kinematics in the
    !> workspace (after `kinematics`): the hot path for linear springs.
@@ -516,6 +746,7 @@ contains
       integer, intent(in) :: kin(:), els(:), der(:)
       integer :: k, i, l, r, o
       real(wp) :: tl, tr, f
+      self%ws_step_end = .false.
       do k = 1, size(kin)
          i = kin(k)
          if (self%fn(i)%kind == nk_plain) then   ! (node_kinematics written out: as in rhs_fast)
@@ -729,8 +960,19 @@ contains
          i = self%guard_els(k)
          n = self%fe(i)%ng
          o = self%guard_offset(i)
-         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
-         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+         ! a plain inertia's angle and speed straight from y (no call on every step)
+         if (self%fe(i)%yl > 0) then
+            thl = y(self%fe(i)%yl)
+            wl = y(self%fe(i)%yl + 1)
+         else
+            call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+         end if
+         if (self%fe(i)%yr > 0) then
+            thr = y(self%fe(i)%yr)
+            wr = y(self%fe(i)%yr + 1)
+         else
+            call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+         end if
          call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
       end do
    end subroutine model_guards
@@ -866,15 +1108,28 @@ contains
    real(wp) function model_stored_energy(self, t, y) result(e)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
-      integer :: i, l, r
+      real(wp) :: pot
       call kinematics_all(self, t, y)
+      call self%workspace_energy(y, e, pot)
+   end function model_stored_energy
+
+   !> Stored energy (kinetic + elastic (+ magnetic)) and the elastic part alone,
+   !> at the kinematics in the workspace and the state y (for nodes with states
+   !> of their own); the stored energy is bit for bit `stored_energy`'s.
+   subroutine model_workspace_energy(self, y, e, pot)
+      class(model_t), intent(in) :: self
+      real(wp), intent(in) :: y(:)
+      real(wp), intent(out) :: e, pot
+      integer :: i, l, r
+      real(wp) :: pe
       e = 0.0_wp
+      pot = 0.0_wp
       do i = 1, size(self%nodes)
          select case (self%fn(i)%kind)
          case (nk_plain)
             e = e + 0.5_wp*self%fn(i)%j*self%omega(i)**2
          case (nk_held)
-            e = e + 0.5_wp*self%nodes(i)%n%inertia()*self%omega(i)**2
+            e = e + 0.5_wp*self%fn(i)%j*self%omega(i)**2     ! j: the held node's inertia
          case default
             e = e + self%nodes(i)%n%stored_energy(y)
          end select
@@ -883,12 +1138,15 @@ contains
          l = self%fe(i)%l
          r = self%fe(i)%r
          if (self%fe(i)%linear) then
-            e = e + 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
+            pe = 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
          else
-            e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+            pe = self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
          end if
+         e = e + pe
+         pot = pot + pe
       end do
-   end function model_stored_energy
+   end subroutine model_workspace_energy
+
    !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed or a
    !> node's own input (motor voltage) jumps or kinks: integrators end steps there.
    subroutine model_breakpoints(model, t0, t1, bp)

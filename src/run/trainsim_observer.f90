@@ -197,30 +197,52 @@ contains
       call self%sample(model, t, t, y, sink, err)
    end subroutine obs_start
 
-   !> Evaluate the recorded quantities at (t, y) into the sample buffer.
+   !> Evaluate the recorded quantities at (t, y) into the sample buffer. When
+   !> the integrator has just evaluated the RHS at (t, y) (RK4's end-of-step
+   !> stage, model%ws_step_end), the kinematics and the element torques are
+   !> read from the model's workspace (bit for bit what would be recomputed).
    subroutine obs_fill(self, model, t, y)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       integer :: i, l, r
       real(wp) :: stored
-      call model%kinematics(t, y)
-      if (model%any_needs_loads) call model%apply_loads(t)   ! torques of elements that read their nodes' loads
+      logical :: ws
+      ws = model%ws_step_end .and. model%ws_t == t
+      if (.not. ws) then
+         call model%kinematics(t, y)
+         if (model%any_needs_loads) call model%apply_loads(t)   ! torques of elements that read their nodes' loads
+      end if
       self%s%t = t
-      self%s%y = y
-      self%s%theta = model%theta
-      self%s%omega = model%omega
+      self%s%y(:) = y
+      self%s%theta(:) = model%theta
+      self%s%omega(:) = model%omega
+      if (ws) then
+         self%s%torque_left(:) = model%el_torque(1, :)
+         self%s%torque_right(:) = model%el_torque(2, :)
+      else
+         do i = 1, size(model%elements)
+            call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
+         end do
+      end if
       do i = 1, size(model%elements)
+         if (ws) then
+            if (model%status_in_ws(i)) then   ! a linear spring's status, computed by the RHS
+               self%s%displacement(i) = model%el_disp(i)
+               self%s%force(i) = model%el_force(i)
+               self%s%contact(i) = 1
+               self%s%pairs(i) = 0
+               cycle
+            end if
+         end if
          associate (e => model%elements(i)%e)
             l = e%left; r = e%right
-            call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
             call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
                           self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
          end associate
       end do
       if (self%track) then
-         stored = model%stored_energy(t, y)
-         self%s%energy(2) = model%potential_energy()
+         call model%workspace_energy(y, stored, self%s%energy(2))   ! the kinematics at (t, y) are in the workspace
          self%s%energy(1) = stored - self%s%energy(2)
          self%s%energy(3) = y(model%n_states + 1)
          self%s%energy(4) = y(model%n_states + 2)
