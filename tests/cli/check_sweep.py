@@ -87,6 +87,31 @@ def metrics(path):
     return out
 
 
+def strings_of(f):
+    """(name, kind) of every string attribute and dataset of an open file."""
+    out = []
+
+    def kind(dtype):
+        info = h5py.check_string_dtype(dtype)
+        if info is None:
+            return None
+        return ("vlen-" if info.length is None else "fixed-") + ("utf8" if info.encoding == "utf-8" else "ascii")
+
+    def visit(name, obj):
+        for a in obj.attrs:
+            k = kind(obj.attrs.get_id(a).dtype)
+            if k:
+                out.append((name + "@" + a, k))
+        if isinstance(obj, h5py.Dataset):
+            k = kind(obj.dtype)
+            if k:
+                out.append((name, k))
+
+    visit("/", f)
+    f.visititems(visit)
+    return out
+
+
 def same_bits(a, b):
     if a.keys() != b.keys():
         return False, "different datasets"
@@ -190,7 +215,7 @@ def case_failed_run(exe, tmp):
     check("the summary counts it", "2 of 3 ok, 1 failed" in r.stdout, r.stdout)
     with h5py.File(os.path.join(tmp, "b.h5"), "r") as f:
         status = f["runs/status"][:].tolist()
-        msg = [m.decode() for m in f["runs/message"][:]]
+        msg = f["runs/message"].asstr()[:].tolist()
         p2p = f["elements/p2p_range"][:, 0]
         impacts = f["elements/impacts"][:, 0]
     check("run 2 (dt = 0.03) failed, runs 1 and 3 completed", status == [1, 2, 1], str(status))
@@ -235,8 +260,13 @@ def case_cli(exe, tmp):
     check("default sweep file DECK_sweep.h5, --set recorded in it", r.returncode == 0 and
           os.path.exists(os.path.join(tmp, "ghm_sweep.h5")), r.stderr)
     with h5py.File(os.path.join(tmp, "ghm_sweep.h5"), "r") as f:
-        check("... overrides attribute", f.attrs["overrides"].decode() == "--set mesh.half_backlash=0.004")
-        check("... deck text stored", "&sweep parameter" in f["deck_text"][0].decode())
+        check("... overrides attribute (a str: variable-length UTF-8)",
+              f.attrs["overrides"] == "--set mesh.half_backlash=0.004", repr(f.attrs["overrides"]))
+        check("... deck text stored", "&sweep parameter" in f["deck_text"].asstr()[0])
+        strings = strings_of(f)
+        check("every string of the file is variable-length UTF-8 (no fixed-length byte strings)",
+              all(kind == "vlen-utf8" for _, kind in strings), str([s for s in strings if s[1] != "vlen-utf8"]))
+        check("... attributes read as str, datasets with .asstr()", len(strings) >= 12, str(len(strings)))
     r = run([exe, "run", "ghm.nml"], tmp)
     check("run of a sweep deck: exit 0, says it ignores the &sweep groups",
           r.returncode == 0 and "ignores them" in r.stderr, r.stderr)

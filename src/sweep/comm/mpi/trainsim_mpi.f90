@@ -9,7 +9,8 @@ module trainsim_mpi
    private
 
    public :: comm_available, comm_init, comm_finalize, comm_rank, comm_size
-   public :: comm_send_record, comm_poll_record, comm_send_index, comm_recv_index, comm_bcast_int
+   public :: comm_send_record, comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index
+   public :: comm_bcast_int, comm_bcast_reals
 
    !> True in the MPI build.
    logical, parameter :: comm_available = .true.
@@ -18,6 +19,12 @@ module trainsim_mpi
 
    !> Whether comm_init called MPI_Init (then comm_finalize calls MPI_Finalize).
    logical, save :: started_here = .false.
+
+   !> Rank 0's receive of the next record, posted in advance (MPI_Irecv from any
+   !> source), so that a poll is one MPI_Test: no probe, no unexpected-message copy.
+   real(real64), allocatable, asynchronous, save :: pending_buf(:)
+   type(MPI_Request), save :: pending_req
+   logical, save :: posted = .false.
 
 contains
 
@@ -35,6 +42,7 @@ contains
 
    subroutine comm_finalize()
       logical :: flag
+      call comm_stop_polling()
       if (.not. started_here) return
       call MPI_Finalized(flag)
       if (.not. flag) call MPI_Finalize()
@@ -57,7 +65,8 @@ contains
       call MPI_Send(message, len(message), MPI_CHARACTER, 0, tag_message, MPI_COMM_WORLD)
    end subroutine comm_send_record
 
-   !> Rank 0: receive one waiting record if there is one (never blocks for long).
+   !> Rank 0: receive one waiting record if there is one (never blocks for long: the
+   !> message follows its record at once). The first call posts the receive.
    subroutine comm_poll_record(buf, found, source, message)
       real(real64), intent(out) :: buf(:)
       logical, intent(out) :: found
@@ -66,15 +75,37 @@ contains
       type(MPI_Status) :: st
       integer :: n
       source = -1
-      call MPI_Iprobe(MPI_ANY_SOURCE, tag_record, MPI_COMM_WORLD, found, st)
+      if (.not. posted) call post_record(size(buf))
+      call MPI_Test(pending_req, found, st)
       if (.not. found) return
+      posted = .false.
       source = st%MPI_SOURCE
-      call MPI_Recv(buf, size(buf), MPI_DOUBLE_PRECISION, source, tag_record, MPI_COMM_WORLD, st)
+      buf = pending_buf
       call MPI_Probe(source, tag_message, MPI_COMM_WORLD, st)
       call MPI_Get_count(st, MPI_CHARACTER, n)
       allocate (character(len=n) :: message)
       call MPI_Recv(message, n, MPI_CHARACTER, source, tag_message, MPI_COMM_WORLD, st)
+      call post_record(size(buf))
    end subroutine comm_poll_record
+
+   subroutine post_record(n)
+      integer, intent(in) :: n
+      if (allocated(pending_buf)) then
+         if (size(pending_buf) /= n) deallocate (pending_buf)
+      end if
+      if (.not. allocated(pending_buf)) allocate (pending_buf(n))
+      call MPI_Irecv(pending_buf, n, MPI_DOUBLE_PRECISION, MPI_ANY_SOURCE, tag_record, MPI_COMM_WORLD, &
+                     pending_req)
+      posted = .true.
+   end subroutine post_record
+
+   !> Rank 0, when every worker has been told to stop: withdraw the posted receive.
+   subroutine comm_stop_polling()
+      if (.not. posted) return
+      call MPI_Cancel(pending_req)
+      call MPI_Wait(pending_req, MPI_STATUS_IGNORE)
+      posted = .false.
+   end subroutine comm_stop_polling
 
    !> Rank 0 -> worker: the next run index (0: no more work).
    subroutine comm_send_index(dest, irun)
@@ -93,4 +124,10 @@ contains
       integer, intent(inout) :: v
       call MPI_Bcast(v, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
    end subroutine comm_bcast_int
+
+   !> Rank 0's values of v on every rank (v has the same size everywhere).
+   subroutine comm_bcast_reals(v)
+      real(real64), intent(inout) :: v(:, :)
+      call MPI_Bcast(v, size(v), MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
+   end subroutine comm_bcast_reals
 end module trainsim_mpi
