@@ -10,6 +10,11 @@ cases:
   resume_after_kill   kill -9 part-way, then the same command: every run present exactly
                       once (the runs done before the kill are not made again, the others
                       are made once), and the metrics equal an uninterrupted sweep's bits
+  continuation_resume a continuation sweep (up and down branches) killed with kill -9 in its
+                      up branch, re-run and killed again in its down branch, re-run to the
+                      end: every run made exactly once, metrics bit-identical to an
+                      uninterrupted continuation sweep; the same from the first kill resumed
+                      on 2 MPI ranks (when mpirun and an MPI build are there)
   failed_run          a run that blows up is recorded as failed with its message, the others
                       complete, exit status 1
   cli                 bad &sweep groups, bad sweep values and misuse fail with exit 2 and a
@@ -204,6 +209,88 @@ def case_resume_after_kill(exe, tmp):
     r = run([exe, "sweep", "ghm.nml", "-o", "killed.h5"], tmp)
     check("a changed deck does not resume into the old file: exit 2",
           r.returncode == 2 and "holds another sweep" in r.stderr, r.stderr)
+    return 0
+
+
+def kill_after(cmd, cwd, n, at):
+    """Start `cmd` (a sweep with --progress 0), kill -9 it once `at` runs are done."""
+    p = subprocess.Popen(cmd, cwd=cwd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+                         start_new_session=True)
+    seen = 0
+    for line in p.stderr:
+        m = re.match(r"sweep: (\d+)/%d runs done" % n, line)
+        if m:
+            seen = int(m.group(1))
+            if seen >= at:
+                os.killpg(p.pid, signal.SIGKILL)
+                break
+    p.wait(timeout=TIMEOUT)
+    return p.returncode, seen
+
+
+def file_state(path):
+    with h5py.File(path, "r") as f:
+        return f["runs/status"][:], f["runs/wall_time"][:], f["runs/branch"][:]
+
+
+def case_continuation_resume(exe, tmp):
+    n_branch = 8
+    n = 2 * n_branch
+    deck = os.path.join(tmp, "cont.nml")
+    with open(deck, "w") as f:
+        f.write(GHM.format(t_end=0.02).replace("output_interval = 8.0e-6 /", "output_interval = 8.0e-6,\n"
+                                                "      initial_state = 'preload' /") +
+                f"&sweep parameter = 'mesh.mesh_frequency', from = 385, to = 645, count = {n_branch}, "
+                "continuation = 'both' /\n"
+                "&sweep parameter = 'mesh.settle_cycles', values = 100 /\n"
+                "&sweep parameter = 'mesh.measure_cycles', values = 60 /\n")
+    r = run([exe, "sweep", "cont.nml", "-o", "ref.h5"], tmp)
+    check("uninterrupted continuation sweep exits 0", r.returncode == 0, r.stderr)
+    ref = metrics(os.path.join(tmp, "ref.h5"))
+    _, _, branch = file_state(os.path.join(tmp, "ref.h5"))
+    up, down = branch == 1, branch == 2
+    check("it has an up and a down branch", up.sum() == n_branch and down.sum() == n_branch, str(branch))
+
+    path = os.path.join(tmp, "k.h5")
+    cmd = [exe, "sweep", "cont.nml", "-o", "k.h5", "--progress", "0"]
+    rc, seen = kill_after(cmd, tmp, n, 3)
+    check("first kill -9 part-way", rc == -signal.SIGKILL and seen >= 3, f"rc {rc}, seen {seen}")
+    s1, w1, _ = file_state(path)
+    k1 = int(np.count_nonzero(s1))
+    check("... in the up branch (down not started)", 3 <= k1 < n_branch and not s1[down].any(), str(s1))
+    shutil.copy(path, os.path.join(tmp, "k_mpi.h5"))
+
+    rc, seen = kill_after(cmd, tmp, n, n_branch + 3)
+    check("resumed, then killed -9 again part-way", rc == -signal.SIGKILL, f"rc {rc}, seen {seen}")
+    s2, w2, _ = file_state(path)
+    k2 = int(np.count_nonzero(s2))
+    check("... in the down branch (up complete)", s2[up].all() and 3 <= s2[down].sum() < n_branch, str(s2))
+    check("... the runs of the first part kept (wall times unchanged to the bit)",
+          np.array_equal(w1[s1 != 0].view(np.uint64), w2[s1 != 0].view(np.uint64)))
+
+    r = run([exe, "sweep", "cont.nml", "-o", "k.h5"], tmp)
+    check("the same command again exits 0", r.returncode == 0, r.stderr)
+    check("it made exactly the missing runs", f"sweep: {n - k2} run(s) made, {n} of {n} ok" in r.stdout, r.stdout)
+    s3, w3, _ = file_state(path)
+    check("every run present exactly once: all complete", np.all(s3 == 1), str(s3))
+    check("no run made twice (wall times of runs done before the kill unchanged)",
+          np.array_equal(w2[s2 != 0].view(np.uint64), w3[s2 != 0].view(np.uint64)))
+    ok, which = same_bits(ref, metrics(path))
+    check("every metric (and end state) bit-identical to the uninterrupted continuation sweep", ok, which)
+
+    mpirun = shutil.which("mpirun")
+    if mpirun:
+        r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "cont.nml",
+                 "-o", "k_mpi.h5"], tmp)
+        if "built without MPI" in r.stderr:
+            print("(MPI part skipped: trainsim built without MPI)")
+        else:
+            check("resumed on 2 MPI ranks: exit 0", r.returncode == 0, r.stderr)
+            ok, which = same_bits(ref, metrics(os.path.join(tmp, "k_mpi.h5")))
+            check("... bit-identical to the uninterrupted serial continuation sweep", ok, which)
+            with h5py.File(os.path.join(tmp, "k_mpi.h5"), "r") as f:
+                ranks = f["runs/rank"][:]
+            check("... both ranks made runs", set(ranks[s1 == 0].tolist()) == {0, 1}, str(ranks))
     return 0
 
 
