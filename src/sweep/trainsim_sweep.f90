@@ -211,6 +211,7 @@ contains
       end if
 
       call master_loop(m, opt, deck, spec, lay, done)
+      if (.not. allocated(m%err)) call m%file%commit(m%err)
       call m%file%close()
       if (allocated(m%err)) then
          call move_alloc(m%err, err)
@@ -548,6 +549,8 @@ contains
       end if
       self%last_line = c
       self%last_done = done
+      ! a line says what the file holds: commit the runs written so far
+      if (.not. allocated(self%err)) call self%file%commit(self%err)
       t = elapsed(self)
       failed = count(self%file%status == status_failed)
       line = 'sweep: '//str(done)//'/'//str(self%n_runs)//' runs done'

@@ -2,10 +2,13 @@
 !>
 !> Every dataset is created at the start with one slot per run (contiguous, space
 !> allocated at once, fill values NaN / -1 / status 0), so recording a finished run
-!> writes raw data into its slot and touches no HDF5 metadata. A run is recorded by
-!> writing its slot, flushing, then writing its status and flushing again: after a
-!> `kill -9` at any moment the file opens, and a run with a non-zero status is
-!> complete. `--resume` runs only the runs whose status is still 0.
+!> writes raw data into its slot and touches no HDF5 metadata. Runs are committed in
+!> batches: their slots are written as they finish; at most every `commit_interval`
+!> seconds (and before a progress line, and at the end) the file is flushed, then the
+!> batch's statuses are written and the file flushed again: after a `kill -9` at any
+!> moment the file opens, and a run with a non-zero status is complete. The runs of a
+!> batch not yet committed are made again by the next `trainsim sweep` (their results
+!> are the same bits). `--resume` runs only the runs whose status is still 0.
 !>
 !> Strings (attributes, ids, names, the deck text, run messages) are variable-length
 !> UTF-8, as in run files (the helpers of trainsim_hdf5): h5py reads attributes as str
@@ -18,7 +21,7 @@ module trainsim_sweep_file
    use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_loc, c_f_pointer, c_size_t, &
       c_associated
    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
-   use trainsim_kinds, only: wp
+   use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_io, err_input
    use trainsim_strings, only: string_t, str
    use trainsim_hdf5, only: make_string_type, vlen_pointers, put_str_attr, put_column_s
@@ -87,11 +90,16 @@ module trainsim_sweep_file
       integer(hid_t) :: d_run(4) = -1
       integer(hid_t) :: d_el(15) = -1, d_node(5) = -1
       integer :: ne = 0, nn = 0, n_runs = 0
-      integer, allocatable :: status(:)      !< as in the file
+      integer, allocatable :: status(:)      !< as in the file once committed
+      integer, allocatable :: batch(:)       !< runs written but not committed
+      integer :: n_batch = 0
+      real(wp) :: commit_interval = 0.5_wp   !< s between commits (0: every run)
+      integer(i8) :: last_commit = 0
    contains
       procedure :: create => file_create
       procedure :: open_existing => file_open_existing
       procedure :: write_run => file_write_run
+      procedure :: commit => file_commit
       procedure :: read_end_state => file_read_end_state
       procedure :: close => file_close
    end type sweep_file_t
@@ -339,6 +347,7 @@ contains
       type(sweep_record_t), intent(in) :: rec
       type(error_t), allocatable, intent(out) :: err
       integer :: h, k, hs
+      integer(i8) :: c, rate
       real(wp) :: col(max(self%ne, 1))
 
       hs = 0
@@ -364,15 +373,35 @@ contains
       do k = 1, size(node_metric_names)
          call put_slot(self%d_node(k), rec%irun, [rec%node(k, :)], h); hs = min(hs, h)
       end do
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
-      call put_slot_int(self%d_status, rec%irun, [rec%status], h); hs = min(hs, h)
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
       if (hs < 0) then
          call fatal_error(err, "cannot write run "//str(rec%irun)//" to sweep file '"//self%path//"'", err_io)
          return
       end if
       self%status(rec%irun) = rec%status
+      if (.not. allocated(self%batch)) allocate (self%batch(self%n_runs))
+      self%n_batch = self%n_batch + 1
+      self%batch(self%n_batch) = rec%irun
+      call system_clock(c, rate)
+      if (real(c - self%last_commit, wp) >= self%commit_interval*real(rate, wp)) call self%commit(err)
    end subroutine file_write_run
+
+   !> Commit the runs written since the last commit: flush, their statuses, flush.
+   subroutine file_commit(self, err)
+      class(sweep_file_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer :: h, hs, i, j
+      call system_clock(self%last_commit)
+      if (self%n_batch == 0) return
+      hs = 0
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
+      do i = 1, self%n_batch
+         j = self%batch(i)
+         call put_slot_int(self%d_status, j, [self%status(j)], h); hs = min(hs, h)
+      end do
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
+      self%n_batch = 0
+      if (hs < 0) call fatal_error(err, "cannot record runs in sweep file '"//self%path//"'", err_io)
+   end subroutine file_commit
 
    !> Where run irun ended, for the run after it in a continuation branch: its nodes'
    !> end_angle, end_speed and start_speed, one after the other in `v`.
@@ -399,10 +428,13 @@ contains
                                    self%path//"'", err_io)
    end subroutine file_read_end_state
 
+   !> Commit the last batch (an error here is reported by `commit` called before) and close.
    subroutine file_close(self)
       class(sweep_file_t), intent(inout) :: self
+      type(error_t), allocatable :: err
       integer :: h
       if (self%file < 0) return
+      call self%commit(err)
       call close_ids(self)
       call h5fclose_f(self%file, h)
       self%file = -1
