@@ -19,6 +19,8 @@ module trainsim_mpi
 
    !> Whether comm_init called MPI_Init (then comm_finalize calls MPI_Finalize).
    logical, save :: started_here = .false.
+   !> Whether MPI is in use (else one rank, no MPI calls).
+   logical, save :: use_mpi = .false.
 
    !> Rank 0's receive of the next record, posted in advance (MPI_Irecv from any
    !> source), so that a poll is one MPI_Test: no probe, no unexpected-message copy.
@@ -28,21 +30,38 @@ module trainsim_mpi
 
 contains
 
-   !> Start MPI (a program not started by mpirun is one rank).
+   !> Start MPI. A program that no MPI launcher started (no OMPI_COMM_WORLD_SIZE,
+   !> PMIX_RANK, PMI_RANK or PMI_SIZE in its environment) is one rank without MPI: Open
+   !> MPI's singleton MPI_Init starts a runtime server of its own, about 0.4 s.
    subroutine comm_init(err)
       character(len=:), allocatable, intent(out) :: err   !< set if MPI cannot be used
       logical :: flag
       err = ''
       call MPI_Initialized(flag)
       if (.not. flag) then
+         if (.not. launched()) return
          call MPI_Init()
          started_here = .true.
       end if
+      use_mpi = .true.
    end subroutine comm_init
+
+   !> Whether an MPI launcher (mpirun, mpiexec, srun) started this process.
+   logical function launched()
+      character(len=*), parameter :: names(4) = [character(len=20) :: 'OMPI_COMM_WORLD_SIZE', 'PMIX_RANK', &
+                                                 'PMI_RANK', 'PMI_SIZE']
+      integer :: i, stat
+      launched = .false.
+      do i = 1, size(names)
+         call get_environment_variable(trim(names(i)), status=stat)
+         if (stat == 0) launched = .true.
+      end do
+   end function launched
 
    subroutine comm_finalize()
       logical :: flag
       call comm_stop_polling()
+      use_mpi = .false.
       if (.not. started_here) return
       call MPI_Finalized(flag)
       if (.not. flag) call MPI_Finalize()
@@ -50,11 +69,13 @@ contains
    end subroutine comm_finalize
 
    integer function comm_rank() result(r)
-      call MPI_Comm_rank(MPI_COMM_WORLD, r)
+      r = 0
+      if (use_mpi) call MPI_Comm_rank(MPI_COMM_WORLD, r)
    end function comm_rank
 
    integer function comm_size() result(n)
-      call MPI_Comm_size(MPI_COMM_WORLD, n)
+      n = 1
+      if (use_mpi) call MPI_Comm_size(MPI_COMM_WORLD, n)
    end function comm_size
 
    !> Worker -> rank 0: a run's record (numbers) and its message.
@@ -122,12 +143,12 @@ contains
    !> Rank 0's value of v on every rank.
    subroutine comm_bcast_int(v)
       integer, intent(inout) :: v
-      call MPI_Bcast(v, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
+      if (use_mpi) call MPI_Bcast(v, 1, MPI_INTEGER, 0, MPI_COMM_WORLD)
    end subroutine comm_bcast_int
 
    !> Rank 0's values of v on every rank (v has the same size everywhere).
    subroutine comm_bcast_reals(v)
       real(real64), intent(inout) :: v(:, :)
-      call MPI_Bcast(v, size(v), MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
+      if (use_mpi) call MPI_Bcast(v, size(v), MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
    end subroutine comm_bcast_reals
 end module trainsim_mpi
