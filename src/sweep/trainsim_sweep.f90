@@ -64,6 +64,7 @@ module trainsim_sweep
       integer :: n_now = 0, n_failed_now = 0, n_before = 0, n_runs = 0
       integer(i8) :: c0 = 0, rate = 1, last_line = 0
       integer :: last_done = -1             !< runs done at the last progress line
+      integer(i8) :: last_service = 0       !< clock at the last look for records
       integer :: unit = -1
       real(wp) :: interval = 5.0_wp
       logical :: tty = .false.
@@ -89,7 +90,7 @@ module trainsim_sweep
       real(wp) :: t_metrics = 0.0_wp
       real(wp), allocatable :: wmin(:), wmax(:)
       type(master_t), pointer :: master => null()
-      integer(i8) :: last_poll = 0, poll_ticks = 0
+      integer(i8) :: poll_ticks = 0
       integer :: n_samples = 0
    contains
       procedure :: open => ssink_open
@@ -479,6 +480,7 @@ contains
       real(wp), allocatable :: buf(:)
       logical :: found
       integer :: src, irun
+      call system_clock(self%last_service)
       allocate (buf(record_size(self%ne, self%nn)), rec%el(size(element_metric_names), self%ne), &
                 rec%node(size(node_metric_names), self%nn))
       do
@@ -746,7 +748,6 @@ contains
       allocate (self%wmin(size(meta%node_ids)), self%wmax(size(meta%node_ids)))
       self%wmin = huge(1.0_wp)
       self%wmax = -huge(1.0_wp)
-      call system_clock(self%last_poll)
    end subroutine ssink_open
 
    subroutine ssink_sample(self, s, err)
@@ -759,14 +760,12 @@ contains
          self%wmax = max(self%wmax, s%omega)
       end if
       if (associated(self%master)) then
-         ! (a clock read every 32 samples: a sample is a few steps of a microsecond)
+         ! a clock read at the first sample (a tiny run has few), then every 32 (a
+         ! sample is a few steps of a microsecond)
          self%n_samples = self%n_samples + 1
-         if (iand(self%n_samples, 31) /= 0) return
+         if (iand(self%n_samples, 31) /= 1) return
          call system_clock(c)
-         if (c - self%last_poll >= self%poll_ticks) then
-            call self%master%service()
-            self%last_poll = c
-         end if
+         if (c - self%master%last_service >= self%poll_ticks) call self%master%service()
       end if
    end subroutine ssink_sample
 
