@@ -31,7 +31,8 @@ module trainsim_sweep
    use trainsim_simulate, only: simulate
    use trainsim_continuation, only: chain_state_t, save_end_state, start_from
    use trainsim_mpi, only: comm_init, comm_finalize, comm_rank, comm_size, comm_send_record, &
-      comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index, comm_bcast_int, comm_bcast_reals
+      comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index, comm_bcast_int, comm_bcast_reals, &
+      comm_sum_reals, comm_min_int
    implicit none
    private
 
@@ -152,10 +153,24 @@ contains
       type(sweep_layout_t) :: lay
       type(master_t), target :: m
       real(wp), allocatable :: cost(:), done(:, :)
-      integer :: i
+      integer :: i, bad
 
       call setup(opt, deck, spec, lay, err)
       if (allocated(err)) then
+         summary%exit_code = 2
+         return
+      end if
+      ! every run must build (input errors before any file is touched); each rank
+      ! builds its share, rank 0 reports the first run that does not build
+      call validate_runs(opt, deck, spec, comm_rank(), comm_size(), cost, i, err)
+      bad = i
+      call comm_sum_reals(cost)
+      call comm_min_int(bad)
+      if (bad <= spec%n_runs) then
+         if (summary%root .and. i /= bad) then
+            call validate_runs(opt, deck, spec, bad - 1, spec%n_runs, cost, i, err)   ! run `bad` alone
+         end if
+         if (.not. allocated(err)) call fatal_error(err, 'error: a run of the sweep does not build', err_input)
          summary%exit_code = 2
          return
       end if
@@ -176,9 +191,7 @@ contains
       if (len(summary%path) == 0) summary%path = default_sweep_path(opt%deck_path)
       m%n_ranks = comm_size()
       m%ne = size(lay%element_ids); m%nn = size(lay%node_ids); m%n_runs = lay%n_runs
-      ! every run must build (input errors before any file is touched)
-      call validate_runs(opt, deck, spec, cost, err)
-      if (.not. allocated(err)) call open_file(m, opt, summary%path, lay, err)
+      call open_file(m, opt, summary%path, lay, err)
       if (.not. allocated(err)) then
          m%pending = longest_first(pack([(i, i=1, lay%n_runs)], m%file%status == status_pending), cost)
          call setup_chains(m, spec, done, err)
@@ -296,25 +309,32 @@ contains
       ovs(n + 1:) = runs
    end function run_overrides
 
-   !> Build every run's model (an input error stops the sweep before any file is
-   !> touched); `cost` is each run's estimated cost: its steps for a fixed step, else
-   !> its simulated time.
-   subroutine validate_runs(opt, deck, spec, cost, err)
+   !> Build the models of runs first+1, first+1+stride, ... (an input error stops the
+   !> sweep before any file is touched): `bad` is the first that does not build (`err`
+   !> says why; n_runs + 1 if none), `cost` each run's estimated cost (its steps for a
+   !> fixed step, else its simulated time; 0 for the runs of other strides).
+   subroutine validate_runs(opt, deck, spec, first, stride, cost, bad, err)
       type(sweep_options_t), intent(in) :: opt
       type(deck_t), intent(in) :: deck
       type(sweep_spec_t), intent(in) :: spec
+      integer, intent(in) :: first, stride
       real(wp), allocatable, intent(out) :: cost(:)
+      integer, intent(out) :: bad
       type(error_t), allocatable, intent(out) :: err
       type(model_t) :: model
       type(override_t), allocatable :: ovs(:)
       integer :: i
       allocate (cost(spec%n_runs))
       cost = 0.0_wp
-      do i = 1, spec%n_runs
+      bad = spec%n_runs + 1
+      do i = first + 1, spec%n_runs, stride
          if (allocated(ovs)) deallocate (ovs)
          allocate (ovs, source=run_overrides(opt, spec, i, err))   ! not `ovs = ...`: gfortran 12 false -Wuninitialized
-         if (allocated(err)) return
-         call prepare_model(deck, ovs, model, err); if (allocated(err)) return
+         if (.not. allocated(err)) call prepare_model(deck, ovs, model, err)
+         if (allocated(err)) then
+            bad = i
+            return
+         end if
          cost(i) = model%run%t_end - model%run%t_start
          if (model%run%dt > 0.0_wp) cost(i) = cost(i)/model%run%dt
       end do

@@ -151,6 +151,14 @@ def case_mpi_matches_serial(exe, tmp):
     with h5py.File(os.path.join(tmp, "mpi.h5"), "r") as f:
         ranks = set(f["runs/rank"][:].tolist())
     check("both ranks made runs (dynamic hand-out reached rank 1)", ranks == {0, 1}, str(ranks))
+    with open(os.path.join(tmp, "bad.nml"), "w") as f:
+        f.write(GHM.format(t_end=0.01) + "&sweep parameter = 'mesh.half_backlash', values = 0.005, 0.004, -1.0 /\n")
+    for n in ("2", "3"):
+        r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", n, exe, "sweep", "bad.nml", "-o", "bad.h5"],
+                tmp)
+        check(f"a run that does not build, on {n} ranks (validated by rank {2 % int(n)}): exit 2, rank 0 says which",
+              r.returncode == 2 and "(run 3: mesh.half_backlash = -1)" in r.stderr, f"rc {r.returncode}: {r.stderr}")
+        check("... no sweep file", not os.path.exists(os.path.join(tmp, "bad.h5")))
     return 0
 
 

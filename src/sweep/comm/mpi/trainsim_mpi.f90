@@ -10,7 +10,7 @@ module trainsim_mpi
 
    public :: comm_available, comm_init, comm_finalize, comm_rank, comm_size
    public :: comm_send_record, comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index
-   public :: comm_bcast_int, comm_bcast_reals
+   public :: comm_bcast_int, comm_bcast_reals, comm_sum_reals, comm_min_int
 
    !> True in the MPI build.
    logical, parameter :: comm_available = .true.
@@ -151,4 +151,16 @@ contains
       real(real64), intent(inout) :: v(:, :)
       if (use_mpi) call MPI_Bcast(v, size(v), MPI_DOUBLE_PRECISION, 0, MPI_COMM_WORLD)
    end subroutine comm_bcast_reals
+
+   !> Every rank's v summed, on every rank.
+   subroutine comm_sum_reals(v)
+      real(real64), intent(inout) :: v(:)
+      if (use_mpi) call MPI_Allreduce(MPI_IN_PLACE, v, size(v), MPI_DOUBLE_PRECISION, MPI_SUM, MPI_COMM_WORLD)
+   end subroutine comm_sum_reals
+
+   !> The smallest of every rank's v, on every rank.
+   subroutine comm_min_int(v)
+      integer, intent(inout) :: v
+      if (use_mpi) call MPI_Allreduce(MPI_IN_PLACE, v, 1, MPI_INTEGER, MPI_MIN, MPI_COMM_WORLD)
+   end subroutine comm_min_int
 end module trainsim_mpi

@@ -7,7 +7,7 @@ module trainsim_mpi
 
    public :: comm_available, comm_init, comm_finalize, comm_rank, comm_size
    public :: comm_send_record, comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index
-   public :: comm_bcast_int, comm_bcast_reals
+   public :: comm_bcast_int, comm_bcast_reals, comm_sum_reals, comm_min_int
 
    logical, parameter :: comm_available = .false.
 
@@ -77,4 +77,14 @@ contains
    subroutine comm_bcast_reals(v)
       real(real64), intent(inout) :: v(:, :)
    end subroutine comm_bcast_reals
+
+   !> Every rank's v summed, on every rank.
+   subroutine comm_sum_reals(v)
+      real(real64), intent(inout) :: v(:)
+   end subroutine comm_sum_reals
+
+   !> The smallest of every rank's v, on every rank.
+   subroutine comm_min_int(v)
+      integer, intent(inout) :: v
+   end subroutine comm_min_int
 end module trainsim_mpi
