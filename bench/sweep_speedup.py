@@ -17,7 +17,9 @@
    (wall * min(ranks, cores) - sum of /runs/wall_time) / runs.
 
 Timings on a shared machine are noisy: the script prints the load average (uptime) before
-and after, and compares configurations only within one interleaved run. Needs mpirun for
+and after, and compares configurations only within one interleaved run. With
+`--wait-idle S` it waits (at most S seconds) before each round until no other process has
+been running for 2 s (the running count of /proc/loadavg), and says how long it waited. Needs mpirun for
 the MPI configurations (skipped without it). Not a test: it asserts nothing.
 """
 
@@ -42,6 +44,22 @@ MPI = ["--allow-run-as-root", "--oversubscribe"]
 def load():
     with open("/proc/loadavg") as f:
         return " ".join(f.read().split()[:3])
+
+
+def running_others():
+    """Processes running now, besides the one reading /proc/loadavg."""
+    with open("/proc/loadavg") as f:
+        return int(f.read().split()[3].split("/")[0]) - 1
+
+
+def wait_idle(limit):
+    """Wait until nothing else has run for 2 s (checked every 0.1 s), at most `limit` s."""
+    t0 = time.perf_counter()
+    quiet = 0
+    while quiet < 20 and time.perf_counter() - t0 < limit:
+        quiet = quiet + 1 if running_others() == 0 else 0
+        time.sleep(0.1)
+    return time.perf_counter() - t0, quiet >= 20
 
 
 def timed(cmd, cwd):
@@ -69,10 +87,14 @@ def run_walls(path):
         return float(f["runs/wall_time"][:].sum()), f["runs/rank"][:]
 
 
-def interleaved(exe, deck, configs, reps, tmp):
+def interleaved(exe, deck, configs, reps, tmp, idle=0.0):
     """{ranks: [(wall, cpu, sum of run walls, ranks of the runs), ...]} over `reps` rounds."""
     out = {r: [] for r in configs}
     for i in range(reps):
+        if idle > 0:
+            waited, ok = wait_idle(idle)
+            print(f"  round {i + 1}: waited {waited:.1f} s for an idle machine" + ("" if ok else " (not idle)"),
+                  f"load {load()}", flush=True)
         for ranks in configs:
             h5 = os.path.join(tmp, f"s{ranks}_{i}.h5")
             wall, cpu = timed(sweep_cmd(exe, ranks, deck, h5), tmp)
@@ -94,7 +116,7 @@ def speedup(exe, args, tmp, have_mpi):
         f.write(text)
     configs = [1, 2] if have_mpi else [1]
     print(f"\n27-run Fig. 5.11 sweep, {args.cycles} mesh cycles per run, {args.reps} interleaved rounds")
-    res = interleaved(exe, deck, configs, args.reps, tmp)
+    res = interleaved(exe, deck, configs, args.reps, tmp, args.wait_idle)
     print(f"\n| ranks | wall (median, range) | runs/s | CPU (median) | run wall (sum, median) |")
     print("|---|---|---|---|---|")
     for r in configs:
@@ -125,7 +147,7 @@ def tiny(exe, args, tmp, have_mpi):
     configs = [1, 2, 4] if have_mpi else [1]
     cores = os.cpu_count() or 1
     print(f"\n{args.tiny} tiny runs (5 RK4 steps each), {args.reps} interleaved rounds; {cores} cores")
-    res = interleaved(exe, deck, configs, args.reps, tmp)
+    res = interleaved(exe, deck, configs, args.reps, tmp, args.wait_idle)
     start = {}
     if have_mpi:
         for r in configs[1:]:
@@ -152,6 +174,8 @@ def main():
     ap.add_argument("--cycles", type=int, default=1100, help="mesh cycles per run (100 settle + the rest)")
     ap.add_argument("--tiny", type=int, default=2000, help="number of tiny runs")
     ap.add_argument("--only", choices=("speedup", "tiny"))
+    ap.add_argument("--wait-idle", type=float, default=0.0, metavar="S",
+                    help="before each round, wait up to S s for no other running process")
     args = ap.parse_args()
     exe = os.path.abspath(args.trainsim)
     have_mpi = shutil.which("mpirun") is not None
