@@ -10,7 +10,9 @@
    `--reps` times, each from a fresh sweep file. Reports per configuration the median wall
    (whole process: mpirun's start-up included), runs/s, CPU seconds (user + sys of every
    process, from the children's rusage), and per pair the speed-up, with its median and
-   range, and the CPU ratio (2 ranks / serial).
+   range, and the CPU ratio (2 ranks / serial). Also the speed-up of the sweep phase alone
+   (the "s elapsed" of trainsim's last progress line: from the first run handed out to
+   the last recorded, without start-up, validation and MPI_Init/Finalize).
 2. The manager's overhead per run: `--tiny` runs of 5 RK4 steps each (the same rig,
    t_end = 4e-5 s), serially and on 2 and 4 (oversubscribed) ranks, interleaved. Reports the
    wall per run and the time per run not spent in runs:
@@ -72,6 +74,8 @@ def timed(cmd, cwd):
     if r.returncode != 0:
         sys.exit(f"failed ({r.returncode}): {' '.join(cmd)}\n{r.stderr}")
     cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+    el = re.findall(r"runs done.*?, ([0-9.]+) s elapsed", r.stderr)
+    timed.elapsed = float(el[-1]) if el else float("nan")
     return wall, cpu
 
 
@@ -99,7 +103,7 @@ def interleaved(exe, deck, configs, reps, tmp, idle=0.0):
             h5 = os.path.join(tmp, f"s{ranks}_{i}.h5")
             wall, cpu = timed(sweep_cmd(exe, ranks, deck, h5), tmp)
             rw, rk = run_walls(h5)
-            out[ranks].append((wall, cpu, rw, rk))
+            out[ranks].append((wall, cpu, rw, rk, timed.elapsed))
             os.remove(h5)
             print(f"  round {i + 1}, {ranks} rank(s): {wall:.3f} s wall, {cpu:.3f} s CPU", flush=True)
     return out
@@ -128,8 +132,11 @@ def speedup(exe, args, tmp, have_mpi):
     if have_mpi:
         sp = [a[0] / b[0] for a, b in zip(res[1], res[2])]
         cr = [b[1] / a[1] for a, b in zip(res[1], res[2])]
+        ph = [a[4] / b[4] for a, b in zip(res[1], res[2])]
         print(f"\nspeed-up on 2 ranks (per round): {', '.join(f'{x:.3f}' for x in sp)}; "
               f"median {statistics.median(sp):.3f} (range {min(sp):.3f}-{max(sp):.3f})")
+        print(f"sweep phase alone (no start-up): speed-up median {statistics.median(ph):.3f} "
+              f"(range {min(ph):.3f}-{max(ph):.3f})")
         print(f"CPU 2 ranks / serial: median {statistics.median(cr):.3f} (range {min(cr):.3f}-{max(cr):.3f})")
         print("runs per rank (last round): " +
               ", ".join(f"rank {k}: {int((res[2][-1][3] == k).sum())}" for k in sorted(set(res[2][-1][3]))))
