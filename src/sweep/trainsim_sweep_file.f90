@@ -29,7 +29,7 @@ module trainsim_sweep_file
       h5gcreate_f, h5gclose_f, h5screate_simple_f, h5sclose_f, h5sselect_hyperslab_f, &
       h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_space_f, &
       h5sget_simple_extent_dims_f, h5pcreate_f, h5pclose_f, h5pset_alloc_time_f, h5pset_fill_value_f, &
-      h5pset_obj_track_times_f, h5tclose_f, h5aopen_f, h5aclose_f, h5aread_f, h5eset_auto_f, &
+      h5pset_obj_track_times_f, h5tclose_f, h5aexists_f, h5aopen_f, h5aclose_f, h5aread_f, h5eset_auto_f, &
       H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_SCOPE_GLOBAL_F, H5S_SELECT_SET_F, &
       H5P_DATASET_CREATE_F, H5D_ALLOC_TIME_EARLY_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER
    implicit none
@@ -281,7 +281,12 @@ contains
       why = ''
       call get_attr(self%file, 'format', s, ok)
       if (.not. ok .or. s /= 'trainsim-sweep') then
-         why = 'it is not a trainsim sweep file'
+         ! (format_version 1 had fixed-length strings, which do not read as variable-length)
+         if (h5_attr_exists(self%file, 'format')) then
+            why = 'it is a sweep file of an older layout, not format_version '//format_version
+         else
+            why = 'it is not a trainsim sweep file'
+         end if
       else
          call get_attr(self%file, 'format_version', s, ok)
          if (s /= format_version) why = 'its layout is version '//s//', this trainsim writes '//format_version
@@ -563,6 +568,14 @@ contains
       end if
       call h5screate_simple_f(1, [int(n, hsize_t)], ms, h)
    end subroutine select_slot
+
+   logical function h5_attr_exists(loc, name)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      integer :: h
+      call h5aexists_f(loc, name, h5_attr_exists, h)
+      if (h < 0) h5_attr_exists = .false.
+   end function h5_attr_exists
 
    !> A scalar variable-length string attribute ('' and ok = .false. if absent).
    subroutine get_attr(loc, name, value, ok)
