@@ -162,6 +162,22 @@ def case_mpi_matches_serial(exe, tmp):
     return 0
 
 
+def kill_after(cmd, cwd, n, at):
+    """Start `cmd` (a sweep with --progress 0), kill -9 it once `at` runs are done."""
+    p = subprocess.Popen(cmd, cwd=cwd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+                         start_new_session=True)
+    seen = 0
+    for line in p.stderr:
+        m = re.match(r"sweep: (\d+)/%d runs done" % n, line)
+        if m:
+            seen = int(m.group(1))
+            if seen >= at:
+                os.killpg(p.pid, signal.SIGKILL)
+                break
+    p.wait(timeout=TIMEOUT)
+    return p.returncode, seen
+
+
 def case_resume_after_kill(exe, tmp):
     n = 16
     deck = os.path.join(tmp, "ghm.nml")
@@ -171,19 +187,9 @@ def case_resume_after_kill(exe, tmp):
     check("uninterrupted reference sweep exits 0", r.returncode == 0, r.stderr)
 
     cmd = [exe, "sweep", "ghm.nml", "-o", "killed.h5", "--progress", "0"]
-    p = subprocess.Popen(cmd, cwd=tmp, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
-                         start_new_session=True)
-    seen = 0
-    for line in p.stderr:
-        m = re.match(r"sweep: (\d+)/%d runs done" % n, line)
-        if m:
-            seen = int(m.group(1))
-            if seen >= 4:
-                os.killpg(p.pid, signal.SIGKILL)
-                break
-    p.wait(timeout=TIMEOUT)
-    check("the sweep was killed part-way (by SIGKILL)", p.returncode == -signal.SIGKILL and 4 <= seen < n,
-          f"rc {p.returncode}, seen {seen}")
+    rc, seen = kill_after(cmd, tmp, n, 4)
+    check("the sweep was killed part-way (by SIGKILL)", rc == -signal.SIGKILL and 4 <= seen < n,
+          f"rc {rc}, seen {seen}")
     path = os.path.join(tmp, "killed.h5")
     with h5py.File(path, "r") as f:
         status = f["runs/status"][:]
@@ -218,22 +224,6 @@ def case_resume_after_kill(exe, tmp):
     check("a changed deck does not resume into the old file: exit 2",
           r.returncode == 2 and "holds another sweep" in r.stderr, r.stderr)
     return 0
-
-
-def kill_after(cmd, cwd, n, at):
-    """Start `cmd` (a sweep with --progress 0), kill -9 it once `at` runs are done."""
-    p = subprocess.Popen(cmd, cwd=cwd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
-                         start_new_session=True)
-    seen = 0
-    for line in p.stderr:
-        m = re.match(r"sweep: (\d+)/%d runs done" % n, line)
-        if m:
-            seen = int(m.group(1))
-            if seen >= at:
-                os.killpg(p.pid, signal.SIGKILL)
-                break
-    p.wait(timeout=TIMEOUT)
-    return p.returncode, seen
 
 
 def file_state(path):
