@@ -12,7 +12,10 @@
    process, from the children's rusage), and per pair the speed-up, with its median and
    range, and the CPU ratio (2 ranks / serial). Also the speed-up of the sweep phase alone
    (the "s elapsed" of trainsim's last progress line: from the first run handed out to
-   the last recorded, without start-up, validation and MPI_Init/Finalize).
+   the last recorded, without start-up, validation and MPI_Init/Finalize), and how well
+   the hand-out keeps the ranks busy whatever the machine's load: that speed-up divided by
+   the one the runs' own wall times allow, 2 * (sum of run walls, serial) / (sum, 2 ranks)
+   (a run is slower when the two ranks share the cores with other processes).
 2. The manager's overhead per run: `--tiny` runs of 5 RK4 steps each (the same rig,
    t_end = 4e-5 s), serially and on 2 and 4 (oversubscribed) ranks, interleaved. Reports the
    wall per run and the time per run not spent in runs:
@@ -133,10 +136,13 @@ def speedup(exe, args, tmp, have_mpi):
         sp = [a[0] / b[0] for a, b in zip(res[1], res[2])]
         cr = [b[1] / a[1] for a, b in zip(res[1], res[2])]
         ph = [a[4] / b[4] for a, b in zip(res[1], res[2])]
+        ef = [x / (2 * a[2] / b[2]) for x, a, b in zip(ph, res[1], res[2])]
         print(f"\nspeed-up on 2 ranks (per round): {', '.join(f'{x:.3f}' for x in sp)}; "
               f"median {statistics.median(sp):.3f} (range {min(sp):.3f}-{max(sp):.3f})")
         print(f"sweep phase alone (no start-up): speed-up median {statistics.median(ph):.3f} "
               f"(range {min(ph):.3f}-{max(ph):.3f})")
+        print(f"... over what the runs' wall times allow (busy ranks): median {statistics.median(ef):.3f} "
+              f"(range {min(ef):.3f}-{max(ef):.3f})")
         print(f"CPU 2 ranks / serial: median {statistics.median(cr):.3f} (range {min(cr):.3f}-{max(cr):.3f})")
         print("runs per rank (last round): " +
               ", ".join(f"rank {k}: {int((res[2][-1][3] == k).sum())}" for k in sorted(set(res[2][-1][3]))))
