@@ -241,7 +241,7 @@ def case_continuation_resume(exe, tmp):
                 f"&sweep parameter = 'mesh.mesh_frequency', from = 385, to = 645, count = {n_branch}, "
                 "continuation = 'both' /\n"
                 "&sweep parameter = 'mesh.settle_cycles', values = 100 /\n"
-                "&sweep parameter = 'mesh.measure_cycles', values = 60 /\n")
+                "&sweep parameter = 'mesh.measure_cycles', values = 200 /\n")
     r = run([exe, "sweep", "cont.nml", "-o", "ref.h5"], tmp)
     check("uninterrupted continuation sweep exits 0", r.returncode == 0, r.stderr)
     ref = metrics(os.path.join(tmp, "ref.h5"))
@@ -251,18 +251,19 @@ def case_continuation_resume(exe, tmp):
 
     path = os.path.join(tmp, "k.h5")
     cmd = [exe, "sweep", "cont.nml", "-o", "k.h5", "--progress", "0"]
-    rc, seen = kill_after(cmd, tmp, n, 3)
-    check("first kill -9 part-way", rc == -signal.SIGKILL and seen >= 3, f"rc {rc}, seen {seen}")
+    # (kill after 2 runs of a branch of 8: room for 5 more runs of lag on a busy machine)
+    rc, seen = kill_after(cmd, tmp, n, 2)
+    check("first kill -9 part-way", rc == -signal.SIGKILL and seen >= 2, f"rc {rc}, seen {seen}")
     s1, w1, _ = file_state(path)
     k1 = int(np.count_nonzero(s1))
-    check("... in the up branch (down not started)", 3 <= k1 < n_branch and not s1[down].any(), str(s1))
+    check("... in the up branch (down not started)", 2 <= k1 < n_branch and not s1[down].any(), str(s1))
     shutil.copy(path, os.path.join(tmp, "k_mpi.h5"))
 
-    rc, seen = kill_after(cmd, tmp, n, n_branch + 3)
+    rc, seen = kill_after(cmd, tmp, n, n_branch + 2)
     check("resumed, then killed -9 again part-way", rc == -signal.SIGKILL, f"rc {rc}, seen {seen}")
     s2, w2, _ = file_state(path)
     k2 = int(np.count_nonzero(s2))
-    check("... in the down branch (up complete)", s2[up].all() and 3 <= s2[down].sum() < n_branch, str(s2))
+    check("... in the down branch (up complete)", s2[up].all() and 2 <= s2[down].sum() < n_branch, str(s2))
     check("... the runs of the first part kept (wall times unchanged to the bit)",
           np.array_equal(w1[s1 != 0].view(np.uint64), w2[s1 != 0].view(np.uint64)))
 
