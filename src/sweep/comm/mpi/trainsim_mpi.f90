@@ -4,9 +4,19 @@
 !> finds MPI; otherwise comm/serial/trainsim_mpi.f90 has the same interface.
 module trainsim_mpi
    use, intrinsic :: iso_fortran_env, only: real64
+   use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
    use mpi_f08
    implicit none
    private
+
+   interface
+      function c_setenv(name, value, overwrite) bind(C, name='setenv') result(rc)
+         import :: c_char, c_int
+         character(kind=c_char), intent(in) :: name(*), value(*)
+         integer(c_int), value :: overwrite
+         integer(c_int) :: rc
+      end function c_setenv
+   end interface
 
    public :: comm_available, comm_init, comm_finalize, comm_rank, comm_size
    public :: comm_send_record, comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index
@@ -40,11 +50,28 @@ contains
       call MPI_Initialized(flag)
       if (.not. flag) then
          if (.not. launched()) return
+         call prefer_shared_memory()
          call MPI_Init()
          started_here = .true.
       end if
       use_mpi = .true.
    end subroutine comm_init
+
+   !> Open MPI, all ranks on one machine, no pml chosen by the user: choose `ob1` (shared
+   !> memory through the `vader` transport), as Open MPI would after probing the others.
+   !> Its probing of UCX and the OFI/PSM transports took 0.2 s of MPI_Init's 0.23 s on
+   !> this machine (0.03 s with ob1). Every rank sees the same environment, so all choose
+   !> alike; across machines (local size < size) Open MPI chooses, as before.
+   subroutine prefer_shared_memory()
+      character(len=32) :: size_all, size_local
+      integer :: s1, s2, s3, rc
+      call get_environment_variable('OMPI_COMM_WORLD_SIZE', size_all, status=s1)
+      call get_environment_variable('OMPI_COMM_WORLD_LOCAL_SIZE', size_local, status=s2)
+      call get_environment_variable('OMPI_MCA_pml', status=s3)
+      if (s1 /= 0 .or. s2 /= 0 .or. s3 /= 1) return      ! (status 1: not set)
+      if (trim(size_all) /= trim(size_local)) return
+      rc = c_setenv('OMPI_MCA_pml'//c_null_char, 'ob1'//c_null_char, 0_c_int)
+   end subroutine prefer_shared_memory
 
    !> Whether an MPI launcher (mpirun, mpiexec, srun) started this process.
    logical function launched()
