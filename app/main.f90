@@ -239,7 +239,9 @@ contains
       sweep_opt%sets = sets
       sweep_opt%progress_unit = error_unit
       call run_sweep(sweep_opt, summary, err)
-      if (.not. summary%root) call quit(summary%exit_code)
+      ! other ranks exit 0: mpirun's status is rank 0's, and a rank that exits non-zero
+      ! first makes mpirun kill rank 0 before it has printed why
+      if (.not. summary%root) call quit(0)
       if (allocated(err)) call fail(err)
       write (output_unit, '(a)') 'sweep: '//str(summary%n_now)//' run(s) made, '//str(summary%n_ok)//' of '// &
          str(summary%n_runs)//' ok, '//str(summary%n_failed)//' failed; results in '//summary%path

@@ -56,7 +56,7 @@ def read(path, metric, xname):
             else:
                 el = [k for k in f["elements"] if k not in ("ids", "types")]
                 sys.exit(f"{path}: no metric '{metric}'; element ids: {', '.join(strings(f['elements/ids']))}; "
-                         f"element metrics: {', '.join(el)}; node metrics: speed_min, speed_max, end_angle, end_speed")
+                         f"element metrics: {', '.join(el)}; node metrics: speed_min, speed_max, end_angle, end_speed, start_speed")
         label = f.attrs.get("overrides", b"")
         label = label.decode() if isinstance(label, bytes) else str(label)
         branch = f["runs/branch"][:] if "branch" in f["runs"] else np.zeros(len(x), dtype=int)

@@ -41,6 +41,8 @@ module trainsim_hdf5
    private
 
    public :: hdf5_sink_t, hdf5_library_stuck
+   !> String helpers shared with the sweep file (src/sweep/trainsim_sweep_file.f90).
+   public :: make_string_type, vlen_pointers, put_str_attr, put_column_s
 
    !> Deflate level of the sample datasets (1 fast .. 9 small).
    !> Names of the five energy columns (rows of /energy in Fortran order).

@@ -4,9 +4,12 @@
 !> hysteresis can show; a fixed-start run cannot show one.
 !>
 !> The next run keeps the angles and re-scales the speeds to its operating point: node
-!> i starts at w_end,i * w0_new,i / w0_old,i, where w0 are the two runs' own initial
-!> speeds (those `mesh_frequency` sets), so the vibration rides on the new speed in the
-!> same proportion; where w0_old,i = 0 the offset w_end,i - w0_old,i is kept instead.
+!> i starts at w_end,i * w0_new,i / w0_old,i, where w0_new is the speed `mesh_frequency`
+!> sets for the new run and w0_old the speed the run before it started from (itself
+!> re-scaled, if that run continued one: the sweep file keeps it as
+!> /nodes/start_speed, so a killed branch resumes with the same bits), so the vibration
+!> rides on the new speed in the same proportion; where w0_old,i = 0 the offset
+!> w_end,i - w0_old,i is kept instead.
 !> A held node continues its angle (its prescribed speed is the new run's); a fixed
 !> node stays. Motor currents and the contact law's memory are those of a fresh start
 !> (a contact closed at the start has D = 0 unless initial_contact_velocity, D-13).

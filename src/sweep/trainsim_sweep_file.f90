@@ -2,36 +2,45 @@
 !>
 !> Every dataset is created at the start with one slot per run (contiguous, space
 !> allocated at once, fill values NaN / -1 / status 0), so recording a finished run
-!> writes raw data into its slot and touches no HDF5 metadata. A run is recorded by
-!> writing its slot, flushing, then writing its status and flushing again: after a
-!> `kill -9` at any moment the file opens, and a run with a non-zero status is
-!> complete. `--resume` runs only the runs whose status is still 0.
+!> writes raw data into its slot and touches no HDF5 metadata. Runs are committed in
+!> batches: their slots are written as they finish; at most every `commit_interval`
+!> seconds (and before a progress line, and at the end) the file is flushed, then the
+!> batch's statuses are written and the file flushed again: after a `kill -9` at any
+!> moment the file opens, and a run with a non-zero status is complete. The runs of a
+!> batch not yet committed are made again by the next `trainsim sweep` (their results
+!> are the same bits). `--resume` runs only the runs whose status is still 0.
+!>
+!> Strings (attributes, ids, names, the deck text, run messages) are variable-length
+!> UTF-8, as in run files (the helpers of trainsim_hdf5): h5py reads attributes as str
+!> and string datasets with `.asstr()`. An empty message is the fill value (no heap
+!> object); a failed run's message is written to the global heap with its slot, before
+!> the flush that precedes its status.
 !>
 !> Fortran (n, n_runs) arrays appear in h5py as (n_runs, n).
 module trainsim_sweep_file
-   use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char
+   use, intrinsic :: iso_c_binding, only: c_char, c_int, c_null_char, c_ptr, c_loc, c_f_pointer, c_size_t, &
+      c_associated
    use, intrinsic :: ieee_arithmetic, only: ieee_is_nan
-   use trainsim_kinds, only: wp
+   use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_io, err_input
    use trainsim_strings, only: string_t, str
+   use trainsim_hdf5, only: make_string_type, vlen_pointers, put_str_attr, put_column_s
    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, &
-      h5gcreate_f, h5gclose_f, h5screate_simple_f, h5screate_f, h5sclose_f, h5sselect_hyperslab_f, &
-      h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_type_f, h5dget_space_f, &
+      h5gcreate_f, h5gclose_f, h5screate_simple_f, h5sclose_f, h5sselect_hyperslab_f, &
+      h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_space_f, &
       h5sget_simple_extent_dims_f, h5pcreate_f, h5pclose_f, h5pset_alloc_time_f, h5pset_fill_value_f, &
-      h5pset_obj_track_times_f, h5tcopy_f, h5tset_size_f, h5tset_strpad_f, h5tclose_f, h5tget_size_f, &
-      h5acreate_f, h5aopen_f, h5aclose_f, h5awrite_f, h5aread_f, h5aget_type_f, h5eset_auto_f, &
-      H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_SCOPE_GLOBAL_F, H5S_SCALAR_F, H5S_SELECT_SET_F, &
-      H5P_DATASET_CREATE_F, H5D_ALLOC_TIME_EARLY_F, H5T_FORTRAN_S1, H5T_STR_NULLTERM_F, &
-      H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER
+      h5pset_obj_track_times_f, h5tclose_f, h5aexists_f, h5aopen_f, h5aclose_f, h5aread_f, h5eset_auto_f, &
+      H5F_ACC_TRUNC_F, H5F_ACC_RDWR_F, H5F_SCOPE_GLOBAL_F, H5S_SELECT_SET_F, &
+      H5P_DATASET_CREATE_F, H5D_ALLOC_TIME_EARLY_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER
    implicit none
    private
 
    public :: sweep_file_t, sweep_layout_t, sweep_record_t, element_metric_names, node_metric_names
-   public :: status_pending, status_ok, status_failed, record_size, message_len
+   public :: status_pending, status_ok, status_failed, record_size, format_version
 
    integer, parameter :: status_pending = 0, status_ok = 1, status_failed = 2
-   !> Longest run message kept in the file.
-   integer, parameter :: message_len = 400
+   !> Layout version (2: variable-length UTF-8 strings, nodes/start_speed).
+   character(len=*), parameter :: format_version = '2'
 
    !> Per-element metrics (element_metrics_t), in record order; the integer counts are
    !> stored as integer datasets.
@@ -41,10 +50,11 @@ module trainsim_sweep_file
       'p2p_mean', 'p2p_swings']
    logical, parameter :: element_metric_is_int(15) = [.false., .false., .false., .false., .false., .false., &
       .true., .true., .true., .false., .false., .false., .false., .false., .true.]
-   !> Per-node metrics: the speed range after settle_time, and the angle and speed at
-   !> the end of the run (where a continuation run starts: trainsim_continuation).
-   character(len=*), parameter :: node_metric_names(4) = [character(len=9) :: 'speed_min', 'speed_max', &
-                                                          'end_angle', 'end_speed']
+   !> Per-node metrics: the speed range after settle_time, the angle and speed at the
+   !> end of the run, and the run's initial speed (what the next run of a continuation
+   !> branch starts from, trainsim_continuation, also when a killed sweep is resumed).
+   character(len=*), parameter :: node_metric_names(5) = [character(len=11) :: 'speed_min', 'speed_max', &
+                                                          'end_angle', 'end_speed', 'start_speed']
    !> Per-run figures besides the metrics.
    character(len=*), parameter :: run_value_names(4) = [character(len=15) :: 'steps', 'rhs_evals', 'events', &
                                                         'energy_residual']
@@ -78,13 +88,19 @@ module trainsim_sweep_file
       integer(hid_t) :: file = -1
       integer(hid_t) :: d_status = -1, d_wall = -1, d_rank = -1, d_message = -1, t_message = -1
       integer(hid_t) :: d_run(4) = -1
-      integer(hid_t) :: d_el(15) = -1, d_node(4) = -1
+      integer(hid_t) :: d_el(15) = -1, d_node(5) = -1
       integer :: ne = 0, nn = 0, n_runs = 0
-      integer, allocatable :: status(:)      !< as in the file
+      integer, allocatable :: status(:)      !< as in the file once committed
+      integer, allocatable :: batch(:)       !< runs written but not committed
+      integer :: n_batch = 0
+      real(wp) :: commit_interval = 0.5_wp   !< s between commits (0: every run)
+      integer(i8) :: last_commit = 0
    contains
       procedure :: create => file_create
       procedure :: open_existing => file_open_existing
       procedure :: write_run => file_write_run
+      procedure :: commit => file_commit
+      procedure :: read_end_state => file_read_end_state
       procedure :: close => file_close
    end type sweep_file_t
 
@@ -94,6 +110,17 @@ module trainsim_sweep_file
          character(kind=c_char), intent(in) :: old(*), new(*)
          integer(c_int) :: rc
       end function c_rename
+      pure function c_strlen(p) bind(C, name='strlen') result(n)
+         import :: c_ptr, c_size_t
+         type(c_ptr), value :: p
+         integer(c_size_t) :: n
+      end function c_strlen
+      !> Frees what HDF5 allocated for a variable-length read.
+      function c_h5free_memory(p) bind(C, name='H5free_memory') result(rc)
+         import :: c_ptr, c_int
+         type(c_ptr), value :: p
+         integer(c_int) :: rc
+      end function c_h5free_memory
    end interface
 
 contains
@@ -150,23 +177,28 @@ contains
          call fatal_error(err, "cannot create sweep file '"//part//"'", err_io)
          return
       end if
-      call put_attr(f, 'format', 'trainsim-sweep')
-      call put_attr(f, 'format_version', '1')
-      call put_attr(f, 'trainsim_version', lay%version)
-      call put_attr(f, 'deck_file', lay%deck_file)
-      call put_attr(f, 'title', lay%title)
-      call put_attr(f, 'units', lay%units)
-      call put_attr(f, 'overrides', lay%overrides)
-      call put_attr(f, 'n_runs', str(lay%n_runs))
+      call put_str_attr(f, 'format', 'trainsim-sweep', err)
+      if (.not. allocated(err)) call put_str_attr(f, 'format_version', format_version, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'trainsim_version', lay%version, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'deck_file', lay%deck_file, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'title', lay%title, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'units', lay%units, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'overrides', lay%overrides, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'n_runs', str(lay%n_runs), err)
       allocate (text(1))
       text(1)%s = lay%deck_text       ! (an array constructor of string_t here trips gfortran 12)
-      call put_strings(f, 'deck_text', text)
+      if (.not. allocated(err)) call put_column_s(f, 'deck_text', text, err)
       call h5gcreate_f(f, 'parameters', g, h)
       if (size(lay%param_names) > 0) then
-         call put_strings(g, 'names', lay%param_names)
+         if (.not. allocated(err)) call put_column_s(g, 'names', lay%param_names, err)
          call put_reals(g, 'values', lay%param_values)
       end if
       call h5gclose_f(g, h)
+      if (allocated(err)) then
+         call h5fclose_f(f, h)
+         call fatal_error(err, "cannot write sweep file '"//part//"': "//err%message, err_io)
+         return
+      end if
       call h5gcreate_f(f, 'runs', g, h)
       call new_dset(g, 'status', [lay%n_runs], H5T_NATIVE_INTEGER, self%d_status, ifill=status_pending)
       call new_dset(g, 'rank', [lay%n_runs], H5T_NATIVE_INTEGER, self%d_rank, ifill=-1)
@@ -174,7 +206,8 @@ contains
       do k = 1, size(run_value_names)
          call new_dset(g, trim(run_value_names(k)), [lay%n_runs], H5T_NATIVE_DOUBLE, self%d_run(k))
       end do
-      call string_type(message_len, self%t_message)
+      call make_string_type(self%t_message, err)
+      if (allocated(err)) return
       call new_dset(g, 'message', [lay%n_runs], self%t_message, self%d_message)
       call new_dset(g, 'branch', [lay%n_runs], H5T_NATIVE_INTEGER, d_branch, ifill=0)
       if (allocated(lay%branch)) then
@@ -186,8 +219,8 @@ contains
       call h5gclose_f(g, h)
       call h5gcreate_f(f, 'elements', g, h)
       if (size(lay%element_ids) > 0) then
-         call put_strings(g, 'ids', lay%element_ids)
-         call put_strings(g, 'types', lay%element_types)
+         call put_column_s(g, 'ids', lay%element_ids, err)
+         if (.not. allocated(err)) call put_column_s(g, 'types', lay%element_types, err)
          do k = 1, size(element_metric_names)
             if (element_metric_is_int(k)) then
                call new_dset(g, trim(element_metric_names(k)), [size(lay%element_ids), lay%n_runs], &
@@ -200,7 +233,7 @@ contains
       end if
       call h5gclose_f(g, h)
       call h5gcreate_f(f, 'nodes', g, h)
-      call put_strings(g, 'ids', lay%node_ids)
+      if (.not. allocated(err)) call put_column_s(g, 'ids', lay%node_ids, err)
       do k = 1, size(node_metric_names)
          call new_dset(g, trim(node_metric_names(k)), [size(lay%node_ids), lay%n_runs], H5T_NATIVE_DOUBLE, &
                        self%d_node(k))
@@ -208,6 +241,10 @@ contains
       call h5gclose_f(g, h)
       call close_ids(self)
       call h5fclose_f(f, h)
+      if (allocated(err)) then
+         call fatal_error(err, "cannot write sweep file '"//part//"': "//err%message, err_io)
+         return
+      end if
       if (h < 0) then
          call fatal_error(err, "cannot write sweep file '"//part//"'", err_io)
          return
@@ -244,10 +281,19 @@ contains
       why = ''
       call get_attr(self%file, 'format', s, ok)
       if (.not. ok .or. s /= 'trainsim-sweep') then
-         why = 'it is not a trainsim sweep file'
+         ! (format_version 1 had fixed-length strings, which do not read as variable-length)
+         if (h5_attr_exists(self%file, 'format')) then
+            why = 'it is a sweep file of an older layout, not format_version '//format_version
+         else
+            why = 'it is not a trainsim sweep file'
+         end if
       else
+         call get_attr(self%file, 'format_version', s, ok)
+         if (s /= format_version) why = 'its layout is version '//s//', this trainsim writes '//format_version
+      end if
+      if (len(why) == 0) then
          call get_attr(self%file, 'trainsim_version', s, ok)
-         if (s /= lay%version) why = 'it was written by trainsim '//s//', this is '//lay%version
+         if (len(why) == 0 .and. s /= lay%version) why = 'it was written by trainsim '//s//', this is '//lay%version
          call get_strings(self%file, 'deck_text', deck_text, ok)
          if (len(why) == 0 .and. .not. ok) why = 'it has no deck text'
          if (len(why) == 0) then
@@ -279,7 +325,8 @@ contains
       call h5dopen_f(self%file, 'runs/rank', self%d_rank, h)
       call h5dopen_f(self%file, 'runs/wall_time', self%d_wall, h)
       call h5dopen_f(self%file, 'runs/message', self%d_message, h)
-      call h5dget_type_f(self%d_message, self%t_message, h)
+      call make_string_type(self%t_message, err)
+      if (allocated(err)) return
       do k = 1, size(run_value_names)
          call h5dopen_f(self%file, 'runs/'//trim(run_value_names(k)), self%d_run(k), h)
       end do
@@ -305,7 +352,7 @@ contains
       type(sweep_record_t), intent(in) :: rec
       type(error_t), allocatable, intent(out) :: err
       integer :: h, k, hs
-      character(len=message_len) :: msg(1)
+      integer(i8) :: c, rate
       real(wp) :: col(max(self%ne, 1))
 
       hs = 0
@@ -314,9 +361,9 @@ contains
       do k = 1, size(run_value_names)
          call put_slot(self%d_run(k), rec%irun, [rec%run_values(k)], h); hs = min(hs, h)
       end do
-      msg(1) = repeat(c_null_char, message_len)
-      msg(1)(1:min(len(rec%message), message_len - 1)) = rec%message
-      call put_message(self, rec%irun, msg, h); hs = min(hs, h)
+      if (len(rec%message) > 0) then
+         call put_message(self, rec%irun, rec%message, h); hs = min(hs, h)
+      end if
       if (self%ne > 0) then
          do k = 1, size(element_metric_names)
             if (element_metric_is_int(k)) then
@@ -331,20 +378,68 @@ contains
       do k = 1, size(node_metric_names)
          call put_slot(self%d_node(k), rec%irun, [rec%node(k, :)], h); hs = min(hs, h)
       end do
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
-      call put_slot_int(self%d_status, rec%irun, [rec%status], h); hs = min(hs, h)
-      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
       if (hs < 0) then
          call fatal_error(err, "cannot write run "//str(rec%irun)//" to sweep file '"//self%path//"'", err_io)
          return
       end if
       self%status(rec%irun) = rec%status
+      if (.not. allocated(self%batch)) allocate (self%batch(self%n_runs))
+      self%n_batch = self%n_batch + 1
+      self%batch(self%n_batch) = rec%irun
+      call system_clock(c, rate)
+      if (real(c - self%last_commit, wp) >= self%commit_interval*real(rate, wp)) call self%commit(err)
    end subroutine file_write_run
 
+   !> Commit the runs written since the last commit: flush, their statuses, flush.
+   subroutine file_commit(self, err)
+      class(sweep_file_t), intent(inout) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer :: h, hs, i, j
+      call system_clock(self%last_commit)
+      if (self%n_batch == 0) return
+      hs = 0
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
+      do i = 1, self%n_batch
+         j = self%batch(i)
+         call put_slot_int(self%d_status, j, [self%status(j)], h); hs = min(hs, h)
+      end do
+      call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
+      self%n_batch = 0
+      if (hs < 0) call fatal_error(err, "cannot record runs in sweep file '"//self%path//"'", err_io)
+   end subroutine file_commit
+
+   !> Where run irun ended, for the run after it in a continuation branch: its nodes'
+   !> end_angle, end_speed and start_speed, one after the other in `v`.
+   subroutine file_read_end_state(self, irun, v, err)
+      class(sweep_file_t), intent(in) :: self
+      integer, intent(in) :: irun
+      real(wp), intent(out) :: v(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: fs, ms
+      integer(hsize_t) :: dims(2), maxd(2)
+      integer :: h, hs, k, rank, i
+      real(wp) :: col(self%nn)
+      hs = 0
+      do i = 1, 3
+         k = 2 + i            ! end_angle, end_speed, start_speed
+         call select_slot(self%d_node(k), irun, self%nn, fs, ms, rank, dims, maxd)
+         call h5dread_f(self%d_node(k), H5T_NATIVE_DOUBLE, col, [int(self%nn, hsize_t)], h, &
+                        mem_space_id=ms, file_space_id=fs)
+         hs = min(hs, h)
+         call h5sclose_f(ms, rank); call h5sclose_f(fs, rank)
+         v((i - 1)*self%nn + 1:i*self%nn) = col
+      end do
+      if (hs < 0) call fatal_error(err, "cannot read the end state of run "//str(irun)//" from sweep file '"// &
+                                   self%path//"'", err_io)
+   end subroutine file_read_end_state
+
+   !> Commit the last batch (an error here is reported by `commit` called before) and close.
    subroutine file_close(self)
       class(sweep_file_t), intent(inout) :: self
+      type(error_t), allocatable :: err
       integer :: h
       if (self%file < 0) return
+      call self%commit(err)
       call close_ids(self)
       call h5fclose_f(self%file, h)
       self%file = -1
@@ -382,16 +477,6 @@ contains
    ! ------------------------------------------------------------------------------------------
    ! HDF5 helpers
    ! ------------------------------------------------------------------------------------------
-
-   !> A fixed-length, NUL-terminated string type of `n` characters (at least 1).
-   subroutine string_type(n, t)
-      integer, intent(in) :: n
-      integer(hid_t), intent(out) :: t
-      integer :: h
-      call h5tcopy_f(H5T_FORTRAN_S1, t, h)
-      call h5tset_size_f(t, int(max(n, 1), size_t), h)
-      call h5tset_strpad_f(t, H5T_STR_NULLTERM_F, h)
-   end subroutine string_type
 
    !> A dataset with one slot per run: contiguous, allocated now, filled with NaN
    !> (reals) or `ifill` (integers); no time stamps (metadata stays fixed).
@@ -446,16 +531,22 @@ contains
       call h5sclose_f(ms, rank); call h5sclose_f(fs, rank)
    end subroutine put_slot_int
 
-   subroutine put_message(self, irun, msg, h)
+   !> The message of run irun (variable length; '' is the fill value, never written).
+   subroutine put_message(self, irun, message, h)
       type(sweep_file_t), intent(in) :: self
       integer, intent(in) :: irun
-      character(len=message_len), intent(in) :: msg(1)
+      character(len=*), intent(in) :: message
       integer, intent(out) :: h
       integer(hid_t) :: fs, ms
       integer(hsize_t) :: dims(2), maxd(2)
       integer :: rank
+      type(string_t) :: one(1)
+      character(kind=c_char), allocatable, target :: pool(:)
+      type(c_ptr), allocatable, target :: ptrs(:)
+      one(1)%s = message
+      call vlen_pointers(one, pool, ptrs)
       call select_slot(self%d_message, irun, 1, fs, ms, rank, dims, maxd)
-      call h5dwrite_f(self%d_message, self%t_message, msg, [1_hsize_t], h, mem_space_id=ms, file_space_id=fs)
+      call h5dwrite_f(self%d_message, self%t_message, c_loc(ptrs), h, mem_space_id=ms, file_space_id=fs)
       call h5sclose_f(ms, rank); call h5sclose_f(fs, rank)
    end subroutine put_message
 
@@ -478,101 +569,96 @@ contains
       call h5screate_simple_f(1, [int(n, hsize_t)], ms, h)
    end subroutine select_slot
 
-   subroutine put_attr(loc, name, value)
+   logical function h5_attr_exists(loc, name)
       integer(hid_t), intent(in) :: loc
-      character(len=*), intent(in) :: name, value
-      integer(hid_t) :: sp, t, a
+      character(len=*), intent(in) :: name
       integer :: h
-      character(len=len(value) + 1) :: buf   ! NUL-terminated, so '' is one byte
-      buf = value//c_null_char
-      call string_type(len(buf), t)
-      call h5screate_f(H5S_SCALAR_F, sp, h)
-      call h5acreate_f(loc, name, t, sp, a, h)
-      call h5awrite_f(a, t, buf, [1_hsize_t], h)
-      call h5aclose_f(a, h); call h5sclose_f(sp, h); call h5tclose_f(t, h)
-   end subroutine put_attr
+      call h5aexists_f(loc, name, h5_attr_exists, h)
+      if (h < 0) h5_attr_exists = .false.
+   end function h5_attr_exists
 
+   !> A scalar variable-length string attribute ('' and ok = .false. if absent).
    subroutine get_attr(loc, name, value, ok)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
       character(len=:), allocatable, intent(out) :: value
       logical, intent(out) :: ok
       integer(hid_t) :: t, a
-      integer(size_t) :: n
-      integer :: h, i
+      type(c_ptr), target :: p(1)
+      type(c_ptr) :: buf
+      type(error_t), allocatable :: err
+      integer :: h
       value = ''
       call h5aopen_f(loc, name, a, h)
       ok = h >= 0
       if (.not. ok) return
-      call h5aget_type_f(a, t, h)
-      call h5tget_size_f(t, n, h)
-      deallocate (value)
-      allocate (character(len=n) :: value)
-      call h5aread_f(a, t, value, [1_hsize_t], h)
-      ok = h >= 0
-      call h5tclose_f(t, h); call h5aclose_f(a, h)
-      i = index(value, achar(0))
-      if (i > 0) value = value(1:i - 1)
+      call make_string_type(t, err)
+      ok = .not. allocated(err)
+      if (ok) then
+         buf = c_loc(p)
+         call h5aread_f(a, t, buf, h)
+         ok = h >= 0
+         if (ok) value = c_text(p(1))
+         call h5tclose_f(t, h)
+      end if
+      call h5aclose_f(a, h)
    end subroutine get_attr
 
-   !> A 1-D dataset of fixed-length strings (the longest item's length).
-   subroutine put_strings(loc, name, items)
-      integer(hid_t), intent(in) :: loc
-      character(len=*), intent(in) :: name
-      type(string_t), intent(in) :: items(:)
-      character(len=:), allocatable :: buf(:)
-      integer(hid_t) :: sp, t, d
-      integer :: h, i, n
-      n = 1
-      do i = 1, size(items)
-         n = max(n, len(items(i)%s))
-      end do
-      n = n + 1                                   ! room for the NUL
-      allocate (character(len=n) :: buf(size(items)))
-      do i = 1, size(items)
-         buf(i) = repeat(c_null_char, n)
-         buf(i)(1:len(items(i)%s)) = items(i)%s
-      end do
-      call string_type(n, t)
-      call h5screate_simple_f(1, [int(size(items), hsize_t)], sp, h)
-      call h5dcreate_f(loc, name, t, sp, d, h)
-      call h5dwrite_f(d, t, buf, [int(size(items), hsize_t)], h)
-      call h5dclose_f(d, h); call h5sclose_f(sp, h); call h5tclose_f(t, h)
-   end subroutine put_strings
-
+   !> A 1-D dataset of variable-length strings.
    subroutine get_strings(loc, name, items, ok)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
       type(string_t), allocatable, intent(out) :: items(:)
       logical, intent(out) :: ok
-      character(len=:), allocatable :: buf(:)
+      type(c_ptr), allocatable, target :: p(:)
+      type(c_ptr) :: buf
+      type(error_t), allocatable :: err
       integer(hid_t) :: d, t, sp
-      integer(size_t) :: n
       integer(hsize_t) :: dims(1), maxd(1)
-      integer :: h, i, p
+      integer :: h, i
       allocate (items(0))
       call h5dopen_f(loc, name, d, h)
       ok = h >= 0
       if (.not. ok) return
-      call h5dget_type_f(d, t, h)
-      call h5tget_size_f(t, n, h)
       call h5dget_space_f(d, sp, h)
       call h5sget_simple_extent_dims_f(sp, dims, maxd, h)
-      allocate (character(len=n) :: buf(dims(1)))
-      call h5dread_f(d, t, buf, dims, h)
-      ok = h >= 0
-      deallocate (items)
-      allocate (items(dims(1)))
-      do i = 1, size(items)
-         p = index(buf(i), achar(0))
-         if (p > 0) then
-            items(i)%s = buf(i)(1:p - 1)
-         else
-            items(i)%s = trim(buf(i))
+      call h5sclose_f(sp, h)
+      call make_string_type(t, err)
+      ok = .not. allocated(err)
+      if (ok) then
+         allocate (p(dims(1)))
+         buf = c_loc(p)
+         call h5dread_f(d, t, buf, h)
+         ok = h >= 0
+         if (ok) then
+            deallocate (items)
+            allocate (items(dims(1)))
+            do i = 1, size(items)
+               items(i)%s = c_text(p(i))
+            end do
          end if
-      end do
-      call h5sclose_f(sp, h); call h5tclose_f(t, h); call h5dclose_f(d, h)
+         call h5tclose_f(t, h)
+      end if
+      call h5dclose_f(d, h)
    end subroutine get_strings
+
+   !> The text of a C string that HDF5 allocated for a variable-length read; frees it.
+   function c_text(p) result(text)
+      type(c_ptr), intent(in) :: p
+      character(len=:), allocatable :: text
+      character(kind=c_char), pointer :: chars(:)
+      integer :: i, n, rc
+      text = ''
+      if (.not. c_associated(p)) return
+      n = int(c_strlen(p))
+      call c_f_pointer(p, chars, [n])
+      deallocate (text)
+      allocate (character(len=n) :: text)
+      do i = 1, n
+         text(i:i) = chars(i)
+      end do
+      rc = c_h5free_memory(p)
+   end function c_text
 
    subroutine put_reals(loc, name, v)
       integer(hid_t), intent(in) :: loc

@@ -10,6 +10,11 @@ cases:
   resume_after_kill   kill -9 part-way, then the same command: every run present exactly
                       once (the runs done before the kill are not made again, the others
                       are made once), and the metrics equal an uninterrupted sweep's bits
+  continuation_resume a continuation sweep (up and down branches) killed with kill -9 in its
+                      up branch, re-run and killed again in its down branch, re-run to the
+                      end: every run made exactly once, metrics bit-identical to an
+                      uninterrupted continuation sweep; the same from the first kill resumed
+                      on 2 MPI ranks (when mpirun and an MPI build are there)
   failed_run          a run that blows up is recorded as failed with its message, the others
                       complete, exit status 1
   cli                 bad &sweep groups, bad sweep values and misuse fail with exit 2 and a
@@ -87,6 +92,31 @@ def metrics(path):
     return out
 
 
+def strings_of(f):
+    """(name, kind) of every string attribute and dataset of an open file."""
+    out = []
+
+    def kind(dtype):
+        info = h5py.check_string_dtype(dtype)
+        if info is None:
+            return None
+        return ("vlen-" if info.length is None else "fixed-") + ("utf8" if info.encoding == "utf-8" else "ascii")
+
+    def visit(name, obj):
+        for a in obj.attrs:
+            k = kind(obj.attrs.get_id(a).dtype)
+            if k:
+                out.append((name + "@" + a, k))
+        if isinstance(obj, h5py.Dataset):
+            k = kind(obj.dtype)
+            if k:
+                out.append((name, k))
+
+    visit("/", f)
+    f.visititems(visit)
+    return out
+
+
 def same_bits(a, b):
     if a.keys() != b.keys():
         return False, "different datasets"
@@ -121,7 +151,31 @@ def case_mpi_matches_serial(exe, tmp):
     with h5py.File(os.path.join(tmp, "mpi.h5"), "r") as f:
         ranks = set(f["runs/rank"][:].tolist())
     check("both ranks made runs (dynamic hand-out reached rank 1)", ranks == {0, 1}, str(ranks))
+    with open(os.path.join(tmp, "bad.nml"), "w") as f:
+        f.write(GHM.format(t_end=0.01) + "&sweep parameter = 'mesh.half_backlash', values = 0.005, 0.004, -1.0 /\n")
+    for n in ("2", "3"):
+        r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", n, exe, "sweep", "bad.nml", "-o", "bad.h5"],
+                tmp)
+        check(f"a run that does not build, on {n} ranks (validated by rank {2 % int(n)}): exit 2, rank 0 says which",
+              r.returncode == 2 and "(run 3: mesh.half_backlash = -1)" in r.stderr, f"rc {r.returncode}: {r.stderr}")
+        check("... no sweep file", not os.path.exists(os.path.join(tmp, "bad.h5")))
     return 0
+
+
+def kill_after(cmd, cwd, n, at):
+    """Start `cmd` (a sweep with --progress 0), kill -9 it once `at` runs are done."""
+    p = subprocess.Popen(cmd, cwd=cwd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+                         start_new_session=True)
+    seen = 0
+    for line in p.stderr:
+        m = re.match(r"sweep: (\d+)/%d runs done" % n, line)
+        if m:
+            seen = int(m.group(1))
+            if seen >= at:
+                os.killpg(p.pid, signal.SIGKILL)
+                break
+    p.wait(timeout=TIMEOUT)
+    return p.returncode, seen
 
 
 def case_resume_after_kill(exe, tmp):
@@ -133,19 +187,9 @@ def case_resume_after_kill(exe, tmp):
     check("uninterrupted reference sweep exits 0", r.returncode == 0, r.stderr)
 
     cmd = [exe, "sweep", "ghm.nml", "-o", "killed.h5", "--progress", "0"]
-    p = subprocess.Popen(cmd, cwd=tmp, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
-                         start_new_session=True)
-    seen = 0
-    for line in p.stderr:
-        m = re.match(r"sweep: (\d+)/%d runs done" % n, line)
-        if m:
-            seen = int(m.group(1))
-            if seen >= 4:
-                os.killpg(p.pid, signal.SIGKILL)
-                break
-    p.wait(timeout=TIMEOUT)
-    check("the sweep was killed part-way (by SIGKILL)", p.returncode == -signal.SIGKILL and 4 <= seen < n,
-          f"rc {p.returncode}, seen {seen}")
+    rc, seen = kill_after(cmd, tmp, n, 4)
+    check("the sweep was killed part-way (by SIGKILL)", rc == -signal.SIGKILL and 4 <= seen < n,
+          f"rc {rc}, seen {seen}")
     path = os.path.join(tmp, "killed.h5")
     with h5py.File(path, "r") as f:
         status = f["runs/status"][:]
@@ -182,6 +226,73 @@ def case_resume_after_kill(exe, tmp):
     return 0
 
 
+def file_state(path):
+    with h5py.File(path, "r") as f:
+        return f["runs/status"][:], f["runs/wall_time"][:], f["runs/branch"][:]
+
+
+def case_continuation_resume(exe, tmp):
+    n_branch = 8
+    n = 2 * n_branch
+    deck = os.path.join(tmp, "cont.nml")
+    with open(deck, "w") as f:
+        f.write(GHM.format(t_end=0.02).replace("output_interval = 8.0e-6 /", "output_interval = 8.0e-6,\n"
+                                                "      initial_state = 'preload' /") +
+                f"&sweep parameter = 'mesh.mesh_frequency', from = 385, to = 645, count = {n_branch}, "
+                "continuation = 'both' /\n"
+                "&sweep parameter = 'mesh.settle_cycles', values = 100 /\n"
+                "&sweep parameter = 'mesh.measure_cycles', values = 200 /\n")
+    r = run([exe, "sweep", "cont.nml", "-o", "ref.h5"], tmp)
+    check("uninterrupted continuation sweep exits 0", r.returncode == 0, r.stderr)
+    ref = metrics(os.path.join(tmp, "ref.h5"))
+    _, _, branch = file_state(os.path.join(tmp, "ref.h5"))
+    up, down = branch == 1, branch == 2
+    check("it has an up and a down branch", up.sum() == n_branch and down.sum() == n_branch, str(branch))
+
+    path = os.path.join(tmp, "k.h5")
+    cmd = [exe, "sweep", "cont.nml", "-o", "k.h5", "--progress", "0"]
+    # (kill after 2 runs of a branch of 8: room for 5 more runs of lag on a busy machine)
+    rc, seen = kill_after(cmd, tmp, n, 2)
+    check("first kill -9 part-way", rc == -signal.SIGKILL and seen >= 2, f"rc {rc}, seen {seen}")
+    s1, w1, _ = file_state(path)
+    k1 = int(np.count_nonzero(s1))
+    check("... in the up branch (down not started)", 2 <= k1 < n_branch and not s1[down].any(), str(s1))
+    shutil.copy(path, os.path.join(tmp, "k_mpi.h5"))
+
+    rc, seen = kill_after(cmd, tmp, n, n_branch + 2)
+    check("resumed, then killed -9 again part-way", rc == -signal.SIGKILL, f"rc {rc}, seen {seen}")
+    s2, w2, _ = file_state(path)
+    k2 = int(np.count_nonzero(s2))
+    check("... in the down branch (up complete)", s2[up].all() and 2 <= s2[down].sum() < n_branch, str(s2))
+    check("... the runs of the first part kept (wall times unchanged to the bit)",
+          np.array_equal(w1[s1 != 0].view(np.uint64), w2[s1 != 0].view(np.uint64)))
+
+    r = run([exe, "sweep", "cont.nml", "-o", "k.h5"], tmp)
+    check("the same command again exits 0", r.returncode == 0, r.stderr)
+    check("it made exactly the missing runs", f"sweep: {n - k2} run(s) made, {n} of {n} ok" in r.stdout, r.stdout)
+    s3, w3, _ = file_state(path)
+    check("every run present exactly once: all complete", np.all(s3 == 1), str(s3))
+    check("no run made twice (wall times of runs done before the kill unchanged)",
+          np.array_equal(w2[s2 != 0].view(np.uint64), w3[s2 != 0].view(np.uint64)))
+    ok, which = same_bits(ref, metrics(path))
+    check("every metric (and end state) bit-identical to the uninterrupted continuation sweep", ok, which)
+
+    mpirun = shutil.which("mpirun")
+    if mpirun:
+        r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "cont.nml",
+                 "-o", "k_mpi.h5"], tmp)
+        if "built without MPI" in r.stderr:
+            print("(MPI part skipped: trainsim built without MPI)")
+        else:
+            check("resumed on 2 MPI ranks: exit 0", r.returncode == 0, r.stderr)
+            ok, which = same_bits(ref, metrics(os.path.join(tmp, "k_mpi.h5")))
+            check("... bit-identical to the uninterrupted serial continuation sweep", ok, which)
+            with h5py.File(os.path.join(tmp, "k_mpi.h5"), "r") as f:
+                ranks = f["runs/rank"][:]
+            check("... both ranks made runs", set(ranks[s1 == 0].tolist()) == {0, 1}, str(ranks))
+    return 0
+
+
 def case_failed_run(exe, tmp):
     with open(os.path.join(tmp, "blowup.nml"), "w") as f:
         f.write(BLOWUP)
@@ -190,7 +301,7 @@ def case_failed_run(exe, tmp):
     check("the summary counts it", "2 of 3 ok, 1 failed" in r.stdout, r.stdout)
     with h5py.File(os.path.join(tmp, "b.h5"), "r") as f:
         status = f["runs/status"][:].tolist()
-        msg = [m.decode() for m in f["runs/message"][:]]
+        msg = f["runs/message"].asstr()[:].tolist()
         p2p = f["elements/p2p_range"][:, 0]
         impacts = f["elements/impacts"][:, 0]
     check("run 2 (dt = 0.03) failed, runs 1 and 3 completed", status == [1, 2, 1], str(status))
@@ -235,8 +346,13 @@ def case_cli(exe, tmp):
     check("default sweep file DECK_sweep.h5, --set recorded in it", r.returncode == 0 and
           os.path.exists(os.path.join(tmp, "ghm_sweep.h5")), r.stderr)
     with h5py.File(os.path.join(tmp, "ghm_sweep.h5"), "r") as f:
-        check("... overrides attribute", f.attrs["overrides"].decode() == "--set mesh.half_backlash=0.004")
-        check("... deck text stored", "&sweep parameter" in f["deck_text"][0].decode())
+        check("... overrides attribute (a str: variable-length UTF-8)",
+              f.attrs["overrides"] == "--set mesh.half_backlash=0.004", repr(f.attrs["overrides"]))
+        check("... deck text stored", "&sweep parameter" in f["deck_text"].asstr()[0])
+        strings = strings_of(f)
+        check("every string of the file is variable-length UTF-8 (no fixed-length byte strings)",
+              all(kind == "vlen-utf8" for _, kind in strings), str([s for s in strings if s[1] != "vlen-utf8"]))
+        check("... attributes read as str, datasets with .asstr()", len(strings) >= 12, str(len(strings)))
     r = run([exe, "run", "ghm.nml"], tmp)
     check("run of a sweep deck: exit 0, says it ignores the &sweep groups",
           r.returncode == 0 and "ignores them" in r.stderr, r.stderr)

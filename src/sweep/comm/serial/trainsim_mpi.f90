@@ -6,7 +6,8 @@ module trainsim_mpi
    private
 
    public :: comm_available, comm_init, comm_finalize, comm_rank, comm_size
-   public :: comm_send_record, comm_poll_record, comm_send_index, comm_recv_index, comm_bcast_int
+   public :: comm_send_record, comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index
+   public :: comm_bcast_int, comm_bcast_reals, comm_sum_reals, comm_min_int
 
    logical, parameter :: comm_available = .false.
 
@@ -55,6 +56,9 @@ contains
       message = ''
    end subroutine comm_poll_record
 
+   subroutine comm_stop_polling()
+   end subroutine comm_stop_polling
+
    subroutine comm_send_index(dest, irun)
       integer, intent(in) :: dest, irun
       error stop 'trainsim_mpi (serial): comm_send_index with one rank'
@@ -69,4 +73,18 @@ contains
    subroutine comm_bcast_int(v)
       integer, intent(inout) :: v
    end subroutine comm_bcast_int
+
+   subroutine comm_bcast_reals(v)
+      real(real64), intent(inout) :: v(:, :)
+   end subroutine comm_bcast_reals
+
+   !> Every rank's v summed, on every rank.
+   subroutine comm_sum_reals(v)
+      real(real64), intent(inout) :: v(:)
+   end subroutine comm_sum_reals
+
+   !> The smallest of every rank's v, on every rank.
+   subroutine comm_min_int(v)
+      integer, intent(inout) :: v
+   end subroutine comm_min_int
 end module trainsim_mpi
