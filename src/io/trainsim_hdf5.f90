@@ -1347,6 +1347,32 @@ contains
       if (write_err < 0 .or. hdferr < 0) call fatal_error(err, 'cannot write events/'//name, err_io)
    end subroutine finish_column
 
+   !> Column of variable-length UTF-8 strings (units '1').
+   subroutine put_column_s(loc, name, texts, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      type(string_t), intent(in) :: texts(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: dset, stype
+      integer :: hdferr, hdferr2
+      character(kind=c_char), allocatable, target :: pool(:)
+      type(c_ptr), allocatable, target :: ptrs(:)
+      call make_string_type(stype, err)
+      if (allocated(err)) return
+      call make_column(loc, name, stype, size(texts), dset, err)
+      if (.not. allocated(err)) then
+         hdferr = 0
+         if (size(texts) > 0) then
+            call vlen_pointers(texts, pool, ptrs)
+            call h5dwrite_f(dset, stype, c_loc(ptrs), hdferr)
+         end if
+         if (hdferr >= 0) call put_str_attr(dset, 'units', '1', err)
+         if (allocated(err)) hdferr = -1
+         call finish_column(dset, hdferr, name, err)
+      end if
+      call h5tclose_f(stype, hdferr2)
+   end subroutine put_column_s
+
    !> 1-D column with its `units` (the common unit of `entry_units`, or `mixed`) and,
    !> when the entries differ, one unit per entry in `entry_units`.
    subroutine put_column_r(loc, name, values, err, entry_units)
