@@ -2,7 +2,8 @@
 """Plot a metric of a trainsim sweep file against the swept parameter.
 
     /usr/bin/python3 scripts/plot_sweep.py SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean \
-        [--x mesh.mesh_frequency] [--label TEXT ...] [--out fig.png] [--fig5-11]
+        [--x mesh.mesh_frequency] [--label TEXT ...] [--out fig.png] [--fig5-11] [--data d.npz]
+    trainsim plot SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean -o fig.png   (the same)
 
 --metric ID.NAME   an element metric (elements/NAME column ID: p2p_range, p2p_mean,
                    impacts, time_out_of_contact, max_peak_force, ...) or a node metric
@@ -80,8 +81,9 @@ def draw(ax, x, y, status, impacts, order, name, mark):
                 label=f"failed run ({failed.sum()})")
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def main(argv=None, prog=None):
+    ap = argparse.ArgumentParser(prog=prog, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("files", nargs="+")
     ap.add_argument("--metric", required=True)
     ap.add_argument("--x")
@@ -90,7 +92,9 @@ def main():
     ap.add_argument("--fig5-11", dest="fig511", action="store_true")
     ap.add_argument("--fig7-6", dest="fig76", action="store_true",
                     help="mark Cook's Ch. VII contact loss, about 335-480 teeth/s")
-    a = ap.parse_args()
+    ap.add_argument("--data", help="also save the plotted arrays to this .npz (x, y, status per file and branch)")
+    a = ap.parse_args(argv)
+    plotted = {}
 
     fig, ax = plt.subplots(figsize=(8, 5))
     for i, path in enumerate(a.files):
@@ -105,6 +109,8 @@ def main():
             name = {0: label, 1: f"{label} (up)", 2: f"{label} (down)"}[b]
             mark = {0: "o", 1: ">", 2: "<"}[b]
             draw(ax, x, y, status, impacts, order, name, mark)
+            key = f"f{i}_b{b}"
+            plotted[key + "_x"], plotted[key + "_y"], plotted[key + "_status"] = x[order], y[order], status[order]
         pending = status == 0
         if pending.any():
             print(f"{path}: {pending.sum()} run(s) not made yet", file=sys.stderr)
@@ -122,8 +128,11 @@ def main():
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(a.out, dpi=120)
+    if a.data:
+        np.savez(a.data, **plotted)
     print(a.out)
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -6,6 +6,9 @@ usage:
   trainsim_plot.py FILE --te GEAR [--t0 T] [--t1 T] [--events] -o OUT.pdf
   trainsim_plot.py FILE --te-spectrum GEAR [--t0 T] [--t1 T] -o OUT.svg
   add --data OUT.npz to save the plotted arrays (what a test reads back)
+  trainsim_plot.py SWEEP.h5 [MORE.h5 ...] --metric ID.NAME [--x PARAM] [--fig5-11] -o OUT.png
+      a sweep file (trainsim sweep): a metric against a swept parameter, continuation
+      branches up and down, failed runs marked (scripts/plot_sweep.py --help)
 
 Y and X are quantities as in trainsim_export.py (mesh.displacement, drive.omega,
 energy.balance, ...). With --x the plot is Y against X (a phase plane, e.g.
@@ -102,7 +105,21 @@ def prepare_te_spectrum(f, gear, t0=None, t1=None):
     return {"order": freq / f_mesh, "amplitude": amp, "mesh_frequency": np.array([f_mesh])}, unit
 
 
+def is_sweep_file(path):
+    """A trainsim sweep file (trainsim sweep -o FILE), not a run's history."""
+    try:
+        with h5py.File(path, "r") as f:
+            return str(f.attrs.get("format", "")) == "trainsim-sweep"
+    except OSError:
+        return False
+
+
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and not argv[0].startswith("-") and is_sweep_file(argv[0]):
+        # a sweep file: a metric against a swept parameter (scripts/plot_sweep.py)
+        import plot_sweep
+        return plot_sweep.main(["--out" if x in ("-o", "--output") else x for x in argv], prog="trainsim plot")
     p = argparse.ArgumentParser(prog="trainsim plot", description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file")

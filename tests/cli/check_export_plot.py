@@ -10,6 +10,9 @@ run through `trainsim export|plot` as a user would, on inputs/start_stop_two_cle
 - The plotted arrays (--data .npz) are the file's: the TE and its pairs over the window,
   the contact threshold at +/- the gear's half_backlash, the gear's event times; the TE
   spectrum's mesh frequency is N * mean driver speed / 2 pi. PNG, PDF and SVG are written.
+- `trainsim plot SWEEP.h5 --metric ...` (a sweep file, inputs/sweep_ghm_continuation.nml
+  shortened to 7 frequencies and 30 cycles) plots the sweep file's metric column against the swept
+  parameter, one curve per continuation branch, in run order.
 
 usage: check_export_plot.py TRAINSIM_EXE
 """
@@ -129,5 +132,37 @@ with tempfile.TemporaryDirectory() as tmp:
     check("unknown quantity: exit 2 naming it", r.returncode == 2 and "mesh.tork" in r.stderr)
     r = trainsim("plot", h5, "mesh.force", "-o", os.path.join(tmp, "x.jpg"))
     check("unsupported image format: exit 2", r.returncode == 2 and ".png, .pdf or .svg" in r.stderr)
+
+with tempfile.TemporaryDirectory() as tmp:
+    sweep, deck = os.path.join(tmp, "sweep.h5"), os.path.join(tmp, "sweep.nml")
+    with open(os.path.join(ROOT, "inputs", "sweep_ghm_continuation.nml"), encoding="utf-8") as f:
+        text = f.read()
+    for a, b in (("count = 27", "count = 7"), ("values = 100", "values = 20"), ("values = 60", "values = 10")):
+        check(f"the continuation deck has '{a}' (shortened for the test)", a in text)
+        text = text.replace(a, b)
+    with open(deck, "w", encoding="utf-8") as f:
+        f.write(text)
+    r = trainsim("sweep", deck, "-o", sweep)
+    check(f"a continuation sweep runs ({r.stderr.strip()[-200:]})", r.returncode == 0)
+    if r.returncode == 0:
+        npz, png = os.path.join(tmp, "s.npz"), os.path.join(tmp, "s.png")
+        r = trainsim("plot", sweep, "--metric", "mesh.p2p_range", "-o", png, "--data", npz)
+        check(f"trainsim plot reads the sweep file ({r.stderr.strip()[-200:]})", r.returncode == 0)
+        if r.returncode == 0:
+            d = np.load(npz)
+            with h5py.File(sweep) as f:
+                names = list(f["parameters/names"].asstr()[()])
+                x = f["parameters/values"][:, names.index("mesh.mesh_frequency")]
+                ids = list(f["elements/ids"].asstr()[()])
+                y = f["elements/p2p_range"][:, ids.index("mesh")]
+                branch = f["runs/branch"][:]
+            for b, what in ((1, "up"), (2, "down")):
+                runs = np.flatnonzero(branch == b)
+                check(f"the {what} branch is plotted in run order: x and p2p_range are the file's ({len(runs)} runs)",
+                      len(runs) > 1 and np.array_equal(d[f"f0_b{b}_x"], x[runs])
+                      and np.array_equal(d[f"f0_b{b}_y"], y[runs]))
+            check("the up branch rises and the down branch falls in frequency",
+                  np.all(np.diff(d["f0_b1_x"]) > 0) and np.all(np.diff(d["f0_b2_x"]) < 0))
+            check("a PNG is written", os.path.getsize(png) > 1000)
 
 sys.exit(1 if failures else 0)
