@@ -576,6 +576,15 @@ contains
                  'with a status of its own', all(ms%status_in_ws .eqv. [.true., .true., .false., .true., .false., .false.]))
       call check('the other model runs the generic RHS (no status taken over)', .not. any(mg%status_in_ws))
       call check('workspace: their displacement and force, identical to the bit', status_ok)
+      ! an inner stage's RHS (rk4's k2 .. k4): the kernel that stores only dy/dt
+      ! and the element torques gives the same derivatives, on both models
+      ds = huge(1.0_wp); dg = -huge(1.0_wp)
+      call ms%rhs_stage(0.1_wp, y, ds)
+      call mg%rhs_stage(0.1_wp, y, dg)
+      call check('inner-stage RHS: the same derivatives to the bit, kernel and generic', all(ds == dg))
+      call mg%rhs(0.1_wp, y, dg)
+      call check('inner-stage RHS: the same derivatives to the bit as the full RHS', all(ds == dg))
+      call check('inner-stage RHS: the workspace is not marked as a step end', .not. ms%ws_step_end)
    end subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace
 
    !> Element 6 (a shaft) replaced by a recording_shaft_t with its parameters.

@@ -314,15 +314,16 @@ contains
       do i = 1, size(y)
          self%ytmp(i) = y(i) + hh*self%k1(i)
       end do
-      call model%rhs(t + 0.5_wp*h, self%ytmp, self%k2)
+      ! inner stages: no one reads the model's workspace after them (`rhs_stage`)
+      call model%rhs_stage(t + 0.5_wp*h, self%ytmp, self%k2)
       do i = 1, size(y)
          self%ytmp(i) = y(i) + hh*self%k2(i)
       end do
-      call model%rhs(t + 0.5_wp*h, self%ytmp, self%k3)
+      call model%rhs_stage(t + 0.5_wp*h, self%ytmp, self%k3)
       do i = 1, size(y)
          self%ytmp(i) = y(i) + h*self%k3(i)
       end do
-      call model%rhs(t4, self%ytmp, self%k4)
+      call model%rhs_stage(t4, self%ytmp, self%k4)
       h6 = h/6.0_wp
       do i = 1, size(y)
          ynew(i) = y(i) + h6*(self%k1(i) + 2.0_wp*(self%k2(i) + self%k3(i)) + self%k4(i))
