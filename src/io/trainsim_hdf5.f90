@@ -42,7 +42,7 @@ module trainsim_hdf5
 
    public :: hdf5_sink_t, hdf5_library_stuck
    !> String helpers shared with the sweep file (src/sweep/trainsim_sweep_file.f90).
-   public :: make_string_type, vlen_pointers, put_str_attr, put_column_s
+   public :: make_string_type, vlen_pointers, put_str_attr, put_column_s, write_deck_files
 
    !> Deflate level of the sample datasets (1 fast .. 9 small).
    !> Names of the five energy columns (rows of /energy in Fortran order).
@@ -633,26 +633,28 @@ contains
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'git_revision', git_revision(), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'integrator', opt_text(meta%integrator), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'created', iso_now(), err)
-      if (.not. allocated(err)) call write_deck_files(self%file_id, meta, err)
+      if (.not. allocated(err)) call write_deck_files(self%file_id, meta%input_keys, meta%input_files, &
+                                                      meta%input_texts, err)
    end subroutine write_root_attributes
 
    !> /deck_files: the files the deck read (table_file), beside the deck text, so the
    !> file holds every input of the run. Attributes `paths` (as the deck wrote them),
    !> `files` (as opened) and `texts` (their contents), one entry per file.
-   subroutine write_deck_files(loc, meta, err)
+   !> (Also the sweep file's.)
+   subroutine write_deck_files(loc, keys, files, texts, err)
       integer(hid_t), intent(in) :: loc
-      type(run_meta_t), intent(in) :: meta
+      type(string_t), allocatable, intent(in) :: keys(:), files(:), texts(:)
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: grp
       integer :: n, hdferr
       n = 0
-      if (allocated(meta%input_files)) n = size(meta%input_files)
+      if (allocated(files)) n = size(files)
       if (n == 0) return
       call make_group(loc, 'deck_files', grp, err)
       if (allocated(err)) return
-      call put_names_attr(grp, 'paths', meta%input_keys, n, err)
-      if (.not. allocated(err)) call put_names_attr(grp, 'files', meta%input_files, n, err)
-      if (.not. allocated(err)) call put_names_attr(grp, 'texts', meta%input_texts, n, err)
+      call put_names_attr(grp, 'paths', keys, n, err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'files', files, n, err)
+      if (.not. allocated(err)) call put_names_attr(grp, 'texts', texts, n, err)
       call h5gclose_f(grp, hdferr)
    end subroutine write_deck_files
 

@@ -27,7 +27,7 @@ module trainsim_sweep
    use trainsim_sweep_file, only: sweep_file_t, sweep_layout_t, sweep_record_t, element_metric_names, &
       node_metric_names, status_pending, status_ok, status_failed, record_size
    use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t
-   use trainsim_observer, only: run_result_t
+   use trainsim_observer, only: run_result_t, make_meta
    use trainsim_simulate, only: simulate
    use trainsim_continuation, only: chain_state_t, save_end_state, start_from
    use trainsim_mpi, only: comm_init, comm_finalize, comm_rank, comm_size, comm_send_record, &
@@ -251,6 +251,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(deck_group_t), allocatable :: groups(:)
       type(model_t) :: model
+      type(run_meta_t) :: meta
       type(string_t), allocatable :: sets(:)
       integer :: i, j, k
 
@@ -271,6 +272,10 @@ contains
       lay%version = version_full()
       lay%deck_file = opt%deck_path
       lay%deck_text = deck%text
+      meta = make_meta(model)   ! the table files the deck reads (the same for every run)
+      call move_alloc(meta%input_keys, lay%input_keys)
+      call move_alloc(meta%input_files, lay%input_files)
+      call move_alloc(meta%input_texts, lay%input_texts)
       lay%title = model%title
       lay%units = model%units%name
       allocate (sets(size(opt%sets)))

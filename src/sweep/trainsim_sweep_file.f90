@@ -24,7 +24,7 @@ module trainsim_sweep_file
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_io, err_input
    use trainsim_strings, only: string_t, str
-   use trainsim_hdf5, only: make_string_type, vlen_pointers, put_str_attr, put_column_s
+   use trainsim_hdf5, only: make_string_type, vlen_pointers, put_str_attr, put_column_s, write_deck_files
    use hdf5, only: hid_t, hsize_t, size_t, h5open_f, h5fcreate_f, h5fopen_f, h5fclose_f, h5fflush_f, &
       h5gcreate_f, h5gclose_f, h5screate_simple_f, h5sclose_f, h5sselect_hyperslab_f, &
       h5dcreate_f, h5dopen_f, h5dclose_f, h5dwrite_f, h5dread_f, h5dget_space_f, &
@@ -63,6 +63,8 @@ module trainsim_sweep_file
    !> What the file describes (the same on every rank: built from the deck).
    type :: sweep_layout_t
       character(len=:), allocatable :: version, deck_file, deck_text, title, units, overrides
+      !> the files the deck reads (table_file), as in a run file's /deck_files
+      type(string_t), allocatable :: input_keys(:), input_files(:), input_texts(:)
       type(string_t), allocatable :: param_names(:)
       real(wp), allocatable :: param_values(:, :)    !< (parameter, run)
       type(string_t), allocatable :: element_ids(:), element_types(:), node_ids(:)
@@ -188,6 +190,7 @@ contains
       allocate (text(1))
       text(1)%s = lay%deck_text       ! (an array constructor of string_t here trips gfortran 12)
       if (.not. allocated(err)) call put_column_s(f, 'deck_text', text, err)
+      if (.not. allocated(err)) call write_deck_files(f, lay%input_keys, lay%input_files, lay%input_texts, err)
       call h5gcreate_f(f, 'parameters', g, h)
       if (size(lay%param_names) > 0) then
          if (.not. allocated(err)) call put_column_s(g, 'names', lay%param_names, err)

@@ -120,4 +120,27 @@ with tempfile.TemporaryDirectory() as tmp:
                 check("the run from the file's own inputs has the same /metrics, bit for bit", same)
                 check("its states are the same, bit for bit", (f["states"][()] == f2["states"][()]).all())
 
+with tempfile.TemporaryDirectory() as tmp:
+    # a sweep of the same deck: its file holds the table file too
+    with open(os.path.join(ROOT, "inputs/loads_table_ramp.nml"), encoding="utf-8") as f:
+        text = f.read()
+    deck = os.path.join(tmp, "sweep.nml")
+    with open(deck, "w", encoding="utf-8") as f:
+        f.write(text + "&sweep parameter = 'coupling.stiffness', values = 4.0e3, 5.0e3 /\n"
+                       "&sweep parameter = 'run.t_end', values = 0.05 /\n")
+    with open(os.path.join(ROOT, "inputs/wind_load.txt"), encoding="utf-8") as f:
+        table = f.read()
+    with open(os.path.join(tmp, "wind_load.txt"), "w", encoding="utf-8") as f:
+        f.write(table)
+    out = os.path.join(tmp, "sweep.h5")
+    r = subprocess.run([EXE, "sweep", deck, "-o", out], capture_output=True, text=True, timeout=600)
+    check(f"a sweep of the table deck runs ({r.stderr.strip()[-160:]})", r.returncode == 0)
+    if r.returncode == 0:
+        with h5py.File(out) as f:
+            g = f["deck_files"].attrs if "deck_files" in f else {}
+            check("the sweep file's /deck_files holds the table file's text",
+                  list(g.get("paths", [])) == ["wind_load.txt"] and list(g.get("texts", [])) == [table])
+            check("the sweep file's version names the revision", "git" in f.attrs["trainsim_version"]
+                  or git_revision() is None)
+
 sys.exit(1 if failures else 0)
