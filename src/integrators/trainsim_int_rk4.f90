@@ -85,7 +85,9 @@ module trainsim_int_rk4
       integer, allocatable :: adj_first(:), adj_list(:), el_nodes(:, :)
       logical, allocatable :: has_guards(:), in_l(:), in_kin(:), el_in(:), gel_in(:)
       integer, allocatable :: depth(:), stack(:), l_nodes(:), b_nodes(:), kin(:), els(:), gels(:), sl(:), sb(:)
-      integer :: n_l = 0, n_b = 0, n_kin = 0, n_els = 0, n_gels = 0, n_sl = 0, n_sb = 0
+      integer, allocatable :: in_els(:)             !< the elements with both nodes in L
+      integer :: n_l = 0, n_b = 0, n_kin = 0, n_els = 0, n_gels = 0, n_sl = 0, n_sb = 0, n_in = 0
+      logical :: at_local = .false.                 !< the event just returned is a local event instant
       real(wp) :: pr(2, 4) = 0.0_wp                 !< energy rates of L's terms at the unsplit stages
       real(wp) :: pk1(2) = 0.0_wp, pw_step(2) = 0.0_wp, pw_full(2) = 0.0_wp
       real(wp) :: e_acc(2) = 0.0_wp, e_book(2) = 0.0_wp, e_shown(2) = 0.0_wp
@@ -111,6 +113,7 @@ module trainsim_int_rk4
       procedure, private :: mr_step => rk4_mr_step
       procedure, private :: mr_bnd => rk4_mr_bnd
       procedure, private :: mr_rhs => rk4_mr_rhs
+      procedure :: local_instant => rk4_local_instant
    end type rk4_t
 
 contains
@@ -340,6 +343,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_grid, t_sub, h
       logical :: at_bp, done
+      self%at_local = .false.
       if (self%mr_on) then
          ! inside a local event step: the next event of the region, or its end
          call self%mr_continue(model, t_goal, t, y, status, done)
@@ -668,10 +672,13 @@ contains
       allocate (self%in_l(nn), self%in_kin(nn), self%el_in(ne), self%gel_in(ne), self%depth(nn))
       self%in_l = .false.; self%in_kin = .false.; self%el_in = .false.; self%gel_in = .false.
       self%depth = huge(1)
-      allocate (self%stack(4*nn + 4), self%l_nodes(nn), self%b_nodes(nn), self%kin(nn), self%els(ne), self%gels(ne))
+      allocate (self%stack(4*nn + 4), self%l_nodes(nn), self%b_nodes(nn), self%kin(nn), self%els(ne), self%gels(ne), &
+                self%in_els(ne))
       allocate (self%sl(n), self%sb(n))
       allocate (self%my0(n), self%mk1(n), self%md2(n), self%md3(n), self%md4(n), self%mynew(n), self%yc(n))
       self%n_l = 0; self%n_b = 0; self%n_kin = 0; self%n_els = 0; self%n_gels = 0; self%n_sl = 0; self%n_sb = 0
+      self%n_in = 0
+      self%at_local = .false.
       self%mr_steps = 0; self%mr_events = 0; self%mr_collapses = 0; self%mr_node_rhs = 0
    end subroutine build_graph
 
@@ -771,6 +778,13 @@ contains
       call sort_int(self%b_nodes(1:self%n_b))
       call sort_int(self%kin(1:self%n_kin))
       call sort_int(self%els(1:self%n_els))
+      self%n_in = 0
+      do k = 1, self%n_els
+         if (self%in_l(self%el_nodes(1, self%els(k))) .and. self%in_l(self%el_nodes(2, self%els(k)))) then
+            self%n_in = self%n_in + 1
+            self%in_els(self%n_in) = self%els(k)
+         end if
+      end do
       call states(self%l_nodes(1:self%n_l), self%sl, self%n_sl)
       call states(self%b_nodes(1:self%n_b), self%sb, self%n_sb)
       ok = .true.
@@ -856,6 +870,24 @@ contains
          end do
       end subroutine states
    end subroutine rk4_mr_begin
+
+   !> A local event instant (see integrator_t%local_instant): the event just
+   !> returned is inside a local event step that goes on (L's states are
+   !> integration points at t, every other state an interpolation of the
+   !> unsplit step; no guard outside L's guard elements is below zero there).
+   logical function rk4_local_instant(self, nodes, states, els, gels) result(local)
+      class(rk4_t), intent(in), target :: self
+      integer, pointer, contiguous, intent(out) :: nodes(:), states(:), els(:), gels(:)
+      local = self%at_local .and. self%mr_on
+      if (local) then
+         nodes => self%l_nodes(1:self%n_l)
+         states => self%sl(1:self%n_sl)
+         els => self%in_els(1:self%n_in)
+         gels => self%gels(1:self%n_gels)
+      else
+         nodes => null(); states => null(); els => null(); gels => null()
+      end if
+   end function rk4_local_instant
 
    !> ys = the end of L's step (L's and B's states) in a local event step.
    subroutine mr_end_copy(self)
@@ -1061,6 +1093,7 @@ contains
                   exit
                end if
             end do
+            self%at_local = self%mr_on
             return
          end if
       else

@@ -50,6 +50,7 @@ module trainsim_integrator
       procedure :: finish => integrator_finish
       procedure :: fired => integrator_fired
       procedure :: may_miss_events => integrator_may_miss_events
+      procedure :: local_instant => integrator_local_instant
       procedure, non_overridable :: set_stop => integrator_set_stop
    end type integrator_t
 
@@ -131,6 +132,19 @@ contains
       class(integrator_t), intent(in) :: self
       may = .false.
    end function integrator_may_miss_events
+
+   !> Whether the event `advance` just returned is a local event instant (D-32):
+   !> only the states `states` of the nodes `nodes` are integration points at t
+   !> (the others are interpolations inside a step that ends later), only the
+   !> guards of the elements `gels` can have fired, and `els` are the elements
+   !> with both nodes among `nodes`. The driver and the observer then work on
+   !> those alone. Default: no (every event instant is one of the whole train).
+   logical function integrator_local_instant(self, nodes, states, els, gels) result(local)
+      class(integrator_t), intent(in), target :: self
+      integer, pointer, contiguous, intent(out) :: nodes(:), states(:), els(:), gels(:)
+      nodes => null(); states => null(); els => null(); gels => null()
+      local = .false.
+   end function integrator_local_instant
 
    !> Default finish: nothing to free.
    subroutine integrator_finish(self)
