@@ -88,6 +88,7 @@ module trainsim_int_rk4
       integer, allocatable :: in_els(:)             !< the elements with both nodes in L
       integer :: n_l = 0, n_b = 0, n_kin = 0, n_els = 0, n_gels = 0, n_sl = 0, n_sb = 0, n_in = 0
       logical :: at_local = .false.                 !< the event just returned is a local event instant
+      logical :: y_partial = .false.                !< y outside L was not set at that instant (region_instants)
       real(wp) :: pr(2, 4) = 0.0_wp                 !< energy rates of L's terms at the unsplit stages
       real(wp) :: pk1(2) = 0.0_wp, pw_step(2) = 0.0_wp, pw_full(2) = 0.0_wp
       real(wp) :: e_acc(2) = 0.0_wp, e_book(2) = 0.0_wp, e_shown(2) = 0.0_wp
@@ -679,6 +680,7 @@ contains
       self%n_l = 0; self%n_b = 0; self%n_kin = 0; self%n_els = 0; self%n_gels = 0; self%n_sl = 0; self%n_sb = 0
       self%n_in = 0
       self%at_local = .false.
+      self%y_partial = .false.
       self%mr_steps = 0; self%mr_events = 0; self%mr_collapses = 0; self%mr_node_rhs = 0
    end subroutine build_graph
 
@@ -1013,14 +1015,17 @@ contains
       logical :: track, far_fired
       done = .false.
       status = adv_step
+      nst = model%n_states
       if (abs(t - self%mt_c) > self%tiny_t .or. t_goal < self%mt1 - self%tiny_t) then
          self%mr_on = .false.
          self%mr_collapses = self%mr_collapses + 1
+         if (self%y_partial) call shown(self%mt_c)   ! the state shown at the last event becomes the state
+         self%y_partial = .false.
          return
       end if
+      self%y_partial = .false.
       done = .true.
       track = model%run%track_energy
-      nst = model%n_states
       if (track .and. self%mt_c > self%mt0) self%e_book = self%e_book + (y(nst + 1:nst + 2) - self%e_shown)
       self%pw_full = 0.0_wp
       if (self%mt1 - self%mt_c > self%tiny_t) then
@@ -1067,9 +1072,17 @@ contains
             b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
             b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
             hh = self%mh
-            do i = 1, size(y)
-               y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
-            end do
+            if (self%region_instants) then
+               ! L's states (and the energy states); the rest when the step ends
+               do i = nst + 1, size(y)
+                  y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+               end do
+               self%y_partial = .true.
+            else
+               do i = 1, size(y)
+                  y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+               end do
+            end if
             do q = 1, self%n_sl
                y(self%sl(q)) = self%ys(self%sl(q))
             end do
@@ -1085,14 +1098,36 @@ contains
             status = adv_event
             ! a guard outside L below zero on the dense output (it dips inside the
             ! step): the state shown becomes the state, the local step ends here
-            call model%guards(t, y, self%gs)
-            do j = 1, self%ng
-               if (self%gs(j) < 0.0_wp .and. .not. self%gel_in(self%g_el(j))) then
-                  self%mr_on = .false.
-                  self%mr_collapses = self%mr_collapses + 1
-                  exit
-               end if
-            end do
+            if (self%y_partial) then
+               ! the guard elements outside L (none has a node in L): their nodes'
+               ! states on the dense output, their guards
+               do j = 1, self%ng
+                  ne = self%g_el(j)
+                  if (self%gel_in(ne) .or. self%g_loc(j) /= 1) cycle
+                  do k = 1, 3, 2
+                     do i = self%el_states(k, ne), self%el_states(k + 1, ne)
+                        y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+                     end do
+                  end do
+                  call model%element_guards(ne, t, y, self%ge)
+                  if (any(self%ge(1:model%elements(ne)%e%n_guards()) < 0.0_wp)) then
+                     self%mr_on = .false.
+                     self%mr_collapses = self%mr_collapses + 1
+                     call shown(t)
+                     self%y_partial = .false.
+                     exit
+                  end if
+               end do
+            else
+               call model%guards(t, y, self%gs)
+               do j = 1, self%ng
+                  if (self%gs(j) < 0.0_wp .and. .not. self%gel_in(self%g_el(j))) then
+                     self%mr_on = .false.
+                     self%mr_collapses = self%mr_collapses + 1
+                     exit
+                  end if
+               end do
+            end if
             self%at_local = self%mr_on
             return
          end if
@@ -1120,6 +1155,28 @@ contains
       end if
       status = adv_step
       if (t >= t_goal - self%tiny_t) status = adv_reached
+   contains
+      !> The states outside L at tt (in the unsplit step) into y, from the
+      !> unsplit step's dense output: the whole state shown at a local event
+      !> instant (L's states and the energy states are kept).
+      subroutine shown(tt)
+         real(wp), intent(in) :: tt
+         real(wp) :: c1, c2, c4, w
+         integer :: p
+         do p = 1, self%n_sl
+            self%yc(self%sl(p)) = y(self%sl(p))
+         end do
+         w = (tt - self%mt0)/self%mh
+         c1 = w*(1.0_wp - w*(1.5_wp - w*(2.0_wp/3.0_wp)))
+         c2 = w*w*(1.0_wp - w*(2.0_wp/3.0_wp))
+         c4 = w*w*(-0.5_wp + w*(2.0_wp/3.0_wp))
+         do p = 1, nst
+            y(p) = self%my0(p) + self%mh*(c1*self%mk1(p) + c2*(self%md2(p) + self%md3(p)) + c4*self%md4(p))
+         end do
+         do p = 1, self%n_sl
+            y(self%sl(p)) = self%yc(self%sl(p))
+         end do
+      end subroutine shown
    end subroutine rk4_mr_continue
 
    !> L's earliest event in its step from (t_loc, y) (guards g1 at its end):

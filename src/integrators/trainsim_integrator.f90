@@ -41,6 +41,11 @@ module trainsim_integrator
       !> a breakpoint of the inputs when stop_is_breakpoint (a jump or kink).
       real(wp) :: t_stop = 0.0_wp
       logical :: stop_is_breakpoint = .false.
+      !> The caller handles local event instants through `local_instant` (the
+      !> driver does): at such an instant `advance` may then set in y only the
+      !> states `local_instant` names (and the energy states); the others are set
+      !> when the local step ends, or ends early.
+      logical :: region_instants = .false.
    contains
       procedure(start_i), deferred :: start
       procedure(advance_i), deferred :: advance

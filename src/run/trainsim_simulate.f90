@@ -80,6 +80,7 @@ contains
          call fatal_error(err, "internal: integrator '"//model%run%integrator//"' is not in the registry", err_internal)
          return
       end if
+      integ%region_instants = .true.   ! advance_to works on the region alone at local event instants
       call check_fixed_step(model, err)
       if (allocated(err)) return
       t = model%run%t_start
