@@ -11,8 +11,9 @@
 !>   3. peak resident memory against run length (child processes of this program).
 !> With `--hdf5` it also times HDF5 output on the rig (every step, every 10th);
 !> with `rig`, `chain` or `rss` it runs that section only; `--profile CASE`
-!> (ideal-off, ideal-on, backlash-off, backlash-on, ref-ideal, ref-backlash)
-!> runs one rig run alone, for `perf record`.
+!> (ideal-off, ideal-on, backlash-off, backlash-on, ref-ideal, ref-backlash; chain-shafts,
+!> chain-backlash: the 1000-node chain, 3000 steps)
+!> runs one run alone, for `perf record`.
 !>
 !> Decks are built as strings, parsed and built outside the timed region; the
 !> timed region is one call of `simulate` (sink open/close included), timed in
@@ -223,13 +224,22 @@ contains
 
    !> Profiling mode: one trainsim run of the rig (2e6 steps), the case named
    !> by `which`: ideal-off, ideal-on, backlash-off or backlash-on; or one run
-   !> of the reference loop: ref-ideal, ref-backlash.
+   !> of the reference loop: ref-ideal, ref-backlash; or of the 1000-node chain
+   !> of section 2 for 3000 steps: chain-shafts, chain-backlash.
    subroutine profile_run(which)
       character(len=*), intent(in) :: which
       type(model_t) :: m
       type(run_result_t) :: r
       type(ref_result_t) :: ref
       real(wp) :: secs
+      if (index(which, 'chain-') == 1) then
+         ! chain-shafts or chain-backlash: the 1000-node chain of section 2 (3000 steps)
+         call load(chain_deck(1000, 3000.0_wp*chain_dt, chain_dt, index(which, 'backlash') > 0), m)
+         call time_run(m, r, secs)
+         write (output_unit, '(a,f8.3,a,f8.1,a,i0,a)') which//': ', secs, ' s, ', 1.0e9_wp*secs/3.0e6_wp, &
+            ' ns/node-step, ', r%stats%events, ' events'
+         return
+      end if
       if (index(which, 'ref-') == 1) then
          call time_ref(index(which, 'backlash') > 0, real(rig_steps, wp)*rig_dt, ref, secs)
          write (output_unit, '(a,f8.3,a,f8.1,a)') which//': ', secs, ' s, ', 1.0e9_wp*secs/real(rig_steps, wp), ' ns/step'

@@ -16,7 +16,7 @@ program test_rk4_local_events
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
-   use trainsim_event, only: event_t
+   use trainsim_event, only: event_t, ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_integrator, only: adv_event
    use trainsim_int_rk4, only: rk4_t
    use trainsim_observer, only: run_result_t
@@ -216,7 +216,7 @@ contains
       call test_begin('the energy ledger closes to the global path''s order')
       call check('ledger within 2x the global path''s (or 1e-12 E0)', &
                  abs(m1%ledger) <= 2.0_wp*abs(g1%ledger) + 1.0e-12_wp*ref%scale)
-      call through_simulate(deck, dt, g1)
+      call through_simulate(deck, dt, g1, m1)
    end subroutine long_chain
 
    !> A chain of 300 nodes with a gear as every 10th element: several events
@@ -255,6 +255,7 @@ contains
       call check('final-state error falls >= 10x from dt to dt/2', ey_m >= 10.0_wp*ey_m2)
       call check('ledger within 2x the global path''s (or 1e-12 E0)', &
                  abs(m1%ledger) <= 2.0_wp*abs(g1%ledger) + 1.0e-12_wp*ref%scale)
+      call through_simulate(deck, dt, g1, m1)
    end subroutine rattling_chain
 
    !> The benchmark's chain (100 nodes, a gear as every 10th element, no
@@ -291,16 +292,61 @@ contains
 
    !> The same chain through `simulate` (the real driver and observer): the
    !> final state is the mini-driver's, the ledger residual of the observer
-   !> (every sample) stays at the order of the final one.
-   subroutine through_simulate(deck, dt, g1)
+   !> (every sample) stays at the order of the final one. At a local event
+   !> instant the driver looks at the region's guards and modes alone, and the
+   !> observer at the region's elements alone: the events and the final state
+   !> are still the mini-driver's (which looks at the whole train there) bit for
+   !> bit, and each gear's time out of contact is still the one its event rows
+   !> give (out of contact from t_start, the teeth starting inside the backlash,
+   !> to the first contact, and from each separation to the next contact).
+   subroutine through_simulate(deck, dt, g1, m1)
       character(len=*), intent(in) :: deck
       real(wp), intent(in) :: dt
-      type(run_t), intent(in) :: g1
+      type(run_t), intent(in) :: g1, m1
       type(model_t) :: m
       type(run_result_t) :: res
+      type(run_t) :: s
+      integer :: k, e, nst
+      real(wp) :: toc, t_sep, worst
+      logical :: out
       call load_model_text(deck, m)
       m%run%dt = dt
       call run_model(m, res)
+      nst = m%n_states
+      s%nev = size(res%events)
+      allocate (s%ev_t(s%nev), s%ev_el(s%nev), s%ev_kind(s%nev))
+      do k = 1, s%nev
+         s%ev_t(k) = res%events(k)%t
+         s%ev_el(k) = res%events(k)%element
+         s%ev_kind(k) = res%events(k)%kind
+      end do
+      call by_element(s)
+      worst = 0.0_wp
+      do e = 1, size(res%el)
+         if (m%elements(e)%e%n_guards() == 0) cycle
+         toc = 0.0_wp
+         out = .true.
+         t_sep = m%run%t_start
+         do k = 1, size(res%events)
+            if (res%events(k)%element /= e) cycle
+            select case (res%events(k)%kind)
+            case (ev_contact_front, ev_contact_rear)
+               if (out) toc = toc + (res%events(k)%t - t_sep)
+               out = .false.
+            case (ev_separation)
+               if (.not. out) t_sep = res%events(k)%t
+               out = .true.
+            end select
+         end do
+         if (out) toc = toc + (res%t_final - t_sep)
+         worst = max(worst, abs(toc - res%el(e)%time_out_of_contact))
+      end do
+      write (*, '(a,es10.2,a)') '    simulate: time out of contact against the event rows, worst ', worst, ' s'
+      call test_begin('through simulate: the region alone at local event instants')
+      call check('the same events and event times as the mini-driver, bit for bit', same_events(s, m1) .and. &
+                 all(s%ev_t(1:s%nev) == m1%ev_t(1:m1%nev)))
+      call check('the same final state as the mini-driver, bit for bit', all(res%y_final(1:nst) == m1%y(1:nst)))
+      call check('each gear''s time out of contact is its event rows'' (to 1e-9 s)', worst <= 1.0e-9_wp)
       call test_begin('through simulate: the ledger residual at every sample')
       write (*, '(a,es10.2,a,es10.2)') '    simulate: max ledger residual ', res%energy_residual_max, &
          ' of scale ', res%energy_scale

@@ -85,7 +85,10 @@ module trainsim_int_rk4
       integer, allocatable :: adj_first(:), adj_list(:), el_nodes(:, :)
       logical, allocatable :: has_guards(:), in_l(:), in_kin(:), el_in(:), gel_in(:)
       integer, allocatable :: depth(:), stack(:), l_nodes(:), b_nodes(:), kin(:), els(:), gels(:), sl(:), sb(:)
-      integer :: n_l = 0, n_b = 0, n_kin = 0, n_els = 0, n_gels = 0, n_sl = 0, n_sb = 0
+      integer, allocatable :: in_els(:)             !< the elements with both nodes in L
+      integer :: n_l = 0, n_b = 0, n_kin = 0, n_els = 0, n_gels = 0, n_sl = 0, n_sb = 0, n_in = 0
+      logical :: at_local = .false.                 !< the event just returned is a local event instant
+      logical :: y_partial = .false.                !< y outside L was not set at that instant (region_instants)
       real(wp) :: pr(2, 4) = 0.0_wp                 !< energy rates of L's terms at the unsplit stages
       real(wp) :: pk1(2) = 0.0_wp, pw_step(2) = 0.0_wp, pw_full(2) = 0.0_wp
       real(wp) :: e_acc(2) = 0.0_wp, e_book(2) = 0.0_wp, e_shown(2) = 0.0_wp
@@ -111,6 +114,7 @@ module trainsim_int_rk4
       procedure, private :: mr_step => rk4_mr_step
       procedure, private :: mr_bnd => rk4_mr_bnd
       procedure, private :: mr_rhs => rk4_mr_rhs
+      procedure :: local_instant => rk4_local_instant
    end type rk4_t
 
 contains
@@ -341,6 +345,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_grid, t_sub, h
       logical :: at_bp, done
+      self%at_local = .false.
       if (self%mr_on) then
          ! inside a local event step: the next event of the region, or its end
          call self%mr_continue(model, t_goal, t, y, status, done)
@@ -669,10 +674,14 @@ contains
       allocate (self%in_l(nn), self%in_kin(nn), self%el_in(ne), self%gel_in(ne), self%depth(nn))
       self%in_l = .false.; self%in_kin = .false.; self%el_in = .false.; self%gel_in = .false.
       self%depth = huge(1)
-      allocate (self%stack(4*nn + 4), self%l_nodes(nn), self%b_nodes(nn), self%kin(nn), self%els(ne), self%gels(ne))
+      allocate (self%stack(4*nn + 4), self%l_nodes(nn), self%b_nodes(nn), self%kin(nn), self%els(ne), self%gels(ne), &
+                self%in_els(ne))
       allocate (self%sl(n), self%sb(n))
       allocate (self%my0(n), self%mk1(n), self%md2(n), self%md3(n), self%md4(n), self%mynew(n), self%yc(n))
       self%n_l = 0; self%n_b = 0; self%n_kin = 0; self%n_els = 0; self%n_gels = 0; self%n_sl = 0; self%n_sb = 0
+      self%n_in = 0
+      self%at_local = .false.
+      self%y_partial = .false.
       self%mr_steps = 0; self%mr_events = 0; self%mr_collapses = 0; self%mr_node_rhs = 0
    end subroutine build_graph
 
@@ -772,6 +781,13 @@ contains
       call sort_int(self%b_nodes(1:self%n_b))
       call sort_int(self%kin(1:self%n_kin))
       call sort_int(self%els(1:self%n_els))
+      self%n_in = 0
+      do k = 1, self%n_els
+         if (self%in_l(self%el_nodes(1, self%els(k))) .and. self%in_l(self%el_nodes(2, self%els(k)))) then
+            self%n_in = self%n_in + 1
+            self%in_els(self%n_in) = self%els(k)
+         end if
+      end do
       call states(self%l_nodes(1:self%n_l), self%sl, self%n_sl)
       call states(self%b_nodes(1:self%n_b), self%sb, self%n_sb)
       ok = .true.
@@ -857,6 +873,24 @@ contains
          end do
       end subroutine states
    end subroutine rk4_mr_begin
+
+   !> A local event instant (see integrator_t%local_instant): the event just
+   !> returned is inside a local event step that goes on (L's states are
+   !> integration points at t, every other state an interpolation of the
+   !> unsplit step; no guard outside L's guard elements is below zero there).
+   logical function rk4_local_instant(self, nodes, states, els, gels) result(local)
+      class(rk4_t), intent(in), target :: self
+      integer, pointer, contiguous, intent(out) :: nodes(:), states(:), els(:), gels(:)
+      local = self%at_local .and. self%mr_on
+      if (local) then
+         nodes => self%l_nodes(1:self%n_l)
+         states => self%sl(1:self%n_sl)
+         els => self%in_els(1:self%n_in)
+         gels => self%gels(1:self%n_gels)
+      else
+         nodes => null(); states => null(); els => null(); gels => null()
+      end if
+   end function rk4_local_instant
 
    !> ys = the end of L's step (L's and B's states) in a local event step.
    subroutine mr_end_copy(self)
@@ -982,14 +1016,17 @@ contains
       logical :: track, far_fired
       done = .false.
       status = adv_step
+      nst = model%n_states
       if (abs(t - self%mt_c) > self%tiny_t .or. t_goal < self%mt1 - self%tiny_t) then
          self%mr_on = .false.
          self%mr_collapses = self%mr_collapses + 1
+         if (self%y_partial) call shown(self%mt_c)   ! the state shown at the last event becomes the state
+         self%y_partial = .false.
          return
       end if
+      self%y_partial = .false.
       done = .true.
       track = model%run%track_energy
-      nst = model%n_states
       if (track .and. self%mt_c > self%mt0) self%e_book = self%e_book + (y(nst + 1:nst + 2) - self%e_shown)
       self%pw_full = 0.0_wp
       if (self%mt1 - self%mt_c > self%tiny_t) then
@@ -1036,9 +1073,17 @@ contains
             b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
             b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
             hh = self%mh
-            do i = 1, size(y)
-               y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
-            end do
+            if (self%region_instants) then
+               ! L's states (and the energy states); the rest when the step ends
+               do i = nst + 1, size(y)
+                  y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+               end do
+               self%y_partial = .true.
+            else
+               do i = 1, size(y)
+                  y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+               end do
+            end if
             do q = 1, self%n_sl
                y(self%sl(q)) = self%ys(self%sl(q))
             end do
@@ -1054,14 +1099,37 @@ contains
             status = adv_event
             ! a guard outside L below zero on the dense output (it dips inside the
             ! step): the state shown becomes the state, the local step ends here
-            call model%guards(t, y, self%gs)
-            do j = 1, self%ng
-               if (self%gs(j) < 0.0_wp .and. .not. self%gel_in(self%g_el(j))) then
-                  self%mr_on = .false.
-                  self%mr_collapses = self%mr_collapses + 1
-                  exit
-               end if
-            end do
+            if (self%y_partial) then
+               ! the guard elements outside L (none has a node in L): their nodes'
+               ! states on the dense output, their guards
+               do j = 1, self%ng
+                  ne = self%g_el(j)
+                  if (self%gel_in(ne) .or. self%g_loc(j) /= 1) cycle
+                  do k = 1, 3, 2
+                     do i = self%el_states(k, ne), self%el_states(k + 1, ne)
+                        y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
+                     end do
+                  end do
+                  call model%element_guards(ne, t, y, self%ge)
+                  if (any(self%ge(1:model%elements(ne)%e%n_guards()) < 0.0_wp)) then
+                     self%mr_on = .false.
+                     self%mr_collapses = self%mr_collapses + 1
+                     call shown(t)
+                     self%y_partial = .false.
+                     exit
+                  end if
+               end do
+            else
+               call model%guards(t, y, self%gs)
+               do j = 1, self%ng
+                  if (self%gs(j) < 0.0_wp .and. .not. self%gel_in(self%g_el(j))) then
+                     self%mr_on = .false.
+                     self%mr_collapses = self%mr_collapses + 1
+                     exit
+                  end if
+               end do
+            end if
+            self%at_local = self%mr_on
             return
          end if
       else
@@ -1088,6 +1156,28 @@ contains
       end if
       status = adv_step
       if (t >= t_goal - self%tiny_t) status = adv_reached
+   contains
+      !> The states outside L at tt (in the unsplit step) into y, from the
+      !> unsplit step's dense output: the whole state shown at a local event
+      !> instant (L's states and the energy states are kept).
+      subroutine shown(tt)
+         real(wp), intent(in) :: tt
+         real(wp) :: c1, c2, c4, w
+         integer :: p
+         do p = 1, self%n_sl
+            self%yc(self%sl(p)) = y(self%sl(p))
+         end do
+         w = (tt - self%mt0)/self%mh
+         c1 = w*(1.0_wp - w*(1.5_wp - w*(2.0_wp/3.0_wp)))
+         c2 = w*w*(1.0_wp - w*(2.0_wp/3.0_wp))
+         c4 = w*w*(-0.5_wp + w*(2.0_wp/3.0_wp))
+         do p = 1, nst
+            y(p) = self%my0(p) + self%mh*(c1*self%mk1(p) + c2*(self%md2(p) + self%md3(p)) + c4*self%md4(p))
+         end do
+         do p = 1, self%n_sl
+            y(self%sl(p)) = self%yc(self%sl(p))
+         end do
+      end subroutine shown
    end subroutine rk4_mr_continue
 
    !> L's earliest event in its step from (t_loc, y) (guards g1 at its end):

@@ -41,6 +41,11 @@ module trainsim_integrator
       !> a breakpoint of the inputs when stop_is_breakpoint (a jump or kink).
       real(wp) :: t_stop = 0.0_wp
       logical :: stop_is_breakpoint = .false.
+      !> The caller handles local event instants through `local_instant` (the
+      !> driver does): at such an instant `advance` may then set in y only the
+      !> states `local_instant` names (and the energy states); the others are set
+      !> when the local step ends, or ends early.
+      logical :: region_instants = .false.
    contains
       procedure(start_i), deferred :: start
       procedure(advance_i), deferred :: advance
@@ -50,6 +55,7 @@ module trainsim_integrator
       procedure :: finish => integrator_finish
       procedure :: fired => integrator_fired
       procedure :: may_miss_events => integrator_may_miss_events
+      procedure :: local_instant => integrator_local_instant
       procedure, non_overridable :: set_stop => integrator_set_stop
    end type integrator_t
 
@@ -131,6 +137,19 @@ contains
       class(integrator_t), intent(in) :: self
       may = .false.
    end function integrator_may_miss_events
+
+   !> Whether the event `advance` just returned is a local event instant (D-32):
+   !> only the states `states` of the nodes `nodes` are integration points at t
+   !> (the others are interpolations inside a step that ends later), only the
+   !> guards of the elements `gels` can have fired, and `els` are the elements
+   !> with both nodes among `nodes`. The driver and the observer then work on
+   !> those alone. Default: no (every event instant is one of the whole train).
+   logical function integrator_local_instant(self, nodes, states, els, gels) result(local)
+      class(integrator_t), intent(in), target :: self
+      integer, pointer, contiguous, intent(out) :: nodes(:), states(:), els(:), gels(:)
+      nodes => null(); states => null(); els => null(); gels => null()
+      local = .false.
+   end function integrator_local_instant
 
    !> Default finish: nothing to free.
    subroutine integrator_finish(self)

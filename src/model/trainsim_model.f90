@@ -132,6 +132,7 @@ module trainsim_model
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
       procedure :: kinematics => model_kinematics
+      procedure :: kinematics_part => model_kinematics_part
       procedure :: rhs => model_rhs
       procedure :: rhs_stage => model_rhs_stage
       procedure :: rhs_part => model_rhs_part
@@ -440,6 +441,22 @@ contains
       real(wp), intent(in) :: t, y(:)
       call kinematics_all(self, t, y)
    end subroutine model_kinematics
+
+   !> The kinematics of the nodes `nodes` only, into the workspace (the
+   !> observer at a local event instant, D-32).
+   subroutine model_kinematics_part(self, t, y, nodes)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      integer, intent(in) :: nodes(:)
+      integer :: k
+      real(wp) :: th, om
+      self%ws_step_end = .false.
+      do k = 1, size(nodes)
+         call node_kinematics(self, nodes(k), t, y, th, om)
+         self%theta(nodes(k)) = th
+         self%omega(nodes(k)) = om
+      end do
+   end subroutine model_kinematics_part
 
    !> `model_kinematics` without the dispatch (the hot path calls it directly).
    subroutine kinematics_all(self, t, y)
@@ -1167,21 +1184,40 @@ contains
    !> A mode change that changes the stored energy (a mesh-stiffness switch
    !> while teeth are loaded) is work done on the train: it is booked to the
    !> work-input state, so that the energy balance keeps closing.
-   subroutine model_apply_events(self, t, y, fired, events, nev)
+   !> With `els` (a local event instant, D-32: the elements with guards of the
+   !> region, whose nodes are integration points there), only those elements are
+   !> looked at (fired is read only at their guards), only their nodes'
+   !> kinematics are computed, and the change of the stored energy is that of
+   !> their elastic energy (the only terms a mode change can change).
+   subroutine model_apply_events(self, t, y, fired, events, nev, els)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t
       real(wp), intent(inout) :: y(:)
       logical, intent(in) :: fired(:)
       type(event_t), allocatable, intent(inout) :: events(:)
       integer, intent(inout) :: nev
-      integer :: i, l, r, o, n, k, m
+      integer, intent(in), optional :: els(:)
+      integer :: i, l, r, o, n, k, m, q, nq
       type(event_t) :: local(max_update_events)
       type(event_t), allocatable :: grown(:)
       real(wp) :: e_before
       e_before = 0.0_wp   ! read below only if track_energy; set so -Wmaybe-uninitialized need not prove that
-      if (self%run%track_energy) e_before = self%stored_energy(t, y)
-      call self%kinematics(t, y)
-      do i = 1, size(self%elements)
+      if (present(els)) then
+         self%ws_step_end = .false.
+         do q = 1, size(els)
+            i = els(q)
+            call self%kinematics_part(t, y, [self%fe(i)%l, self%fe(i)%r])
+         end do
+         if (self%run%track_energy) e_before = els_energy()
+         nq = size(els)
+      else
+         if (self%run%track_energy) e_before = self%stored_energy(t, y)
+         call self%kinematics(t, y)
+         nq = size(self%elements)
+      end if
+      do q = 1, nq
+         i = q
+         if (present(els)) i = els(q)
          n = self%elements(i)%e%n_guards()
          if (n == 0) cycle
          o = self%guard_offset(i)
@@ -1202,7 +1238,23 @@ contains
             events(nev)%element = i
          end do
       end do
-      if (self%run%track_energy) y(self%n_states + 2) = y(self%n_states + 2) + self%stored_energy(t, y) - e_before
+      if (.not. self%run%track_energy) return
+      if (present(els)) then
+         y(self%n_states + 2) = y(self%n_states + 2) + (els_energy() - e_before)
+      else
+         y(self%n_states + 2) = y(self%n_states + 2) + self%stored_energy(t, y) - e_before
+      end if
+   contains
+      !> The elastic energy of the elements els at the kinematics in the workspace.
+      real(wp) function els_energy() result(e)
+         integer :: p, ll, rr
+         e = 0.0_wp
+         do p = 1, size(els)
+            ll = self%fe(els(p))%l
+            rr = self%fe(els(p))%r
+            e = e + self%elements(els(p))%e%potential_energy(self%theta(ll), self%theta(rr))
+         end do
+      end function els_energy
    end subroutine model_apply_events
 
    !> Whether any clearance element is in contact (thesis-mode step control).

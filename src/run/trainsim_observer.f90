@@ -62,11 +62,17 @@ module trainsim_observer
       logical :: refine_peaks = .false.
       real(wp), allocatable :: th_prev(:), om_prev(:), force_prev(:), disp_prev(:), torque_prev(:)
       integer, allocatable :: contact_prev(:)
+      !> per element: the time up to which its time out of contact is counted by
+      !> a local event instant (step_part) past t_prev (-huge: none)
+      real(wp), allocatable :: t_counted(:)
    contains
       procedure :: start => obs_start
       procedure :: step => obs_step
+      procedure :: step_part => obs_step_part
       procedure :: sample => obs_sample
       procedure, private :: update_metrics => obs_update_metrics
+      procedure, private :: fill_part => obs_fill_part
+      procedure, private :: update_part => obs_update_part
       procedure, private :: keep_step_end => obs_keep_step_end
       procedure, private :: refine => obs_refine
       procedure :: record_events => obs_record_events
@@ -191,6 +197,8 @@ contains
       allocate (self%th_prev(nn), self%om_prev(nn), self%force_prev(ne), self%disp_prev(ne), self%torque_prev(ne), &
                 self%contact_prev(ne))
       self%contact_prev = 0
+      allocate (self%t_counted(ne))
+      self%t_counted = -huge(1.0_wp)
       call sink%open(make_meta(model), err)
       if (allocated(err)) return
       call self%step(model, t, y)
@@ -309,6 +317,77 @@ contains
       call self%update_metrics(model, t)
       if (self%refine_peaks) call self%keep_step_end()
    end subroutine obs_step
+
+   !> At a local event instant (integrator_t%local_instant, D-32): only the
+   !> elements els, whose nodes (among `nodes`) are integration points at t,
+   !> are evaluated and folded into the metrics. Every other element's state
+   !> at t is an interpolation inside a step that ends later: its extremes are
+   !> taken at that step's end, as on any step; the energy at the step's end.
+   !> (Fixed-step integrators only: no peak refinement inside steps.)
+   subroutine obs_step_part(self, model, t, y, nodes, els)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      integer, intent(in) :: nodes(:), els(:)
+      call self%fill_part(model, t, y, nodes, els)
+      call self%update_part(t, els)
+   end subroutine obs_step_part
+
+   !> `fill` for the nodes `nodes` and the elements els only (their nodes among
+   !> `nodes`). The sample buffer is then not a whole sample: its time is set so
+   !> that `sample` fills it again.
+   subroutine obs_fill_part(self, model, t, y, nodes, els)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      integer, intent(in) :: nodes(:), els(:)
+      integer :: k, i, l, r
+      call model%kinematics_part(t, y, nodes)
+      if (model%any_needs_loads) call model%apply_loads(t)
+      self%s%t = -huge(1.0_wp)
+      do k = 1, size(nodes)
+         self%s%theta(nodes(k)) = model%theta(nodes(k))
+         self%s%omega(nodes(k)) = model%omega(nodes(k))
+      end do
+      do k = 1, size(els)
+         i = els(k)
+         call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
+         associate (e => model%elements(i)%e)
+            l = e%left; r = e%right
+            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
+                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
+         end associate
+      end do
+   end subroutine obs_fill_part
+
+   !> `update_metrics` for the elements els only, at a local event instant:
+   !> t_prev stays (the other elements' last point), each element's time out
+   !> of contact is counted to t (t_counted).
+   subroutine obs_update_part(self, t, els)
+      class(observer_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer, intent(in) :: els(:)
+      integer :: i, k, q
+      real(wp) :: t0
+      do q = 1, size(els)
+         i = els(q)
+         associate (m => self%res%el(i))
+            k = m%open_event
+            if (k > 0) self%res%events(k)%peak_force = max(self%res%events(k)%peak_force, abs(self%s%force(i)))
+            if (t >= self%t_metrics) then
+               m%force_min = min(m%force_min, self%s%force(i))
+               m%force_max = max(m%force_max, self%s%force(i))
+               m%torque_min = min(m%torque_min, self%s%torque_right(i))
+               m%torque_max = max(m%torque_max, self%s%torque_right(i))
+               m%disp_min = min(m%disp_min, self%s%displacement(i))
+               m%disp_max = max(m%disp_max, self%s%displacement(i))
+               t0 = max(self%t_prev, self%t_counted(i))
+               if (self%s%contact(i) == 0 .and. t > t0) m%time_out_of_contact = m%time_out_of_contact + (t - t0)
+            end if
+         end associate
+         self%t_counted(i) = t
+      end do
+   end subroutine obs_update_part
 
    !> The step end just filled, as the start of the next step's interpolation.
    subroutine obs_keep_step_end(self)
@@ -439,7 +518,7 @@ contains
                m%disp_min = min(m%disp_min, self%s%displacement(i))
                m%disp_max = max(m%disp_max, self%s%displacement(i))
                if (self%s%contact(i) == 0 .and. t > self%t_prev) then
-                  m%time_out_of_contact = m%time_out_of_contact + (t - self%t_prev)
+                  m%time_out_of_contact = m%time_out_of_contact + (t - max(self%t_prev, self%t_counted(i)))
                end if
             end if
          end associate
@@ -469,17 +548,24 @@ contains
    !> each row goes to the sink now; a contact's row is kept (slot i of
    !> self%res%events for element i) until the contact ends, then handed over
    !> again with its peak force and duration.
-   subroutine obs_record_events(self, model, t, y, evs, nev, err)
+   subroutine obs_record_events(self, model, t, y, evs, nev, err, nodes, els)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       type(event_t), intent(in) :: evs(:)
       integer, intent(in) :: nev
       type(error_t), allocatable, intent(out) :: err
+      !> at a local event instant (see step_part): its nodes and elements (the
+      !> events' elements among them); only those are evaluated
+      integer, intent(in), optional :: nodes(:), els(:)
       type(event_t) :: row
       integer :: k, i
       if (nev == 0) return
-      call self%fill(model, t, y)
+      if (present(els)) then
+         call self%fill_part(model, t, y, nodes, els)
+      else
+         call self%fill(model, t, y)
+      end if
       do k = 1, nev
          i = evs(k)%element
          self%n_events = self%n_events + 1
@@ -534,6 +620,10 @@ contains
       ! force jumps at a zone change, and its peak may be right there. (No
       ! sample is written: samples stay on the output grid, and the event
       ! table holds the state at each event.)
+      if (present(els)) then
+         call self%update_part(t, els)
+         return
+      end if
       call self%update_metrics(model, t)
       if (self%refine_peaks) call self%keep_step_end()
    contains

@@ -80,6 +80,7 @@ contains
          call fatal_error(err, "internal: integrator '"//model%run%integrator//"' is not in the registry", err_internal)
          return
       end if
+      integ%region_instants = .true.   ! advance_to works on the region alone at local event instants
       call check_fixed_step(model, err)
       if (allocated(err)) return
       t = model%run%t_start
@@ -155,16 +156,33 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_goal
       integer :: status
+      integer, pointer, contiguous :: r_nodes(:), r_states(:), r_els(:), r_gels(:)
+      logical :: local
       do
          t_goal = min(t_out, integ%t_stop)
          if (t_goal - t > d%tol) then
             call integ%advance(model, t_goal, t, y, status, err)
             if (allocated(err)) return
-            call check_state(model, integ, t, y, err)
+            ! a local event instant (D-32): only the region's states are
+            ! integration points at t; the rest of the train is checked and
+            ! observed at the end of its step
+            local = .false.
+            if (status == adv_event) local = integ%local_instant(r_nodes, r_states, r_els, r_gels)
+            if (local) then
+               call check_state(model, integ, t, y, err, r_states)
+            else
+               call check_state(model, integ, t, y, err)
+            end if
             if (allocated(err)) return
             if (interrupt_signal() /= 0) then   ! SIGINT/SIGTERM: stop at this step
                call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
                return
+            end if
+            if (local) then
+               call obs%step_part(model, t, y, r_nodes, r_els)
+               call settle_local(model, integ, obs, d, t, y, r_nodes, r_els, r_gels, err)
+               if (allocated(err)) return
+               cycle
             end if
             call obs%step(model, t, y)
             if (status == adv_event) then
@@ -240,6 +258,59 @@ contains
       if (restart) call integ%restart(model, t, y, err)
    end subroutine settle_if_fired
 
+   !> `settle_if_fired` at a local event instant (D-32): the guards of the
+   !> region's guard elements gels alone (the integrator saw no other below
+   !> zero at t), their mode updates and cascades, the observer on the
+   !> region's nodes and elements (both nodes among `nodes`) alone. The same
+   !> events as `settle_if_fired` would find at this state.
+   subroutine settle_local(model, integ, obs, d, t, y, nodes, els, gels, err)
+      type(model_t), intent(inout), target :: model
+      class(integrator_t), intent(inout), target :: integ
+      type(observer_t), intent(inout) :: obs
+      type(drive_t), intent(inout) :: d
+      real(wp), intent(in) :: t
+      real(wp), intent(inout) :: y(:)
+      integer, intent(in) :: nodes(:), els(:), gels(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: pass, nev, n_total, j
+      if (.not. region_fired()) return
+      n_total = 0
+      do pass = 1, max_settle_passes
+         nev = 0
+         call model%apply_events(t, y, d%fired, d%ev, nev, gels)
+         call obs%record_events(model, t, y, d%ev, nev, err, nodes, els)
+         if (allocated(err)) return
+         n_total = n_total + nev
+         if (.not. region_fired()) exit
+      end do
+      if (pass > max_settle_passes) then
+         call fatal_error(err, 'the modes did not settle at t = '//str(t)//' s: after '//str(max_settle_passes)// &
+                          ' passes of the mode update, a guard of '//guard_owner(model, j)// &
+                          ' is still below zero; the state there is not consistent with any contact state '// &
+                          '(a runaway state, or a time step above the stability limit)', err_numeric)
+         return
+      end if
+      call count_events(model, d, t, n_total, err)
+      if (allocated(err)) return
+      call integ%restart(model, t, y, err)
+   contains
+      !> The guards of gels at (t, y) into d%g, d%fired; j: the first that fired.
+      logical function region_fired() result(any_fired)
+         integer :: k, e, o, n
+         any_fired = .false.
+         j = 0
+         do k = 1, size(gels)
+            e = gels(k)
+            o = model%guard_offset(e)
+            n = model%elements(e)%e%n_guards()
+            call model%element_guards(e, t, y, d%g(o + 1:o + n))
+            d%fired(o + 1:o + n) = d%g(o + 1:o + n) < 0.0_wp
+            if (j == 0 .and. any(d%fired(o + 1:o + n))) j = o + findloc(d%fired(o + 1:o + n), .true., 1)
+         end do
+         any_fired = j > 0
+      end function region_fired
+   end subroutine settle_local
+
    !> The one routine that settles the events at an instant: update the modes
    !> of the elements whose guards fired (d%fired on entry), record the events,
    !> and repeat while a guard of the new modes is below zero (cascades: a zone
@@ -295,20 +366,36 @@ contains
 
    !> NaN or runaway state after a step -> an error naming the time, the node
    !> and quantity, and the likely cause.
-   subroutine check_state(model, integ, t, y, err)
+   !> With `states`, only those entries of y (a local event instant).
+   subroutine check_state(model, integ, t, y, err, states)
       type(model_t), intent(inout) :: model
       class(integrator_t), intent(in) :: integ
       real(wp), intent(in) :: t, y(:)
       type(error_t), allocatable, intent(out) :: err
-      integer :: i
+      integer, intent(in), optional :: states(:)
+      integer :: i, k
+      if (present(states)) then
+         do k = 1, size(states)
+            if (.not. abs(y(states(k))) <= blowup_limit) then   ! also true for NaN
+               call blew_up(states(k))
+               return
+            end if
+         end do
+         return
+      end if
       do i = 1, size(y)
          if (.not. abs(y(i)) <= blowup_limit) then   ! also true for NaN
-            call fatal_error(err, "integrator '"//model%run%integrator//"': the solution blew up at t = "//str(t)// &
-                             ' s ('//model%state_label(i)//' is '//trim(merge('NaN    ', 'runaway', y(i) /= y(i)))// &
-                             '). '//blowup_advice(model, integ), err_numeric)
+            call blew_up(i)
             return
          end if
       end do
+   contains
+      subroutine blew_up(j)
+         integer, intent(in) :: j
+         call fatal_error(err, "integrator '"//model%run%integrator//"': the solution blew up at t = "//str(t)// &
+                          ' s ('//model%state_label(j)//' is '//trim(merge('NaN    ', 'runaway', y(j) /= y(j)))// &
+                          '). '//blowup_advice(model, integ), err_numeric)
+      end subroutine blew_up
    end subroutine check_state
 
    !> What to try after a blow-up: the step if it is above the stability
