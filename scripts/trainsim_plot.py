@@ -148,6 +148,9 @@ def main(argv=None):
     try:
         with f:
             title = str(f.attrs.get("title", os.path.basename(a.file)))
+            overrides = str(f.attrs.get("overrides", ""))
+            if overrides:   # the deck's title does not know the --set values of this run
+                title += f"\n(--set {overrides})"
             fig, ax = plt.subplots(figsize=(8, 4.5))
             if a.te_spectrum:
                 data, unit = prepare_te_spectrum(f, a.te_spectrum, a.t0, a.t1)

@@ -18,7 +18,7 @@ module trainsim_overrides
    implicit none
    private
 
-   public :: override_t, parse_set_argument, make_override, apply_overrides, localize_error
+   public :: override_t, parse_set_argument, make_override, apply_overrides, localize_error, describe_overrides
    public :: split_sweep_groups, derived_keys, is_derived_key, resolve_target
 
    !> The derived parameters (applied to the model, not to a deck group).
@@ -289,4 +289,25 @@ contains
       sweeps = pack(deck%groups, is_sweep)
       deck%groups = pack(deck%groups, .not. is_sweep)
    end subroutine split_sweep_groups
+   !> The overrides as `--set` would write them, separated by blanks, e.g.
+   !> "mesh.half_backlash=2e-4 run.integrator='cvode-bdf'" ('' for none): what a run
+   !> file records beside the deck, so deck + overrides reproduce the run.
+   function describe_overrides(ovs) result(text)
+      type(override_t), intent(in) :: ovs(:)
+      character(len=:), allocatable :: text
+      integer :: i, j
+      text = ''
+      do i = 1, size(ovs)
+         if (i > 1) text = text//' '
+         text = text//ovs(i)%target//'.'//ovs(i)%key//'='
+         do j = 1, size(ovs(i)%values)
+            if (j > 1) text = text//','
+            if (ovs(i)%quoted(j)) then
+               text = text//"'"//ovs(i)%values(j)%s//"'"
+            else
+               text = text//ovs(i)%values(j)%s
+            end if
+         end do
+      end do
+   end function describe_overrides
 end module trainsim_overrides

@@ -628,6 +628,7 @@ contains
             call put_str_attr(self%file_id, 'deck', '', err)
          end if
       end if
+      if (.not. allocated(err)) call put_str_attr(self%file_id, 'overrides', opt_text(meta%overrides), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'units', opt_text(meta%units), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'trainsim_version', opt_text(meta%version), err)
       if (.not. allocated(err)) call put_str_attr(self%file_id, 'git_revision', git_revision(), err)

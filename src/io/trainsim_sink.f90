@@ -25,6 +25,7 @@ module trainsim_sink
    !> Everything that says how a run was made; written as attributes.
    type :: run_meta_t
       character(len=:), allocatable :: title, deck_file, deck_text, units, version, integrator
+      character(len=:), allocatable :: overrides   !< --set TARGET.KEY=VALUE applied to the deck, blank-separated
       type(string_t), allocatable :: state_names(:)
       type(string_t), allocatable :: node_ids(:), node_types(:)
       type(string_t), allocatable :: element_ids(:), element_types(:)

@@ -80,6 +80,8 @@ module trainsim_model
 
    type :: model_t
       character(len=:), allocatable :: title, deck_file, deck_text
+      !> the overrides (--set, a sweep's values) applied to the deck, as `--set` writes them
+      character(len=:), allocatable :: overrides
       type(units_t) :: units
       type(run_settings_t) :: run
       type(node_slot_t), allocatable :: nodes(:)

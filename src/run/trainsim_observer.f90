@@ -93,6 +93,8 @@ contains
       meta%title = model%title
       meta%deck_file = model%deck_file
       meta%deck_text = model%deck_text
+      meta%overrides = ''
+      if (allocated(model%overrides)) meta%overrides = model%overrides
       meta%units = model%units%name
       meta%version = version_full()
       meta%integrator = model%run%integrator

@@ -8,7 +8,7 @@ module trainsim_prepare
    use trainsim_deck, only: deck_t
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
-   use trainsim_overrides, only: override_t, apply_overrides, localize_error
+   use trainsim_overrides, only: override_t, apply_overrides, localize_error, describe_overrides
    use trainsim_derived, only: apply_derived
    use trainsim_preload, only: preload_info_t, apply_preload
    implicit none
@@ -34,6 +34,7 @@ contains
       work = deck
       call apply_overrides(work, ovs, err)
       if (.not. allocated(err)) call build_model(work, model, err)
+      if (.not. allocated(err)) model%overrides = describe_overrides(ovs)
       if (.not. allocated(err)) call apply_derived(model, ovs, err)
       if (.not. allocated(err) .and. model%run%preload) call apply_preload(model, info, err)
       if (present(preload)) preload = info

@@ -9,15 +9,17 @@ coupling, DC motor, SI units):
   .decode()), string datasets are variable-length UTF-8, every 2-D series has
   column_names/column_units and /time as the dimension scale of its rows;
 - derived constants are stored: the spur gear's gear_ratio = rb_driven / rb_driver;
-- the file holds every input: the deck, and the text of every table_file it read
-  (/deck_files): the deck and tables written back from the file into an empty
-  folder reproduce the run's /metrics exactly;
+- the file holds every input: the deck, the text of every table_file it read
+  (/deck_files) and the --set overrides (`overrides`): the deck and tables written
+  back from the file into an empty folder, run with the overrides, reproduce the
+  run's /metrics exactly;
 - the version names the git revision the executable was built from.
 
 usage: check_h5_self_describing.py TRAINSIM_EXE
 """
 import os
 import re
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -80,8 +82,9 @@ def git_revision():
 with tempfile.TemporaryDirectory() as tmp:
     deck = os.path.join(ROOT, "inputs/loads_table_ramp.nml")
     out = os.path.join(tmp, "orig.h5")
-    r = subprocess.run([EXE, "run", deck, "-o", out], capture_output=True, text=True, timeout=600)
-    check("loads_table_ramp runs", r.returncode == 0)
+    sets = ["--set", "coupling.stiffness=4.5e3", "--set", "run.integrator='rk4'"]
+    r = subprocess.run([EXE, "run", deck, "-o", out] + sets, capture_output=True, text=True, timeout=600)
+    check("loads_table_ramp runs (with two --set)", r.returncode == 0)
     with h5py.File(out) as f:
         rev = f.attrs["git_revision"]
         head = git_revision()
@@ -108,10 +111,14 @@ with tempfile.TemporaryDirectory() as tmp:
         for p_, t_ in zip(paths, texts):
             with open(os.path.join(again, p_), "w", encoding="utf-8") as d:
                 d.write(t_)
+        overrides = f.attrs["overrides"]
+        check(f"the overrides are recorded as --set writes them ({overrides!r})",
+              overrides == "coupling.stiffness=4.5e3 run.integrator='rk4'")
+        again_sets = [a for o in shlex.split(overrides, posix=False) for a in ("--set", o)]
         out2 = os.path.join(tmp, "again.h5")
-        r = subprocess.run([EXE, "run", os.path.join(again, "deck.nml"), "-o", out2], capture_output=True,
-                           text=True, timeout=600)
-        check("the deck and tables taken from the file run", r.returncode == 0)
+        r = subprocess.run([EXE, "run", os.path.join(again, "deck.nml"), "-o", out2] + again_sets,
+                           capture_output=True, text=True, timeout=600)
+        check("the deck, tables and overrides taken from the file run", r.returncode == 0)
         if r.returncode == 0:
             with h5py.File(out2) as f2:
                 a, b = f["metrics"], f2["metrics"]
