@@ -369,27 +369,38 @@ contains
       class(observer_t), intent(inout) :: self
       real(wp), intent(in) :: t
       integer, intent(in) :: els(:)
-      integer :: i, k, q
-      real(wp) :: t0
+      integer :: q
       do q = 1, size(els)
-         i = els(q)
-         associate (m => self%res%el(i))
-            k = m%open_event
-            if (k > 0) self%res%events(k)%peak_force = max(self%res%events(k)%peak_force, abs(self%s%force(i)))
-            if (t >= self%t_metrics) then
-               m%force_min = min(m%force_min, self%s%force(i))
-               m%force_max = max(m%force_max, self%s%force(i))
-               m%torque_min = min(m%torque_min, self%s%torque_right(i))
-               m%torque_max = max(m%torque_max, self%s%torque_right(i))
-               m%disp_min = min(m%disp_min, self%s%displacement(i))
-               m%disp_max = max(m%disp_max, self%s%displacement(i))
-               t0 = max(self%t_prev, self%t_counted(i))
-               if (self%s%contact(i) == 0 .and. t > t0) m%time_out_of_contact = m%time_out_of_contact + (t - t0)
-            end if
-         end associate
-         self%t_counted(i) = t
+         call fold_element(self, els(q), t)
+         self%t_counted(els(q)) = t
       end do
    end subroutine obs_update_part
+
+   !> Fold element i of the sample buffer (filled at t) into its running metrics:
+   !> the open contact's peak force, the extremes, and the time out of contact
+   !> since the later of the last point (t_prev) and the element's own last
+   !> local instant (t_counted).
+   subroutine fold_element(self, i, t)
+      type(observer_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t
+      integer :: k
+      real(wp) :: t0
+      associate (m => self%res%el(i))
+         k = m%open_event
+         if (k > 0) self%res%events(k)%peak_force = max(self%res%events(k)%peak_force, abs(self%s%force(i)))
+         if (t >= self%t_metrics) then
+            m%force_min = min(m%force_min, self%s%force(i))
+            m%force_max = max(m%force_max, self%s%force(i))
+            m%torque_min = min(m%torque_min, self%s%torque_right(i))
+            m%torque_max = max(m%torque_max, self%s%torque_right(i))
+            m%disp_min = min(m%disp_min, self%s%displacement(i))
+            m%disp_max = max(m%disp_max, self%s%displacement(i))
+            t0 = max(self%t_prev, self%t_counted(i))
+            if (self%s%contact(i) == 0 .and. t > t0) m%time_out_of_contact = m%time_out_of_contact + (t - t0)
+         end if
+      end associate
+   end subroutine fold_element
 
    !> The step end just filled, as the start of the next step's interpolation.
    subroutine obs_keep_step_end(self)
@@ -507,23 +518,9 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: t
-      integer :: i, k
+      integer :: i
       do i = 1, size(model%elements)
-         associate (m => self%res%el(i))
-            k = m%open_event
-            if (k > 0) self%res%events(k)%peak_force = max(self%res%events(k)%peak_force, abs(self%s%force(i)))
-            if (t >= self%t_metrics) then
-               m%force_min = min(m%force_min, self%s%force(i))
-               m%force_max = max(m%force_max, self%s%force(i))
-               m%torque_min = min(m%torque_min, self%s%torque_right(i))
-               m%torque_max = max(m%torque_max, self%s%torque_right(i))
-               m%disp_min = min(m%disp_min, self%s%displacement(i))
-               m%disp_max = max(m%disp_max, self%s%displacement(i))
-               if (self%s%contact(i) == 0 .and. t > self%t_prev) then
-                  m%time_out_of_contact = m%time_out_of_contact + (t - max(self%t_prev, self%t_counted(i)))
-               end if
-            end if
-         end associate
+         call fold_element(self, i, t)
       end do
       if (self%track) then
          self%res%energy_residual_max = max(self%res%energy_residual_max, abs(self%s%energy(5)))
