@@ -25,8 +25,7 @@ module trainsim_preload
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
    use trainsim_strings, only: str
-   use trainsim_model, only: model_t
-   use trainsim_element, only: lin_closed
+   use trainsim_model, only: model_t, rigid_speeds
    implicit none
    private
 
@@ -187,47 +186,21 @@ contains
    end subroutine reference_node
 
    !> Speed of each node per unit speed of node `ref` when the train turns rigidly,
-   !> carried along the elements' closed-contact speed ratios (the null vector of
-   !> their stiffness; as trainsim_derived). Fixed nodes and parts not joined: 0.
+   !> carried along the elements' closed-contact speed ratios (trainsim_model's
+   !> rigid_speeds, as mesh_frequency). Fixed nodes and parts not joined: 0.
    subroutine kinematic_ratios(model, ref, kappa, err)
       type(model_t), intent(in) :: model
       integer, intent(in) :: ref
       real(wp), allocatable, intent(out) :: kappa(:)
       type(error_t), allocatable, intent(out) :: err
       logical, allocatable :: known(:)
-      real(wp) :: k(2, 2), c(2, 2), rho
-      integer :: pass, j, l, r
-      logical :: changed
-      allocate (kappa(size(model%nodes)), known(size(model%nodes)))
-      kappa = 0.0_wp
-      known = .false.
-      if (model%nodes(ref)%n%is_fixed()) return
-      kappa(ref) = 1.0_wp
-      known(ref) = .true.
-      do pass = 1, size(model%elements) + 1
-         changed = .false.
-         do j = 1, size(model%elements)
-            l = model%elements(j)%e%left
-            r = model%elements(j)%e%right
-            if (model%nodes(l)%n%is_fixed() .or. model%nodes(r)%n%is_fixed()) cycle
-            if (known(l) .eqv. known(r)) cycle
-            call model%elements(j)%e%linearise(lin_closed, 1.0_wp, 1.0_wp, k, c)
-            rho = 0.0_wp
-            if (abs(k(2, 2)) > 0.0_wp) then
-               rho = -k(1, 2)/k(2, 2)
-            else if (abs(c(2, 2)) > 0.0_wp) then
-               rho = -c(1, 2)/c(2, 2)
-            end if
-            if (rho == 0.0_wp) cycle
-            if (known(l)) then
-               kappa(r) = rho*kappa(l); known(r) = .true.
-            else
-               kappa(l) = kappa(r)/rho; known(l) = .true.
-            end if
-            changed = .true.
-         end do
-         if (.not. changed) exit
-      end do
+      integer :: loop_el
+      if (model%nodes(ref)%n%is_fixed()) then
+         allocate (kappa(size(model%nodes)))
+         kappa = 0.0_wp
+         return
+      end if
+      call rigid_speeds(model, ref, 1.0_wp, kappa, known, loop_el)   ! (a loop that disagrees: as carried)
       associate (unused => err)
       end associate
    end subroutine kinematic_ratios

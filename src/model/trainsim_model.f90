@@ -9,12 +9,12 @@ module trainsim_model
    use trainsim_units, only: units_t
    use trainsim_signal, only: signal_t
    use trainsim_node, only: node_t, node_slot_t
-   use trainsim_element, only: element_t, element_slot_t
+   use trainsim_element, only: element_t, element_slot_t, lin_closed
    use trainsim_event, only: event_t, max_update_events
    implicit none
    private
 
-   public :: model_t, run_settings_t, load_t
+   public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds
 
    !> Kinds of node on the hot path.
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
@@ -1392,4 +1392,66 @@ contains
          end if
       end do
    end function model_state_label
+   !> Speed ratio w_right / w_left of element ie when its clearance is closed and it
+   !> turns rigidly: the null vector of its closed-contact stiffness (shaft 1, gear pair
+   !> r1/r2), else of its damping (a damper: 1). 0 if the element couples no speeds.
+   real(wp) function closed_speed_ratio(model, ie) result(rho)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ie
+      real(wp) :: k(2, 2), c(2, 2)
+      call model%elements(ie)%e%linearise(lin_closed, 1.0_wp, 1.0_wp, k, c)
+      rho = 0.0_wp
+      if (abs(k(2, 2)) > 0.0_wp) then
+         rho = -k(1, 2)/k(2, 2)
+      else if (abs(c(2, 2)) > 0.0_wp) then
+         rho = -c(1, 2)/c(2, 2)
+      end if
+   end function closed_speed_ratio
+
+   !> Node speeds when every clearance is closed and the train turns rigidly with
+   !> node ref at w_ref: carried from ref along the elements' closed speed ratios
+   !> until nothing changes (fixed nodes stop it). known(i): node i was reached.
+   !> loop_el: 0, or the first element found joining two reached nodes at a ratio
+   !> that disagrees with theirs (relative 1e-9): a loop of gears that cannot turn
+   !> (the carrying goes on; a caller that needs a rigid motion reports it).
+   subroutine rigid_speeds(model, ref, w_ref, w, known, loop_el)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ref
+      real(wp), intent(in) :: w_ref
+      real(wp), allocatable, intent(out) :: w(:)
+      logical, allocatable, intent(out) :: known(:)
+      integer, intent(out) :: loop_el
+      integer :: pass, j, l, r
+      real(wp) :: rho
+      logical :: changed
+      allocate (w(size(model%nodes)), known(size(model%nodes)))
+      w = 0.0_wp
+      known = .false.
+      w(ref) = w_ref
+      known(ref) = .true.
+      loop_el = 0
+      do pass = 1, size(model%elements) + 1
+         changed = .false.
+         do j = 1, size(model%elements)
+            l = model%elements(j)%e%left
+            r = model%elements(j)%e%right
+            if (model%nodes(l)%n%is_fixed() .or. model%nodes(r)%n%is_fixed()) cycle
+            if (.not. (known(l) .or. known(r))) cycle
+            rho = closed_speed_ratio(model, j)
+            if (rho == 0.0_wp) cycle
+            if (known(l) .and. known(r)) then
+               if (loop_el == 0 .and. abs(w(r) - rho*w(l)) > 1.0e-9_wp*max(abs(w(r)), abs(w(l)))) loop_el = j
+            else if (known(l)) then
+               w(r) = rho*w(l)
+               known(r) = .true.
+               changed = .true.
+            else
+               w(l) = w(r)/rho
+               known(l) = .true.
+               changed = .true.
+            end if
+         end do
+         if (.not. changed) exit
+      end do
+   end subroutine rigid_speeds
 end module trainsim_model

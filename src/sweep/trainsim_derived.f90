@@ -16,15 +16,14 @@ module trainsim_derived
    use trainsim_kinds, only: wp, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: str, to_lower
-   use trainsim_model, only: model_t
-   use trainsim_element, only: lin_closed
+   use trainsim_model, only: model_t, rigid_speeds
    use trainsim_signal, only: constant_signal
    use trainsim_param_list, only: param_list_t
    use trainsim_overrides, only: override_t, derived_keys
    implicit none
    private
 
-   public :: apply_derived, set_mesh_frequency, mesh_frequency_of, speed_ratio
+   public :: apply_derived, set_mesh_frequency, mesh_frequency_of
 
 contains
 
@@ -128,22 +127,6 @@ contains
       end do
    end function driver_teeth
 
-   !> Speed ratio w_right / w_left of element ie when its clearance is closed and it
-   !> turns rigidly: the null vector of its closed-contact stiffness (shaft 1, gear pair
-   !> r1/r2), else of its damping (a damper: 1). 0 if the element couples no speeds.
-   real(wp) function speed_ratio(model, ie) result(rho)
-      type(model_t), intent(in) :: model
-      integer, intent(in) :: ie
-      real(wp) :: k(2, 2), c(2, 2)
-      call model%elements(ie)%e%linearise(lin_closed, 1.0_wp, 1.0_wp, k, c)
-      rho = 0.0_wp
-      if (abs(k(2, 2)) > 0.0_wp) then
-         rho = -k(1, 2)/k(2, 2)
-      else if (abs(c(2, 2)) > 0.0_wp) then
-         rho = -c(1, 2)/c(2, 2)
-      end if
-   end function speed_ratio
-
    !> Set the mesh frequency of gear element ie to f (teeth/s): initial speeds of the
    !> connected train and its prescribed constant speeds (see the module's note).
    subroutine set_mesh_frequency(model, ie, f, err)
@@ -153,9 +136,8 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp), allocatable :: w(:)
       logical, allocatable :: known(:)
-      real(wp) :: teeth, rho
-      integer :: nn, i, j, pass
-      logical :: changed
+      real(wp) :: teeth
+      integer :: nn, i, loop_el
 
       teeth = driver_teeth(model, ie)
       associate (e => model%elements(ie)%e)
@@ -169,40 +151,14 @@ contains
             return
          end if
          nn = size(model%nodes)
-         allocate (w(nn), known(nn))
-         known = .false.
-         w = 0.0_wp
-         w(e%left) = two_pi*f/teeth
-         known(e%left) = .true.
+         call rigid_speeds(model, e%left, two_pi*f/teeth, w, known, loop_el)
       end associate
-      ! carry the speed along the elements until nothing changes (the train is small)
-      do pass = 1, size(model%elements) + 1
-         changed = .false.
-         do j = 1, size(model%elements)
-            associate (e => model%elements(j)%e)
-               if (model%nodes(e%left)%n%is_fixed() .or. model%nodes(e%right)%n%is_fixed()) cycle
-               if (.not. (known(e%left) .or. known(e%right))) cycle
-               rho = speed_ratio(model, j)
-               if (rho == 0.0_wp) cycle
-               if (known(e%left) .and. known(e%right)) then
-                  if (abs(w(e%right) - rho*w(e%left)) > 1.0e-9_wp*max(abs(w(e%right)), abs(w(e%left)))) then
-                     call fatal_error(err, "error: the speed ratios around a loop through element '"//e%id// &
-                                      "' do not agree, so no speeds turn the whole train rigidly", err_input)
-                     return
-                  end if
-               else if (known(e%left)) then
-                  w(e%right) = rho*w(e%left)
-                  known(e%right) = .true.
-                  changed = .true.
-               else
-                  w(e%left) = w(e%right)/rho
-                  known(e%left) = .true.
-                  changed = .true.
-               end if
-            end associate
-         end do
-         if (.not. changed) exit
-      end do
+      if (loop_el > 0) then
+         call fatal_error(err, "error: the speed ratios around a loop through element '"// &
+                          model%elements(loop_el)%e%id//"' do not agree, so no speeds turn the whole train rigidly", &
+                          err_input)
+         return
+      end if
       ! prescribed speeds in the connected part must be constant; set them
       do i = 1, nn
          if (.not. known(i)) cycle
