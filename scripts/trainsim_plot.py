@@ -22,6 +22,7 @@ and tooth count). Axes carry units, the title is the run's.
 import argparse
 import os
 import sys
+import textwrap
 
 import h5py
 import numpy as np
@@ -150,7 +151,8 @@ def main(argv=None):
             title = str(f.attrs.get("title", os.path.basename(a.file)))
             overrides = str(f.attrs.get("overrides", ""))
             if overrides:   # the deck's title does not know the --set values of this run
-                title += f"\n(--set {overrides})"
+                # wrapped to the figure's width (a sweep's override list is long)
+                title += "\n" + "\n".join(textwrap.wrap(f"(--set {overrides})", 100))
             fig, ax = plt.subplots(figsize=(8, 4.5))
             if a.te_spectrum:
                 data, unit = prepare_te_spectrum(f, a.te_spectrum, a.t0, a.t1)
