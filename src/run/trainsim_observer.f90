@@ -87,7 +87,6 @@ module trainsim_observer
       procedure :: record_events => obs_record_events
       procedure :: finish => obs_finish
       procedure, private :: fill => obs_fill
-      procedure, private :: step_ws => obs_step_ws
       procedure, private :: emit => obs_emit
    end type observer_t
 
@@ -273,28 +272,7 @@ contains
       end if
    end subroutine obs_fill
 
-   !> `step` without peak refinement and energy tracking, when the integrator
-   !> has just evaluated the RHS at (t, y) (model%ws_step_end): each element's
-   !> displacement, force, contact and torque on its right node are taken from
-   !> the model's workspace (bit for bit what `fill` puts in the sample) and
-   !> folded into the metrics as `update_metrics` does; only the displacements
-   !> go to the sample buffer (s_whole = .false.). Returns .false. (nothing
-   !> done) without that workspace.
-   logical function obs_step_ws(self, model, t) result(done)
-      class(observer_t), intent(inout) :: self
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t
-      done = model%ws_step_end .and. model%ws_t == t
-      if (.not. done) return
-      self%s%t = t
-      self%s_whole = .false.
-      call fold_ws(t, t >= self%t_metrics, self%t_prev, model%el_torque, model%el_disp, model%el_force, &
-                   model%status_in_ws, model%elements, model%theta, model%omega, self%s%displacement, self%res%el, &
-                   self%res%events, self%t_counted)
-      self%t_prev = t
-   end function obs_step_ws
-
-   !> The kernel of `step_ws` on plain arrays (dummies: no aliasing, the array
+   !> The kernel of `step`'s short way on plain arrays (dummies: no aliasing, the array
    !> descriptors read once): per element, its status from the workspace (a
    !> linear spring whose status the RHS computed: status_in_ws) or from the
    !> element, then fold_element's updates in fold_element's order.
@@ -388,8 +366,22 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
-      if (.not. (self%refine_peaks .or. self%track)) then   ! else the whole sample: node angles and speeds, energies
-         if (self%step_ws(model, t)) return
+      ! the short way (D-34): no peak refinement, no energy tracking, and the
+      ! integrator has just evaluated the RHS at (t, y) (model%ws_step_end).
+      ! Each element's displacement, force, contact and torque on its right
+      ! node are taken from the model's workspace (bit for bit what `fill`
+      ! puts in the sample) and folded into the metrics as `update_metrics`
+      ! does; only the displacements go to the sample buffer (s_whole = .false.)
+      if (.not. (self%refine_peaks .or. self%track) .and. model%ws_step_end) then
+         if (model%ws_t == t) then
+            self%s%t = t
+            self%s_whole = .false.
+            call fold_ws(t, t >= self%t_metrics, self%t_prev, model%el_torque, model%el_disp, model%el_force, &
+                         model%status_in_ws, model%elements, model%theta, model%omega, self%s%displacement, &
+                         self%res%el, self%res%events, self%t_counted)
+            self%t_prev = t
+            return
+         end if
       end if
       call self%fill(model, t, y)
       if (self%refine_peaks) call self%refine(model, t)
