@@ -9,6 +9,7 @@ program test_library_runs
    use trainsim_observer, only: run_result_t
    use trainsim_simulate, only: simulate
    use trainsim_hdf5, only: hdf5_sink_t
+   use trainsim_sink, only: null_sink_t, element_metrics_t, event_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model, run_model
    implicit none
@@ -17,6 +18,7 @@ program test_library_runs
    call test_interleaved_runs_are_bit_identical()
    call test_copies_are_independent()
    call test_many_hdf5_histories_from_one_process()
+   call test_metrics_do_not_depend_on_who_takes_the_samples()
    call suite_end()
 
 contains
@@ -92,4 +94,96 @@ contains
       end do
       call check('20 runs in one process each wrote a complete history', ok == 20)
    end subroutine test_many_hdf5_histories_from_one_process
+
+   !> D-34: on a fixed-step run the observer folds the metrics straight from
+   !> the model's workspace and builds a sample only when someone takes it
+   !> (a sink that stores samples, keep_series). The two-clearance deck (two
+   !> backlash gears, shafts, impacts and separations; settle_time so that the
+   !> metrics start mid-run) with an output every step and every 3rd step:
+   !> the null sink (no sample built), an HDF5 file with keep_series (every
+   !> sample whole) and a run that takes the long way every step (energy
+   !> tracking: the whole sample at every step, then update_metrics) give the
+   !> same metrics, p2p figures and event table, to the bit.
+   subroutine test_metrics_do_not_depend_on_who_takes_the_samples()
+      type(model_t) :: base, m
+      type(run_result_t) :: r_null, r_file, r_long
+      type(hdf5_sink_t) :: h5
+      type(null_sink_t) :: none
+      type(error_t), allocatable :: err
+      character(len=*), parameter :: path = '/tmp/trainsim_library_samples_taken.h5'
+      integer :: every, u, ios, n_states
+      logical :: ok_file, ok_long
+      call test_begin('metrics_do_not_depend_on_who_takes_the_samples')
+      call load_model('inputs/two_clearance.nml', base)
+      base%run%settle_time = 0.3_wp*(base%run%t_end - base%run%t_start)
+      base%run%keep_events = .true.
+      base%run%track_energy = .false.   ! (the deck tracks it: that takes the long way)
+      call base%finalize()
+      n_states = base%n_states
+      do every = 1, 3, 2
+         base%run%output_interval = real(every, wp)*base%run%dt
+         m = base
+         call simulate(m, none, r_null, err)
+         call check('null sink: the run completes', .not. allocated(err))
+         if (allocated(err)) return
+         m = base
+         m%run%keep_series = .true.
+         h5%path = path
+         call simulate(m, h5, r_file, err)
+         call check('HDF5 file and keep_series: the run completes', .not. allocated(err))
+         if (allocated(err)) return
+         open (newunit=u, file=path, iostat=ios)
+         if (ios == 0) close (u, status='delete')
+         m = base
+         m%run%track_energy = .true.
+         call m%finalize()
+         call simulate(m, none, r_long, err)
+         call check('energy tracking: the run completes', .not. allocated(err))
+         if (allocated(err)) return
+         ok_file = same_run(r_null, r_file, n_states)
+         ok_long = same_run(r_null, r_long, n_states)
+         call check('output every '//merge('step    ', '3rd step', every == 1)//': file + keep_series = null sink, '// &
+                    'to the bit', ok_file)
+         call check('output every '//merge('step    ', '3rd step', every == 1)//': whole sample every step = '// &
+                    'null sink, to the bit', ok_long)
+      end do
+      call check('the deck exercises the metrics: impacts on both gears, swings counted', &
+                 all(r_null%el(2:4:2)%impacts > 0) .and. all(r_null%el(2:4:2)%p2p_swings > 0) .and. &
+                 size(r_null%events) > 10)
+   end subroutine test_metrics_do_not_depend_on_who_takes_the_samples
+
+   !> Same final physical state, metrics and event table, to the bit.
+   logical function same_run(a, b, n_states) result(same)
+      type(run_result_t), intent(in) :: a, b
+      integer, intent(in) :: n_states
+      integer :: i
+      same = all(a%y_final(1:n_states) == b%y_final(1:n_states)) .and. size(a%el) == size(b%el) .and. &
+             size(a%events) == size(b%events)
+      if (.not. same) return
+      do i = 1, size(a%el)
+         same = same .and. same_metrics(a%el(i), b%el(i))
+      end do
+      do i = 1, size(a%events)
+         same = same .and. same_event(a%events(i), b%events(i))
+      end do
+   end function same_run
+
+   logical function same_metrics(a, b) result(same)
+      type(element_metrics_t), intent(in) :: a, b
+      same = a%force_min == b%force_min .and. a%force_max == b%force_max .and. a%torque_min == b%torque_min .and. &
+             a%torque_max == b%torque_max .and. a%disp_min == b%disp_min .and. a%disp_max == b%disp_max .and. &
+             a%impacts == b%impacts .and. a%separations == b%separations .and. a%zone_changes == b%zone_changes .and. &
+             a%max_approach_velocity == b%max_approach_velocity .and. a%max_peak_force == b%max_peak_force .and. &
+             a%time_out_of_contact == b%time_out_of_contact .and. a%p2p_range == b%p2p_range .and. &
+             a%p2p_mean == b%p2p_mean .and. a%p2p_swings == b%p2p_swings .and. (a%p2p_exact .eqv. b%p2p_exact)
+   end function same_metrics
+
+   logical function same_event(a, b) result(same)
+      type(event_t), intent(in) :: a, b
+      same = a%t == b%t .and. a%element == b%element .and. a%kind == b%kind .and. &
+             a%approach_velocity == b%approach_velocity .and. a%peak_force == b%peak_force .and. &
+             a%duration == b%duration .and. a%theta_left == b%theta_left .and. a%omega_left == b%omega_left .and. &
+             a%theta_right == b%theta_right .and. a%omega_right == b%omega_right .and. &
+             a%displacement == b%displacement .and. a%force == b%force
+   end function same_event
 end program test_library_runs
