@@ -46,9 +46,9 @@ module trainsim_observer
    end type run_result_t
 
    type :: observer_t
-      !> The sample buffer. After `step` (no peak refinement, no energy
-      !> tracking) it holds at s%t only what the peak-to-peak detectors read:
-      !> each element's displacement (s_whole = .false.); the whole sample is
+      !> The sample buffer. After `step` (no peak refinement) it holds at s%t
+      !> only what the peak-to-peak detectors read, each element's
+      !> displacement, and the energies (s_whole = .false.); the whole sample is
       !> filled when someone takes it (a sink that stores samples,
       !> keep_series) or an event is recorded (D-34).
       type(sample_t) :: s
@@ -227,7 +227,6 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       integer :: i, l, r
-      real(wp) :: stored
       logical :: ws
       ws = model%ws_step_end .and. model%ws_t == t
       self%s_whole = .true.
@@ -263,14 +262,29 @@ contains
                           self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
          end associate
       end do
-      if (self%track) then
-         call model%workspace_energy(y, stored, self%s%energy(2))   ! the kinematics at (t, y) are in the workspace
-         self%s%energy(1) = stored - self%s%energy(2)
-         self%s%energy(3) = y(model%n_states + 1)
-         self%s%energy(4) = y(model%n_states + 2)
-         self%s%energy(5) = stored + self%s%energy(3) - self%s%energy(4) - model%energy0
-      end if
+      if (self%track) call fill_energy(self, model, y)
    end subroutine obs_fill
+
+   !> The energies of the sample at (t, y), the kinematics at (t, y) in the workspace.
+   subroutine fill_energy(self, model, y)
+      type(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:)
+      real(wp) :: stored
+      call model%workspace_energy(y, stored, self%s%energy(2))
+      self%s%energy(1) = stored - self%s%energy(2)
+      self%s%energy(3) = y(model%n_states + 1)
+      self%s%energy(4) = y(model%n_states + 2)
+      self%s%energy(5) = stored + self%s%energy(3) - self%s%energy(4) - model%energy0
+   end subroutine fill_energy
+
+   !> The sample's energies into the balance figures.
+   subroutine fold_energy(self)
+      type(observer_t), intent(inout) :: self
+      self%res%energy_residual_max = max(self%res%energy_residual_max, abs(self%s%energy(5)))
+      self%res%energy_scale = max(self%res%energy_scale, abs(self%s%energy(1) + self%s%energy(2)), &
+                                  abs(self%s%energy(4)), abs(self%s%energy(3)))
+   end subroutine fold_energy
 
    !> The kernel of `step`'s short way on plain arrays (dummies: no aliasing, the array
    !> descriptors read once): per element, its status from the workspace (a
@@ -366,19 +380,23 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
-      ! the short way (D-34): no peak refinement, no energy tracking, and the
-      ! integrator has just evaluated the RHS at (t, y) (model%ws_step_end).
-      ! Each element's displacement, force, contact and torque on its right
-      ! node are taken from the model's workspace (bit for bit what `fill`
-      ! puts in the sample) and folded into the metrics as `update_metrics`
-      ! does; only the displacements go to the sample buffer (s_whole = .false.)
-      if (.not. (self%refine_peaks .or. self%track) .and. model%ws_step_end) then
+      ! the short way (D-34): no peak refinement, and the integrator has just
+      ! evaluated the RHS at (t, y) (model%ws_step_end). Each element's
+      ! displacement, force, contact and torque on its right node are taken
+      ! from the model's workspace (bit for bit what `fill` puts in the
+      ! sample) and folded into the metrics as `update_metrics` does; only the
+      ! displacements (and the energies) go to the sample buffer (s_whole = .false.)
+      if (.not. self%refine_peaks .and. model%ws_step_end) then
          if (model%ws_t == t) then
             self%s%t = t
             self%s_whole = .false.
             call fold_ws(t, t >= self%t_metrics, self%t_prev, model%el_torque, model%el_disp, model%el_force, &
                          model%status_in_ws, model%elements, model%theta, model%omega, self%s%displacement, &
                          self%res%el, self%res%events, self%t_counted)
+            if (self%track) then
+               call fill_energy(self, model, y)
+               call fold_energy(self)
+            end if
             self%t_prev = t
             return
          end if
@@ -610,11 +628,7 @@ contains
             end associate
          end do
       end if
-      if (self%track) then
-         self%res%energy_residual_max = max(self%res%energy_residual_max, abs(self%s%energy(5)))
-         self%res%energy_scale = max(self%res%energy_scale, abs(self%s%energy(1) + self%s%energy(2)), &
-                                     abs(self%s%energy(4)), abs(self%s%energy(3)))
-      end if
+      if (self%track) call fold_energy(self)
       self%t_prev = t
    end subroutine obs_update_metrics
 
