@@ -329,7 +329,6 @@ contains
       end do
    end subroutine fold_ws
 
-
    !> Cubic Hermite interpolation on a step of length h at tau in [0, 1]: the
    !> value x and its rate v from the values and rates at both ends.
    pure subroutine hermite(x0, v0, x1, v1, h, tau, x, v)
