@@ -6,7 +6,7 @@ program test_gear_rigs
    use trainsim_observer, only: run_result_t
    use trainsim_modes, only: modes_t, compute_modes
    use trainsim_el_spur_gear, only: mesh_zone, contact_ratio
-   use trainsim_metrics, only: peak_to_peak, p2p_detector_t, peak_to_peak_values
+   use trainsim_metrics, only: peak_to_peak, p2p_detector_t, peak_to_peak_values, push_samples
    use trainsim_observer, only: p2p_hysteresis
    use trainsim_sink, only: ev_zone
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
@@ -202,15 +202,15 @@ contains
    subroutine test_online_detector_on_random_signals()
       integer, parameter :: n_sig = 3000
       real(wp) :: x(6000), u(6000), r1, m1, r2, m2, a
-      integer :: k, i, n, n1, n2, n_exact, n_bad, n_short_inexact, n_long, n_replayed
+      integer :: k, i, n, n1, n2, n_exact, n_bad, n_short_inexact, n_long, n_replayed, n_differ
       integer, allocatable :: seed(:)
-      type(p2p_detector_t) :: det
+      type(p2p_detector_t) :: det, dets(2)
       call test_begin('online_detector_on_random_signals')
       call random_seed(size=n)
       allocate (seed(n))
       seed = 20261123
       call random_seed(put=seed)
-      n_exact = 0; n_bad = 0; n_short_inexact = 0; n_long = 0; n_replayed = 0
+      n_exact = 0; n_bad = 0; n_short_inexact = 0; n_long = 0; n_replayed = 0; n_differ = 0
       do k = 1, n_sig
          call random_number(u)
          call random_number(a)
@@ -238,6 +238,18 @@ contains
             end do
          end select
          det = p2p_detector_t(hyst=0.1_wp)
+         dets = p2p_detector_t(hyst=0.1_wp)
+         do i = 1, n
+            call det%push(x(i))
+            call push_samples(dets, [x(i), -x(i)])   ! the observer's way, one sample per detector
+         end do
+         if (.not. same_state(det, dets(1))) n_differ = n_differ + 1
+         det = p2p_detector_t(hyst=0.1_wp)
+         do i = 1, n
+            call det%push(-x(i))
+         end do
+         if (.not. same_state(det, dets(2))) n_differ = n_differ + 1
+         det = p2p_detector_t(hyst=0.1_wp)
          do i = 1, n
             call det%push(x(i))
          end do
@@ -257,7 +269,24 @@ contains
       call check('every short signal is exact (fewer extremes than the log holds)', n_short_inexact == 0)
       call check('the re-run was exercised (> 100 signals)', n_replayed > 100)
       call check('the long signals are exact too (folded edges far above the threshold)', n_exact == n_sig)
+      call check('push_samples (the observer''s path) leaves each detector as det_push does, to the bit', n_differ == 0)
    end subroutine test_online_detector_on_random_signals
+
+   !> Two detectors in the same state, every field to the bit.
+   logical function same_state(a, b) result(same)
+      type(p2p_detector_t), intent(in) :: a, b
+      same = a%n == b%n .and. a%x1 == b%x1 .and. a%xmin == b%xmin .and. a%xmax == b%xmax .and. a%h == b%h .and. &
+             (a%exact .eqv. b%exact) .and. a%e_min == b%e_min .and. a%e_min_f == b%e_min_f .and. &
+             a%n_log == b%n_log .and. a%replays == b%replays
+      ! the detector now and its folded part
+      same = same .and. a%s%dir == b%s%dir .and. a%s%cand == b%s%cand .and. a%s%last_ext == b%s%last_ext .and. &
+             (a%s%have_max .eqv. b%s%have_max) .and. a%s%last_max == b%s%last_max .and. a%s%total == b%s%total .and. &
+             a%s%n_swings == b%s%n_swings
+      same = same .and. a%f%dir == b%f%dir .and. a%f%cand == b%f%cand .and. a%f%last_ext == b%f%last_ext .and. &
+             (a%f%have_max .eqv. b%f%have_max) .and. a%f%last_max == b%f%last_max .and. a%f%total == b%f%total .and. &
+             a%f%n_swings == b%f%n_swings
+      if (same .and. a%n_log > 0) same = all(a%log(1:a%n_log) == b%log(1:b%n_log))
+   end function same_state
 
    !> Swings of 1 for 3000 samples (more extremes than the log holds), then the
    !> range grows to 20 (threshold 2): the swings already folded would not be

@@ -6,9 +6,13 @@ program test_library_runs
    use trainsim_kinds, only: wp, two_pi
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
-   use trainsim_observer, only: run_result_t
+   use trainsim_observer, only: run_result_t, observer_t
+   use trainsim_integrator, only: integrator_t, adv_event
+   use trainsim_integrator_registry, only: make_integrator
+   use trainsim_run_stats, only: run_stats_t
    use trainsim_simulate, only: simulate
    use trainsim_hdf5, only: hdf5_sink_t
+   use trainsim_sink, only: null_sink_t, element_metrics_t, event_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model, run_model
    implicit none
@@ -17,6 +21,8 @@ program test_library_runs
    call test_interleaved_runs_are_bit_identical()
    call test_copies_are_independent()
    call test_many_hdf5_histories_from_one_process()
+   call test_metrics_do_not_depend_on_who_takes_the_samples()
+   call test_short_way_of_the_observer_equals_the_whole_sample()
    call suite_end()
 
 contains
@@ -92,4 +98,206 @@ contains
       end do
       call check('20 runs in one process each wrote a complete history', ok == 20)
    end subroutine test_many_hdf5_histories_from_one_process
+
+   !> D-34: on a fixed-step run the observer folds the metrics straight from
+   !> the model's workspace and builds a sample only when someone takes it
+   !> (a sink that stores samples, keep_series). The two-clearance deck (two
+   !> backlash gears, shafts, impacts and separations; settle_time so that the
+   !> metrics start mid-run) with an output every step and every 3rd step:
+   !> the null sink (no sample built), an HDF5 file with keep_series (every
+   !> sample whole) and a run with energy tracking (two more states, the
+   !> energies folded each step) give the same metrics, p2p figures and event
+   !> table, to the bit. (The short way against the whole sample at each step:
+   !> test_short_way_of_the_observer_equals_the_whole_sample.)
+   subroutine test_metrics_do_not_depend_on_who_takes_the_samples()
+      type(model_t) :: base, m
+      type(run_result_t) :: r_null, r_file, r_long
+      type(hdf5_sink_t) :: h5
+      type(null_sink_t) :: none
+      type(error_t), allocatable :: err
+      character(len=*), parameter :: path = '/tmp/trainsim_library_samples_taken.h5'
+      integer :: every, u, ios, n_states
+      logical :: ok_file, ok_long
+      call test_begin('metrics_do_not_depend_on_who_takes_the_samples')
+      call load_model('inputs/two_clearance.nml', base)
+      base%run%settle_time = 0.3_wp*(base%run%t_end - base%run%t_start)
+      base%run%keep_events = .true.
+      base%run%track_energy = .false.   ! (the deck tracks it: that takes the long way)
+      call base%finalize()
+      n_states = base%n_states
+      do every = 1, 3, 2
+         base%run%output_interval = real(every, wp)*base%run%dt
+         m = base
+         call simulate(m, none, r_null, err)
+         call check('null sink: the run completes', .not. allocated(err))
+         if (allocated(err)) return
+         m = base
+         m%run%keep_series = .true.
+         h5%path = path
+         call simulate(m, h5, r_file, err)
+         call check('HDF5 file and keep_series: the run completes', .not. allocated(err))
+         if (allocated(err)) return
+         open (newunit=u, file=path, iostat=ios)
+         if (ios == 0) close (u, status='delete')
+         m = base
+         m%run%track_energy = .true.
+         call m%finalize()
+         call simulate(m, none, r_long, err)
+         call check('energy tracking: the run completes', .not. allocated(err))
+         if (allocated(err)) return
+         ok_file = same_run(r_null, r_file, n_states)
+         ok_long = same_run(r_null, r_long, n_states)
+         call check('output every '//merge('step    ', '3rd step', every == 1)//': file + keep_series = null sink, '// &
+                    'to the bit', ok_file)
+         call check('output every '//merge('step    ', '3rd step', every == 1)//': energy tracked = '// &
+                    'null sink, to the bit', ok_long)
+      end do
+      call check('the deck exercises the metrics: impacts on both gears, swings counted', &
+                 all(r_null%el(2:4:2)%impacts > 0) .and. all(r_null%el(2:4:2)%p2p_swings > 0) .and. &
+                 size(r_null%events) > 10)
+   end subroutine test_metrics_do_not_depend_on_who_takes_the_samples
+
+   !> D-34 at the level of one step: two copies of the two-clearance deck (energy
+   !> tracked, settle_time mid-run) advanced by RK4 side by side up to the first
+   !> event, each step given to an observer. Observer A takes the short way
+   !> (the model's workspace holds the RHS at the step's end); for observer B
+   !> the mark is cleared first, so it fills the whole sample (recomputing the
+   !> kinematics, torques and statuses) and folds it as before. The metrics and
+   !> the energy balance figures are the same to the bit.
+   subroutine test_short_way_of_the_observer_equals_the_whole_sample()
+      type(model_t) :: ma, mb
+      class(integrator_t), allocatable :: ia, ib
+      type(observer_t) :: oa, ob
+      type(null_sink_t), target :: sa, sb
+      type(run_result_t) :: ra, rb
+      type(run_stats_t) :: stats
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: ya(:), yb(:)
+      real(wp) :: ta, tb, t_goal
+      integer :: k, sta, stb, n_short, n_steps, n_events
+      logical :: same_y
+      call test_begin('short_way_of_the_observer_equals_the_whole_sample')
+      call load_model('inputs/two_clearance.nml', ma)
+      call check('the deck tracks the energy', ma%run%track_energy)
+      ma%run%settle_time = 0.002_wp
+      mb = ma
+      call begin_run(ma, ia, oa, sa, ta, ya, err)
+      if (allocated(err)) return
+      call begin_run(mb, ib, ob, sb, tb, yb, err)
+      if (allocated(err)) return
+      n_short = 0; n_steps = 0; n_events = 0; same_y = .true.
+      do k = 1, 200
+         t_goal = ma%run%t_start + real(k, wp)*ma%run%dt
+         do   ! to the grid point, through the events on the way
+            call ia%advance(ma, t_goal, ta, ya, sta, err)
+            if (allocated(err)) exit
+            call ib%advance(mb, t_goal, tb, yb, stb, err)
+            if (allocated(err)) exit
+            n_steps = n_steps + 1
+            same_y = same_y .and. ta == tb .and. all(ya == yb) .and. sta == stb
+            if (ma%ws_step_end) n_short = n_short + 1
+            call oa%step(ma, ta, ya)
+            mb%ws_step_end = .false.   ! the long way: the whole sample, recomputed
+            call ob%step(mb, tb, yb)
+            if (sta /= adv_event) exit
+            n_events = n_events + 1
+            call settle(ma, ia, oa, ta, ya, err)
+            if (allocated(err)) exit
+            call settle(mb, ib, ob, tb, yb, err)
+            if (allocated(err)) exit
+         end do
+         if (allocated(err)) exit
+      end do
+      call check('no error', .not. allocated(err))
+      if (allocated(err)) return
+      write (*, '(a,i0,a,i0,a,i0,a)') '    ', n_steps, ' steps, ', n_short, ' the short way, ', n_events, ' events'
+      call check('steps on both sides of settle_time and events among them; the plain steps the short way for A', &
+                 n_steps - n_events > nint(ma%run%settle_time/ma%run%dt) + 10 .and. n_events > 2 .and. &
+                 n_short == n_steps - n_events)
+      call check('the two copies step alike, to the bit', same_y)
+      call oa%finish(ma, ta, ya, stats, sa, ra, err)
+      call ob%finish(mb, tb, yb, stats, sb, rb, err)
+      call check('metrics (extremes, p2p, time out of contact) equal to the bit', same_run(ra, rb, ma%n_states))
+      call check('energy balance figures equal to the bit', ra%energy_residual_max == rb%energy_residual_max .and. &
+                 ra%energy_scale == rb%energy_scale .and. ra%energy_scale > 0.0_wp)
+   end subroutine test_short_way_of_the_observer_equals_the_whole_sample
+
+   !> The modes settled at an event, as the driver does, and RK4 restarted.
+   subroutine settle(m, integ, obs, t, y, err)
+      type(model_t), intent(inout) :: m
+      class(integrator_t), intent(inout) :: integ
+      type(observer_t), intent(inout) :: obs
+      real(wp), intent(in) :: t
+      real(wp), intent(inout) :: y(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: g(:)
+      logical, allocatable :: fired(:)
+      type(event_t), allocatable :: ev(:)
+      integer :: pass, nev
+      allocate (g(m%n_guards), fired(m%n_guards), ev(64))
+      do pass = 1, 16
+         call m%guards(t, y, g)
+         fired = g < 0.0_wp
+         if (.not. any(fired)) exit
+         nev = 0
+         call m%apply_events(t, y, fired, ev, nev)
+         call obs%record_events(m, t, y, ev, nev, err)
+         if (allocated(err)) return
+      end do
+      call integ%restart(m, t, y, err)
+   end subroutine settle
+
+   !> As simulate starts a run: RK4 and the observer at (t_start, initial state).
+   subroutine begin_run(m, integ, obs, sink, t, y, err)
+      type(model_t), intent(inout) :: m
+      class(integrator_t), allocatable, intent(out) :: integ
+      type(observer_t), intent(inout) :: obs
+      type(null_sink_t), intent(inout), target :: sink
+      real(wp), intent(out) :: t
+      real(wp), allocatable, intent(out) :: y(:)
+      type(error_t), allocatable, intent(out) :: err
+      call make_integrator('rk4', integ)
+      t = m%run%t_start
+      call m%initial_state(y)
+      call m%init_modes(t, y)
+      call integ%set_stop(m%run%t_end, .false.)
+      call integ%start(m, t, y, err)
+      if (.not. allocated(err)) call obs%start(m, t, y, sink, err)
+      call check('start', .not. allocated(err))
+   end subroutine begin_run
+
+   !> Same final physical state, metrics and event table, to the bit.
+   logical function same_run(a, b, n_states) result(same)
+      type(run_result_t), intent(in) :: a, b
+      integer, intent(in) :: n_states
+      integer :: i
+      same = all(a%y_final(1:n_states) == b%y_final(1:n_states)) .and. size(a%el) == size(b%el) .and. &
+             size(a%events) == size(b%events)
+      if (.not. same) return
+      do i = 1, size(a%el)
+         same = same .and. same_metrics(a%el(i), b%el(i))
+      end do
+      do i = 1, size(a%events)
+         same = same .and. same_event(a%events(i), b%events(i))
+      end do
+   end function same_run
+
+   logical function same_metrics(a, b) result(same)
+      type(element_metrics_t), intent(in) :: a, b
+      same = a%force_min == b%force_min .and. a%force_max == b%force_max .and. a%torque_min == b%torque_min .and. &
+             a%torque_max == b%torque_max .and. a%disp_min == b%disp_min .and. a%disp_max == b%disp_max .and. &
+             a%impacts == b%impacts .and. a%separations == b%separations .and. a%zone_changes == b%zone_changes .and. &
+             a%max_approach_velocity == b%max_approach_velocity .and. a%max_peak_force == b%max_peak_force .and. &
+             a%time_out_of_contact == b%time_out_of_contact .and. a%p2p_range == b%p2p_range .and. &
+             a%p2p_mean == b%p2p_mean .and. a%p2p_swings == b%p2p_swings .and. (a%p2p_exact .eqv. b%p2p_exact)
+   end function same_metrics
+
+   logical function same_event(a, b) result(same)
+      type(event_t), intent(in) :: a, b
+      same = a%t == b%t .and. a%element == b%element .and. a%kind == b%kind .and. &
+             a%approach_velocity == b%approach_velocity .and. a%peak_force == b%peak_force .and. &
+             a%duration == b%duration .and. a%theta_left == b%theta_left .and. a%omega_left == b%omega_left .and. &
+             a%theta_right == b%theta_right .and. a%omega_right == b%omega_right .and. &
+             a%displacement == b%displacement .and. a%force == b%force
+   end function same_event
 end program test_library_runs

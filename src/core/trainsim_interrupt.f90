@@ -1,5 +1,6 @@
 !> SIGINT and SIGTERM as a flag: the handler only records the signal, the run loop
-!> polls `interrupt_signal()` once per step and stops with an error value, so the
+!> polls the flag (`signal_caught`, read as a plain variable) once per step and
+!> stops with an error value, so the
 !> program unwinds normally (temporary output removed, stdout flushed) and exits
 !> with 128 + the signal number.
 !>
@@ -10,15 +11,16 @@ module trainsim_interrupt
    implicit none
    private
 
-   public :: install_interrupt_handlers, interrupt_signal, signal_name
+   public :: install_interrupt_handlers, interrupt_signal, signal_name, signal_caught
    public :: sigint, sigterm
 
    integer(c_int), parameter :: sigint = 2    !< POSIX signal numbers
    integer(c_int), parameter :: sigterm = 15
 
    !> Signal received, 0 if none (written only by the handler; an int is what C's
-   !> sig_atomic_t is on every platform trainsim builds on).
-   integer(c_int), volatile, save :: caught = 0
+   !> sig_atomic_t is on every platform trainsim builds on). Read-only outside:
+   !> the run loop polls it as a variable (a load per step, no call).
+   integer(c_int), volatile, protected, save :: signal_caught = 0
 
    interface
       !> C signal(3); glibc gives BSD semantics (the handler stays installed).
@@ -41,14 +43,14 @@ contains
    !> Catch SIGINT and SIGTERM from now on (for `trainsim run`).
    subroutine install_interrupt_handlers()
       type(c_funptr) :: previous
-      caught = 0
+      signal_caught = 0
       previous = c_signal(sigint, c_funloc(on_signal))
       previous = c_signal(sigterm, c_funloc(on_signal))
    end subroutine install_interrupt_handlers
 
    !> The signal that asked the program to stop (sigint or sigterm), 0 if none.
    integer function interrupt_signal()
-      interrupt_signal = int(caught)
+      interrupt_signal = int(signal_caught)
    end function interrupt_signal
 
    !> "SIGINT", "SIGTERM" or "signal N".
@@ -72,11 +74,11 @@ contains
       integer(c_int), value :: signum
       type(c_funptr) :: previous
       integer(c_int) :: rc
-      if (caught /= 0) then
+      if (signal_caught /= 0) then
          previous = c_signal(signum, c_null_funptr)   ! SIG_DFL
          rc = c_raise(signum)
          return
       end if
-      caught = signum
+      signal_caught = signum
    end subroutine on_signal
 end module trainsim_interrupt

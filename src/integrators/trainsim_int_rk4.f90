@@ -351,7 +351,10 @@ contains
          call self%mr_continue(model, t_goal, t, y, status, done)
          if (done) return
       end if
-      t_grid = self%grid_target(t)
+      ! the next grid point (grid_target, written out for the usual case: t not
+      ! already on it)
+      t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
+      if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
       t_sub = min(t_grid, t_goal)
       at_bp = self%stop_is_breakpoint .and. t_sub >= self%t_stop - self%tiny_t
       h = t_sub - t

@@ -132,7 +132,7 @@ contains
    !> integrator having reported it (a root finder can miss a crossing that
    !> goes down and up inside one step): the driver then checks the guards at
    !> every output time. Default: no (the state at the end of every step was
-   !> checked by `advance` itself).
+   !> checked by `advance` itself). Asked once per run: the answer may not change.
    pure logical function integrator_may_miss_events(self) result(may)
       class(integrator_t), intent(in) :: self
       may = .false.

@@ -85,6 +85,7 @@ module trainsim_sink
       procedure :: abort => sink_abort
       procedure :: write_event => sink_write_event
       procedure :: update_event => sink_update_event
+      procedure :: stores_samples => sink_stores_samples
    end type sink_t
 
    abstract interface
@@ -121,6 +122,7 @@ module trainsim_sink
       procedure :: open => null_open
       procedure :: write_sample => null_sample
       procedure :: close => null_close
+      procedure :: stores_samples => null_stores_samples
    end type null_sink_t
 
 contains
@@ -131,6 +133,16 @@ contains
       associate (unused => self)
       end associate
    end subroutine sink_abort
+
+   !> Whether the sink looks at the samples (asked once, at the start of a run).
+   !> A sink that answers .false. is not given any: write_sample is never
+   !> called, and the observer does not build them (D-34). Default: .true.
+   pure logical function sink_stores_samples(self) result(stores)
+      class(sink_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      stores = .true.
+   end function sink_stores_samples
 
    !> Default: events are not stored.
    subroutine sink_write_event(self, row, ev, err)
@@ -167,6 +179,14 @@ contains
       associate (u1 => self, u2 => s)
       end associate
    end subroutine null_sample
+
+   !> The null sink takes no samples.
+   pure logical function null_stores_samples(self) result(stores)
+      class(null_sink_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      stores = .false.
+   end function null_stores_samples
 
    subroutine null_close(self, events, stats, metrics, err)
       class(null_sink_t), intent(inout) :: self

@@ -12,7 +12,7 @@ module trainsim_metrics
    implicit none
    private
 
-   public :: peak_to_peak, peak_to_peak_values, p2p_detector_t
+   public :: peak_to_peak, peak_to_peak_values, p2p_detector_t, push_samples
 
    !> State of the hysteresis peak detector (as in peak_to_peak_values).
    type :: p2p_state_t
@@ -234,6 +234,42 @@ contains
          end do
       end subroutine replay
    end subroutine det_push
+
+   !> One sample per detector: x(i) to det(i)%push, with det_push's own steps
+   !> written out for the usual sample, one inside the range seen so far (the
+   !> threshold does not move, so det_push would only feed it), and det_push
+   !> itself for the others: the same state, without a call per sample.
+   subroutine push_samples(det, x)
+      type(p2p_detector_t), intent(inout) :: det(:)
+      real(wp), intent(in) :: x(:)
+      integer :: i
+      logical :: confirmed
+      real(wp) :: edge
+      do i = 1, size(det)
+         associate (d => det(i))
+            if (d%n > 0 .and. x(i) >= d%xmin .and. x(i) <= d%xmax) then
+               d%n = d%n + 1
+               if (.not. d%h > 0.0_wp) cycle
+               ! feed's branches that confirm nothing: a rising edge not yet
+               ! down by h from its maximum, a falling one not yet up by h
+               if (d%s%dir == 1 .and. x(i) > d%s%cand - d%h) then
+                  if (x(i) > d%s%cand) d%s%cand = x(i)
+                  cycle
+               else if (d%s%dir == -1 .and. x(i) < d%s%cand + d%h) then
+                  if (x(i) < d%s%cand) d%s%cand = x(i)
+                  cycle
+               end if
+               call feed(d%s, x(i), d%h, confirmed, edge)
+               if (confirmed) then
+                  d%e_min = min(d%e_min, edge)
+                  call keep(d, d%s%last_ext)
+               end if
+            else
+               call d%push(x(i))
+            end if
+         end associate
+      end do
+   end subroutine push_samples
 
    !> Log a confirmed extreme; when the log is full, fold its older half into
    !> the folded state (run through the detector with the threshold now).

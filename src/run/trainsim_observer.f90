@@ -15,11 +15,12 @@ module trainsim_observer
    use trainsim_error, only: error_t
    use trainsim_strings, only: string_t
    use trainsim_model, only: model_t
+   use trainsim_element, only: element_slot_t
    use trainsim_signal, only: signal_t
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_full
-   use trainsim_metrics, only: p2p_detector_t
+   use trainsim_metrics, only: p2p_detector_t, push_samples
    implicit none
    private
 
@@ -45,7 +46,15 @@ module trainsim_observer
    end type run_result_t
 
    type :: observer_t
+      !> The sample buffer. After `step` (no peak refinement) it holds at s%t
+      !> only what the peak-to-peak detectors read, each element's
+      !> displacement, and the energies (s_whole = .false.); the whole sample is
+      !> filled when someone takes it (a sink that stores samples,
+      !> keep_series) or an event is recorded (D-34).
       type(sample_t) :: s
+      logical :: s_whole = .false.                   !< s is a whole sample at s%t
+      logical :: take_samples = .true.               !< the sink stores samples (sink_t%stores_samples)
+      logical :: want_whole = .true.                 !< take_samples or keep: a sample must be whole
       type(run_result_t) :: res
       integer :: n_events = 0                        !< rows handed to the sink so far
       integer, allocatable :: open_row(:)            !< per element: row number of its contact in progress
@@ -192,6 +201,8 @@ contains
       allocate (self%turns(ne))
       self%turns%hyst = p2p_hysteresis
       self%keep = model%run%keep_series
+      self%take_samples = sink%stores_samples()
+      self%want_whole = self%take_samples .or. self%keep
       nmax = 0
       if (self%keep) nmax = 1024
       allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
@@ -216,9 +227,9 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       integer :: i, l, r
-      real(wp) :: stored
       logical :: ws
       ws = model%ws_step_end .and. model%ws_t == t
+      self%s_whole = .true.
       if (.not. ws) then
          call model%kinematics(t, y)
          if (model%any_needs_loads) call model%apply_loads(t)   ! torques of elements that read their nodes' loads
@@ -251,14 +262,72 @@ contains
                           self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
          end associate
       end do
-      if (self%track) then
-         call model%workspace_energy(y, stored, self%s%energy(2))   ! the kinematics at (t, y) are in the workspace
-         self%s%energy(1) = stored - self%s%energy(2)
-         self%s%energy(3) = y(model%n_states + 1)
-         self%s%energy(4) = y(model%n_states + 2)
-         self%s%energy(5) = stored + self%s%energy(3) - self%s%energy(4) - model%energy0
-      end if
+      if (self%track) call fill_energy(self, model, y)
    end subroutine obs_fill
+
+   !> The energies of the sample at (t, y), the kinematics at (t, y) in the workspace.
+   subroutine fill_energy(self, model, y)
+      type(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:)
+      real(wp) :: stored
+      call model%workspace_energy(y, stored, self%s%energy(2))
+      self%s%energy(1) = stored - self%s%energy(2)
+      self%s%energy(3) = y(model%n_states + 1)
+      self%s%energy(4) = y(model%n_states + 2)
+      self%s%energy(5) = stored + self%s%energy(3) - self%s%energy(4) - model%energy0
+   end subroutine fill_energy
+
+   !> The sample's energies into the balance figures.
+   subroutine fold_energy(self)
+      type(observer_t), intent(inout) :: self
+      self%res%energy_residual_max = max(self%res%energy_residual_max, abs(self%s%energy(5)))
+      self%res%energy_scale = max(self%res%energy_scale, abs(self%s%energy(1) + self%s%energy(2)), &
+                                  abs(self%s%energy(4)), abs(self%s%energy(3)))
+   end subroutine fold_energy
+
+   !> The kernel of `step`'s short way on plain arrays (dummies: no aliasing, the array
+   !> descriptors read once): per element, its status from the workspace (a
+   !> linear spring whose status the RHS computed: status_in_ws) or from the
+   !> element, then fold_element's updates in fold_element's order.
+   subroutine fold_ws(t, on, t_prev, el_torque, el_disp, el_force, in_ws, elements, theta, omega, disp, m, events, &
+                      t_counted)
+      real(wp), intent(in) :: t, t_prev
+      logical, intent(in) :: on    !< t >= t_metrics
+      real(wp), intent(in), contiguous :: el_torque(:, :), el_disp(:), el_force(:), theta(:), omega(:), t_counted(:)
+      logical, intent(in), contiguous :: in_ws(:)
+      type(element_slot_t), intent(in), contiguous :: elements(:)
+      real(wp), intent(inout), contiguous :: disp(:)
+      type(element_metrics_t), intent(inout), contiguous :: m(:)
+      type(event_t), intent(inout), contiguous :: events(:)
+      integer :: i, k, l, r, c, p
+      real(wp) :: d, f, torque, t0
+      do i = 1, size(elements)
+         if (in_ws(i)) then
+            d = el_disp(i)
+            f = el_force(i)
+            c = 1
+            p = 0
+         else
+            l = elements(i)%e%left; r = elements(i)%e%right
+            call elements(i)%e%status(theta(l), omega(l), theta(r), omega(r), d, f, c, p)
+         end if
+         torque = el_torque(2, i)
+         disp(i) = d
+         k = m(i)%open_event
+         if (k > 0) events(k)%peak_force = max(events(k)%peak_force, abs(f))
+         if (on) then
+            m(i)%force_min = min(m(i)%force_min, f)
+            m(i)%force_max = max(m(i)%force_max, f)
+            m(i)%torque_min = min(m(i)%torque_min, torque)
+            m(i)%torque_max = max(m(i)%torque_max, torque)
+            m(i)%disp_min = min(m(i)%disp_min, d)
+            m(i)%disp_max = max(m(i)%disp_max, d)
+            t0 = max(t_prev, t_counted(i))
+            if (c == 0 .and. t > t0) m(i)%time_out_of_contact = m(i)%time_out_of_contact + (t - t0)
+         end if
+      end do
+   end subroutine fold_ws
 
    !> Cubic Hermite interpolation on a step of length h at tau in [0, 1]: the
    !> value x and its rate v from the values and rates at both ends.
@@ -280,12 +349,8 @@ contains
       class(sink_t), intent(inout) :: sink
       type(error_t), allocatable, intent(out) :: err
       real(wp), allocatable :: t2(:), d2(:, :), th2(:, :), om2(:, :)
-      integer :: n, i
-      if (self%s%t >= self%t_metrics) then
-         do i = 1, size(self%turns)
-            call self%turns(i)%push(self%s%displacement(i))
-         end do
-      end if
+      integer :: n
+      if (self%s%t >= self%t_metrics) call push_samples(self%turns, self%s%displacement)
       if (self%keep) then
          if (self%n_series == size(self%res%series_t)) then
             n = self%n_series
@@ -306,7 +371,7 @@ contains
          self%res%series_theta(:, self%n_series) = self%s%theta
          self%res%series_omega(:, self%n_series) = self%s%omega
       end if
-      call sink%write_sample(self%s, err)
+      if (self%take_samples) call sink%write_sample(self%s, err)
    end subroutine obs_emit
 
    !> After every step of the integrator: update the metrics at (t, y).
@@ -314,6 +379,27 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
+      ! the short way (D-34): no peak refinement, and the integrator has just
+      ! evaluated the RHS at (t, y) (model%ws_step_end). Each element's
+      ! displacement, force, contact and torque on its right node are taken
+      ! from the model's workspace (bit for bit what `fill` puts in the
+      ! sample) and folded into the metrics as `update_metrics` does; only the
+      ! displacements (and the energies) go to the sample buffer (s_whole = .false.)
+      if (.not. self%refine_peaks .and. model%ws_step_end) then
+         if (model%ws_t == t) then
+            self%s%t = t
+            self%s_whole = .false.
+            call fold_ws(t, t >= self%t_metrics, self%t_prev, model%el_torque, model%el_disp, model%el_force, &
+                         model%status_in_ws, model%elements, model%theta, model%omega, self%s%displacement, &
+                         self%res%el, self%res%events, self%t_counted)
+            if (self%track) then
+               call fill_energy(self, model, y)
+               call fold_energy(self)
+            end if
+            self%t_prev = t
+            return
+         end if
+      end if
       call self%fill(model, t, y)
       if (self%refine_peaks) call self%refine(model, t)
       call self%update_metrics(model, t)
@@ -347,6 +433,7 @@ contains
       call model%kinematics_part(t, y, nodes)
       if (model%any_needs_loads) call model%apply_loads(t)
       self%s%t = -huge(1.0_wp)
+      self%s_whole = .false.
       do k = 1, size(nodes)
          self%s%theta(nodes(k)) = model%theta(nodes(k))
          self%s%omega(nodes(k)) = model%omega(nodes(k))
@@ -518,15 +605,29 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: t
-      integer :: i
+      integer :: i, k
+      real(wp) :: t0
+      ! fold_element for every element, the time test once
       do i = 1, size(model%elements)
-         call fold_element(self, i, t)
+         k = self%res%el(i)%open_event
+         if (k > 0) self%res%events(k)%peak_force = max(self%res%events(k)%peak_force, abs(self%s%force(i)))
       end do
-      if (self%track) then
-         self%res%energy_residual_max = max(self%res%energy_residual_max, abs(self%s%energy(5)))
-         self%res%energy_scale = max(self%res%energy_scale, abs(self%s%energy(1) + self%s%energy(2)), &
-                                     abs(self%s%energy(4)), abs(self%s%energy(3)))
+      if (t >= self%t_metrics) then
+         do i = 1, size(model%elements)
+            associate (m => self%res%el(i), f => self%s%force(i), tr => self%s%torque_right(i), &
+                       dd => self%s%displacement(i))
+               m%force_min = min(m%force_min, f)
+               m%force_max = max(m%force_max, f)
+               m%torque_min = min(m%torque_min, tr)
+               m%torque_max = max(m%torque_max, tr)
+               m%disp_min = min(m%disp_min, dd)
+               m%disp_max = max(m%disp_max, dd)
+               t0 = max(self%t_prev, self%t_counted(i))
+               if (self%s%contact(i) == 0 .and. t > t0) m%time_out_of_contact = m%time_out_of_contact + (t - t0)
+            end associate
+         end do
       end if
+      if (self%track) call fold_energy(self)
       self%t_prev = t
    end subroutine obs_update_metrics
 
@@ -538,7 +639,13 @@ contains
       real(wp), intent(in) :: t_out, t, y(:)
       class(sink_t), intent(inout) :: sink
       type(error_t), allocatable, intent(out) :: err
-      if (self%s%t /= t) call self%fill(model, t, y)
+      if (self%s%t == t .and. .not. self%want_whole) then
+         ! `emit` for a sample no one takes: the peak-to-peak detectors only
+         self%s%t = t_out
+         if (t_out >= self%t_metrics) call push_samples(self%turns, self%s%displacement)
+         return
+      end if
+      if (self%s%t /= t .or. .not. self%s_whole) call self%fill(model, t, y)
       self%s%t = t_out
       call self%emit(sink, err)
    end subroutine obs_sample

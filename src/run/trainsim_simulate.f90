@@ -15,7 +15,7 @@
 module trainsim_simulate
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric, err_interrupted, err_input
-   use trainsim_interrupt, only: interrupt_signal
+   use trainsim_interrupt, only: signal_caught
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_event, only: event_t, ev_name
@@ -56,6 +56,7 @@ module trainsim_simulate
       real(wp) :: tol = 0.0_wp             !< times closer than this are one instant
       real(wp) :: t_window = 0.0_wp        !< start of the current event-budget window
       integer :: window_events = 0         !< events since t_window
+      logical :: may_miss = .false.        !< integ%may_miss_events(), asked once per run
    end type drive_t
 
 contains
@@ -124,6 +125,7 @@ contains
       n_out = int(min(max(n_real, 1.0_wp), 9.0e18_wp), i8)
       d%tol = 1.0e-9_wp*model%run%dt
       d%t_window = t
+      d%may_miss = integ%may_miss_events()
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
       call model%breakpoints(t, t_end, d%bp)
       call set_next_stop(d, integ, t, t_end)
@@ -170,11 +172,11 @@ contains
             if (status == adv_event) local = integ%local_instant(r_nodes, r_states, r_els, r_gels)
             if (local) then
                call check_state(model, integ, t, y, err, r_states)
-            else
+            else if (.not. within_limit(y)) then
                call check_state(model, integ, t, y, err)
             end if
             if (allocated(err)) return
-            if (interrupt_signal() /= 0) then   ! SIGINT/SIGTERM: stop at this step
+            if (signal_caught /= 0) then   ! SIGINT/SIGTERM: stop at this step
                call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
                return
             end if
@@ -198,7 +200,7 @@ contains
             call set_next_stop(d, integ, t, t_end)
             call settle_if_fired(model, integ, obs, d, t, y, .false., err, force_restart=.true.)
             if (allocated(err)) return
-         else if (integ%may_miss_events()) then
+         else if (d%may_miss) then
             ! a guard below zero that the integrator did not report (safety net)
             call settle_if_fired(model, integ, obs, d, t, y, .false., err)
             if (allocated(err)) return
@@ -363,6 +365,20 @@ contains
                        ev_name(d%ev(max(nev, 1))%kind)//"' of element '"//model%elements(last)%e%id//"'). "// &
                        stability_advice(model), err_numeric)
    end subroutine count_events
+
+   !> Every entry of y within the blow-up limit (NaN is not): the test of
+   !> check_state without the error path, small enough to be inlined.
+   pure logical function within_limit(y) result(ok)
+      real(wp), intent(in) :: y(:)
+      integer :: i
+      ok = .true.
+      do i = 1, size(y)
+         if (.not. abs(y(i)) <= blowup_limit) then
+            ok = .false.
+            return
+         end if
+      end do
+   end function within_limit
 
    !> NaN or runaway state after a step -> an error naming the time, the node
    !> and quantity, and the likely cause.
