@@ -9,7 +9,8 @@ module trainsim_model
    use trainsim_units, only: units_t
    use trainsim_signal, only: signal_t
    use trainsim_node, only: node_t, node_slot_t
-   use trainsim_element, only: element_t, element_slot_t, lin_closed
+   use trainsim_element, only: element_t, element_slot_t, lin_closed, hot_form_t, hf_none, hf_open, hf_yang_sun, &
+                               hf_linear, hg_none, hg_faces, hg_faces_zone
    use trainsim_event, only: event_t, max_update_events
    implicit none
    private
@@ -38,6 +39,11 @@ module trainsim_model
       !> of the angle of its left and right node if a plain inertia, else 0
       !> (`rhs_simple` and `guards` read those straight from y).
       integer :: form = 0, yl = 0, yr = 0
+      !> The element's hot form (D-35) in its current mode, refreshed after every
+      !> mode change the model makes (`refresh_hot`): a clearance's torques (form
+      !> lf_open, lf_yang_sun, lf_cl_linear) and its guards (gform, hg_*).
+      type(hot_form_t) :: h
+      integer :: gform = hg_none
    end type fast_element_t
 
    !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
@@ -45,6 +51,9 @@ module trainsim_model
    !> the RHS's critical path): general, undamped (c = 0), undamped with unit
    !> lever arms (a shaft: c = 0, r1 = r2 = 1).
    integer, parameter :: lf_general = 1, lf_undamped = 2, lf_unit = 3
+   !> Forms of a clearance element in its current mode (its hot form, D-35):
+   !> open, closed with the yang_sun law, closed with the linear law.
+   integer, parameter :: lf_open = 4, lf_yang_sun = 5, lf_cl_linear = 6
 
    !> A load on the hot path: its node and, when constant, its value.
    type :: fast_load_t
@@ -149,6 +158,7 @@ module trainsim_model
       procedure :: guard_element => model_guard_element
       procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
+      procedure :: preload_mode => model_preload_mode
       procedure :: apply_events => model_apply_events
       procedure :: any_contact => model_any_contact
       procedure :: stored_energy => model_stored_energy
@@ -259,6 +269,7 @@ contains
             if (self%fn(e%left)%kind == nk_plain) self%fe(i)%yl = self%fn(e%left)%off + 1
             if (self%fn(e%right)%kind == nk_plain) self%fe(i)%yr = self%fn(e%right)%off + 1
          end associate
+         call refresh_hot(self, i)
       end do
       self%guard_els = pack([(i, i=1, ne)], self%fe(:)%ng > 0)
       if (allocated(self%fl)) deallocate (self%fl)
@@ -308,7 +319,7 @@ contains
       if (allocated(self%status_in_ws)) deallocate (self%status_in_ws)
       allocate (self%status_in_ws(ne))
       do i = 1, ne
-         self%status_in_ws(i) = self%simple .and. self%fe(i)%form /= 0
+         self%status_in_ws(i) = self%simple .and. self%fe(i)%form >= lf_general .and. self%fe(i)%form <= lf_unit
          if (self%status_in_ws(i)) self%status_in_ws(i) = status_agrees(self%elements(i)%e, self%fe(i))
       end do
       self%ws_step_end = .false.
@@ -702,6 +713,14 @@ contains
             disp(i) = d
             force(i) = f
             if (track) pdiss = pdiss + fe(i)%c*dv**2
+         case (lf_open)                                                    ! a clearance open (D-35)
+            f = 0.0_wp
+            et(2*i - 1) = -(f*fe(i)%h%r1)
+            et(2*i) = f*fe(i)%h%r2
+            if (track) pdiss = pdiss + 0.0_wp
+         case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
+            call hot_torques(fe(i)%h, thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
+            if (track) pdiss = pdiss + pw
          case default
             if (track) then
                call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
@@ -796,6 +815,14 @@ contains
             et(2*i - 1) = -(f*fe(i)%r1)
             et(2*i) = f*fe(i)%r2
             if (track) pdiss = pdiss + fe(i)%c*dv**2
+         case (lf_open)                                                    ! a clearance open (D-35)
+            f = 0.0_wp
+            et(2*i - 1) = -(f*fe(i)%h%r1)
+            et(2*i) = f*fe(i)%h%r2
+            if (track) pdiss = pdiss + 0.0_wp
+         case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
+            call hot_torques(fe(i)%h, thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
+            if (track) pdiss = pdiss + pw
          case default
             if (track) then
                call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
@@ -1086,7 +1113,7 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
       integer :: k, i, o, n
-      real(wp) :: thl, wl, thr, wr
+      real(wp) :: thl, wl, thr, wr, gh(4)
       if (self%n_guards == 0) return
       ! only the nodes of elements with guards (a long train has few of them)
       do k = 1, size(self%guard_els)
@@ -1106,7 +1133,13 @@ contains
          else
             call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
          end if
-         call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
+         select case (self%fe(i)%gform)
+         case (hg_faces, hg_faces_zone)                 ! the element's hot form (D-35)
+            call hot_guards(self%fe(i)%h, thl, thr, gh)
+            g(o + 1:o + n) = gh(1:n)
+         case default
+            call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
+         end select
       end do
    end subroutine model_guards
 
@@ -1119,10 +1152,15 @@ contains
       integer, intent(in) :: i
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      real(wp) :: thl, wl, thr, wr
+      real(wp) :: thl, wl, thr, wr, gh(4)
       call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
       call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
-      call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
+      if (self%fe(i)%gform /= hg_none) then              ! the element's hot form (D-35)
+         call hot_guards(self%fe(i)%h, thl, thr, gh)
+         g(1:self%fe(i)%ng) = gh(1:self%fe(i)%ng)
+      else
+         call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
+      end if
    end subroutine model_element_guards
 
    !> The element that owns guard j (0 if none).
@@ -1176,9 +1214,125 @@ contains
          l = self%elements(i)%e%left
          r = self%elements(i)%e%right
          call self%elements(i)%e%init_mode(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
+         call refresh_hot(self, i)
       end do
       self%energy0 = self%stored_energy(t, y)
    end subroutine model_init_modes
+
+   !> Element j's static-preload mode (`preload_mode` of the element: face +1,
+   !> -1 or 0, zones from the angles) at the given kinematics, through the
+   !> model, which refreshes the element's hot form (D-35).
+   subroutine model_preload_mode(self, j, face, thl, wl, thr, wr)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: j, face
+      real(wp), intent(in) :: thl, wl, thr, wr
+      call self%elements(j)%e%preload_mode(face, thl, wl, thr, wr)
+      call refresh_hot(self, j)
+   end subroutine model_preload_mode
+
+   !> Ask element i for its hot form (D-35) in its current mode and take it only
+   !> where the element's own procedures agree bit for bit at three probe
+   !> states (`torques`, `torques_dissipation`, `guards`): otherwise the
+   !> element is asked through its procedures as before. Torque forms only for
+   !> elements that read no loads and supply no power, and not for linear
+   !> springs (they have their own form).
+   subroutine refresh_hot(self, i)
+      type(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      type(hot_form_t) :: h
+      real(wp) :: x(4), g(4), gh(4), tl, tr, pw, htl, htr, hpw, pen
+      integer :: p, ng
+      associate (e => self%elements(i)%e, q => self%fe(i))
+         call e%hot_form(h)
+         if (q%linear .or. e%needs_loads .or. e%supplies_power) h%kind = hf_none
+         ng = q%ng
+         if (.not. ((h%guards == hg_faces .and. ng == 2) .or. (h%guards == hg_faces_zone .and. ng == 4))) &
+            h%guards = hg_none
+         do p = 1, 3
+            if (h%kind == hf_none .and. h%guards == hg_none) exit
+            ! two states with the face penetrated by a little, one anywhere
+            x = [0.0_wp, 1.1_wp*p, 0.3_wp*p, -0.7_wp/p]
+            pen = 0.25_wp*p*max(h%b, 1.0e-3_wp)
+            if (h%r1 /= 0.0_wp) x(1) = (h%r2*x(3) + h%s*(h%b + pen))/h%r1
+            if (p == 3) x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]
+            if (h%kind /= hf_none) then
+               call e%torques(x(1), x(2), x(3), x(4), tl, tr)
+               call hot_torques(h, x(1), x(2), x(3), x(4), htl, htr, hpw)
+               if (.not. (tl == htl .and. tr == htr)) h%kind = hf_none
+               call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
+               if (.not. (tl == htl .and. tr == htr .and. pw == hpw)) h%kind = hf_none
+            end if
+            if (h%guards /= hg_none) then
+               call e%guards(x(1), x(2), x(3), x(4), g(1:ng))
+               call hot_guards(h, x(1), x(3), gh)
+               if (any(g(1:ng) /= gh(1:ng))) h%guards = hg_none
+            end if
+         end do
+         q%h = h
+         q%gform = h%guards
+         if (.not. q%linear) then
+            select case (h%kind)
+            case (hf_open); q%form = lf_open
+            case (hf_yang_sun); q%form = lf_yang_sun
+            case (hf_linear); q%form = lf_cl_linear
+            case default; q%form = 0
+            end select
+         end if
+      end associate
+   end subroutine refresh_hot
+
+   !> Torques (and the power dissipated) of a hot form (D-35): ce_torques and
+   !> ce_torques_dissipation's arithmetic, the same operations in the same order.
+   pure subroutine hot_torques(h, thl, wl, thr, wr, tl, tr, pw)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, pw
+      real(wp) :: d, dd, p, pdot, f, fs
+      if (h%kind == hf_open) then
+         fs = 0.0_wp
+         tl = -(fs*h%r1)
+         tr = fs*h%r2
+         pw = 0.0_wp
+         return
+      end if
+      d = h%r1*thl - h%r2*thr
+      dd = h%r1*wl - h%r2*wr
+      p = h%s*d - h%b
+      pdot = h%s*dd
+      if (h%kind == hf_yang_sun) then
+         f = h%c*(h%k*p + h%dmp*p*pdot)                                  ! eqs. (3.18)-(3.19)
+      else
+         f = h%c*(h%k*p) + h%dmp*pdot
+      end if
+      if (h%no_tension) f = max(f, 0.0_wp)
+      fs = h%s*f
+      tl = -(fs*h%r1)
+      tr = fs*h%r2
+      pw = (h%s*fs - h%c*(h%k*p))*pdot
+   end subroutine hot_torques
+
+   !> Guards of a hot form (D-35): cl_guards' faces, and a zone window.
+   pure subroutine hot_guards(h, thl, thr, g)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, thr
+      real(wp), intent(out) :: g(4)
+      real(wp) :: d
+      d = h%r1*thl - h%r2*thr
+      select case (h%mode)
+      case (1)
+         g(1) = d - h%b; g(2) = 1.0_wp
+      case (-1)
+         g(1) = 1.0_wp; g(2) = -d - h%b
+      case default
+         g(1) = h%b - d; g(2) = d + h%b
+      end select
+      if (h%lo_open) then
+         g(3) = 1.0_wp
+      else
+         g(3) = thl - h%th_lo
+      end if
+      g(4) = h%th_hi - thl
+   end subroutine hot_guards
 
    !> Update the modes of the elements whose guards fired; the events that
    !> result are appended to events(nev+1:) (with the time and the element
@@ -1228,6 +1382,7 @@ contains
          r = self%elements(i)%e%right
          call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
                                              fired(o + 1:o + n), local, m)
+         call refresh_hot(self, i)
          if (nev + m > size(events)) then
             allocate (grown(max(2*size(events), nev + m, 16)))
             grown(1:nev) = events(1:nev)
