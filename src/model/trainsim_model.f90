@@ -511,8 +511,9 @@ contains
    !> a caller may read (`ws_step_end` cleared). Other models run `model_rhs`.
    subroutine model_rhs_stage(self, t, y, dydt)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t, y(:)
-      real(wp), intent(out) :: dydt(:)
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)
+      real(wp), intent(out), contiguous :: dydt(:)
       self%ws_step_end = .false.
       if (.not. self%simple) then
          call rhs_fast(self, t, y, dydt)
@@ -651,7 +652,7 @@ contains
       real(wp), intent(inout) :: dydt(:)
       logical, intent(in) :: track
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs
       pdiss = 0.0_wp
       pin = 0.0_wp
       do i = 1, nn
@@ -719,8 +720,23 @@ contains
             et(2*i) = f*fe(i)%h%r2
             if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
-            call hot_torques(fe(i)%h, thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
-            if (track) pdiss = pdiss + pw
+            ! hot_torques written out (a call costs more than the arithmetic)
+            associate (h => fe(i)%h)
+               d = h%r1*thl - h%r2*thr
+               dv = h%r1*wl - h%r2*wr
+               p = h%s*d - h%b
+               pdot = h%s*dv
+               if (fe(i)%form == lf_yang_sun) then
+                  f = h%c*(h%k*p + h%dmp*p*pdot)                           ! eqs. (3.18)-(3.19)
+               else
+                  f = h%c*(h%k*p) + h%dmp*pdot
+               end if
+               if (h%no_tension) f = max(f, 0.0_wp)
+               fs = h%s*f
+               et(2*i - 1) = -(fs*h%r1)
+               et(2*i) = fs*h%r2
+               if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
+            end associate
          case default
             if (track) then
                call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
@@ -768,11 +784,12 @@ contains
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: et(2*ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
-      real(wp), intent(in) :: t, y(:)
-      real(wp), intent(inout) :: dydt(:)
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)            ! (model_rhs_stage's: no packing)
+      real(wp), intent(inout), contiguous :: dydt(:)
       logical, intent(in) :: track
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs
       pdiss = 0.0_wp
       pin = 0.0_wp
       if (track) then
@@ -821,8 +838,23 @@ contains
             et(2*i) = f*fe(i)%h%r2
             if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
-            call hot_torques(fe(i)%h, thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
-            if (track) pdiss = pdiss + pw
+            ! hot_torques written out (a call costs more than the arithmetic)
+            associate (h => fe(i)%h)
+               d = h%r1*thl - h%r2*thr
+               dv = h%r1*wl - h%r2*wr
+               p = h%s*d - h%b
+               pdot = h%s*dv
+               if (fe(i)%form == lf_yang_sun) then
+                  f = h%c*(h%k*p + h%dmp*p*pdot)                           ! eqs. (3.18)-(3.19)
+               else
+                  f = h%c*(h%k*p) + h%dmp*pdot
+               end if
+               if (h%no_tension) f = max(f, 0.0_wp)
+               fs = h%s*f
+               et(2*i - 1) = -(fs*h%r1)
+               et(2*i) = fs*h%r2
+               if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
+            end associate
          case default
             if (track) then
                call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
