@@ -1145,7 +1145,7 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
       integer :: k, i, o, n
-      real(wp) :: thl, wl, thr, wr, gh(4)
+      real(wp) :: thl, wl, thr, wr, d
       if (self%n_guards == 0) return
       ! only the nodes of elements with guards (a long train has few of them)
       do k = 1, size(self%guard_els)
@@ -1166,9 +1166,26 @@ contains
             call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
          end if
          select case (self%fe(i)%gform)
-         case (hg_faces, hg_faces_zone)                 ! the element's hot form (D-35)
-            call hot_guards(self%fe(i)%h, thl, thr, gh)
-            g(o + 1:o + n) = gh(1:n)
+         case (hg_faces, hg_faces_zone)                 ! the element's hot form (D-35): hot_guards written out
+            associate (h => self%fe(i)%h)
+               d = h%r1*thl - h%r2*thr
+               select case (h%mode)
+               case (1)
+                  g(o + 1) = d - h%b; g(o + 2) = 1.0_wp
+               case (-1)
+                  g(o + 1) = 1.0_wp; g(o + 2) = -d - h%b
+               case default
+                  g(o + 1) = h%b - d; g(o + 2) = d + h%b
+               end select
+               if (self%fe(i)%gform == hg_faces_zone) then
+                  if (h%lo_open) then
+                     g(o + 3) = 1.0_wp
+                  else
+                     g(o + 3) = thl - h%th_lo
+                  end if
+                  g(o + 4) = h%th_hi - thl
+               end if
+            end associate
          case default
             call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
          end select
