@@ -159,6 +159,7 @@ module trainsim_model
       procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
       procedure :: preload_mode => model_preload_mode
+      procedure :: hot_kinds => model_hot_kinds
       procedure :: apply_events => model_apply_events
       procedure :: any_contact => model_any_contact
       procedure :: stored_energy => model_stored_energy
@@ -1278,6 +1279,16 @@ contains
       call self%elements(j)%e%preload_mode(face, thl, wl, thr, wr)
       call refresh_hot(self, j)
    end subroutine model_preload_mode
+
+   !> The hot form (D-35) the model holds for element i: the torque form
+   !> (hf_*, hf_none when asked through `torques`) and the guard form (hg_*).
+   pure subroutine model_hot_kinds(self, i, kind, guards)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      integer, intent(out) :: kind, guards
+      kind = self%fe(i)%h%kind
+      guards = self%fe(i)%gform
+   end subroutine model_hot_kinds
 
    !> Ask element i for its hot form (D-35) in its current mode and take it only
    !> where the element's own procedures agree bit for bit at three probe
