@@ -39,10 +39,9 @@ module trainsim_model
       !> of the angle of its left and right node if a plain inertia, else 0
       !> (`rhs_simple` and `guards` read those straight from y).
       integer :: form = 0, yl = 0, yr = 0
-      !> The element's hot form (D-35) in its current mode, refreshed after every
-      !> mode change the model makes (`refresh_hot`): a clearance's torques (form
-      !> lf_open, lf_yang_sun, lf_cl_linear) and its guards (gform, hg_*).
-      type(hot_form_t) :: h
+      !> The form of the element's hot form (D-35, the record in the model's fh)
+      !> for its guards (hg_*); its torque form is `form` (lf_open, lf_yang_sun,
+      !> lf_cl_linear).
       integer :: gform = hg_none
    end type fast_element_t
 
@@ -129,6 +128,10 @@ module trainsim_model
       ! objects; every other node and element is asked as before.
       type(fast_node_t), allocatable, private :: fn(:)
       type(fast_element_t), allocatable, private :: fe(:)
+      !> Per element: its hot form (D-35) in its current mode, refreshed after every
+      !> mode change the model makes (`refresh_hot`); apart from fe (which every
+      !> element's evaluation reads) so that fe stays small.
+      type(hot_form_t), allocatable, private :: fh(:)
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
@@ -248,8 +251,8 @@ contains
             end if
          end if
       end do
-      if (allocated(self%fe)) deallocate (self%fe)
-      allocate (self%fe(ne))
+      if (allocated(self%fe)) deallocate (self%fe, self%fh)
+      allocate (self%fe(ne), self%fh(ne))
       do i = 1, ne
          associate (e => self%elements(i)%e)
             self%fe(i)%l = e%left
@@ -520,7 +523,8 @@ contains
          call rhs_fast(self, t, y, dydt)
          return
       end if
-      call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
+      call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
+                            self%elements, &
                             self%el_torque, self%node_first, self%node_inc, t, y, dydt, self%run%track_energy, &
                             self%n_states)
    end subroutine model_rhs_stage
@@ -537,7 +541,7 @@ contains
       self%ws_step_end = .false.
       self%ws_t = t
       if (self%simple) then
-         call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
+         call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
                          self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, &
                          self%node_first, self%node_inc, t, y, dydt, track, self%n_states)
          return
@@ -584,6 +588,9 @@ contains
                tl = -(f*e%r1)
                tr = f*e%r2
                if (track .and. e%c /= 0.0_wp) pdiss = pdiss + e%c*dv**2
+            else if (e%form >= lf_open) then                               ! a clearance's hot form (D-35)
+               call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
+               if (track) pdiss = pdiss + f
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
                if (track) then
@@ -640,11 +647,12 @@ contains
    !> instead of reloading them from the model after every store). The element
    !> torques go to et first; each node then adds its own (node_inc) in a
    !> register, in the order `rhs_fast` adds them to self%torque.
-   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
                          track, ns)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
+      type(hot_form_t), intent(in) :: fh(ne)
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne)
@@ -717,12 +725,12 @@ contains
             if (track) pdiss = pdiss + fe(i)%c*dv**2
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
-            et(2*i - 1) = -(f*fe(i)%h%r1)
-            et(2*i) = f*fe(i)%h%r2
+            et(2*i - 1) = -(f*fh(i)%r1)
+            et(2*i) = f*fh(i)%r2
             if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             ! hot_torques written out (a call costs more than the arithmetic)
-            associate (h => fe(i)%h)
+            associate (h => fh(i))
                d = h%r1*thl - h%r2*thr
                dv = h%r1*wl - h%r2*wr
                p = h%s*d - h%b
@@ -777,10 +785,11 @@ contains
    !> are stored; a node's angle and speed are read where they are used, from y
    !> (a plain inertia) or by the expression `rhs_simple` stores (a held node).
    !> About a tenth of the kernel's time on the Table 5.5 rig (issue 11).
-   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fl, els, et, first, inc, t, y, dydt, track, ns)
+   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, track, ns)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
+      type(hot_form_t), intent(in) :: fh(ne)
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: et(2*ne)
@@ -835,12 +844,12 @@ contains
             if (track) pdiss = pdiss + fe(i)%c*dv**2
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
-            et(2*i - 1) = -(f*fe(i)%h%r1)
-            et(2*i) = f*fe(i)%h%r2
+            et(2*i - 1) = -(f*fh(i)%r1)
+            et(2*i) = f*fh(i)%r2
             if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             ! hot_torques written out (a call costs more than the arithmetic)
-            associate (h => fe(i)%h)
+            associate (h => fh(i))
                d = h%r1*thl - h%r2*thr
                dv = h%r1*wl - h%r2*wr
                p = h%s*d - h%b
@@ -904,6 +913,8 @@ contains
             f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
             tl = -(f*e%r1)
             tr = f*e%r2
+         else if (e%form >= lf_open) then                                  ! a clearance's hot form (D-35)
+            call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
          else
             call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
          end if
@@ -973,6 +984,8 @@ contains
                f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
                tl = -(f*e%r1)
                tr = f*e%r2
+            else if (e%form >= lf_open) then                               ! a clearance's hot form (D-35)
+               call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
             end if
@@ -1168,7 +1181,7 @@ contains
          end if
          select case (self%fe(i)%gform)
          case (hg_faces, hg_faces_zone)                 ! the element's hot form (D-35): hot_guards written out
-            associate (h => self%fe(i)%h)
+            associate (h => self%fh(i))
                d = h%r1*thl - h%r2*thr
                select case (h%mode)
                case (1)
@@ -1206,7 +1219,7 @@ contains
       call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
       call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
       if (self%fe(i)%gform /= hg_none) then              ! the element's hot form (D-35)
-         call hot_guards(self%fe(i)%h, thl, thr, gh)
+         call hot_guards(self%fh(i), thl, thr, gh)
          g(1:self%fe(i)%ng) = gh(1:self%fe(i)%ng)
       else
          call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
@@ -1286,7 +1299,7 @@ contains
       class(model_t), intent(in) :: self
       integer, intent(in) :: i
       integer, intent(out) :: kind, guards
-      kind = self%fe(i)%h%kind
+      kind = self%fh(i)%kind
       guards = self%fe(i)%gform
    end subroutine model_hot_kinds
 
@@ -1328,7 +1341,7 @@ contains
                if (any(g(1:ng) /= gh(1:ng))) h%guards = hg_none
             end if
          end do
-         q%h = h
+         self%fh(i) = h
          q%gform = h%guards
          if (.not. q%linear) then
             select case (h%kind)
