@@ -1216,8 +1216,19 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
       real(wp) :: thl, wl, thr, wr, gh(4)
-      call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
-      call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+      ! a plain inertia's angle and speed straight from y (as model_guards)
+      if (self%fe(i)%yl > 0) then
+         thl = y(self%fe(i)%yl)
+         wl = y(self%fe(i)%yl + 1)
+      else
+         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+      end if
+      if (self%fe(i)%yr > 0) then
+         thr = y(self%fe(i)%yr)
+         wr = y(self%fe(i)%yr + 1)
+      else
+         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+      end if
       if (self%fe(i)%gform /= hg_none) then              ! the element's hot form (D-35)
          call hot_guards(self%fh(i), thl, thr, gh)
          g(1:self%fe(i)%ng) = gh(1:self%fe(i)%ng)
