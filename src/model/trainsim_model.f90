@@ -138,6 +138,9 @@ module trainsim_model
       !> Every node a plain inertia or held at a constant speed, every load
       !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
       logical, private :: simple = .false.
+      !> Element i joins nodes i and i + 1, for every i (a serial chain; the
+      !> stage kernel then sums the node torques in registers).
+      logical, private :: chain = .false.
       !> Per node i: the element torques acting on it, node_inc(node_first(i) :
       !> node_first(i+1) - 1), as indices into el_torque (2 (e - 1) + side), in
       !> the order the generic RHS adds them (elements in order, left side first).
@@ -316,6 +319,10 @@ contains
          inc_n(self%fe(i)%l) = inc_n(self%fe(i)%l) + 1
          self%node_inc(inc_n(self%fe(i)%r)) = 2*i
          inc_n(self%fe(i)%r) = inc_n(self%fe(i)%r) + 1
+      end do
+      self%chain = ne == nn - 1 .and. ne > 0
+      do i = 1, ne
+         if (self%fe(i)%l /= i .or. self%fe(i)%r /= i + 1) self%chain = .false.
       end do
       self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
                     .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0
@@ -526,7 +533,7 @@ contains
       call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
                             self%elements, &
                             self%el_torque, self%node_first, self%node_inc, t, y, dydt, self%run%track_energy, &
-                            self%n_states)
+                            self%n_states, self%chain .and. .not. self%run%track_energy)
    end subroutine model_rhs_stage
 
    !> `model_rhs` without the dispatch.
@@ -785,7 +792,7 @@ contains
    !> are stored; a node's angle and speed are read where they are used, from y
    !> (a plain inertia) or by the expression `rhs_simple` stores (a held node).
    !> About a tenth of the kernel's time on the Table 5.5 rig (issue 11).
-   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, track, ns)
+   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, track, ns, chain)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
@@ -798,10 +805,16 @@ contains
       real(wp), intent(in), contiguous :: y(:)            ! (model_rhs_stage's: no packing)
       real(wp), intent(inout), contiguous :: dydt(:)
       logical, intent(in) :: track
+      !> The train is a serial chain (element i joins nodes i and i + 1) and
+      !> track is off: each node's torque is finished as soon as its right-hand
+      !> element is evaluated (load0 + tr of element i-1 + tl of element i, the
+      !> node_inc order), in a register (no store and reload of et on the path).
+      logical, intent(in) :: chain
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
       pdiss = 0.0_wp
       pin = 0.0_wp
+      tqc = fn(1)%load0
       if (track) then
          do i = 1, nl
             l = fl(i)%node
@@ -829,23 +842,23 @@ contains
          select case (fe(i)%form)
          case (lf_unit)                                                    ! eq. (H.1), c = 0
             f = fe(i)%k*(thl - thr)
-            et(2*i - 1) = -f
-            et(2*i) = f
+            tl = -f
+            tr = f
          case (lf_undamped)                                                ! eq. (H.15)
             f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr)
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
          case (lf_general)
             dv = fe(i)%r1*wl - fe(i)%r2*wr
             d = fe(i)%r1*thl - fe(i)%r2*thr
             f = fe(i)%k*d + fe(i)%c*dv
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
             if (track) pdiss = pdiss + fe(i)%c*dv**2
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
-            et(2*i - 1) = -(f*fh(i)%r1)
-            et(2*i) = f*fh(i)%r2
+            tl = -(f*fh(i)%r1)
+            tr = f*fh(i)%r2
             if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             ! hot_torques written out (a call costs more than the arithmetic)
@@ -861,8 +874,8 @@ contains
                end if
                if (h%no_tension) f = max(f, 0.0_wp)
                fs = h%s*f
-               et(2*i - 1) = -(fs*h%r1)
-               et(2*i) = fs*h%r2
+               tl = -(fs*h%r1)
+               tr = fs*h%r2
                if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
             end associate
          case default
@@ -873,8 +886,39 @@ contains
             else
                call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
             end if
+            tl = et(2*i - 1)
+            tr = et(2*i)
          end select
+         et(2*i - 1) = tl
+         et(2*i) = tr
+         if (chain) then
+            ! node i is done: its torque load0 + tr(i-1) + tl(i) (from the register)
+            tq = tqc + tl
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+               end if
+            end if
+            tqc = fn(i + 1)%load0 + tr
+         end if
       end do
+      if (chain) then
+         ! the last node: load0 + tr of the last element
+         if (fn(nn)%kind == nk_plain) then
+            o = fn(nn)%off
+            dydt(o + 1) = y(o + 2)
+            if (fn(nn)%d == 0.0_wp) then
+               dydt(o + 2) = tqc/fn(nn)%j
+            else
+               dydt(o + 2) = (tqc - fn(nn)%d*y(o + 2))/fn(nn)%j
+            end if
+         end if
+         return
+      end if
       do i = 1, nn
          tq = fn(i)%load0
          do k = first(i), first(i + 1) - 1
