@@ -550,7 +550,8 @@ contains
       if (self%simple) then
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
                          self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, &
-                         self%node_first, self%node_inc, t, y, dydt, track, self%n_states)
+                         self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
+                         self%chain .and. .not. track)
          return
       end if
       pdiss = 0.0_wp
@@ -655,7 +656,7 @@ contains
    !> torques go to et first; each node then adds its own (node_inc) in a
    !> register, in the order `rhs_fast` adds them to self%torque.
    subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
-                         track, ns)
+                         track, ns, chain)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
@@ -667,10 +668,12 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: dydt(:)
       logical, intent(in) :: track
+      logical, intent(in) :: chain   !< as in `rhs_stage_simple` (a serial chain, energy off)
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
       pdiss = 0.0_wp
       pin = 0.0_wp
+      tqc = fn(1)%load0
       do i = 1, nn
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
@@ -710,30 +713,30 @@ contains
          case (lf_unit)                                                    ! eq. (H.1), c = 0
             d = thl - thr
             f = fe(i)%k*d
-            et(2*i - 1) = -f
-            et(2*i) = f
+            tl = -f
+            tr = f
             disp(i) = d
             force(i) = f
          case (lf_undamped)                                                ! eq. (H.15)
             d = fe(i)%r1*thl - fe(i)%r2*thr
             f = fe(i)%k*d
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
             disp(i) = d
             force(i) = f
          case (lf_general)
             dv = fe(i)%r1*wl - fe(i)%r2*wr
             d = fe(i)%r1*thl - fe(i)%r2*thr
             f = fe(i)%k*d + fe(i)%c*dv
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
             disp(i) = d
             force(i) = f
             if (track) pdiss = pdiss + fe(i)%c*dv**2
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
-            et(2*i - 1) = -(f*fh(i)%r1)
-            et(2*i) = f*fh(i)%r2
+            tl = -(f*fh(i)%r1)
+            tr = f*fh(i)%r2
             if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             ! hot_torques written out (a call costs more than the arithmetic)
@@ -749,8 +752,8 @@ contains
                end if
                if (h%no_tension) f = max(f, 0.0_wp)
                fs = h%s*f
-               et(2*i - 1) = -(fs*h%r1)
-               et(2*i) = fs*h%r2
+               tl = -(fs*h%r1)
+               tr = fs*h%r2
                if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
             end associate
          case default
@@ -761,8 +764,40 @@ contains
             else
                call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
             end if
+            tl = et(2*i - 1)
+            tr = et(2*i)
          end select
+         et(2*i - 1) = tl
+         et(2*i) = tr
+         if (chain) then
+            ! node i is done (as in rhs_stage_simple)
+            tq = tqc + tl
+            torque(i) = tq
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+               end if
+            end if
+            tqc = fn(i + 1)%load0 + tr
+         end if
       end do
+      if (chain) then
+         torque(nn) = tqc
+         if (fn(nn)%kind == nk_plain) then
+            o = fn(nn)%off
+            dydt(o + 1) = y(o + 2)
+            if (fn(nn)%d == 0.0_wp) then
+               dydt(o + 2) = tqc/fn(nn)%j
+            else
+               dydt(o + 2) = (tqc - fn(nn)%d*y(o + 2))/fn(nn)%j
+            end if
+         end if
+         return
+      end if
       do i = 1, nn
          tq = fn(i)%load0
          do k = first(i), first(i + 1) - 1
@@ -809,6 +844,8 @@ contains
       !> track is off: each node's torque is finished as soon as its right-hand
       !> element is evaluated (load0 + tr of element i-1 + tl of element i, the
       !> node_inc order), in a register (no store and reload of et on the path).
+      !> (With energy tracking the same, with the nodes' energy terms in a second
+      !> pass, measured no faster: not used.)
       logical, intent(in) :: chain
       integer :: i, l, r, o, k
       real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
