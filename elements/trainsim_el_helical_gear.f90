@@ -14,8 +14,8 @@ module trainsim_el_helical_gear
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
-   use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_element, only: element_t
+   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
+   use trainsim_element, only: element_t, hot_form_t, hf_none
    use trainsim_el_spur_gear, only: tooth_phase, max_teeth
    implicit none
    private
@@ -33,6 +33,7 @@ module trainsim_el_helical_gear
       procedure :: input_power => hel_input_power
       procedure :: factor_derivative => hel_factor_derivative
       procedure :: params => hel_params
+      procedure :: hot_form => hel_hot_form
    end type helical_gear_t
 
 contains
@@ -183,6 +184,15 @@ contains
       class(helical_gear_t), intent(in) :: self
       c = self%mp*self%face/cos(self%zeta)
    end function hel_linear_factor
+
+   !> Hot form (D-35): the faces' guards only; the torques stay with `torques`
+   !> (the stiffness factor varies with the driver angle between events).
+   pure subroutine hel_hot_form(self, form)
+      class(helical_gear_t), intent(in) :: self
+      type(hot_form_t), intent(out) :: form
+      call clearance_hot_form(self, form)
+      form%kind = hf_none
+   end subroutine hel_hot_form
 
    function hel_params(self) result(p)
       class(helical_gear_t), intent(in) :: self

@@ -26,8 +26,8 @@ module trainsim_el_keyed_joint
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
-   use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_element, only: element_t
+   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
+   use trainsim_element, only: element_t, hot_form_t, hf_none
    implicit none
    private
 
@@ -46,6 +46,7 @@ module trainsim_el_keyed_joint
       procedure :: torque_jacobian => key_torque_jacobian
       procedure :: dissipation_power => key_dissipation
       procedure :: torques_dissipation => key_torques_dissipation
+      procedure :: hot_form => key_hot_form
       procedure, private :: friction => key_friction
    end type keyed_joint_t
 
@@ -182,6 +183,16 @@ contains
       call self%torques(thl, wl, thr, wr, tl, tr)
       p = self%dissipation_power(thl, wl, thr, wr)
    end subroutine key_torques_dissipation
+
+   !> Hot form (D-35): the clearance element's, whose torques are key_torques'
+   !> when there is no bore friction (tf = 0: tl - 0 and tr + 0, equal values);
+   !> with bore friction the torques stay with `torques` (the guards are the faces').
+   pure subroutine key_hot_form(self, form)
+      class(keyed_joint_t), intent(in) :: self
+      type(hot_form_t), intent(out) :: form
+      call clearance_hot_form(self, form)
+      if (self%fric_factor /= 0.0_wp) form%kind = hf_none
+   end subroutine key_hot_form
 
    function key_params(self) result(p)
       class(keyed_joint_t), intent(in) :: self

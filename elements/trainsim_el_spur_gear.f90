@@ -24,8 +24,8 @@ module trainsim_el_spur_gear
    use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
-   use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_element, only: element_t
+   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
+   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone
    implicit none
    private
 
@@ -59,6 +59,7 @@ module trainsim_el_spur_gear
       procedure :: params => spur_params
       procedure :: factor => spur_factor
       procedure :: state_factor => spur_state_factor
+      procedure :: hot_form => spur_hot_form
       procedure, private :: set_zone
    end type spur_gear_t
 
@@ -359,6 +360,18 @@ contains
       contact = self%cl%mode
       pairs = self%pairs
    end subroutine spur_status
+
+   !> Hot form (D-35): the clearance element's with the zone's factor (constant
+   !> until the next zone event) and the zone window of guards 3-4.
+   pure subroutine spur_hot_form(self, form)
+      class(spur_gear_t), intent(in) :: self
+      type(hot_form_t), intent(out) :: form
+      call clearance_hot_form(self, form)
+      form%guards = hg_faces_zone
+      form%lo_open = self%lo_open
+      form%th_lo = self%th_lo
+      form%th_hi = self%th_hi
+   end subroutine spur_hot_form
 
    function spur_params(self) result(p)
       class(spur_gear_t), intent(in) :: self

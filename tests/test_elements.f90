@@ -70,6 +70,8 @@ program test_elements
    use trainsim_contact, only: key_lineal_stiffness, fit_tight, fit_loose
    use trainsim_el_keyed_joint, only: keyed_joint_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
+   use trainsim_event, only: event_t
+   use trainsim_element, only: hf_none, hf_open, hf_yang_sun, hf_linear, hg_faces, hg_faces_zone
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
    use trainsim_el_shaft, only: shaft_t
    use trainsim_node_inertia, only: inertia_node_t
@@ -100,6 +102,8 @@ program test_elements
    call test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
    call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.false.)
    call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.true.)
+   call test_hot_forms_are_the_elements_own_arithmetic()
+   call test_hot_form_follows_mode_changes()
    call suite_end()
 
 contains
@@ -586,6 +590,157 @@ contains
       call check('inner-stage RHS: the same derivatives to the bit as the full RHS', all(ds == dg))
       call check('inner-stage RHS: the workspace is not marked as a step end', .not. ms%ws_step_end)
    end subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace
+
+   !> Every clearance element type of the registry, with every contact law it
+   !> takes: in every face (and, for the spur gear, both zones), at random
+   !> states, the model's kernels (inner stage, full RHS with energy rates) and
+   !> guards give the element's own torques, dissipated power and guards to the
+   !> bit, and the hot form (D-35) is taken where it should be.
+   subroutine test_hot_forms_are_the_elements_own_arithmetic()
+      integer, parameter :: n_el = 9
+      character(len=240) :: el(n_el)
+      ! expected torque form when closed / when open, guard form
+      integer, parameter :: want_closed(n_el) = [hf_yang_sun, hf_yang_sun, hf_none, hf_yang_sun, hf_none, &
+                                                 hf_linear, hf_yang_sun, hf_none, hf_linear]
+      integer, parameter :: want_open(n_el) = [hf_open, hf_open, hf_none, hf_open, hf_none, hf_open, hf_open, &
+                                               hf_open, hf_open]
+      integer, parameter :: want_g(n_el) = [hg_faces_zone, hg_faces_zone, hg_faces, hg_faces, hg_faces, hg_faces, &
+                                            hg_faces, hg_faces, hg_faces]
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), dydt(:), g(:)
+      real(wp) :: ge(4), x(4), tl, tr, pw, sgn, b
+      integer :: ie, face, p, kind, gk, ng, zones(2), nz
+      logical :: torques_ok, power_ok, guards_ok, kinds_ok, track
+      call test_begin('hot_forms_are_the_elements_own_arithmetic')
+      el(1) = "type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, contact_ratio=1.5, "// &
+              "approach_angle=0.1, half_backlash=0.001, initial_contact_velocity=0.3"
+      el(2) = "type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, contact_ratio=1.5, "// &
+              "approach_angle=0.1, half_backlash=0.001, no_tension=.true., two_pair_factor=2.0, zone_function='truncate'"
+      el(3) = "type='helical_gear', rb_driver=1.5, rb_driven=1.5, teeth=30, profile_contact_ratio=1.5, "// &
+              "base_helix_angle=20.0, face_width=1.0, half_backlash=0.001"
+      el(4) = "type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, initial_contact_velocity=0.2"
+      el(5) = "type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness_fit='tight', key_length=1.0"
+      el(6) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_damping=1.0"
+      el(7) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_law='yang_sun', radius=0.1, "// &
+              "initial_contact_velocity=0.2, restitution_law='smith'"
+      el(8) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_law='elasto_backlash', contact_damping=2.0"
+      el(9) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_damping=1.5, no_tension=.true."
+      torques_ok = .true.; power_ok = .true.; guards_ok = .true.; kinds_ok = .true.
+      do ie = 1, 2*n_el
+         track = ie > n_el
+         call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = "//merge('.true. ', '.false.', track)// &
+                              " /"//nl//"&node type='inertia', inertia=1.3 /"//nl// &
+                              "&node type='inertia', inertia=0.7 /"//nl//"&element "//trim(el(1 + mod(ie - 1, n_el)))// &
+                              " /"//nl, m)
+         call m%initial_state(y)
+         allocate (dydt(size(y)), g(m%n_guards))
+         ng = m%n_guards
+         nz = 1
+         zones = [0, 0]
+         do face = -1, 1
+            do p = 1, 40
+               associate (e => m%elements(1)%e)
+                  ! a random state near the face: delta = s b (1 + 2u), u in [-1, 1]
+                  ! (penetrations of either sign), the driven angle over a few teeth
+                  sgn = merge(1.0_wp, -1.0_wp, face >= 0)
+                  b = merge(0.01_wp, 0.001_wp, e%displacement_unit() == 'rad')
+                  x(2) = 3.0_wp*sin(78.233_wp*p + face)
+                  x(3) = sin(39.425_wp*p + 2*face)
+                  x(4) = 3.0_wp*sin(4.1_wp*p)
+                  x(1) = (sgn*b*(1.0_wp + 2.0_wp*sin(12.9898_wp*p)) - e%displacement(0.0_wp, x(3)))/ &
+                         e%displacement(1.0_wp, 0.0_wp)
+                  y(1:4) = x
+                  call m%preload_mode(1, face, x(1), x(2), x(3), x(4))
+                  call m%hot_kinds(1, kind, gk)
+                  if (face == 0) then
+                     kinds_ok = kinds_ok .and. kind == want_open(1 + mod(ie - 1, n_el))
+                  else
+                     kinds_ok = kinds_ok .and. kind == want_closed(1 + mod(ie - 1, n_el))
+                  end if
+                  kinds_ok = kinds_ok .and. gk == want_g(1 + mod(ie - 1, n_el))
+                  ! the inner-stage kernel, then the full RHS (energy rates when tracked)
+                  call m%rhs_stage(0.0_wp, y, dydt)
+                  call e%torques(x(1), x(2), x(3), x(4), tl, tr)
+                  torques_ok = torques_ok .and. tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1)
+                  call m%rhs(0.0_wp, y, dydt)
+                  torques_ok = torques_ok .and. tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1)
+                  if (track) then
+                     call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
+                     power_ok = power_ok .and. dydt(m%n_states + 1) == pw
+                  end if
+                  call m%guards(0.0_wp, y, g)
+                  call e%guards(x(1), x(2), x(3), x(4), ge(1:ng))
+                  guards_ok = guards_ok .and. all(g == ge(1:ng))
+                  call m%element_guards(1, 0.0_wp, y, g)
+                  guards_ok = guards_ok .and. all(g == ge(1:ng))
+                  if (ng == 4 .and. face /= 0) then
+                     call e%status(x(1), x(2), x(3), x(4), tl, tr, kind, gk)
+                     zones(gk) = 1
+                  end if
+               end associate
+            end do
+         end do
+         if (ng == 4) nz = sum(zones)
+         call check(trim(el(1 + mod(ie - 1, n_el)))//merge(' (energy on)', '            ', track)// &
+                    ': both mesh zones visited', nz == merge(2, 1, ng == 4))
+         deallocate (dydt, g)
+      end do
+      call check('hot forms taken (or declined) as expected', kinds_ok)
+      call check('kernel torques are the element''s own, to the bit', torques_ok)
+      call check('kernel dissipated power is the element''s own, to the bit', power_ok)
+      call check('guards (all, and one element''s) are the element''s own, to the bit', guards_ok)
+   end subroutine test_hot_forms_are_the_elements_own_arithmetic
+
+   !> The hot form follows every mode change the model makes (an event through
+   !> `apply_events`, `init_modes`, `preload_mode`); a change made on the
+   !> element behind the model's back is not seen (the contract the test
+   !> relies on: without the refresh the kernel's torques would be stale).
+   subroutine test_hot_form_follows_mode_changes()
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), dydt(:), g(:)
+      type(event_t), allocatable :: events(:)
+      logical, allocatable :: fired(:)
+      real(wp) :: tl, tr
+      integer :: nev, kind, gk
+      call test_begin('hot_form_follows_mode_changes')
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
+                           "&node type='inertia', inertia=1.3 /"//nl//"&node type='inertia', inertia=0.7 /"//nl// &
+                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, m)
+      call m%initial_state(y)
+      allocate (dydt(size(y)), g(m%n_guards), fired(m%n_guards), events(4))
+      y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
+      call m%init_modes(0.0_wp, y)
+      call m%hot_kinds(1, kind, gk)
+      call check('init_modes: open', kind == hf_open .and. gk == hg_faces)
+      ! the key has closed on the front face: delta = r (thl - thr) = 0.0015 > b
+      y(1:4) = [0.0015_wp, 1.0_wp, 0.0_wp, -1.0_wp]
+      call m%guards(0.0_wp, y, g)
+      call check('the front-face guard has crossed', g(1) < 0.0_wp)
+      fired = [.true., .false.]
+      nev = 0
+      call m%apply_events(0.0_wp, y, fired, events, nev)
+      call m%hot_kinds(1, kind, gk)
+      call check('apply_events: an impact, the form now closed (yang_sun)', nev == 1 .and. kind == hf_yang_sun)
+      call m%rhs_stage(0.0_wp, y, dydt)
+      call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
+      call check('after the event: the kernel''s torques are the element''s, to the bit, and not zero', &
+                 tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1) .and. tl /= 0.0_wp)
+      call m%preload_mode(1, -1, y(1), y(2), y(3), y(4))
+      call m%rhs_stage(0.0_wp, y, dydt)
+      call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
+      call check('preload_mode (rear face): the kernel''s torques are the element''s, to the bit', &
+                 tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1))
+      ! behind the model's back: the element opens, the model's record does not know
+      call m%elements(1)%e%preload_mode(0, y(1), y(2), y(3), y(4))
+      call m%rhs_stage(0.0_wp, y, dydt)
+      call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
+      call check('a mode set on the element directly is not seen by the kernel (the refresh is what keeps it '// &
+                 'current)', tl == 0.0_wp .and. m%el_torque(1, 1) /= 0.0_wp)
+      call m%init_modes(0.0_wp, y)
+      call m%rhs_stage(0.0_wp, y, dydt)
+      call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
+      call check('init_modes refreshes it again', tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1))
+   end subroutine test_hot_form_follows_mode_changes
 
    !> Element 6 (a shaft) replaced by a recording_shaft_t with its parameters.
    subroutine swap_in_recording_shaft(m)

@@ -215,7 +215,7 @@ contains
       do j = 1, size(model%elements)
          l = model%elements(j)%e%left
          r = model%elements(j)%e%right
-         call model%elements(j)%e%preload_mode(face(j), model%theta(l), model%omega(l), model%theta(r), model%omega(r))
+         call model%preload_mode(j, face(j), model%theta(l), model%omega(l), model%theta(r), model%omega(r))
          if (.not. model%elements(j)%e%in_contact()) face(j) = 0   ! no clearance
       end do
    end subroutine set_modes
@@ -244,7 +244,7 @@ contains
          changed = .true.
          l = model%elements(j)%e%left
          r = model%elements(j)%e%right
-         call model%elements(j)%e%preload_mode(face(j), model%theta(l), model%omega(l), model%theta(r), model%omega(r))
+         call model%preload_mode(j, face(j), model%theta(l), model%omega(l), model%theta(r), model%omega(r))
          call model%elements(j)%e%guards(model%theta(l), model%omega(l), model%theta(r), model%omega(r), g(o + 1:o + n))
          if (minval(g(o + 1:o + n)) < -tol .and. face(j) /= 0) face(j) = -face(j)
       end do

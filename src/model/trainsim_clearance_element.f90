@@ -6,12 +6,13 @@
 module trainsim_clearance_element
    use trainsim_kinds, only: wp
    use trainsim_event, only: event_t
-   use trainsim_contact, only: clearance_t
-   use trainsim_element, only: element_t, lin_state_t, lin_contact_closed
+   use trainsim_contact, only: clearance_t, law_yang_sun, law_linear, fit_none
+   use trainsim_element, only: element_t, lin_state_t, lin_contact_closed, hot_form_t, hf_none, hf_open, &
+                               hf_yang_sun, hf_linear, hg_faces
    implicit none
    private
 
-   public :: clearance_element_t
+   public :: clearance_element_t, clearance_hot_form
 
    type, abstract, extends(element_t) :: clearance_element_t
       type(clearance_t) :: cl
@@ -36,6 +37,7 @@ module trainsim_clearance_element
       procedure :: update_mode => ce_update_mode
       procedure :: in_contact => ce_in_contact
       procedure :: status => ce_status
+      procedure :: hot_form => ce_hot_form
    end type clearance_element_t
 
 contains
@@ -235,4 +237,45 @@ contains
       contact = self%cl%mode
       pairs = 0
    end subroutine ce_status
+
+   !> The hot form (D-35) of `torques` (ce_torques: cl_contact_force with the
+   !> stiffness factor `factor`) and `guards` (ce_guards: the two faces) in the
+   !> current mode: open, or closed with the yang_sun or linear law and a
+   !> constant stiffness law (no key fit); elasto_backlash and fitted keys are
+   !> declined (kind = hf_none). The factor is taken as `factor(0)`: a type
+   !> whose factor varies between events (the helical gear), or that adds to
+   !> the torques (the keyed joint's bore friction), overrides this to decline
+   !> the torque form; one that changes the guards answers its own guard form.
+   pure subroutine ce_hot_form(self, form)
+      class(clearance_element_t), intent(in) :: self
+      type(hot_form_t), intent(out) :: form
+      call clearance_hot_form(self, form)
+   end subroutine ce_hot_form
+
+   !> `ce_hot_form` under a name the concrete types call from their own
+   !> `hot_form` (an abstract parent's binding cannot be called directly).
+   pure subroutine clearance_hot_form(self, form)
+      class(clearance_element_t), intent(in) :: self
+      type(hot_form_t), intent(out) :: form
+      form%guards = hg_faces
+      form%mode = self%cl%mode
+      form%s = real(self%cl%mode, wp)
+      form%b = self%cl%b
+      form%r1 = self%cl%r1
+      form%r2 = self%cl%r2
+      form%k = self%cl%law%k
+      form%no_tension = self%cl%law%no_tension
+      form%c = self%factor(0.0_wp)
+      form%kind = hf_none
+      if (self%cl%law%fit /= fit_none) return
+      if (self%cl%mode == 0) then
+         form%kind = hf_open
+      else if (self%cl%law%law == law_yang_sun) then
+         form%kind = hf_yang_sun
+         form%dmp = self%cl%law%d
+      else if (self%cl%law%law == law_linear) then
+         form%kind = hf_linear
+         form%dmp = self%cl%law%c
+      end if
+   end subroutine clearance_hot_form
 end module trainsim_clearance_element

@@ -21,6 +21,7 @@ module trainsim_element
    public :: lin_state_t, lin_start, lin_closed, lin_stiffest
    public :: lin_contact_initial, lin_contact_closed
    public :: lin_zone_initial, lin_zone_single, lin_zone_stiffest
+   public :: hot_form_t, hf_none, hf_open, hf_yang_sun, hf_linear, hg_none, hg_faces, hg_faces_zone
 
    !> Contact state of a linearisation: as at t_start, or every clearance closed.
    integer, parameter :: lin_contact_initial = 1, lin_contact_closed = 2
@@ -44,6 +45,34 @@ module trainsim_element
    type(lin_state_t), parameter :: lin_closed = lin_state_t(lin_contact_closed, lin_zone_initial, 1.0_wp)
    !> The stiffest state a run can reach: clearances closed, gears at their largest stiffness factor.
    type(lin_state_t), parameter :: lin_stiffest = lin_state_t(lin_contact_closed, lin_zone_stiffest, 1.0_wp)
+
+   !> Torque forms of `hot_form` (D-35): none (asked through `torques`), a
+   !> clearance open (no force), a closed clearance with the yang_sun or the
+   !> linear law and a stiffness factor that is constant until the next event.
+   integer, parameter :: hf_none = 0, hf_open = 1, hf_yang_sun = 2, hf_linear = 3
+   !> Guard forms of `hot_form`: none (asked through `guards`), the two faces of
+   !> a clearance (trainsim_contact's cl_guards), the faces and a driver-angle
+   !> window [th_lo, th_hi] (a gear's mesh zone: guards 3-4).
+   integer, parameter :: hg_none = 0, hg_faces = 1, hg_faces_zone = 2
+
+   !> What an element is between two events, as plain numbers (optional
+   !> capability `hot_form`, D-35): the model evaluates its torques and guards
+   !> from this record, without calls through the element, with the element's
+   !> own operations in the element's own order (bit for bit; see
+   !> docs/elements.md). Closed clearance, face s = mode (+1 front, -1 rear):
+   !>   d = r1 thl - r2 thr, dd = r1 wl - r2 wr, p = s d - b, pdot = s dd,
+   !>   yang_sun: F = c (k p + dmp p pdot);  linear: F = c (k p) + dmp pdot,
+   !>   F = max(F, 0) if no_tension; fs = s F; tl = -(fs r1), tr = fs r2.
+   !> Guards (cl_guards; zone: g3 = thl - th_lo (1 if lo_open), g4 = th_hi - thl).
+   type :: hot_form_t
+      integer :: kind = hf_none
+      integer :: guards = hg_none
+      integer :: mode = 0
+      logical :: no_tension = .false., lo_open = .false.
+      real(wp) :: s = 0.0_wp                  !< real(mode)
+      real(wp) :: c = 1.0_wp, k = 0.0_wp, dmp = 0.0_wp, b = 0.0_wp, r1 = 1.0_wp, r2 = 1.0_wp
+      real(wp) :: th_lo = 0.0_wp, th_hi = 0.0_wp
+   end type hot_form_t
 
    type, abstract :: element_t
       character(len=:), allocatable :: id
@@ -79,6 +108,7 @@ module trainsim_element
       procedure :: status => el_status
       procedure :: params => el_params
       procedure :: linear_spring => el_linear_spring
+      procedure :: hot_form => el_hot_form
    end type element_t
 
    !> A slot in the model's element list (arrays of polymorphic objects).
@@ -301,6 +331,21 @@ contains
       k = 0.0_wp; c = 0.0_wp; r1 = 1.0_wp; r2 = 1.0_wp
       linear = .false.
    end subroutine el_linear_spring
+
+   !> The element's torques and guards in its current mode as a plain record
+   !> (optional capability, D-35; default: declined, kind = hf_none and guards
+   !> = hg_none). Valid until the element's mode or parameters change: the
+   !> model asks again after every `init_mode`, `preload_mode` and
+   !> `update_mode` it makes, and checks the record against the element's own
+   !> `torques` and `guards` (bit for bit, at probe states) each time.
+   pure subroutine el_hot_form(self, form)
+      class(element_t), intent(in) :: self
+      type(hot_form_t), intent(out) :: form
+      associate (unused => self)
+      end associate
+      form%kind = hf_none
+      form%guards = hg_none
+   end subroutine el_hot_form
 
    !> Parameters as used (derived values included), for the output file.
    function el_params(self) result(p)

@@ -9,7 +9,8 @@ module trainsim_model
    use trainsim_units, only: units_t
    use trainsim_signal, only: signal_t
    use trainsim_node, only: node_t, node_slot_t
-   use trainsim_element, only: element_t, element_slot_t, lin_closed
+   use trainsim_element, only: element_t, element_slot_t, lin_closed, hot_form_t, hf_none, hf_open, hf_yang_sun, &
+                               hf_linear, hg_none, hg_faces, hg_faces_zone
    use trainsim_event, only: event_t, max_update_events
    implicit none
    private
@@ -38,6 +39,10 @@ module trainsim_model
       !> of the angle of its left and right node if a plain inertia, else 0
       !> (`rhs_simple` and `guards` read those straight from y).
       integer :: form = 0, yl = 0, yr = 0
+      !> The form of the element's hot form (D-35, the record in the model's fh)
+      !> for its guards (hg_*); its torque form is `form` (lf_open, lf_yang_sun,
+      !> lf_cl_linear).
+      integer :: gform = hg_none
    end type fast_element_t
 
    !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
@@ -45,6 +50,9 @@ module trainsim_model
    !> the RHS's critical path): general, undamped (c = 0), undamped with unit
    !> lever arms (a shaft: c = 0, r1 = r2 = 1).
    integer, parameter :: lf_general = 1, lf_undamped = 2, lf_unit = 3
+   !> Forms of a clearance element in its current mode (its hot form, D-35):
+   !> open, closed with the yang_sun law, closed with the linear law.
+   integer, parameter :: lf_open = 4, lf_yang_sun = 5, lf_cl_linear = 6
 
    !> A load on the hot path: its node and, when constant, its value.
    type :: fast_load_t
@@ -120,12 +128,19 @@ module trainsim_model
       ! objects; every other node and element is asked as before.
       type(fast_node_t), allocatable, private :: fn(:)
       type(fast_element_t), allocatable, private :: fe(:)
+      !> Per element: its hot form (D-35) in its current mode, refreshed after every
+      !> mode change the model makes (`refresh_hot`); apart from fe (which every
+      !> element's evaluation reads) so that fe stays small.
+      type(hot_form_t), allocatable, private :: fh(:)
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
       !> Every node a plain inertia or held at a constant speed, every load
       !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
       logical, private :: simple = .false.
+      !> Element i joins nodes i and i + 1, for every i (a serial chain; the
+      !> stage kernel then sums the node torques in registers).
+      logical, private :: chain = .false.
       !> Per node i: the element torques acting on it, node_inc(node_first(i) :
       !> node_first(i+1) - 1), as indices into el_torque (2 (e - 1) + side), in
       !> the order the generic RHS adds them (elements in order, left side first).
@@ -149,6 +164,8 @@ module trainsim_model
       procedure :: guard_element => model_guard_element
       procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
+      procedure :: preload_mode => model_preload_mode
+      procedure :: hot_kinds => model_hot_kinds
       procedure :: apply_events => model_apply_events
       procedure :: any_contact => model_any_contact
       procedure :: stored_energy => model_stored_energy
@@ -237,8 +254,8 @@ contains
             end if
          end if
       end do
-      if (allocated(self%fe)) deallocate (self%fe)
-      allocate (self%fe(ne))
+      if (allocated(self%fe)) deallocate (self%fe, self%fh)
+      allocate (self%fe(ne), self%fh(ne))
       do i = 1, ne
          associate (e => self%elements(i)%e)
             self%fe(i)%l = e%left
@@ -259,6 +276,7 @@ contains
             if (self%fn(e%left)%kind == nk_plain) self%fe(i)%yl = self%fn(e%left)%off + 1
             if (self%fn(e%right)%kind == nk_plain) self%fe(i)%yr = self%fn(e%right)%off + 1
          end associate
+         call refresh_hot(self, i)
       end do
       self%guard_els = pack([(i, i=1, ne)], self%fe(:)%ng > 0)
       if (allocated(self%fl)) deallocate (self%fl)
@@ -302,13 +320,17 @@ contains
          self%node_inc(inc_n(self%fe(i)%r)) = 2*i
          inc_n(self%fe(i)%r) = inc_n(self%fe(i)%r) + 1
       end do
+      self%chain = ne == nn - 1 .and. ne > 0
+      do i = 1, ne
+         if (self%fe(i)%l /= i .or. self%fe(i)%r /= i + 1) self%chain = .false.
+      end do
       self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
                     .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0
       ! elements whose recorded status the observer may take from the workspace
       if (allocated(self%status_in_ws)) deallocate (self%status_in_ws)
       allocate (self%status_in_ws(ne))
       do i = 1, ne
-         self%status_in_ws(i) = self%simple .and. self%fe(i)%form /= 0
+         self%status_in_ws(i) = self%simple .and. self%fe(i)%form >= lf_general .and. self%fe(i)%form <= lf_unit
          if (self%status_in_ws(i)) self%status_in_ws(i) = status_agrees(self%elements(i)%e, self%fe(i))
       end do
       self%ws_step_end = .false.
@@ -500,16 +522,18 @@ contains
    !> a caller may read (`ws_step_end` cleared). Other models run `model_rhs`.
    subroutine model_rhs_stage(self, t, y, dydt)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t, y(:)
-      real(wp), intent(out) :: dydt(:)
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)
+      real(wp), intent(out), contiguous :: dydt(:)
       self%ws_step_end = .false.
       if (.not. self%simple) then
          call rhs_fast(self, t, y, dydt)
          return
       end if
-      call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
+      call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
+                            self%elements, &
                             self%el_torque, self%node_first, self%node_inc, t, y, dydt, self%run%track_energy, &
-                            self%n_states)
+                            self%n_states, self%chain .and. .not. self%run%track_energy)
    end subroutine model_rhs_stage
 
    !> `model_rhs` without the dispatch.
@@ -524,9 +548,10 @@ contains
       self%ws_step_end = .false.
       self%ws_t = t
       if (self%simple) then
-         call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fl, self%elements, &
+         call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
                          self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, &
-                         self%node_first, self%node_inc, t, y, dydt, track, self%n_states)
+                         self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
+                         self%chain .and. .not. track)
          return
       end if
       pdiss = 0.0_wp
@@ -571,6 +596,9 @@ contains
                tl = -(f*e%r1)
                tr = f*e%r2
                if (track .and. e%c /= 0.0_wp) pdiss = pdiss + e%c*dv**2
+            else if (e%form >= lf_open) then                               ! a clearance's hot form (D-35)
+               call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
+               if (track) pdiss = pdiss + f
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
                if (track) then
@@ -627,11 +655,12 @@ contains
    !> instead of reloading them from the model after every store). The element
    !> torques go to et first; each node then adds its own (node_inc) in a
    !> register, in the order `rhs_fast` adds them to self%torque.
-   subroutine rhs_simple(nn, ne, nl, fn, fe, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
-                         track, ns)
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
+                         track, ns, chain)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
+      type(hot_form_t), intent(in) :: fh(ne)
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne)
@@ -639,10 +668,12 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: dydt(:)
       logical, intent(in) :: track
+      logical, intent(in) :: chain   !< as in `rhs_stage_simple` (a serial chain, energy off)
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
       pdiss = 0.0_wp
       pin = 0.0_wp
+      tqc = fn(1)%load0
       do i = 1, nn
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
@@ -682,26 +713,49 @@ contains
          case (lf_unit)                                                    ! eq. (H.1), c = 0
             d = thl - thr
             f = fe(i)%k*d
-            et(2*i - 1) = -f
-            et(2*i) = f
+            tl = -f
+            tr = f
             disp(i) = d
             force(i) = f
          case (lf_undamped)                                                ! eq. (H.15)
             d = fe(i)%r1*thl - fe(i)%r2*thr
             f = fe(i)%k*d
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
             disp(i) = d
             force(i) = f
          case (lf_general)
             dv = fe(i)%r1*wl - fe(i)%r2*wr
             d = fe(i)%r1*thl - fe(i)%r2*thr
             f = fe(i)%k*d + fe(i)%c*dv
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
             disp(i) = d
             force(i) = f
             if (track) pdiss = pdiss + fe(i)%c*dv**2
+         case (lf_open)                                                    ! a clearance open (D-35)
+            f = 0.0_wp
+            tl = -(f*fh(i)%r1)
+            tr = f*fh(i)%r2
+            if (track) pdiss = pdiss + 0.0_wp
+         case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
+            ! hot_torques written out (a call costs more than the arithmetic)
+            associate (h => fh(i))
+               d = h%r1*thl - h%r2*thr
+               dv = h%r1*wl - h%r2*wr
+               p = h%s*d - h%b
+               pdot = h%s*dv
+               if (fe(i)%form == lf_yang_sun) then
+                  f = h%c*(h%k*p + h%dmp*p*pdot)                           ! eqs. (3.18)-(3.19)
+               else
+                  f = h%c*(h%k*p) + h%dmp*pdot
+               end if
+               if (h%no_tension) f = max(f, 0.0_wp)
+               fs = h%s*f
+               tl = -(fs*h%r1)
+               tr = fs*h%r2
+               if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
+            end associate
          case default
             if (track) then
                call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
@@ -710,8 +764,40 @@ contains
             else
                call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
             end if
+            tl = et(2*i - 1)
+            tr = et(2*i)
          end select
+         et(2*i - 1) = tl
+         et(2*i) = tr
+         if (chain) then
+            ! node i is done (as in rhs_stage_simple)
+            tq = tqc + tl
+            torque(i) = tq
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+               end if
+            end if
+            tqc = fn(i + 1)%load0 + tr
+         end if
       end do
+      if (chain) then
+         torque(nn) = tqc
+         if (fn(nn)%kind == nk_plain) then
+            o = fn(nn)%off
+            dydt(o + 1) = y(o + 2)
+            if (fn(nn)%d == 0.0_wp) then
+               dydt(o + 2) = tqc/fn(nn)%j
+            else
+               dydt(o + 2) = (tqc - fn(nn)%d*y(o + 2))/fn(nn)%j
+            end if
+         end if
+         return
+      end if
       do i = 1, nn
          tq = fn(i)%load0
          do k = first(i), first(i + 1) - 1
@@ -741,21 +827,31 @@ contains
    !> are stored; a node's angle and speed are read where they are used, from y
    !> (a plain inertia) or by the expression `rhs_simple` stores (a held node).
    !> About a tenth of the kernel's time on the Table 5.5 rig (issue 11).
-   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fl, els, et, first, inc, t, y, dydt, track, ns)
+   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, track, ns, chain)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
+      type(hot_form_t), intent(in) :: fh(ne)
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: et(2*ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
-      real(wp), intent(in) :: t, y(:)
-      real(wp), intent(inout) :: dydt(:)
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)            ! (model_rhs_stage's: no packing)
+      real(wp), intent(inout), contiguous :: dydt(:)
       logical, intent(in) :: track
+      !> The train is a serial chain (element i joins nodes i and i + 1) and
+      !> track is off: each node's torque is finished as soon as its right-hand
+      !> element is evaluated (load0 + tr of element i-1 + tl of element i, the
+      !> node_inc order), in a register (no store and reload of et on the path).
+      !> (With energy tracking the same, with the nodes' energy terms in a second
+      !> pass, measured no faster: not used.)
+      logical, intent(in) :: chain
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
       pdiss = 0.0_wp
       pin = 0.0_wp
+      tqc = fn(1)%load0
       if (track) then
          do i = 1, nl
             l = fl(i)%node
@@ -783,19 +879,42 @@ contains
          select case (fe(i)%form)
          case (lf_unit)                                                    ! eq. (H.1), c = 0
             f = fe(i)%k*(thl - thr)
-            et(2*i - 1) = -f
-            et(2*i) = f
+            tl = -f
+            tr = f
          case (lf_undamped)                                                ! eq. (H.15)
             f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr)
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
          case (lf_general)
             dv = fe(i)%r1*wl - fe(i)%r2*wr
             d = fe(i)%r1*thl - fe(i)%r2*thr
             f = fe(i)%k*d + fe(i)%c*dv
-            et(2*i - 1) = -(f*fe(i)%r1)
-            et(2*i) = f*fe(i)%r2
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
             if (track) pdiss = pdiss + fe(i)%c*dv**2
+         case (lf_open)                                                    ! a clearance open (D-35)
+            f = 0.0_wp
+            tl = -(f*fh(i)%r1)
+            tr = f*fh(i)%r2
+            if (track) pdiss = pdiss + 0.0_wp
+         case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
+            ! hot_torques written out (a call costs more than the arithmetic)
+            associate (h => fh(i))
+               d = h%r1*thl - h%r2*thr
+               dv = h%r1*wl - h%r2*wr
+               p = h%s*d - h%b
+               pdot = h%s*dv
+               if (fe(i)%form == lf_yang_sun) then
+                  f = h%c*(h%k*p + h%dmp*p*pdot)                           ! eqs. (3.18)-(3.19)
+               else
+                  f = h%c*(h%k*p) + h%dmp*pdot
+               end if
+               if (h%no_tension) f = max(f, 0.0_wp)
+               fs = h%s*f
+               tl = -(fs*h%r1)
+               tr = fs*h%r2
+               if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
+            end associate
          case default
             if (track) then
                call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
@@ -804,8 +923,39 @@ contains
             else
                call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
             end if
+            tl = et(2*i - 1)
+            tr = et(2*i)
          end select
+         et(2*i - 1) = tl
+         et(2*i) = tr
+         if (chain) then
+            ! node i is done: its torque load0 + tr(i-1) + tl(i) (from the register)
+            tq = tqc + tl
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+               end if
+            end if
+            tqc = fn(i + 1)%load0 + tr
+         end if
       end do
+      if (chain) then
+         ! the last node: load0 + tr of the last element
+         if (fn(nn)%kind == nk_plain) then
+            o = fn(nn)%off
+            dydt(o + 1) = y(o + 2)
+            if (fn(nn)%d == 0.0_wp) then
+               dydt(o + 2) = tqc/fn(nn)%j
+            else
+               dydt(o + 2) = (tqc - fn(nn)%d*y(o + 2))/fn(nn)%j
+            end if
+         end if
+         return
+      end if
       do i = 1, nn
          tq = fn(i)%load0
          do k = first(i), first(i + 1) - 1
@@ -844,6 +994,8 @@ contains
             f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
             tl = -(f*e%r1)
             tr = f*e%r2
+         else if (e%form >= lf_open) then                                  ! a clearance's hot form (D-35)
+            call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
          else
             call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
          end if
@@ -913,6 +1065,8 @@ contains
                f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
                tl = -(f*e%r1)
                tr = f*e%r2
+            else if (e%form >= lf_open) then                               ! a clearance's hot form (D-35)
+               call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
             end if
@@ -1086,7 +1240,7 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
       integer :: k, i, o, n
-      real(wp) :: thl, wl, thr, wr
+      real(wp) :: thl, wl, thr, wr, d
       if (self%n_guards == 0) return
       ! only the nodes of elements with guards (a long train has few of them)
       do k = 1, size(self%guard_els)
@@ -1106,7 +1260,30 @@ contains
          else
             call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
          end if
-         call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
+         select case (self%fe(i)%gform)
+         case (hg_faces, hg_faces_zone)                 ! the element's hot form (D-35): hot_guards written out
+            associate (h => self%fh(i))
+               d = h%r1*thl - h%r2*thr
+               select case (h%mode)
+               case (1)
+                  g(o + 1) = d - h%b; g(o + 2) = 1.0_wp
+               case (-1)
+                  g(o + 1) = 1.0_wp; g(o + 2) = -d - h%b
+               case default
+                  g(o + 1) = h%b - d; g(o + 2) = d + h%b
+               end select
+               if (self%fe(i)%gform == hg_faces_zone) then
+                  if (h%lo_open) then
+                     g(o + 3) = 1.0_wp
+                  else
+                     g(o + 3) = thl - h%th_lo
+                  end if
+                  g(o + 4) = h%th_hi - thl
+               end if
+            end associate
+         case default
+            call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
+         end select
       end do
    end subroutine model_guards
 
@@ -1119,10 +1296,26 @@ contains
       integer, intent(in) :: i
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      real(wp) :: thl, wl, thr, wr
-      call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
-      call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
-      call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
+      real(wp) :: thl, wl, thr, wr, gh(4)
+      ! a plain inertia's angle and speed straight from y (as model_guards)
+      if (self%fe(i)%yl > 0) then
+         thl = y(self%fe(i)%yl)
+         wl = y(self%fe(i)%yl + 1)
+      else
+         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+      end if
+      if (self%fe(i)%yr > 0) then
+         thr = y(self%fe(i)%yr)
+         wr = y(self%fe(i)%yr + 1)
+      else
+         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+      end if
+      if (self%fe(i)%gform /= hg_none) then              ! the element's hot form (D-35)
+         call hot_guards(self%fh(i), thl, thr, gh)
+         g(1:self%fe(i)%ng) = gh(1:self%fe(i)%ng)
+      else
+         call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
+      end if
    end subroutine model_element_guards
 
    !> The element that owns guard j (0 if none).
@@ -1176,9 +1369,135 @@ contains
          l = self%elements(i)%e%left
          r = self%elements(i)%e%right
          call self%elements(i)%e%init_mode(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
+         call refresh_hot(self, i)
       end do
       self%energy0 = self%stored_energy(t, y)
    end subroutine model_init_modes
+
+   !> Element j's static-preload mode (`preload_mode` of the element: face +1,
+   !> -1 or 0, zones from the angles) at the given kinematics, through the
+   !> model, which refreshes the element's hot form (D-35).
+   subroutine model_preload_mode(self, j, face, thl, wl, thr, wr)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: j, face
+      real(wp), intent(in) :: thl, wl, thr, wr
+      call self%elements(j)%e%preload_mode(face, thl, wl, thr, wr)
+      call refresh_hot(self, j)
+   end subroutine model_preload_mode
+
+   !> The hot form (D-35) the model holds for element i: the torque form
+   !> (hf_*, hf_none when asked through `torques`) and the guard form (hg_*).
+   pure subroutine model_hot_kinds(self, i, kind, guards)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      integer, intent(out) :: kind, guards
+      kind = self%fh(i)%kind
+      guards = self%fe(i)%gform
+   end subroutine model_hot_kinds
+
+   !> Ask element i for its hot form (D-35) in its current mode and take it only
+   !> where the element's own procedures agree bit for bit at three probe
+   !> states (`torques`, `torques_dissipation`, `guards`): otherwise the
+   !> element is asked through its procedures as before. Torque forms only for
+   !> elements that read no loads and supply no power, and not for linear
+   !> springs (they have their own form).
+   subroutine refresh_hot(self, i)
+      type(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      type(hot_form_t) :: h
+      real(wp) :: x(4), g(4), gh(4), tl, tr, pw, htl, htr, hpw, pen
+      integer :: p, ng
+      associate (e => self%elements(i)%e, q => self%fe(i))
+         call e%hot_form(h)
+         if (q%linear .or. e%needs_loads .or. e%supplies_power) h%kind = hf_none
+         ng = q%ng
+         if (.not. ((h%guards == hg_faces .and. ng == 2) .or. (h%guards == hg_faces_zone .and. ng == 4))) &
+            h%guards = hg_none
+         do p = 1, 3
+            if (h%kind == hf_none .and. h%guards == hg_none) exit
+            ! two states with the face penetrated by a little, one anywhere
+            x = [0.0_wp, 1.1_wp*p, 0.3_wp*p, -0.7_wp/p]
+            pen = 0.25_wp*p*max(h%b, 1.0e-3_wp)
+            if (h%r1 /= 0.0_wp) x(1) = (h%r2*x(3) + h%s*(h%b + pen))/h%r1
+            if (p == 3) x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]
+            if (h%kind /= hf_none) then
+               call e%torques(x(1), x(2), x(3), x(4), tl, tr)
+               call hot_torques(h, x(1), x(2), x(3), x(4), htl, htr, hpw)
+               if (.not. (tl == htl .and. tr == htr)) h%kind = hf_none
+               call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
+               if (.not. (tl == htl .and. tr == htr .and. pw == hpw)) h%kind = hf_none
+            end if
+            if (h%guards /= hg_none) then
+               call e%guards(x(1), x(2), x(3), x(4), g(1:ng))
+               call hot_guards(h, x(1), x(3), gh)
+               if (any(g(1:ng) /= gh(1:ng))) h%guards = hg_none
+            end if
+         end do
+         self%fh(i) = h
+         q%gform = h%guards
+         if (.not. q%linear) then
+            select case (h%kind)
+            case (hf_open); q%form = lf_open
+            case (hf_yang_sun); q%form = lf_yang_sun
+            case (hf_linear); q%form = lf_cl_linear
+            case default; q%form = 0
+            end select
+         end if
+      end associate
+   end subroutine refresh_hot
+
+   !> Torques (and the power dissipated) of a hot form (D-35): ce_torques and
+   !> ce_torques_dissipation's arithmetic, the same operations in the same order.
+   pure subroutine hot_torques(h, thl, wl, thr, wr, tl, tr, pw)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, pw
+      real(wp) :: d, dd, p, pdot, f, fs
+      if (h%kind == hf_open) then
+         fs = 0.0_wp
+         tl = -(fs*h%r1)
+         tr = fs*h%r2
+         pw = 0.0_wp
+         return
+      end if
+      d = h%r1*thl - h%r2*thr
+      dd = h%r1*wl - h%r2*wr
+      p = h%s*d - h%b
+      pdot = h%s*dd
+      if (h%kind == hf_yang_sun) then
+         f = h%c*(h%k*p + h%dmp*p*pdot)                                  ! eqs. (3.18)-(3.19)
+      else
+         f = h%c*(h%k*p) + h%dmp*pdot
+      end if
+      if (h%no_tension) f = max(f, 0.0_wp)
+      fs = h%s*f
+      tl = -(fs*h%r1)
+      tr = fs*h%r2
+      pw = (h%s*fs - h%c*(h%k*p))*pdot
+   end subroutine hot_torques
+
+   !> Guards of a hot form (D-35): cl_guards' faces, and a zone window.
+   pure subroutine hot_guards(h, thl, thr, g)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, thr
+      real(wp), intent(out) :: g(4)
+      real(wp) :: d
+      d = h%r1*thl - h%r2*thr
+      select case (h%mode)
+      case (1)
+         g(1) = d - h%b; g(2) = 1.0_wp
+      case (-1)
+         g(1) = 1.0_wp; g(2) = -d - h%b
+      case default
+         g(1) = h%b - d; g(2) = d + h%b
+      end select
+      if (h%lo_open) then
+         g(3) = 1.0_wp
+      else
+         g(3) = thl - h%th_lo
+      end if
+      g(4) = h%th_hi - thl
+   end subroutine hot_guards
 
    !> Update the modes of the elements whose guards fired; the events that
    !> result are appended to events(nev+1:) (with the time and the element
@@ -1228,6 +1547,7 @@ contains
          r = self%elements(i)%e%right
          call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
                                              fired(o + 1:o + n), local, m)
+         call refresh_hot(self, i)
          if (nev + m > size(events)) then
             allocate (grown(max(2*size(events), nev + m, 16)))
             grown(1:nev) = events(1:nev)
