@@ -287,7 +287,9 @@ contains
             if (conf) self%e_min_f = min(self%e_min_f, e)
          end do
          if (self%f%dir /= 0) self%e_min_f = min(self%e_min_f, abs(self%f%cand - self%f%last_ext))
-         self%log(1:self%n_log - m) = self%log(m + 1:self%n_log)
+         do i = 1, self%n_log - m   ! forward copy (overlapping sections: no temporary)
+            self%log(i) = self%log(m + i)
+         end do
          self%n_log = self%n_log - m
       end if
       self%n_log = self%n_log + 1
