@@ -402,7 +402,16 @@ contains
                          model%el_contact, model%ws_status, model%elements, model%theta, model%omega, self%s%displacement, &
                          self%res%el, self%res%events, self%t_counted)
             if (self%track) then
-               call fill_energy(self, model, y)
+               if (model%ws_energy) then
+                  ! fill_energy with the stored energy the kernel left (D-36), written out
+                  self%s%energy(2) = model%ws_elastic
+                  self%s%energy(1) = model%ws_stored - model%ws_elastic
+                  self%s%energy(3) = y(model%n_states + 1)
+                  self%s%energy(4) = y(model%n_states + 2)
+                  self%s%energy(5) = model%ws_stored + self%s%energy(3) - self%s%energy(4) - model%energy0
+               else
+                  call fill_energy(self, model, y)
+               end if
                call fold_energy(self)
             end if
             self%t_prev = t
