@@ -521,7 +521,7 @@ contains
       logical, intent(in) :: track
       type(model_t) :: ms, mg
       real(wp), allocatable :: y(:), ds(:), dg(:)
-      real(wp) :: tl, tr, disp, force
+      real(wp) :: tl, tr, disp, force, stored, elastic
       integer :: i, contact, pairs
       logical :: torques_ok, status_ok
       character(len=:), allocatable :: train
@@ -567,19 +567,30 @@ contains
       do i = 1, size(ms%elements)
          call ms%element_torques(i, tl, tr)
          torques_ok = torques_ok .and. tl == ms%el_torque(1, i) .and. tr == ms%el_torque(2, i)
-         if (.not. ms%status_in_ws(i)) cycle
+         if (.not. ms%ws_status(i)) cycle
          associate (e => ms%elements(i)%e)
             call e%status(ms%theta(e%left), ms%omega(e%left), ms%theta(e%right), ms%omega(e%right), disp, force, &
                           contact, pairs)
          end associate
-         status_ok = status_ok .and. disp == ms%el_disp(i) .and. force == ms%el_force(i) .and. contact == 1 .and. &
-                     pairs == 0
+         status_ok = status_ok .and. disp == ms%el_disp(i) .and. force == ms%el_force(i) .and. &
+                     contact == ms%el_contact(i)
+         if (ms%status_in_ws(i)) status_ok = status_ok .and. contact == 1 .and. pairs == 0
       end do
       call check('workspace: every element''s torques, identical to the bit', torques_ok)
       call check('status taken over for the shafts and the ideal gear, not the clearance elements nor a shaft '// &
                  'with a status of its own', all(ms%status_in_ws .eqv. [.true., .true., .false., .true., .false., .false.]))
       call check('the other model runs the generic RHS (no status taken over)', .not. any(mg%status_in_ws))
-      call check('workspace: their displacement and force, identical to the bit', status_ok)
+      ! D-36: the clearance elements in a hot form (the spur gear, the keyed joint) too
+      call check('status from the workspace (D-36): also the clearance elements in a hot form', &
+                 all(ms%ws_status .eqv. [.true., .true., .true., .true., .true., .false.]) .and. .not. any(mg%ws_status))
+      call check('workspace: their displacement, force and contact, identical to the bit', status_ok)
+      ! D-36: with energy tracking the kernel leaves the stored energy (every
+      ! element a linear spring or a hot form), `workspace_energy`'s to the bit
+      call ms%workspace_energy(y, stored, elastic)
+      call check('energy in the workspace exactly when tracked (D-36)', (ms%ws_energy .eqv. track) .and. &
+                 .not. mg%ws_energy)
+      if (track) call check('workspace: stored and elastic energy, identical to the bit (and not zero)', &
+                            ms%ws_stored == stored .and. ms%ws_elastic == elastic .and. elastic > 0.0_wp)
       ! an inner stage's RHS (rk4's k2 .. k4): the kernel that stores only dy/dt
       ! and the element torques gives the same derivatives, on both models
       ds = huge(1.0_wp); dg = -huge(1.0_wp)
@@ -608,9 +619,9 @@ contains
                                             hg_faces, hg_faces, hg_faces]
       type(model_t) :: m
       real(wp), allocatable :: y(:), dydt(:), g(:)
-      real(wp) :: ge(4), x(4), tl, tr, pw, sgn, b
-      integer :: ie, face, p, kind, gk, ng, zones(2), nz
-      logical :: torques_ok, power_ok, guards_ok, kinds_ok, track
+      real(wp) :: ge(4), x(4), tl, tr, pw, sgn, b, disp, force, stored, elastic
+      integer :: ie, face, p, kind, gk, ng, zones(2), nz, contact, pairs
+      logical :: torques_ok, power_ok, guards_ok, kinds_ok, track, status_ok, energy_ok
       call test_begin('hot_forms_are_the_elements_own_arithmetic')
       el(1) = "type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, contact_ratio=1.5, "// &
               "approach_angle=0.1, half_backlash=0.001, initial_contact_velocity=0.3"
@@ -626,6 +637,7 @@ contains
       el(8) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_law='elasto_backlash', contact_damping=2.0"
       el(9) = "type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_damping=1.5, no_tension=.true."
       torques_ok = .true.; power_ok = .true.; guards_ok = .true.; kinds_ok = .true.
+      status_ok = .true.; energy_ok = .true.
       do ie = 1, 2*n_el
          track = ie > n_el
          call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = "//merge('.true. ', '.false.', track)// &
@@ -668,6 +680,18 @@ contains
                      call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
                      power_ok = power_ok .and. dydt(m%n_states + 1) == pw
                   end if
+                  ! D-36: a hot form's status (displacement, signed force, face)
+                  ! and, tracked, the stored energy are left in the workspace
+                  call e%status(x(1), x(2), x(3), x(4), disp, force, contact, pairs)
+                  status_ok = status_ok .and. (m%ws_status(1) .eqv. kind /= hf_none)
+                  if (m%ws_status(1)) status_ok = status_ok .and. disp == m%el_disp(1) .and. &
+                                                  force == m%el_force(1) .and. contact == m%el_contact(1)
+                  energy_ok = energy_ok .and. (m%ws_energy .eqv. (track .and. kind /= hf_none))
+                  if (m%ws_energy) then
+                     call m%workspace_energy(y, stored, elastic)
+                     energy_ok = energy_ok .and. m%ws_stored == stored .and. m%ws_elastic == elastic .and. &
+                                 elastic == e%potential_energy(x(1), x(3))
+                  end if
                   call m%guards(0.0_wp, y, g)
                   call e%guards(x(1), x(2), x(3), x(4), ge(1:ng))
                   guards_ok = guards_ok .and. all(g == ge(1:ng))
@@ -689,6 +713,8 @@ contains
       call check('kernel torques are the element''s own, to the bit', torques_ok)
       call check('kernel dissipated power is the element''s own, to the bit', power_ok)
       call check('guards (all, and one element''s) are the element''s own, to the bit', guards_ok)
+      call check('D-36: a hot form''s status in the workspace is the element''s own, to the bit', status_ok)
+      call check('D-36: the stored energy in the workspace is workspace_energy''s, to the bit', energy_ok)
    end subroutine test_hot_forms_are_the_elements_own_arithmetic
 
    !> The hot form follows every mode change the model makes (an event through

@@ -163,7 +163,9 @@ contains
    !> (the model's workspace holds the RHS at the step's end); for observer B
    !> the mark is cleared first, so it fills the whole sample (recomputing the
    !> kinematics, torques and statuses) and folds it as before. The metrics and
-   !> the energy balance figures are the same to the bit.
+   !> the energy balance figures are the same to the bit; so are, at every
+   !> step, the sample's displacements and energies (D-36: A reads the gears'
+   !> statuses and the stored energy the RHS kernel left in the workspace).
    subroutine test_short_way_of_the_observer_equals_the_whole_sample()
       type(model_t) :: ma, mb
       class(integrator_t), allocatable :: ia, ib
@@ -174,8 +176,8 @@ contains
       type(error_t), allocatable :: err
       real(wp), allocatable :: ya(:), yb(:)
       real(wp) :: ta, tb, t_goal
-      integer :: k, sta, stb, n_short, n_steps, n_events
-      logical :: same_y
+      integer :: k, sta, stb, n_short, n_steps, n_events, n_ws
+      logical :: same_y, same_s
       call test_begin('short_way_of_the_observer_equals_the_whole_sample')
       call load_model('inputs/two_clearance.nml', ma)
       call check('the deck tracks the energy', ma%run%track_energy)
@@ -185,7 +187,7 @@ contains
       if (allocated(err)) return
       call begin_run(mb, ib, ob, sb, tb, yb, err)
       if (allocated(err)) return
-      n_short = 0; n_steps = 0; n_events = 0; same_y = .true.
+      n_short = 0; n_steps = 0; n_events = 0; same_y = .true.; same_s = .true.; n_ws = 0
       do k = 1, 200
          t_goal = ma%run%t_start + real(k, wp)*ma%run%dt
          do   ! to the grid point, through the events on the way
@@ -196,9 +198,11 @@ contains
             n_steps = n_steps + 1
             same_y = same_y .and. ta == tb .and. all(ya == yb) .and. sta == stb
             if (ma%ws_step_end) n_short = n_short + 1
+            if (ma%ws_step_end .and. ma%ws_energy .and. any(ma%ws_status .and. .not. ma%status_in_ws)) n_ws = n_ws + 1
             call oa%step(ma, ta, ya)
             mb%ws_step_end = .false.   ! the long way: the whole sample, recomputed
             call ob%step(mb, tb, yb)
+            same_s = same_s .and. all(oa%s%displacement == ob%s%displacement) .and. all(oa%s%energy == ob%s%energy)
             if (sta /= adv_event) exit
             n_events = n_events + 1
             call settle(ma, ia, oa, ta, ya, err)
@@ -215,6 +219,9 @@ contains
                  n_steps - n_events > nint(ma%run%settle_time/ma%run%dt) + 10 .and. n_events > 2 .and. &
                  n_short == n_steps - n_events)
       call check('the two copies step alike, to the bit', same_y)
+      call check('D-36: the short way read the gears'' statuses and the stored energy from the workspace', &
+                 n_ws == n_short)
+      call check('each step: displacements and energies of the two samples equal to the bit', same_s)
       call oa%finish(ma, ta, ya, stats, sa, ra, err)
       call ob%finish(mb, tb, yb, stats, sb, rb, err)
       call check('metrics (extremes, p2p, time out of contact) equal to the bit', same_run(ra, rb, ma%n_states))

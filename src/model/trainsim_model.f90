@@ -43,6 +43,14 @@ module trainsim_model
       !> for its guards (hg_*); its torque form is `form` (lf_open, lf_yang_sun,
       !> lf_cl_linear).
       integer :: gform = hg_none
+      !> The hot form's elastic energy (`hot_potential`) and its status (the
+      !> displacement and signed force `rhs_simple` leaves in el_disp, el_force,
+      !> the contact its mode) agree bit for bit with the element's own
+      !> `potential_energy` and `status` at `refresh_hot`'s probe states (D-36).
+      logical :: hot_pe = .false., hot_status = .false.
+      !> The element's elastic energy is neither a linear spring's nor its hot
+      !> form's (counted in n_cold: `rhs_simple` then leaves no energy).
+      logical :: cold = .true.
    end type fast_element_t
 
    !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
@@ -112,6 +120,19 @@ module trainsim_model
       !> only): delta = r1 thl - r2 thr and F, at the last full RHS.
       real(wp), allocatable :: el_disp(:), el_force(:)
       logical, allocatable :: status_in_ws(:)
+      !> Per element: its status's displacement, force and contact are el_disp,
+      !> el_force and el_contact at the last full RHS of a simple model (D-36):
+      !> the status_in_ws elements (contact 1) and the clearance elements in a
+      !> hot form whose status agrees (contact: the hot form's mode, set by
+      !> `refresh_hot`). The pairs of their status are not in the workspace.
+      logical, allocatable :: ws_status(:)
+      integer, allocatable :: el_contact(:)
+      !> The stored energy (kinetic + elastic) and its elastic part at the last
+      !> full RHS, bit for bit `workspace_energy`'s there, if ws_energy (D-36:
+      !> a simple model with energy tracking whose elements are all linear
+      !> springs or hot forms with agreeing elastic energy, n_cold = 0).
+      real(wp) :: ws_stored = 0.0_wp, ws_elastic = 0.0_wp
+      logical :: ws_energy = .false.
       !> The workspace (theta, omega, torque, el_torque) holds the full RHS at
       !> (ws_t, the state an integrator has just returned): set by the integrator
       !> right after it evaluated the RHS there (RK4's end-of-step evaluation,
@@ -145,6 +166,10 @@ module trainsim_model
       !> node_first(i+1) - 1), as indices into el_torque (2 (e - 1) + side), in
       !> the order the generic RHS adds them (elements in order, left side first).
       integer, allocatable, private :: node_first(:), node_inc(:)
+      !> Elements whose elastic energy `rhs_simple` cannot compute (fe%cold), and
+      !> that kernel's per-element elastic energies (summed after the kinetic).
+      integer, private :: n_cold = 0
+      real(wp), allocatable, private :: el_pe(:)
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -212,9 +237,9 @@ contains
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
-      if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force)
-      allocate (self%el_torque(2, ne), self%el_disp(ne), self%el_force(ne))
-      self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp
+      if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force, self%el_pe)
+      allocate (self%el_torque(2, ne), self%el_disp(ne), self%el_force(ne), self%el_pe(ne))
+      self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp; self%el_pe = 0.0_wp
       call self%build_fast_path()
    end subroutine model_finalize
 
@@ -256,6 +281,9 @@ contains
       end do
       if (allocated(self%fe)) deallocate (self%fe, self%fh)
       allocate (self%fe(ne), self%fh(ne))
+      ! (refresh_hot keeps ws_status, el_contact and n_cold only once they exist: below)
+      if (allocated(self%ws_status)) deallocate (self%ws_status)
+      if (allocated(self%el_contact)) deallocate (self%el_contact)
       do i = 1, ne
          associate (e => self%elements(i)%e)
             self%fe(i)%l = e%left
@@ -333,7 +361,16 @@ contains
          self%status_in_ws(i) = self%simple .and. self%fe(i)%form >= lf_general .and. self%fe(i)%form <= lf_unit
          if (self%status_in_ws(i)) self%status_in_ws(i) = status_agrees(self%elements(i)%e, self%fe(i))
       end do
+      allocate (self%ws_status(ne), self%el_contact(ne))
+      self%ws_status = .false.
+      self%el_contact = 0
+      self%n_cold = 0
+      do i = 1, ne
+         self%fe(i)%cold = .false.   ! (counted by ws_flags)
+         call ws_flags(self, i)
+      end do
       self%ws_step_end = .false.
+      self%ws_energy = .false.
    contains
 
       !> The element's own `status` gives, bit for bit at two probe points, the
@@ -547,11 +584,12 @@ contains
       track = self%run%track_energy
       self%ws_step_end = .false.
       self%ws_t = t
+      self%ws_energy = self%simple .and. track .and. self%n_cold == 0
       if (self%simple) then
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
-                         self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, &
+                         self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, self%el_pe, &
                          self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
-                         self%chain .and. .not. track)
+                         self%chain .and. .not. track, self%ws_energy, self%ws_stored, self%ws_elastic)
          return
       end if
       pdiss = 0.0_wp
@@ -655,22 +693,30 @@ contains
    !> instead of reloading them from the model after every store). The element
    !> torques go to et first; each node then adds its own (node_inc) in a
    !> register, in the order `rhs_fast` adds them to self%torque.
-   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, first, inc, t, y, dydt, &
-                         track, ns, chain)
+   !> With `energy` (D-36) it also leaves the stored energy and its elastic part
+   !> (est, epot), bit for bit `model_workspace_energy`'s: the same terms in the
+   !> same order (the kinetic energies node by node, then the elastic energies,
+   !> pe, element by element).
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, pe, first, inc, t, y, &
+                         dydt, track, ns, chain, energy, est, epot)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
       type(hot_form_t), intent(in) :: fh(ne)
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
-      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne)
+      real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne), pe(ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: dydt(:)
       logical, intent(in) :: track
       logical, intent(in) :: chain   !< as in `rhs_stage_simple` (a serial chain, energy off)
+      !> track, and every element a linear spring or a hot form whose elastic
+      !> energy is `hot_potential` (not with chain)
+      logical, intent(in) :: energy
+      real(wp), intent(inout) :: est, epot
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, ek
       pdiss = 0.0_wp
       pin = 0.0_wp
       tqc = fn(1)%load0
@@ -717,6 +763,7 @@ contains
             tr = f
             disp(i) = d
             force(i) = f
+            if (energy) pe(i) = 0.5_wp*fe(i)%k*d**2                       ! (r1 = r2 = 1: d is r1 thl - r2 thr)
          case (lf_undamped)                                                ! eq. (H.15)
             d = fe(i)%r1*thl - fe(i)%r2*thr
             f = fe(i)%k*d
@@ -724,6 +771,7 @@ contains
             tr = f*fe(i)%r2
             disp(i) = d
             force(i) = f
+            if (energy) pe(i) = 0.5_wp*fe(i)%k*d**2
          case (lf_general)
             dv = fe(i)%r1*wl - fe(i)%r2*wr
             d = fe(i)%r1*thl - fe(i)%r2*thr
@@ -733,11 +781,16 @@ contains
             disp(i) = d
             force(i) = f
             if (track) pdiss = pdiss + fe(i)%c*dv**2
+            if (energy) pe(i) = 0.5_wp*fe(i)%k*d**2
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
             tl = -(f*fh(i)%r1)
             tr = f*fh(i)%r2
             if (track) pdiss = pdiss + 0.0_wp
+            ! its status (D-36): delta, force 0 (contact: el_contact); no elastic energy
+            disp(i) = fh(i)%r1*thl - fh(i)%r2*thr
+            force(i) = f
+            if (energy) pe(i) = 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             ! hot_torques written out (a call costs more than the arithmetic)
             associate (h => fh(i))
@@ -755,6 +808,11 @@ contains
                tl = -(fs*h%r1)
                tr = fs*h%r2
                if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
+               ! its status (D-36): delta and the signed contact force; its
+               ! elastic energy as `hot_potential`
+               disp(i) = d
+               force(i) = fs
+               if (energy) pe(i) = h%c*(0.5_wp*h%k*p**2)
             end associate
          case default
             if (track) then
@@ -798,12 +856,14 @@ contains
          end if
          return
       end if
+      ek = 0.0_wp
       do i = 1, nn
          tq = fn(i)%load0
          do k = first(i), first(i + 1) - 1
             tq = tq + et(inc(k))
          end do
          torque(i) = tq
+         if (energy) ek = ek + 0.5_wp*fn(i)%j*omega(i)**2                ! (held: j its inertia)
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
             dydt(o + 1) = y(o + 2)                                         ! eq. (G.1)
@@ -820,6 +880,13 @@ contains
       if (.not. track) return
       dydt(ns + 1) = pdiss
       dydt(ns + 2) = pin
+      if (.not. energy) return
+      epot = 0.0_wp
+      do i = 1, ne
+         ek = ek + pe(i)
+         epot = epot + pe(i)
+      end do
+      est = ek
    end subroutine rhs_simple
 
    !> `rhs_simple` for an inner stage (`model_rhs_stage`): the same values bit
@@ -1405,8 +1472,11 @@ contains
       type(model_t), intent(inout) :: self
       integer, intent(in) :: i
       type(hot_form_t) :: h
-      real(wp) :: x(4), g(4), gh(4), tl, tr, pw, htl, htr, hpw, pen
-      integer :: p, ng
+      real(wp) :: x(4), g(4), gh(4), tl, tr, pw, htl, htr, hpw, pen, sd, sf
+      integer :: p, ng, sc, sp
+      logical :: pe_ok, st_ok
+      pe_ok = .true.
+      st_ok = .true.
       associate (e => self%elements(i)%e, q => self%fe(i))
          call e%hot_form(h)
          if (q%linear .or. e%needs_loads .or. e%supplies_power) h%kind = hf_none
@@ -1426,6 +1496,11 @@ contains
                if (.not. (tl == htl .and. tr == htr)) h%kind = hf_none
                call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
                if (.not. (tl == htl .and. tr == htr .and. pw == hpw)) h%kind = hf_none
+               ! D-36: its elastic energy and status as `rhs_simple` leaves them
+               if (.not. e%potential_energy(x(1), x(3)) == hot_potential(h, x(1), x(3))) pe_ok = .false.
+               call e%status(x(1), x(2), x(3), x(4), sd, sf, sc, sp)
+               if (.not. (sd == h%r1*x(1) - h%r2*x(3) .and. sf == hot_force(h, x(1), x(2), x(3), x(4)) .and. &
+                          sc == h%mode)) st_ok = .false.
             end if
             if (h%guards /= hg_none) then
                call e%guards(x(1), x(2), x(3), x(4), g(1:ng))
@@ -1435,6 +1510,8 @@ contains
          end do
          self%fh(i) = h
          q%gform = h%guards
+         q%hot_pe = pe_ok .and. h%kind /= hf_none
+         q%hot_status = st_ok .and. h%kind /= hf_none
          if (.not. q%linear) then
             select case (h%kind)
             case (hf_open); q%form = lf_open
@@ -1444,7 +1521,70 @@ contains
             end select
          end if
       end associate
+      if (allocated(self%ws_status)) call ws_flags(self, i)
    end subroutine refresh_hot
+
+   !> Element i's entries of ws_status and el_contact, and whether its elastic
+   !> energy is cold (kept in n_cold), from its current form (D-36).
+   subroutine ws_flags(self, i)
+      type(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      logical :: cold
+      if (self%fe(i)%linear) then
+         self%ws_status(i) = self%status_in_ws(i)
+         self%el_contact(i) = 1
+         cold = .false.
+      else if (self%fe(i)%form >= lf_open) then
+         self%ws_status(i) = self%simple .and. self%fe(i)%hot_status
+         self%el_contact(i) = self%fh(i)%mode
+         cold = .not. self%fe(i)%hot_pe
+      else
+         self%ws_status(i) = .false.
+         self%el_contact(i) = 0
+         cold = .true.
+      end if
+      if (cold .neqv. self%fe(i)%cold) then
+         if (cold) then
+            self%n_cold = self%n_cold + 1
+         else
+            self%n_cold = self%n_cold - 1
+         end if
+         self%fe(i)%cold = cold
+      end if
+   end subroutine ws_flags
+
+   !> Elastic energy of a hot form (D-36): cl_potential's arithmetic (c k p^2/2
+   !> closed, 0 open), the operations `rhs_simple` does.
+   pure real(wp) function hot_potential(h, thl, thr) result(e)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, thr
+      real(wp) :: d, p
+      e = 0.0_wp
+      if (h%kind == hf_open) return
+      d = h%r1*thl - h%r2*thr
+      p = h%s*d - h%b
+      e = h%c*(0.5_wp*h%k*p**2)
+   end function hot_potential
+
+   !> Signed contact force of a hot form (D-36): fs of `hot_torques`.
+   pure real(wp) function hot_force(h, thl, wl, thr, wr) result(fs)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: d, dd, p, pdot, f
+      fs = 0.0_wp
+      if (h%kind == hf_open) return
+      d = h%r1*thl - h%r2*thr
+      dd = h%r1*wl - h%r2*wr
+      p = h%s*d - h%b
+      pdot = h%s*dd
+      if (h%kind == hf_yang_sun) then
+         f = h%c*(h%k*p + h%dmp*p*pdot)
+      else
+         f = h%c*(h%k*p) + h%dmp*pdot
+      end if
+      if (h%no_tension) f = max(f, 0.0_wp)
+      fs = h%s*f
+   end function hot_force
 
    !> Torques (and the power dissipated) of a hot form (D-35): ce_torques and
    !> ce_torques_dissipation's arithmetic, the same operations in the same order.

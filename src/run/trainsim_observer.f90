@@ -265,13 +265,21 @@ contains
       if (self%track) call fill_energy(self, model, y)
    end subroutine obs_fill
 
-   !> The energies of the sample at (t, y), the kinematics at (t, y) in the workspace.
+   !> The energies of the sample at (s%t, y), the kinematics at (s%t, y) in the
+   !> workspace. When the integrator has just evaluated the RHS there and the
+   !> kernel left the stored energy (model%ws_energy, D-36), it is read from
+   !> the workspace (bit for bit `workspace_energy`'s), else computed.
    subroutine fill_energy(self, model, y)
       type(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: y(:)
       real(wp) :: stored
-      call model%workspace_energy(y, stored, self%s%energy(2))
+      if (model%ws_energy .and. model%ws_step_end .and. model%ws_t == self%s%t) then
+         stored = model%ws_stored
+         self%s%energy(2) = model%ws_elastic
+      else
+         call model%workspace_energy(y, stored, self%s%energy(2))
+      end if
       self%s%energy(1) = stored - self%s%energy(2)
       self%s%energy(3) = y(model%n_states + 1)
       self%s%energy(4) = y(model%n_states + 2)
@@ -288,13 +296,15 @@ contains
 
    !> The kernel of `step`'s short way on plain arrays (dummies: no aliasing, the array
    !> descriptors read once): per element, its status from the workspace (a
-   !> linear spring whose status the RHS computed: status_in_ws) or from the
-   !> element, then fold_element's updates in fold_element's order.
-   subroutine fold_ws(t, on, t_prev, el_torque, el_disp, el_force, in_ws, elements, theta, omega, disp, m, events, &
-                      t_counted)
+   !> linear spring or a clearance element's hot form whose status the RHS
+   !> computed: ws_status, D-36) or from the element, then fold_element's
+   !> updates in fold_element's order.
+   subroutine fold_ws(t, on, t_prev, el_torque, el_disp, el_force, el_contact, in_ws, elements, theta, omega, disp, m, &
+                      events, t_counted)
       real(wp), intent(in) :: t, t_prev
       logical, intent(in) :: on    !< t >= t_metrics
       real(wp), intent(in), contiguous :: el_torque(:, :), el_disp(:), el_force(:), theta(:), omega(:), t_counted(:)
+      integer, intent(in), contiguous :: el_contact(:)
       logical, intent(in), contiguous :: in_ws(:)
       type(element_slot_t), intent(in), contiguous :: elements(:)
       real(wp), intent(inout), contiguous :: disp(:)
@@ -306,8 +316,7 @@ contains
          if (in_ws(i)) then
             d = el_disp(i)
             f = el_force(i)
-            c = 1
-            p = 0
+            c = el_contact(i)
          else
             l = elements(i)%e%left; r = elements(i)%e%right
             call elements(i)%e%status(theta(l), omega(l), theta(r), omega(r), d, f, c, p)
@@ -390,10 +399,19 @@ contains
             self%s%t = t
             self%s_whole = .false.
             call fold_ws(t, t >= self%t_metrics, self%t_prev, model%el_torque, model%el_disp, model%el_force, &
-                         model%status_in_ws, model%elements, model%theta, model%omega, self%s%displacement, &
+                         model%el_contact, model%ws_status, model%elements, model%theta, model%omega, self%s%displacement, &
                          self%res%el, self%res%events, self%t_counted)
             if (self%track) then
-               call fill_energy(self, model, y)
+               if (model%ws_energy) then
+                  ! fill_energy with the stored energy the kernel left (D-36), written out
+                  self%s%energy(2) = model%ws_elastic
+                  self%s%energy(1) = model%ws_stored - model%ws_elastic
+                  self%s%energy(3) = y(model%n_states + 1)
+                  self%s%energy(4) = y(model%n_states + 2)
+                  self%s%energy(5) = model%ws_stored + self%s%energy(3) - self%s%energy(4) - model%energy0
+               else
+                  call fill_energy(self, model, y)
+               end if
                call fold_energy(self)
             end if
             self%t_prev = t
