@@ -23,7 +23,6 @@ program test_library_runs
    call test_many_hdf5_histories_from_one_process()
    call test_metrics_do_not_depend_on_who_takes_the_samples()
    call test_short_way_of_the_observer_equals_the_whole_sample()
-   call test_one_observer_call_per_step()
    call test_restart_after_the_caller_changed_the_state()
    call suite_end()
 
@@ -223,93 +222,6 @@ contains
       call check('energy balance figures equal to the bit', ra%energy_residual_max == rb%energy_residual_max .and. &
                  ra%energy_scale == rb%energy_scale .and. ra%energy_scale > 0.0_wp)
    end subroutine test_short_way_of_the_observer_equals_the_whole_sample
-
-   !> D-37: the driver's one observer call for a step that ends on the output
-   !> time (`step_sample`) against `step` then `sample`. Two copies of the
-   !> two-clearance deck (impacts, separations, settle_time mid-run) advanced
-   !> by RK4 side by side with an output time at every grid point, the samples
-   !> once not taken (null sink, the detectors fed from the short way) and
-   !> once kept (keep_series: whole samples). Observer A gets `step_sample`
-   !> for every step that reached its output time, B `step` and then `sample`;
-   !> the metrics, the peak-to-peak figures, the event table and the kept
-   !> series are the same to the bit.
-   subroutine test_one_observer_call_per_step()
-      type(model_t) :: base, ma, mb
-      class(integrator_t), allocatable :: ia, ib
-      type(observer_t), allocatable :: oa, ob
-      type(null_sink_t), target :: sa, sb
-      type(run_stats_t) :: stats
-      type(run_result_t) :: ra, rb
-      type(error_t), allocatable :: err
-      real(wp), allocatable :: ya(:), yb(:)
-      real(wp) :: ta, tb, t_goal
-      integer :: k, sta, stb, n_fused, n_events, keep
-      logical :: same_y, fused
-      call test_begin('one_observer_call_per_step_equals_step_then_sample')
-      call load_model('inputs/two_clearance.nml', base)
-      base%run%settle_time = 0.002_wp
-      base%run%keep_events = .true.
-      do keep = 0, 1
-         ma = base
-         ma%run%keep_series = keep == 1
-         mb = ma
-         allocate (oa, ob)
-         call begin_run(ma, ia, oa, sa, ta, ya, err)
-         if (allocated(err)) return
-         call begin_run(mb, ib, ob, sb, tb, yb, err)
-         if (allocated(err)) return
-         n_fused = 0; n_events = 0; same_y = .true.
-         do k = 1, 300
-            t_goal = ma%run%t_start + real(k, wp)*ma%run%dt
-            fused = .false.
-            do   ! to the output time, through the events on the way
-               call ia%advance(ma, t_goal, ta, ya, sta, err)
-               if (allocated(err)) exit
-               call ib%advance(mb, t_goal, tb, yb, stb, err)
-               if (allocated(err)) exit
-               same_y = same_y .and. ta == tb .and. all(ya == yb) .and. sta == stb
-               if (sta == adv_reached) then
-                  call oa%step_sample(ma, t_goal, ta, ya, sa, err)
-                  if (allocated(err)) exit
-                  fused = .true.
-                  n_fused = n_fused + 1
-               else
-                  call oa%step(ma, ta, ya)
-               end if
-               call ob%step(mb, tb, yb)
-               if (sta == adv_reached) exit
-               if (sta /= adv_event) cycle
-               n_events = n_events + 1
-               call settle(ma, ia, oa, ta, ya, err)
-               if (allocated(err)) exit
-               call settle(mb, ib, ob, tb, yb, err)
-               if (allocated(err)) exit
-            end do
-            if (allocated(err)) exit
-            call ob%sample(mb, t_goal, tb, yb, sb, err)
-            if (allocated(err)) exit
-            if (.not. fused) call oa%sample(ma, t_goal, ta, ya, sa, err)
-            if (allocated(err)) exit
-         end do
-         call check('no error', .not. allocated(err))
-         if (allocated(err)) return
-         write (*, '(a,i0,a,i0,a)') '    ', n_fused, ' steps observed and sampled in one call, ', n_events, ' events'
-         call check('events on the way, the steps to the output times in one call', &
-                    n_events > 2 .and. n_fused == 300)
-         call check('the two copies step alike, to the bit', same_y)
-         call oa%finish(ma, ta, ya, stats, sa, ra, err)
-         call ob%finish(mb, tb, yb, stats, sb, rb, err)
-         call check(merge('keep_series: ', 'null sink:   ', keep == 1)// &
-                    ' metrics, p2p figures and event table equal to the bit', &
-                    same_run(ra, rb, ma%n_states) .and. size(ra%events) > 2 .and. any(ra%el(:)%p2p_swings > 0))
-         if (keep == 1) call check('keep_series: the kept samples equal to the bit', &
-                                   size(ra%series_t) == 301 .and. size(rb%series_t) == 301 .and. &
-                                   all(ra%series_t == rb%series_t) .and. all(ra%series_disp == rb%series_disp) .and. &
-                                   all(ra%series_theta == rb%series_theta) .and. &
-                                   all(ra%series_omega == rb%series_omega))
-         deallocate (oa, ob, ia, ib)
-      end do
-   end subroutine test_one_observer_call_per_step
 
    !> D-37: RK4 reuses the RHS at the last step's end as the next step's first
    !> stage; a caller that changes the state between two advances calls

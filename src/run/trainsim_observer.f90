@@ -79,7 +79,6 @@ module trainsim_observer
       procedure :: step => obs_step
       procedure :: step_part => obs_step_part
       procedure :: sample => obs_sample
-      procedure :: step_sample => obs_step_sample
       procedure, private :: update_metrics => obs_update_metrics
       procedure, private :: fill_part => obs_fill_part
       procedure, private :: update_part => obs_update_part
@@ -650,26 +649,6 @@ contains
       self%s%t = t_out
       call self%emit(sink, err)
    end subroutine obs_sample
-
-   !> `step` at (t, y) and then `sample` at the output time t_out, in one call
-   !> (the driver's step that ends on an output time with nothing to settle
-   !> there, D-37): the same work, bit for bit, as the two calls.
-   subroutine obs_step_sample(self, model, t_out, t, y, sink, err)
-      class(observer_t), intent(inout) :: self
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t_out, t, y(:)
-      class(sink_t), intent(inout) :: sink
-      type(error_t), allocatable, intent(out) :: err
-      call obs_step(self, model, t, y)
-      ! `sample` after `step` (the sample buffer is at t): a sample no one
-      ! takes only feeds the peak-to-peak detectors
-      if (.not. self%want_whole) then
-         self%s%t = t_out
-         if (t_out >= self%t_metrics) call push_samples(self%turns, self%s%displacement)
-         return
-      end if
-      call obs_sample(self, model, t_out, t, y, sink, err)
-   end subroutine obs_step_sample
 
    !> Record events that happened at (t, y) (the state after the mode update):
    !> each row goes to the sink now; a contact's row is kept (slot i of

@@ -113,7 +113,6 @@ contains
       type(drive_t) :: d
       real(wp) :: t0, t_end, dout, t_out, x, n_real
       integer(i8) :: k, n_out
-      logical :: sampled
 
       t0 = model%run%t_start
       t_end = model%run%t_end
@@ -139,9 +138,8 @@ contains
       do k = 1, n_out
          t_out = t0 + real(k, wp)*dout
          if (k == n_out) t_out = t_end
-         call advance_to(model, integ, obs, sink, d, t_out, t_end, t, y, sampled, err)
+         call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
-         if (sampled) cycle
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
       end do
@@ -150,24 +148,18 @@ contains
 
    !> Advance (t, y) to the output time t_out: through the breakpoints of the
    !> inputs and the events on the way, checking the state after every step.
-   !> `sampled`: the output sample at t_out was taken too (D-37: a step that
-   !> ends on t_out with nothing to settle there, no breakpoint and no check of
-   !> missed events, is observed and sampled in one call).
-   subroutine advance_to(model, integ, obs, sink, d, t_out, t_end, t, y, sampled, err)
+   subroutine advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
-      class(sink_t), intent(inout) :: sink
       type(drive_t), intent(inout) :: d
       real(wp), intent(in) :: t_out, t_end
       real(wp), intent(inout) :: t, y(:)
-      logical, intent(out) :: sampled
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_goal
       integer :: status
       integer, pointer, contiguous :: r_nodes(:), r_states(:), r_els(:), r_gels(:)
       logical :: local
-      sampled = .false.
       do
          t_goal = min(t_out, integ%t_stop)
          if (t_goal - t > d%tol) then
@@ -193,15 +185,6 @@ contains
                call settle_local(model, integ, obs, d, t, y, r_nodes, r_els, r_gels, err)
                if (allocated(err)) return
                cycle
-            end if
-            if (status == adv_reached .and. .not. d%may_miss) then
-               if (t_goal >= t_out - d%tol .and. &
-                   .not. (integ%stop_is_breakpoint .and. t_goal >= integ%t_stop - d%tol)) then
-                  ! what follows below is the output sample alone: one observer call
-                  call obs%step_sample(model, t_out, t, y, sink, err)
-                  sampled = .true.
-                  return
-               end if
             end if
             call obs%step(model, t, y)
             if (status == adv_event) then
