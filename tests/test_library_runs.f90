@@ -7,7 +7,7 @@ program test_library_runs
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_observer, only: run_result_t, observer_t
-   use trainsim_integrator, only: integrator_t, adv_event
+   use trainsim_integrator, only: integrator_t, adv_event, adv_reached
    use trainsim_integrator_registry, only: make_integrator
    use trainsim_run_stats, only: run_stats_t
    use trainsim_simulate, only: simulate
@@ -23,6 +23,7 @@ program test_library_runs
    call test_many_hdf5_histories_from_one_process()
    call test_metrics_do_not_depend_on_who_takes_the_samples()
    call test_short_way_of_the_observer_equals_the_whole_sample()
+   call test_restart_after_the_caller_changed_the_state()
    call suite_end()
 
 contains
@@ -228,6 +229,53 @@ contains
       call check('energy balance figures equal to the bit', ra%energy_residual_max == rb%energy_residual_max .and. &
                  ra%energy_scale == rb%energy_scale .and. ra%energy_scale > 0.0_wp)
    end subroutine test_short_way_of_the_observer_equals_the_whole_sample
+
+   !> D-37: RK4 reuses the RHS at the last step's end as the next step's first
+   !> stage; a caller that changes the state between two advances calls
+   !> `restart`, which then drops it. Three copies of the two-clearance deck
+   !> step alike to t1; the state is then nudged in all three: A calls
+   !> restart, B clears the model's workspace mark (the first stage
+   !> recomputed, as after a mode change), C does neither (the contract
+   !> broken: the old first stage is used). After the next steps A is B to the
+   !> bit, and C is not (the check has something to catch).
+   subroutine test_restart_after_the_caller_changed_the_state()
+      type(model_t) :: ma, mb, mc
+      class(integrator_t), allocatable :: ia, ib, ic
+      type(observer_t) :: oa, ob, oc
+      type(null_sink_t), target :: sa, sb, sc
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: ya(:), yb(:), yc(:)
+      real(wp) :: ta, tb, tc, t_goal
+      integer :: k, st
+      call test_begin('restart_after_the_caller_changed_the_state')
+      call load_model('inputs/two_clearance.nml', ma)
+      mb = ma
+      mc = ma
+      call begin_run(ma, ia, oa, sa, ta, ya, err)
+      if (allocated(err)) return
+      call begin_run(mb, ib, ob, sb, tb, yb, err)
+      if (allocated(err)) return
+      call begin_run(mc, ic, oc, sc, tc, yc, err)
+      if (allocated(err)) return
+      do k = 1, 6
+         t_goal = ma%run%t_start + real(k, wp)*ma%run%dt
+         call ia%advance(ma, t_goal, ta, ya, st, err)
+         call check('A: a plain step to the grid point', st == adv_reached .and. .not. allocated(err))
+         call ib%advance(mb, t_goal, tb, yb, st, err)
+         call ic%advance(mc, t_goal, tc, yc, st, err)
+         if (k == 3) then
+            ya(2) = ya(2)*1.001_wp
+            yb(2) = yb(2)*1.001_wp
+            yc(2) = yc(2)*1.001_wp
+            call ia%restart(ma, ta, ya, err)
+            mb%ws_step_end = .false.
+         end if
+      end do
+      call check('the nudge is not zero', ya(2) /= 0.0_wp)
+      call check('restart after the change = the first stage recomputed, to the bit', &
+                 ta == tb .and. all(ya == yb))
+      call check('without restart the old first stage is used (the state differs)', any(yc /= yb))
+   end subroutine test_restart_after_the_caller_changed_the_state
 
    !> The modes settled at an event, as the driver does, and RK4 restarted.
    subroutine settle(m, integ, obs, t, y, err)

@@ -101,6 +101,7 @@ module trainsim_int_rk4
    contains
       procedure :: start => rk4_start
       procedure :: advance => rk4_advance
+      procedure :: restart => rk4_restart
       procedure :: step => rk4_step
       procedure, private :: end_on_event => rk4_end_on_event
       procedure, private :: dense_guard => rk4_dense_guard
@@ -335,6 +336,21 @@ contains
       self%stats%rhs_evals = self%stats%rhs_evals + 3
    end subroutine rk4_step
 
+   !> After the caller changed the modes or the state at t, or passed a
+   !> breakpoint: k1 (the last step's end-of-step RHS) stays the next step's
+   !> first stage only if y is still that step's end state (a change of the
+   !> modes clears the model's workspace mark, which `advance` checks).
+   subroutine rk4_restart(self, model, t, y, err)
+      class(rk4_t), intent(inout), target :: self
+      type(model_t), intent(inout), target :: model
+      real(wp), intent(in) :: t, y(:)
+      type(error_t), allocatable, intent(out) :: err
+      associate (unused_m => model, unused_t => t)
+      end associate
+      if (.not. self%k1_next) return
+      if (any(y /= self%ynew)) self%k1_next = .false.
+   end subroutine rk4_restart
+
    !> One sub-step: to the next grid point, or to t_goal if that comes first.
    subroutine rk4_advance(self, model, t_goal, t, y, status, err)
       class(rk4_t), intent(inout), target :: self
@@ -358,15 +374,14 @@ contains
       t_sub = min(t_grid, t_goal)
       at_bp = self%stop_is_breakpoint .and. t_sub >= self%t_stop - self%tiny_t
       h = t_sub - t
+      ! k1 = f(t, y) from the last step's end (D-37: a caller that changes y
+      ! between two advances calls `restart`, which checks y against that end)
       if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
-         call model%rhs(t, y, self%k1)
-         self%stats%rhs_evals = self%stats%rhs_evals + 1
-      else if (any(y /= self%ynew)) then
          call model%rhs(t, y, self%k1)
          self%stats%rhs_evals = self%stats%rhs_evals + 1
       end if
       self%k1_next = .false.
-      call self%step(model, t, y, h, self%ynew, at_bp)
+      call rk4_step(self, model, t, y, h, self%ynew, at_bp)
       if (self%ng > 0) then
          call model%guards(t + h, self%ynew, self%g1)
          if (any(self%g1 < 0.0_wp)) then
@@ -386,7 +401,9 @@ contains
       t = t_sub
       if (t >= t_grid - self%tiny_t) then
          t = t_grid
-         call self%count_grid_step()
+         ! count_grid_step, written out
+         self%istep = self%istep + 1
+         self%stats%steps = self%stats%steps + 1
       end if
       ! the RHS at the step's end is the next step's first stage: evaluated now,
       ! it leaves the end state's kinematics and element torques in the model's

@@ -14,7 +14,9 @@
 !>   negative: t is the located crossing, the modes are not yet updated).
 !> - `restart` is called after the driver changed the modes or passed a
 !>   breakpoint: the right-hand side is not smooth across (t, y), so no history
-!>   may be carried over. It gives the next stop time.
+!>   may be carried over. It gives the next stop time. A caller that changes y
+!>   itself between two advances calls it too (D-37: RK4 checks y there, not
+!>   at every step).
 !> - `statistics` adds the integrator's counters to a run_stats_t.
 !> - `finish` frees what `start` made (also after a failure).
 !> Adding an integrator = one file with an extension of this type and its
