@@ -86,6 +86,7 @@ module trainsim_sink
       procedure :: write_event => sink_write_event
       procedure :: update_event => sink_update_event
       procedure :: stores_samples => sink_stores_samples
+      procedure :: speeds_only => sink_speeds_only
    end type sink_t
 
    abstract interface
@@ -143,6 +144,18 @@ contains
       end associate
       stores = .true.
    end function sink_stores_samples
+
+   !> Whether the sink reads only the time and the node speeds (omega) of a
+   !> sample (asked once, at the start of a run, of a sink that stores samples).
+   !> The observer then fills only those (and the displacements it folds) when
+   !> the integrator has just left them in the model's workspace; the other
+   !> fields of the samples it is given are stale (D-34). Default: .false.
+   pure logical function sink_speeds_only(self) result(only)
+      class(sink_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      only = .false.
+   end function sink_speeds_only
 
    !> Default: events are not stored.
    subroutine sink_write_event(self, row, ev, err)

@@ -54,7 +54,8 @@ module trainsim_observer
       type(sample_t) :: s
       logical :: s_whole = .false.                   !< s is a whole sample at s%t
       logical :: take_samples = .true.               !< the sink stores samples (sink_t%stores_samples)
-      logical :: want_whole = .true.                 !< take_samples or keep: a sample must be whole
+      logical :: speeds_only = .false.               !< the sink reads t and omega only (sink_t%speeds_only)
+      logical :: want_whole = .true.                 !< a sink that reads whole samples, or keep: a sample must be whole
       type(run_result_t) :: res
       integer :: n_events = 0                        !< rows handed to the sink so far
       integer, allocatable :: open_row(:)            !< per element: row number of its contact in progress
@@ -202,7 +203,8 @@ contains
       self%turns%hyst = p2p_hysteresis
       self%keep = model%run%keep_series
       self%take_samples = sink%stores_samples()
-      self%want_whole = self%take_samples .or. self%keep
+      self%speeds_only = self%take_samples .and. sink%speeds_only()
+      self%want_whole = (self%take_samples .and. .not. self%speeds_only) .or. self%keep
       nmax = 0
       if (self%keep) nmax = 1024
       allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
@@ -658,9 +660,20 @@ contains
       class(sink_t), intent(inout) :: sink
       type(error_t), allocatable, intent(out) :: err
       if (self%s%t == t .and. .not. self%want_whole) then
-         ! `emit` for a sample no one takes: the peak-to-peak detectors only
+         ! `emit` for a sample no one takes whole: the peak-to-peak detectors,
+         ! and for a sink that reads the speeds only (a sweep run), the node
+         ! speeds the integrator has just left in the workspace (bit for bit
+         ! what `fill` copies); without them, the whole sample as below
+         if (self%speeds_only) then
+            if (model%ws_step_end .and. model%ws_t == t) then
+               self%s%omega(:) = model%omega
+            else
+               call self%fill(model, t, y)
+            end if
+         end if
          self%s%t = t_out
          if (t_out >= self%t_metrics) call push_samples(self%turns, self%s%displacement)
+         if (self%speeds_only) call sink%write_sample(self%s, err)
          return
       end if
       if (self%s%t /= t .or. .not. self%s_whole) call self%fill(model, t, y)

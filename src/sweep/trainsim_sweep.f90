@@ -96,6 +96,7 @@ module trainsim_sweep
    contains
       procedure :: open => ssink_open
       procedure :: write_sample => ssink_sample
+      procedure :: speeds_only => ssink_speeds_only
       procedure :: close => ssink_close
    end type sweep_sink_t
 
@@ -793,6 +794,14 @@ contains
          if (c - self%master%last_service >= self%poll_ticks) call self%master%service()
       end if
    end subroutine ssink_sample
+
+   !> A sweep run reads the node speeds of its samples only (their range).
+   pure logical function ssink_speeds_only(self) result(only)
+      class(sweep_sink_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      only = .true.
+   end function ssink_speeds_only
 
    subroutine ssink_close(self, events, stats, metrics, err)
       class(sweep_sink_t), intent(inout) :: self

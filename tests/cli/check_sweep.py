@@ -17,6 +17,9 @@ cases:
                       on 2 MPI ranks (when mpirun and an MPI build are there)
   failed_run          a run that blows up is recorded as failed with its message, the others
                       complete, exit status 1
+  speed_range         each run's node speed range in the sweep file (/nodes/speed_min, speed_max)
+                      equals the extremes of /nodes/omega in a `trainsim run` history of the same
+                      run, to the bit (a sweep run's sink reads the speeds only: D-34)
   cli                 bad &sweep groups, bad sweep values and misuse fail with exit 2 and a
                       message naming file:line, group and value; run ignores &sweep groups
 """
@@ -308,6 +311,31 @@ def case_failed_run(exe, tmp):
     check("its message says why", "blew up" in msg[1], msg[1])
     check("the completed runs have their metrics, the failed one NaN / -1",
           np.isfinite(p2p[[0, 2]]).all() and np.isnan(p2p[1]) and impacts[1] == -1, f"{p2p} {impacts}")
+    return 0
+
+
+def case_speed_range(exe, tmp):
+    values = (400.0, 520.0)
+    with open(os.path.join(tmp, "ghm.nml"), "w") as f:
+        f.write(GHM.format(t_end=0.01) + "&sweep parameter = 'mesh.mesh_frequency', values = "
+                + ", ".join(repr(v) for v in values) + " /\n")
+    r = run([exe, "sweep", "ghm.nml", "-o", "sw.h5"], tmp)
+    check("sweep of 2 mesh frequencies: exit 0", r.returncode == 0, r.stderr)
+    with h5py.File(os.path.join(tmp, "sw.h5"), "r") as f:
+        wmin, wmax = f["nodes/speed_min"][:], f["nodes/speed_max"][:]
+        par = f["parameters/values"][:, 0]
+    for i, v in enumerate(values):
+        k = int(np.argmin(np.abs(par - v)))
+        r = run([exe, "run", "ghm.nml", "--set", f"mesh.mesh_frequency={v!r}", "-o", f"r{i}.h5"], tmp)
+        check(f"run at {v} teeth/s: exit 0", r.returncode == 0, r.stderr)
+        with h5py.File(os.path.join(tmp, f"r{i}.h5"), "r") as f:
+            om = f["nodes/omega"][:]
+        check(f"{v} teeth/s: the sweep's speed_max is the history's maximum speed of every node, to the bit",
+              np.array_equal(wmax[k].view(np.uint64), om.max(axis=0).view(np.uint64)), f"{wmax[k]} {om.max(axis=0)}")
+        check(f"{v} teeth/s: ... and speed_min its minimum", np.array_equal(wmin[k].view(np.uint64),
+              om.min(axis=0).view(np.uint64)), f"{wmin[k]} {om.min(axis=0)}")
+        check(f"{v} teeth/s: the speeds vary (the range is not a constant)", bool(np.all(om.max(axis=0)[1:] >
+                                                                                      om.min(axis=0)[1:])))
     return 0
 
 
