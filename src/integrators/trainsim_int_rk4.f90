@@ -408,7 +408,7 @@ contains
       ! the RHS at the step's end is the next step's first stage: evaluated now,
       ! it leaves the end state's kinematics and element torques in the model's
       ! workspace for the observer (which then does not recompute them)
-      call model%rhs(t, y, self%k1)
+      call model%rhs_step_end(t, y, self%k1)
       self%stats%rhs_evals = self%stats%rhs_evals + 1
       model%ws_step_end = .true.
       self%k1_next = .true.

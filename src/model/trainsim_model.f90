@@ -128,7 +128,8 @@ module trainsim_model
       logical, allocatable :: ws_status(:)
       integer, allocatable :: el_contact(:)
       !> The stored energy (kinetic + elastic) and its elastic part at the last
-      !> full RHS, bit for bit `workspace_energy`'s there, if ws_energy (D-36:
+      !> full RHS if that was `rhs_step_end`, bit for bit `workspace_energy`'s
+      !> there, if ws_energy (D-36:
       !> a simple model with energy tracking whose elements are all linear
       !> springs or hot forms with agreeing elastic energy, n_cold = 0).
       real(wp) :: ws_stored = 0.0_wp, ws_elastic = 0.0_wp
@@ -176,6 +177,7 @@ module trainsim_model
       procedure :: kinematics => model_kinematics
       procedure :: kinematics_part => model_kinematics_part
       procedure :: rhs => model_rhs
+      procedure :: rhs_step_end => model_rhs_step_end
       procedure :: rhs_stage => model_rhs_stage
       procedure :: rhs_part => model_rhs_part
       procedure :: part_power => model_part_power
@@ -548,8 +550,19 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
-      call rhs_fast(self, t, y, dydt)
+      call rhs_fast(self, t, y, dydt, .false.)
    end subroutine model_rhs
+
+   !> `model_rhs` at the end of an integrator's step, where the observer reads
+   !> the workspace (RK4, D-33): a simple model with energy tracking also leaves
+   !> the stored energy there (D-36). Every other RHS (CVODE's, the stages, the
+   !> event location) is `model_rhs`, which does not compute it.
+   subroutine model_rhs_step_end(self, t, y, dydt)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
+      call rhs_fast(self, t, y, dydt, .true.)
+   end subroutine model_rhs_step_end
 
    !> dy/dt at (t, y) as `model_rhs`, the same values bit for bit, for an
    !> integrator's inner stage, after which no one reads the workspace: a
@@ -564,7 +577,7 @@ contains
       real(wp), intent(out), contiguous :: dydt(:)
       self%ws_step_end = .false.
       if (.not. self%simple) then
-         call rhs_fast(self, t, y, dydt)
+         call rhs_fast(self, t, y, dydt, .false.)
          return
       end if
       call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
@@ -574,17 +587,18 @@ contains
    end subroutine model_rhs_stage
 
    !> `model_rhs` without the dispatch.
-   subroutine rhs_fast(self, t, y, dydt)
+   subroutine rhs_fast(self, t, y, dydt, step_end)
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
+      logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       integer :: i, l, r, s, o
       real(wp) :: tl, tr, f, dv, pdiss, pin
       logical :: track
       track = self%run%track_energy
       self%ws_step_end = .false.
       self%ws_t = t
-      self%ws_energy = self%simple .and. track .and. self%n_cold == 0
+      self%ws_energy = step_end .and. self%simple .and. track .and. self%n_cold == 0
       if (self%simple) then
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
                          self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, self%el_pe, &
