@@ -1196,6 +1196,17 @@ contains
       if (write_err < 0) call fatal_error(err, 'H5Dwrite failed for '//what//' (disk full?)', err_io)
    end subroutine end_append
 
+   !> A 2-d dataset with no columns (e.g. no elements): only its row count grows.
+   subroutine extend_empty(dset, n_rows, what, err)
+      integer(hid_t), intent(in) :: dset
+      integer(hsize_t), intent(in) :: n_rows
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      integer :: hdferr
+      call h5dset_extent_f(dset, [0_hsize_t, n_rows], hdferr)
+      if (hdferr < 0) call fatal_error(err, 'H5Dset_extent failed for '//what, err_io)
+   end subroutine extend_empty
+
    subroutine append_r1(dset, buf, row0, what, err)
       integer(hid_t), intent(in) :: dset
       real(wp), contiguous, intent(in) :: buf(:)
@@ -1220,8 +1231,7 @@ contains
       integer(hid_t) :: fspace, mspace
       integer :: hdferr
       if (size(buf, 1) == 0) then   ! nothing to store, but keep the row count right
-         call h5dset_extent_f(dset, [0_hsize_t, row0 + int(size(buf, 2), hsize_t)], hdferr)
-         if (hdferr < 0) call fatal_error(err, 'H5Dset_extent failed for '//what, err_io)
+         call extend_empty(dset, row0 + int(size(buf, 2), hsize_t), what, err)
          return
       end if
       call begin_append(dset, 2, size(buf, 1), row0, size(buf, 2), fspace, mspace, what, err)
@@ -1239,9 +1249,8 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: fspace, mspace
       integer :: hdferr
-      if (size(buf, 1) == 0) then
-         call h5dset_extent_f(dset, [0_hsize_t, row0 + int(size(buf, 2), hsize_t)], hdferr)
-         if (hdferr < 0) call fatal_error(err, 'H5Dset_extent failed for '//what, err_io)
+      if (size(buf, 1) == 0) then   ! nothing to store, but keep the row count right
+         call extend_empty(dset, row0 + int(size(buf, 2), hsize_t), what, err)
          return
       end if
       call begin_append(dset, 2, size(buf, 1), row0, size(buf, 2), fspace, mspace, what, err)
