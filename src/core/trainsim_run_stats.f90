@@ -11,6 +11,8 @@ module trainsim_run_stats
    type :: run_stats_t
       integer(i8) :: steps = 0, rhs_evals = 0, jac_evals = 0, root_returns = 0
       integer(i8) :: error_test_fails = 0, conv_fails = 0, events = 0, rejected = 0
+      !> steps an integrator took in blocks (`advance_block`, D-38), among `steps`
+      integer(i8) :: block_steps = 0
       real(wp) :: wall_time = 0.0_wp, t_final = 0.0_wp
       logical :: completed = .false.
    end type run_stats_t

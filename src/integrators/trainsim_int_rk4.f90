@@ -98,9 +98,16 @@ module trainsim_int_rk4
       !> evaluation's, i.e. nothing changed the modes or the state since).
       logical :: k1_next = .false.
       real(wp) :: t_k1 = 0.0_wp
+      !> A step `advance_block` computed but did not take (a guard below zero at
+      !> its end): from (t_pend, y at the block's end) by h_pend, into ynew and
+      !> k2..k4, its end's guards in g1. The next `advance` from there takes it
+      !> as its step (D-38); `restart` and `start` drop it.
+      logical :: pend = .false.
+      real(wp) :: t_pend = 0.0_wp, h_pend = 0.0_wp
    contains
       procedure :: start => rk4_start
       procedure :: advance => rk4_advance
+      procedure :: advance_block => rk4_advance_block
       procedure :: restart => rk4_restart
       procedure :: step => rk4_step
       procedure, private :: end_on_event => rk4_end_on_event
@@ -124,6 +131,7 @@ contains
    subroutine new_rk4(integ)
       class(integrator_t), allocatable, intent(out) :: integ
       allocate (rk4_t :: integ)
+      integ%takes_blocks = .true.   ! (not an extension that steps differently, e.g. rk4-thesis)
    end subroutine new_rk4
 
    subroutine rk4_start(self, model, t, y, err)
@@ -135,6 +143,7 @@ contains
       n = size(y)
       self%ng = model%n_guards
       self%k1_next = .false.
+      self%pend = .false.
       allocate (self%k1(n), self%k2(n), self%k3(n), self%k4(n), self%ytmp(n), self%ynew(n), self%ys(n))
       allocate (self%g0(self%ng), self%g1(self%ng), self%gs(self%ng))
       allocate (self%d2(n), self%d3(n), self%d4(n), self%yi(n), self%yb(n))
@@ -347,6 +356,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       associate (unused_m => model, unused_t => t)
       end associate
+      self%pend = .false.
       if (.not. self%k1_next) return
       if (any(y /= self%ynew)) self%k1_next = .false.
    end subroutine rk4_restart
@@ -374,16 +384,23 @@ contains
       t_sub = min(t_grid, t_goal)
       at_bp = self%stop_is_breakpoint .and. t_sub >= self%t_stop - self%tiny_t
       h = t_sub - t
-      ! k1 = f(t, y) from the last step's end (D-37: a caller that changes y
-      ! between two advances calls `restart`, which checks y against that end)
-      if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
-         call model%rhs(t, y, self%k1)
-         self%stats%rhs_evals = self%stats%rhs_evals + 1
+      if (self%pend .and. t == self%t_pend .and. h == self%h_pend .and. .not. at_bp) then
+         ! the step the block computed and left (D-38): ynew, k2..k4 and g1 hold it
+         self%pend = .false.
+         self%k1_next = .false.
+      else
+         self%pend = .false.
+         ! k1 = f(t, y) from the last step's end (D-37: a caller that changes y
+         ! between two advances calls `restart`, which checks y against that end)
+         if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
+            call model%rhs(t, y, self%k1)
+            self%stats%rhs_evals = self%stats%rhs_evals + 1
+         end if
+         self%k1_next = .false.
+         call rk4_step(self, model, t, y, h, self%ynew, at_bp)
+         if (self%ng > 0) call model%guards(t + h, self%ynew, self%g1)
       end if
-      self%k1_next = .false.
-      call rk4_step(self, model, t, y, h, self%ynew, at_bp)
       if (self%ng > 0) then
-         call model%guards(t + h, self%ynew, self%g1)
          if (any(self%g1 < 0.0_wp)) then
             if (.not. at_bp) then
                call self%mr_begin(model, t, y, h, t_grid, done)
@@ -416,6 +433,66 @@ contains
       status = adv_step
       if (t >= t_goal - self%tiny_t) status = adv_reached
    end subroutine rk4_advance
+
+   !> Plain steps toward t_goal in one call (D-38): whole grid steps, none
+   !> ending on a breakpoint or past t_goal, none with a guard below zero at
+   !> its end, at most model%blk%cap; step j's end goes to column j of
+   !> model%blk (`rhs_step_end`), model%blk%n = the steps taken. It stops after
+   !> a step whose state has an entry beyond y_limit or NaN (the caller reports
+   !> it), and once t_goal - t <= t_tol (the caller's instant tolerance: a
+   !> sliver of a step below it is no step). A step with a guard below zero at its end is not taken but kept
+   !> (pend): the next `advance` from here takes it without computing it again,
+   !> so the steps, the RHS evaluations and the results are those of `advance`
+   !> step by step.
+   subroutine rk4_advance_block(self, model, t_goal, t_tol, y_limit, t, y)
+      class(rk4_t), intent(inout), target :: self
+      type(model_t), intent(inout), target :: model
+      real(wp), intent(in) :: t_goal, t_tol, y_limit
+      real(wp), intent(inout) :: t, y(:)
+      real(wp) :: t_grid, h
+      integer :: j, i
+      model%blk%n = 0
+      if (self%mr_on .or. self%pend .or. .not. self%takes_blocks) return
+      do j = 1, model%blk%cap
+         t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
+         if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
+         if (t_grid > t_goal) exit
+         if (self%stop_is_breakpoint .and. t_grid >= self%t_stop - self%tiny_t) exit
+         h = t_grid - t
+         if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
+            call model%rhs(t, y, self%k1)
+            self%stats%rhs_evals = self%stats%rhs_evals + 1
+         end if
+         self%k1_next = .false.
+         call rk4_step(self, model, t, y, h, self%ynew, .false.)
+         if (self%ng > 0) then
+            call model%guards(t + h, self%ynew, self%g1)
+            if (any(self%g1 < 0.0_wp)) then
+               self%pend = .true.
+               self%t_pend = t
+               self%h_pend = h
+               exit
+            end if
+         end if
+         y = self%ynew
+         t = t_grid
+         self%istep = self%istep + 1
+         self%stats%steps = self%stats%steps + 1
+         self%stats%block_steps = self%stats%block_steps + 1
+         model%blk%col = j
+         call model%rhs_step_end(t, y, self%k1)
+         model%blk%col = 1
+         self%stats%rhs_evals = self%stats%rhs_evals + 1
+         model%ws_step_end = .true.
+         self%k1_next = .true.
+         self%t_k1 = t
+         model%blk%n = j
+         do i = 1, size(y)
+            if (.not. abs(y(i)) <= y_limit) return   ! (also NaN)
+         end do
+         if (t_goal - t <= t_tol) exit
+      end do
+   end subroutine rk4_advance_block
 
    !> A guard went negative inside [t, t+h]: locate the earliest zero and end
    !> the step there (t, y at the located point). The zero of each guard that

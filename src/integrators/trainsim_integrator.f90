@@ -48,9 +48,14 @@ module trainsim_integrator
       !> states `local_instant` names (and the energy states); the others are set
       !> when the local step ends, or ends early.
       logical :: region_instants = .false.
+      !> `advance_block` takes plain steps in blocks (D-38): set by a
+      !> constructor whose type implements it (an extension that steps
+      !> differently inherits the procedure but not this flag).
+      logical :: takes_blocks = .false.
    contains
       procedure(start_i), deferred :: start
       procedure(advance_i), deferred :: advance
+      procedure :: advance_block => integrator_advance_block
       procedure :: restart => integrator_restart
       procedure, non_overridable :: statistics => integrator_statistics
       procedure :: flush_counters => integrator_flush_counters
@@ -93,6 +98,20 @@ contains
       self%stop_is_breakpoint = is_breakpoint
    end subroutine integrator_set_stop
 
+   !> Up to model%blk%cap plain steps toward t_goal in one call, each step's
+   !> end in a column of model%blk, model%blk%n of them (D-38; see rk4_t's).
+   !> Default: none (model%blk%n = 0); the caller then calls `advance`.
+   subroutine integrator_advance_block(self, model, t_goal, t_tol, y_limit, t, y)
+      class(integrator_t), intent(inout), target :: self
+      type(model_t), intent(inout), target :: model
+      real(wp), intent(in) :: t_goal, t_tol, y_limit
+      real(wp), intent(inout) :: t, y(:)
+      associate (unused_s => self, unused_t => t_goal, unused_tol => t_tol, unused_l => y_limit, unused_tt => t, &
+                 unused_y => y)
+      end associate
+      model%blk%n = 0
+   end subroutine integrator_advance_block
+
    !> Default restart: one-step methods carry no history.
    subroutine integrator_restart(self, model, t, y, err)
       class(integrator_t), intent(inout), target :: self
@@ -119,6 +138,7 @@ contains
       stats%error_test_fails = stats%error_test_fails + self%stats%error_test_fails
       stats%conv_fails = stats%conv_fails + self%stats%conv_fails
       stats%rejected = stats%rejected + self%stats%rejected
+      stats%block_steps = stats%block_steps + self%stats%block_steps
    end subroutine integrator_statistics
 
    !> The guards that fired at an event the integrator returned (default: those

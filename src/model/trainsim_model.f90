@@ -94,6 +94,23 @@ module trainsim_model
       type(signal_t) :: torque
    end type load_t
 
+   !> The end-of-step quantities the observer folds, for up to `cap` plain
+   !> steps an integrator takes in one call (`advance_block`, D-38). Column
+   !> `col` is written by every `rhs_step_end` of a simple model (col = 1
+   !> outside a block); the workspace (el_disp, el_force, el_torque, ws_stored,
+   !> ws_elastic) is written as before, so it holds the last step's end.
+   type, public :: step_block_t
+      integer :: cap = 1          !< columns
+      integer :: col = 1          !< the column the next `rhs_step_end` writes
+      integer :: n = 0            !< steps in the block just taken
+      real(wp), allocatable :: t(:)                      !< (step) its end time
+      !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end
+      real(wp), allocatable :: disp(:, :), force(:, :), torque(:, :)
+      !> (step): ws_stored, ws_elastic (if ws_energy); (2, step): the energy
+      !> states y(n_states + 1 : n_states + 2) (if energy tracking)
+      real(wp), allocatable :: stored(:), elastic(:), work(:, :)
+   end type step_block_t
+
    type :: model_t
       character(len=:), allocatable :: title, deck_file, deck_text
       !> the overrides (--set, a sweep's values) applied to the deck, as `--set` writes them
@@ -142,6 +159,8 @@ module trainsim_model
       !> The observer then reads the element torques instead of recomputing them.
       logical :: ws_step_end = .false.
       real(wp) :: ws_t = 0.0_wp
+      !> The ends of the steps of a block (D-38), sized by `finalize`.
+      type(step_block_t) :: blk
       ! The hot path (`build_fast_path`, redone by `finalize` and at the start of
       ! every run in `init_modes`, so a re-parameterised copy is current): nodes
       ! that are plain inertias and elements that are linear springs (their
@@ -179,6 +198,7 @@ module trainsim_model
       procedure :: rhs => model_rhs
       procedure :: rhs_step_end => model_rhs_step_end
       procedure :: rhs_stage => model_rhs_stage
+      procedure :: block_ok => model_block_ok
       procedure :: rhs_part => model_rhs_part
       procedure :: part_power => model_part_power
       procedure :: element_torques => model_element_torques
@@ -242,6 +262,18 @@ contains
       if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force, self%el_pe)
       allocate (self%el_torque(2, ne), self%el_disp(ne), self%el_force(ne), self%el_pe(ne))
       self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp; self%el_pe = 0.0_wp
+      ! a block of steps (D-38): at most 64, and about 32 KiB per array at most
+      ! (a long train gains little from blocks: its steps are long already)
+      associate (b => self%blk)
+         b%cap = max(1, min(64, 4096/max(ne, 1)))
+         b%col = 1
+         b%n = 0
+         if (allocated(b%t)) deallocate (b%t, b%disp, b%force, b%torque, b%stored, b%elastic, b%work)
+         allocate (b%t(b%cap), b%disp(ne, b%cap), b%force(ne, b%cap), b%torque(ne, b%cap), b%stored(b%cap), &
+                   b%elastic(b%cap), b%work(2, b%cap))
+         b%t = 0.0_wp; b%disp = 0.0_wp; b%force = 0.0_wp; b%torque = 0.0_wp
+         b%stored = 0.0_wp; b%elastic = 0.0_wp; b%work = 0.0_wp
+      end associate
       call self%build_fast_path()
    end subroutine model_finalize
 
@@ -586,13 +618,26 @@ contains
                             self%n_states, self%chain .and. .not. self%run%track_energy)
    end subroutine model_rhs_stage
 
+   !> Whether an integrator may take a block of steps (D-38) in the current
+   !> modes: a simple model whose `rhs_step_end` leaves in the block's columns
+   !> everything the observer folds after a step (every element's status in
+   !> the workspace, and with energy tracking the stored energy), and room
+   !> for two steps at least.
+   logical function model_block_ok(self) result(ok)
+      class(model_t), intent(in) :: self
+      ok = self%simple .and. self%blk%cap >= 2
+      if (.not. ok) return
+      if (self%run%track_energy) ok = self%n_cold == 0
+      if (ok) ok = all(self%ws_status)
+   end function model_block_ok
+
    !> `model_rhs` without the dispatch.
    subroutine rhs_fast(self, t, y, dydt, step_end)
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
       logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
-      integer :: i, l, r, s, o
+      integer :: i, l, r, s, o, c
       real(wp) :: tl, tr, f, dv, pdiss, pin
       logical :: track
       track = self%run%track_energy
@@ -600,10 +645,22 @@ contains
       self%ws_t = t
       self%ws_energy = step_end .and. self%simple .and. track .and. self%n_cold == 0
       if (self%simple) then
+         c = self%blk%col
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
                          self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, self%el_pe, &
+                         self%blk%disp(:, c), self%blk%force(:, c), self%blk%torque(:, c), &
                          self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
                          self%chain .and. .not. track, self%ws_energy, self%ws_stored, self%ws_elastic)
+         if (step_end) then
+            ! the step's end in the block's column (D-38)
+            self%blk%t(c) = t
+            if (track) then
+               self%blk%work(1, c) = y(self%n_states + 1)
+               self%blk%work(2, c) = y(self%n_states + 2)
+               self%blk%stored(c) = self%ws_stored
+               self%blk%elastic(c) = self%ws_elastic
+            end if
+         end if
          return
       end if
       pdiss = 0.0_wp
@@ -711,8 +768,8 @@ contains
    !> (est, epot), bit for bit `model_workspace_energy`'s: the same terms in the
    !> same order (the kinetic energies node by node, then the elastic energies,
    !> pe, element by element).
-   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, pe, first, inc, t, y, &
-                         dydt, track, ns, chain, energy, est, epot)
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, pe, bd, bf, bt, first, &
+                         inc, t, y, dydt, track, ns, chain, energy, est, epot)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
@@ -720,6 +777,8 @@ contains
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne), pe(ne)
+      !> the block's column (D-38): disp, force and et(2, :) again
+      real(wp), intent(inout) :: bd(ne), bf(ne), bt(ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: dydt(:)
@@ -841,6 +900,9 @@ contains
          end select
          et(2*i - 1) = tl
          et(2*i) = tr
+         bd(i) = disp(i)          ! the block's column (D-38)
+         bf(i) = force(i)
+         bt(i) = tr
          if (chain) then
             ! node i is done (as in rhs_stage_simple)
             tq = tqc + tl

@@ -78,6 +78,7 @@ module trainsim_observer
    contains
       procedure :: start => obs_start
       procedure :: step => obs_step
+      procedure :: fold_block => obs_fold_block
       procedure :: step_part => obs_step_part
       procedure :: sample => obs_sample
       procedure, private :: update_metrics => obs_update_metrics
@@ -425,6 +426,99 @@ contains
       call self%update_metrics(model, t)
       if (self%refine_peaks) call self%keep_step_end()
    end subroutine obs_step
+
+   !> The steps of a block an integrator has just taken (model%blk, D-38),
+   !> folded into the metrics as `step` would fold them one by one (its short
+   !> way: the steps' ends are in the block's columns, every element's status
+   !> and the stored energy among them: model_t%block_ok), the same updates in
+   !> the same order per element. With `samples`, the end of every step of the
+   !> block is also an output time, and the sink takes no whole samples:
+   !> `sample` after each step (its displacements to the peak-to-peak detectors).
+   subroutine obs_fold_block(self, model, samples)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      logical, intent(in) :: samples
+      integer :: n, j
+      n = model%blk%n
+      if (n == 0) return
+      associate (b => model%blk)
+         call fold_cols(size(model%elements), b%cap, n, self%t_prev, self%t_metrics, b%t, b%disp, b%force, b%torque, &
+                        model%el_contact, self%res%el, self%res%events, self%t_counted)
+         if (self%track) then
+            do j = 1, n   ! the short way's energies (the stored energy from the kernel, D-36)
+               self%s%energy(2) = b%elastic(j)
+               self%s%energy(1) = b%stored(j) - b%elastic(j)
+               self%s%energy(3) = b%work(1, j)
+               self%s%energy(4) = b%work(2, j)
+               self%s%energy(5) = b%stored(j) + self%s%energy(3) - self%s%energy(4) - model%energy0
+               call fold_energy(self)
+            end do
+         end if
+         if (samples) then
+            do j = 1, n
+               if (b%t(j) >= self%t_metrics) call push_samples(self%turns, b%disp(:, j))
+            end do
+         end if
+         self%s%displacement(:) = b%disp(:, n)
+         self%s%t = b%t(n)
+         self%s_whole = .false.
+         self%t_prev = b%t(n)
+      end associate
+   end subroutine obs_fold_block
+
+   !> `fold_ws` over the n steps of a block, element by element (explicit-shape
+   !> arrays: the block's columns, (element, step)). A contact's mode does not
+   !> change inside a block (events end blocks): contact(i) holds for all its steps.
+   subroutine fold_cols(ne, cap, n, t_prev, t_metrics, tc, disp, force, torque, contact, m, events, t_counted)
+      integer, intent(in) :: ne, cap, n
+      real(wp), intent(in) :: t_prev, t_metrics, tc(cap), disp(ne, cap), force(ne, cap), torque(ne, cap)
+      integer, intent(in) :: contact(ne)
+      type(element_metrics_t), intent(inout) :: m(ne)
+      type(event_t), intent(inout) :: events(:)
+      real(wp), intent(in) :: t_counted(ne)
+      integer :: i, j, j0, k
+      real(wp) :: pk, fmin, fmax, tmin, tmax, dmin, dmax, tp, t0, tout
+      j0 = 1   ! the first step at or after t_metrics (the metrics' start)
+      do while (j0 <= n)
+         if (tc(j0) >= t_metrics) exit
+         j0 = j0 + 1
+      end do
+      do i = 1, ne
+         k = m(i)%open_event
+         if (k > 0) then
+            pk = events(k)%peak_force
+            do j = 1, n
+               pk = max(pk, abs(force(i, j)))
+            end do
+            events(k)%peak_force = pk
+         end if
+         if (j0 > n) cycle
+         fmin = m(i)%force_min; fmax = m(i)%force_max
+         tmin = m(i)%torque_min; tmax = m(i)%torque_max
+         dmin = m(i)%disp_min; dmax = m(i)%disp_max
+         do j = j0, n
+            fmin = min(fmin, force(i, j))
+            fmax = max(fmax, force(i, j))
+            tmin = min(tmin, torque(i, j))
+            tmax = max(tmax, torque(i, j))
+            dmin = min(dmin, disp(i, j))
+            dmax = max(dmax, disp(i, j))
+         end do
+         m(i)%force_min = fmin; m(i)%force_max = fmax
+         m(i)%torque_min = tmin; m(i)%torque_max = tmax
+         m(i)%disp_min = dmin; m(i)%disp_max = dmax
+         if (contact(i) == 0) then
+            tout = m(i)%time_out_of_contact
+            do j = j0, n
+               tp = t_prev
+               if (j > 1) tp = tc(j - 1)
+               t0 = max(tp, t_counted(i))
+               if (tc(j) > t0) tout = tout + (tc(j) - t0)
+            end do
+            m(i)%time_out_of_contact = tout
+         end if
+      end do
+   end subroutine fold_cols
 
    !> At a local event instant (integrator_t%local_instant, D-32): only the
    !> elements els, whose nodes (among `nodes`) are integration points at t,

@@ -57,6 +57,11 @@ module trainsim_simulate
       real(wp) :: t_window = 0.0_wp        !< start of the current event-budget window
       integer :: window_events = 0         !< events since t_window
       logical :: may_miss = .false.        !< integ%may_miss_events(), asked once per run
+      !> plain steps in blocks (D-38): the integrator takes them, and the
+      !> observer's short way folds them (no whole samples, no peak refinement)
+      logical :: blocks = .false.
+      !> blocks, and the output times are the integrator's grid (output_interval = dt)
+      logical :: block_samples = .false.
    end type drive_t
 
 contains
@@ -112,7 +117,9 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(drive_t) :: d
       real(wp) :: t0, t_end, dout, t_out, x, n_real
-      integer(i8) :: k, n_out
+      integer(i8) :: k, n_out, k_last
+      integer :: j
+      logical :: folded
 
       t0 = model%run%t_start
       t_end = model%run%t_end
@@ -126,6 +133,8 @@ contains
       d%tol = 1.0e-9_wp*model%run%dt
       d%t_window = t
       d%may_miss = integ%may_miss_events()
+      d%blocks = integ%takes_blocks .and. .not. (d%may_miss .or. obs%want_whole .or. obs%speeds_only .or. obs%refine_peaks)
+      d%block_samples = d%blocks .and. dout == model%run%dt
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
       call model%breakpoints(t, t_end, d%bp)
       call set_next_stop(d, integ, t, t_end)
@@ -135,16 +144,71 @@ contains
       call settle_if_fired(model, integ, obs, d, t, y, .false., err)
       if (allocated(err)) return
 
-      do k = 1, n_out
-         t_out = t0 + real(k, wp)*dout
-         if (k == n_out) t_out = t_end
+      k = 1
+      do while (k <= n_out)
+         if (d%block_samples .and. k < n_out) then
+            ! plain steps in blocks (D-38), each step's end an output time:
+            ! k .. k_last at most (not the last, t_end, which may lie off the grid
+            ! by less than the instant tolerance)
+            k_last = min(k + int(model%blk%cap, i8) - 1, n_out - 1)
+            call run_block(model, integ, obs, d, min(out_time(k_last), integ%t_stop), t, y, folded, err)
+            if (allocated(err)) return
+            if (folded) then
+               ! the block's steps ended on output times k, k + 1, ... (one grid)
+               do j = 1, model%blk%n
+                  if (model%blk%t(j) /= out_time(k + j - 1)) then
+                     call fatal_error(err, 'internal: a step of a block ended at t = '//str(model%blk%t(j))// &
+                                      ' s, off the output time '//str(out_time(k + j - 1))//' s', err_internal)
+                     return
+                  end if
+               end do
+               k = k + model%blk%n
+               cycle
+            end if
+         end if
+         t_out = out_time(k)
          call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
+         k = k + 1
       end do
       t = t_end
+   contains
+      !> Output time k: t0 + k dout, the last one t_end.
+      real(wp) function out_time(kk) result(tk)
+         integer(i8), intent(in) :: kk
+         tk = t0 + real(kk, wp)*dout
+         if (kk == n_out) tk = t_end
+      end function out_time
    end subroutine drive
+
+   !> Plain steps toward t_goal in a block (D-38), if the integrator and the
+   !> model's modes allow one (folded: it took steps; the observer has folded
+   !> them, with each step's end an output time if d%block_samples). The
+   !> state is checked after the block (the integrator stops a block at a
+   !> step beyond the blow-up limit), and the interrupt flag.
+   subroutine run_block(model, integ, obs, d, t_goal, t, y, folded, err)
+      type(model_t), intent(inout), target :: model
+      class(integrator_t), intent(inout), target :: integ
+      type(observer_t), intent(inout) :: obs
+      type(drive_t), intent(in) :: d
+      real(wp), intent(in) :: t_goal
+      real(wp), intent(inout) :: t, y(:)
+      logical, intent(out) :: folded
+      type(error_t), allocatable, intent(out) :: err
+      folded = .false.
+      if (.not. model%block_ok()) return
+      call integ%advance_block(model, t_goal, d%tol, blowup_limit, t, y)
+      if (model%blk%n == 0) return
+      folded = .true.
+      if (.not. within_limit(y)) then
+         call check_state(model, integ, t, y, err)
+         return
+      end if
+      call obs%fold_block(model, d%block_samples)
+      if (signal_caught /= 0) call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
+   end subroutine run_block
 
    !> Advance (t, y) to the output time t_out: through the breakpoints of the
    !> inputs and the events on the way, checking the state after every step.
@@ -159,10 +223,15 @@ contains
       real(wp) :: t_goal
       integer :: status
       integer, pointer, contiguous :: r_nodes(:), r_states(:), r_els(:), r_gels(:)
-      logical :: local
+      logical :: local, folded
       do
          t_goal = min(t_out, integ%t_stop)
          if (t_goal - t > d%tol) then
+            if (d%blocks) then
+               call run_block(model, integ, obs, d, t_goal, t, y, folded, err)
+               if (allocated(err)) return
+               if (folded) cycle
+            end if
             call integ%advance(model, t_goal, t, y, status, err)
             if (allocated(err)) return
             ! a local event instant (D-32): only the region's states are

@@ -1,0 +1,209 @@
+!> Plain steps in blocks (docs/decisions.md D-38): when no one takes whole
+!> samples (no history file, no in-memory series), RK4 takes its plain steps
+!> in blocks and the observer folds each block's columns afterwards. That is a
+!> second path to the same numbers, so it must give them bit for bit: every
+!> deck that ships with trainsim (and the benchmark's rig and a long chain),
+!> with energy tracking off and on, with output every step, every 7th step and
+!> as written, and metrics starting half-way, is run twice:
+!> - with a null sink and no series (blocks), and
+!> - keeping the in-memory series (whole samples: step by step, no blocks);
+!> every metric of every element, the event table, the energy ledger, the final
+!> state and the counters must be equal (==, not within a tolerance). Each
+!> blocked run must also have taken most of its steps in blocks (else this
+!> compares the step-by-step path with itself), the other none. A run that
+!> fails (a deck whose state runs away) must fail alike, with the same message.
+program test_step_blocks
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t
+   use trainsim_model, only: model_t
+   use trainsim_simulate, only: simulate
+   use trainsim_observer, only: run_result_t
+   use trainsim_sink, only: null_sink_t
+   use trainsim_testing, only: suite_begin, suite_end, test_begin, check
+   use trainsim_test_support, only: load_model, load_model_text, nl
+   implicit none
+
+   character(len=*), parameter :: decks(*) = [character(len=48) :: &
+                                  'inputs/two_clearance.nml', 'inputs/gregory_harris_munro.nml', &
+                                  'inputs/start_stop_two_clearances.nml', 'inputs/branched_train.nml', &
+                                  'inputs/dc_motor_geared_load.nml', 'inputs/helical_pair.nml', &
+                                  'inputs/loads_table_ramp.nml', 'verification/table5_1/table5_1.nml', &
+                                  'verification/table5_2/table5_2.nml', 'verification/table5_3/table5_3.nml', &
+                                  'verification/table5_4/table5_4.nml', 'verification/chapter3/case1.nml', &
+                                  'verification/chapter3/case2.nml', 'verification/chapter3/case3.nml', &
+                                  'tests/decks/tracker_si_start_stop.nml', 'tests/decks/cvode_zone_late_table5_5_285.nml', &
+                                  'tests/decks/cvode_zone_late_table7_1_640.nml', 'tests/decks/runaway_at_safe_dt.nml']
+   integer :: i, n_blocked
+
+   call suite_begin('step blocks (D-38): the same numbers as step by step')
+   n_blocked = 0
+   do i = 1, size(decks)
+      call test_begin(trim(decks(i)))
+      call deck_variants(trim(decks(i)), '')
+   end do
+   call test_begin('the Table 5.5 rig with backlash (26 thousand events in 2e6 steps: 0.05 s of it)')
+   call deck_variants('', rig_text())
+   call test_begin('a 120-node chain with a backlash gear every 10th element (local event steps)')
+   call deck_variants('', chain_text(120))
+   call test_begin('blocks were taken')
+   write (*, '(a,i0,a,i0)') '  runs that took most of their steps in blocks: ', n_blocked, ' of ', 6*(size(decks) + 2)
+   call check('most runs of a simple model took blocks', n_blocked >= 60)
+   call suite_end()
+
+contains
+
+   !> The deck in its variants: as written; output every step; every 7th step
+   !> with the metrics from half-way; each with energy tracking off and on.
+   subroutine deck_variants(path, text)
+      character(len=*), intent(in) :: path, text
+      integer :: v, e
+      do v = 1, 3
+         do e = 0, 1
+            call compare(path, text, v, e == 1)
+         end do
+      end do
+   end subroutine deck_variants
+
+   subroutine compare(path, text, variant, energy)
+      character(len=*), intent(in) :: path, text
+      integer, intent(in) :: variant
+      logical, intent(in) :: energy
+      type(model_t) :: base, m
+      type(run_result_t) :: a, b
+      type(error_t), allocatable :: err_a, err_b
+      character(len=:), allocatable :: what
+      integer :: j
+      if (len(path) > 0) then
+         call load_model(path, base)
+      else
+         call load_model_text(text, base)
+      end if
+      base%run%integrator = 'rk4'   ! (the blocks are RK4's; a CVODE deck's dt is RK4-safe too)
+      base%run%track_energy = energy
+      select case (variant)
+      case (2)
+         base%run%output_interval = base%run%dt
+      case (3)
+         base%run%output_interval = 7.0_wp*base%run%dt
+         base%run%settle_time = 0.5_wp*(base%run%t_end - base%run%t_start)
+      end select
+      call base%finalize()
+      what = trim(merge('as written   ', 'every step   ', variant == 1))
+      if (variant == 3) what = 'every 7th, metrics from half-way'
+      what = what//merge(', energy on ', ', energy off', energy)//': '
+      m = base
+      call run(m, .false., a, err_a)
+      m = base
+      call run(m, .true., b, err_b)
+      call check(what//'both runs succeed or both fail', allocated(err_a) .eqv. allocated(err_b))
+      if (allocated(err_a) .or. allocated(err_b)) then
+         if (allocated(err_a) .and. allocated(err_b)) &
+            call check(what//'the same error', err_a%message == err_b%message)
+         return
+      end if
+      if (a%stats%block_steps > a%stats%steps/2) n_blocked = n_blocked + 1
+      call check(what//'no blocks when whole samples are taken', b%stats%block_steps == 0)
+      call check(what//'same steps, RHS evaluations, events', a%stats%steps == b%stats%steps .and. &
+                 a%stats%rhs_evals == b%stats%rhs_evals .and. a%stats%events == b%stats%events)
+      call check(what//'same final time and state', a%t_final == b%t_final .and. all(a%y_final == b%y_final))
+      call check(what//'same energy ledger', a%energy_residual_max == b%energy_residual_max .and. &
+                 a%energy_scale == b%energy_scale)
+      call check(what//'same event table', same_events(a, b))
+      do j = 1, size(a%el)
+         associate (p => a%el(j), q => b%el(j))
+            call check(what//'element '//itoa(j)//': same extremes', p%force_min == q%force_min .and. &
+                       p%force_max == q%force_max .and. p%torque_min == q%torque_min .and. &
+                       p%torque_max == q%torque_max .and. p%disp_min == q%disp_min .and. p%disp_max == q%disp_max)
+            call check(what//'element '//itoa(j)//': same impacts, peaks, time out of contact', &
+                       p%impacts == q%impacts .and. p%separations == q%separations .and. &
+                       p%zone_changes == q%zone_changes .and. p%max_approach_velocity == q%max_approach_velocity .and. &
+                       p%max_peak_force == q%max_peak_force .and. p%time_out_of_contact == q%time_out_of_contact)
+            call check(what//'element '//itoa(j)//': same peak-to-peak figures', p%p2p_range == q%p2p_range .and. &
+                       p%p2p_mean == q%p2p_mean .and. p%p2p_swings == q%p2p_swings .and. &
+                       (p%p2p_exact .eqv. q%p2p_exact))
+         end associate
+      end do
+   end subroutine compare
+
+   !> The two event tables equal, row by row.
+   logical function same_events(a, b) result(same)
+      type(run_result_t), intent(in) :: a, b
+      integer :: k
+      same = size(a%events) == size(b%events)
+      if (.not. same) return
+      do k = 1, size(a%events)
+         associate (p => a%events(k), q => b%events(k))
+            same = p%t == q%t .and. p%element == q%element .and. p%kind == q%kind .and. &
+                   p%peak_force == q%peak_force .and. p%duration == q%duration .and. &
+                   p%approach_velocity == q%approach_velocity .and. p%force == q%force .and. &
+                   p%displacement == q%displacement
+         end associate
+         if (.not. same) return
+      end do
+   end function same_events
+
+   !> One run with a null sink; series: keep the in-memory series (whole samples).
+   subroutine run(model, series, res, err)
+      type(model_t), intent(inout) :: model
+      logical, intent(in) :: series
+      type(run_result_t), intent(out) :: res
+      type(error_t), allocatable, intent(out) :: err
+      type(null_sink_t) :: none
+      model%run%keep_series = series
+      model%run%keep_events = .true.
+      call simulate(model, none, res, err)
+   end subroutine run
+
+   !> bench_rk4_throughput's rig with the spur gear (Table 5.5), 0.05 s.
+   function rig_text() result(text)
+      character(len=:), allocatable :: text
+      text = "&run t_end = 0.05, dt = 8.0e-6, integrator = 'rk4' /"//nl// &
+             "&node id = 'n1', type = 'inertia', inertia = 100.0 /"//nl// &
+             "&node id = 'n2', type = 'inertia', inertia = 0.987 /"//nl// &
+             "&node id = 'n3', type = 'inertia', inertia = 0.987 /"//nl// &
+             "&node id = 'n4', type = 'inertia', inertia = 100.0 /"//nl// &
+             "&element id = 'e1', type = 'shaft', stiffness = 32000.0 /"//nl// &
+             "&element id = 'e2', type = 'spur_gear', stiffness = 234500.0, rb_driver = 3.7588, "// &
+             'rb_driven = 3.7588, teeth = 32, contact_ratio = 1.6676, approach_angle = 0.1637, '// &
+             'half_backlash = 0.005 /'//nl// &
+             "&element id = 'e3', type = 'shaft', stiffness = 32000.0 /"//nl// &
+             "&initial node = 'all', speed = 80.0 /"//nl// &
+             "&initial node = 'n1', angle = -0.187847 /"//nl// &
+             "&initial node = 'n2', angle = -0.212810 /"//nl// &
+             "&initial node = 'n3', angle = -0.214283 /"//nl// &
+             "&initial node = 'n4', angle = -0.239246 /"//nl// &
+             "&load node = 'n1', quantity = 'speed', kind = 'constant', value = 80.0 /"//nl// &
+             "&load node = 'n4', kind = 'constant', value = -798.8 /"
+   end function rig_text
+
+   !> bench_rk4_throughput's chain: n unit inertias, shafts of stiffness 1e4, a
+   !> spur gear with half backlash 1e-3 as every 10th element; node 1 starts at
+   !> 1 rad/s, the others at rest (a wave runs down the chain and back).
+   function chain_text(n) result(text)
+      integer, intent(in) :: n
+      character(len=:), allocatable :: text
+      integer :: k
+      text = "&run t_end = 0.5, dt = 5.0e-3, integrator = 'rk4' /"//nl
+      do k = 1, n
+         text = text//"&node id = 'n"//itoa(k)//"', type = 'inertia', inertia = 1.0 /"//nl
+      end do
+      do k = 1, n - 1
+         if (mod(k, 10) == 0) then
+            text = text//"&element id = 'e"//itoa(k)//"', type = 'spur_gear', stiffness = 1.0e4, "// &
+                   'rb_driver = 1.0, rb_driven = 1.0, teeth = 32, contact_ratio = 1.6, approach_angle = 0.1, '// &
+                   'half_backlash = 1.0e-3 /'//nl
+         else
+            text = text//"&element id = 'e"//itoa(k)//"', type = 'shaft', stiffness = 1.0e4 /"//nl
+         end if
+      end do
+      text = text//"&initial node = 'n1', speed = 1.0 /"
+   end function chain_text
+
+   function itoa(k) result(s)
+      integer, intent(in) :: k
+      character(len=:), allocatable :: s
+      character(len=16) :: buf
+      write (buf, '(i0)') k
+      s = trim(buf)
+   end function itoa
+end program test_step_blocks
