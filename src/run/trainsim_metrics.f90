@@ -12,7 +12,7 @@ module trainsim_metrics
    implicit none
    private
 
-   public :: peak_to_peak, peak_to_peak_values, p2p_detector_t, push_samples
+   public :: peak_to_peak, peak_to_peak_values, p2p_detector_t, push_samples, push_block
 
    !> State of the hysteresis peak detector (as in peak_to_peak_values).
    type :: p2p_state_t
@@ -235,41 +235,61 @@ contains
       end subroutine replay
    end subroutine det_push
 
-   !> One sample per detector: x(i) to det(i)%push, with det_push's own steps
-   !> written out for the usual sample, one inside the range seen so far (the
-   !> threshold does not move, so det_push would only feed it), and det_push
-   !> itself for the others: the same state, without a call per sample.
+   !> One sample per detector: x(i) to det(i) (push_one).
    subroutine push_samples(det, x)
       type(p2p_detector_t), intent(inout) :: det(:)
       real(wp), intent(in) :: x(:)
       integer :: i
-      logical :: confirmed
-      real(wp) :: edge
       do i = 1, size(det)
-         associate (d => det(i))
-            if (d%n > 0 .and. x(i) >= d%xmin .and. x(i) <= d%xmax) then
-               d%n = d%n + 1
-               if (.not. d%h > 0.0_wp) cycle
-               ! feed's branches that confirm nothing: a rising edge not yet
-               ! down by h from its maximum, a falling one not yet up by h
-               if (d%s%dir == 1 .and. x(i) > d%s%cand - d%h) then
-                  if (x(i) > d%s%cand) d%s%cand = x(i)
-                  cycle
-               else if (d%s%dir == -1 .and. x(i) < d%s%cand + d%h) then
-                  if (x(i) < d%s%cand) d%s%cand = x(i)
-                  cycle
-               end if
-               call feed(d%s, x(i), d%h, confirmed, edge)
-               if (confirmed) then
-                  d%e_min = min(d%e_min, edge)
-                  call keep(d, d%s%last_ext)
-               end if
-            else
-               call d%push(x(i))
-            end if
-         end associate
+         call push_one(det(i), x(i))
       end do
    end subroutine push_samples
+
+   !> `push_samples` for the samples j0 .. n of a block, x(element, sample):
+   !> each detector takes its samples in order, detector by detector (they are
+   !> independent: the same as column by column, D-38).
+   subroutine push_block(det, x, j0, n)
+      type(p2p_detector_t), intent(inout) :: det(:)
+      real(wp), intent(in) :: x(:, :)
+      integer, intent(in) :: j0, n
+      integer :: i, j
+      do i = 1, size(det)
+         do j = j0, n
+            call push_one(det(i), x(i, j))
+         end do
+      end do
+   end subroutine push_block
+
+   !> One sample x to detector d: det_push's own steps written out for the
+   !> usual sample, one inside the range seen so far (the threshold does not
+   !> move, so det_push would only feed it), and det_push itself for the
+   !> others: the same state, without a call through the type per sample.
+   subroutine push_one(d, x)
+      type(p2p_detector_t), intent(inout) :: d
+      real(wp), intent(in) :: x
+      logical :: confirmed
+      real(wp) :: edge
+      if (d%n > 0 .and. x >= d%xmin .and. x <= d%xmax) then
+         d%n = d%n + 1
+         if (.not. d%h > 0.0_wp) return
+         ! feed's branches that confirm nothing: a rising edge not yet
+         ! down by h from its maximum, a falling one not yet up by h
+         if (d%s%dir == 1 .and. x > d%s%cand - d%h) then
+            if (x > d%s%cand) d%s%cand = x
+            return
+         else if (d%s%dir == -1 .and. x < d%s%cand + d%h) then
+            if (x < d%s%cand) d%s%cand = x
+            return
+         end if
+         call feed(d%s, x, d%h, confirmed, edge)
+         if (confirmed) then
+            d%e_min = min(d%e_min, edge)
+            call keep(d, d%s%last_ext)
+         end if
+      else
+         call d%push(x)
+      end if
+   end subroutine push_one
 
    !> Log a confirmed extreme; when the log is full, fold its older half into
    !> the folded state (run through the detector with the threshold now).

@@ -20,7 +20,7 @@ module trainsim_observer
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_full
-   use trainsim_metrics, only: p2p_detector_t, push_samples
+   use trainsim_metrics, only: p2p_detector_t, push_samples, push_block
    implicit none
    private
 
@@ -438,11 +438,16 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       logical, intent(in) :: samples
-      integer :: n, j
+      integer :: n, j, j0
       n = model%blk%n
       if (n == 0) return
       associate (b => model%blk)
-         call fold_cols(size(model%elements), b%cap, n, self%t_prev, self%t_metrics, b%t, b%disp, b%force, b%torque, &
+         j0 = 1   ! the first step at or after t_metrics (the metrics' start)
+         do while (j0 <= n)
+            if (b%t(j0) >= self%t_metrics) exit
+            j0 = j0 + 1
+         end do
+         call fold_cols(size(model%elements), b%cap, n, j0, self%t_prev, b%t, b%disp, b%force, b%torque, &
                         model%el_contact, self%res%el, self%res%events, self%t_counted)
          if (self%track) then
             do j = 1, n   ! the short way's energies (the stored energy from the kernel, D-36)
@@ -454,11 +459,7 @@ contains
                call fold_energy(self)
             end do
          end if
-         if (samples) then
-            do j = 1, n
-               if (b%t(j) >= self%t_metrics) call push_samples(self%turns, b%disp(:, j))
-            end do
-         end if
+         if (samples .and. j0 <= n) call push_block(self%turns, b%disp, j0, n)
          self%s%displacement(:) = b%disp(:, n)
          self%s%t = b%t(n)
          self%s_whole = .false.
@@ -469,20 +470,16 @@ contains
    !> `fold_ws` over the n steps of a block, element by element (explicit-shape
    !> arrays: the block's columns, (element, step)). A contact's mode does not
    !> change inside a block (events end blocks): contact(i) holds for all its steps.
-   subroutine fold_cols(ne, cap, n, t_prev, t_metrics, tc, disp, force, torque, contact, m, events, t_counted)
+   subroutine fold_cols(ne, cap, n, j0, t_prev, tc, disp, force, torque, contact, m, events, t_counted)
       integer, intent(in) :: ne, cap, n
-      real(wp), intent(in) :: t_prev, t_metrics, tc(cap), disp(ne, cap), force(ne, cap), torque(ne, cap)
+      integer, intent(in) :: j0   !< the first step at or after t_metrics
+      real(wp), intent(in) :: t_prev, tc(cap), disp(ne, cap), force(ne, cap), torque(ne, cap)
       integer, intent(in) :: contact(ne)
       type(element_metrics_t), intent(inout) :: m(ne)
       type(event_t), intent(inout) :: events(:)
       real(wp), intent(in) :: t_counted(ne)
-      integer :: i, j, j0, k
+      integer :: i, j, k
       real(wp) :: pk, fmin, fmax, tmin, tmax, dmin, dmax, tp, t0, tout
-      j0 = 1   ! the first step at or after t_metrics (the metrics' start)
-      do while (j0 <= n)
-         if (tc(j0) >= t_metrics) exit
-         j0 = j0 + 1
-      end do
       do i = 1, ne
          k = m(i)%open_event
          if (k > 0) then
