@@ -448,8 +448,7 @@ contains
       class(rk4_t), intent(inout), target :: self
       type(model_t), intent(inout), target :: model
       real(wp), intent(in) :: t_goal, t_tol, y_limit
-      real(wp), intent(inout) :: t
-      real(wp), intent(inout), contiguous :: y(:)
+      real(wp), intent(inout) :: t, y(:)
       real(wp) :: t_grid, h
       integer :: j, i
       model%blk%n = 0

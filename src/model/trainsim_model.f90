@@ -580,9 +580,8 @@ contains
    !> tables; the others are asked through their procedures, in the same order.
    subroutine model_rhs(self, t, y, dydt)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp), intent(out), contiguous :: dydt(:)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
       call rhs_fast(self, t, y, dydt, .false.)
    end subroutine model_rhs
 
@@ -592,9 +591,8 @@ contains
    !> event location) is `model_rhs`, which does not compute it.
    subroutine model_rhs_step_end(self, t, y, dydt)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp), intent(out), contiguous :: dydt(:)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
       call rhs_fast(self, t, y, dydt, .true.)
    end subroutine model_rhs_step_end
 
@@ -636,9 +634,8 @@ contains
    !> `model_rhs` without the dispatch.
    subroutine rhs_fast(self, t, y, dydt, step_end)
       type(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp), intent(out), contiguous :: dydt(:)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
       logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       integer :: i, l, r, s, o, c
       real(wp) :: tl, tr, f, dv, pdiss, pin
@@ -783,9 +780,8 @@ contains
       !> the block's column (D-38): disp, force and et(2, :) again
       real(wp), intent(inout) :: bd(ne), bf(ne), bt(ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
-      real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp), intent(inout), contiguous :: dydt(:)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: dydt(:)
       logical, intent(in) :: track
       logical, intent(in) :: chain   !< as in `rhs_stage_simple` (a serial chain, energy off)
       !> track, and every element a linear spring or a hot form whose elastic
