@@ -106,6 +106,8 @@ module trainsim_model
       real(wp), allocatable :: t(:)                      !< (step) its end time
       !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end
       real(wp), allocatable :: disp(:, :), force(:, :), torque(:, :)
+      !> (node, step): omega at the step's end
+      real(wp), allocatable :: omega(:, :)
       !> (step): ws_stored, ws_elastic (if ws_energy); (2, step): the energy
       !> states y(n_states + 1 : n_states + 2) (if energy tracking)
       real(wp), allocatable :: stored(:), elastic(:), work(:, :)
@@ -265,13 +267,13 @@ contains
       ! a block of steps (D-38): at most 64, and about 32 KiB per array at most
       ! (a long train gains little from blocks: its steps are long already)
       associate (b => self%blk)
-         b%cap = max(1, min(64, 4096/max(ne, 1)))
+         b%cap = max(1, min(64, 4096/max(ne, nn, 1)))
          b%col = 1
          b%n = 0
-         if (allocated(b%t)) deallocate (b%t, b%disp, b%force, b%torque, b%stored, b%elastic, b%work)
-         allocate (b%t(b%cap), b%disp(ne, b%cap), b%force(ne, b%cap), b%torque(ne, b%cap), b%stored(b%cap), &
-                   b%elastic(b%cap), b%work(2, b%cap))
-         b%t = 0.0_wp; b%disp = 0.0_wp; b%force = 0.0_wp; b%torque = 0.0_wp
+         if (allocated(b%t)) deallocate (b%t, b%disp, b%force, b%torque, b%omega, b%stored, b%elastic, b%work)
+         allocate (b%t(b%cap), b%disp(ne, b%cap), b%force(ne, b%cap), b%torque(ne, b%cap), b%omega(nn, b%cap), &
+                   b%stored(b%cap), b%elastic(b%cap), b%work(2, b%cap))
+         b%t = 0.0_wp; b%disp = 0.0_wp; b%force = 0.0_wp; b%torque = 0.0_wp; b%omega = 0.0_wp
          b%stored = 0.0_wp; b%elastic = 0.0_wp; b%work = 0.0_wp
       end associate
       call self%build_fast_path()
@@ -648,7 +650,7 @@ contains
          c = self%blk%col
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
                          self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, self%el_pe, &
-                         self%blk%disp(:, c), self%blk%force(:, c), self%blk%torque(:, c), &
+                         self%blk%disp(:, c), self%blk%force(:, c), self%blk%torque(:, c), self%blk%omega(:, c), &
                          self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
                          self%chain .and. .not. track, self%ws_energy, self%ws_stored, self%ws_elastic)
          if (step_end) then
@@ -768,8 +770,8 @@ contains
    !> (est, epot), bit for bit `model_workspace_energy`'s: the same terms in the
    !> same order (the kinetic energies node by node, then the elastic energies,
    !> pe, element by element).
-   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, pe, bd, bf, bt, first, &
-                         inc, t, y, dydt, track, ns, chain, energy, est, epot)
+   subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, pe, bd, bf, bt, bo, &
+                         first, inc, t, y, dydt, track, ns, chain, energy, est, epot)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
@@ -777,8 +779,8 @@ contains
       type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: theta(nn), omega(nn), torque(nn), et(2*ne), disp(ne), force(ne), pe(ne)
-      !> the block's column (D-38): disp, force and et(2, :) again
-      real(wp), intent(inout) :: bd(ne), bf(ne), bt(ne)
+      !> the block's column (D-38): disp, force, et(2, :) and omega again
+      real(wp), intent(inout) :: bd(ne), bf(ne), bt(ne), bo(nn)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: dydt(:)
@@ -802,6 +804,7 @@ contains
             theta(i) = fn(i)%theta0 + fn(i)%w*t
             omega(i) = fn(i)%w
          end if
+         bo(i) = omega(i)
       end do
       if (track) then
          do i = 1, nl

@@ -433,11 +433,13 @@ contains
    !> and the stored energy among them: model_t%block_ok), the same updates in
    !> the same order per element. With `samples`, the end of every step of the
    !> block is also an output time, and the sink takes no whole samples:
-   !> `sample` after each step (its displacements to the peak-to-peak detectors).
-   subroutine obs_fold_block(self, model, samples)
+   !> `sample` after each step (its displacements to the peak-to-peak
+   !> detectors; to a sink that reads the speeds only, each step's t and speeds).
+   subroutine obs_fold_block(self, model, samples, err)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       logical, intent(in) :: samples
+      type(error_t), allocatable, intent(out) :: err
       integer :: n, j, j0
       n = model%blk%n
       if (n == 0) return
@@ -460,6 +462,14 @@ contains
             end do
          end if
          if (samples .and. j0 <= n) call push_block(self%turns, b%disp, j0, n)
+         if (samples .and. self%speeds_only) then
+            do j = 1, n
+               self%s%t = b%t(j)
+               self%s%omega(:) = b%omega(:, j)
+               call self%out%write_sample(self%s, err)
+               if (allocated(err)) return
+            end do
+         end if
          self%s%displacement(:) = b%disp(:, n)
          self%s%t = b%t(n)
          self%s_whole = .false.

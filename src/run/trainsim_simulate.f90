@@ -133,7 +133,7 @@ contains
       d%tol = 1.0e-9_wp*model%run%dt
       d%t_window = t
       d%may_miss = integ%may_miss_events()
-      d%blocks = integ%takes_blocks .and. .not. (d%may_miss .or. obs%want_whole .or. obs%speeds_only .or. obs%refine_peaks)
+      d%blocks = integ%takes_blocks .and. .not. (d%may_miss .or. obs%want_whole .or. obs%refine_peaks)
       d%block_samples = d%blocks .and. dout == model%run%dt
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
       call model%breakpoints(t, t_end, d%bp)
@@ -206,7 +206,8 @@ contains
          call check_state(model, integ, t, y, err)
          return
       end if
-      call obs%fold_block(model, d%block_samples)
+      call obs%fold_block(model, d%block_samples, err)
+      if (allocated(err)) return
       if (signal_caught /= 0) call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
    end subroutine run_block
 
