@@ -481,7 +481,7 @@ contains
          self%stats%block_steps = self%stats%block_steps + 1
          model%blk%col = j
          call model%rhs_step_end(t, y, self%k1)
-         model%blk%col = 1
+         model%blk%col = 0
          self%stats%rhs_evals = self%stats%rhs_evals + 1
          model%ws_step_end = .true.
          self%k1_next = .true.

@@ -95,13 +95,14 @@ module trainsim_model
    end type load_t
 
    !> The end-of-step quantities the observer folds, for up to `cap` plain
-   !> steps an integrator takes in one call (`advance_block`, D-38). Column
-   !> `col` is written by every `rhs_step_end` of a simple model (col = 1
-   !> outside a block); the workspace (el_disp, el_force, el_torque, ws_stored,
-   !> ws_elastic) is written as before, so it holds the last step's end.
+   !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
+   !> block, column `col` is written by `rhs_step_end` of a simple model (col =
+   !> 0 outside a block: no column written); the workspace (el_disp, el_force,
+   !> el_torque, ws_stored, ws_elastic) is written as always, so it holds the
+   !> last step's end.
    type, public :: step_block_t
       integer :: cap = 1          !< columns
-      integer :: col = 1          !< the column the next `rhs_step_end` writes
+      integer :: col = 0          !< the column the next `rhs_step_end` writes (0: none)
       integer :: n = 0            !< steps in the block just taken
       real(wp), allocatable :: t(:)                      !< (step) its end time
       !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end
@@ -264,11 +265,12 @@ contains
       if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force, self%el_pe)
       allocate (self%el_torque(2, ne), self%el_disp(ne), self%el_force(ne), self%el_pe(ne))
       self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp; self%el_pe = 0.0_wp
-      ! a block of steps (D-38): at most 64, and about 32 KiB per array at most
-      ! (a long train gains little from blocks: its steps are long already)
+      ! a block of steps (D-38): at most 64, its columns 32 KiB at most (they
+      ! stay in the first-level cache; a long train gains little from blocks, its
+      ! steps are long already, and measured slower with columns beyond the cache)
       associate (b => self%blk)
-         b%cap = max(1, min(64, 4096/max(ne, nn, 1)))
-         b%col = 1
+         b%cap = max(1, min(64, 32768/(8*(3*ne + nn + 4))))
+         b%col = 0
          b%n = 0
          if (allocated(b%t)) deallocate (b%t, b%disp, b%force, b%torque, b%omega, b%stored, b%elastic, b%work)
          allocate (b%t(b%cap), b%disp(ne, b%cap), b%force(ne, b%cap), b%torque(ne, b%cap), b%omega(nn, b%cap), &
@@ -627,7 +629,7 @@ contains
    !> for two steps at least.
    logical function model_block_ok(self) result(ok)
       class(model_t), intent(in) :: self
-      ok = self%simple .and. self%blk%cap >= 2
+      ok = self%simple .and. self%blk%cap >= 4
       if (.not. ok) return
       if (self%run%track_energy) ok = self%n_cold == 0
       if (ok) ok = all(self%ws_status)
@@ -647,13 +649,14 @@ contains
       self%ws_t = t
       self%ws_energy = step_end .and. self%simple .and. track .and. self%n_cold == 0
       if (self%simple) then
-         c = self%blk%col
+         c = max(self%blk%col, 1)
          call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
                          self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, self%el_pe, &
                          self%blk%disp(:, c), self%blk%force(:, c), self%blk%torque(:, c), self%blk%omega(:, c), &
                          self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
-                         self%chain .and. .not. track, self%ws_energy, self%ws_stored, self%ws_elastic)
-         if (step_end) then
+                         self%chain .and. .not. track, self%ws_energy, self%ws_stored, self%ws_elastic, &
+                         self%blk%col > 0)
+         if (step_end .and. self%blk%col > 0) then
             ! the step's end in the block's column (D-38)
             self%blk%t(c) = t
             if (track) then
@@ -771,7 +774,7 @@ contains
    !> same order (the kinetic energies node by node, then the elastic energies,
    !> pe, element by element).
    subroutine rhs_simple(nn, ne, nl, fn, fe, fh, fl, els, theta, omega, torque, et, disp, force, pe, bd, bf, bt, bo, &
-                         first, inc, t, y, dydt, track, ns, chain, energy, est, epot)
+                         first, inc, t, y, dydt, track, ns, chain, energy, est, epot, to_col)
       integer, intent(in) :: nn, ne, nl, ns
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
@@ -790,6 +793,7 @@ contains
       !> energy is `hot_potential` (not with chain)
       logical, intent(in) :: energy
       real(wp), intent(inout) :: est, epot
+      logical, intent(in) :: to_col   !< write the block's column (bd, bf, bt, bo)
       integer :: i, l, r, o, k
       real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, ek
       pdiss = 0.0_wp
@@ -804,7 +808,7 @@ contains
             theta(i) = fn(i)%theta0 + fn(i)%w*t
             omega(i) = fn(i)%w
          end if
-         bo(i) = omega(i)
+         if (to_col) bo(i) = omega(i)
       end do
       if (track) then
          do i = 1, nl
@@ -903,9 +907,11 @@ contains
          end select
          et(2*i - 1) = tl
          et(2*i) = tr
-         bd(i) = disp(i)          ! the block's column (D-38)
-         bf(i) = force(i)
-         bt(i) = tr
+         if (to_col) then          ! the block's column (D-38)
+            bd(i) = disp(i)
+            bf(i) = force(i)
+            bt(i) = tr
+         end if
          if (chain) then
             ! node i is done (as in rhs_stage_simple)
             tq = tqc + tl
