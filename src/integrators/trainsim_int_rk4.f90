@@ -450,20 +450,27 @@ contains
       real(wp), intent(in) :: t_goal, t_tol, y_limit
       real(wp), intent(inout) :: t, y(:)
       real(wp) :: t_grid, h
-      integer :: j, i
+      integer :: j, i, n
+      logical :: ok
       model%blk%n = 0
       if (self%mr_on .or. self%pend .or. .not. self%takes_blocks) return
+      n = 0
+      ok = .true.
       do j = 1, model%blk%cap
          t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
          if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
          if (t_grid > t_goal) exit
          if (self%stop_is_breakpoint .and. t_grid >= self%t_stop - self%tiny_t) exit
          h = t_grid - t
-         if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
-            call model%rhs(t, y, self%k1)
-            self%stats%rhs_evals = self%stats%rhs_evals + 1
+         if (j == 1) then
+            ! k1 as `advance` takes it; after a step of the block it is that
+            ! step's end-of-step RHS
+            if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
+               call model%rhs(t, y, self%k1)
+               self%stats%rhs_evals = self%stats%rhs_evals + 1
+            end if
+            self%k1_next = .false.
          end if
-         self%k1_next = .false.
          call rk4_step(self, model, t, y, h, self%ynew, .false.)
          if (self%ng > 0) then
             call model%guards(t + h, self%ynew, self%g1)
@@ -474,24 +481,27 @@ contains
                exit
             end if
          end if
-         y = self%ynew
+         do i = 1, size(y)
+            y(i) = self%ynew(i)
+            if (.not. abs(y(i)) <= y_limit) ok = .false.   ! (also NaN)
+         end do
          t = t_grid
          self%istep = self%istep + 1
-         self%stats%steps = self%stats%steps + 1
-         self%stats%block_steps = self%stats%block_steps + 1
          model%blk%col = j
          call model%rhs_step_end(t, y, self%k1)
-         model%blk%col = 0
-         self%stats%rhs_evals = self%stats%rhs_evals + 1
-         model%ws_step_end = .true.
-         self%k1_next = .true.
-         self%t_k1 = t
-         model%blk%n = j
-         do i = 1, size(y)
-            if (.not. abs(y(i)) <= y_limit) return   ! (also NaN)
-         end do
-         if (t_goal - t <= t_tol) exit
+         n = j
+         if (.not. ok .or. t_goal - t <= t_tol) exit
       end do
+      model%blk%col = 0
+      model%blk%n = n
+      if (n == 0) return
+      ! the counters of n grid steps, and k1 of the last one for the next step
+      self%stats%steps = self%stats%steps + n
+      self%stats%block_steps = self%stats%block_steps + n
+      self%stats%rhs_evals = self%stats%rhs_evals + n
+      model%ws_step_end = .true.
+      self%k1_next = .true.
+      self%t_k1 = t
    end subroutine rk4_advance_block
 
    !> A guard went negative inside [t, t+h]: locate the earliest zero and end

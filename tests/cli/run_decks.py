@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
 """Smoke test: every bundled deck (inputs/, verification/) runs to completion,
 exits 0, prints no error, and writes a complete HDF5 history (checked by
-tests/check_h5_layout.py). Usage: run_decks.py TRAINSIM (cwd = repo root)."""
+tests/check_h5_layout.py); and runs again without a history (--no-output: plain
+steps in blocks, D-38), also exiting 0. Neither run may print a Fortran runtime
+warning (in the Debug build: an array temporary, i.e. a copy, on the way to the
+hot path). Usage: run_decks.py TRAINSIM (cwd = repo root)."""
 import glob
 import os
 import subprocess
@@ -22,6 +25,13 @@ with tempfile.TemporaryDirectory() as tmp:
             problems.append("Table 5.2: dt above the RK4 stability limit must be warned about")
         if "error" in r.stderr.lower() or "backtrace" in r.stderr.lower():
             problems.append("stderr: " + r.stderr.strip()[:300])
+        n = subprocess.run([exe, "run", deck, "--no-output"], capture_output=True, text=True, timeout=600)
+        if n.returncode != 0:
+            problems.append(f"--no-output: exit {n.returncode}: {n.stderr.strip()[:300]}")
+        for what, text in (("", r.stderr), ("--no-output: ", n.stderr)):
+            if "runtime warning" in text:
+                i = text.index("runtime warning")
+                problems.append(what + "stderr: " + text[max(0, i - 80):i + 120].strip())
         if not os.path.exists(out) or os.path.exists(out + ".part"):
             problems.append("no complete output file")
         else:
