@@ -138,6 +138,9 @@ contains
          if (bl) write (output_unit, '(a,i0,a,f6.2,a)') '          reference: ', ref%events, &
             ' events, ', real(ref%located, wp)/real(max(ref%events, 1_i8), wp), &
             ' RHS per event spent locating (step map)'
+         write (output_unit, '(a,f6.2,a,f6.2,a)') '          trainsim: steps taken in blocks (D-38) ', &
+            100.0_wp*real(r_off%stats%block_steps, wp)/real(r_off%stats%steps, wp), ' % (energy off), ', &
+            100.0_wp*real(r_on%stats%block_steps, wp)/real(r_on%stats%steps, wp), ' % (on)'
          flush (output_unit)
       end do
       write (output_unit, '(a)') hrule
