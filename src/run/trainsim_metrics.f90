@@ -252,11 +252,33 @@ contains
       type(p2p_detector_t), intent(inout) :: det(:)
       real(wp), intent(in) :: x(:, :)
       integer, intent(in) :: j0, n
-      integer :: i, j
+      integer :: i, j, nn, dir
+      real(wp) :: xv, lo, hi, h, cand
       do i = 1, size(det)
-         do j = j0, n
-            call push_one(det(i), x(i, j))
-         end do
+         associate (d => det(i))
+            ! push_one's usual sample (inside the range seen so far, on an edge
+            ! that confirms nothing) on the detector's state in registers; any
+            ! other sample goes to push_one itself
+            nn = d%n; lo = d%xmin; hi = d%xmax; h = d%h; dir = d%s%dir; cand = d%s%cand
+            do j = j0, n
+               xv = x(i, j)
+               if (nn > 0 .and. xv >= lo .and. xv <= hi .and. h > 0.0_wp) then
+                  if (dir == 1 .and. xv > cand - h) then
+                     nn = nn + 1
+                     if (xv > cand) cand = xv
+                     cycle
+                  else if (dir == -1 .and. xv < cand + h) then
+                     nn = nn + 1
+                     if (xv < cand) cand = xv
+                     cycle
+                  end if
+               end if
+               d%n = nn; d%s%cand = cand
+               call push_one(d, xv)
+               nn = d%n; lo = d%xmin; hi = d%xmax; h = d%h; dir = d%s%dir; cand = d%s%cand
+            end do
+            d%n = nn; d%s%cand = cand
+         end associate
       end do
    end subroutine push_block
 
