@@ -441,14 +441,14 @@ contains
       s_ev = h
       do j = 1, self%ng
          if (self%g1(j) < 0.0_wp) then
-            sj = self%dense_root(model, y, j, max(self%g0(j), 0.0_wp), h, self%g1(j))
+            sj = rk4_dense_root(self, model, y, j, max(self%g0(j), 0.0_wp), h, self%g1(j))
             if (jb == 0 .or. sj < s_ev) then
                s_ev = sj
                jb = j
             end if
          end if
       end do
-      s_ev = self%refine(model, y, jb, s_ev, max(self%g0(jb), 0.0_wp), h, self%g1(jb))
+      s_ev = rk4_refine(self, model, y, jb, s_ev, max(self%g0(jb), 0.0_wp), h, self%g1(jb))
       ! another guard below zero there may have crossed earlier still (its zero
       ! on the dense output was later, within the dense output's error)
       do pass = 1, self%ng
@@ -457,16 +457,16 @@ contains
          jb = 0
          do j = 1, self%ng
             if (j == jl .or. .not. self%gs(j) < 0.0_wp) cycle
-            gd = self%dense_guard(model, y, j, s_ev)
+            gd = rk4_dense_guard(self, model, y, j, s_ev)
             if (.not. gd < 0.0_wp) gd = self%gs(j)
-            sj = self%dense_root(model, y, j, max(self%g0(j), 0.0_wp), s_ev, gd)
+            sj = rk4_dense_root(self, model, y, j, max(self%g0(j), 0.0_wp), s_ev, gd)
             if (sj < s_ev - self%event_tol) then
                jb = j
                exit
             end if
          end do
          if (jb == 0) exit
-         s_ev = self%refine(model, y, jb, sj, max(self%g0(jb), 0.0_wp), s_ev, self%gs(jb))
+         s_ev = rk4_refine(self, model, y, jb, sj, max(self%g0(jb), 0.0_wp), s_ev, self%gs(jb))
       end do
       t = t + s_ev
       y = self%ys
@@ -508,8 +508,7 @@ contains
             self%yi(i) = y(i) + h*(b1*self%k1(i) + b2*(self%d2(i) + self%d3(i)) + b4*self%d4(i))
          end do
       end do
-      call model%element_guards(e, self%t_loc + s, self%yi, self%ge)
-      g = self%ge(self%g_loc(j))
+      g = model%element_guard(e, self%g_loc(j), self%t_loc + s, self%yi)
    end function rk4_dense_guard
 
    !> Guard j at t_loc + s on the step map: ys = RK4(y, s), on the part of the
@@ -534,10 +533,9 @@ contains
          call self%step_part(model, y, self%g_el(j), s)
          self%on_part = .true.
       else
-         call self%step(model, self%t_loc, y, s, self%ys, .false.)
+         call rk4_step(self, model, self%t_loc, y, s, self%ys, .false.)
       end if
-      call model%element_guards(self%g_el(j), self%t_loc + s, self%ys, self%ge)
-      g = self%ge(self%g_loc(j))
+      g = model%element_guard(self%g_el(j), self%g_loc(j), self%t_loc + s, self%ys)
    end function rk4_map_guard
 
    !> Zero of guard j on the dense output in [0, b0] (g = ga0 >= 0 at 0,
@@ -555,7 +553,7 @@ contains
          if (b - a <= self%event_tol) exit
          s = (a*fb - b*fa)/(fb - fa)
          s = min(max(s, a + 0.01_wp*(b - a)), b - 0.01_wp*(b - a))
-         fs = self%dense_guard(model, y, j, s)
+         fs = rk4_dense_guard(self, model, y, j, s)
          if (fs < 0.0_wp) then
             b = s; fb = fs
             if (side == -1) fa = 0.5_wp*fa
@@ -594,7 +592,7 @@ contains
       b_full = .false.
       sp = 0.0_wp; gp = 0.0_wp; r = 0.0_wp
       do it = 1, 200
-         gc = self%map_guard(model, y, j, sc)
+         gc = rk4_map_guard(self, model, y, j, sc)
          if (gc < 0.0_wp) then
             b = sc; fb = gc
             call move_alloc(self%ys, swap); call move_alloc(self%yb, self%ys); call move_alloc(swap, self%yb)
@@ -617,7 +615,7 @@ contains
                end if
             else
                dl = 1.0e-3_wp*self%h_loc
-               slope = (self%dense_guard(model, y, j, sc + dl) - self%dense_guard(model, y, j, sc - dl))/(2.0_wp*dl)
+               slope = (rk4_dense_guard(self, model, y, j, sc + dl) - rk4_dense_guard(self, model, y, j, sc - dl))/(2.0_wp*dl)
                if (slope /= 0.0_wp) then
                   r = sc - gc/slope                                     ! Newton, dense-output slope
                   have_r = .true.
@@ -651,7 +649,7 @@ contains
          self%ys = self%ynew
       else
          ! the whole train to the located time (the part's states are bit for bit these)
-         call self%step(model, self%t_loc, y, b, self%ys, .false.)
+         call rk4_step(self, model, self%t_loc, y, b, self%ys, .false.)
       end if
    end function rk4_refine
    !> The node graph for local event steps: node -> elements (compressed rows),

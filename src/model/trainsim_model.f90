@@ -53,6 +53,17 @@ module trainsim_model
       logical :: cold = .true.
    end type fast_element_t
 
+   !> An element with guards, as `model_guards` reads it: where its guards are
+   !> its hot form's (D-35) and both its nodes are plain inertias (form 1:
+   !> faces, 2: faces and the zone window; 0: asked as before), the record's
+   !> guard fields and the state indices of its nodes' angles, in one place
+   !> (refreshed with the hot form, `refresh_hot`).
+   type :: guard_row_t
+      integer :: form = 0, o = 0, yl = 0, yr = 0, mode = 0
+      logical :: lo_open = .false.
+      real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp, b = 0.0_wp, th_lo = 0.0_wp, th_hi = 0.0_wp
+   end type guard_row_t
+
    !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
    !> or exactly a factor 1 are left out (the same values, fewer operations on
    !> the RHS's critical path): general, undamped (c = 0), undamped with unit
@@ -154,6 +165,7 @@ module trainsim_model
       !> mode change the model makes (`refresh_hot`); apart from fe (which every
       !> element's evaluation reads) so that fe stays small.
       type(hot_form_t), allocatable, private :: fh(:)
+      type(guard_row_t), allocatable, private :: gr(:)   !< per element (guards), see guard_row_t
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
@@ -188,6 +200,7 @@ module trainsim_model
       procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
       procedure :: element_guards => model_element_guards
+      procedure :: element_guard => model_element_guard
       procedure :: guard_element => model_guard_element
       procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
@@ -281,8 +294,8 @@ contains
             end if
          end if
       end do
-      if (allocated(self%fe)) deallocate (self%fe, self%fh)
-      allocate (self%fe(ne), self%fh(ne))
+      if (allocated(self%fe)) deallocate (self%fe, self%fh, self%gr)
+      allocate (self%fe(ne), self%fh(ne), self%gr(ne))
       ! (refresh_hot keeps ws_status, el_contact and n_cold only once they exist: below)
       if (allocated(self%ws_status)) deallocate (self%ws_status)
       if (allocated(self%el_contact)) deallocate (self%el_contact)
@@ -1318,55 +1331,76 @@ contains
    !> All elements' guards at (t, y) (a mode is valid while every guard is >= 0).
    subroutine model_guards(self, t, y, g)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t, y(:)
-      real(wp), intent(out) :: g(:)
-      integer :: k, i, o, n
-      real(wp) :: thl, wl, thr, wr, d
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)
+      real(wp), intent(out), contiguous :: g(:)
+      integer :: k, i, o
+      real(wp) :: d
       if (self%n_guards == 0) return
-      ! only the nodes of elements with guards (a long train has few of them)
+      ! only the elements with guards (a long train has few of them)
       do k = 1, size(self%guard_els)
          i = self%guard_els(k)
-         n = self%fe(i)%ng
-         o = self%guard_offset(i)
-         ! a plain inertia's angle and speed straight from y (no call on every step)
-         if (self%fe(i)%yl > 0) then
-            thl = y(self%fe(i)%yl)
-            wl = y(self%fe(i)%yl + 1)
-         else
-            call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
-         end if
-         if (self%fe(i)%yr > 0) then
-            thr = y(self%fe(i)%yr)
-            wr = y(self%fe(i)%yr + 1)
-         else
-            call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
-         end if
-         select case (self%fe(i)%gform)
-         case (hg_faces, hg_faces_zone)                 ! the element's hot form (D-35): hot_guards written out
-            associate (h => self%fh(i))
-               d = h%r1*thl - h%r2*thr
-               select case (h%mode)
-               case (1)
-                  g(o + 1) = d - h%b; g(o + 2) = 1.0_wp
-               case (-1)
-                  g(o + 1) = 1.0_wp; g(o + 2) = -d - h%b
-               case default
-                  g(o + 1) = h%b - d; g(o + 2) = d + h%b
-               end select
-               if (self%fe(i)%gform == hg_faces_zone) then
-                  if (h%lo_open) then
-                     g(o + 3) = 1.0_wp
-                  else
-                     g(o + 3) = thl - h%th_lo
-                  end if
-                  g(o + 4) = h%th_hi - thl
+         associate (q => self%gr(i))
+            if (q%form == 0) then
+               call guards_other(self, i, t, y, g)
+               cycle
+            end if
+            ! the element's hot form (D-35) on two plain inertias: hot_guards
+            ! written out, the angles straight from y, the record in one row
+            o = q%o
+            d = q%r1*y(q%yl) - q%r2*y(q%yr)
+            select case (q%mode)
+            case (1)
+               g(o + 1) = d - q%b; g(o + 2) = 1.0_wp
+            case (-1)
+               g(o + 1) = 1.0_wp; g(o + 2) = -d - q%b
+            case default
+               g(o + 1) = q%b - d; g(o + 2) = d + q%b
+            end select
+            if (q%form == 2) then
+               if (q%lo_open) then
+                  g(o + 3) = 1.0_wp
+               else
+                  g(o + 3) = y(q%yl) - q%th_lo
                end if
-            end associate
-         case default
-            call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
-         end select
+               g(o + 4) = q%th_hi - y(q%yl)
+            end if
+         end associate
       end do
    end subroutine model_guards
+
+   !> `model_guards` for element i, not in a guard row (a node that is not a
+   !> plain inertia, or no hot guard form): into g(offset + 1 : offset + ng).
+   subroutine guards_other(self, i, t, y, g)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)
+      real(wp), intent(inout), contiguous :: g(:)
+      integer :: o, n
+      real(wp) :: thl, wl, thr, wr, gh(4)
+      n = self%fe(i)%ng
+      o = self%guard_offset(i)
+      ! a plain inertia's angle and speed straight from y (no call on every step)
+      if (self%fe(i)%yl > 0) then
+         thl = y(self%fe(i)%yl)
+         wl = y(self%fe(i)%yl + 1)
+      else
+         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
+      end if
+      if (self%fe(i)%yr > 0) then
+         thr = y(self%fe(i)%yr)
+         wr = y(self%fe(i)%yr + 1)
+      else
+         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
+      end if
+      if (self%fe(i)%gform /= hg_none) then             ! the element's hot form (D-35)
+         call hot_guards(self%fh(i), thl, thr, gh)
+         g(o + 1:o + n) = gh(1:n)
+      else
+         call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
+      end if
+   end subroutine guards_other
 
    !> The guards of element i alone at (t, y), into g(1:n_guards of i): only the
    !> kinematics of its two nodes are evaluated (for event location, where one
@@ -1398,6 +1432,41 @@ contains
          call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
       end if
    end subroutine model_element_guards
+
+   !> Guard k (1 .. n_guards of i) of element i alone at (t, y): `element_guards`
+   !> for one guard (event location follows one guard on trial states), bit for
+   !> bit its value; a hot form on two plain inertias reads only their angles.
+   real(wp) function model_element_guard(self, i, k, t, y) result(gk)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i, k
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)
+      real(wp) :: d, g(4)
+      associate (q => self%gr(i))
+         if (q%form > 0) then                              ! model_guards' hot row, guard k only
+            select case (k)
+            case (1, 2)
+               d = q%r1*y(q%yl) - q%r2*y(q%yr)
+               select case (q%mode)
+               case (1)
+                  gk = merge(d - q%b, 1.0_wp, k == 1)
+               case (-1)
+                  gk = merge(1.0_wp, -d - q%b, k == 1)
+               case default
+                  gk = merge(q%b - d, d + q%b, k == 1)
+               end select
+            case (3)
+               gk = 1.0_wp
+               if (.not. q%lo_open) gk = y(q%yl) - q%th_lo
+            case default
+               gk = q%th_hi - y(q%yl)
+            end select
+            return
+         end if
+      end associate
+      call model_element_guards(self, i, t, y, g(1:self%fe(i)%ng))
+      gk = g(k)
+   end function model_element_guard
 
    !> The element that owns guard j (0 if none).
    pure integer function model_guard_element(self, j) result(owner)
@@ -1534,6 +1603,17 @@ contains
             case default; q%form = 0
             end select
          end if
+      end associate
+      associate (q => self%gr(i), f => self%fe(i), h => self%fh(i))
+         q%form = 0
+         if (f%yl > 0 .and. f%yr > 0) then
+            if (f%gform == hg_faces) q%form = 1
+            if (f%gform == hg_faces_zone) q%form = 2
+         end if
+         q%o = 0
+         if (allocated(self%guard_offset)) q%o = self%guard_offset(i)
+         q%yl = f%yl; q%yr = f%yr; q%mode = h%mode; q%lo_open = h%lo_open
+         q%r1 = h%r1; q%r2 = h%r2; q%b = h%b; q%th_lo = h%th_lo; q%th_hi = h%th_hi
       end associate
       if (allocated(self%ws_status)) call ws_flags(self, i)
    end subroutine refresh_hot
@@ -1687,18 +1767,18 @@ contains
          nq = size(els)
       else
          if (self%run%track_energy) e_before = self%stored_energy(t, y)
-         call self%kinematics(t, y)
+         call kinematics_all(self, t, y)
          nq = size(self%elements)
       end if
       do q = 1, nq
          i = q
          if (present(els)) i = els(q)
-         n = self%elements(i)%e%n_guards()
+         n = self%fe(i)%ng                  ! the element's n_guards (build_fast_path)
          if (n == 0) cycle
          o = self%guard_offset(i)
          if (.not. any(fired(o + 1:o + n))) cycle
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
+         l = self%fe(i)%l
+         r = self%fe(i)%r
          call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
                                              fired(o + 1:o + n), local, m)
          call refresh_hot(self, i)
