@@ -72,6 +72,9 @@ module trainsim_int_rk4
       integer, allocatable :: g_el(:), g_loc(:)     !< per guard: owner element, index in its guards
       integer, allocatable :: el_states(:, :)       !< per element: state ranges of its left, right node
       real(wp) :: t_loc = 0.0_wp, h_loc = 0.0_wp    !< the step being located
+      !> The element whose guards `dense_guard` last asked `guard_angles` for
+      !> (0: ask again; cleared where a location starts) and its answer.
+      integer :: dg_e = 0, dg_l = 0, dg_r = 0
       type(part_t), allocatable :: part(:)          !< per element (guard elements of long trains)
       logical :: on_part = .false.                  !< ys holds only the part's states (not a full step)
       ! local (multirate) event steps, see `mr_begin`: the unsplit step of the
@@ -430,6 +433,7 @@ contains
       real(wp) :: s_ev, sj, gd
       real(wp), allocatable :: swap(:)
       integer :: j, jb, jl, pass
+      self%dg_e = 0
       call model%guards(t, y, self%g0)
       ! keep the stages of this step (its dense output): swap, no copy
       call move_alloc(self%k2, swap); call move_alloc(self%d2, self%k2); call move_alloc(swap, self%d2)
@@ -490,6 +494,22 @@ contains
       b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
       b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
       e = self%g_el(j)
+      if (.not. self%mr_on) then
+         ! guards that read only two plain inertias' angles (the model says which
+         ! states): those two on the dense output, the guard from them
+         if (e /= self%dg_e) then
+            call model%guard_angles(e, self%dg_l, self%dg_r)
+            self%dg_e = e
+         end if
+         if (self%dg_l > 0) then
+            associate (il => self%dg_l, ir => self%dg_r)
+               g = model%angle_guard(e, self%g_loc(j), &
+                                     y(il) + h*(b1*self%k1(il) + b2*(self%d2(il) + self%d3(il)) + b4*self%d4(il)), &
+                                     y(ir) + h*(b1*self%k1(ir) + b2*(self%d2(ir) + self%d3(ir)) + b4*self%d4(ir)))
+            end associate
+            return
+         end if
+      end if
       do k = 1, 3, 2
          if (self%mr_on) then
             if (.not. self%in_l(self%el_nodes((k + 1)/2, e))) then
@@ -549,6 +569,7 @@ contains
       real(wp) :: a, fa, fb, s, fs
       integer :: side, it
       a = 0.0_wp; b = b0; fa = ga0; fb = gb0; side = 0
+      self%dg_e = 0
       do it = 1, 100
          if (b - a <= self%event_tol) exit
          s = (a*fb - b*fa)/(fb - fa)
@@ -586,6 +607,7 @@ contains
       integer :: it, side
       logical :: have_b, have_r, b_full
       tol = self%event_tol
+      self%dg_e = 0
       a = 0.0_wp; fa = ga0; b = b0; fb = gb0; side = 0
       sc = min(max(s0, a + 0.5_wp*tol), b)
       have_b = .false.   ! yb holds RK4(y, b) (all of it when b_full)

@@ -201,6 +201,8 @@ module trainsim_model
       procedure :: guards => model_guards
       procedure :: element_guards => model_element_guards
       procedure :: element_guard => model_element_guard
+      procedure :: guard_angles => model_guard_angles
+      procedure :: angle_guard => model_angle_guard
       procedure :: guard_element => model_guard_element
       procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
@@ -1331,9 +1333,8 @@ contains
    !> All elements' guards at (t, y) (a mode is valid while every guard is >= 0).
    subroutine model_guards(self, t, y, g)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp), intent(out), contiguous :: g(:)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: g(:)
       integer :: k, i, o
       real(wp) :: d
       if (self%n_guards == 0) return
@@ -1374,9 +1375,8 @@ contains
    subroutine guards_other(self, i, t, y, g)
       class(model_t), intent(inout) :: self
       integer, intent(in) :: i
-      real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp), intent(inout), contiguous :: g(:)
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: g(:)
       integer :: o, n
       real(wp) :: thl, wl, thr, wr, gh(4)
       n = self%fe(i)%ng
@@ -1439,34 +1439,70 @@ contains
    real(wp) function model_element_guard(self, i, k, t, y) result(gk)
       class(model_t), intent(inout) :: self
       integer, intent(in) :: i, k
-      real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp) :: d, g(4)
-      associate (q => self%gr(i))
-         if (q%form > 0) then                              ! model_guards' hot row, guard k only
-            select case (k)
-            case (1, 2)
-               d = q%r1*y(q%yl) - q%r2*y(q%yr)
-               select case (q%mode)
-               case (1)
-                  gk = merge(d - q%b, 1.0_wp, k == 1)
-               case (-1)
-                  gk = merge(1.0_wp, -d - q%b, k == 1)
-               case default
-                  gk = merge(q%b - d, d + q%b, k == 1)
-               end select
-            case (3)
-               gk = 1.0_wp
-               if (.not. q%lo_open) gk = y(q%yl) - q%th_lo
-            case default
-               gk = q%th_hi - y(q%yl)
-            end select
-            return
-         end if
-      end associate
+      real(wp), intent(in) :: t, y(:)
+      real(wp) :: g(4)
+      if (self%gr(i)%form > 0) then
+         gk = row_guard(self%gr(i), k, y(self%gr(i)%yl), y(self%gr(i)%yr))
+         return
+      end if
       call model_element_guards(self, i, t, y, g(1:self%fe(i)%ng))
       gk = g(k)
    end function model_element_guard
+
+   !> Where element i's guards are its hot form's (D-35) on two plain inertias
+   !> (they read only the two nodes' angles): the state indices of those angles,
+   !> else 0 and 0. Valid until the element's mode changes (`apply_events`).
+   pure subroutine model_guard_angles(self, i, yl, yr)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      integer, intent(out) :: yl, yr
+      yl = 0
+      yr = 0
+      if (self%gr(i)%form == 0) return
+      yl = self%gr(i)%yl
+      yr = self%gr(i)%yr
+   end subroutine model_guard_angles
+
+   !> Guard k of element i from its nodes' angles, where `guard_angles` gave
+   !> their state indices: bit for bit `element_guard` at a state with those angles.
+   pure real(wp) function model_angle_guard(self, i, k, thl, thr) result(gk)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i, k
+      real(wp), intent(in) :: thl, thr
+      gk = row_guard(self%gr(i), k, thl, thr)
+   end function model_angle_guard
+
+   !> Guard k of a guard row at the angles thl, thr: `model_guards`' arithmetic
+   !> (hot_guards') for that guard alone.
+   pure real(wp) function row_guard(q, k, thl, thr) result(gk)
+      type(guard_row_t), intent(in) :: q
+      integer, intent(in) :: k
+      real(wp), intent(in) :: thl, thr
+      real(wp) :: d
+      select case (k)
+      case (1, 2)
+         d = q%r1*thl - q%r2*thr
+         select case (q%mode)
+         case (1)
+            gk = 1.0_wp
+            if (k == 1) gk = d - q%b
+         case (-1)
+            gk = 1.0_wp
+            if (k == 2) gk = -d - q%b
+         case default
+            if (k == 1) then
+               gk = q%b - d
+            else
+               gk = d + q%b
+            end if
+         end select
+      case (3)
+         gk = 1.0_wp
+         if (.not. q%lo_open) gk = thl - q%th_lo
+      case default
+         gk = q%th_hi - thl
+      end select
+   end function row_guard
 
    !> The element that owns guard j (0 if none).
    pure integer function model_guard_element(self, j) result(owner)
