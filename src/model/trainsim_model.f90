@@ -1343,7 +1343,7 @@ contains
          i = self%guard_els(k)
          associate (q => self%gr(i))
             if (q%form == 0) then
-               call guards_other(self, i, t, y, g)
+               call guards_other(self, i, t, y, g, self%guard_offset(i))
                cycle
             end if
             ! the element's hot form (D-35) on two plain inertias: hot_guards
@@ -1370,17 +1370,18 @@ contains
       end do
    end subroutine model_guards
 
-   !> `model_guards` for element i, not in a guard row (a node that is not a
-   !> plain inertia, or no hot guard form): into g(offset + 1 : offset + ng).
-   subroutine guards_other(self, i, t, y, g)
+   !> The guards of element i at (t, y) into g(o + 1 : o + ng) (`model_guards` for
+   !> an element without a guard row, `element_guards`): the kinematics of its two
+   !> nodes (a plain inertia's straight from y), then its hot guard form or its
+   !> own `guards`.
+   subroutine guards_other(self, i, t, y, g, o)
       class(model_t), intent(inout) :: self
-      integer, intent(in) :: i
+      integer, intent(in) :: i, o
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: g(:)
-      integer :: o, n
+      integer :: n
       real(wp) :: thl, wl, thr, wr, gh(4)
       n = self%fe(i)%ng
-      o = self%guard_offset(i)
       ! a plain inertia's angle and speed straight from y (no call on every step)
       if (self%fe(i)%yl > 0) then
          thl = y(self%fe(i)%yl)
@@ -1411,26 +1412,7 @@ contains
       integer, intent(in) :: i
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      real(wp) :: thl, wl, thr, wr, gh(4)
-      ! a plain inertia's angle and speed straight from y (as model_guards)
-      if (self%fe(i)%yl > 0) then
-         thl = y(self%fe(i)%yl)
-         wl = y(self%fe(i)%yl + 1)
-      else
-         call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
-      end if
-      if (self%fe(i)%yr > 0) then
-         thr = y(self%fe(i)%yr)
-         wr = y(self%fe(i)%yr + 1)
-      else
-         call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
-      end if
-      if (self%fe(i)%gform /= hg_none) then              ! the element's hot form (D-35)
-         call hot_guards(self%fh(i), thl, thr, gh)
-         g(1:self%fe(i)%ng) = gh(1:self%fe(i)%ng)
-      else
-         call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
-      end if
+      call guards_other(self, i, t, y, g, 0)
    end subroutine model_element_guards
 
    !> Guard k (1 .. n_guards of i) of element i alone at (t, y): `element_guards`
