@@ -796,49 +796,63 @@ contains
    end subroutine swap_in_recording_shaft
    !> A clearance element whose left node is held at a prescribed speed: its guards
    !> read an angle that is not a state, so the model has no angle row for them
-   !> (guard_angles: 0) and asks through node kinematics; the guards, one at a
-   !> time too, are still the element's own at the held node's angle at t, to the
-   !> bit, in every mode the element takes.
+   !> (guard_angles: 0) and asks through node kinematics; a second clearance
+   !> between two plain inertias has its row, and the model then takes the
+   !> general loop for both. The guards, one at a time too, are still the
+   !> elements' own (at the held node's angle at t), to the bit, in every mode.
    subroutine test_guards_next_to_a_held_node_are_the_elements_own()
       type(model_t) :: m
       real(wp), allocatable :: y(:), g(:)
-      real(wp) :: ge(4), t, thl, wl, gone
-      integer :: face, p, k, il, ir, ng
-      logical :: ok, rowless
+      real(wp) :: ge(6), t, thl, wl, gone
+      integer :: face, p, k, il, ir, ng, n1
+      logical :: ok, rows_ok
       call test_begin('guards_next_to_a_held_node_are_the_elements_own')
       call load_model_text("&run t_end = 1e-3, dt = 1e-6 /"//nl// &
                            "&node id = 'a', type='inertia', inertia=1.3 /"//nl// &
                            "&node id = 'b', type='inertia', inertia=0.7 /"//nl// &
+                           "&node id = 'c', type='inertia', inertia=0.9 /"//nl// &
                            "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
                            "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001 /"//nl// &
+                           "&element type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_damping=1.0 /"//nl// &
                            "&load node = 'a', quantity = 'speed', kind = 'constant', value = 2.5 /"//nl, m)
       call m%initial_state(y)
       ng = m%n_guards
+      n1 = m%elements(1)%e%n_guards()
       allocate (g(ng))
-      call check('the spur gear has four guards', ng == 4)
+      call check('the spur gear has four guards, the coupling two', ng == 6 .and. n1 == 4)
       ok = .true.
-      rowless = .true.
+      rows_ok = .true.
       do face = -1, 1
          do p = 1, 10
             t = 1.0e-4_wp*p
-            y(1) = 0.3_wp*sin(3.7_wp*p + face)            ! the driven node's angle and speed
+            y(1) = 0.3_wp*sin(3.7_wp*p + face)            ! node b's angle and speed, then c's
             y(2) = 2.0_wp*sin(1.3_wp*p)
+            y(3) = y(1) - 0.01_wp*(1.0_wp + face*(1.0_wp + 0.1_wp*sin(5.1_wp*p)))
+            y(4) = 1.5_wp*sin(2.9_wp*p)
             thl = m%nodes(1)%n%theta0 + 2.5_wp*t            ! the held node at t
             wl = 2.5_wp
             call m%preload_mode(1, face, thl, wl, y(1), y(2))
+            call m%preload_mode(2, face, y(1), y(2), y(3), y(4))
             call m%guard_angles(1, il, ir)
-            rowless = rowless .and. il == 0 .and. ir == 0
-            call m%elements(1)%e%guards(thl, wl, y(1), y(2), ge(1:ng))
+            rows_ok = rows_ok .and. il == 0 .and. ir == 0
+            call m%guard_angles(2, il, ir)
+            rows_ok = rows_ok .and. il == 1 .and. ir == 3
+            call m%elements(1)%e%guards(thl, wl, y(1), y(2), ge(1:n1))
+            call m%elements(2)%e%guards(y(1), y(2), y(3), y(4), ge(n1 + 1:ng))
             call m%guards(t, y, g)
             ok = ok .and. all(g == ge(1:ng))
-            do k = 1, ng
+            do k = 1, n1
                gone = m%element_guard(1, k, t, y)
                ok = ok .and. gone == ge(k)
             end do
+            do k = 1, ng - n1
+               gone = m%element_guard(2, k, t, y)
+               ok = ok .and. gone == ge(n1 + k)
+            end do
          end do
       end do
-      call check('no angle row for guards that read a held node', rowless)
-      call check('guards (all, one at a time) are the element''s own at the held angle, to the bit', ok)
+      call check('no angle row for guards that read a held node, one for the coupling', rows_ok)
+      call check('guards (all, one at a time) are the elements'' own, to the bit', ok)
    end subroutine test_guards_next_to_a_held_node_are_the_elements_own
 
 end program test_elements

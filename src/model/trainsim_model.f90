@@ -166,6 +166,9 @@ module trainsim_model
       !> element's evaluation reads) so that fe stays small.
       type(hot_form_t), allocatable, private :: fh(:)
       type(guard_row_t), allocatable, private :: gr(:)   !< per element (guards), see guard_row_t
+      !> Elements with guards but no guard row (kept by refresh_hot): at 0, every
+      !> guard is a row's and `model_guards` runs on plain arrays.
+      integer, private :: n_norow = 0
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
@@ -298,6 +301,7 @@ contains
       end do
       if (allocated(self%fe)) deallocate (self%fe, self%fh, self%gr)
       allocate (self%fe(ne), self%fh(ne), self%gr(ne))
+      self%n_norow = 0   ! (each element with guards counted below, then by refresh_hot)
       ! (refresh_hot keeps ws_status, el_contact and n_cold only once they exist: below)
       if (allocated(self%ws_status)) deallocate (self%ws_status)
       if (allocated(self%el_contact)) deallocate (self%el_contact)
@@ -306,6 +310,7 @@ contains
             self%fe(i)%l = e%left
             self%fe(i)%r = e%right
             self%fe(i)%ng = e%n_guards()
+            if (self%fe(i)%ng > 0) self%n_norow = self%n_norow + 1   ! its row: not yet (form 0)
             call e%linear_spring(lin, k, c, r1, r2)
             if (lin) lin = linear_element_agrees(e, k, c, r1, r2)
             self%fe(i)%linear = lin
@@ -1335,19 +1340,41 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      integer :: k, i, o
-      real(wp) :: d
+      integer :: k, i, j
       if (self%n_guards == 0) return
-      ! only the elements with guards (a long train has few of them)
+      ! only the elements with guards (a long train has few of them); those with a
+      ! guard row (the element's hot form on two plain inertias, D-38) on plain
+      ! arrays, the others as their nodes' kinematics and guards ask
+      if (self%n_norow == 0 .and. is_contiguous(y) .and. is_contiguous(g)) then
+         call guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
+         return
+      end if
       do k = 1, size(self%guard_els)
          i = self%guard_els(k)
-         associate (q => self%gr(i))
-            if (q%form == 0) then
-               call guards_other(self, i, t, y, g, self%guard_offset(i))
-               cycle
-            end if
-            ! the element's hot form (D-35) on two plain inertias: hot_guards
-            ! written out, the angles straight from y, the record in one row
+         if (self%gr(i)%form == 0) then
+            call guards_other(self, i, t, y, g, self%guard_offset(i))
+         else
+            associate (q => self%gr(i))
+               do j = 1, self%fe(i)%ng
+                  g(q%o + j) = row_guard(q, j, y(q%yl), y(q%yr))
+               end do
+            end associate
+         end if
+      end do
+   end subroutine model_guards
+
+   !> The guards of the elements els(1:n), each with a guard row (rows(els(k))%form
+   !> > 0), at the state y into g: hot_guards written out, the angles straight from
+   !> y (plain arrays: no descriptor, no stride).
+   subroutine guard_rows(n, els, rows, y, g)
+      integer, intent(in) :: n, els(n)
+      type(guard_row_t), intent(in) :: rows(*)
+      real(wp), intent(in) :: y(*)
+      real(wp), intent(inout) :: g(*)
+      integer :: k, o
+      real(wp) :: d
+      do k = 1, n
+         associate (q => rows(els(k)))
             o = q%o
             d = q%r1*y(q%yl) - q%r2*y(q%yr)
             select case (q%mode)
@@ -1368,7 +1395,7 @@ contains
             end if
          end associate
       end do
-   end subroutine model_guards
+   end subroutine guard_rows
 
    !> The guards of element i at (t, y) into g(o + 1 : o + ng) (`model_guards` for
    !> an element without a guard row, `element_guards`): the kinematics of its two
@@ -1630,11 +1657,13 @@ contains
          end if
       end associate
       associate (q => self%gr(i), f => self%fe(i), h => self%fh(i))
+         if (f%ng > 0 .and. q%form == 0) self%n_norow = self%n_norow - 1
          q%form = 0
          if (f%yl > 0 .and. f%yr > 0) then
             if (f%gform == hg_faces) q%form = 1
             if (f%gform == hg_faces_zone) q%form = 2
          end if
+         if (f%ng > 0 .and. q%form == 0) self%n_norow = self%n_norow + 1
          q%o = 0
          if (allocated(self%guard_offset)) q%o = self%guard_offset(i)
          q%yl = f%yl; q%yr = f%yr; q%mode = h%mode; q%lo_open = h%lo_open
