@@ -202,6 +202,7 @@ module trainsim_model
       procedure :: apply_loads => model_apply_loads
       procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
+      procedure, private :: guards_general => model_guards_general
       procedure :: element_guards => model_element_guards
       procedure :: element_guard => model_element_guard
       procedure :: guard_angles => model_guard_angles
@@ -1340,15 +1341,24 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      integer :: k, i, j
       if (self%n_guards == 0) return
-      ! only the elements with guards (a long train has few of them); those with a
-      ! guard row (the element's hot form on two plain inertias, D-38) on plain
-      ! arrays, the others as their nodes' kinematics and guards ask
+      ! only the elements with guards (a long train has few of them); when each
+      ! has a guard row (the element's hot form on two plain inertias, D-38), on
+      ! plain arrays; else the general loop (through the binding: kept out of line)
       if (self%n_norow == 0 .and. is_contiguous(y) .and. is_contiguous(g)) then
          call guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
-         return
+      else
+         call self%guards_general(t, y, g)
       end if
+   end subroutine model_guards
+
+   !> `model_guards` element by element: a guard row by row_guard, any other
+   !> element by guards_other (its nodes' kinematics, its hot form or `guards`).
+   subroutine model_guards_general(self, t, y, g)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: g(:)
+      integer :: k, i, j
       do k = 1, size(self%guard_els)
          i = self%guard_els(k)
          if (self%gr(i)%form == 0) then
@@ -1361,7 +1371,7 @@ contains
             end associate
          end if
       end do
-   end subroutine model_guards
+   end subroutine model_guards_general
 
    !> The guards of the elements els(1:n), each with a guard row (rows(els(k))%form
    !> > 0), at the state y into g: hot_guards written out, the angles straight from
