@@ -71,7 +71,7 @@ program test_elements
    use trainsim_el_keyed_joint, only: keyed_joint_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_event, only: event_t
-   use trainsim_element, only: hf_none, hf_open, hf_yang_sun, hf_linear, hg_faces, hg_faces_zone
+   use trainsim_element, only: hf_none, hf_open, hf_yang_sun, hf_linear, hg_none, hg_faces, hg_faces_zone
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
    use trainsim_el_shaft, only: shaft_t
    use trainsim_node_inertia, only: inertia_node_t
@@ -104,6 +104,7 @@ program test_elements
    call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.true.)
    call test_hot_forms_are_the_elements_own_arithmetic()
    call test_hot_form_follows_mode_changes()
+   call test_guards_next_to_a_held_node_are_the_elements_own()
    call suite_end()
 
 contains
@@ -619,10 +620,11 @@ contains
                                             hg_faces, hg_faces, hg_faces]
       type(model_t) :: m
       real(wp), allocatable :: y(:), dydt(:), g(:)
-      real(wp) :: ge(4), x(4), tl, tr, pw, sgn, b, disp, force, stored, elastic
-      integer :: ie, face, p, kind, gk, ng, zones(2), nz, contact, pairs
-      logical :: torques_ok, power_ok, guards_ok, kinds_ok, track, status_ok, energy_ok
+      real(wp) :: ge(4), x(4), tl, tr, pw, sgn, b, disp, force, stored, elastic, gone
+      integer :: ie, face, p, kind, gk, ng, zones(2), nz, contact, pairs, il, ir, k
+      logical :: torques_ok, power_ok, guards_ok, kinds_ok, track, status_ok, energy_ok, angles_ok
       call test_begin('hot_forms_are_the_elements_own_arithmetic')
+      angles_ok = .true.
       el(1) = "type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, contact_ratio=1.5, "// &
               "approach_angle=0.1, half_backlash=0.001, initial_contact_velocity=0.3"
       el(2) = "type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, contact_ratio=1.5, "// &
@@ -697,6 +699,17 @@ contains
                   guards_ok = guards_ok .and. all(g == ge(1:ng))
                   call m%element_guards(1, 0.0_wp, y, g)
                   guards_ok = guards_ok .and. all(g == ge(1:ng))
+                  ! one guard at a time (event location), and from the two angles
+                  ! where the model says the guards read only those (two plain
+                  ! inertias: states 1 and 3, whenever the guard form is hot)
+                  call m%guard_angles(1, il, ir)
+                  angles_ok = angles_ok .and. ((il == 1 .and. ir == 3) .eqv. gk /= hg_none) .and. &
+                              (il == 0 .eqv. ir == 0)
+                  do k = 1, ng
+                     gone = m%element_guard(1, k, 0.0_wp, y)
+                     guards_ok = guards_ok .and. gone == ge(k)
+                     if (il > 0) angles_ok = angles_ok .and. m%angle_guard(1, k, y(il), y(ir)) == ge(k)
+                  end do
                   if (ng == 4 .and. face /= 0) then
                      call e%status(x(1), x(2), x(3), x(4), tl, tr, kind, gk)
                      zones(gk) = 1
@@ -712,7 +725,9 @@ contains
       call check('hot forms taken (or declined) as expected', kinds_ok)
       call check('kernel torques are the element''s own, to the bit', torques_ok)
       call check('kernel dissipated power is the element''s own, to the bit', power_ok)
-      call check('guards (all, and one element''s) are the element''s own, to the bit', guards_ok)
+      call check('guards (all, one element''s, one guard) are the element''s own, to the bit', guards_ok)
+      call check('a hot guard form on two plain inertias: guard_angles names their angles, angle_guard '// &
+                 'is the element''s guard from them, to the bit', angles_ok)
       call check('D-36: a hot form''s status in the workspace is the element''s own, to the bit', status_ok)
       call check('D-36: the stored energy in the workspace is workspace_energy''s, to the bit', energy_ok)
    end subroutine test_hot_forms_are_the_elements_own_arithmetic
@@ -779,4 +794,65 @@ contains
       deallocate (m%elements(6)%e)
       allocate (m%elements(6)%e, source=rs)
    end subroutine swap_in_recording_shaft
+   !> A clearance element whose left node is held at a prescribed speed: its guards
+   !> read an angle that is not a state, so the model has no angle row for them
+   !> (guard_angles: 0) and asks through node kinematics; a second clearance
+   !> between two plain inertias has its row, and the model then takes the
+   !> general loop for both. The guards, one at a time too, are still the
+   !> elements' own (at the held node's angle at t), to the bit, in every mode.
+   subroutine test_guards_next_to_a_held_node_are_the_elements_own()
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), g(:)
+      real(wp) :: ge(6), t, thl, wl, gone
+      integer :: face, p, k, il, ir, ng, n1
+      logical :: ok, rows_ok
+      call test_begin('guards_next_to_a_held_node_are_the_elements_own')
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6 /"//nl// &
+                           "&node id = 'a', type='inertia', inertia=1.3 /"//nl// &
+                           "&node id = 'b', type='inertia', inertia=0.7 /"//nl// &
+                           "&node id = 'c', type='inertia', inertia=0.9 /"//nl// &
+                           "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
+                           "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001 /"//nl// &
+                           "&element type='clearance_coupling', clearance=0.02, stiffness=1e4, contact_damping=1.0 /"//nl// &
+                           "&load node = 'a', quantity = 'speed', kind = 'constant', value = 2.5 /"//nl, m)
+      call m%initial_state(y)
+      ng = m%n_guards
+      n1 = m%elements(1)%e%n_guards()
+      allocate (g(ng))
+      call check('the spur gear has four guards, the coupling two', ng == 6 .and. n1 == 4)
+      ok = .true.
+      rows_ok = .true.
+      do face = -1, 1
+         do p = 1, 10
+            t = 1.0e-4_wp*p
+            y(1) = 0.3_wp*sin(3.7_wp*p + face)            ! node b's angle and speed, then c's
+            y(2) = 2.0_wp*sin(1.3_wp*p)
+            y(3) = y(1) - 0.01_wp*(1.0_wp + face*(1.0_wp + 0.1_wp*sin(5.1_wp*p)))
+            y(4) = 1.5_wp*sin(2.9_wp*p)
+            thl = m%nodes(1)%n%theta0 + 2.5_wp*t            ! the held node at t
+            wl = 2.5_wp
+            call m%preload_mode(1, face, thl, wl, y(1), y(2))
+            call m%preload_mode(2, face, y(1), y(2), y(3), y(4))
+            call m%guard_angles(1, il, ir)
+            rows_ok = rows_ok .and. il == 0 .and. ir == 0
+            call m%guard_angles(2, il, ir)
+            rows_ok = rows_ok .and. il == 1 .and. ir == 3
+            call m%elements(1)%e%guards(thl, wl, y(1), y(2), ge(1:n1))
+            call m%elements(2)%e%guards(y(1), y(2), y(3), y(4), ge(n1 + 1:ng))
+            call m%guards(t, y, g)
+            ok = ok .and. all(g == ge(1:ng))
+            do k = 1, n1
+               gone = m%element_guard(1, k, t, y)
+               ok = ok .and. gone == ge(k)
+            end do
+            do k = 1, ng - n1
+               gone = m%element_guard(2, k, t, y)
+               ok = ok .and. gone == ge(n1 + k)
+            end do
+         end do
+      end do
+      call check('no angle row for guards that read a held node, one for the coupling', rows_ok)
+      call check('guards (all, one at a time) are the elements'' own, to the bit', ok)
+   end subroutine test_guards_next_to_a_held_node_are_the_elements_own
+
 end program test_elements

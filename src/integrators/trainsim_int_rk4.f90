@@ -72,6 +72,9 @@ module trainsim_int_rk4
       integer, allocatable :: g_el(:), g_loc(:)     !< per guard: owner element, index in its guards
       integer, allocatable :: el_states(:, :)       !< per element: state ranges of its left, right node
       real(wp) :: t_loc = 0.0_wp, h_loc = 0.0_wp    !< the step being located
+      !> The element whose guards `dense_guard` last asked `guard_angles` for
+      !> (0: ask again; cleared where a location starts) and its answer.
+      integer :: dg_e = 0, dg_l = 0, dg_r = 0
       type(part_t), allocatable :: part(:)          !< per element (guard elements of long trains)
       logical :: on_part = .false.                  !< ys holds only the part's states (not a full step)
       ! local (multirate) event steps, see `mr_begin`: the unsplit step of the
@@ -517,6 +520,7 @@ contains
       real(wp) :: s_ev, sj, gd
       real(wp), allocatable :: swap(:)
       integer :: j, jb, jl, pass
+      self%dg_e = 0
       call model%guards(t, y, self%g0)
       ! keep the stages of this step (its dense output): swap, no copy
       call move_alloc(self%k2, swap); call move_alloc(self%d2, self%k2); call move_alloc(swap, self%d2)
@@ -528,14 +532,14 @@ contains
       s_ev = h
       do j = 1, self%ng
          if (self%g1(j) < 0.0_wp) then
-            sj = self%dense_root(model, y, j, max(self%g0(j), 0.0_wp), h, self%g1(j))
+            sj = rk4_dense_root(self, model, y, j, max(self%g0(j), 0.0_wp), h, self%g1(j))
             if (jb == 0 .or. sj < s_ev) then
                s_ev = sj
                jb = j
             end if
          end if
       end do
-      s_ev = self%refine(model, y, jb, s_ev, max(self%g0(jb), 0.0_wp), h, self%g1(jb))
+      s_ev = rk4_refine(self, model, y, jb, s_ev, max(self%g0(jb), 0.0_wp), h, self%g1(jb))
       ! another guard below zero there may have crossed earlier still (its zero
       ! on the dense output was later, within the dense output's error)
       do pass = 1, self%ng
@@ -544,16 +548,16 @@ contains
          jb = 0
          do j = 1, self%ng
             if (j == jl .or. .not. self%gs(j) < 0.0_wp) cycle
-            gd = self%dense_guard(model, y, j, s_ev)
+            gd = rk4_dense_guard(self, model, y, j, s_ev)
             if (.not. gd < 0.0_wp) gd = self%gs(j)
-            sj = self%dense_root(model, y, j, max(self%g0(j), 0.0_wp), s_ev, gd)
+            sj = rk4_dense_root(self, model, y, j, max(self%g0(j), 0.0_wp), s_ev, gd)
             if (sj < s_ev - self%event_tol) then
                jb = j
                exit
             end if
          end do
          if (jb == 0) exit
-         s_ev = self%refine(model, y, jb, sj, max(self%g0(jb), 0.0_wp), s_ev, self%gs(jb))
+         s_ev = rk4_refine(self, model, y, jb, sj, max(self%g0(jb), 0.0_wp), s_ev, self%gs(jb))
       end do
       t = t + s_ev
       y = self%ys
@@ -577,6 +581,22 @@ contains
       b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
       b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
       e = self%g_el(j)
+      if (.not. self%mr_on) then
+         ! guards that read only two plain inertias' angles (the model says which
+         ! states): those two on the dense output, the guard from them
+         if (e /= self%dg_e) then
+            call model%guard_angles(e, self%dg_l, self%dg_r)
+            self%dg_e = e
+         end if
+         if (self%dg_l > 0) then
+            associate (il => self%dg_l, ir => self%dg_r)
+               g = model%angle_guard(e, self%g_loc(j), &
+                                     y(il) + h*(b1*self%k1(il) + b2*(self%d2(il) + self%d3(il)) + b4*self%d4(il)), &
+                                     y(ir) + h*(b1*self%k1(ir) + b2*(self%d2(ir) + self%d3(ir)) + b4*self%d4(ir)))
+            end associate
+            return
+         end if
+      end if
       do k = 1, 3, 2
          if (self%mr_on) then
             if (.not. self%in_l(self%el_nodes((k + 1)/2, e))) then
@@ -595,8 +615,7 @@ contains
             self%yi(i) = y(i) + h*(b1*self%k1(i) + b2*(self%d2(i) + self%d3(i)) + b4*self%d4(i))
          end do
       end do
-      call model%element_guards(e, self%t_loc + s, self%yi, self%ge)
-      g = self%ge(self%g_loc(j))
+      g = model%element_guard(e, self%g_loc(j), self%t_loc + s, self%yi)
    end function rk4_dense_guard
 
    !> Guard j at t_loc + s on the step map: ys = RK4(y, s), on the part of the
@@ -621,10 +640,9 @@ contains
          call self%step_part(model, y, self%g_el(j), s)
          self%on_part = .true.
       else
-         call self%step(model, self%t_loc, y, s, self%ys, .false.)
+         call rk4_step(self, model, self%t_loc, y, s, self%ys, .false.)
       end if
-      call model%element_guards(self%g_el(j), self%t_loc + s, self%ys, self%ge)
-      g = self%ge(self%g_loc(j))
+      g = model%element_guard(self%g_el(j), self%g_loc(j), self%t_loc + s, self%ys)
    end function rk4_map_guard
 
    !> Zero of guard j on the dense output in [0, b0] (g = ga0 >= 0 at 0,
@@ -638,11 +656,12 @@ contains
       real(wp) :: a, fa, fb, s, fs
       integer :: side, it
       a = 0.0_wp; b = b0; fa = ga0; fb = gb0; side = 0
+      self%dg_e = 0
       do it = 1, 100
          if (b - a <= self%event_tol) exit
          s = (a*fb - b*fa)/(fb - fa)
          s = min(max(s, a + 0.01_wp*(b - a)), b - 0.01_wp*(b - a))
-         fs = self%dense_guard(model, y, j, s)
+         fs = rk4_dense_guard(self, model, y, j, s)
          if (fs < 0.0_wp) then
             b = s; fb = fs
             if (side == -1) fa = 0.5_wp*fa
@@ -675,13 +694,14 @@ contains
       integer :: it, side
       logical :: have_b, have_r, b_full
       tol = self%event_tol
+      self%dg_e = 0
       a = 0.0_wp; fa = ga0; b = b0; fb = gb0; side = 0
       sc = min(max(s0, a + 0.5_wp*tol), b)
       have_b = .false.   ! yb holds RK4(y, b) (all of it when b_full)
       b_full = .false.
       sp = 0.0_wp; gp = 0.0_wp; r = 0.0_wp
       do it = 1, 200
-         gc = self%map_guard(model, y, j, sc)
+         gc = rk4_map_guard(self, model, y, j, sc)
          if (gc < 0.0_wp) then
             b = sc; fb = gc
             call move_alloc(self%ys, swap); call move_alloc(self%yb, self%ys); call move_alloc(swap, self%yb)
@@ -704,7 +724,7 @@ contains
                end if
             else
                dl = 1.0e-3_wp*self%h_loc
-               slope = (self%dense_guard(model, y, j, sc + dl) - self%dense_guard(model, y, j, sc - dl))/(2.0_wp*dl)
+               slope = (rk4_dense_guard(self, model, y, j, sc + dl) - rk4_dense_guard(self, model, y, j, sc - dl))/(2.0_wp*dl)
                if (slope /= 0.0_wp) then
                   r = sc - gc/slope                                     ! Newton, dense-output slope
                   have_r = .true.
@@ -738,7 +758,7 @@ contains
          self%ys = self%ynew
       else
          ! the whole train to the located time (the part's states are bit for bit these)
-         call self%step(model, self%t_loc, y, b, self%ys, .false.)
+         call rk4_step(self, model, self%t_loc, y, b, self%ys, .false.)
       end if
    end function rk4_refine
    !> The node graph for local event steps: node -> elements (compressed rows),

@@ -53,6 +53,17 @@ module trainsim_model
       logical :: cold = .true.
    end type fast_element_t
 
+   !> An element with guards, as `model_guards` reads it: where its guards are
+   !> its hot form's (D-35) and both its nodes are plain inertias (form 1:
+   !> faces, 2: faces and the zone window; 0: asked as before), the record's
+   !> guard fields and the state indices of its nodes' angles, in one place
+   !> (refreshed with the hot form, `refresh_hot`).
+   type :: guard_row_t
+      integer :: form = 0, o = 0, yl = 0, yr = 0, mode = 0
+      logical :: lo_open = .false.
+      real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp, b = 0.0_wp, th_lo = 0.0_wp, th_hi = 0.0_wp
+   end type guard_row_t
+
    !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
    !> or exactly a factor 1 are left out (the same values, fewer operations on
    !> the RHS's critical path): general, undamped (c = 0), undamped with unit
@@ -176,6 +187,10 @@ module trainsim_model
       !> mode change the model makes (`refresh_hot`); apart from fe (which every
       !> element's evaluation reads) so that fe stays small.
       type(hot_form_t), allocatable, private :: fh(:)
+      type(guard_row_t), allocatable, private :: gr(:)   !< per element (guards), see guard_row_t
+      !> Elements with guards but no guard row (kept by refresh_hot): at 0, every
+      !> guard is a row's and `model_guards` runs on plain arrays.
+      integer, private :: n_norow = 0
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
@@ -210,7 +225,11 @@ module trainsim_model
       procedure :: apply_loads => model_apply_loads
       procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
+      procedure, private :: guards_general => model_guards_general
       procedure :: element_guards => model_element_guards
+      procedure :: element_guard => model_element_guard
+      procedure :: guard_angles => model_guard_angles
+      procedure :: angle_guard => model_angle_guard
       procedure :: guard_element => model_guard_element
       procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
@@ -317,8 +336,9 @@ contains
             end if
          end if
       end do
-      if (allocated(self%fe)) deallocate (self%fe, self%fh)
-      allocate (self%fe(ne), self%fh(ne))
+      if (allocated(self%fe)) deallocate (self%fe, self%fh, self%gr)
+      allocate (self%fe(ne), self%fh(ne), self%gr(ne))
+      self%n_norow = 0   ! (each element with guards counted below, then by refresh_hot)
       ! (refresh_hot keeps ws_status, el_contact and n_cold only once they exist: below)
       if (allocated(self%ws_status)) deallocate (self%ws_status)
       if (allocated(self%el_contact)) deallocate (self%el_contact)
@@ -327,6 +347,7 @@ contains
             self%fe(i)%l = e%left
             self%fe(i)%r = e%right
             self%fe(i)%ng = e%n_guards()
+            if (self%fe(i)%ng > 0) self%n_norow = self%n_norow + 1   ! its row: not yet (form 0)
             call e%linear_spring(lin, k, c, r1, r2)
             if (lin) lin = linear_element_agrees(e, k, c, r1, r2)
             self%fe(i)%linear = lin
@@ -1391,65 +1412,85 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
-      integer :: k, i, o, n
-      real(wp) :: thl, wl, thr, wr, d
       if (self%n_guards == 0) return
-      ! only the nodes of elements with guards (a long train has few of them)
-      do k = 1, size(self%guard_els)
-         i = self%guard_els(k)
-         n = self%fe(i)%ng
-         o = self%guard_offset(i)
-         ! a plain inertia's angle and speed straight from y (no call on every step)
-         if (self%fe(i)%yl > 0) then
-            thl = y(self%fe(i)%yl)
-            wl = y(self%fe(i)%yl + 1)
-         else
-            call node_kinematics(self, self%fe(i)%l, t, y, thl, wl)
-         end if
-         if (self%fe(i)%yr > 0) then
-            thr = y(self%fe(i)%yr)
-            wr = y(self%fe(i)%yr + 1)
-         else
-            call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
-         end if
-         select case (self%fe(i)%gform)
-         case (hg_faces, hg_faces_zone)                 ! the element's hot form (D-35): hot_guards written out
-            associate (h => self%fh(i))
-               d = h%r1*thl - h%r2*thr
-               select case (h%mode)
-               case (1)
-                  g(o + 1) = d - h%b; g(o + 2) = 1.0_wp
-               case (-1)
-                  g(o + 1) = 1.0_wp; g(o + 2) = -d - h%b
-               case default
-                  g(o + 1) = h%b - d; g(o + 2) = d + h%b
-               end select
-               if (self%fe(i)%gform == hg_faces_zone) then
-                  if (h%lo_open) then
-                     g(o + 3) = 1.0_wp
-                  else
-                     g(o + 3) = thl - h%th_lo
-                  end if
-                  g(o + 4) = h%th_hi - thl
-               end if
-            end associate
-         case default
-            call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
-         end select
-      end do
+      ! only the elements with guards (a long train has few of them); when each
+      ! has a guard row (the element's hot form on two plain inertias, D-39), on
+      ! plain arrays; else the general loop (through the binding: kept out of line)
+      if (self%n_norow == 0 .and. is_contiguous(y) .and. is_contiguous(g)) then
+         call guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
+      else
+         call self%guards_general(t, y, g)
+      end if
    end subroutine model_guards
 
-   !> The guards of element i alone at (t, y), into g(1:n_guards of i): only the
-   !> kinematics of its two nodes are evaluated (for event location, where one
-   !> guard is followed on a trial state; a node's kinematics reads only its own
-   !> states y(offset+1:offset+nstates)).
-   subroutine model_element_guards(self, i, t, y, g)
+   !> `model_guards` element by element: a guard row by row_guard, any other
+   !> element by guards_other (its nodes' kinematics, its hot form or `guards`).
+   subroutine model_guards_general(self, t, y, g)
       class(model_t), intent(inout) :: self
-      integer, intent(in) :: i
       real(wp), intent(in) :: t, y(:)
-      real(wp), intent(out) :: g(:)
+      real(wp), intent(inout) :: g(:)
+      integer :: k, i, j
+      do k = 1, size(self%guard_els)
+         i = self%guard_els(k)
+         if (self%gr(i)%form == 0) then
+            call guards_other(self, i, t, y, g, self%guard_offset(i))
+         else
+            associate (q => self%gr(i))
+               do j = 1, self%fe(i)%ng
+                  g(q%o + j) = row_guard(q, j, y(q%yl), y(q%yr))
+               end do
+            end associate
+         end if
+      end do
+   end subroutine model_guards_general
+
+   !> The guards of the elements els(1:n), each with a guard row (rows(els(k))%form
+   !> > 0), at the state y into g: hot_guards written out, the angles straight from
+   !> y (plain arrays: no descriptor, no stride).
+   subroutine guard_rows(n, els, rows, y, g)
+      integer, intent(in) :: n, els(n)
+      type(guard_row_t), intent(in) :: rows(*)
+      real(wp), intent(in) :: y(*)
+      real(wp), intent(inout) :: g(*)
+      integer :: k, o
+      real(wp) :: d
+      do k = 1, n
+         associate (q => rows(els(k)))
+            o = q%o
+            d = q%r1*y(q%yl) - q%r2*y(q%yr)
+            select case (q%mode)
+            case (1)
+               g(o + 1) = d - q%b; g(o + 2) = 1.0_wp
+            case (-1)
+               g(o + 1) = 1.0_wp; g(o + 2) = -d - q%b
+            case default
+               g(o + 1) = q%b - d; g(o + 2) = d + q%b
+            end select
+            if (q%form == 2) then
+               if (q%lo_open) then
+                  g(o + 3) = 1.0_wp
+               else
+                  g(o + 3) = y(q%yl) - q%th_lo
+               end if
+               g(o + 4) = q%th_hi - y(q%yl)
+            end if
+         end associate
+      end do
+   end subroutine guard_rows
+
+   !> The guards of element i at (t, y) into g(o + 1 : o + ng) (`model_guards` for
+   !> an element without a guard row, `element_guards`): the kinematics of its two
+   !> nodes (a plain inertia's straight from y), then its hot guard form or its
+   !> own `guards`.
+   subroutine guards_other(self, i, t, y, g, o)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i, o
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: g(:)
+      integer :: n
       real(wp) :: thl, wl, thr, wr, gh(4)
-      ! a plain inertia's angle and speed straight from y (as model_guards)
+      n = self%fe(i)%ng
+      ! a plain inertia's angle and speed straight from y (no call on every step)
       if (self%fe(i)%yl > 0) then
          thl = y(self%fe(i)%yl)
          wl = y(self%fe(i)%yl + 1)
@@ -1462,13 +1503,96 @@ contains
       else
          call node_kinematics(self, self%fe(i)%r, t, y, thr, wr)
       end if
-      if (self%fe(i)%gform /= hg_none) then              ! the element's hot form (D-35)
+      if (self%fe(i)%gform /= hg_none) then             ! the element's hot form (D-35)
          call hot_guards(self%fh(i), thl, thr, gh)
-         g(1:self%fe(i)%ng) = gh(1:self%fe(i)%ng)
+         g(o + 1:o + n) = gh(1:n)
       else
-         call self%elements(i)%e%guards(thl, wl, thr, wr, g(1:self%fe(i)%ng))
+         call self%elements(i)%e%guards(thl, wl, thr, wr, g(o + 1:o + n))
       end if
+   end subroutine guards_other
+
+   !> The guards of element i alone at (t, y), into g(1:n_guards of i): only the
+   !> kinematics of its two nodes are evaluated (for event location, where one
+   !> guard is followed on a trial state; a node's kinematics reads only its own
+   !> states y(offset+1:offset+nstates)).
+   subroutine model_element_guards(self, i, t, y, g)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: g(:)
+      call guards_other(self, i, t, y, g, 0)
    end subroutine model_element_guards
+
+   !> Guard k (1 .. n_guards of i) of element i alone at (t, y): `element_guards`
+   !> for one guard (event location follows one guard on trial states), bit for
+   !> bit its value; a hot form on two plain inertias reads only their angles.
+   real(wp) function model_element_guard(self, i, k, t, y) result(gk)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i, k
+      real(wp), intent(in) :: t, y(:)
+      real(wp) :: g(4)
+      if (self%gr(i)%form > 0) then
+         gk = row_guard(self%gr(i), k, y(self%gr(i)%yl), y(self%gr(i)%yr))
+         return
+      end if
+      call model_element_guards(self, i, t, y, g(1:self%fe(i)%ng))
+      gk = g(k)
+   end function model_element_guard
+
+   !> Where element i's guards are its hot form's (D-35) on two plain inertias
+   !> (they read only the two nodes' angles): the state indices of those angles,
+   !> else 0 and 0. Valid until the element's mode changes (`apply_events`).
+   pure subroutine model_guard_angles(self, i, yl, yr)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      integer, intent(out) :: yl, yr
+      yl = 0
+      yr = 0
+      if (self%gr(i)%form == 0) return
+      yl = self%gr(i)%yl
+      yr = self%gr(i)%yr
+   end subroutine model_guard_angles
+
+   !> Guard k of element i from its nodes' angles, where `guard_angles` gave
+   !> their state indices: bit for bit `element_guard` at a state with those angles.
+   pure real(wp) function model_angle_guard(self, i, k, thl, thr) result(gk)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i, k
+      real(wp), intent(in) :: thl, thr
+      gk = row_guard(self%gr(i), k, thl, thr)
+   end function model_angle_guard
+
+   !> Guard k of a guard row at the angles thl, thr: `model_guards`' arithmetic
+   !> (hot_guards') for that guard alone.
+   pure real(wp) function row_guard(q, k, thl, thr) result(gk)
+      type(guard_row_t), intent(in) :: q
+      integer, intent(in) :: k
+      real(wp), intent(in) :: thl, thr
+      real(wp) :: d
+      select case (k)
+      case (1, 2)
+         d = q%r1*thl - q%r2*thr
+         select case (q%mode)
+         case (1)
+            gk = 1.0_wp
+            if (k == 1) gk = d - q%b
+         case (-1)
+            gk = 1.0_wp
+            if (k == 2) gk = -d - q%b
+         case default
+            if (k == 1) then
+               gk = q%b - d
+            else
+               gk = d + q%b
+            end if
+         end select
+      case (3)
+         gk = 1.0_wp
+         if (.not. q%lo_open) gk = thl - q%th_lo
+      case default
+         gk = q%th_hi - thl
+      end select
+   end function row_guard
 
    !> The element that owns guard j (0 if none).
    pure integer function model_guard_element(self, j) result(owner)
@@ -1560,7 +1684,9 @@ contains
       real(wp) :: x(4), g(4), gh(4), tl, tr, pw, htl, htr, hpw, pen, sd, sf
       integer :: p, ng, sc, sp
       logical :: pe_ok, st_ok
-      pe_ok = .true.
+      ! hot_pe is read only with energy tracking (ws_energy needs run%track_energy,
+      ! which every run's init_modes refreshes with): without, it stays false
+      pe_ok = self%run%track_energy
       st_ok = .true.
       associate (e => self%elements(i)%e, q => self%fe(i))
          call e%hot_form(h)
@@ -1582,10 +1708,15 @@ contains
                call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
                if (.not. (tl == htl .and. tr == htr .and. pw == hpw)) h%kind = hf_none
                ! D-36: its elastic energy and status as `rhs_simple` leaves them
-               if (.not. e%potential_energy(x(1), x(3)) == hot_potential(h, x(1), x(3))) pe_ok = .false.
-               call e%status(x(1), x(2), x(3), x(4), sd, sf, sc, sp)
-               if (.not. (sd == h%r1*x(1) - h%r2*x(3) .and. sf == hot_force(h, x(1), x(2), x(3), x(4)) .and. &
-                          sc == h%mode)) st_ok = .false.
+               ! (each until it disagrees; the energy only where it can be read)
+               if (pe_ok) then
+                  if (.not. e%potential_energy(x(1), x(3)) == hot_potential(h, x(1), x(3))) pe_ok = .false.
+               end if
+               if (st_ok) then
+                  call e%status(x(1), x(2), x(3), x(4), sd, sf, sc, sp)
+                  if (.not. (sd == h%r1*x(1) - h%r2*x(3) .and. sf == hot_force(h, x(1), x(2), x(3), x(4)) .and. &
+                             sc == h%mode)) st_ok = .false.
+               end if
             end if
             if (h%guards /= hg_none) then
                call e%guards(x(1), x(2), x(3), x(4), g(1:ng))
@@ -1605,6 +1736,19 @@ contains
             case default; q%form = 0
             end select
          end if
+      end associate
+      associate (q => self%gr(i), f => self%fe(i), h => self%fh(i))
+         if (f%ng > 0 .and. q%form == 0) self%n_norow = self%n_norow - 1
+         q%form = 0
+         if (f%yl > 0 .and. f%yr > 0) then
+            if (f%gform == hg_faces) q%form = 1
+            if (f%gform == hg_faces_zone) q%form = 2
+         end if
+         if (f%ng > 0 .and. q%form == 0) self%n_norow = self%n_norow + 1
+         q%o = 0
+         if (allocated(self%guard_offset)) q%o = self%guard_offset(i)
+         q%yl = f%yl; q%yr = f%yr; q%mode = h%mode; q%lo_open = h%lo_open
+         q%r1 = h%r1; q%r2 = h%r2; q%b = h%b; q%th_lo = h%th_lo; q%th_hi = h%th_hi
       end associate
       if (allocated(self%ws_status)) call ws_flags(self, i)
    end subroutine refresh_hot
@@ -1758,18 +1902,18 @@ contains
          nq = size(els)
       else
          if (self%run%track_energy) e_before = self%stored_energy(t, y)
-         call self%kinematics(t, y)
+         call kinematics_all(self, t, y)
          nq = size(self%elements)
       end if
       do q = 1, nq
          i = q
          if (present(els)) i = els(q)
-         n = self%elements(i)%e%n_guards()
+         n = self%fe(i)%ng                  ! the element's n_guards (build_fast_path)
          if (n == 0) cycle
          o = self%guard_offset(i)
          if (.not. any(fired(o + 1:o + n))) cycle
-         l = self%elements(i)%e%left
-         r = self%elements(i)%e%right
+         l = self%fe(i)%l
+         r = self%fe(i)%r
          call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
                                              fired(o + 1:o + n), local, m)
          call refresh_hot(self, i)
