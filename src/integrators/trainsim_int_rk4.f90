@@ -476,8 +476,7 @@ contains
          end if
          call rk4_step(self, model, t, y, h, self%ynew, .false.)
          if (self%ng > 0) then
-            call model%guards(t + h, self%ynew, self%g1)
-            if (any(self%g1 < 0.0_wp)) then
+            if (model%guards_below(t + h, self%ynew, self%g1)) then
                self%pend = .true.
                self%t_pend = t
                self%h_pend = h

@@ -225,6 +225,7 @@ module trainsim_model
       procedure :: apply_loads => model_apply_loads
       procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
+      procedure :: guards_below => model_guards_below
       procedure, private :: guards_general => model_guards_general
       procedure :: element_guards => model_element_guards
       procedure :: element_guard => model_element_guard
@@ -1412,16 +1413,38 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: g(:)
+      logical :: below
       if (self%n_guards == 0) return
       ! only the elements with guards (a long train has few of them); when each
       ! has a guard row (the element's hot form on two plain inertias, D-39), on
       ! plain arrays; else the general loop (through the binding: kept out of line)
       if (self%n_norow == 0 .and. is_contiguous(y) .and. is_contiguous(g)) then
-         call guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
+         below = self%guards_below(t, y, g)   ! (guard_rows; whether one is below zero unused)
       else
          call self%guards_general(t, y, g)
       end if
    end subroutine model_guards
+
+   !> `model_guards` on an integrator's own arrays (explicit size: their
+   !> addresses only, no descriptors), and whether a guard is below zero: the
+   !> check at the end of every RK4 step (D-38). All rows: guard_rows.
+   logical function model_guards_below(self, t, y, g) result(below)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      real(wp), intent(in) :: y(self%n_y)
+      real(wp), intent(inout) :: g(self%n_guards)
+      integer :: j
+      below = .false.
+      if (self%n_guards == 0) return
+      if (self%n_norow == 0) then
+         call guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
+      else
+         call self%guards_general(t, y, g)
+      end if
+      do j = 1, self%n_guards
+         if (g(j) < 0.0_wp) below = .true.
+      end do
+   end function model_guards_below
 
    !> `model_guards` element by element: a guard row by row_guard, any other
    !> element by guards_other (its nodes' kinematics, its hot form or `guards`).
