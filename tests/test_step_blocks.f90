@@ -15,6 +15,7 @@
 program test_step_blocks
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
+   use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
@@ -111,14 +112,14 @@ contains
       call check(what//'same event table', same_events(a, b))
       do j = 1, size(a%el)
          associate (p => a%el(j), q => b%el(j))
-            call check(what//'element '//itoa(j)//': same extremes', p%force_min == q%force_min .and. &
+            call check(what//'element '//str(j)//': same extremes', p%force_min == q%force_min .and. &
                        p%force_max == q%force_max .and. p%torque_min == q%torque_min .and. &
                        p%torque_max == q%torque_max .and. p%disp_min == q%disp_min .and. p%disp_max == q%disp_max)
-            call check(what//'element '//itoa(j)//': same impacts, peaks, time out of contact', &
+            call check(what//'element '//str(j)//': same impacts, peaks, time out of contact', &
                        p%impacts == q%impacts .and. p%separations == q%separations .and. &
                        p%zone_changes == q%zone_changes .and. p%max_approach_velocity == q%max_approach_velocity .and. &
                        p%max_peak_force == q%max_peak_force .and. p%time_out_of_contact == q%time_out_of_contact)
-            call check(what//'element '//itoa(j)//': same peak-to-peak figures', p%p2p_range == q%p2p_range .and. &
+            call check(what//'element '//str(j)//': same peak-to-peak figures', p%p2p_range == q%p2p_range .and. &
                        p%p2p_mean == q%p2p_mean .and. p%p2p_swings == q%p2p_swings .and. &
                        (p%p2p_exact .eqv. q%p2p_exact))
          end associate
@@ -185,25 +186,18 @@ contains
       integer :: k
       text = "&run t_end = 0.5, dt = 5.0e-3, integrator = 'rk4' /"//nl
       do k = 1, n
-         text = text//"&node id = 'n"//itoa(k)//"', type = 'inertia', inertia = 1.0 /"//nl
+         text = text//"&node id = 'n"//str(k)//"', type = 'inertia', inertia = 1.0 /"//nl
       end do
       do k = 1, n - 1
          if (mod(k, 10) == 0) then
-            text = text//"&element id = 'e"//itoa(k)//"', type = 'spur_gear', stiffness = 1.0e4, "// &
+            text = text//"&element id = 'e"//str(k)//"', type = 'spur_gear', stiffness = 1.0e4, "// &
                    'rb_driver = 1.0, rb_driven = 1.0, teeth = 32, contact_ratio = 1.6, approach_angle = 0.1, '// &
                    'half_backlash = 1.0e-3 /'//nl
          else
-            text = text//"&element id = 'e"//itoa(k)//"', type = 'shaft', stiffness = 1.0e4 /"//nl
+            text = text//"&element id = 'e"//str(k)//"', type = 'shaft', stiffness = 1.0e4 /"//nl
          end if
       end do
       text = text//"&initial node = 'n1', speed = 1.0 /"
    end function chain_text
 
-   function itoa(k) result(s)
-      integer, intent(in) :: k
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(i0)') k
-      s = trim(buf)
-   end function itoa
 end program test_step_blocks
