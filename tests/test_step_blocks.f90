@@ -1,17 +1,19 @@
-!> Plain steps in blocks (docs/decisions.md D-38): when no one takes whole
-!> samples (no history file, no in-memory series), RK4 takes its plain steps
-!> in blocks and the observer folds each block's columns afterwards. That is a
-!> second path to the same numbers, so it must give them bit for bit: every
-!> deck that ships with trainsim (and the benchmark's rig and a long chain),
-!> with energy tracking off and on, with output every step, every 7th step and
-!> as written, and metrics starting half-way, is run twice:
-!> - with a null sink and no series (blocks), and
-!> - keeping the in-memory series (whole samples: step by step, no blocks);
+!> Plain steps in blocks (docs/decisions.md D-38): RK4 takes its plain steps in
+!> blocks and the observer folds each block's columns afterwards, wherever no
+!> step but the output times' needs a whole sample. That is a second path to
+!> the same numbers, so it must give them bit for bit: every deck that ships
+!> with trainsim (and the benchmark's rig and a long chain), with energy
+!> tracking off and on, with output every step, every 7th step and as written,
+!> and metrics starting half-way, is run three times:
+!> - step by step (run%step_blocks off), keeping the in-memory series: the reference;
+!> - with blocks, a null sink and no series (samples never whole);
+!> - with blocks, keeping the series (whole samples at the output times, filled
+!>   from the workspace of a block's last step);
 !> every metric of every element, the event table, the energy ledger, the final
-!> state and the counters must be equal (==, not within a tolerance). Each
-!> blocked run must also have taken most of its steps in blocks (else this
-!> compares the step-by-step path with itself), the other none. A run that
-!> fails (a deck whose state runs away) must fail alike, with the same message.
+!> state, the counters and the series must equal the reference's (==, not within
+!> a tolerance). Most runs must have taken most of their steps in blocks (else
+!> this compares the step-by-step path with itself), the reference none. A run
+!> that fails (a deck whose state runs away) must fail alike, with the same message.
 program test_step_blocks
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -34,10 +36,11 @@ program test_step_blocks
                                   'verification/chapter3/case2.nml', 'verification/chapter3/case3.nml', &
                                   'tests/decks/tracker_si_start_stop.nml', 'tests/decks/cvode_zone_late_table5_5_285.nml', &
                                   'tests/decks/cvode_zone_late_table7_1_640.nml', 'tests/decks/runaway_at_safe_dt.nml']
-   integer :: i, n_blocked
+   integer :: i, n_blocked, n_blocked_series
 
    call suite_begin('step blocks (D-38): the same numbers as step by step')
    n_blocked = 0
+   n_blocked_series = 0
    do i = 1, size(decks)
       call test_begin(trim(decks(i)))
       call deck_variants(trim(decks(i)), '')
@@ -47,8 +50,11 @@ program test_step_blocks
    call test_begin('a 120-node chain with a backlash gear every 10th element (local event steps)')
    call deck_variants('', chain_text(120))
    call test_begin('blocks were taken')
-   write (*, '(a,i0,a,i0)') '  runs that took most of their steps in blocks: ', n_blocked, ' of ', 6*(size(decks) + 2)
+   write (*, '(a,i0,a,i0,a,i0,a)') '  runs that took most of their steps in blocks: ', n_blocked, ' of ', &
+      6*(size(decks) + 2), ' without the series, ', n_blocked_series, ' with it'
    call check('most runs of a simple model took blocks', n_blocked >= 60)
+   ! (the 12 simple trains with output every 7th step, energy off and on, at least)
+   call check('runs keeping the series took blocks too (output every 7th step, or as written)', n_blocked_series >= 24)
    call suite_end()
 
 contains
@@ -65,15 +71,17 @@ contains
       end do
    end subroutine deck_variants
 
+   !> The deck in one variant: step by step (the reference, keeping the series),
+   !> then with blocks and no series (the null-sink path: samples not whole) and
+   !> with blocks and the series (whole samples at the output times).
    subroutine compare(path, text, variant, energy)
       character(len=*), intent(in) :: path, text
       integer, intent(in) :: variant
       logical, intent(in) :: energy
       type(model_t) :: base, m
-      type(run_result_t) :: a, b
-      type(error_t), allocatable :: err_a, err_b
+      type(run_result_t) :: ref, a, c
+      type(error_t), allocatable :: err_ref, err_a, err_c
       character(len=:), allocatable :: what
-      integer :: j
       if (len(path) > 0) then
          call load_model(path, base)
       else
@@ -93,38 +101,57 @@ contains
       if (variant == 3) what = 'every 7th, metrics from half-way'
       what = what//merge(', energy on ', ', energy off', energy)//': '
       m = base
-      call run(m, .false., a, err_a)
+      call run(m, .false., .true., ref, err_ref)
       m = base
-      call run(m, .true., b, err_b)
-      call check(what//'both runs succeed or both fail', allocated(err_a) .eqv. allocated(err_b))
-      if (allocated(err_a) .or. allocated(err_b)) then
-         if (allocated(err_a) .and. allocated(err_b)) &
-            call check(what//'the same error', err_a%message == err_b%message)
+      call run(m, .true., .false., a, err_a)
+      m = base
+      call run(m, .true., .true., c, err_c)
+      call check(what//'no blocks when switched off', ref%stats%block_steps == 0)
+      if (a%stats%block_steps > a%stats%steps/2) n_blocked = n_blocked + 1
+      if (c%stats%block_steps > c%stats%steps/2) n_blocked_series = n_blocked_series + 1
+      call same_run(what//'blocks, no series: ', a, err_a, ref, err_ref, .false.)
+      call same_run(what//'blocks, series: ', c, err_c, ref, err_ref, .true.)
+   end subroutine compare
+
+   !> Run r (with error er) the same as the reference ref (err_ref), bit for bit;
+   !> series: its series too.
+   subroutine same_run(label, r, er, ref, err_ref, series)
+      character(len=*), intent(in) :: label
+      type(run_result_t), intent(in) :: r, ref
+      type(error_t), allocatable, intent(in) :: er, err_ref
+      logical, intent(in) :: series
+      integer :: j
+      call check(label//'both runs succeed or both fail', allocated(er) .eqv. allocated(err_ref))
+      if (allocated(er) .or. allocated(err_ref)) then
+         if (allocated(er) .and. allocated(err_ref)) call check(label//'the same error', er%message == err_ref%message)
          return
       end if
-      if (a%stats%block_steps > a%stats%steps/2) n_blocked = n_blocked + 1
-      call check(what//'no blocks when whole samples are taken', b%stats%block_steps == 0)
-      call check(what//'same steps, RHS evaluations, events', a%stats%steps == b%stats%steps .and. &
-                 a%stats%rhs_evals == b%stats%rhs_evals .and. a%stats%events == b%stats%events)
-      call check(what//'same final time and state', a%t_final == b%t_final .and. all(a%y_final == b%y_final))
-      call check(what//'same energy ledger', a%energy_residual_max == b%energy_residual_max .and. &
-                 a%energy_scale == b%energy_scale)
-      call check(what//'same event table', same_events(a, b))
-      do j = 1, size(a%el)
-         associate (p => a%el(j), q => b%el(j))
-            call check(what//'element '//str(j)//': same extremes', p%force_min == q%force_min .and. &
+      call check(label//'same steps, RHS evaluations, events', r%stats%steps == ref%stats%steps .and. &
+                 r%stats%rhs_evals == ref%stats%rhs_evals .and. r%stats%events == ref%stats%events)
+      call check(label//'same final time and state', r%t_final == ref%t_final .and. all(r%y_final == ref%y_final))
+      call check(label//'same energy ledger', r%energy_residual_max == ref%energy_residual_max .and. &
+                 r%energy_scale == ref%energy_scale)
+      call check(label//'same event table', same_events(r, ref))
+      do j = 1, size(r%el)
+         associate (p => r%el(j), q => ref%el(j))
+            call check(label//'element '//str(j)//': same extremes', p%force_min == q%force_min .and. &
                        p%force_max == q%force_max .and. p%torque_min == q%torque_min .and. &
                        p%torque_max == q%torque_max .and. p%disp_min == q%disp_min .and. p%disp_max == q%disp_max)
-            call check(what//'element '//str(j)//': same impacts, peaks, time out of contact', &
+            call check(label//'element '//str(j)//': same impacts, peaks, time out of contact', &
                        p%impacts == q%impacts .and. p%separations == q%separations .and. &
                        p%zone_changes == q%zone_changes .and. p%max_approach_velocity == q%max_approach_velocity .and. &
                        p%max_peak_force == q%max_peak_force .and. p%time_out_of_contact == q%time_out_of_contact)
-            call check(what//'element '//str(j)//': same peak-to-peak figures', p%p2p_range == q%p2p_range .and. &
+            call check(label//'element '//str(j)//': same peak-to-peak figures', p%p2p_range == q%p2p_range .and. &
                        p%p2p_mean == q%p2p_mean .and. p%p2p_swings == q%p2p_swings .and. &
                        (p%p2p_exact .eqv. q%p2p_exact))
          end associate
       end do
-   end subroutine compare
+      if (.not. series) return
+      call check(label//'same series (times, displacements, angles, speeds)', &
+                 size(r%series_t) == size(ref%series_t) .and. all(r%series_t == ref%series_t) .and. &
+                 all(r%series_disp == ref%series_disp) .and. all(r%series_theta == ref%series_theta) .and. &
+                 all(r%series_omega == ref%series_omega))
+   end subroutine same_run
 
    !> The two event tables equal, row by row.
    logical function same_events(a, b) result(same)
@@ -143,13 +170,15 @@ contains
       end do
    end function same_events
 
-   !> One run with a null sink; series: keep the in-memory series (whole samples).
-   subroutine run(model, series, res, err)
+   !> One run with a null sink; blocks: plain steps in blocks (run%step_blocks);
+   !> series: keep the in-memory series (whole samples at the output times).
+   subroutine run(model, blocks, series, res, err)
       type(model_t), intent(inout) :: model
-      logical, intent(in) :: series
+      logical, intent(in) :: blocks, series
       type(run_result_t), intent(out) :: res
       type(error_t), allocatable, intent(out) :: err
       type(null_sink_t) :: none
+      model%run%step_blocks = blocks
       model%run%keep_series = series
       model%run%keep_events = .true.
       call simulate(model, none, res, err)

@@ -97,6 +97,9 @@ module trainsim_model
       integer :: compression = 0                !< zlib level of the HDF5 history (0: none)
       logical :: analytic_jacobian = .true.     !< CVODE BDF: model%jacobian, else difference quotients
       logical :: preload = .false.              !< initial_state = 'preload': angles from the static wind-up
+      !> plain steps in blocks where the output allows (D-38); .false.: step by
+      !> step (a switch for comparing the two paths; not a deck key)
+      logical :: step_blocks = .true.
    end type run_settings_t
 
    !> An external torque on a node.

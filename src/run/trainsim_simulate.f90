@@ -58,7 +58,8 @@ module trainsim_simulate
       integer :: window_events = 0         !< events since t_window
       logical :: may_miss = .false.        !< integ%may_miss_events(), asked once per run
       !> plain steps in blocks (D-38): the integrator takes them, and the
-      !> observer's short way folds them (no whole samples, no peak refinement)
+      !> observer's short way folds them (no peak refinement; whole samples at
+      !> the output times only, from the workspace of a block's last step)
       logical :: blocks = .false.
       !> blocks, and the output times are the integrator's grid (output_interval = dt)
       logical :: block_samples = .false.
@@ -133,8 +134,13 @@ contains
       d%tol = 1.0e-9_wp*model%run%dt
       d%t_window = t
       d%may_miss = integ%may_miss_events()
-      d%blocks = integ%takes_blocks .and. .not. (d%may_miss .or. obs%want_whole .or. obs%refine_peaks)
-      d%block_samples = d%blocks .and. dout == model%run%dt
+      ! blocks when no step but the output times' needs a whole sample: the
+      ! samples are not taken whole, or there are steps between output times
+      ! (a block then ends on each output time, where the sample is filled from
+      ! the workspace of its last step)
+      d%blocks = integ%takes_blocks .and. model%run%step_blocks .and. .not. (d%may_miss .or. obs%refine_peaks) .and. &
+                 (.not. obs%want_whole .or. dout /= model%run%dt)
+      d%block_samples = d%blocks .and. dout == model%run%dt .and. .not. obs%want_whole
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
       call model%breakpoints(t, t_end, d%bp)
       call set_next_stop(d, integ, t, t_end)
