@@ -14,6 +14,71 @@
 !> a tolerance). Most runs must have taken most of their steps in blocks (else
 !> this compares the step-by-step path with itself), the reference none. A run
 !> that fails (a deck whose state runs away) must fail alike, with the same message.
+!> A sink that reads the speeds only (as a sweep run's) and keeps every sample's
+!> time and speeds: test_step_blocks checks that blocks hand it the same samples.
+module step_blocks_sink
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t
+   use trainsim_sink, only: sink_t, sample_t, run_meta_t, event_t, run_stats_t, element_metrics_t
+   implicit none
+   private
+   public :: speeds_sink_t
+
+   type, extends(sink_t) :: speeds_sink_t
+      integer :: n = 0
+      real(wp), allocatable :: t(:), w(:, :)
+   contains
+      procedure :: open => ss_open
+      procedure :: write_sample => ss_sample
+      procedure :: close => ss_close
+      procedure :: speeds_only => ss_speeds_only
+   end type speeds_sink_t
+
+contains
+
+   subroutine ss_open(self, meta, err)
+      class(speeds_sink_t), intent(inout) :: self
+      type(run_meta_t), intent(in) :: meta
+      type(error_t), allocatable, intent(out) :: err
+      self%n = 0
+      allocate (self%t(1024), self%w(size(meta%node_ids), 1024))
+   end subroutine ss_open
+
+   subroutine ss_sample(self, s, err)
+      class(speeds_sink_t), intent(inout) :: self
+      type(sample_t), intent(in) :: s
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: t2(:), w2(:, :)
+      if (self%n == size(self%t)) then
+         allocate (t2(2*self%n), w2(size(self%w, 1), 2*self%n))
+         t2(1:self%n) = self%t
+         w2(:, 1:self%n) = self%w
+         call move_alloc(t2, self%t)
+         call move_alloc(w2, self%w)
+      end if
+      self%n = self%n + 1
+      self%t(self%n) = s%t
+      self%w(:, self%n) = s%omega
+   end subroutine ss_sample
+
+   subroutine ss_close(self, events, stats, metrics, err)
+      class(speeds_sink_t), intent(inout) :: self
+      type(event_t), intent(in) :: events(:)
+      type(run_stats_t), intent(in) :: stats
+      type(element_metrics_t), intent(in) :: metrics(:)
+      type(error_t), allocatable, intent(out) :: err
+      associate (unused_s => self, unused_e => events, unused_t => stats, unused_m => metrics)
+      end associate
+   end subroutine ss_close
+
+   pure logical function ss_speeds_only(self) result(only)
+      class(speeds_sink_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      only = .true.
+   end function ss_speeds_only
+end module step_blocks_sink
+
 program test_step_blocks
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -24,6 +89,7 @@ program test_step_blocks
    use trainsim_sink, only: null_sink_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model, load_model_text, nl
+   use step_blocks_sink, only: speeds_sink_t
    implicit none
 
    character(len=*), parameter :: decks(*) = [character(len=48) :: &
@@ -49,6 +115,8 @@ program test_step_blocks
    call deck_variants('', rig_text())
    call test_begin('a 120-node chain with a backlash gear every 10th element (local event steps)')
    call deck_variants('', chain_text(120))
+   call test_begin('a sweep run''s sink (speeds only) gets the same samples, each once')
+   call speeds_samples()
    call test_begin('blocks were taken')
    write (*, '(a,i0,a,i0,a,i0,a)') '  runs that took most of their steps in blocks: ', n_blocked, ' of ', &
       6*(size(decks) + 2), ' without the series, ', n_blocked_series, ' with it'
@@ -152,6 +220,35 @@ contains
                  all(r%series_disp == ref%series_disp) .and. all(r%series_theta == ref%series_theta) .and. &
                  all(r%series_omega == ref%series_omega))
    end subroutine same_run
+
+   !> The rig with backlash (an event every 77 steps), output every step, to a
+   !> sink that reads the speeds only: with blocks (the samples from the
+   !> block's columns) it gets the samples step by step gets, the same times
+   !> and speeds, each once (one per output time, and the start).
+   subroutine speeds_samples()
+      type(model_t) :: base, m
+      type(speeds_sink_t) :: sa, sb
+      type(run_result_t) :: ra, rb
+      type(error_t), allocatable :: ea, eb
+      integer :: n_out
+      call load_model_text(rig_text(), base)
+      base%run%output_interval = 0.0_wp
+      m = base
+      m%run%step_blocks = .false.
+      call simulate(m, sb, rb, eb)
+      m = base
+      call simulate(m, sa, ra, ea)
+      call check('both runs succeed', .not. (allocated(ea) .or. allocated(eb)))
+      if (allocated(ea) .or. allocated(eb)) return
+      call check('blocks taken', ra%stats%block_steps > ra%stats%steps/2 .and. rb%stats%block_steps == 0)
+      n_out = nint((base%run%t_end - base%run%t_start)/base%run%dt)
+      call check('one sample per output time and the start ('//str(n_out + 1)//'), got '//str(sa%n)//' and '// &
+                 str(sb%n), sa%n == n_out + 1 .and. sb%n == n_out + 1)
+      if (sa%n /= sb%n) return
+      call check('the same sample times', all(sa%t(1:sa%n) == sb%t(1:sb%n)))
+      call check('the sample times increase', all(sa%t(2:sa%n) > sa%t(1:sa%n - 1)))
+      call check('the same speeds', all(sa%w(:, 1:sa%n) == sb%w(:, 1:sb%n)))
+   end subroutine speeds_samples
 
    !> The two event tables equal, row by row.
    logical function same_events(a, b) result(same)

@@ -157,7 +157,7 @@ contains
             ! k .. k_last at most (not the last, t_end, which may lie off the grid
             ! by less than the instant tolerance)
             k_last = min(k + int(model%blk%cap, i8) - 1, n_out - 1)
-            call run_block(model, integ, obs, d, min(out_time(k_last), integ%t_stop), t, y, folded, err)
+            call run_block(model, integ, obs, d, min(out_time(k_last), integ%t_stop), .true., t, y, folded, err)
             if (allocated(err)) return
             if (folded) then
                ! the block's steps ended on output times k, k + 1, ... (one grid)
@@ -191,15 +191,17 @@ contains
 
    !> Plain steps toward t_goal in a block (D-38), if the integrator and the
    !> model's modes allow one (folded: it took steps; the observer has folded
-   !> them, with each step's end an output time if d%block_samples). The
-   !> state is checked after the block (the integrator stops a block at a
-   !> step beyond the blow-up limit), and the interrupt flag.
-   subroutine run_block(model, integ, obs, d, t_goal, t, y, folded, err)
+   !> them; with `samples`, each step's end is an output time, sampled by the
+   !> fold: `drive`'s blocks of output times, d%block_samples). The state is
+   !> checked after the block (the integrator stops a block at a step beyond
+   !> the blow-up limit), and the interrupt flag.
+   subroutine run_block(model, integ, obs, d, t_goal, samples, t, y, folded, err)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
       type(drive_t), intent(in) :: d
       real(wp), intent(in) :: t_goal
+      logical, intent(in) :: samples
       real(wp), intent(inout) :: t, y(:)
       logical, intent(out) :: folded
       type(error_t), allocatable, intent(out) :: err
@@ -212,7 +214,7 @@ contains
          call check_state(model, integ, t, y, err)
          return
       end if
-      call obs%fold_block(model, d%block_samples, err)
+      call obs%fold_block(model, samples, err)
       if (allocated(err)) return
       if (signal_caught /= 0) call fatal_error(err, 'interrupted at t = '//str(t)//' s', err_interrupted)
    end subroutine run_block
@@ -235,7 +237,7 @@ contains
          t_goal = min(t_out, integ%t_stop)
          if (t_goal - t > d%tol) then
             if (d%blocks) then
-               call run_block(model, integ, obs, d, t_goal, t, y, folded, err)
+               call run_block(model, integ, obs, d, t_goal, .false., t, y, folded, err)
                if (allocated(err)) return
                if (folded) cycle
             end if
