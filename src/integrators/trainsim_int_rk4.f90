@@ -373,49 +373,39 @@ contains
       integer, intent(out) :: status
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_grid, t_sub, h
-      logical :: at_bp, done
+      logical :: at_bp, done, below
       self%at_local = .false.
       if (self%mr_on) then
          ! inside a local event step: the next event of the region, or its end
          call self%mr_continue(model, t_goal, t, y, status, done)
          if (done) return
       end if
-      ! the next grid point (grid_target, written out for the usual case: t not
-      ! already on it)
-      t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
-      if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
+      t_grid = next_grid(self, t)
       t_sub = min(t_grid, t_goal)
       at_bp = self%stop_is_breakpoint .and. t_sub >= self%t_stop - self%tiny_t
       h = t_sub - t
       if (self%pend .and. t == self%t_pend .and. h == self%h_pend .and. .not. at_bp) then
          ! the step the block computed and left (D-38): ynew, k2..k4 and g1 hold it
-         self%pend = .false.
-         self%k1_next = .false.
+         below = .true.
       else
-         self%pend = .false.
-         ! k1 = f(t, y) from the last step's end (D-37: a caller that changes y
-         ! between two advances calls `restart`, which checks y against that end)
-         if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
-            call model%rhs(t, y, self%k1)
-            self%stats%rhs_evals = self%stats%rhs_evals + 1
-         end if
-         self%k1_next = .false.
+         call first_stage(self, model, t, y)
          call rk4_step(self, model, t, y, h, self%ynew, at_bp)
-         if (self%ng > 0) call model%guards(t + h, self%ynew, self%g1)
+         below = .false.
+         if (self%ng > 0) below = model%guards_below(t + h, self%ynew, self%g1)
       end if
-      if (self%ng > 0) then
-         if (any(self%g1 < 0.0_wp)) then
-            if (.not. at_bp) then
-               call self%mr_begin(model, t, y, h, t_grid, done)
-               if (done) then
-                  call self%mr_continue(model, t_goal, t, y, status, done)
-                  return
-               end if
+      self%pend = .false.
+      self%k1_next = .false.
+      if (below) then
+         if (.not. at_bp) then
+            call self%mr_begin(model, t, y, h, t_grid, done)
+            if (done) then
+               call self%mr_continue(model, t_goal, t, y, status, done)
+               return
             end if
-            call self%end_on_event(model, h, t, y)
-            status = adv_event
-            return
          end if
+         call self%end_on_event(model, h, t, y)
+         status = adv_event
+         return
       end if
       y = self%ynew
       t = t_sub
@@ -437,16 +427,37 @@ contains
       if (t >= t_goal - self%tiny_t) status = adv_reached
    end subroutine rk4_advance
 
+   !> The next grid point after t: `grid_target` written out for the usual case,
+   !> t not already on it (a call into fixed_step costs more than the arithmetic).
+   real(wp) function next_grid(self, t) result(t_grid)
+      class(rk4_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
+      if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
+   end function next_grid
+
+   !> k1 = f(t, y), unless it is the last step's end-of-step RHS (D-33; D-37: a
+   !> caller that changes y between two advances calls `restart`, which checks
+   !> y against that end).
+   subroutine first_stage(self, model, t, y)
+      class(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      if (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t) return
+      call model%rhs(t, y, self%k1)
+      self%stats%rhs_evals = self%stats%rhs_evals + 1
+   end subroutine first_stage
+
    !> Plain steps toward t_goal in one call (D-38): whole grid steps, none
    !> ending on a breakpoint or past t_goal, none with a guard below zero at
    !> its end, at most model%blk%cap; step j's end goes to column j of
    !> model%blk (`rhs_step_end`), model%blk%n = the steps taken. It stops after
    !> a step whose state has an entry beyond y_limit or NaN (the caller reports
    !> it), and once t_goal - t <= t_tol (the caller's instant tolerance: a
-   !> sliver of a step below it is no step). A step with a guard below zero at its end is not taken but kept
-   !> (pend): the next `advance` from here takes it without computing it again,
-   !> so the steps, the RHS evaluations and the results are those of `advance`
-   !> step by step.
+   !> sliver of a step below it is no step). A step with a guard below zero at
+   !> its end is not taken but kept (pend): the next `advance` from here takes
+   !> it without computing it again, so the steps, the RHS evaluations and the
+   !> results are those of `advance` step by step.
    subroutine rk4_advance_block(self, model, t_goal, t_tol, y_limit, t, y)
       class(rk4_t), intent(inout), target :: self
       type(model_t), intent(inout), target :: model
@@ -460,18 +471,14 @@ contains
       n = 0
       ok = .true.
       do j = 1, model%blk%cap
-         t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
-         if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
+         t_grid = next_grid(self, t)
          if (t_grid > t_goal) exit
          if (self%stop_is_breakpoint .and. t_grid >= self%t_stop - self%tiny_t) exit
          h = t_grid - t
+         ! k1 as `advance` takes it; after a step of the block it is that step's
+         ! end-of-step RHS
          if (j == 1) then
-            ! k1 as `advance` takes it; after a step of the block it is that
-            ! step's end-of-step RHS
-            if (.not. (self%k1_next .and. model%ws_step_end .and. t == self%t_k1 .and. model%ws_t == t)) then
-               call model%rhs(t, y, self%k1)
-               self%stats%rhs_evals = self%stats%rhs_evals + 1
-            end if
+            call first_stage(self, model, t, y)
             self%k1_next = .false.
          end if
          call rk4_step(self, model, t, y, h, self%ynew, .false.)
