@@ -1440,10 +1440,10 @@ contains
       below = .false.
       if (self%n_guards == 0) return
       if (self%n_norow == 0) then
-         call guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
-      else
-         call self%guards_general(t, y, g)
+         below = guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
+         return
       end if
+      call self%guards_general(t, y, g)
       do j = 1, self%n_guards
          if (g(j) < 0.0_wp) below = .true.
       end do
@@ -1471,38 +1471,45 @@ contains
    end subroutine model_guards_general
 
    !> The guards of the elements els(1:n), each with a guard row (rows(els(k))%form
-   !> > 0), at the state y into g: hot_guards written out, the angles straight from
+   !> > 0), at the state y into g, and whether one of them is below zero (tested
+   !> on the values as they are written: no second pass over g; NaN is not below
+   !> zero, as in `g(j) < 0`): hot_guards written out, the angles straight from
    !> y (plain arrays: no descriptor, no stride).
-   subroutine guard_rows(n, els, rows, y, g)
+   logical function guard_rows(n, els, rows, y, g) result(below)
       integer, intent(in) :: n, els(n)
       type(guard_row_t), intent(in) :: rows(*)
       real(wp), intent(in) :: y(*)
       real(wp), intent(inout) :: g(*)
       integer :: k, o
-      real(wp) :: d
+      real(wp) :: d, g1, g2, g3, g4
+      below = .false.
       do k = 1, n
          associate (q => rows(els(k)))
             o = q%o
             d = q%r1*y(q%yl) - q%r2*y(q%yr)
             select case (q%mode)
             case (1)
-               g(o + 1) = d - q%b; g(o + 2) = 1.0_wp
+               g1 = d - q%b; g2 = 1.0_wp
             case (-1)
-               g(o + 1) = 1.0_wp; g(o + 2) = -d - q%b
+               g1 = 1.0_wp; g2 = -d - q%b
             case default
-               g(o + 1) = q%b - d; g(o + 2) = d + q%b
+               g1 = q%b - d; g2 = d + q%b
             end select
+            g(o + 1) = g1; g(o + 2) = g2
+            if (g1 < 0.0_wp .or. g2 < 0.0_wp) below = .true.
             if (q%form == 2) then
                if (q%lo_open) then
-                  g(o + 3) = 1.0_wp
+                  g3 = 1.0_wp
                else
-                  g(o + 3) = y(q%yl) - q%th_lo
+                  g3 = y(q%yl) - q%th_lo
                end if
-               g(o + 4) = q%th_hi - y(q%yl)
+               g4 = q%th_hi - y(q%yl)
+               g(o + 3) = g3; g(o + 4) = g4
+               if (g3 < 0.0_wp .or. g4 < 0.0_wp) below = .true.
             end if
          end associate
       end do
-   end subroutine guard_rows
+   end function guard_rows
 
    !> The guards of element i at (t, y) into g(o + 1 : o + ng) (`model_guards` for
    !> an element without a guard row, `element_guards`): the kinematics of its two
