@@ -320,8 +320,10 @@ contains
    subroutine rk4_step(self, model, t, y, h, ynew, left_limit)
       class(rk4_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, y(:), h
-      real(wp), intent(out) :: ynew(:)
+      real(wp), intent(in) :: t, h
+      !> (explicit size: their addresses only, no descriptors, unit stride)
+      real(wp), intent(in) :: y(size(self%k1))
+      real(wp), intent(out) :: ynew(size(self%k1))
       logical, intent(in) :: left_limit
       real(wp) :: t4, hh, h6
       integer :: i

@@ -622,7 +622,13 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
-      call rhs_fast(self, t, y, dydt, .true.)
+      if (self%simple) then
+         ! straight to the kernel (every step of a block, D-38): no second layer
+         ! of descriptors
+         call rhs_simple_ws(self, t, y, dydt, .true.)
+      else
+         call rhs_fast(self, t, y, dydt, .true.)
+      end if
    end subroutine model_rhs_step_end
 
    !> dy/dt at (t, y) as `model_rhs`, the same values bit for bit, for an
@@ -666,33 +672,17 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
       logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
-      integer :: i, l, r, s, o, c
+      integer :: i, l, r, s, o
       real(wp) :: tl, tr, f, dv, pdiss, pin
       logical :: track
+      if (self%simple) then
+         call rhs_simple_ws(self, t, y, dydt, step_end)
+         return
+      end if
       track = self%run%track_energy
       self%ws_step_end = .false.
       self%ws_t = t
-      self%ws_energy = step_end .and. self%simple .and. track .and. self%n_cold == 0
-      if (self%simple) then
-         c = max(self%blk%col, 1)
-         call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
-                         self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, self%el_pe, &
-                         self%blk%disp(:, c), self%blk%force(:, c), self%blk%torque(:, c), self%blk%omega(:, c), &
-                         self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
-                         self%chain .and. .not. track, self%ws_energy, self%ws_stored, self%ws_elastic, &
-                         self%blk%col > 0)
-         if (step_end .and. self%blk%col > 0) then
-            ! the step's end in the block's column (D-38)
-            self%blk%t(c) = t
-            if (track) then
-               self%blk%work(1, c) = y(self%n_states + 1)
-               self%blk%work(2, c) = y(self%n_states + 2)
-               self%blk%stored(c) = self%ws_stored
-               self%blk%elastic(c) = self%ws_elastic
-            end if
-         end if
-         return
-      end if
+      self%ws_energy = .false.
       pdiss = 0.0_wp
       pin = 0.0_wp
       ! kinematics and constant loads in one pass (the branch of kinematics_all, written
@@ -786,6 +776,41 @@ contains
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
    end subroutine rhs_fast
+
+   !> `rhs_fast` of a simple model: the kernel `rhs_simple` with the model's
+   !> workspace, and at a step's end inside a block (D-38) its column. On
+   !> explicit-size y and dydt (their addresses only: `model_rhs_step_end` calls
+   !> it for every step of a block).
+   subroutine rhs_simple_ws(self, t, y, dydt, step_end)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      real(wp), intent(in) :: y(self%n_y)
+      real(wp), intent(out) :: dydt(self%n_y)
+      logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
+      integer :: c
+      logical :: track
+      track = self%run%track_energy
+      self%ws_step_end = .false.
+      self%ws_t = t
+      self%ws_energy = step_end .and. track .and. self%n_cold == 0
+      c = max(self%blk%col, 1)
+      call rhs_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, self%elements, &
+                      self%theta, self%omega, self%torque, self%el_torque, self%el_disp, self%el_force, self%el_pe, &
+                      self%blk%disp(:, c), self%blk%force(:, c), self%blk%torque(:, c), self%blk%omega(:, c), &
+                      self%node_first, self%node_inc, t, y, dydt, track, self%n_states, &
+                      self%chain .and. .not. track, self%ws_energy, self%ws_stored, self%ws_elastic, &
+                      self%blk%col > 0)
+      if (step_end .and. self%blk%col > 0) then
+         ! the step's end in the block's column (D-38)
+         self%blk%t(c) = t
+         if (track) then
+            self%blk%work(1, c) = y(self%n_states + 1)
+            self%blk%work(2, c) = y(self%n_states + 2)
+            self%blk%stored(c) = self%ws_stored
+            self%blk%elastic(c) = self%ws_elastic
+         end if
+      end if
+   end subroutine rhs_simple_ws
 
    !> `rhs_fast` for a simple model (component `simple`): the same values (bit
    !> for bit, but for the sign of a zero: terms that are exactly 0 or factors
