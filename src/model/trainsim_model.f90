@@ -620,8 +620,10 @@ contains
    !> event location) is `model_rhs`, which does not compute it.
    subroutine model_rhs_step_end(self, t, y, dydt)
       class(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t, y(:)
-      real(wp), intent(out) :: dydt(:)
+      real(wp), intent(in) :: t
+      !> (explicit size: their addresses only, no descriptors)
+      real(wp), intent(in) :: y(self%n_y)
+      real(wp), intent(out) :: dydt(self%n_y)
       if (self%simple) then
          ! straight to the kernel (every step of a block, D-38): no second layer
          ! of descriptors
