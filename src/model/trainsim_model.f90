@@ -641,10 +641,14 @@ contains
          call rhs_fast(self, t, y, dydt, .false.)
          return
       end if
-      call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
-                            self%elements, &
-                            self%el_torque, self%node_first, self%node_inc, t, y, dydt, self%run%track_energy, &
-                            self%n_states, self%chain .and. .not. self%run%track_energy)
+      if (self%run%track_energy) then
+         call rhs_stage_energy(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
+                               self%elements, self%el_torque, self%node_first, self%node_inc, t, y, dydt, &
+                               self%n_states, self%chain)
+      else
+         call rhs_stage_simple(size(self%fn), size(self%fe), self%fn, self%fe, self%fh, self%elements, &
+                               self%el_torque, self%node_first, self%node_inc, t, y, dydt, self%chain)
+      end if
    end subroutine model_rhs_stage
 
    !> Whether an integrator may take a block of steps (D-38) in the current
@@ -999,43 +1003,31 @@ contains
       est = ek
    end subroutine rhs_simple
 
-   !> `rhs_simple` for an inner stage (`model_rhs_stage`): the same values bit
-   !> for bit from the same operations in the same order, but only et and dydt
-   !> are stored; a node's angle and speed are read where they are used, from y
-   !> (a plain inertia) or by the expression `rhs_simple` stores (a held node).
-   !> About a tenth of the kernel's time on the Table 5.5 rig (issue 11).
-   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, track, ns, chain)
-      integer, intent(in) :: nn, ne, nl, ns
+   !> `rhs_simple` for an inner stage (`model_rhs_stage`) without energy
+   !> tracking: the same values bit for bit from the same operations in the
+   !> same order, but only et and dydt are stored; a node's angle and speed are
+   !> read where they are used, from y (a plain inertia) or by the expression
+   !> `rhs_simple` stores (a held node). About a tenth of the kernel's time on
+   !> the Table 5.5 rig (issue 11). With energy tracking: `rhs_stage_energy`.
+   subroutine rhs_stage_simple(nn, ne, fn, fe, fh, els, et, first, inc, t, y, dydt, chain)
+      integer, intent(in) :: nn, ne
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
       type(hot_form_t), intent(in) :: fh(ne)
-      type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: et(2*ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
       real(wp), intent(in) :: t
       real(wp), intent(in), contiguous :: y(:)            ! (model_rhs_stage's: no packing)
       real(wp), intent(inout), contiguous :: dydt(:)
-      logical, intent(in) :: track
-      !> The train is a serial chain (element i joins nodes i and i + 1) and
-      !> track is off: each node's torque is finished as soon as its right-hand
-      !> element is evaluated (load0 + tr of element i-1 + tl of element i, the
-      !> node_inc order), in a register (no store and reload of et on the path).
-      !> (With energy tracking the same, with the nodes' energy terms in a second
-      !> pass, measured no faster: not used.)
+      !> The train is a serial chain (element i joins nodes i and i + 1): each
+      !> node's torque is finished as soon as its right-hand element is
+      !> evaluated (load0 + tr of element i-1 + tl of element i, the node_inc
+      !> order), in a register (no store and reload of et on the path).
       logical, intent(in) :: chain
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
-      pdiss = 0.0_wp
-      pin = 0.0_wp
+      real(wp) :: f, d, dv, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
       tqc = fn(1)%load0
-      if (track) then
-         do i = 1, nl
-            l = fl(i)%node
-            if (fn(l)%kind == nk_held) cycle
-            pin = pin + fl(i)%v*y(fn(l)%off + 2)
-         end do
-      end if
       do i = 1, ne
          if (fe(i)%yl > 0) then
             thl = y(fe(i)%yl)
@@ -1068,12 +1060,10 @@ contains
             f = fe(i)%k*d + fe(i)%c*dv
             tl = -(f*fe(i)%r1)
             tr = f*fe(i)%r2
-            if (track) pdiss = pdiss + fe(i)%c*dv**2
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
             tl = -(f*fh(i)%r1)
             tr = f*fh(i)%r2
-            if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             ! hot_torques written out (a call costs more than the arithmetic)
             associate (h => fh(i))
@@ -1090,16 +1080,9 @@ contains
                fs = h%s*f
                tl = -(fs*h%r1)
                tr = fs*h%r2
-               if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
             end associate
          case default
-            if (track) then
-               call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
-               pdiss = pdiss + pw
-               if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
-            else
-               call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
-            end if
+            call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
             tl = et(2*i - 1)
             tr = et(2*i)
          end select
@@ -1145,16 +1128,166 @@ contains
                dydt(o + 2) = tq/fn(i)%j                                      ! eq. (G.2), d = 0
             else
                dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j                 ! eq. (G.2)
-               if (track) pdiss = pdiss + fn(i)%d*y(o + 2)**2
             end if
-         else if (track) then
-            pin = pin - tq*fn(i)%w              ! the drive's torque (alpha = 0) times the speed
          end if
       end do
-      if (.not. track) return
+   end subroutine rhs_stage_simple
+
+   !> `rhs_stage_simple` with energy tracking: also the dissipated power pdiss
+   !> and the input power pin (dydt(ns + 1 : ns + 2)), bit for bit `rhs_simple`'s
+   !> (the same terms in the same order: the loads, the elements, the nodes).
+   !> A kernel of its own (D-40): sharing one with the energy-off stage made
+   !> the compiler's code for that path slower (measured, benchmarks.md).
+   !> On a serial chain the nodes' dy/dt come from registers as there, and the
+   !> nodes' power terms follow in a pass of their own (a held node's torque
+   !> summed from et in the node_inc order, as the general node loop sums it).
+   subroutine rhs_stage_energy(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, ns, chain)
+      integer, intent(in) :: nn, ne, nl, ns
+      type(fast_node_t), intent(in) :: fn(nn)
+      type(fast_element_t), intent(in) :: fe(ne)
+      type(hot_form_t), intent(in) :: fh(ne)
+      type(fast_load_t), intent(in) :: fl(nl)
+      type(element_slot_t), intent(in) :: els(ne)
+      real(wp), intent(inout) :: et(2*ne)
+      integer, intent(in) :: first(nn + 1), inc(2*ne)
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)            ! (model_rhs_stage's: no packing)
+      real(wp), intent(inout), contiguous :: dydt(:)
+      logical, intent(in) :: chain   !< as in `rhs_stage_simple`
+      integer :: i, l, r, o, k
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      tqc = fn(1)%load0
+      do i = 1, nl
+         l = fl(i)%node
+         if (fn(l)%kind == nk_held) cycle
+         pin = pin + fl(i)%v*y(fn(l)%off + 2)
+      end do
+      do i = 1, ne
+         if (fe(i)%yl > 0) then
+            thl = y(fe(i)%yl)
+            wl = y(fe(i)%yl + 1)
+         else                                   ! held at a constant speed
+            l = fe(i)%l
+            thl = fn(l)%theta0 + fn(l)%w*t
+            wl = fn(l)%w
+         end if
+         if (fe(i)%yr > 0) then
+            thr = y(fe(i)%yr)
+            wr = y(fe(i)%yr + 1)
+         else
+            r = fe(i)%r
+            thr = fn(r)%theta0 + fn(r)%w*t
+            wr = fn(r)%w
+         end if
+         select case (fe(i)%form)
+         case (lf_unit)                                                    ! eq. (H.1), c = 0
+            f = fe(i)%k*(thl - thr)
+            tl = -f
+            tr = f
+         case (lf_undamped)                                                ! eq. (H.15)
+            f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr)
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
+         case (lf_general)
+            dv = fe(i)%r1*wl - fe(i)%r2*wr
+            d = fe(i)%r1*thl - fe(i)%r2*thr
+            f = fe(i)%k*d + fe(i)%c*dv
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
+            pdiss = pdiss + fe(i)%c*dv**2
+         case (lf_open)                                                    ! a clearance open (D-35)
+            f = 0.0_wp
+            tl = -(f*fh(i)%r1)
+            tr = f*fh(i)%r2
+            pdiss = pdiss + 0.0_wp
+         case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
+            associate (h => fh(i))
+               d = h%r1*thl - h%r2*thr
+               dv = h%r1*wl - h%r2*wr
+               p = h%s*d - h%b
+               pdot = h%s*dv
+               if (fe(i)%form == lf_yang_sun) then
+                  f = h%c*(h%k*p + h%dmp*p*pdot)                           ! eqs. (3.18)-(3.19)
+               else
+                  f = h%c*(h%k*p) + h%dmp*pdot
+               end if
+               if (h%no_tension) f = max(f, 0.0_wp)
+               fs = h%s*f
+               tl = -(fs*h%r1)
+               tr = fs*h%r2
+               pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
+            end associate
+         case default
+            call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
+            pdiss = pdiss + pw
+            if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
+            tl = et(2*i - 1)
+            tr = et(2*i)
+         end select
+         et(2*i - 1) = tl
+         et(2*i) = tr
+         if (chain) then
+            ! node i is done (as in rhs_stage_simple)
+            tq = tqc + tl
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+               end if
+            end if
+            tqc = fn(i + 1)%load0 + tr
+         end if
+      end do
+      if (chain) then
+         if (fn(nn)%kind == nk_plain) then
+            o = fn(nn)%off
+            dydt(o + 1) = y(o + 2)
+            if (fn(nn)%d == 0.0_wp) then
+               dydt(o + 2) = tqc/fn(nn)%j
+            else
+               dydt(o + 2) = (tqc - fn(nn)%d*y(o + 2))/fn(nn)%j
+            end if
+         end if
+         ! the nodes' power terms, in the order of the node loop below
+         do i = 1, nn
+            if (fn(i)%kind == nk_plain) then
+               if (fn(i)%d /= 0.0_wp) pdiss = pdiss + fn(i)%d*y(fn(i)%off + 2)**2
+            else
+               tq = fn(i)%load0
+               do k = first(i), first(i + 1) - 1
+                  tq = tq + et(inc(k))
+               end do
+               pin = pin - tq*fn(i)%w           ! the drive's torque (alpha = 0) times the speed
+            end if
+         end do
+      else
+         do i = 1, nn
+            tq = fn(i)%load0
+            do k = first(i), first(i + 1) - 1
+               tq = tq + et(inc(k))
+            end do
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+                  pdiss = pdiss + fn(i)%d*y(o + 2)**2
+               end if
+            else
+               pin = pin - tq*fn(i)%w           ! the drive's torque (alpha = 0) times the speed
+            end if
+         end do
+      end if
       dydt(ns + 1) = pdiss
       dydt(ns + 2) = pin
-   end subroutine rhs_stage_simple
+   end subroutine rhs_stage_energy
 
    !> Torques of element i on its left and right node at the kinematics in the
    !> workspace (after `kinematics`): the hot path for linear springs.
