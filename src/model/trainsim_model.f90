@@ -1134,12 +1134,15 @@ contains
    end subroutine rhs_stage_simple
 
    !> `rhs_stage_simple` with energy tracking: also the dissipated power pdiss
-   !> and the input power pin (dydt(ns + 1 : ns + 2)), bit for bit `rhs_simple`'s
-   !> (the same terms in the same order: the loads, the elements, the nodes).
-   !> A kernel of its own (D-40): sharing one with the energy-off stage made
-   !> the compiler's code for that path slower (measured, benchmarks.md).
-   !> On a serial chain the nodes' dy/dt come from registers as there, and the
-   !> nodes' power terms follow in a pass of their own (a held node's torque
+   !> and the input power pin (dydt(ns + 1 : ns + 2)), bit for bit `rhs_simple`'s:
+   !> the same terms summed in the same order (the loads, the elements, the
+   !> nodes). A kernel of its own (D-40): sharing one with the energy-off stage
+   !> made the compiler's code for that path slower (measured, benchmarks.md).
+   !> On a serial chain the nodes' dy/dt come from registers as there, and so
+   !> do their power terms, summed apart (pdn; pinc from the loads' sum on) and
+   !> joined at the end where that gives the same sums: pin = pinc if no
+   !> element supplies power, pdiss = pdn if no element dissipates; else the
+   !> nodes' terms are added again in a pass of their own (a held node's torque
    !> summed from et in the node_inc order, as the general node loop sums it).
    subroutine rhs_stage_energy(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, ns, chain)
       integer, intent(in) :: nn, ne, nl, ns
@@ -1155,15 +1158,21 @@ contains
       real(wp), intent(inout), contiguous :: dydt(:)
       logical, intent(in) :: chain   !< as in `rhs_stage_simple`
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, pdn, pinc
+      logical :: el_d, el_p, nd_d   ! a term from an element in pdiss, in pin; from a node in pdn
       pdiss = 0.0_wp
       pin = 0.0_wp
+      pdn = 0.0_wp
+      el_d = .false.
+      el_p = .false.
+      nd_d = .false.
       tqc = fn(1)%load0
       do i = 1, nl
          l = fl(i)%node
          if (fn(l)%kind == nk_held) cycle
          pin = pin + fl(i)%v*y(fn(l)%off + 2)
       end do
+      pinc = pin
       do i = 1, ne
          if (fe(i)%yl > 0) then
             thl = y(fe(i)%yl)
@@ -1197,11 +1206,13 @@ contains
             tl = -(f*fe(i)%r1)
             tr = f*fe(i)%r2
             pdiss = pdiss + fe(i)%c*dv**2
+            el_d = .true.
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
             tl = -(f*fh(i)%r1)
             tr = f*fh(i)%r2
             pdiss = pdiss + 0.0_wp
+            el_d = .true.
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             associate (h => fh(i))
                d = h%r1*thl - h%r2*thr
@@ -1219,17 +1230,22 @@ contains
                tr = fs*h%r2
                pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
             end associate
+            el_d = .true.
          case default
             call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
             pdiss = pdiss + pw
-            if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
+            el_d = .true.
+            if (els(i)%e%supplies_power) then
+               pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
+               el_p = .true.
+            end if
             tl = et(2*i - 1)
             tr = et(2*i)
          end select
          et(2*i - 1) = tl
          et(2*i) = tr
          if (chain) then
-            ! node i is done (as in rhs_stage_simple)
+            ! node i is done (as in rhs_stage_simple), and its power terms
             tq = tqc + tl
             if (fn(i)%kind == nk_plain) then
                o = fn(i)%off
@@ -1238,7 +1254,11 @@ contains
                   dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
                else
                   dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+                  pdn = pdn + fn(i)%d*y(o + 2)**2
+                  nd_d = .true.
                end if
+            else
+               pinc = pinc - tq*fn(i)%w         ! the drive's torque (alpha = 0) times the speed
             end if
             tqc = fn(i + 1)%load0 + tr
          end if
@@ -1251,20 +1271,28 @@ contains
                dydt(o + 2) = tqc/fn(nn)%j
             else
                dydt(o + 2) = (tqc - fn(nn)%d*y(o + 2))/fn(nn)%j
+               pdn = pdn + fn(nn)%d*y(o + 2)**2
+               nd_d = .true.
             end if
+         else
+            pinc = pinc - tqc*fn(nn)%w
          end if
-         ! the nodes' power terms, in the order of the node loop below
-         do i = 1, nn
-            if (fn(i)%kind == nk_plain) then
-               if (fn(i)%d /= 0.0_wp) pdiss = pdiss + fn(i)%d*y(fn(i)%off + 2)**2
-            else
-               tq = fn(i)%load0
-               do k = first(i), first(i + 1) - 1
-                  tq = tq + et(inc(k))
-               end do
-               pin = pin - tq*fn(i)%w           ! the drive's torque (alpha = 0) times the speed
-            end if
-         end do
+         if (.not. el_p) pin = pinc                 ! the loads' terms, then the nodes'
+         if (nd_d .and. .not. el_d) pdiss = pdn     ! (0 + the nodes' terms)
+         if (el_p .or. (nd_d .and. el_d)) then
+            ! both an element's and a node's terms: the nodes' again, after the elements'
+            do i = 1, nn
+               if (fn(i)%kind == nk_plain) then
+                  if (fn(i)%d /= 0.0_wp .and. el_d) pdiss = pdiss + fn(i)%d*y(fn(i)%off + 2)**2
+               else if (el_p) then
+                  tq = fn(i)%load0
+                  do k = first(i), first(i + 1) - 1
+                     tq = tq + et(inc(k))
+                  end do
+                  pin = pin - tq*fn(i)%w
+               end if
+            end do
+         end if
       else
          do i = 1, nn
             tq = fn(i)%load0
