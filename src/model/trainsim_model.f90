@@ -824,10 +824,12 @@ contains
       real(wp), intent(inout) :: est, epot
       logical, intent(in) :: to_col   !< write the block's column (bd, bf, bt, bo)
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, ek
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, ek, ep
       pdiss = 0.0_wp
       pin = 0.0_wp
       tqc = fn(1)%load0
+      ek = 0.0_wp
+      ep = 0.0_wp
       do i = 1, nn
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
@@ -839,6 +841,13 @@ contains
          end if
          if (to_col) bo(i) = omega(i)
       end do
+      if (energy) then
+         ! the stored energy (model_workspace_energy's order): the kinetic
+         ! energies node by node, then (in the element loop) the elastic ones
+         do i = 1, nn
+            ek = ek + 0.5_wp*fn(i)%j*omega(i)**2                        ! (held: j its inertia)
+         end do
+      end if
       if (track) then
          do i = 1, nl
             l = fl(i)%node
@@ -936,6 +945,10 @@ contains
          end select
          et(2*i - 1) = tl
          et(2*i) = tr
+         if (energy) then          ! the elastic energies after the kinetic
+            ek = ek + pe(i)
+            ep = ep + pe(i)
+         end if
          if (to_col) then          ! the block's column (D-38)
             bd(i) = disp(i)
             bf(i) = force(i)
@@ -970,14 +983,12 @@ contains
          end if
          return
       end if
-      ek = 0.0_wp
       do i = 1, nn
          tq = fn(i)%load0
          do k = first(i), first(i + 1) - 1
             tq = tq + et(inc(k))
          end do
          torque(i) = tq
-         if (energy) ek = ek + 0.5_wp*fn(i)%j*omega(i)**2                ! (held: j its inertia)
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
             dydt(o + 1) = y(o + 2)                                         ! eq. (G.1)
@@ -995,12 +1006,8 @@ contains
       dydt(ns + 1) = pdiss
       dydt(ns + 2) = pin
       if (.not. energy) return
-      epot = 0.0_wp
-      do i = 1, ne
-         ek = ek + pe(i)
-         epot = epot + pe(i)
-      end do
       est = ek
+      epot = ep
    end subroutine rhs_simple
 
    !> `rhs_simple` for an inner stage (`model_rhs_stage`) without energy
