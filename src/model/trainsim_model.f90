@@ -1285,7 +1285,9 @@ contains
             pinc = pinc - tqc*fn(nn)%w
          end if
          if (.not. el_p) pin = pinc                 ! the loads' terms, then the nodes'
-         if (nd_d .and. .not. el_d) pdiss = pdn     ! (0 + the nodes' terms)
+         if (nd_d) then
+            if (.not. el_d) pdiss = pdn             ! (0 + the nodes' terms)
+         end if
          if (el_p .or. (nd_d .and. el_d)) then
             ! both an element's and a node's terms: the nodes' again, after the elements'
             do i = 1, nn
