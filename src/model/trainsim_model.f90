@@ -627,7 +627,9 @@ contains
 
    !> dy/dt at (t, y) as `model_rhs`, the same values bit for bit, for an
    !> integrator's inner stage, after which no one reads the workspace: a
-   !> simple model runs the kernel `rhs_stage_simple`, which stores nothing but
+   !> simple model runs the kernel `rhs_stage_simple` (with energy tracking
+   !> `rhs_stage_energy`, D-40: two kernels, each called once here, so that the
+   !> compiler inlines and compiles each apart), which stores nothing but
    !> dy/dt and the element torques (no node angles, speeds and torques, no
    !> element displacements and forces), and the workspace then holds nothing
    !> a caller may read (`ws_step_end` cleared). Other models run `model_rhs`.
