@@ -7,7 +7,7 @@ module test_elements_doubles
    use trainsim_node_inertia, only: inertia_node_t
    implicit none
    private
-   public :: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t
+   public :: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t, powered_shaft_t
 
    !> A shaft whose torque grows with the cube of the twist.
    type, extends(shaft_t) :: stiffening_shaft_t
@@ -21,6 +21,13 @@ module test_elements_doubles
    contains
       procedure :: status => recording_status
    end type recording_shaft_t
+
+   !> A shaft that claims to feed power in (supplies_power set by the test):
+   !> an input power that is not zero (its torques are the shaft's).
+   type, extends(shaft_t) :: powered_shaft_t
+   contains
+      procedure :: input_power => powered_input_power
+   end type powered_shaft_t
 
    !> A disk with a constant extra torque of 1 on it.
    type, extends(inertia_node_t) :: pushed_inertia_t
@@ -46,6 +53,12 @@ contains
       call self%shaft_t%status(thl, wl, thr, wr, disp, force, contact, pairs)
       force = 4.448_wp*force
    end subroutine recording_status
+
+   pure real(wp) function powered_input_power(self, thl, wl, thr, wr) result(p)
+      class(powered_shaft_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      p = 0.37_wp*self%k*(thl - thr)*(wl + 0.1_wp*wr)
+   end function powered_input_power
 
    pure subroutine pushed_derivatives(self, t, y, torque, dydt)
       class(pushed_inertia_t), intent(in) :: self
@@ -75,7 +88,7 @@ program test_elements
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
    use trainsim_el_shaft, only: shaft_t
    use trainsim_node_inertia, only: inertia_node_t
-   use test_elements_doubles, only: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t
+   use test_elements_doubles, only: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t, powered_shaft_t
    implicit none
 
    character(len=*), parameter :: two_disks = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
@@ -102,6 +115,7 @@ program test_elements
    call test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
    call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.false.)
    call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.true.)
+   call test_stage_energy_rates_are_the_full_rhs_own()
    call test_hot_forms_are_the_elements_own_arithmetic()
    call test_hot_form_follows_mode_changes()
    call test_guards_next_to_a_held_node_are_the_elements_own()
@@ -782,6 +796,94 @@ contains
       call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
       call check('init_modes refreshes it again', tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1))
    end subroutine test_hot_form_follows_mode_changes
+
+   !> The inner-stage kernel with energy tracking (`rhs_stage_energy`) sums the
+   !> nodes' power terms on a serial chain apart from the elements' and joins
+   !> them at the end only where that gives the same sums; else it adds them
+   !> again after the elements'. On chains that take each of its ways (no term
+   !> from an element or a node; only a node's; only an element's; both; an
+   !> element that feeds power in; a held node in the middle and at the end)
+   !> and on a branched train, at random states, its dy/dt (the dissipated and
+   !> the input power included) must be the full RHS's (which sums the
+   !> elements' terms, then the nodes', in one pass) to the bit.
+   subroutine test_stage_energy_rates_are_the_full_rhs_own()
+      integer, parameter :: n_case = 7
+      character(len=:), allocatable :: deck
+      character(len=60) :: what(n_case)
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), ds(:), df(:)
+      type(powered_shaft_t) :: ps
+      integer :: ic, p, i
+      logical :: same, nonzero
+      call test_begin('stage_energy_rates_are_the_full_rhs_own')
+      what = [character(len=60) :: 'chain, no dissipation (the rig''s way)', 'chain, a damped node only', &
+              'chain, a damped shaft only', 'chain, damped nodes and shaft, a clearance', &
+              'chain, an element feeding power in, damped nodes', 'chain, held nodes in the middle and at the end', &
+              'branched train (no chain)']
+      do ic = 1, n_case
+         deck = "&run t_end = 1e-3, dt = 1e-6, track_energy = .true. /"//nl// &
+                "&node id='a', type='inertia', inertia=1.0 /"//nl// &
+                "&node id='b', type='inertia', inertia=0.3"//merge(", damping=0.2", "             ", &
+                                                                   any(ic == [2, 4, 5]))//" /"//nl// &
+                "&node id='c', type='inertia', inertia=0.7"//merge(", damping=1.3e-3", "                ", &
+                                                                   any(ic == [4, 5]))//" /"//nl// &
+                "&node id='d', type='inertia', inertia=0.4"//merge(", damping=0.05", "              ", &
+                                                                   any(ic == [4, 5, 6]))//" /"//nl// &
+                "&node id='e', type='inertia', inertia=1.5 /"//nl// &
+                "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
+                "&element type='shaft', stiffness=2e3"//merge(", damping=0.1", "             ", any(ic == [3, 4, 7]))// &
+                ", left='b', right='c' /"//nl
+         if (ic == 4) then
+            deck = deck//"&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, "// &
+                   "left='c', right='d' /"//nl
+         else
+            deck = deck//"&element type='ideal_gear', stiffness=2e4, rb_driver=0.7, rb_driven=1.1, left='c', "// &
+                   "right='d' /"//nl
+         end if
+         if (ic == 7) then
+            deck = deck//"&element type='shaft', stiffness=3e3, left='c', right='e' /"//nl
+         else
+            deck = deck//"&element type='shaft', stiffness=3e3, left='d', right='e' /"//nl
+         end if
+         deck = deck//"&load node='a', quantity='speed', kind='constant', value=5.0 /"//nl// &
+                "&load node='b', value=0.5 /"//nl//"&load node='e', value=-3.0 /"//nl
+         if (ic == 6) deck = deck//"&load node='c', quantity='speed', kind='constant', value=-2.0 /"//nl// &
+                             "&load node='e', quantity='speed', kind='constant', value=1.5 /"//nl
+         call load_model_text(deck, m)
+         if (ic == 5) then
+            ! the shaft b-c feeds power in (an element asked through its procedures)
+            select type (sh => m%elements(2)%e)
+            type is (shaft_t)
+               ps%shaft_t = sh
+            end select
+            ps%supplies_power = .true.
+            deallocate (m%elements(2)%e)
+            allocate (m%elements(2)%e, source=ps)
+         end if
+         call m%initial_state(y)
+         allocate (ds(size(y)), df(size(y)))
+         same = .true.
+         nonzero = .true.
+         do p = 1, 25
+            do i = 1, m%n_states
+               y(i) = 0.01_wp*sin(1.7_wp*i + 0.61_wp*p) + merge(3.0_wp*cos(0.3_wp*p + i), 0.0_wp, mod(i, 2) == 0)
+            end do
+            call m%init_modes(0.1_wp*p, y)
+            ds = huge(1.0_wp)
+            df = -huge(1.0_wp)
+            call m%rhs_stage(0.1_wp*p, y, ds)
+            call m%rhs(0.1_wp*p, y, df)
+            same = same .and. all(ds == df)
+            ! the rates are not trivially zero (an input from the loads or a held node)
+            nonzero = nonzero .and. ds(m%n_states + 2) /= 0.0_wp
+         end do
+         call check(trim(what(ic))//': dy/dt and the energy rates to the bit the full RHS''s', same)
+         call check(trim(what(ic))//': the input power is not zero', nonzero)
+         if (ic == 1) call check(trim(what(ic))//': nothing dissipates', ds(m%n_states + 1) == 0.0_wp)
+         if (ic /= 1) call check(trim(what(ic))//': something dissipates', ds(m%n_states + 1) > 0.0_wp)
+         deallocate (ds, df)
+      end do
+   end subroutine test_stage_energy_rates_are_the_full_rhs_own
 
    !> Element 6 (a shaft) replaced by a recording_shaft_t with its parameters.
    subroutine swap_in_recording_shaft(m)

@@ -635,7 +635,9 @@ contains
 
    !> dy/dt at (t, y) as `model_rhs`, the same values bit for bit, for an
    !> integrator's inner stage, after which no one reads the workspace: a
-   !> simple model runs the kernel `rhs_stage_simple`, which stores nothing but
+   !> simple model runs the kernel `rhs_stage_simple` (with energy tracking
+   !> `rhs_stage_energy`, D-40: two kernels, each called once here, so that the
+   !> compiler inlines and compiles each apart), which stores nothing but
    !> dy/dt and the element torques (no node angles, speeds and torques, no
    !> element displacements and forces), and the workspace then holds nothing
    !> a caller may read (`ws_step_end` cleared). Other models run `model_rhs`.
@@ -649,10 +651,14 @@ contains
          call rhs_fast(self, t, y, dydt, .false.)
          return
       end if
-      call rhs_stage_simple(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
-                            self%elements, &
-                            self%el_torque, self%node_first, self%node_inc, t, y, dydt, self%run%track_energy, &
-                            self%n_states, self%chain .and. .not. self%run%track_energy)
+      if (self%run%track_energy) then
+         call rhs_stage_energy(size(self%fn), size(self%fe), size(self%fl), self%fn, self%fe, self%fh, self%fl, &
+                               self%elements, self%el_torque, self%node_first, self%node_inc, t, y, dydt, &
+                               self%n_states, self%chain)
+      else
+         call rhs_stage_simple(size(self%fn), size(self%fe), self%fn, self%fe, self%fh, self%elements, &
+                               self%el_torque, self%node_first, self%node_inc, t, y, dydt, self%chain)
+      end if
    end subroutine model_rhs_stage
 
    !> Whether an integrator may take a block of steps (D-38) in the current
@@ -847,10 +853,12 @@ contains
       real(wp), intent(inout) :: est, epot
       logical, intent(in) :: to_col   !< write the block's column (bd, bf, bt, bo)
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, ek
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, ek, ep
       pdiss = 0.0_wp
       pin = 0.0_wp
       tqc = fn(1)%load0
+      ek = 0.0_wp
+      ep = 0.0_wp
       do i = 1, nn
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
@@ -862,6 +870,13 @@ contains
          end if
          if (to_col) bo(i) = omega(i)
       end do
+      if (energy) then
+         ! the stored energy (model_workspace_energy's order): the kinetic
+         ! energies node by node, then (in the element loop) the elastic ones
+         do i = 1, nn
+            ek = ek + 0.5_wp*fn(i)%j*omega(i)**2                        ! (held: j its inertia)
+         end do
+      end if
       if (track) then
          do i = 1, nl
             l = fl(i)%node
@@ -959,6 +974,10 @@ contains
          end select
          et(2*i - 1) = tl
          et(2*i) = tr
+         if (energy) then          ! the elastic energies after the kinetic
+            ek = ek + pe(i)
+            ep = ep + pe(i)
+         end if
          if (to_col) then          ! the block's column (D-38)
             bd(i) = disp(i)
             bf(i) = force(i)
@@ -993,14 +1012,12 @@ contains
          end if
          return
       end if
-      ek = 0.0_wp
       do i = 1, nn
          tq = fn(i)%load0
          do k = first(i), first(i + 1) - 1
             tq = tq + et(inc(k))
          end do
          torque(i) = tq
-         if (energy) ek = ek + 0.5_wp*fn(i)%j*omega(i)**2                ! (held: j its inertia)
          if (fn(i)%kind == nk_plain) then
             o = fn(i)%off
             dydt(o + 1) = y(o + 2)                                         ! eq. (G.1)
@@ -1018,51 +1035,35 @@ contains
       dydt(ns + 1) = pdiss
       dydt(ns + 2) = pin
       if (.not. energy) return
-      epot = 0.0_wp
-      do i = 1, ne
-         ek = ek + pe(i)
-         epot = epot + pe(i)
-      end do
       est = ek
+      epot = ep
    end subroutine rhs_simple
 
-   !> `rhs_simple` for an inner stage (`model_rhs_stage`): the same values bit
-   !> for bit from the same operations in the same order, but only et and dydt
-   !> are stored; a node's angle and speed are read where they are used, from y
-   !> (a plain inertia) or by the expression `rhs_simple` stores (a held node).
-   !> About a tenth of the kernel's time on the Table 5.5 rig (issue 11).
-   subroutine rhs_stage_simple(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, track, ns, chain)
-      integer, intent(in) :: nn, ne, nl, ns
+   !> `rhs_simple` for an inner stage (`model_rhs_stage`) without energy
+   !> tracking: the same values bit for bit from the same operations in the
+   !> same order, but only et and dydt are stored; a node's angle and speed are
+   !> read where they are used, from y (a plain inertia) or by the expression
+   !> `rhs_simple` stores (a held node). About a tenth of the kernel's time on
+   !> the Table 5.5 rig (issue 11). With energy tracking: `rhs_stage_energy`.
+   subroutine rhs_stage_simple(nn, ne, fn, fe, fh, els, et, first, inc, t, y, dydt, chain)
+      integer, intent(in) :: nn, ne
       type(fast_node_t), intent(in) :: fn(nn)
       type(fast_element_t), intent(in) :: fe(ne)
       type(hot_form_t), intent(in) :: fh(ne)
-      type(fast_load_t), intent(in) :: fl(nl)
       type(element_slot_t), intent(in) :: els(ne)
       real(wp), intent(inout) :: et(2*ne)
       integer, intent(in) :: first(nn + 1), inc(2*ne)
       real(wp), intent(in) :: t
       real(wp), intent(in), contiguous :: y(:)            ! (model_rhs_stage's: no packing)
       real(wp), intent(inout), contiguous :: dydt(:)
-      logical, intent(in) :: track
-      !> The train is a serial chain (element i joins nodes i and i + 1) and
-      !> track is off: each node's torque is finished as soon as its right-hand
-      !> element is evaluated (load0 + tr of element i-1 + tl of element i, the
-      !> node_inc order), in a register (no store and reload of et on the path).
-      !> (With energy tracking the same, with the nodes' energy terms in a second
-      !> pass, measured no faster: not used.)
+      !> The train is a serial chain (element i joins nodes i and i + 1): each
+      !> node's torque is finished as soon as its right-hand element is
+      !> evaluated (load0 + tr of element i-1 + tl of element i, the node_inc
+      !> order), in a register (no store and reload of et on the path).
       logical, intent(in) :: chain
       integer :: i, l, r, o, k
-      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
-      pdiss = 0.0_wp
-      pin = 0.0_wp
+      real(wp) :: f, d, dv, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc
       tqc = fn(1)%load0
-      if (track) then
-         do i = 1, nl
-            l = fl(i)%node
-            if (fn(l)%kind == nk_held) cycle
-            pin = pin + fl(i)%v*y(fn(l)%off + 2)
-         end do
-      end if
       do i = 1, ne
          if (fe(i)%yl > 0) then
             thl = y(fe(i)%yl)
@@ -1095,12 +1096,10 @@ contains
             f = fe(i)%k*d + fe(i)%c*dv
             tl = -(f*fe(i)%r1)
             tr = f*fe(i)%r2
-            if (track) pdiss = pdiss + fe(i)%c*dv**2
          case (lf_open)                                                    ! a clearance open (D-35)
             f = 0.0_wp
             tl = -(f*fh(i)%r1)
             tr = f*fh(i)%r2
-            if (track) pdiss = pdiss + 0.0_wp
          case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
             ! hot_torques written out (a call costs more than the arithmetic)
             associate (h => fh(i))
@@ -1117,16 +1116,9 @@ contains
                fs = h%s*f
                tl = -(fs*h%r1)
                tr = fs*h%r2
-               if (track) pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
             end associate
          case default
-            if (track) then
-               call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
-               pdiss = pdiss + pw
-               if (els(i)%e%supplies_power) pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
-            else
-               call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
-            end if
+            call els(i)%e%torques(thl, wl, thr, wr, et(2*i - 1), et(2*i))
             tl = et(2*i - 1)
             tr = et(2*i)
          end select
@@ -1172,16 +1164,196 @@ contains
                dydt(o + 2) = tq/fn(i)%j                                      ! eq. (G.2), d = 0
             else
                dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j                 ! eq. (G.2)
-               if (track) pdiss = pdiss + fn(i)%d*y(o + 2)**2
             end if
-         else if (track) then
-            pin = pin - tq*fn(i)%w              ! the drive's torque (alpha = 0) times the speed
          end if
       end do
-      if (.not. track) return
+   end subroutine rhs_stage_simple
+
+   !> `rhs_stage_simple` with energy tracking: also the dissipated power pdiss
+   !> and the input power pin (dydt(ns + 1 : ns + 2)), bit for bit `rhs_simple`'s:
+   !> the same terms summed in the same order (the loads, the elements, the
+   !> nodes). A kernel of its own (D-40): sharing one with the energy-off stage
+   !> made the compiler's code for that path slower (measured, benchmarks.md).
+   !> On a serial chain the nodes' dy/dt come from registers as there, and so
+   !> do their power terms, summed apart (pdn; pinc from the loads' sum on) and
+   !> joined at the end where that gives the same sums: pin = pinc if no
+   !> element supplies power, pdiss = pdn if no element dissipates; else the
+   !> nodes' terms are added again in a pass of their own (a held node's torque
+   !> summed from et in the node_inc order, as the general node loop sums it).
+   subroutine rhs_stage_energy(nn, ne, nl, fn, fe, fh, fl, els, et, first, inc, t, y, dydt, ns, chain)
+      integer, intent(in) :: nn, ne, nl, ns
+      type(fast_node_t), intent(in) :: fn(nn)
+      type(fast_element_t), intent(in) :: fe(ne)
+      type(hot_form_t), intent(in) :: fh(ne)
+      type(fast_load_t), intent(in) :: fl(nl)
+      type(element_slot_t), intent(in) :: els(ne)
+      real(wp), intent(inout) :: et(2*ne)
+      integer, intent(in) :: first(nn + 1), inc(2*ne)
+      real(wp), intent(in) :: t
+      real(wp), intent(in), contiguous :: y(:)            ! (model_rhs_stage's: no packing)
+      real(wp), intent(inout), contiguous :: dydt(:)
+      logical, intent(in) :: chain   !< as in `rhs_stage_simple`
+      integer :: i, l, r, o, k
+      real(wp) :: f, d, dv, pdiss, pin, pw, tq, thl, wl, thr, wr, p, pdot, fs, tl, tr, tqc, pdn, pinc
+      logical :: el_d, el_p, nd_d   ! a term from an element in pdiss, in pin; from a node in pdn
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      pdn = 0.0_wp
+      el_d = .false.
+      el_p = .false.
+      nd_d = .false.
+      tqc = fn(1)%load0
+      do i = 1, nl
+         l = fl(i)%node
+         if (fn(l)%kind == nk_held) cycle
+         pin = pin + fl(i)%v*y(fn(l)%off + 2)
+      end do
+      pinc = pin
+      do i = 1, ne
+         if (fe(i)%yl > 0) then
+            thl = y(fe(i)%yl)
+            wl = y(fe(i)%yl + 1)
+         else                                   ! held at a constant speed
+            l = fe(i)%l
+            thl = fn(l)%theta0 + fn(l)%w*t
+            wl = fn(l)%w
+         end if
+         if (fe(i)%yr > 0) then
+            thr = y(fe(i)%yr)
+            wr = y(fe(i)%yr + 1)
+         else
+            r = fe(i)%r
+            thr = fn(r)%theta0 + fn(r)%w*t
+            wr = fn(r)%w
+         end if
+         select case (fe(i)%form)
+         case (lf_unit)                                                    ! eq. (H.1), c = 0
+            f = fe(i)%k*(thl - thr)
+            tl = -f
+            tr = f
+         case (lf_undamped)                                                ! eq. (H.15)
+            f = fe(i)%k*(fe(i)%r1*thl - fe(i)%r2*thr)
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
+         case (lf_general)
+            dv = fe(i)%r1*wl - fe(i)%r2*wr
+            d = fe(i)%r1*thl - fe(i)%r2*thr
+            f = fe(i)%k*d + fe(i)%c*dv
+            tl = -(f*fe(i)%r1)
+            tr = f*fe(i)%r2
+            pdiss = pdiss + fe(i)%c*dv**2
+            el_d = .true.
+         case (lf_open)                                                    ! a clearance open (D-35)
+            f = 0.0_wp
+            tl = -(f*fh(i)%r1)
+            tr = f*fh(i)%r2
+            pdiss = pdiss + 0.0_wp
+            el_d = .true.
+         case (lf_yang_sun, lf_cl_linear)                                  ! a clearance closed (D-35)
+            associate (h => fh(i))
+               d = h%r1*thl - h%r2*thr
+               dv = h%r1*wl - h%r2*wr
+               p = h%s*d - h%b
+               pdot = h%s*dv
+               if (fe(i)%form == lf_yang_sun) then
+                  f = h%c*(h%k*p + h%dmp*p*pdot)                           ! eqs. (3.18)-(3.19)
+               else
+                  f = h%c*(h%k*p) + h%dmp*pdot
+               end if
+               if (h%no_tension) f = max(f, 0.0_wp)
+               fs = h%s*f
+               tl = -(fs*h%r1)
+               tr = fs*h%r2
+               pdiss = pdiss + (h%s*fs - h%c*(h%k*p))*pdot
+            end associate
+            el_d = .true.
+         case default
+            call els(i)%e%torques_dissipation(thl, wl, thr, wr, et(2*i - 1), et(2*i), pw)
+            pdiss = pdiss + pw
+            el_d = .true.
+            if (els(i)%e%supplies_power) then
+               pin = pin + els(i)%e%input_power(thl, wl, thr, wr)
+               el_p = .true.
+            end if
+            tl = et(2*i - 1)
+            tr = et(2*i)
+         end select
+         et(2*i - 1) = tl
+         et(2*i) = tr
+         if (chain) then
+            ! node i is done (as in rhs_stage_simple), and its power terms
+            tq = tqc + tl
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+                  pdn = pdn + fn(i)%d*y(o + 2)**2
+                  nd_d = .true.
+               end if
+            else
+               pinc = pinc - tq*fn(i)%w         ! the drive's torque (alpha = 0) times the speed
+            end if
+            tqc = fn(i + 1)%load0 + tr
+         end if
+      end do
+      if (chain) then
+         if (fn(nn)%kind == nk_plain) then
+            o = fn(nn)%off
+            dydt(o + 1) = y(o + 2)
+            if (fn(nn)%d == 0.0_wp) then
+               dydt(o + 2) = tqc/fn(nn)%j
+            else
+               dydt(o + 2) = (tqc - fn(nn)%d*y(o + 2))/fn(nn)%j
+               pdn = pdn + fn(nn)%d*y(o + 2)**2
+               nd_d = .true.
+            end if
+         else
+            pinc = pinc - tqc*fn(nn)%w
+         end if
+         if (.not. el_p) pin = pinc                 ! the loads' terms, then the nodes'
+         if (nd_d) then
+            if (.not. el_d) pdiss = pdn             ! (0 + the nodes' terms)
+         end if
+         if (el_p .or. (nd_d .and. el_d)) then
+            ! both an element's and a node's terms: the nodes' again, after the elements'
+            do i = 1, nn
+               if (fn(i)%kind == nk_plain) then
+                  if (fn(i)%d /= 0.0_wp .and. el_d) pdiss = pdiss + fn(i)%d*y(fn(i)%off + 2)**2
+               else if (el_p) then
+                  tq = fn(i)%load0
+                  do k = first(i), first(i + 1) - 1
+                     tq = tq + et(inc(k))
+                  end do
+                  pin = pin - tq*fn(i)%w
+               end if
+            end do
+         end if
+      else
+         do i = 1, nn
+            tq = fn(i)%load0
+            do k = first(i), first(i + 1) - 1
+               tq = tq + et(inc(k))
+            end do
+            if (fn(i)%kind == nk_plain) then
+               o = fn(i)%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               if (fn(i)%d == 0.0_wp) then
+                  dydt(o + 2) = tq/fn(i)%j                                   ! eq. (G.2), d = 0
+               else
+                  dydt(o + 2) = (tq - fn(i)%d*y(o + 2))/fn(i)%j              ! eq. (G.2)
+                  pdiss = pdiss + fn(i)%d*y(o + 2)**2
+               end if
+            else
+               pin = pin - tq*fn(i)%w           ! the drive's torque (alpha = 0) times the speed
+            end if
+         end do
+      end if
       dydt(ns + 1) = pdiss
       dydt(ns + 2) = pin
-   end subroutine rhs_stage_simple
+   end subroutine rhs_stage_energy
 
    !> Torques of element i on its left and right node at the kinematics in the
    !> workspace (after `kinematics`): the hot path for linear springs.
