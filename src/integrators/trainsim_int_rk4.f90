@@ -1270,23 +1270,29 @@ contains
             self%ynew(self%sl(q)) = y(self%sl(q))
          end do
       end if
-      ! the end of the step: outside L the unsplit step's, L its own
+      ! the end of the step: outside L the unsplit step's, L its own (assembled
+      ! in mynew, which then becomes ynew: the step's end, as after a plain step)
       do q = 1, self%n_sl
-         self%ys(self%sl(q)) = self%ynew(self%sl(q))
+         self%mynew(self%sl(q)) = self%ynew(self%sl(q))
       end do
+      if (track) self%mynew(nst + 1:nst + 2) = self%mynew(nst + 1:nst + 2) - (self%mh/6.0_wp)*(self%pr(:, 1) + &
+                                               2.0_wp*(self%pr(:, 2) + self%pr(:, 3)) + self%pr(:, 4)) + self%e_acc + &
+                                               self%pw_full + self%e_book
       y = self%mynew
-      do q = 1, self%n_sl
-         y(self%sl(q)) = self%ys(self%sl(q))
-      end do
-      if (track) y(nst + 1:nst + 2) = y(nst + 1:nst + 2) - (self%mh/6.0_wp)*(self%pr(:, 1) + &
-                                      2.0_wp*(self%pr(:, 2) + self%pr(:, 3)) + self%pr(:, 4)) + self%e_acc + &
-                                      self%pw_full + self%e_book
+      call move_alloc(self%ynew, swap); call move_alloc(self%mynew, self%ynew); call move_alloc(swap, self%mynew)
       self%mr_on = .false.
       t = self%mt1
       if (t >= self%mt_grid - self%tiny_t) then
          t = self%mt_grid
          call self%count_grid_step()
       end if
+      ! the RHS at the step's end, as after a plain step (`advance`): the next
+      ! step's first stage, and the workspace the observer reads (its short way)
+      call model%rhs_step_end(t, y, self%k1)
+      self%stats%rhs_evals = self%stats%rhs_evals + 1
+      model%ws_step_end = .true.
+      self%k1_next = .true.
+      self%t_k1 = t
       status = adv_step
       if (t >= t_goal - self%tiny_t) status = adv_reached
    contains
