@@ -96,6 +96,12 @@ module trainsim_int_rk4
       real(wp) :: pk1(2) = 0.0_wp, pw_step(2) = 0.0_wp, pw_full(2) = 0.0_wp
       real(wp) :: e_acc(2) = 0.0_wp, e_book(2) = 0.0_wp, e_shown(2) = 0.0_wp
       integer(i8) :: mr_steps = 0, mr_events = 0, mr_collapses = 0, mr_node_rhs = 0   !< diagnostics
+      !> The guard elements outside L that may be below zero somewhere on the
+      !> unsplit step's dense output (`mr_far_list`, made at the step's first
+      !> local event instant, far_done): the only ones checked at its instants.
+      integer, allocatable :: far(:)
+      integer :: n_far = 0
+      logical :: far_done = .false.
       !> k1 holds f(t_k1, ynew), evaluated at the end of the last plain step (the
       !> next step's first stage; used if the model's workspace is still that
       !> evaluation's, i.e. nothing changed the modes or the state since).
@@ -809,7 +815,9 @@ contains
       self%depth = huge(1)
       allocate (self%stack(4*nn + 4), self%l_nodes(nn), self%b_nodes(nn), self%kin(nn), self%els(ne), self%gels(ne), &
                 self%in_els(ne))
-      allocate (self%sl(n), self%sb(n))
+      allocate (self%sl(n), self%sb(n), self%far(ne))
+      self%n_far = 0
+      self%far_done = .false.
       allocate (self%my0(n), self%mk1(n), self%md2(n), self%md3(n), self%md4(n), self%mynew(n), self%yc(n))
       self%n_l = 0; self%n_b = 0; self%n_kin = 0; self%n_els = 0; self%n_gels = 0; self%n_sl = 0; self%n_sb = 0
       self%n_in = 0
@@ -935,6 +943,7 @@ contains
       call move_alloc(self%ynew, swap); call move_alloc(self%mynew, self%ynew); call move_alloc(swap, self%mynew)
       self%e_acc = 0.0_wp; self%e_book = 0.0_wp; self%pr = 0.0_wp
       self%mr_steps = self%mr_steps + 1
+      self%far_done = .false.
       if (.not. model%run%track_energy) return
       ! the energy rates of L's terms (elements with a node in L, nodes of L, their
       ! loads) at the four stages of the unsplit step, to be replaced by L's own
@@ -1024,6 +1033,38 @@ contains
          nodes => null(); states => null(); els => null(); gels => null()
       end if
    end function rk4_local_instant
+
+   !> The guard elements outside L whose guards may be below zero somewhere on
+   !> the unsplit step's dense output, into far(1:n_far): all but those whose
+   !> guards read two angles (`guard_angles`) and stay above zero for any
+   !> angles within the dense output's reach over the whole step
+   !> (`guard_floor`). The dense output of a state is y0 + h (b1 k1 + b2 (d2 +
+   !> d3) + b4 d4) with 0 <= b1 <= 5/24, 0 <= b2 <= 1/3, -1/24 <= b4 <= 1/6 on
+   !> [0, 1]: within y0 +- h (0.21 |k1| + 0.34 (|d2| + |d3|) + 0.17 |d4|). The
+   !> check at an instant is then that of every outside element, as the skipped
+   !> ones cannot be below zero there.
+   subroutine mr_far_list(self, model)
+      type(rk4_t), intent(inout) :: self
+      type(model_t), intent(in) :: model
+      integer :: j, ne, il, ir
+      real(wp) :: rl, rr
+      self%n_far = 0
+      self%far_done = .true.
+      do j = 1, self%ng
+         ne = self%g_el(j)
+         if (self%gel_in(ne) .or. self%g_loc(j) /= 1) cycle
+         call model%guard_angles(ne, il, ir)
+         if (il > 0) then
+            rl = self%mh*(0.21_wp*abs(self%mk1(il)) + 0.34_wp*(abs(self%md2(il)) + abs(self%md3(il))) + &
+                          0.17_wp*abs(self%md4(il)))
+            rr = self%mh*(0.21_wp*abs(self%mk1(ir)) + 0.34_wp*(abs(self%md2(ir)) + abs(self%md3(ir))) + &
+                          0.17_wp*abs(self%md4(ir)))
+            if (model%guard_floor(ne, self%my0(il), rl, self%my0(ir), rr) > 0.0_wp) cycle
+         end if
+         self%n_far = self%n_far + 1
+         self%far(self%n_far) = ne
+      end do
+   end subroutine mr_far_list
 
    !> ys = the end of L's step (L's and B's states) in a local event step.
    subroutine mr_end_copy(self)
@@ -1233,11 +1274,11 @@ contains
             ! a guard outside L below zero on the dense output (it dips inside the
             ! step): the state shown becomes the state, the local step ends here
             if (self%y_partial) then
-               ! the guard elements outside L (none has a node in L): their nodes'
-               ! states on the dense output, their guards
-               do j = 1, self%ng
-                  ne = self%g_el(j)
-                  if (self%gel_in(ne) .or. self%g_loc(j) /= 1) cycle
+               ! the guard elements outside L (none has a node in L) that may be
+               ! below zero on the dense output: their nodes' states there, their guards
+               if (.not. self%far_done) call mr_far_list(self, model)
+               do j = 1, self%n_far
+                  ne = self%far(j)
                   do k = 1, 3, 2
                      do i = self%el_states(k, ne), self%el_states(k + 1, ne)
                         y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
