@@ -1054,14 +1054,12 @@ contains
          integer, intent(in) :: nodes(:)
          integer, intent(inout) :: st(:)
          integer, intent(out) :: ns
-         integer :: a, o, b
+         integer :: a, b
          ns = 0
          do a = 1, size(nodes)
-            if (model%is_held(nodes(a))) cycle
-            o = model%nodes(nodes(a))%n%offset
-            do b = 1, model%nodes(nodes(a))%n%nstates()
+            do b = self%ns_range(1, nodes(a)), self%ns_range(2, nodes(a))   ! (none for a held node)
                ns = ns + 1
-               st(ns) = o + b
+               st(ns) = b
             end do
          end do
       end subroutine states
