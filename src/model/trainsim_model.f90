@@ -1239,7 +1239,15 @@ contains
          associate (e => self%fe(i))
             l = e%l
             r = e%r
-            if (e%linear) then
+            if (e%form == lf_unit) then                                    ! (rhs_simple's forms: the same values)
+               f = e%k*(self%theta(l) - self%theta(r))
+               tl = -f
+               tr = f
+            else if (e%form == lf_undamped) then
+               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r))
+               tl = -(f*e%r1)
+               tr = f*e%r2
+            else if (e%linear) then
                f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
                tl = -(f*e%r1)
                tr = f*e%r2
