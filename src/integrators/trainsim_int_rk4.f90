@@ -1233,6 +1233,10 @@ contains
       integer :: k, e, nd, side, i
       self%cur_c = c
       self%n_cn = 0; self%n_ce = 0; self%n_ck = 0; self%n_csl = 0; self%n_csb = 0
+      if (self%stamp == huge(1)) then   ! (after 2^31 lists: marks start again)
+         self%mark = 0
+         self%stamp = 0
+      end if
       self%stamp = self%stamp + 1
       do k = 1, self%n_l
          nd = self%l_nodes(k)
