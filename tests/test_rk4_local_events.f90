@@ -11,7 +11,10 @@
 !> - the error falls like dt^4 (order 4 kept: halving dt divides it by >= 10);
 !> - the energy ledger closes to the same order as on the global path;
 !> - the local path is taken on the long chain (no whole-train RHS beyond the
-!>   4 per step) and never on a train where the region is not a small part.
+!>   4 per step) and never on a train where the region is not a small part;
+!> - the guard floor (`model_t%guard_floor`, with which a local step skips the
+!>   guard elements outside its region that cannot fire) is a lower bound of
+!>   the guards over its box of angles, and a tight one.
 program test_rk4_local_events
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
@@ -40,6 +43,7 @@ program test_rk4_local_events
    call rattling_chain()
    call coarse_chain()
    call small_trains_stay_global()
+   call guard_floor_bound()
    call suite_end()
 
 contains
@@ -369,4 +373,70 @@ contains
       call check('bit for bit the global path', same_events(a, b) .and. all(a%y == b%y) .and. &
                  all(a%ev_t(1:a%nev) == b%ev_t(1:b%nev)))
    end subroutine small_trains_stay_global
+   !> `guard_floor`: for a gear in each of its modes (free, contact on either
+   !> face), over boxes of angles that do and do not reach a guard's zero, the
+   !> floor is at most the least guard over the box and within 1e-9 of it (the
+   !> guards are linear in the two angles: their least value over a box is at
+   !> a corner).
+   subroutine guard_floor_bound()
+      type(model_t) :: m
+      real(wp), allocatable :: y(:)
+      real(wp), parameter :: radii(4) = [0.0_wp, 4.0e-4_wp, 1.5e-3_wp, 3.0e-3_wp]
+      real(wp), parameter :: shifts(3) = [0.0_wp, 6.0e-4_wp, -1.3e-3_wp]
+      integer :: gears(3), k, e, il, ir, a, b, c, d, kk, n_cases, n_pos, n_neg, n_contact
+      real(wp) :: thl, thr, rl, rr, fl, exact, worst_over, worst_gap
+      logical :: rows
+      gears = [10, 20, 30]
+      ! e20 (nodes 20, 21) starts pressed on one face, e30 (nodes 30, 31) on the other
+      call load_model_text(chain_deck(40, gears, 1.0_wp, 1.0e-3_wp)//new_line('a')// &
+                           "&initial node = 'n21', angle = 2.0e-3 /"//new_line('a')// &
+                           "&initial node = 'n30', angle = 2.0e-3 /", m)
+      call m%initial_state(y)
+      call m%init_modes(m%run%t_start, y)
+      n_cases = 0; n_pos = 0; n_neg = 0; n_contact = 0
+      worst_over = -huge(1.0_wp); worst_gap = 0.0_wp
+      rows = .true.
+      do k = 1, size(gears)
+         e = gears(k)
+         call m%guard_angles(e, il, ir)
+         if (il == 0) then
+            rows = .false.
+            cycle
+         end if
+         if (m%angle_guard(e, 1, y(il), y(ir)) == 1.0_wp .or. m%angle_guard(e, 2, y(il), y(ir)) == 1.0_wp) &
+            n_contact = n_contact + 1
+         do a = 1, size(shifts)
+            do b = 1, size(radii)
+               do c = 1, size(radii)
+                  thl = y(il) + shifts(a)
+                  thr = y(ir) - 0.5_wp*shifts(a)
+                  rl = radii(b)
+                  rr = radii(c)
+                  fl = m%guard_floor(e, thl, rl, thr, rr)
+                  exact = huge(1.0_wp)
+                  do d = 0, 3
+                     do kk = 1, m%elements(e)%e%n_guards()
+                        exact = min(exact, m%angle_guard(e, kk, thl + merge(rl, -rl, mod(d, 2) == 1), &
+                                                         thr + merge(rr, -rr, d >= 2)))
+                     end do
+                  end do
+                  n_cases = n_cases + 1
+                  if (exact > 0.0_wp) n_pos = n_pos + 1
+                  if (exact < 0.0_wp) n_neg = n_neg + 1
+                  worst_over = max(worst_over, fl - exact)
+                  worst_gap = max(worst_gap, exact - fl)
+               end do
+            end do
+         end do
+      end do
+      write (*, '(a,i0,a,i0,a,i0,a,es10.2,a,es10.2)') '    guard floor: ', n_cases, ' boxes (', n_pos, &
+         ' with every guard above zero, ', n_neg, ' reaching below); floor - least guard <= ', worst_over, &
+         ', least guard - floor <= ', worst_gap
+      call test_begin('guard floor: a tight lower bound of the guards over a box of angles')
+      call check('the gears have guard rows', rows)
+      call check('free and pressed gears (two in contact)', n_contact == 2)
+      call check('boxes on both sides of zero', n_pos > 10 .and. n_neg > 10)
+      call check('the floor is at most the least guard', worst_over <= 0.0_wp)
+      call check('the floor is within 1e-9 of the least guard', worst_gap <= 1.0e-9_wp)
+   end subroutine guard_floor_bound
 end program test_rk4_local_events

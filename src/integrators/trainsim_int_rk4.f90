@@ -96,6 +96,20 @@ module trainsim_int_rk4
       real(wp) :: pk1(2) = 0.0_wp, pw_step(2) = 0.0_wp, pw_full(2) = 0.0_wp
       real(wp) :: e_acc(2) = 0.0_wp, e_book(2) = 0.0_wp, e_shown(2) = 0.0_wp
       integer(i8) :: mr_steps = 0, mr_events = 0, mr_collapses = 0, mr_node_rhs = 0   !< diagnostics
+      !> The guard elements outside L that may be below zero somewhere on the
+      !> unsplit step's dense output (`mr_far_list`, made at the step's first
+      !> local event instant, far_done): the only ones checked at its instants.
+      integer, allocatable :: far(:)
+      integer :: n_far = 0
+      logical :: far_done = .false.
+      !> The connected parts (components) of L: comp(node) for the nodes of L
+      !> (`mr_begin`); the lists of component cur_c (`mr_comp_lists`): its nodes
+      !> (cn), elements with a node in it (ce), those nodes and their neighbours
+      !> outside L (ck), their states (csl: of cn, csb: of the neighbours).
+      !> A trial step of event location is taken on the event's component alone.
+      integer, allocatable :: comp(:), ns_range(:, :), mark(:)
+      integer, allocatable :: cn(:), ce(:), ck(:), csl(:), csb(:)
+      integer :: n_comp = 0, cur_c = 0, n_cn = 0, n_ce = 0, n_ck = 0, n_csl = 0, n_csb = 0, stamp = 0
       !> k1 holds f(t_k1, ynew), evaluated at the end of the last plain step (the
       !> next step's first stage; used if the model's workspace is still that
       !> evaluation's, i.e. nothing changed the modes or the state since).
@@ -638,10 +652,16 @@ contains
          ! a local event step: L's step map
          if (s == self%h_loc) then
             call mr_end_copy(self)
+         else if (self%n_comp > 1) then
+            ! the guard's component of L alone (its states bit for bit those of
+            ! L's step: the components do not see each other); refine then
+            ! takes L's step to the located time
+            call mr_comp_step(self, model, y, self%g_el(j), s)
+            self%on_part = .true.
          else
             call self%mr_step(model, y, s)
          end if
-         ! (ys holds all of L's step: refine may keep it)
+         ! (ys holds all of L's step unless on_part: refine may keep it)
       else if (s == self%h_loc) then
          self%ys = self%ynew
       else if (self%part(self%g_el(j))%used) then
@@ -811,7 +831,19 @@ contains
       self%depth = huge(1)
       allocate (self%stack(4*nn + 4), self%l_nodes(nn), self%b_nodes(nn), self%kin(nn), self%els(ne), self%gels(ne), &
                 self%in_els(ne))
-      allocate (self%sl(n), self%sb(n))
+      allocate (self%sl(n), self%sb(n), self%far(ne))
+      allocate (self%comp(nn), self%ns_range(2, nn), self%mark(nn), self%cn(nn), self%ce(ne), self%ck(nn), &
+                self%csl(n), self%csb(n))
+      self%comp = 0; self%mark = 0; self%stamp = 0; self%n_comp = 0; self%cur_c = 0
+      do i = 1, nn
+         self%ns_range(1, i) = 1   ! (1:0): a held node has no states
+         self%ns_range(2, i) = 0
+         if (model%is_held(i)) cycle
+         self%ns_range(1, i) = model%nodes(i)%n%offset + 1
+         self%ns_range(2, i) = model%nodes(i)%n%offset + model%nodes(i)%n%nstates()
+      end do
+      self%n_far = 0
+      self%far_done = .false.
       allocate (self%my0(n), self%mk1(n), self%md2(n), self%md3(n), self%md4(n), self%mynew(n), self%yc(n))
       self%n_l = 0; self%n_b = 0; self%n_kin = 0; self%n_els = 0; self%n_gels = 0; self%n_sl = 0; self%n_sb = 0
       self%n_in = 0
@@ -925,6 +957,33 @@ contains
       end do
       call states(self%l_nodes(1:self%n_l), self%sl, self%n_sl)
       call states(self%b_nodes(1:self%n_b), self%sb, self%n_sb)
+      ! the components of L (joined by elements with both nodes in L)
+      do k = 1, self%n_l
+         self%comp(self%l_nodes(k)) = 0
+      end do
+      self%n_comp = 0
+      self%cur_c = 0
+      do k = 1, self%n_l
+         if (self%comp(self%l_nodes(k)) /= 0) cycle
+         self%n_comp = self%n_comp + 1
+         self%comp(self%l_nodes(k)) = self%n_comp
+         top = 1
+         self%stack(1) = self%l_nodes(k)
+         do while (top > 0)
+            nd = self%stack(top)
+            top = top - 1
+            do q = self%adj_first(nd), self%adj_first(nd + 1) - 1
+               e2 = self%adj_list(q)
+               other = self%el_nodes(1, e2)
+               if (other == nd) other = self%el_nodes(2, e2)
+               if (.not. self%in_l(other)) cycle
+               if (self%comp(other) /= 0) cycle
+               self%comp(other) = self%n_comp
+               top = top + 1
+               self%stack(top) = other
+            end do
+         end do
+      end do
       ok = .true.
       ! keep the unsplit step: start, stages (swapped, not copied), end
       self%mr_on = .true.
@@ -937,6 +996,7 @@ contains
       call move_alloc(self%ynew, swap); call move_alloc(self%mynew, self%ynew); call move_alloc(swap, self%mynew)
       self%e_acc = 0.0_wp; self%e_book = 0.0_wp; self%pr = 0.0_wp
       self%mr_steps = self%mr_steps + 1
+      self%far_done = .false.
       if (.not. model%run%track_energy) return
       ! the energy rates of L's terms (elements with a node in L, nodes of L, their
       ! loads) at the four stages of the unsplit step, to be replaced by L's own
@@ -996,14 +1056,12 @@ contains
          integer, intent(in) :: nodes(:)
          integer, intent(inout) :: st(:)
          integer, intent(out) :: ns
-         integer :: a, o, b
+         integer :: a, b
          ns = 0
          do a = 1, size(nodes)
-            if (model%is_held(nodes(a))) cycle
-            o = model%nodes(nodes(a))%n%offset
-            do b = 1, model%nodes(nodes(a))%n%nstates()
+            do b = self%ns_range(1, nodes(a)), self%ns_range(2, nodes(a))   ! (none for a held node)
                ns = ns + 1
-               st(ns) = o + b
+               st(ns) = b
             end do
          end do
       end subroutine states
@@ -1026,6 +1084,38 @@ contains
          nodes => null(); states => null(); els => null(); gels => null()
       end if
    end function rk4_local_instant
+
+   !> The guard elements outside L whose guards may be below zero somewhere on
+   !> the unsplit step's dense output, into far(1:n_far): all but those whose
+   !> guards read two angles (`guard_angles`) and stay above zero for any
+   !> angles within the dense output's reach over the whole step
+   !> (`guard_floor`). The dense output of a state is y0 + h (b1 k1 + b2 (d2 +
+   !> d3) + b4 d4) with 0 <= b1 <= 5/24, 0 <= b2 <= 1/3, -1/24 <= b4 <= 1/6 on
+   !> [0, 1]: within y0 +- h (0.21 |k1| + 0.34 (|d2| + |d3|) + 0.17 |d4|). The
+   !> check at an instant is then that of every outside element, as the skipped
+   !> ones cannot be below zero there.
+   subroutine mr_far_list(self, model)
+      type(rk4_t), intent(inout) :: self
+      type(model_t), intent(in) :: model
+      integer :: j, ne, il, ir
+      real(wp) :: rl, rr
+      self%n_far = 0
+      self%far_done = .true.
+      do j = 1, self%ng
+         ne = self%g_el(j)
+         if (self%gel_in(ne) .or. self%g_loc(j) /= 1) cycle
+         call model%guard_angles(ne, il, ir)
+         if (il > 0) then
+            rl = self%mh*(0.21_wp*abs(self%mk1(il)) + 0.34_wp*(abs(self%md2(il)) + abs(self%md3(il))) + &
+                          0.17_wp*abs(self%md4(il)))
+            rr = self%mh*(0.21_wp*abs(self%mk1(ir)) + 0.34_wp*(abs(self%md2(ir)) + abs(self%md3(ir))) + &
+                          0.17_wp*abs(self%md4(ir)))
+            if (model%guard_floor(ne, self%my0(il), rl, self%my0(ir), rr) > 0.0_wp) cycle
+         end if
+         self%n_far = self%n_far + 1
+         self%far(self%n_far) = ne
+      end do
+   end subroutine mr_far_list
 
    !> ys = the end of L's step (L's and B's states) in a local event step.
    subroutine mr_end_copy(self)
@@ -1061,17 +1151,26 @@ contains
       class(rk4_t), intent(inout) :: self
       real(wp), intent(inout) :: v(:)
       real(wp), intent(in) :: t
+      call mr_bnd_on(self, v, t, self%sb(1:self%n_sb))
+   end subroutine rk4_mr_bnd
+
+   !> `mr_bnd` for the states sb of B.
+   subroutine mr_bnd_on(self, v, t, sb)
+      type(rk4_t), intent(inout) :: self
+      real(wp), intent(inout) :: v(:)
+      real(wp), intent(in) :: t
+      integer, intent(in) :: sb(:)
       real(wp) :: th, b1, b2, b4
       integer :: q, i
       th = (t - self%mt0)/self%mh
       b1 = th*(1.0_wp - th*(1.5_wp - th*(2.0_wp/3.0_wp)))
       b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
       b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
-      do q = 1, self%n_sb
-         i = self%sb(q)
+      do q = 1, size(sb)
+         i = sb(q)
          v(i) = self%my0(i) + self%mh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
       end do
-   end subroutine rk4_mr_bnd
+   end subroutine mr_bnd_on
 
    !> dy/dt of L's states at (t, v) (v holds L and B), and with energy tracking
    !> the energy rates of L's terms.
@@ -1127,6 +1226,102 @@ contains
       end do
       self%pw_step = h6*(self%pk1 + 2.0_wp*(p2 + p3) + p4)
    end subroutine rk4_mr_step
+
+   !> The lists of L's component c (cn, ce, ck, csl, csb; in the order of L's
+   !> lists, so that each node's torque sums its elements in the same order).
+   subroutine mr_comp_lists(self, c)
+      type(rk4_t), intent(inout) :: self
+      integer, intent(in) :: c
+      integer :: k, e, nd, side, i
+      self%cur_c = c
+      self%n_cn = 0; self%n_ce = 0; self%n_ck = 0; self%n_csl = 0; self%n_csb = 0
+      if (self%stamp == huge(1)) then   ! (after 2^31 lists: marks start again)
+         self%mark = 0
+         self%stamp = 0
+      end if
+      self%stamp = self%stamp + 1
+      do k = 1, self%n_l
+         nd = self%l_nodes(k)
+         if (self%comp(nd) /= c) cycle
+         self%n_cn = self%n_cn + 1
+         self%cn(self%n_cn) = nd
+         self%n_ck = self%n_ck + 1
+         self%ck(self%n_ck) = nd
+         do i = self%ns_range(1, nd), self%ns_range(2, nd)
+            self%n_csl = self%n_csl + 1
+            self%csl(self%n_csl) = i
+         end do
+      end do
+      do k = 1, self%n_els
+         e = self%els(k)
+         if (.not. (in_c(self%el_nodes(1, e)) .or. in_c(self%el_nodes(2, e)))) cycle
+         self%n_ce = self%n_ce + 1
+         self%ce(self%n_ce) = e
+         do side = 1, 2
+            nd = self%el_nodes(side, e)
+            if (self%in_l(nd) .or. self%mark(nd) == self%stamp) cycle
+            self%mark(nd) = self%stamp
+            self%n_ck = self%n_ck + 1
+            self%ck(self%n_ck) = nd
+            do i = self%ns_range(1, nd), self%ns_range(2, nd)
+               self%n_csb = self%n_csb + 1
+               self%csb(self%n_csb) = i
+            end do
+         end do
+      end do
+   contains
+      logical function in_c(n)
+         integer, intent(in) :: n
+         in_c = .false.
+         if (self%in_l(n)) in_c = self%comp(n) == c
+      end function in_c
+   end subroutine mr_comp_lists
+
+   !> A trial step of event location on the component of L that holds element
+   !> e: `mr_step` for its states alone (the same values bit for bit: a node's
+   !> derivative reads its own and its neighbours' states, all in the component
+   !> or its boundary), into ys; no energy rates (pw_step unchanged).
+   subroutine mr_comp_step(self, model, y, e, s)
+      type(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:), s
+      integer, intent(in) :: e
+      real(wp) :: hh, h6, t
+      integer :: q, i
+      if (self%comp(self%el_nodes(1, e)) /= self%cur_c) call mr_comp_lists(self, self%comp(self%el_nodes(1, e)))
+      associate (csl => self%csl(1:self%n_csl), csb => self%csb(1:self%n_csb), ck => self%ck(1:self%n_ck), &
+                 ce => self%ce(1:self%n_ce), cn => self%cn(1:self%n_cn))
+         t = self%t_loc
+         hh = 0.5_wp*s
+         do q = 1, size(csl)
+            i = csl(q)
+            self%ytmp(i) = y(i) + hh*self%k1(i)
+         end do
+         call mr_bnd_on(self, self%ytmp, t + hh, csb)
+         call model%rhs_part(t + hh, self%ytmp, self%k2, ck, ce, cn)
+         do q = 1, size(csl)
+            i = csl(q)
+            self%ytmp(i) = y(i) + hh*self%k2(i)
+         end do
+         call model%rhs_part(t + hh, self%ytmp, self%k3, ck, ce, cn)
+         do q = 1, size(csl)
+            i = csl(q)
+            self%ytmp(i) = y(i) + s*self%k3(i)
+         end do
+         call mr_bnd_on(self, self%ytmp, t + s, csb)
+         call model%rhs_part(t + s, self%ytmp, self%k4, ck, ce, cn)
+         self%mr_node_rhs = self%mr_node_rhs + 3*size(cn)
+         h6 = s/6.0_wp
+         do q = 1, size(csl)
+            i = csl(q)
+            self%ys(i) = y(i) + h6*(self%k1(i) + 2.0_wp*(self%k2(i) + self%k3(i)) + self%k4(i))
+         end do
+         do q = 1, size(csb)
+            i = csb(q)
+            self%ys(i) = self%ytmp(i)
+         end do
+      end associate
+   end subroutine mr_comp_step
 
    !> Inside a local event step (t = mt_c, L's states in y at t): step L to
    !> the end of the unsplit step, or to L's next event. At an event, (t, y)
@@ -1235,11 +1430,11 @@ contains
             ! a guard outside L below zero on the dense output (it dips inside the
             ! step): the state shown becomes the state, the local step ends here
             if (self%y_partial) then
-               ! the guard elements outside L (none has a node in L): their nodes'
-               ! states on the dense output, their guards
-               do j = 1, self%ng
-                  ne = self%g_el(j)
-                  if (self%gel_in(ne) .or. self%g_loc(j) /= 1) cycle
+               ! the guard elements outside L (none has a node in L) that may be
+               ! below zero on the dense output: their nodes' states there, their guards
+               if (.not. self%far_done) call mr_far_list(self, model)
+               do j = 1, self%n_far
+                  ne = self%far(j)
                   do k = 1, 3, 2
                      do i = self%el_states(k, ne), self%el_states(k + 1, ne)
                         y(i) = self%my0(i) + hh*(b1*self%mk1(i) + b2*(self%md2(i) + self%md3(i)) + b4*self%md4(i))
@@ -1272,23 +1467,29 @@ contains
             self%ynew(self%sl(q)) = y(self%sl(q))
          end do
       end if
-      ! the end of the step: outside L the unsplit step's, L its own
+      ! the end of the step: outside L the unsplit step's, L its own (assembled
+      ! in mynew, which then becomes ynew: the step's end, as after a plain step)
       do q = 1, self%n_sl
-         self%ys(self%sl(q)) = self%ynew(self%sl(q))
+         self%mynew(self%sl(q)) = self%ynew(self%sl(q))
       end do
+      if (track) self%mynew(nst + 1:nst + 2) = self%mynew(nst + 1:nst + 2) - (self%mh/6.0_wp)*(self%pr(:, 1) + &
+                                               2.0_wp*(self%pr(:, 2) + self%pr(:, 3)) + self%pr(:, 4)) + self%e_acc + &
+                                               self%pw_full + self%e_book
       y = self%mynew
-      do q = 1, self%n_sl
-         y(self%sl(q)) = self%ys(self%sl(q))
-      end do
-      if (track) y(nst + 1:nst + 2) = y(nst + 1:nst + 2) - (self%mh/6.0_wp)*(self%pr(:, 1) + &
-                                      2.0_wp*(self%pr(:, 2) + self%pr(:, 3)) + self%pr(:, 4)) + self%e_acc + &
-                                      self%pw_full + self%e_book
+      call move_alloc(self%ynew, swap); call move_alloc(self%mynew, self%ynew); call move_alloc(swap, self%mynew)
       self%mr_on = .false.
       t = self%mt1
       if (t >= self%mt_grid - self%tiny_t) then
          t = self%mt_grid
          call self%count_grid_step()
       end if
+      ! the RHS at the step's end, as after a plain step (`advance`): the next
+      ! step's first stage, and the workspace the observer reads (its short way)
+      call model%rhs_step_end(t, y, self%k1)
+      self%stats%rhs_evals = self%stats%rhs_evals + 1
+      model%ws_step_end = .true.
+      self%k1_next = .true.
+      self%t_k1 = t
       status = adv_step
       if (t >= t_goal - self%tiny_t) status = adv_reached
    contains

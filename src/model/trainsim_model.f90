@@ -234,6 +234,7 @@ module trainsim_model
       procedure :: element_guard => model_element_guard
       procedure :: guard_angles => model_guard_angles
       procedure :: angle_guard => model_angle_guard
+      procedure :: guard_floor => model_guard_floor
       procedure :: guard_element => model_guard_element
       procedure :: build_fast_path => model_build_fast_path
       procedure :: init_modes => model_init_modes
@@ -1437,7 +1438,15 @@ contains
          associate (e => self%fe(i))
             l = e%l
             r = e%r
-            if (e%linear) then
+            if (e%form == lf_unit) then                                    ! (rhs_simple's forms: the same values)
+               f = e%k*(self%theta(l) - self%theta(r))
+               tl = -f
+               tr = f
+            else if (e%form == lf_undamped) then
+               f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r))
+               tl = -(f*e%r1)
+               tr = f*e%r2
+            else if (e%linear) then
                f = e%k*(e%r1*self%theta(l) - e%r2*self%theta(r)) + e%c*(e%r1*self%omega(l) - e%r2*self%omega(r))
                tl = -(f*e%r1)
                tr = f*e%r2
@@ -1793,6 +1802,40 @@ contains
       real(wp), intent(in) :: thl, thr
       gk = row_guard(self%gr(i), k, thl, thr)
    end function model_angle_guard
+
+   !> A lower bound of element i's guards (where `guard_angles` gave their
+   !> state indices) over all angles within thl +- rl, thr +- rr, with room for
+   !> the rounding of the angles and of the guards' arithmetic; -huge for an
+   !> element without a guard row. Local event steps (D-32) use it to skip the
+   !> elements that cannot be below zero anywhere on a step's dense output.
+   pure real(wp) function model_guard_floor(self, i, thl, rl, thr, rr) result(gmin)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: thl, rl, thr, rr
+      real(wp), parameter :: rel = 1.0e-12_wp   ! far above a few ulps
+      real(wp) :: d, dr, al, slack
+      gmin = -huge(1.0_wp)
+      if (self%gr(i)%form == 0) return
+      associate (q => self%gr(i))
+         al = abs(thl) + rl
+         slack = rel*(abs(q%r1)*al + abs(q%r2)*(abs(thr) + rr) + q%b)
+         d = q%r1*thl - q%r2*thr
+         dr = abs(q%r1)*rl + abs(q%r2)*rr + slack
+         select case (q%mode)
+         case (1)
+            gmin = min(1.0_wp, d - dr - q%b)
+         case (-1)
+            gmin = min(1.0_wp, -d - dr - q%b)
+         case default
+            gmin = min(q%b - d - dr, d - dr + q%b)
+         end select
+         if (q%form == 2) then
+            slack = rel*(al + abs(q%th_lo) + abs(q%th_hi))
+            if (.not. q%lo_open) gmin = min(gmin, thl - rl - q%th_lo - slack)
+            gmin = min(gmin, q%th_hi - thl - rl - slack)
+         end if
+      end associate
+   end function model_guard_floor
 
    !> Guard k of a guard row at the angles thl, thr: `model_guards`' arithmetic
    !> (hot_guards') for that guard alone.
