@@ -645,8 +645,9 @@ contains
    subroutine model_rhs_stage(self, t, y, dydt)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t
-      real(wp), intent(in), contiguous :: y(:)
-      real(wp), intent(out), contiguous :: dydt(:)
+      !> (explicit size: their addresses only, D-41)
+      real(wp), intent(in) :: y(self%n_y)
+      real(wp), intent(out) :: dydt(self%n_y)
       self%ws_step_end = .false.
       if (.not. self%simple) then
          call rhs_fast(self, t, y, dydt, .false.)
