@@ -1194,38 +1194,65 @@ contains
       class(rk4_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: y(:), s
+      call mr_step_on(self, model, y, s, self%sl(1:self%n_sl), self%sb(1:self%n_sb), self%kin(1:self%n_kin), &
+                      self%els(1:self%n_els), self%l_nodes(1:self%n_l), model%run%track_energy)
+   end subroutine rk4_mr_step
+
+   !> The RK4 step of size s from (t_loc, y) into ys of the states sl (k1 given),
+   !> with the boundary states sb at t_loc + s from the unsplit step's dense
+   !> output; the RHS of the nodes `nodes` (kin: those whose kinematics it reads,
+   !> els: their elements). With `power`, the integral of L's energy rates into
+   !> pw_step (only for L's own lists: `part_power` reads L's). k2..k4 and ytmp
+   !> are scratch. `mr_step` (L) and `mr_comp_step` (one component of L).
+   subroutine mr_step_on(self, model, y, s, sl, sb, kin, els, nodes, power)
+      type(rk4_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: y(:), s
+      integer, intent(in) :: sl(:), sb(:), kin(:), els(:), nodes(:)
+      logical, intent(in) :: power
       real(wp) :: hh, h6, t, p2(2), p3(2), p4(2)
       integer :: q, i
       t = self%t_loc
       hh = 0.5_wp*s
-      do q = 1, self%n_sl
-         i = self%sl(q)
+      do q = 1, size(sl)
+         i = sl(q)
          self%ytmp(i) = y(i) + hh*self%k1(i)
       end do
-      call self%mr_bnd(self%ytmp, t + hh)
-      call self%mr_rhs(model, t + hh, self%ytmp, self%k2, p2)
-      do q = 1, self%n_sl
-         i = self%sl(q)
+      call mr_bnd_on(self, self%ytmp, t + hh, sb)
+      call stage(t + hh, self%k2, p2)
+      do q = 1, size(sl)
+         i = sl(q)
          self%ytmp(i) = y(i) + hh*self%k2(i)
       end do
-      call self%mr_rhs(model, t + hh, self%ytmp, self%k3, p3)
-      do q = 1, self%n_sl
-         i = self%sl(q)
+      call stage(t + hh, self%k3, p3)
+      do q = 1, size(sl)
+         i = sl(q)
          self%ytmp(i) = y(i) + s*self%k3(i)
       end do
-      call self%mr_bnd(self%ytmp, t + s)
-      call self%mr_rhs(model, t + s, self%ytmp, self%k4, p4)
+      call mr_bnd_on(self, self%ytmp, t + s, sb)
+      call stage(t + s, self%k4, p4)
       h6 = s/6.0_wp
-      do q = 1, self%n_sl
-         i = self%sl(q)
+      do q = 1, size(sl)
+         i = sl(q)
          self%ys(i) = y(i) + h6*(self%k1(i) + 2.0_wp*(self%k2(i) + self%k3(i)) + self%k4(i))
       end do
-      do q = 1, self%n_sb
-         i = self%sb(q)
+      do q = 1, size(sb)
+         i = sb(q)
          self%ys(i) = self%ytmp(i)
       end do
-      self%pw_step = h6*(self%pk1 + 2.0_wp*(p2 + p3) + p4)
-   end subroutine rk4_mr_step
+      if (power) self%pw_step = h6*(self%pk1 + 2.0_wp*(p2 + p3) + p4)
+   contains
+      !> dy/dt of the nodes at (ts, ytmp) into k, and L's energy rates into p
+      subroutine stage(ts, k, p)
+         real(wp), intent(in) :: ts
+         real(wp), intent(inout) :: k(:)
+         real(wp), intent(out) :: p(2)
+         call model%rhs_part(ts, self%ytmp, k, kin, els, nodes)
+         self%mr_node_rhs = self%mr_node_rhs + size(nodes)
+         p = 0.0_wp
+         if (power) call model%part_power(ts, self%ytmp, els, nodes, self%in_l, p(1), p(2))
+      end subroutine stage
+   end subroutine mr_step_on
 
    !> The lists of L's component c (cn, ce, ck, csl, csb; in the order of L's
    !> lists, so that each node's torque sums its elements in the same order).
@@ -1286,41 +1313,9 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: y(:), s
       integer, intent(in) :: e
-      real(wp) :: hh, h6, t
-      integer :: q, i
       if (self%comp(self%el_nodes(1, e)) /= self%cur_c) call mr_comp_lists(self, self%comp(self%el_nodes(1, e)))
-      associate (csl => self%csl(1:self%n_csl), csb => self%csb(1:self%n_csb), ck => self%ck(1:self%n_ck), &
-                 ce => self%ce(1:self%n_ce), cn => self%cn(1:self%n_cn))
-         t = self%t_loc
-         hh = 0.5_wp*s
-         do q = 1, size(csl)
-            i = csl(q)
-            self%ytmp(i) = y(i) + hh*self%k1(i)
-         end do
-         call mr_bnd_on(self, self%ytmp, t + hh, csb)
-         call model%rhs_part(t + hh, self%ytmp, self%k2, ck, ce, cn)
-         do q = 1, size(csl)
-            i = csl(q)
-            self%ytmp(i) = y(i) + hh*self%k2(i)
-         end do
-         call model%rhs_part(t + hh, self%ytmp, self%k3, ck, ce, cn)
-         do q = 1, size(csl)
-            i = csl(q)
-            self%ytmp(i) = y(i) + s*self%k3(i)
-         end do
-         call mr_bnd_on(self, self%ytmp, t + s, csb)
-         call model%rhs_part(t + s, self%ytmp, self%k4, ck, ce, cn)
-         self%mr_node_rhs = self%mr_node_rhs + 3*size(cn)
-         h6 = s/6.0_wp
-         do q = 1, size(csl)
-            i = csl(q)
-            self%ys(i) = y(i) + h6*(self%k1(i) + 2.0_wp*(self%k2(i) + self%k3(i)) + self%k4(i))
-         end do
-         do q = 1, size(csb)
-            i = csb(q)
-            self%ys(i) = self%ytmp(i)
-         end do
-      end associate
+      call mr_step_on(self, model, y, s, self%csl(1:self%n_csl), self%csb(1:self%n_csb), self%ck(1:self%n_ck), &
+                      self%ce(1:self%n_ce), self%cn(1:self%n_cn), .false.)
    end subroutine mr_comp_step
 
    !> Inside a local event step (t = mt_c, L's states in y at t): step L to
