@@ -7,7 +7,7 @@ program trainsim_main
    use trainsim_interrupt, only: install_interrupt_handlers, interrupt_signal, signal_name
    use trainsim_strings, only: str
    use trainsim_version, only: version_string, version_full
-   use trainsim_deck, only: deck_t, deck_group_t, read_deck
+   use trainsim_deck, only: deck_t, deck_group_t, read_deck, parse_real
    use trainsim_model, only: model_t
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
    use trainsim_element, only: lin_state_t, lin_start, lin_stiffest, lin_contact_closed, &
@@ -22,7 +22,7 @@ program trainsim_main
    use trainsim_preload, only: preload_info_t
    use trainsim_sweep, only: sweep_options_t, sweep_summary_t, run_sweep
    use trainsim_gear_calc, only: gear_input_t, gear_result_t, gear_calc, gear_report, &
-                                 key_input_t, key_result_t, key_calc, key_report
+                                 key_input_t, key_result_t, key_calc, key_report, key_max_points
    use trainsim_units, only: units_t, make_units
    use trainsim_contact, only: fit_tight, fit_loose, fit_average
    implicit none
@@ -33,6 +33,7 @@ program trainsim_main
    type(override_t), allocatable :: sets(:)   ! --set TARGET.KEY=VALUE, in order
    type(sweep_options_t) :: sweep_opt         ! trainsim sweep: --resume, --progress
    logical :: no_output
+   logical :: strict = .false.                ! --strict: plausibility warnings are errors
 
    interface
       !> POSIX _exit(2): ends the process without exit handlers (see quit).
@@ -109,6 +110,13 @@ program trainsim_main
          i = i + 1
       case ('--resume', '--progress')
          call sweep_option(i)
+      case ('--strict')   ! plausibility warnings are errors (trainsim_plausibility)
+         if (cmd /= 'run' .and. cmd /= 'sweep') then
+            write (error_unit, '(a)') 'trainsim: error: option --strict only applies to run and sweep'
+            call quit(2)
+         end if
+         strict = .true.
+         sweep_opt%strict = .true.
       case ('--preload')   ! = --set run.initial_state=preload (trainsim_preload)
          if (cmd /= 'modes') then
             write (error_unit, '(a)') 'trainsim: error: option --preload only applies to modes '// &
@@ -219,8 +227,8 @@ contains
       end if
       ios = 1
       if (k < nargs) then
-         value = arg(k + 1)
-         read (value, *, iostat=ios) sweep_opt%progress_interval
+         value = trim(adjustl(arg(k + 1)))
+         call parse_real(value, sweep_opt%progress_interval, ios)   ! no list-directed READ: 1e999 would trap
       end if
       if (ios /= 0 .or. .not. sweep_opt%progress_interval >= 0.0_wp) then
          write (error_unit, '(a)') 'trainsim: error: option --progress needs the seconds between progress lines (>= 0)'
@@ -253,13 +261,14 @@ contains
       write (unit, '(a)') 'trainsim '//version_string//' - drive trains with clearances (successor to TRAIN, Cook 1989)', &
          '', &
          'usage:', &
-         '  trainsim run DECK [-o FILE | --no-output] [--set TARGET.KEY=VALUE ...]', &
+         '  trainsim run DECK [-o FILE | --no-output] [--set TARGET.KEY=VALUE ...] [--strict]', &
          '                                integrate the train in DECK; write the HDF5 history', &
          '                                (to FILE, else to the deck''s &run output). --set changes a', &
          '                                deck value (TARGET: node/element id, run, or GROUP#K) or a', &
          '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles);', &
-         '                                --no-output (or -o -): no history file, even if the deck names one', &
-         '  trainsim sweep DECK [-o FILE] [--set ...] [--resume] [--progress S]', &
+         '                                --no-output (or -o -): no history file, even if the deck names one;', &
+         '                                --strict: the deck''s plausibility warnings (unit slips) are errors', &
+         '  trainsim sweep DECK [-o FILE] [--set ...] [--resume] [--progress S] [--strict]', &
          '                                every run of the deck''s &sweep groups (serial, or under', &
          '                                mpirun -np N) into one HDF5 sweep file (default DECK_sweep.h5);', &
          '                                re-running it (or --resume) completes a sweep that was stopped;', &
@@ -394,6 +403,7 @@ contains
       type(deck_t) :: deck
       type(deck_group_t), allocatable :: sweeps(:)
       type(error_t), allocatable :: err
+      integer :: i
       call read_deck(path, deck, err)
       if (allocated(err)) call fail(err)
       call split_sweep_groups(deck, sweeps)
@@ -401,6 +411,14 @@ contains
          ' &sweep group(s); '//cmd//' ignores them and uses the deck''s own values (trainsim sweep runs the sweep)'
       call prepare_model(deck, sets, model, err, preload)
       if (allocated(err)) call fail(err)
+      do i = 1, size(model%warnings)
+         write (error_unit, '(a)') 'trainsim: '//model%warnings(i)%s
+      end do
+      if (strict .and. size(model%warnings) > 0) then
+         write (error_unit, '(a)') 'trainsim: error: '//str(size(model%warnings))//' plausibility warning(s) '// &
+            'above, and --strict makes them errors'
+         call quit(2)
+      end if
    end subroutine load
 
    subroutine do_modes(path, state)
@@ -541,9 +559,13 @@ contains
          write (error_unit, '(a)') 'trainsim: '//cmd//': error: option '//arg(k)//' needs a number'
          call quit(2)
       end if
-      text = arg(k + 1)
-      read (text, *, iostat=ios) x
-      if (ios /= 0 .or. verify(trim(text), '0123456789+-.eEdD') > 0 .or. len_trim(text) == 0) then
+      text = trim(adjustl(arg(k + 1)))
+      call parse_real(text, x, ios)   ! checked as text first: 1e999 is refused, never converted
+      if (ios == 2) then
+         write (error_unit, '(a)') 'trainsim: '//cmd//': error: option '//arg(k)//" got '"//arg(k + 1)// &
+            "', beyond the range of double precision"
+         call quit(2)
+      else if (ios /= 0) then
          write (error_unit, '(a)') 'trainsim: '//cmd//': error: option '//arg(k)//" needs a number, got '"// &
             arg(k + 1)//"'"
          call quit(2)
@@ -637,6 +659,7 @@ contains
       type(key_result_t) :: r
       type(error_t), allocatable :: err
       integer :: k, j
+      real(wp) :: x
       call default_units(q%units)
       k = 2
       do while (k <= nargs)
@@ -647,7 +670,15 @@ contains
          case ('--key-height'); q%key_height = real_value(k); k = k + 1
          case ('--clearance'); q%clearance = real_value(k); k = k + 1
          case ('--torque-max'); q%torque_max = real_value(k); k = k + 1
-         case ('--points'); q%points = nint(real_value(k)); k = k + 1
+         case ('--points')   ! checked as a real first: nint of 1e300 would overflow
+            x = real_value(k)
+            if (.not. (x >= 2.0_wp .and. x <= real(key_max_points, wp) .and. x == aint(x))) then
+               write (error_unit, '(a)') 'trainsim: key: error: --points must be a whole number in [2, '// &
+                  str(key_max_points)//'] (rows of the curve), got '//arg(k + 1)
+               call quit(2)
+            end if
+            q%points = nint(x)
+            k = k + 1
          case ('--id'); q%id = text_value(k); k = k + 1
          case ('--units'); call calc_units(k, q%units); k = k + 1
          case ('--fit')

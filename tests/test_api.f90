@@ -142,8 +142,8 @@ contains
       call sim%build(err)
       call check('build rejects a negative stiffness', allocated(err))
       if (allocated(err)) then
-         call check('  ... as an input error naming the file, the line of shaft1 and the key', &
-                    err%code == err_input .and. index(err%message, 'two.nml:5:') > 0 .and. &
+         call check('  ... as an input error naming the set call (as --set names its argument) and the key', &
+                    err%code == err_input .and. index(err%message, "set 'shaft1.stiffness'") > 0 .and. &
                     index(err%message, 'stiffness') > 0)
       end if
       call sim%set('shaft1.stiffnes', 1.0_wp, err)

@@ -19,7 +19,10 @@ module trainsim_gear_calc
 
    public :: gear_input_t, gear_result_t, gear_calc, gear_report
    public :: key_input_t, key_result_t, key_calc, key_report
-   public :: steel_mass_density_ips, steel_youngs_ips, unset
+   public :: steel_mass_density_ips, steel_youngs_ips, unset, key_max_points
+
+   !> Rows of `trainsim key`'s curve: 2 (its ends) to this many.
+   integer, parameter :: key_max_points = 1000
 
    !> Marks an optional input that was not given.
    real(wp), parameter :: unset = -huge(1.0_wp)
@@ -510,7 +513,12 @@ contains
                                                'range (key force 60000 lbf); the stiffness is held there')
          t_hi = inp%torque_max
       end if
-      n = max(inp%points, 2)
+      if (inp%points < 2 .or. inp%points > key_max_points) then
+         call fatal_error(err, 'key: error: --points must be a whole number in [2, '//str(key_max_points)// &
+                          '] (rows of the curve), got '//str(inp%points), err_input)
+         return
+      end if
+      n = inp%points
       allocate (res%torque(n), res%key_force(n))
       allocate (res%lineal(n, size(res%fits)), res%stiffness(n, size(res%fits)), &
                 res%angular(n, size(res%fits)), res%deflection(n, size(res%fits)))

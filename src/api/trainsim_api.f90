@@ -22,15 +22,18 @@
 !>
 !> A parameter path is `GROUP.KEY`: GROUP is the `id` of a `&node` or `&element` group
 !> (`n<k>`/`e<k>` for the k-th group without an id, as the builder names it) or `run`
-!> for the `&run` group; KEY is any key of that group. The same paths as the command
-!> line's `--set GROUP.KEY=VALUE`.
+!> for the `&run` group, or `GROUP#K` for the K-th group of a kind (`load#2`); KEY is any
+!> key of that group or a derived parameter of a gear element (`mesh_frequency`,
+!> `settle_cycles`, `measure_cycles`). One parser reads these paths for `set`, the command
+!> line's `--set GROUP.KEY=VALUE` and the deck's `&sweep parameter` (trainsim_overrides).
 module trainsim
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_io, err_numeric, err_internal
    use trainsim_strings, only: string_t, to_lower, str
    use trainsim_version, only: version_string, version_full, git_revision
-   use trainsim_deck, only: deck_t, deck_entry_t, read_deck, parse_deck
-   use trainsim_builder, only: build_model
+   use trainsim_deck, only: deck_t, read_deck, parse_deck
+   use trainsim_overrides, only: override_t, make_override, check_override
+   use trainsim_prepare, only: prepare_model
    use trainsim_model, only: model_t
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
@@ -62,6 +65,7 @@ module trainsim
       logical :: has_deck = .false.   ! read_file or read_text succeeded
       logical :: built = .false.      ! model is up to date with deck
       logical :: has_run = .false.    ! res is the run of the current model
+      type(override_t), allocatable :: sets(:)   ! set() calls, applied in order at build
    contains
       procedure :: read_file => sim_read_file
       procedure :: read_text => sim_read_text
@@ -120,60 +124,32 @@ contains
       self%has_deck = .false.
       self%built = .false.
       self%has_run = .false.
+      self%sets = [override_t ::]
    end subroutine forget
 
    ! ------------------------------------------------------------------ parameters
 
    !> Set the key at `path` (GROUP.KEY) to `value`, written in deck syntax (`0.002`,
-   !> `'cvode-bdf'`, `1.0, 2.0`). The key is replaced, or added if the group lacks it;
-   !> the model must then be built again (run does that), which checks the value.
+   !> `'cvode-bdf'`, `1.0, 2.0`). Paths and values are read by the same parser as the
+   !> command line's `--set` and the deck's `&sweep` (trainsim_overrides): GROUP is a
+   !> node or element id, `run`, or `GROUP#K` (`load#2`); KEY a deck key or a derived
+   !> parameter (`mesh_frequency`, `settle_cycles`, `measure_cycles`). The path is
+   !> checked against the deck here; the value when the model is built (run does that).
+   !> Later sets of one path win.
    subroutine sim_set_text(self, path, value, err)
       class(simulation_t), intent(inout) :: self
       character(len=*), intent(in) :: path, value
       type(error_t), allocatable, intent(out) :: err
-      type(deck_t) :: one
-      character(len=:), allocatable :: group_id, key
-      integer :: ig, ie
+      type(override_t) :: ov
+      integer :: ig
 
       if (.not. self%has_deck) then
          call fatal_error(err, "set '"//path//"': no deck has been read", err_input)
          return
       end if
-      call split_path(path, group_id, key, err); if (allocated(err)) return
-      call find_group(self%deck, group_id, ig, err)
-      if (allocated(err)) then
-         err%message = "set '"//path//"': "//err%message
-         return
-      end if
-      ! The value goes through the deck's own lexer: quoting, lists and comments
-      ! behave exactly as in a deck file.
-      call parse_deck('&set '//key//' = '//value//' /', "set '"//path//"'", one, err)
-      if (allocated(err)) return
-      if (size(one%groups) /= 1) then
-         call fatal_error(err, "set '"//path//"': bad value '"//value//"'", err_input)
-         return
-      end if
-      if (size(one%groups(1)%entries) /= 1) then
-         call fatal_error(err, "set '"//path//"': bad value '"//value//"'", err_input)
-         return
-      end if
-      associate (g => self%deck%groups(ig), new => one%groups(1)%entries(1))
-         ie = 0
-         if (allocated(g%entries)) then
-            do ie = size(g%entries), 1, -1
-               if (g%entries(ie)%key == key) exit
-            end do
-         else
-            allocate (g%entries(0))
-         end if
-         if (ie > 0) then
-            g%entries(ie)%values = new%values
-            g%entries(ie)%quoted = new%quoted
-            g%entries(ie)%used = .false.
-         else
-            g%entries = [g%entries, deck_entry_t(key=key, values=new%values, quoted=new%quoted, line=g%line)]
-         end if
-      end associate
+      call make_override(path, value, "set '"//path//"'", ov, err); if (allocated(err)) return
+      call check_override(self%deck, ov, ig, err); if (allocated(err)) return
+      self%sets = [self%sets, ov]
       self%built = .false.
       self%has_run = .false.
    end subroutine sim_set_text
@@ -210,92 +186,17 @@ contains
       end if
    end subroutine sim_set_string
 
-   !> GROUP.KEY -> GROUP, KEY (split at the last dot: ids may hold dots, keys do not).
-   subroutine split_path(path, group_id, key, err)
-      character(len=*), intent(in) :: path
-      character(len=:), allocatable, intent(out) :: group_id, key
-      type(error_t), allocatable, intent(out) :: err
-      integer :: k
-      group_id = ''
-      key = ''
-      k = index(path, '.', back=.true.)
-      if (k <= 1 .or. k == len_trim(path)) then
-         call fatal_error(err, "bad parameter path '"//path// &
-                          "': expected GROUP.KEY (GROUP a node or element id, or run)", err_input)
-         return
-      end if
-      group_id = trim(adjustl(path(1:k - 1)))
-      key = to_lower(trim(adjustl(path(k + 1:))))
-      if (len(group_id) == 0 .or. len(key) == 0 .or. verify(key, 'abcdefghijklmnopqrstuvwxyz0123456789_') /= 0) then
-         call fatal_error(err, "bad parameter path '"//path//"': expected GROUP.KEY with KEY a deck key", err_input)
-      end if
-   end subroutine split_path
-
-   !> The group a path's GROUP names: the &node or &element group with that id (the
-   !> builder's default id n<k>/e<k> when it has none), or &run for `run`.
-   subroutine find_group(deck, group_id, ig, err)
-      type(deck_t), intent(in) :: deck
-      character(len=*), intent(in) :: group_id
-      integer, intent(out) :: ig
-      type(error_t), allocatable, intent(out) :: err
-      integer :: i, n_found
-      character(len=:), allocatable :: id
-
-      ig = 0
-      n_found = 0
-      do i = 1, size(deck%groups)
-         associate (g => deck%groups(i))
-            select case (g%name)
-            case ('node', 'element')
-               id = group_id_of(g%name, g%ordinal, g%entries)
-            case ('run')
-               id = 'run'
-            case default
-               cycle
-            end select
-            if (id == group_id) then
-               n_found = n_found + 1
-               if (ig == 0) ig = i
-            end if
-         end associate
-      end do
-      if (n_found == 0) then
-         call fatal_error(err, "no node or element with id '"//group_id//"' (nor is it 'run')", err_input)
-      else if (n_found > 1) then
-         call fatal_error(err, "'"//group_id//"' names "//str(n_found)//' groups (a node and an element, '// &
-                          'or the &run group and one of them)', err_input)
-      end if
-   end subroutine find_group
-
-   function group_id_of(name, ordinal, entries) result(id)
-      character(len=*), intent(in) :: name
-      integer, intent(in) :: ordinal
-      type(deck_entry_t), allocatable, intent(in) :: entries(:)
-      character(len=:), allocatable :: id
-      integer :: j
-      id = name(1:1)//str(ordinal)
-      if (.not. allocated(entries)) return
-      do j = 1, size(entries)
-         if (entries(j)%key == 'id' .and. size(entries(j)%values) == 1) then
-            id = entries(j)%values(1)%s
-            return
-         end if
-      end do
-   end function group_id_of
-
    ! ------------------------------------------------------------------ build and run
 
    !> Build the model from the deck (every node and element checks its own values).
    subroutine sim_build(self, err)
       class(simulation_t), intent(inout) :: self
       type(error_t), allocatable, intent(out) :: err
-      type(deck_t) :: d
       if (.not. self%has_deck) then
          call fatal_error(err, 'build: no deck has been read', err_input)
          return
       end if
-      d = self%deck                   ! the builder marks keys as read; keep ours clean
-      call build_model(d, self%model, err)
+      call prepare_model(self%deck, self%sets, self%model, err)   ! as run and sweep build
       self%built = .not. allocated(err)
       self%has_run = .false.
    end subroutine sim_build

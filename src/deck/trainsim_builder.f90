@@ -12,6 +12,7 @@ module trainsim_builder
    use trainsim_model, only: model_t, load_t
    use trainsim_integrator_registry, only: integrator_names
    use trainsim_id_table, only: id_table_t
+   use trainsim_plausibility, only: check_plausibility
    implicit none
    private
 
@@ -58,6 +59,8 @@ contains
          end associate
          if (allocated(err)) return
       end do
+      allocate (model%warnings(0))
+      call check_plausibility(deck, model, model%warnings, err)
    end subroutine build_model
 
    subroutine read_run(deck, model, err)

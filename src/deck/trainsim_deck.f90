@@ -13,7 +13,7 @@ module trainsim_deck
    implicit none
    private
 
-   public :: deck_t, deck_group_t, deck_entry_t, read_deck, parse_deck
+   public :: deck_t, deck_group_t, deck_entry_t, read_deck, parse_deck, parse_real
 
    !> One `key = value[, value ...]` item of a group.
    type :: deck_entry_t

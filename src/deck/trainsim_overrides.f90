@@ -18,8 +18,9 @@ module trainsim_overrides
    implicit none
    private
 
-   public :: override_t, parse_set_argument, make_override, apply_overrides, localize_error, describe_overrides
-   public :: split_sweep_groups, derived_keys, is_derived_key, resolve_target
+   public :: override_t, parse_set_argument, make_override, apply_overrides, localize_error, localize_text, &
+             describe_overrides
+   public :: split_sweep_groups, derived_keys, is_derived_key, resolve_target, check_override
 
    !> The derived parameters (applied to the model, not to a deck group).
    character(len=*), parameter :: derived_keys(3) = [character(len=14) :: 'mesh_frequency', 'settle_cycles', &
@@ -132,16 +133,9 @@ contains
       type(deck_entry_t), allocatable :: grown(:)
 
       do k = 1, size(ovs)
-         call resolve_target(deck, ovs(k), ig, err)
+         call check_override(deck, ovs(k), ig, err)
          if (allocated(err)) return
-         if (ovs(k)%derived) then
-            if (deck%groups(ig)%name /= 'element') then
-               call fatal_error(err, ovs(k)%origin//": error: '"//ovs(k)%key//"' is a parameter of a gear "// &
-                                "element, and '"//ovs(k)%target//"' is a &"//deck%groups(ig)%name//' group', err_input)
-               return
-            end if
-            cycle
-         end if
+         if (ovs(k)%derived) cycle
          e%key = ovs(k)%key
          e%values = ovs(k)%values
          e%quoted = ovs(k)%quoted
@@ -163,6 +157,22 @@ contains
          end associate
       end do
    end subroutine apply_overrides
+
+   !> The group `ov` sets (its index `ig` in deck%groups), or an error if the deck has
+   !> no such group or a derived key names a group that is not an element. The one
+   !> check of a parameter path against a deck for --set, &sweep and the library's set.
+   subroutine check_override(deck, ov, ig, err)
+      type(deck_t), intent(in) :: deck
+      type(override_t), intent(in) :: ov
+      integer, intent(out) :: ig
+      type(error_t), allocatable, intent(out) :: err
+      call resolve_target(deck, ov, ig, err)
+      if (allocated(err)) return
+      if (ov%derived .and. deck%groups(ig)%name /= 'element') then
+         call fatal_error(err, ov%origin//": error: '"//ov%key//"' is a parameter of a gear "// &
+                          "element, and '"//ov%target//"' is a &"//deck%groups(ig)%name//' group', err_input)
+      end if
+   end subroutine check_override
 
    !> Index in deck%groups of the group `ov%target` names.
    subroutine resolve_target(deck, ov, ig, err)
@@ -261,20 +271,27 @@ contains
       id = g%name(1:1)//str(g%ordinal)
    end function group_id
 
-   !> Replace "FILE:-k:" in `err` by the origin of override k.
+   !> Replace "FILE:-k:" in an error (or a message's text) by the origin of override k.
    subroutine localize_error(err, file, ovs)
       type(error_t), intent(inout) :: err
+      character(len=*), intent(in) :: file
+      type(override_t), intent(in) :: ovs(:)
+      call localize_text(err%message, file, ovs)
+   end subroutine localize_error
+
+   !> Replace "FILE:-k:" in `text` (a warning) by the origin of override k.
+   subroutine localize_text(text, file, ovs)
+      character(len=:), allocatable, intent(inout) :: text
       character(len=*), intent(in) :: file
       type(override_t), intent(in) :: ovs(:)
       character(len=:), allocatable :: marker
       integer :: k, p
       do k = 1, size(ovs)
          marker = file//':-'//str(k)//':'
-         p = index(err%message, marker)
-         if (p > 0) err%message = err%message(1:p - 1)//ovs(k)%origin//':'// &
-                                  err%message(p + len(marker):)
+         p = index(text, marker)
+         if (p > 0) text = text(1:p - 1)//ovs(k)%origin//':'//text(p + len(marker):)
       end do
-   end subroutine localize_error
+   end subroutine localize_text
 
    !> Move the &sweep groups out of `deck` into `sweeps` (the builder knows none of them).
    subroutine split_sweep_groups(deck, sweeps)

@@ -132,6 +132,8 @@ module trainsim_model
       character(len=:), allocatable :: title, deck_file, deck_text
       !> the overrides (--set, a sweep's values) applied to the deck, as `--set` writes them
       character(len=:), allocatable :: overrides
+      !> Plausibility warnings of the deck (trainsim_plausibility), with file, line and key
+      type(string_t), allocatable :: warnings(:)
       type(units_t) :: units
       type(run_settings_t) :: run
       type(node_slot_t), allocatable :: nodes(:)

@@ -7,7 +7,7 @@ module trainsim_signal
    use trainsim_kinds, only: wp, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
    use trainsim_strings, only: to_lower, str, invalid_text_byte
-   use trainsim_deck, only: deck_group_t
+   use trainsim_deck, only: deck_group_t, parse_real
    use trainsim_limits, only: in_range, check_magnitude
    implicit none
    private
@@ -58,6 +58,7 @@ contains
       character(len=:), allocatable :: kind, path
       real(wp) :: v0, v1, t0, t1, ta, tc, td, tw, vc
       real(wp), allocatable :: tt(:), vv(:)
+      integer, allocatable :: rows(:)   ! line of each point of a table file
       integer :: cycles, i, k
 
       call grp%get_string('kind', kind, err, default='constant')
@@ -113,7 +114,7 @@ contains
             call grp%get_string('table_file', path, err); if (allocated(err)) return
             sig%source_key = path
             path = relative_to_deck(path, grp%file)
-            call read_table_file(path, tt, vv, sig%source_text, err)
+            call read_table_file(path, tt, vv, sig%source_text, err, rows)
             if (allocated(err)) then
                err%message = grp%where('table_file')//': error: '//err%message
                return
@@ -143,8 +144,14 @@ contains
          end do
          do i = 2, size(tt)
             if (tt(i) < tt(i - 1)) then
-               call fatal_error(err, grp%where('times')//': error: table times must not decrease (entry '// &
-                                str(i)//': '//str(tt(i))//' after '//str(tt(i - 1))//')', err_input)
+               if (allocated(rows)) then
+                  call fatal_error(err, grp%where('table_file')//': error: '//sig%source_file//':'//str(rows(i))// &
+                                   ': table times must not decrease ('//str(tt(i))//' after '//str(tt(i - 1))// &
+                                   ' on line '//str(rows(i - 1))//')', err_input)
+               else
+                  call fatal_error(err, grp%where('times')//': error: table times must not decrease (entry '// &
+                                   str(i)//': '//str(tt(i))//' after '//str(tt(i - 1))//')', err_input)
+               end if
                return
             end if
          end do
@@ -334,18 +341,24 @@ contains
       if (k > 0) full = deck_file(1:k)//path
    end function relative_to_deck
 
-   !> Read a two-column (time, value) text table; '#' or '!' lines are comments.
+   !> Read a two-column (time, value) text table (docs/deck.md, "Table files"): each
+   !> data line holds exactly two numbers, separated by blanks, tabs or one comma; lines
+   !> that are blank (blanks, tabs) or start with '#' or '!' are skipped; anything else is
+   !> an error naming the file and line. Numbers are checked as text before conversion
+   !> (trainsim_deck's parse_real), so `1e999` is refused, never converted.
    !> `text` receives the file's bytes as read (embedded in the output).
-   subroutine read_table_file(path, tt, vv, text, err)
+   subroutine read_table_file(path, tt, vv, text, err, rows)
       character(len=*), intent(in) :: path
       real(wp), allocatable, intent(out) :: tt(:), vv(:)
       character(len=:), allocatable, intent(out) :: text
       type(error_t), allocatable, intent(out) :: err
+      integer, allocatable, intent(out) :: rows(:)   !< the line of each point
       integer :: u, ios, n, lineno, first, last, nbytes, k
       character(len=512) :: msg
-      character(len=:), allocatable :: line
+      character(len=:), allocatable :: line, why
       real(wp) :: a, b
       real(wp), allocatable :: tmp_t(:), tmp_v(:)
+      integer, allocatable :: tmp_r(:)
       open (newunit=u, file=path, status='old', action='read', access='stream', form='unformatted', &
             iostat=ios, iomsg=msg)
       if (ios /= 0) then
@@ -363,13 +376,12 @@ contains
       n = invalid_text_byte(text)   ! the text is embedded in the output: it must be text
       if (n > 0) then
          write (msg, '(z2.2)') iachar(text(n:n))
-         call fatal_error(err, "table file '"//path//"' line "// &
-                          str(1 + count([(text(k:k) == new_line('a'), k=1, n - 1)]))// &
+         call fatal_error(err, path//':'//str(1 + count([(text(k:k) == new_line('a'), k=1, n - 1)]))// &
                           ': not UTF-8 text (byte 0x'//trim(msg)//' at offset '//str(n)// &
                           '); a table file must be UTF-8 or ASCII text', err_input)
          return
       end if
-      allocate (tt(64), vv(64))
+      allocate (tt(64), vv(64), rows(64))
       n = 0; lineno = 0; first = 1
       do while (first <= len(text))
          last = index(text(first:), new_line('a'))
@@ -378,32 +390,96 @@ contains
          else
             last = first + last - 2
          end if
-         line = adjustl(text(first:last))
+         line = text(first:last)
          first = last + 2
          lineno = lineno + 1
-         if (len_trim(line) > 0) then
-            if (line(len_trim(line):len_trim(line)) == achar(13)) line = line(1:len_trim(line) - 1)   ! CRLF
+         if (len(line) > 0) then
+            if (line(len(line):len(line)) == achar(13)) line = line(1:len(line) - 1)   ! CRLF
          end if
-         if (len_trim(line) == 0) cycle
-         if (line(1:1) == '#' .or. line(1:1) == '!') cycle
-         read (line, *, iostat=ios) a, b
-         if (ios /= 0 .or. a /= a .or. b /= b) then
-            call fatal_error(err, "table file '"//path//"' line "//str(lineno)//": expected two numbers, got '"// &
-                             trim(line)//"'", err_input)
+         call table_line(line, a, b, why)
+         if (why == 'skip') cycle
+         if (len(why) > 0) then
+            call fatal_error(err, path//':'//str(lineno)//': '//why, err_input)
             return
          end if
          n = n + 1
          if (n > size(tt)) then
-            allocate (tmp_t(2*size(tt)), tmp_v(2*size(tt)))
-            tmp_t(1:n - 1) = tt(1:n - 1); tmp_v(1:n - 1) = vv(1:n - 1)
-            call move_alloc(tmp_t, tt); call move_alloc(tmp_v, vv)
+            allocate (tmp_t(2*size(tt)), tmp_v(2*size(tt)), tmp_r(2*size(tt)))
+            tmp_t(1:n - 1) = tt(1:n - 1); tmp_v(1:n - 1) = vv(1:n - 1); tmp_r(1:n - 1) = rows(1:n - 1)
+            call move_alloc(tmp_t, tt); call move_alloc(tmp_v, vv); call move_alloc(tmp_r, rows)
          end if
-         tt(n) = a; vv(n) = b
+         tt(n) = a; vv(n) = b; rows(n) = lineno
       end do
       if (n == 0) then
-         call fatal_error(err, "table file '"//path//"' holds no data rows", err_input)
+         call fatal_error(err, path//": holds no data rows (expected lines of two numbers: time value)", err_input)
          return
       end if
-      tt = tt(1:n); vv = vv(1:n)
+      tt = tt(1:n); vv = vv(1:n); rows = rows(1:n)
    end subroutine read_table_file
+
+   !> One line of a table file: `why` is '' for a data line (a, b set), 'skip' for a
+   !> blank or comment line, else what is wrong with it.
+   subroutine table_line(line, a, b, why)
+      character(len=*), intent(in) :: line
+      real(wp), intent(out) :: a, b
+      character(len=:), allocatable, intent(out) :: why
+      character(len=*), parameter :: blanks = ' '//achar(9)
+      integer :: i, j, n, stat(2), ntok, p(2, 3)
+      logical :: comma
+      a = 0.0_wp; b = 0.0_wp
+      n = len(line)
+      i = verify(line, blanks)
+      if (i == 0) then
+         why = 'skip'
+         return
+      end if
+      if (line(i:i) == '#' .or. line(i:i) == '!') then
+         why = 'skip'
+         return
+      end if
+      ! tokens: runs of characters other than blanks, tabs and commas; at most one comma
+      ! between the two numbers, none before or after
+      ntok = 0
+      comma = .false.
+      do while (i <= n)
+         if (index(blanks, line(i:i)) > 0) then
+            i = i + 1
+            cycle
+         end if
+         if (line(i:i) == ',') then
+            if (ntok /= 1 .or. comma) then
+               ntok = 3
+               exit
+            end if
+            comma = .true.
+            i = i + 1
+            cycle
+         end if
+         j = scan(line(i:), blanks//',')
+         if (j == 0) then
+            j = n
+         else
+            j = i + j - 2
+         end if
+         ntok = ntok + 1
+         if (ntok > 2) exit
+         p(:, ntok) = [i, j]
+         i = j + 1
+      end do
+      if (ntok /= 2) then
+         why = "expected two numbers (time value, separated by blanks, tabs or a comma), got '"// &
+               trim(line)//"'"
+         return
+      end if
+      call parse_real(line(p(1, 1):p(2, 1)), a, stat(1))
+      call parse_real(line(p(1, 2):p(2, 2)), b, stat(2))
+      if (any(stat == 1)) then
+         why = "expected two numbers (time value, separated by blanks, tabs or a comma), got '"// &
+               trim(line)//"'"
+      else if (any(stat == 2) .or. .not. (in_range(a) .and. in_range(b))) then
+         why = "'"//trim(line)//"' is out of range: trainsim accepts 0 or a magnitude in [1e-20, 1e20]"
+      else
+         why = ''
+      end if
+   end subroutine table_line
 end module trainsim_signal

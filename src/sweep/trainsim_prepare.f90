@@ -8,7 +8,7 @@ module trainsim_prepare
    use trainsim_deck, only: deck_t
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
-   use trainsim_overrides, only: override_t, apply_overrides, localize_error, describe_overrides
+   use trainsim_overrides, only: override_t, apply_overrides, localize_error, localize_text, describe_overrides
    use trainsim_derived, only: apply_derived
    use trainsim_preload, only: preload_info_t, apply_preload
    implicit none
@@ -30,6 +30,7 @@ contains
       type(preload_info_t), intent(out), optional :: preload
       type(deck_t) :: work
       type(preload_info_t) :: info
+      integer :: i
 
       work = deck
       call apply_overrides(work, ovs, err)
@@ -39,5 +40,10 @@ contains
       if (.not. allocated(err) .and. model%run%preload) call apply_preload(model, info, err)
       if (present(preload)) preload = info
       if (allocated(err)) call localize_error(err, deck%file, ovs)
+      if (allocated(model%warnings)) then   ! warnings about an override name it, as errors do
+         do i = 1, size(model%warnings)
+            call localize_text(model%warnings(i)%s, deck%file, ovs)
+         end do
+      end if
    end subroutine prepare_model
 end module trainsim_prepare

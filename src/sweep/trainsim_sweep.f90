@@ -44,6 +44,7 @@ module trainsim_sweep
       character(len=:), allocatable :: out_path        !< '' : default_sweep_path(deck_path)
       type(override_t), allocatable :: sets(:)         !< --set, applied before each run's values
       logical :: resume = .false.                      !< the sweep file must exist already
+      logical :: strict = .false.                      !< --strict: a plausibility warning fails the run's build
       integer :: progress_unit = -1                    !< progress lines (rank 0); -1: none
       real(wp) :: progress_interval = 5.0_wp           !< s between lines when not a terminal; 0: every run
    end type sweep_options_t
@@ -270,6 +271,11 @@ contains
          end do
       end do
       call prepare_model(deck, run_overrides(opt, spec, 1, err), model, err); if (allocated(err)) return
+      if (opt%progress_unit >= 0 .and. .not. opt%strict) then   ! the plausibility warnings of run 1
+         do i = 1, size(model%warnings)
+            write (opt%progress_unit, '(a)') 'trainsim: '//model%warnings(i)%s
+         end do
+      end if
       lay%version = version_full()
       lay%deck_file = opt%deck_path
       lay%deck_text = deck%text
@@ -298,6 +304,17 @@ contains
          lay%node_ids(k)%s = model%nodes(k)%n%id
       end do
    end subroutine setup
+
+   !> --strict: the first plausibility warning of a model as an error (exit 2).
+   subroutine strict_error(warnings, err)
+      type(string_t), intent(in) :: warnings(:)
+      type(error_t), allocatable, intent(inout) :: err
+      integer :: p
+      if (allocated(err) .or. size(warnings) == 0) return
+      p = index(warnings(1)%s, ': warning: ')
+      call fatal_error(err, warnings(1)%s(1:p - 1)//': error: '//warnings(1)%s(p + 11:)// &
+                       ' (a warning, made an error by --strict)', err_input)
+   end subroutine strict_error
 
    !> The overrides of run irun: --set first, then the run's sweep values.
    function run_overrides(opt, spec, irun, err) result(ovs)
@@ -337,6 +354,7 @@ contains
          if (allocated(ovs)) deallocate (ovs)
          allocate (ovs, source=run_overrides(opt, spec, i, err))   ! not `ovs = ...`: gfortran 12 false -Wuninitialized
          if (.not. allocated(err)) call prepare_model(deck, ovs, model, err)
+         if (.not. allocated(err) .and. opt%strict) call strict_error(model%warnings, err)
          if (allocated(err)) then
             bad = i
             return
