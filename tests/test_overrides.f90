@@ -11,6 +11,9 @@ program test_overrides
    use trainsim_derived, only: mesh_frequency_of
    use trainsim_param_list, only: param_list_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
+   use trainsim_deck, only: deck_group_t
+   use trainsim_sweep_spec, only: sweep_spec_t, read_sweep_spec
+   use trainsim, only: simulation_t
    implicit none
 
    character(len=*), parameter :: ghm = 'inputs/gregory_harris_munro.nml'
@@ -21,6 +24,7 @@ program test_overrides
    call test_ghm_mesh_frequency_matches_hand_computed_speed()
    call test_mesh_frequency_carries_gear_ratio_to_every_node()
    call test_cycles_set_settle_time_and_t_end()
+   call test_api_set_and_sweep_accept_what_set_accepts()
    call suite_end()
 
 contains
@@ -184,4 +188,85 @@ contains
                  m%run%settle_time, 0.25_wp, 1.0e-14_wp)
       call check('t_end = settle + 40 cycles', m%run%t_end, 0.35_wp, 1.0e-14_wp)
    end subroutine test_cycles_set_settle_time_and_t_end
+   !> One parser of parameter paths (issue 20 item 9): the library's `set`, the command
+   !> line's `--set` and a `&sweep` group accept or refuse each path alike, and an
+   !> accepted one builds the same model. The paths cover GROUP#K targets, default ids,
+   !> `run`, derived keys (mesh_frequency, settle_cycles) and the ways a path goes wrong.
+   subroutine test_api_set_and_sweep_accept_what_set_accepts()
+      character(len=*), parameter :: nl = new_line('a')
+      character(len=*), parameter :: text = "&run t_end = 0.02, dt = 8.0e-6 /"//nl// &
+         "&node id = 'n1', type = 'inertia', inertia = 100.0 /"//nl// &
+         "&node type = 'inertia', inertia = 0.987 /"//nl// &
+         "&node id = 'n3', type = 'inertia', inertia = 0.987 /"//nl// &
+         "&node id = 'n4', type = 'inertia', inertia = 100.0 /"//nl// &
+         "&element id = 'shaft1', type = 'shaft', stiffness = 32000.0 /"//nl// &
+         "&element id = 'mesh', type = 'spur_gear', stiffness = 234500.0, rb_driver = 3.7588, rb_driven = 3.7588,"// &
+         " teeth = 32, contact_ratio = 1.6676, approach_angle = 0.1637, half_backlash = 0.005 /"//nl// &
+         "&element type = 'shaft', stiffness = 32000.0 /"//nl// &
+         "&load node = 'n1', quantity = 'speed', kind = 'constant', value = 95.2286 /"//nl// &
+         "&load node = 'n4', kind = 'sine', offset = -798.8, amplitude = 10.0, frequency = 50.0 /"//nl// &
+         "&initial node = 'all', speed = 95.2286 /"
+      ! path, value, accepted
+      character(len=24), parameter :: paths(*) = [character(len=24) :: &
+         'load#2.amplitude', 'load#2.offset', 'LOAD#1.value', 'mesh.half_backlash', 'mesh.mesh_frequency', &
+         'mesh.settle_cycles', 'mesh.measure_cycles', 'run.t_end', 'RUN.t_end', 'n2.inertia', 'e3.stiffness', &
+         'element#2.stiffness', 'node#2.damping', 'run#1.dt', &
+         'load#3.value', 'load#0.value', 'load#x.value', 'load#.value', 'nosuch.stiffness', 'mesh.nosuchkey', &
+         'n1.mesh_frequency', 'load#1.mesh_frequency', 'shaft1.mesh_frequency', 'mesh', 'mesh.', '.stiffness', &
+         'mesh.half backlash', 'mesh.2x', 'sweep#1.values', 'initial#1.speed', 'mesh.half_backlash.x']
+      character(len=10), parameter :: values(*) = [character(len=10) :: &
+         '20.0', '-700.0', '90.0', '0.004', '485.0', '2.0', '3.0', '0.01', '0.01', '1.5', '4.0e4', &
+         '5.0e5', '0.5', '1.0e-5', &
+         '1.0', '1.0', '1.0', '1.0', '1.0', '1.0', &
+         '485.0', '485.0', '485.0', '1.0', '1.0', '1.0', &
+         '1.0', '1.0', '1.0', '90.0', '1.0']
+      logical, parameter :: expected(*) = [spread(.true., 1, 14), spread(.false., 1, 15), .true., .false.]
+      type(deck_t) :: deck, with_sweep
+      type(model_t) :: m_set, m_sweep, m_api
+      type(override_t) :: ov
+      type(override_t), allocatable :: ovs(:)
+      type(deck_group_t), allocatable :: groups(:)
+      type(sweep_spec_t) :: spec
+      type(simulation_t) :: sim
+      type(error_t), allocatable :: err
+      logical :: ok_set, ok_sweep, ok_api
+      integer :: k
+
+      call test_begin('api_set_and_sweep_accept_what_set_accepts')
+      call parse_deck(text, 'p.nml', deck, err)
+      if (allocated(err)) error stop 'test setup: '//err%message
+      do k = 1, size(paths)
+         ! --set PATH=VALUE
+         call parse_set_argument(trim(paths(k))//'='//trim(values(k)), ov, err)
+         if (.not. allocated(err)) call prepare_model(deck, [ov], m_set, err)
+         ok_set = .not. allocated(err)
+         ! &sweep parameter = 'PATH', values = VALUE /
+         call parse_deck(text//nl//"&sweep parameter = '"//trim(paths(k))//"', values = "//trim(values(k))//" /", &
+                         'p.nml', with_sweep, err)
+         if (allocated(err)) error stop 'test setup: '//err%message
+         groups = [with_sweep%groups(size(with_sweep%groups))]
+         with_sweep%groups = with_sweep%groups(1:size(with_sweep%groups) - 1)
+         call read_sweep_spec(groups, spec, err)
+         if (.not. allocated(err)) ovs = spec%overrides(1, err)
+         if (.not. allocated(err)) call prepare_model(with_sweep, ovs, m_sweep, err)
+         ok_sweep = .not. allocated(err)
+         ! the library: sim%set(PATH, VALUE), then build
+         call sim%read_text(text, err, name='p.nml')
+         if (allocated(err)) error stop 'test setup: '//err%message
+         call sim%set(trim(paths(k)), trim(values(k)), err)
+         if (.not. allocated(err)) call sim%build(err)
+         ok_api = .not. allocated(err)
+         if (ok_api) call sim%get_model(m_api, err)
+         call check(trim(paths(k))//'='//trim(values(k))//': '//trim(merge('accepted', 'refused ', expected(k)))// &
+                    ' by --set, &sweep and the library alike', &
+                    ok_set .eqv. expected(k) .and. ok_sweep .eqv. expected(k) .and. ok_api .eqv. expected(k))
+         if (ok_set .and. ok_sweep .and. ok_api) then
+            call check('  ... the three build the same model (t_end, settle_time, initial speed of n4)', &
+                       m_set%run%t_end == m_sweep%run%t_end .and. m_set%run%t_end == m_api%run%t_end .and. &
+                       m_set%run%settle_time == m_api%run%settle_time .and. &
+                       m_set%nodes(4)%n%omega0 == m_api%nodes(4)%n%omega0 .and. &
+                       m_set%nodes(4)%n%omega0 == m_sweep%nodes(4)%n%omega0)
+         end if
+      end do
+   end subroutine test_api_set_and_sweep_accept_what_set_accepts
 end program test_overrides
