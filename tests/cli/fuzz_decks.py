@@ -17,6 +17,20 @@ changed to another valid or an invalid name, the syntax broken (a `/` dropped, a
 unbalanced quote, a stray `&` or `=`, the text truncated), non-UTF-8 bytes or a NUL
 inserted, the integrator changed among the valid ones.
 
+Besides a plain run, a deck is tried in one of these ways (about a third of the decks):
+
+* `--set`: one or two overrides `TARGET.KEY=VALUE` on the command line, TARGET a node or
+  element id, `run`, or GROUP#K (also out of range), KEY a key of the group, a derived
+  key (`mesh_frequency`, `settle_cycles`, `measure_cycles`) or a typo, VALUE a mutated
+  magnitude or text;
+* `sweep`: one or two `&sweep` groups (values, from/to/count with small and absurd counts,
+  log scale, zip, continuation) over such paths, run as `trainsim sweep deck.nml -o sw.h5`;
+* `table`: a `table_file` load whose file has 2 to 6 lines, each valid or mutated (a third
+  column, trailing text, `/`, `,,`, `2*30`, `1e999`, `nan`, tabs, comments, blank lines,
+  decreasing times, non-numbers);
+* `long`: the run made 100 times longer than MAX_STEPS; after a wall budget (3 s) it is
+  sent SIGINT and must end with status 130 within the timeout (or have ended by itself).
+
 Deck INDEX depends only on the seed and INDEX (its own random generator), so a failure
 is replayed with `--replay INDEX` (same seed), whatever N was.
 
@@ -27,7 +41,9 @@ with a timeout, and must:
 * exit 0, 1 or 2;
 * on exit 1 or 2, print a message starting `trainsim:` on stderr (not a warning);
 * print no sign of a crash (backtrace, runtime error, signal) on stdout or stderr;
-* leave no `*.part` file; leave `out.h5` only on exit 0, and then one h5py can open.
+* leave no `*.part` file; leave `out.h5` only on exit 0, and then one h5py can open;
+* on exit 2, name where the bad input is in the first error line: `FILE:LINE:` of the
+  deck or a table file, the `--set` argument, or the deck file for a whole-deck error.
 
 Prints one line per failure, then
 `fuzz: N decks, X exit 0, Y exit 1, Z exit 2, H hangs, B backtraces, L leftover files`
@@ -47,6 +63,7 @@ import os
 import random
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -74,9 +91,12 @@ MAX_STEPS = 2000
 # deck reader, read_run and the HDF5 sink (other branch): (mutation-substring, reason).
 # A failing deck whose mutation list contains one of the substrings is reported, not
 # counted as a failure. Keep this list empty when that work has landed.
+# An entry "stderr:TEXT" matches a failing deck whose stderr holds TEXT instead.
 EXPECTED_ELSEWHERE = [
     ("&run output_interval:", "output_interval budget (reproducer B: a tiny interval overflows the sample "
                               "buffer size, SIGFPE in obs_start in Debug; Release hangs in the sample loop)"),
+    ("stderr:is more than 1000 times the RK4 stability limit",
+     "the RK4 refusal names neither the node nor the line (issue 20 item 11, helper 'safety')"),
 ]
 
 # Small valid decks that reach keys and types the bundled decks do not use.
@@ -583,8 +603,147 @@ def recap(groups, muts):
         muts.append(f"(t_end cut to {10 * MAX_STEPS} output times)")
 
 
+DERIVED = ["mesh_frequency", "settle_cycles", "measure_cycles"]
+
+
+def group_targets(groups):
+    """Targets of a deck's groups for --set and &sweep: (target, group)."""
+    out = [("run", g) for g in groups if g[0] == "run"]
+    count = {}
+    for g in groups:
+        if g[0] == "sweep":
+            continue
+        count[g[0]] = count.get(g[0], 0) + 1
+        out.append((f"{g[0]}#{count[g[0]]}", g))
+        if g[0] in ("node", "element"):
+            e = entry(g, "id")
+            gid = e[1][0].strip("'\"") if e and e[1] else f"{g[0][0]}{count[g[0]]}"
+            out.append((gid, g))
+    return out
+
+
+def random_path(rng, groups):
+    """A parameter path TARGET.KEY, mostly valid, sometimes not."""
+    targets = group_targets(groups)
+    r = rng.random()
+    if not targets or r < 0.05:
+        return rng.choice(["nosuch.stiffness", "load#99.value", "node#0.inertia", "run.", ".x", "run",
+                           "mesh.half backlash", "load#x.value"])
+    tgt, g = rng.choice(targets)
+    keys = [e[0] for e in g[1] if e[0] not in ("id", "type", "node", "left", "right")]
+    if g[0] == "element" and rng.random() < 0.4:
+        key = rng.choice(DERIVED)
+    elif keys and rng.random() < 0.8:
+        key = rng.choice(keys)
+    else:
+        key = typo(rng, rng.choice(keys)) if keys and rng.random() < 0.5 else \
+            rng.choice(KEY_POOL.get(g[0], ["x = 1"])).split(" = ")[0]
+    return f"{tgt}.{key}"
+
+
+def random_value(rng, path, groups, soft):
+    """A value for `path`: the current value mutated, a derived-key value, or text."""
+    key = path.rsplit(".", 1)[-1]
+    if key in DERIVED:
+        return rng.choice(["485", "2", "100", "0", "-5", "1e300", "1e-300", "1e19", "1e30", "abc", "nan", "1e999",
+                           "2147483648"])
+    for tgt, g in group_targets(groups):
+        if path.startswith(tgt + "."):
+            e = entry(g, key)
+            if e and e[1] and is_number(e[1][0]):
+                if g[0] == "run" and key.lower() in ("t_end", "dt", "output_interval", "t_start", "settle_time"):
+                    # a legitimately long run is not a hang: only halve, double or make absurd
+                    x = float(e[1][0].replace("d", "e").replace("D", "e"))
+                    return rng.choice([repr(x * 0.5), repr(x * 2.0), "0", "-1.0", "1e300", "1e-300", "nan"])
+                return new_magnitude(rng, e[1][0], soft)[1]
+            if e and e[1]:
+                return e[1][0]
+    return rng.choice(["1.0", "0", "-1", "'x'", "1e300", "abc"])
+
+
+TABLE_LINES_BAD = ["0.20 /", "0.20,,", "0.20 30.0 lbf*in", "0.20 30.0 7.0", "0.20 2*30.0", "0.20 1e999",
+                   "0.20 nan", "0.20 -inf", "1e309 1", "abc def", "0.20", "0.20 30 # note", "0.20\t\t30.0,",
+                   ",0.2 3", "0.2;3", "0.20 1.0d5", "0x10 3"]
+TABLE_LINES_OK = ["# time torque", "", "\t", "   ", "! comment", "0.20\t30.0", "0.20, 30.0", "0.20 ,30.0"]
+
+
+def make_table(rng):
+    """Text of a table file: 2 to 6 rows, increasing times, some lines mutated."""
+    lines, t = [], 0.0
+    for _ in range(rng.randint(2, 6)):
+        r = rng.random()
+        if r < 0.15:
+            lines.append(rng.choice(TABLE_LINES_BAD))
+        elif r < 0.3:
+            lines.append(rng.choice(TABLE_LINES_OK))
+        else:
+            t += rng.choice([0.001, 0.002, -0.003, 0.0, 1e-30])
+            lines.append(f"{t!r} {rng.choice(['1.0', '-5.0', '30', '1e25', '0', '2.5e-21', '-1e3'])}")
+    return ("\n".join(lines) + rng.choice(["\n", "", "\r\n"])).encode()
+
+
+def add_variant(rng, groups, muts, soft):
+    """Give the deck a way in other than a plain run: (args, files) (see the docstring)."""
+    r = rng.random()
+    if r < 0.12:
+        sets = []
+        for _ in range(rng.choice([1, 1, 2])):
+            path = random_path(rng, groups)
+            sets += ["--set", f"{path}={random_value(rng, path, groups, soft)}"]
+        muts.append("set: " + " ".join(sets[1::2]))
+        return ["run", "deck.nml", "-o", "out.h5"] + sets, {}
+    if r < 0.22:
+        for _ in range(rng.choice([1, 1, 2])):
+            path = random_path(rng, groups)
+            form = rng.random()
+            if form < 0.5:
+                vals = ", ".join(random_value(rng, path, groups, True) for _ in range(rng.randint(1, 3)))
+                body = f"parameter = '{path}', values = {vals}"
+            else:
+                a = random_value(rng, path, groups, True)
+                b = random_value(rng, path, groups, True)
+                body = (f"parameter = '{path}', from = {a}, to = {b}, count = "
+                        f"{rng.choice(['1', '2', '3', '0', '-1', '1000000000', '3.5'])}")
+                if rng.random() < 0.2:
+                    body += ", scale = 'log'"
+            if rng.random() < 0.15:
+                body += ", mode = 'zip'"
+            if rng.random() < 0.15:
+                body += f", continuation = '{rng.choice(['up', 'down', 'both', 'sideways'])}'"
+            groups.append(["sweep", [[k.strip(), [v.strip()]] for k, v in
+                                     (kv.split("=", 1) for kv in re.split(r",\s(?=\w+ =)", body))]])
+            muts.append(f"sweep: &sweep {body} /")
+        return ["sweep", "deck.nml", "-o", "sw.h5"], {}
+    if r < 0.30:
+        nodes = [g for g in groups if g[0] == "node"]
+        if nodes:
+            k = rng.randrange(len(nodes))
+            g = nodes[k]
+            e = entry(g, "id")
+            nid = e[1][0] if e and e[1] else f"'n{k + 1}'"
+            groups.append(["load", [["node", [nid]], ["kind", ["'table'"]], ["table_file", ["'tab.txt'"]]]])
+            data = make_table(rng)
+            muts.append(f"table: node {nid}, tab.txt = {data!r}")
+            return ["run", "deck.nml", "-o", "out.h5"], {"tab.txt": data}
+    if r < 0.34:
+        runs = [g for g in groups if g[0] == "run"]
+        if runs and entry(runs[0], "t_end") and entry(runs[0], "dt"):
+            try:
+                t0 = float(entry(runs[0], "t_start")[1][0]) if entry(runs[0], "t_start") else 0.0
+                dt = float(entry(runs[0], "dt")[1][0])
+            except ValueError:
+                return ["run", "deck.nml", "-o", "out.h5"], {}
+            entry(runs[0], "t_end")[1] = [repr(t0 + 100 * MAX_STEPS * dt)]
+            muts.append(f"long: t_end = t_start + {100 * MAX_STEPS} dt, SIGINT after {LONG_BUDGET} s")
+            return ["run", "deck.nml", "-o", "out.h5", "long"], {}
+    return ["run", "deck.nml", "-o", "out.h5"], {}
+
+
+LONG_BUDGET = 3.0
+
+
 def make_deck(seed, index, seeds):
-    """Deck `index` of the campaign `seed`: (bytes, seed deck name, [mutations])."""
+    """Deck `index` of the campaign `seed`: (bytes, seed deck name, [mutations], args, files)."""
     rng = random.Random(seed * 1_000_003 + index)
     name, groups = seeds[rng.randrange(len(seeds))]
     groups = [[g[0], [[k, list(v)] for k, v in g[1]]] for g in groups]
@@ -599,6 +758,7 @@ def make_deck(seed, index, seeds):
                 muts.append(d)
                 break
     recap(groups, muts)
+    args, files = add_variant(rng, groups, muts, soft)
     data = render(groups).encode()
     if text_mut:
         for _attempt in range(10):
@@ -607,34 +767,58 @@ def make_deck(seed, index, seeds):
                 data = data2
                 muts.append(d)
                 break
-    return data, name, muts
+    return data, name, muts, args, files
 
 # ----------------------------------------------------------------------------- running
 
 
 def run_one(exe, seed, index, seeds, timeout):
-    data, name, muts = make_deck(seed, index, seeds)
-    res = run_deck(exe, data, timeout)
+    data, name, muts, args, files = make_deck(seed, index, seeds)
+    res = run_deck(exe, data, timeout, args, files)
     res.update(index=index, seed_deck=name, muts=muts)
     return res
 
 
-def run_deck(exe, data, timeout):
+# Where a refusal (exit 2) names the bad input: a deck or table file line, a --set
+# argument, the library's set, or the deck file itself (a whole-deck error).
+LOCATED = re.compile(r"^trainsim: (\S+:-?\d+:|--set |\S+\.nml: error:|sweep file )")
+
+
+def run_deck(exe, data, timeout, args=None, files=None):
     """Run one deck (bytes) in a fresh directory; the outcome and the problems found."""
+    args = args or ["run", "deck.nml", "-o", "out.h5"]
+    long_run = args[-1] == "long"
+    if long_run:
+        args = args[:-1]
     tmp = tempfile.mkdtemp(prefix="trainsim_fuzz_")
     try:
         with open(os.path.join(tmp, "deck.nml"), "wb") as f:
             f.write(data)
         shutil.copy("inputs/wind_load.txt", tmp)
+        for fname, content in (files or {}).items():
+            with open(os.path.join(tmp, fname), "wb") as f:
+                f.write(content)
         t0 = time.monotonic()
-        cmd = [exe, "run", "deck.nml", "-o", "out.h5"]
+        cmd = [exe] + args
+        interrupted = False
+        p = subprocess.Popen(cmd, cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         try:
-            r = subprocess.run(cmd, cwd=tmp, capture_output=True, timeout=timeout)
-            code, out, err = r.returncode, r.stdout.decode(errors="replace"), r.stderr.decode(errors="replace")
-        except subprocess.TimeoutExpired as e:
+            if long_run:
+                try:
+                    o, e = p.communicate(timeout=LONG_BUDGET)
+                except subprocess.TimeoutExpired:
+                    p.send_signal(signal.SIGINT)
+                    interrupted = True
+                    o, e = p.communicate(timeout=timeout)
+            else:
+                o, e = p.communicate(timeout=timeout)
+            code, out, err = p.returncode, o.decode(errors="replace"), e.decode(errors="replace")
+        except subprocess.TimeoutExpired:
+            p.kill()
+            o, e = p.communicate()
             code = None
-            out = (e.stdout or b"").decode(errors="replace")
-            err = (e.stderr or b"").decode(errors="replace")
+            out = (o or b"").decode(errors="replace")
+            err = (e or b"").decode(errors="replace")
         elapsed = time.monotonic() - t0
         problems = []
         kind = None
@@ -642,8 +826,8 @@ def run_deck(exe, data, timeout):
             problems.append(f"hang: no exit within {timeout} s")
             kind = "hang"
         else:
-            if code not in (0, 1, 2):
-                problems.append(f"exit status {code}")
+            if code not in (0, 1, 2) and not (interrupted and code == 130):
+                problems.append(f"exit status {code}" + (" after SIGINT" if interrupted else ""))
                 kind = "crash"
             if code in (1, 2) and not any(ln.startswith("trainsim:") and not ln.startswith("trainsim: warning")
                                           for ln in err.splitlines()):
@@ -653,13 +837,21 @@ def run_deck(exe, data, timeout):
             if bad:
                 problems.append("crash signs: " + ", ".join(bad))
                 kind = "backtrace"
-            left = [p for p in os.listdir(tmp) if p.endswith(".part")]
-            if code != 0 and os.path.exists(os.path.join(tmp, "out.h5")):
+            if code == 2:
+                first = next((ln for ln in err.splitlines() if ln.startswith("trainsim:")
+                              and not ln.startswith(("trainsim: warning", "trainsim: note"))
+                              and ": warning: " not in ln), "")
+                if first and not LOCATED.match(first):
+                    problems.append("refusal names no line, --set argument or table line: " + first[:200])
+                    kind = kind or "unlocated"
+            left = [q for q in os.listdir(tmp) if q.endswith(".part")]
+            # an interrupted run may keep its history so far (marked incomplete)
+            if code not in (0, 130) and os.path.exists(os.path.join(tmp, "out.h5")):
                 left.append("out.h5")
             if left:
                 problems.append("left behind: " + ", ".join(left))
                 kind = kind or "leftover"
-            if code == 0:
+            if code == 0 and args[0] == "run":
                 h5 = os.path.join(tmp, "out.h5")
                 if not os.path.exists(h5):
                     problems.append("exit 0 without out.h5")
@@ -671,14 +863,17 @@ def run_deck(exe, data, timeout):
                         problems.append("out.h5 unreadable: " + c.stderr.strip()[-200:])
                         kind = kind or "output"
         return dict(data=data, code=code, stdout=out, stderr=err, problems=problems, kind=kind, elapsed=elapsed,
-                    cmd=" ".join(cmd))
+                    cmd=" ".join(args), files=files or {})
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
 def expected_elsewhere(res):
     for sub, why in EXPECTED_ELSEWHERE:
-        if any(sub in m for m in res["muts"]):
+        if sub.startswith("stderr:"):
+            if sub[7:] in res["stderr"]:
+                return why
+        elif any(sub in m for m in res["muts"]):
             return why
     return None
 
@@ -688,6 +883,9 @@ def write_failure(folder, res, seed):
     base = os.path.join(folder, f"{res['index']:05d}")
     with open(base + ".nml", "wb") as f:
         f.write(res["data"])
+    for fname, content in res.get("files", {}).items():
+        with open(base + "." + fname, "wb") as f:
+            f.write(content)
     with open(base + ".txt", "w") as f:
         f.write(f"seed {seed}, index {res['index']} (replay: fuzz_decks.py TRAINSIM --seed {seed} "
                 f"--replay {res['index']})\nseed deck: {res['seed_deck']}\nmutations:\n")
@@ -712,8 +910,8 @@ def main():
     seeds = seed_decks()
 
     if a.show is not None:
-        data, name, muts = make_deck(a.seed, a.show, seeds)
-        print(f"seed deck: {name}\nmutations: {muts}")
+        data, name, muts, args, files = make_deck(a.seed, a.show, seeds)
+        print(f"seed deck: {name}\nmutations: {muts}\ncommand: trainsim {' '.join(args)}\nfiles: {files}")
         sys.stdout.write(data.decode(errors="replace"))
         return 0
     if a.replay is not None:
@@ -741,7 +939,7 @@ def main():
     with ThreadPoolExecutor(max_workers=a.jobs) as pool:
         results = list(pool.map(lambda i: run_one(exe, a.seed, i, seeds, a.timeout), range(a.count)))
     exits = {0: 0, 1: 0, 2: 0}
-    tally = dict(hang=0, backtrace=0, leftover=0)
+    tally = dict(hang=0, backtrace=0, leftover=0, unlocated=0)
     elsewhere = 0
     shutil.rmtree(a.failures, ignore_errors=True)
     for res in results:
@@ -767,7 +965,8 @@ def main():
         slow = max(results, key=lambda r: r["elapsed"])
         print(f"slowest: deck {slow['index']} {slow['elapsed']:.1f} s; total {time.monotonic() - t0:.1f} s")
     print(f"fuzz: {len(results)} decks, {exits[0]} exit 0, {exits[1]} exit 1, {exits[2]} exit 2, "
-          f"{tally['hang']} hangs, {tally['backtrace']} backtraces, {tally['leftover']} leftover files"
+          f"{tally['hang']} hangs, {tally['backtrace']} backtraces, {tally['leftover']} leftover files, "
+          f"{tally['unlocated']} unlocated refusals"
           + (f", {failed} failed" if failed else "")
           + (f", {elsewhere} expected elsewhere" if elsewhere else ""))
     if failed or elsewhere:
