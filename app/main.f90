@@ -3,7 +3,7 @@ program trainsim_main
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
    use, intrinsic :: iso_c_binding, only: c_int, c_char, c_long, c_size_t, c_null_char
    use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t, err_numeric, err_interrupted
+   use trainsim_error, only: error_t, err_numeric, err_interrupted, err_input
    use trainsim_interrupt, only: install_interrupt_handlers, interrupt_signal, signal_name
    use trainsim_strings, only: str
    use trainsim_version, only: version_string, version_full
@@ -383,9 +383,17 @@ contains
       stop code, quiet=.true.
    end subroutine quit
 
-   subroutine fail(err)
-      type(error_t), intent(in) :: err
+   subroutine fail(err_in)
+      type(error_t), intent(in) :: err_in
+      type(error_t) :: err
       integer :: sig
+      err = err_in
+      ! an input refusal names where the bad input is: a deck or table line, a --set
+      ! argument; one about the deck as a whole names at least the deck file
+      if (allocated(deck_path)) then
+         if (err%code == err_input .and. len(deck_path) > 0 .and. .not. located(err%message)) &
+            err%message = deck_path//': error: '//err%message
+      end if
       if (err%code == err_interrupted) then
          sig = interrupt_signal()
          write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; no history written'
@@ -395,6 +403,25 @@ contains
       if (err%code == err_numeric) call quit(1)
       call quit(2)
    end subroutine fail
+
+   !> True if `msg` starts with a place: "FILE:LINE:", "--set ...", "set '...'", the deck
+   !> file, or names a file of its own ("sweep file ...", "cannot ..."), or is not about
+   !> the deck ("error: ..." from the MPI start-up).
+   logical function located(msg)
+      character(len=*), intent(in) :: msg
+      integer :: p1, p2
+      located = .true.
+      if (index(msg, '--set ') == 1 .or. index(msg, "set '") == 1 .or. index(msg, deck_path//':') == 1 .or. &
+          index(msg, 'sweep file ') == 1 .or. index(msg, 'cannot ') == 1 .or. index(msg, 'error: ') == 1) return
+      p1 = index(msg, ':')
+      if (p1 > 1) then
+         p2 = index(msg(p1 + 1:), ':')
+         if (p2 > 1) then
+            if (verify(msg(p1 + 1:p1 + p2 - 1), '-0123456789') == 0 .and. index(msg(1:p1), ' ') == 0) return
+         end if
+      end if
+      located = .false.
+   end function located
 
    subroutine load(path, model, preload)
       character(len=*), intent(in) :: path

@@ -169,6 +169,10 @@ contains
                              str(span/max_samples)//' s', err_input)
          else if (.not. (r%rtol > 0.0_wp .and. r%rtol < 1.0_wp)) then
             call fatal_error(err, g%where('rtol')//': error: rtol must be in (0, 1), got '//str(r%rtol), err_input)
+         else if (r%max_step > 0.0_wp .and. span/max_steps > r%max_step) then
+            call fatal_error(err, g%where('max_step')//': error: max_step = '//str(r%max_step)//' s would need '// &
+                             'more than 1e12 steps over the run of '//str(span)//' s: raise it (0 chooses it from '// &
+                             'the highest frequency)', err_input)
          end if
          if (allocated(err)) return
          call g%require_positive('atol_angle', r%atol_angle, err)

@@ -87,4 +87,49 @@ with tempfile.TemporaryDirectory() as tmp:
     s = run(['key', '--diameter', '25', '--key-length', '30', '--units', 'si'])
     check('key --diameter 25 (mm as m): exit 2', s.returncode == 2 and 'diameter' in s.stderr)
 
+    # every numeric option at the edges of double precision and beyond (issue 20 item 11:
+    # --points -5 gave 2 rows with exit 0, --points 1e9 did not end): exit 0 or 2 within
+    # the timeout, no crash (the Debug build traps on overflow), out-of-range counts refused
+    crash = ['Backtrace', 'runtime error', 'SIGFPE', 'SIGSEGV', 'Floating point exception', 'Error termination']
+    gear_base = ['gear', '--teeth', '28', '40', '--diametral-pitch', '8', '--face-width', '0.7']
+    key_base = ['key', '--diameter', '1.5', '--key-length', '2']
+    extremes = ['1e300', '-1e300', '1e-300', '0', '-1', '1e999', '4.9e-324', 'nan', '2*3', 'abc']
+    for base, opts in ((gear_base, ['--teeth', '--diametral-pitch', '--module', '--pressure-angle', '--face-width',
+                                    '--backlash', '--youngs-modulus', '--density', '--stiffness-per-width',
+                                    '--stiffness', '--frequency', '--approach-velocity']),
+                       (key_base, ['--diameter', '--key-length', '--key-width', '--key-height', '--clearance',
+                                   '--torque-max', '--points'])):
+        bad = []
+        for opt in opts:
+            for v in extremes:
+                args = list(base)
+                if opt in args:
+                    i = args.index(opt)
+                    args[i + 1] = v
+                    if opt == '--teeth':
+                        args[i + 2] = v
+                elif opt == '--module':   # instead of the diametral pitch
+                    i = args.index('--diametral-pitch')
+                    args[i:i + 2] = [opt, v]
+                else:
+                    args += [opt, v]
+                try:
+                    s = run(args)
+                except subprocess.TimeoutExpired:
+                    bad.append(f'{opt} {v}: no end within 120 s')
+                    continue
+                if s.returncode not in (0, 2) or any(c in s.stderr for c in crash):
+                    bad.append(f'{opt} {v}: exit {s.returncode} {s.stderr[-200:]}')
+        check(f'{base[0]}: {len(opts)} options x {len(extremes)} extreme values end with exit 0 or 2, no crash',
+              not bad)
+        for b in bad[:10]:
+            print('      ', b)
+    for v in ['-5', '1', '1000000000', '1e9', '2.5']:
+        s = run(key_base + ['--points', v])
+        check(f'key --points {v}: exit 2 naming the valid range [2, 1000]', s.returncode == 2 and '[2, 1000]' in s.stderr)
+    for v in ['2', '1000']:
+        s = run(key_base + ['--points', v])
+        rows = [ln for ln in s.stdout.splitlines() if ln.strip() and ln.split()[0][0].isdigit()]
+        check(f'key --points {v}: exit 0 with {v} rows', s.returncode == 0 and len(rows) == int(v))
+
 sys.exit(1 if failures else 0)
