@@ -14,7 +14,7 @@ module trainsim_gear_calc
    use trainsim_units, only: units_t
    use trainsim_contact, only: key_lineal_stiffness, fit_tight, fit_loose, fit_average
    use trainsim_el_spur_gear, only: contact_ratio
-   use trainsim_limits, only: param_max
+   use trainsim_limits, only: param_min, param_max
    implicit none
    private
 
@@ -242,9 +242,9 @@ contains
       character(len=*), intent(in) :: what
       real(wp), intent(in) :: x
       type(error_t), allocatable, intent(out) :: err
-      if (.not. (x > 0.0_wp .and. x <= param_max)) &
-         call fatal_error(err, 'gear: error: '//what//' must be > 0 and at most '//str(param_max)// &
-                          ' (the largest value a deck accepts), got '//str(x), err_input)
+      if (.not. (x >= param_min .and. x <= param_max)) &
+         call fatal_error(err, 'gear: error: '//what//' must be > 0, in ['//str(param_min)//', '//str(param_max)// &
+                          '] (the range a deck accepts), got '//str(x), err_input)
    end subroutine require_positive
 
    !> Exactly one of diametral pitch (1/in) and module (mm); returns the module in mm.

@@ -27,6 +27,7 @@ module trainsim_contact
    use trainsim_strings, only: str, to_lower, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
+   use trainsim_limits, only: check_magnitude
    use trainsim_event, only: event_t, ev_contact_front, ev_contact_rear, ev_separation
    implicit none
    private
@@ -149,6 +150,9 @@ contains
             return
          end if
          call grp%get_real('initial_contact_velocity', self%v_initial, err, default=0.0_wp); if (allocated(err)) return
+         ! deck values in D-28's range (D of eq. 3.12 divides by them); no element lists them in params()
+         call check_magnitude(grp, 'min_approach_velocity', self%v_min, err)
+         call check_magnitude(grp, 'initial_contact_velocity', self%v_initial, err); if (allocated(err)) return
          if (.not. self%v_initial >= 0.0_wp) then
             call fatal_error(err, grp%where('initial_contact_velocity')//': error: must be >= 0, got '// &
                              str(self%v_initial), err_input)
