@@ -20,6 +20,7 @@ module trainsim_derived
    use trainsim_signal, only: constant_signal
    use trainsim_param_list, only: param_list_t
    use trainsim_overrides, only: override_t, derived_keys
+   use trainsim_deck, only: parse_real
    implicit none
    private
 
@@ -86,8 +87,11 @@ contains
          call fatal_error(err, ov%origin//": error: key '"//ov%key//"': expected one real number", err_input)
          return
       end if
-      read (ov%values(1)%s, *, iostat=ios) v
-      if (ios /= 0 .or. verify(to_lower(ov%values(1)%s), '0123456789.+-ed') /= 0) then
+      call parse_real(ov%values(1)%s, v, ios)   ! checked as text first: 1e999 is refused, never converted
+      if (ios == 2) then
+         call fatal_error(err, ov%origin//": error: key '"//ov%key//"': '"//ov%values(1)%s// &
+                          "' is beyond the range of double precision", err_input)
+      else if (ios /= 0) then
          call fatal_error(err, ov%origin//": error: key '"//ov%key//"': expected a real number, got '"// &
                           ov%values(1)%s//"'", err_input)
       else if (.not. (v > 0.0_wp .and. v < huge(v))) then

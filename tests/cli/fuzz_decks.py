@@ -28,7 +28,7 @@ Besides a plain run, a deck is tried in one of these ways (about a third of the 
 * `table`: a `table_file` load whose file has 2 to 6 lines, each valid or mutated (a third
   column, trailing text, `/`, `,,`, `2*30`, `1e999`, `nan`, tabs, comments, blank lines,
   decreasing times, non-numbers);
-* `long`: the run made 100 times longer than MAX_STEPS; after a wall budget (3 s) it is
+* `long`: the run made 100 times longer than MAX_STEPS; after a wall budget (2 s) it is
   sent SIGINT and must end with status 130 within the timeout (or have ended by itself).
 
 Deck INDEX depends only on the seed and INDEX (its own random generator), so a failure
@@ -725,7 +725,7 @@ def add_variant(rng, groups, muts, soft):
             data = make_table(rng)
             muts.append(f"table: node {nid}, tab.txt = {data!r}")
             return ["run", "deck.nml", "-o", "out.h5"], {"tab.txt": data}
-    if r < 0.34:
+    if r < 0.33:
         runs = [g for g in groups if g[0] == "run"]
         if runs and entry(runs[0], "t_end") and entry(runs[0], "dt"):
             try:
@@ -739,7 +739,7 @@ def add_variant(rng, groups, muts, soft):
     return ["run", "deck.nml", "-o", "out.h5"], {}
 
 
-LONG_BUDGET = 3.0
+LONG_BUDGET = 2.0
 
 
 def make_deck(seed, index, seeds):
