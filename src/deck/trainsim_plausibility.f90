@@ -265,8 +265,10 @@ contains
          r = kt/(ke*model%units%power_per_watt)
          if (r <= motor_ratio_warn .and. r >= 1.0_wp/motor_ratio_warn) return
          ! the ratio the other unit system's constants would give read in this one
-         other = 4.4482216152605_wp*0.0254_wp          ! N*m per lbf*in
-         if (model%units%name /= 'si') other = 1.0_wp/other
+         ! SI constants (k_t = k_e) in an in-lbf-s deck give r = 1/8.8507 (N*m per lbf*in);
+         ! in-lbf-s constants in an SI deck give r = 8.8507
+         other = 4.4482216152605_wp*0.0254_wp
+         if (model%units%name == 'si') other = 1.0_wp/other
          slip = ''
          if (abs(r/other - 1.0_wp) < 0.1_wp) then
             if (model%units%name == 'si') then

@@ -117,7 +117,7 @@ contains
              node_row('fixed', 'ground', 'ground: a node that does not move', '', '', '', new_fixed_node), &
              node_row('dc_motor', 'n02', 'constant-field DC motor with its armature circuit (eqs. G.3-G.5)', &
                       'inertia = 0.1, damping = 0.01, torque_constant = 0.5, inductance = 0.01, resistance = 1.0, '// &
-                      'back_emf_constant = 0.5', 'inertia torque_constant inductance resistance back_emf_constant', &
+                      'back_emf_constant = 0.0565', 'inertia torque_constant inductance resistance back_emf_constant', &
                       'damping', new_dc_motor_node) &
              ]
    end subroutine node_table

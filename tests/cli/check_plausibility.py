@@ -63,6 +63,8 @@ def slip_cases(base, si):
     return [
         ("units = 'si' on an inch deck", edit(base, "&run ", "&run units = 'si', "), "face_width", "error"),
         ("module in metres", edit(base, "diametral_pitch = 8.0", "module = 0.003175"), "module", "error"),
+        ("module in inches (it is always mm)", edit(base, "diametral_pitch = 8.0", "module = 0.125"), "backlash",
+         "warning"),
         ("a 10 in backlash", edit(base, "backlash = 0.004", "backlash = 10.0"), "backlash", "error"),
         ("a 1000 in face width", edit(base, "face_width = 0.75", "face_width = 1000.0"), "face_width", "error"),
         ("a 500 in key diameter", edit(base, "diameter = 1.0,", "diameter = 500.0,"), "diameter", "error"),
@@ -73,6 +75,9 @@ def slip_cases(base, si):
         ("k_t = k_e (SI constants) in an inch deck", edit(base, "back_emf_constant = 0.0565",
                                                           "back_emf_constant = 0.5"),
          "back_emf_constant", "error"),
+        ("  ... and the message names the missing units = 'si'", edit(base, "back_emf_constant = 0.0565",
+                                                                       "back_emf_constant = 0.5"),
+         "back_emf_constant", "units = 'si' missing"),
     ]
 
 
@@ -136,7 +141,9 @@ def main():
                     f.write(text)
                 code, err = run(exe, ["run", "slip.nml", "--no-output", "--set", "run.t_end=2e-4"], tmp)
                 names_key = f"key '{key}'" in err and "slip.nml:" in err
-                if kind == "error":
+                if kind not in ("error", "warning", None):   # a phrase the error must hold
+                    ok = code == 2 and names_key and kind in err
+                elif kind == "error":
                     ok = code == 2 and names_key and ": error: " in err
                 elif kind == "warning":
                     ok = code == 0 and names_key and ": warning: " in err
@@ -150,7 +157,7 @@ def main():
                     check(f"  ... --strict makes it exit 2", code == 2 and "--strict" in err, err[-300:])
                     with open(os.path.join(tmp, "slip.nml"), "a") as f:
                         f.write("&sweep parameter = 'run.t_end', values = 2e-4, 3e-4 /\n")
-                    sw = f"sw_{'si' if si else 'inch'}"
+                    sw = f"sw_{'si' if si else 'inch'}_{len(name)}_{key}"
                     code, err = run(exe, ["sweep", "slip.nml", "-o", sw + ".h5", "--strict"], tmp)
                     check(f"  ... sweep --strict exits 2 before any run, naming the key",
                           code == 2 and f"key '{key}'" in err and not os.path.exists(os.path.join(tmp, sw + ".h5")),
