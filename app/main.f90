@@ -289,7 +289,7 @@ contains
          '                                keyed-joint stiffness curve (Ch. IV) and a deck fragment', &
          '  trainsim export FILE.h5 QUANTITY ... | --events | --metrics | --summary json | --spectrum', &
          '                                CSV/JSON of a history (scripts/trainsim_export.py --help)', &
-         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR  -o OUT.png|pdf|svg', &
+         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR | --overview [ID]  -o OUT', &
          '                                figures of a history or a sweep (scripts/trainsim_plot.py --help)', &
          '  trainsim diagram DECK -o OUT.svg|png|pdf [--json FILE] [--set ...]', &
          '                                the train as a block diagram, from the deck alone', &

@@ -175,7 +175,10 @@ def describe_figure(fig, path):
             "kind": "axes", "title": ax.get_title(), "xlabel": ax.get_xlabel(), "ylabel": ax.get_ylabel(),
             "legend": [t.get_text() for t in leg.get_texts()] if leg else [],
             "lines": lines, "collections": len(ax.collections),
-            "visible_y": bool(ax.yaxis.get_visible() and ax.axison),
+            "x_ticks_labelled": bool(ax.axison and ax.xaxis.get_visible()
+                                     and any(t.get_visible() and t.get_text() for t in ax.get_xticklabels())),
+            "y_ticks_labelled": bool(ax.axison and ax.yaxis.get_visible()
+                                     and any(t.get_visible() and t.get_text() for t in ax.get_yticklabels())),
         })
     out["suptitle"] = fig._suptitle.get_text() if getattr(fig, "_suptitle", None) else ""
     with open(path, "w", encoding="utf-8") as f:
