@@ -122,6 +122,9 @@ def element_lines(e, units):
             u = key_unit("stiffness", units, t)
             lines.append(f"{sym} = {fmt(p[key])} {pretty(u or '')}".rstrip())
             break
+    fit = e.get("choices", {}).get("stiffness_fit")
+    if fit and fit != "constant":
+        lines.append(f"stiffness: {fit} fit")
     if t in ("shaft", "damper") and p.get("damping", 0.0) > 0:
         lines.append(f"c = {fmt(p['damping'])} {pretty(key_unit('damping', units, t))}")
     return lines

@@ -18,8 +18,8 @@ contains
 
    !> Write the description of `model` (built from `deck`) to `unit` as one JSON object:
    !> {"title", "deck_file", "units": {name, length, force, torque, inertia},
-   !>  "nodes": [{index, id, type, fixed, prescribed_speed, params: {name: value}}],
-   !>  "elements": [{index, id, type, left, right, displacement_unit, guards, params}],
+   !>  "nodes": [{index, id, type, fixed, prescribed_speed, params: {name: value}, choices: {name: word}}],
+   !>  "elements": [{index, id, type, left, right, displacement_unit, guards, params, choices}],
    !>  "loads": [{node, quantity, kind, line, keys: {key: text}}]}.
    !> Node and element indices are 1-based, as in the history file.
    subroutine write_description(deck, model, unit)
@@ -39,7 +39,7 @@ contains
             sep = merge(',', ' ', i < size(model%nodes))
             write (unit, '(a)') '  {"index": '//str(i)//', "id": '//jstr(nd%id)//', "type": '//jstr(nd%type_name)// &
                ', "fixed": '//jbool(nd%is_fixed())//', "prescribed_speed": '//jbool(model%speed_of(i) /= 0)// &
-               ', "params": '//jparams(nd%params())//'}'//trim(sep)
+               ', "params": '//jparams(nd%params())//', "choices": '//jchoices(nd%params())//'}'//trim(sep)
          end associate
       end do
       write (unit, '(a)') ' ],'
@@ -52,7 +52,7 @@ contains
             write (unit, '(a)') '  {"index": '//str(i)//', "id": '//jstr(e%id)//', "type": '//jstr(e%type_name)// &
                ', "left": '//jstr(model%nodes(e%left)%n%id)//', "right": '//jstr(model%nodes(e%right)%n%id)// &
                ', "displacement_unit": '//jstr(du)//', "guards": '//str(e%n_guards())// &
-               ', "params": '//jparams(e%params())//'}'//trim(sep)
+               ', "params": '//jparams(e%params())//', "choices": '//jchoices(e%params())//'}'//trim(sep)
          end associate
       end do
       write (unit, '(a)') ' ],'
@@ -115,6 +115,22 @@ contains
       end do
       s = s//'}'
    end function jparams
+
+   !> {"name": "word", ...} of the choice keys of a parameter list (stiffness_fit: 'tight').
+   function jchoices(p) result(s)
+      type(param_list_t), intent(in) :: p
+      character(len=:), allocatable :: s
+      integer :: k
+      s = '{'
+      if (allocated(p%words)) then
+         do k = 1, min(size(p%words), size(p%names))
+            if (len(p%words(k)%s) == 0) cycle
+            if (len(s) > 1) s = s//', '
+            s = s//jstr(p%names(k)%s)//': '//jstr(p%words(k)%s)
+         end do
+      end if
+      s = s//'}'
+   end function jchoices
 
    !> A real as a JSON number, to full precision (null if it is not finite).
    function jnum(x) result(s)

@@ -11,6 +11,7 @@
   gear pair with a parallel spring) is described as two connected components, and
   drawn as two framed parts (`part:1`, `part:2`) whose outlines do not overlap, each
   holding the blocks of its own nodes.
+- A choice key (the keyed joint's stiffness_fit) is described and drawn by its word.
 - A bad deck ends with exit 2 and the same message as `trainsim run` gives for it; a
   bad output name ends with exit 2 before anything is read.
 
@@ -166,6 +167,20 @@ with tempfile.TemporaryDirectory() as tmp:
     check("the clearance is marked ('clearance = 0.01 rad')", any("clearance = 0.01 rad" in t for t in texts))
     check("the voltage, speed and torque are drawn as arrows load:1..3",
           all(f"load:{k}" in gids for k in (1, 2, 3)))
+
+    # a choice key is described and drawn by its word
+    fit = os.path.join(tmp, "fit.nml")
+    with open(os.path.join(ROOT, "inputs", "start_stop_two_clearances.nml"), encoding="utf-8") as f:
+        text = f.read()
+    check("the start-stop deck's key has 'stiffness = 2.03e6 /'", "stiffness = 2.03e6 /" in text)
+    with open(fit, "w", encoding="utf-8") as f:
+        f.write(text.replace("stiffness = 2.03e6 /", "stiffness_fit = 'tight', key_length = 2.0 /"))
+    svg, js = os.path.join(tmp, "fit.svg"), os.path.join(tmp, "fit.json")
+    r = trainsim("diagram", fit, "-o", svg, "--json", js)
+    with open(js, encoding="utf-8") as f:
+        key = [e for e in json.load(f)["elements"] if e["id"] == "key"][0]
+    check(f"stiffness_fit described by its word {key['choices']}", key["choices"] == {"stiffness_fit": "tight"})
+    check("... and drawn ('stiffness: tight fit')", "stiffness: tight fit" in svg_groups(svg)[1])
 
     bad = os.path.join(tmp, "bad.nml")
     with open(bad, "w", encoding="utf-8") as f:
