@@ -12,7 +12,9 @@
 --fig5-11          mark Cook's Fig. 5.11 figures (TRAIN's maximum 0.0022 in at 460 teeth/s,
                    its separation range 460-500 teeth/s, the experiment's 0.00325 in near 385)
 Failed runs are marked with a red x on the axis; runs whose mesh lost contact (impacts > 0)
-are filled markers when the metric is an element metric. A continuation sweep (runs/branch
+are filled markers when the metric is an element metric. Runs that did not settle within
+their budget (&run settle_tol; runs/settled = 0) are ringed in orange: their figures are of a
+transient, not a steady state. A continuation sweep (runs/branch
 1 up, 2 down) draws each branch as its own curve: up with triangles pointing right, down
 with triangles pointing left, in the order the runs were made.
 """
@@ -61,10 +63,12 @@ def read(path, metric, xname):
         label = f.attrs.get("overrides", b"")
         label = label.decode() if isinstance(label, bytes) else str(label)
         branch = f["runs/branch"][:] if "branch" in f["runs"] else np.zeros(len(x), dtype=int)
-    return xname, x, y, status, impacts, label, branch
+        # 1 settled, 0 not settled within the budget, -1 not asked (older files: none)
+        settled = f["runs/settled"][:] if "settled" in f["runs"] else -np.ones(len(x))
+    return xname, x, y, status, impacts, label, (branch, settled)
 
 
-def draw(ax, x, y, status, impacts, order, name, mark):
+def draw(ax, x, y, status, impacts, order, name, mark, settled):
     ok = status[order] == 1
     xs, ys = x[order], y[order]
     line, = ax.plot(xs[ok], ys[ok], "-", lw=1.2, label=name)
@@ -75,6 +79,15 @@ def draw(ax, x, y, status, impacts, order, name, mark):
         ax.plot(xs[lost], ys[lost], mark, mfc=c, mec=c, ms=5)
     else:
         ax.plot(xs[ok], ys[ok], mark, color=c, ms=4)
+    unsettled = ok & (settled[order] == 0)
+    if unsettled.any():
+        # one legend entry for the figure (the count of every curve's unsettled runs)
+        first = not hasattr(ax, "n_unsettled")
+        ax.n_unsettled = getattr(ax, "n_unsettled", 0) + int(unsettled.sum())
+        h, = ax.plot(xs[unsettled], ys[unsettled], "o", mfc="none", mec="tab:orange", mew=1.6, ms=11)
+        if first:
+            ax.unsettled_handle = h
+        h.set_label("_")
     failed = status[order] == 2
     if failed.any():
         ax.plot(xs[failed], np.zeros(failed.sum()), "x", color="red", ms=9, mew=2,
@@ -98,7 +111,7 @@ def main(argv=None, prog=None):
 
     fig, ax = plt.subplots(figsize=(8, 5))
     for i, path in enumerate(a.files):
-        xname, x, y, status, impacts, label, branch = read(path, a.metric, a.x)
+        xname, x, y, status, impacts, label, (branch, settled) = read(path, a.metric, a.x)
         if a.label and i < len(a.label):
             label = a.label[i]
         label = label or path
@@ -108,7 +121,7 @@ def main(argv=None, prog=None):
             order = runs[np.argsort(x[runs])] if b == 0 else runs
             name = {0: label, 1: f"{label} (up)", 2: f"{label} (down)"}[b]
             mark = {0: "o", 1: ">", 2: "<"}[b]
-            draw(ax, x, y, status, impacts, order, name, mark)
+            draw(ax, x, y, status, impacts, order, name, mark, settled)
             key = f"f{i}_b{b}"
             plotted[key + "_x"], plotted[key + "_y"], plotted[key + "_status"] = x[order], y[order], status[order]
         pending = status == 0
@@ -125,6 +138,8 @@ def main(argv=None, prog=None):
     note = "filled: contact lost (impacts > 0)" if impacts is not None else ""
     ax.set_title(f"{a.metric} vs {xname}" + (f"\n{note}" if note else ""), fontsize=10)
     ax.grid(alpha=0.3)
+    if hasattr(ax, "unsettled_handle"):
+        ax.unsettled_handle.set_label(f"not settled within the budget ({ax.n_unsettled} runs): a transient")
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(a.out, dpi=120)

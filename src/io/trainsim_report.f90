@@ -46,6 +46,12 @@ contains
       case (2)
          write (unit, '(a,i0,a)') 'NOT SETTLED: the state did not repeat to settle_tol within settle_max_time (', &
             res%stats%settle_periods, ' settle periods); the metrics below are of a transient'
+      case (3)
+         write (unit, '(a)') 'settled by settle_time: the state repeats from one settle period to the next to 1e-3'
+      case (4)
+         write (unit, '(a,i0,a)') 'NOT SETTLED by settle_time (', res%stats%settle_periods, ' settle periods): '// &
+            'the state does not repeat from one period to the next to 1e-3; the metrics below are of a '// &
+            'transient. Set &run settle_tol (e.g. 1e-5) to settle until periodic'
       end select
       if (model%run%track_energy) write (unit, '(a,es10.3,a,es10.3,a)') 'energy balance: max |residual| ', &
          res%energy_residual_max, ' (energy scale ', res%energy_scale, ')'

@@ -111,21 +111,25 @@ contains
       end subroutine blame_override
    end subroutine apply_derived
 
-   !> &run settle_tol without a settle_period (and no cycle key that sets it): the mesh
-   !> period at t_start of the first gear pair with teeth, then the run's times against
-   !> the limits (the default budget is 1000 periods). An error if there is no gear pair.
+   !> &run settle_tol or settle_time without a settle_period (and no cycle key that sets
+   !> it): the mesh period at t_start of the first gear pair with teeth, then the run's
+   !> times against the limits (the default budget is 1000 periods). With settle_tol, an
+   !> error if there is no gear pair; with settle_time alone (a verdict at settle_time,
+   !> D-43), no period and no verdict.
    subroutine default_settle_period(model, err)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: blame
       integer :: ie
       real(wp) :: f
-      if (.not. (model%run%settle_tol > 0.0_wp .and. model%run%settle_period == 0.0_wp)) return
+      if (model%run%settle_period /= 0.0_wp) return
+      if (.not. (model%run%settle_tol > 0.0_wp .or. model%run%settle_time > 0.0_wp)) return
       do ie = 1, size(model%elements)
          if (driver_teeth(model, ie) > 0.0_wp) exit
       end do
       f = 0.0_wp
       if (ie <= size(model%elements)) f = mesh_frequency_of(model, ie)
+      if (.not. f > 0.0_wp .and. .not. model%run%settle_tol > 0.0_wp) return   ! no verdict at settle_time
       if (.not. f > 0.0_wp) then
          call fatal_error(err, 'error: &run settle_tol needs the period at which the state is compared: give '// &
                           '&run settle_period (s); no gear pair with teeth turns at t_start to give its mesh period', &

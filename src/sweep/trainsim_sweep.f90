@@ -768,8 +768,8 @@ contains
          rec%run_values(4) = 0.0_wp
          if (res%energy_scale > 0.0_wp) rec%run_values(4) = res%energy_residual_max/res%energy_scale
          select case (res%stats%settle_status)
-         case (1); rec%run_values(5) = 1.0_wp
-         case (2); rec%run_values(5) = 0.0_wp
+         case (1, 3); rec%run_values(5) = 1.0_wp
+         case (2, 4); rec%run_values(5) = 0.0_wp
          case default; rec%run_values(5) = -1.0_wp
          end select
          rec%run_values(6) = real(res%stats%settle_periods, wp)

@@ -18,7 +18,9 @@ cases:
                 settle_k must be 2, within 2 periods of the closed form's prediction
   budget        a budget shorter than the closed-form settling: reported as not settled
                 (run: summary line and /run_stats settled = 0; sweep: /runs/settled = 0),
-                and a settled sweep run reads /runs/settled = 1
+                and a settled sweep run reads /runs/settled = 1; without settle_tol, a
+                fixed settle_time gets a verdict: the GHM rig at 545 teeth/s (separating
+                until cycle 127) is not settled after 100 cycles, settled after 300
   continuation  continuation branches start from the previous run's end state moved by the
                 change of nominal speed: a free inertia at nominal 10 rad/s and at 0 rad/s
                 (start speeds 10, 11, 12, 13, 14 and 0, 1, 2, 3, 4 under 1 N.m for 1 s: end
@@ -193,6 +195,19 @@ def case_budget(exe, tmp):
         settled = f["runs/settled"][:]
         periods = f["runs/settle_periods"][:]
     check("sweep file: /runs/settled = 0 (budget) and 1", list(settled) == [0, 1], f"{settled}, {periods}")
+    # no settle_tol, a fixed settle_time: a verdict at settle_time (to 1e-3), the run unchanged.
+    # The GHM rig at 545 teeth/s separates until cycle 127 (issue 20): after 100 cycles it has
+    # not settled; after 300 it has (settle_tol 1e-6 settles it at 265)
+    here = os.path.dirname(os.path.abspath(__file__))
+    deck = os.path.join(os.path.dirname(here), "..", "inputs", "gregory_harris_munro.nml")
+    for n, want in ((100, 0), (300, 1)):
+        p = run([exe, "run", deck, "--set", "mesh.mesh_frequency=545", "--set", f"mesh.settle_cycles={n}",
+                 "--set", "mesh.measure_cycles=60", "-o", f"v{n}.h5"], tmp)
+        s = stats(os.path.join(tmp, f"v{n}.h5")) if p.returncode == 0 else {}
+        check(f"545 teeth/s, settle_cycles = {n}, no settle_tol: verdict settled = {want}",
+              s.get("settled") == want and s.get("settle_tol_given") == 0
+              and abs(s.get("t_metrics", 0) - n / 545.0) < 1e-12
+              and ("NOT SETTLED by settle_time" in p.stdout) == (want == 0), f"{p.returncode} {s}")
 
 
 def free_inertia(speed):
