@@ -1046,7 +1046,7 @@ cycles, then until the state repeats from one mesh period to the next to 1e-3 wi
 330–340. The band ends at {off:.0f}, not about 480, and contact is lost again at {high} teeth/s, where the
 thesis reports none. The reasons are those of Fig. 5.11 (undamped rig, D-13, zone phase). {n_uns71} of the
 23 steady-state runs do not settle (†, the figures of a transient): the impacting ones never repeat
-(56–76 impacts in 60 cycles: not a periodic response), and to a tighter 1e-5 none settles, since the
+(46–120 impacts in 60 cycles: not a periodic response), and to a tighter 1e-5 none settles, since the
 undamped train's start transient of the modes that no impact damps never decays."""
     rep.compare("steady state: onset of the loss of contact (teeth/s)", "330–340", "§7.3, p. 139", on, 335,
                 abs_tol=17.3, why="the sweep's grid step 17.3 teeth/s", must=False, spec=".0f", note=note71)
