@@ -265,7 +265,8 @@ contains
          '                                integrate the train in DECK; write the HDF5 history', &
          '                                (to FILE, else to the deck''s &run output). --set changes a', &
          '                                deck value (TARGET: node/element id, run, or GROUP#K) or a', &
-         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles);', &
+         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles,', &
+         '                                .settle_max_cycles);', &
          '                                --no-output (or -o -): no history file, even if the deck names one', &
          '  trainsim sweep DECK [-o FILE] [--set ...] [--resume] [--progress S]', &
          '                                every run of the deck''s &sweep groups (serial, or under', &
@@ -315,7 +316,8 @@ contains
             '  --no-output, -o -  write no history file, even if the deck names one', &
             '  --set T.KEY=VALUE  change a deck value: T is a node or element id, run, or GROUP#K', &
             '                     (e.g. mesh.half_backlash=2e-4, run.t_end=0.1, load#2.value=-500),', &
-            '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles)', &
+            '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles,', &
+            '                     .settle_max_cycles)', &
             '  -h, --help         this text', '', &
             'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file,', &
             '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)'
