@@ -46,7 +46,7 @@ def start_stop(t, v, ta, tc, td, tw, t0, n):
 
 DECK = """&run title = 'inputs', t_end = 0.05, dt = 1.0e-5, output_interval = 1.0e-4 /
 &node id = 'motor', type = 'dc_motor', inertia = 0.01, torque_constant = 1.0,
-      back_emf_constant = 1.0, resistance = 1.0, inductance = 0.001 /
+      back_emf_constant = 0.11298, resistance = 1.0, inductance = 0.001 /
 &node id = 'a', type = 'inertia', inertia = 0.2 /
 &node id = 'b', type = 'inertia', inertia = 0.3 /
 &node id = 'c', type = 'inertia', inertia = 0.1 /
