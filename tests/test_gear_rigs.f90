@@ -25,6 +25,7 @@ program test_gear_rigs
    call test_online_detector_gives_the_same_figures()
    call test_online_detector_on_random_signals()
    call test_online_detector_says_when_not_exact()
+   call test_online_detector_replay_over_a_full_log()
    call test_every_bundled_deck_metrics_equal_the_full_series_figures()
    call test_run_metrics_equal_the_full_series_figures()
    call suite_end()
@@ -312,6 +313,53 @@ contains
       call check('and the detector says its figures are not exact', .not. det%exact)
       call check('the range is exact all the same', r1 == r2)
    end subroutine test_online_detector_says_when_not_exact
+
+   !> The replay when the log is full (issue 20, item 11): short edges early
+   !> (0.3 against a range of 2), folded away by a long square wave; then, at
+   !> a moment the log holds p2p_log_size extremes, a sample that widens the
+   !> range to 3.2 (threshold 0.32 > 0.3). The replay from the folded state
+   !> confirms that state's own running extreme too: one extreme more than the
+   !> log held. (Before, it was written past the log's end: Debug named
+   !> d%log(513), a long Release run ended in SIGSEGV.)
+   subroutine test_online_detector_replay_over_a_full_log()
+      type(p2p_detector_t) :: det
+      real(wp), allocatable :: x(:)
+      real(wp) :: r1, m1, r2, m2
+      integer :: i, n1, n2, n_full
+      logical :: hit
+      call test_begin('online_detector_replay_over_a_full_log')
+      x = [-1.0_wp, 1.0_wp, 0.7_wp, 1.0_wp, 0.7_wp, 1.0_wp]   ! edges of 0.3, confirmed with h = 0.2
+      det%hyst = 0.1_wp
+      do i = 1, size(x)
+         call det%push(x(i))
+      end do
+      hit = .false.; n_full = 0
+      do i = 1, 4000   ! a square wave of +-1: one extreme confirmed per sample
+         x = [x, merge(-1.0_wp, 1.0_wp, mod(i, 2) == 1)]
+         call det%push(x(size(x)))
+         if (det%n_log == size(det%log) .and. det%n > size(det%log) + 100) then
+            n_full = det%n_log
+            hit = .true.
+            exit
+         end if
+      end do
+      call check('the log was folded and is full again', hit)
+      x = [x, -2.2_wp]
+      call det%push(x(size(x)))
+      call check('the replay kept the log within its size', det%n_log <= size(det%log) .and. det%replays > 0)
+      call check('... with every extreme it held (folded, not dropped)', det%n_log >= n_full/2)
+      do i = 1, 600   ! and it goes on: the wave between -2.2 and 1
+         x = [x, merge(-2.2_wp, 1.0_wp, mod(i, 2) == 1)]
+         call det%push(x(size(x)))
+      end do
+      call det%figures(r2, m2, n2)
+      call peak_to_peak_values(x, 0.1_wp, r1, m1, n1)
+      call check('the range is the whole series one (3.2)', r2 == r1 .and. abs(r2 - 3.2_wp) < 1.0e-12_wp)
+      call check('the detector says its figures are not exact (a folded edge of 0.3 is below 0.32)', &
+                 .not. det%exact)
+      call check('its mean swing is a swing of the signal (2 or 3.2)', abs(m2 - 2.0_wp) < 1.0e-12_wp .or. &
+                 abs(m2 - 3.2_wp) < 1.0e-12_wp .or. (m2 > 2.0_wp .and. m2 < 3.2_wp))
+   end subroutine test_online_detector_replay_over_a_full_log
 
    !> Every bundled deck, every element: the p2p figures of the run (online
    !> detector) are those of its whole output series, to the bit. Among them

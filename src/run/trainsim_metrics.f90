@@ -208,11 +208,15 @@ contains
       end if
    contains
       !> The detector again with threshold self%h: from the folded state over
-      !> the logged extremes and the running extreme (the log is rewritten with
-      !> the extremes confirmed now, never more than before).
+      !> the logged extremes and the running extreme. The log is rewritten in
+      !> place with the extremes confirmed now: feeding log(i) confirms at most
+      !> one, so the i-th write lands at or before i, on an entry already read.
+      !> The running extreme fed last can confirm one more than the log held
+      !> (the folded state's own running extreme, confirmed by log(1), is not
+      !> in the log): that one goes through `keep`, which folds a full log.
       subroutine replay(d)
          type(p2p_detector_t), intent(inout) :: d
-         real(wp) :: c, v
+         real(wp) :: c
          integer :: i, n_old
          logical :: conf
          real(wp) :: e
@@ -222,16 +226,19 @@ contains
          d%s = d%f
          d%e_min = d%e_min_f
          d%n_log = 0
-         do i = 1, n_old + 1
-            v = c
-            if (i <= n_old) v = d%log(i)
-            call feed(d%s, v, d%h, conf, e)
+         do i = 1, n_old
+            call feed(d%s, d%log(i), d%h, conf, e)
             if (conf) then
                d%e_min = min(d%e_min, e)
                d%n_log = d%n_log + 1
                d%log(d%n_log) = d%s%last_ext
             end if
          end do
+         call feed(d%s, c, d%h, conf, e)
+         if (conf) then
+            d%e_min = min(d%e_min, e)
+            call keep(d, d%s%last_ext)
+         end if
       end subroutine replay
    end subroutine det_push
 
