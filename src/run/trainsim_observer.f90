@@ -39,6 +39,8 @@ module trainsim_observer
       type(element_metrics_t), allocatable :: el(:)
       real(wp), allocatable :: y_final(:)
       real(wp) :: t_final = 0.0_wp
+      !> the last output time handed to the sink (the end of the history)
+      real(wp) :: t_sampled = -huge(1.0_wp)
       real(wp) :: energy_residual_max = 0.0_wp  !< max |stored + dissipated - input - E0|
       real(wp) :: energy_scale = 0.0_wp         !< max of stored energy and work input
       real(wp), allocatable :: series_t(:), series_disp(:, :)   !< (element, sample) if keep_series
@@ -62,6 +64,8 @@ module trainsim_observer
       logical :: keep_events = .false.               !< keep the whole table in `kept` (run%keep_events)
       type(event_t), allocatable :: kept(:)
       class(sink_t), pointer :: out => null()       !< the run's sink (set by start)
+      logical :: started = .false.                   !< start opened the sink and took the first sample
+      real(wp) :: t_sampled = -huge(1.0_wp)          !< the last output time handed to the sink
       real(wp) :: t_prev = 0.0_wp, t_metrics = 0.0_wp
       integer :: n_series = 0
       logical :: keep = .false.                      !< keep the whole series of samples (keep_series)
@@ -219,6 +223,7 @@ contains
       if (allocated(err)) return
       call self%step(model, t, y)
       call self%sample(model, t, t, y, sink, err)
+      self%started = .not. allocated(err)
    end subroutine obs_start
 
    !> Evaluate the recorded quantities at (t, y) into the sample buffer. When
@@ -383,7 +388,10 @@ contains
          self%res%series_theta(:, self%n_series) = self%s%theta
          self%res%series_omega(:, self%n_series) = self%s%omega
       end if
-      if (self%take_samples) call sink%write_sample(self%s, err)
+      if (self%take_samples) then
+         call sink%write_sample(self%s, err)
+         self%t_sampled = self%s%t
+      end if
    end subroutine obs_emit
 
    !> After every step of the integrator: update the metrics at (t, y).
@@ -469,6 +477,7 @@ contains
                call self%out%write_sample(self%s, err)
                if (allocated(err)) return
             end do
+            self%t_sampled = b%t(n)
          end if
          self%s%displacement(:) = b%disp(:, n)
          self%s%t = b%t(n)
@@ -774,7 +783,10 @@ contains
          end if
          self%s%t = t_out
          if (t_out >= self%t_metrics) call push_samples(self%turns, self%s%displacement)
-         if (self%speeds_only) call sink%write_sample(self%s, err)
+         if (self%speeds_only) then
+            call sink%write_sample(self%s, err)
+            self%t_sampled = t_out
+         end if
          return
       end if
       if (self%s%t /= t .or. .not. self%s_whole) call self%fill(model, t, y)
@@ -886,8 +898,11 @@ contains
    end subroutine obs_record_events
 
    !> End of a successful run: the rows of contacts still open to the sink,
-   !> close the sink and fill the result.
-   subroutine obs_finish(self, model, t, y, stats, sink, result, err)
+   !> close the sink and fill the result. With `interrupted`, the end of a run
+   !> stopped at t by a signal: the history ends at the last output time
+   !> already written (the state at t is not added), and the statistics say
+   !> the run did not complete.
+   subroutine obs_finish(self, model, t, y, stats, sink, result, err, interrupted)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
@@ -895,8 +910,12 @@ contains
       class(sink_t), intent(inout) :: sink
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: interrupted
       type(event_t) :: no_rows(0)
       integer :: i
+      logical :: stopped
+      stopped = .false.
+      if (present(interrupted)) stopped = interrupted
       ! contacts still open at the end count towards the peak force; their rows
       ! get the peak force so far (duration stays -1)
       do i = 1, size(model%elements)
@@ -909,7 +928,7 @@ contains
             if (self%keep_events) self%kept(self%open_row(i)) = self%res%events(i)
          end if
       end do
-      if (self%s%t < t) then   ! make sure the final state is in the file
+      if (self%s%t < t .and. .not. stopped) then   ! make sure the final state is in the file
          call self%fill(model, t, y)
          call self%emit(sink, err)
          if (allocated(err)) return
@@ -917,7 +936,8 @@ contains
       self%res%stats = stats
       self%res%stats%events = int(self%n_events, i8)
       self%res%stats%t_final = t
-      self%res%stats%completed = .true.
+      self%res%stats%completed = .not. stopped
+      self%res%t_sampled = self%t_sampled
       deallocate (self%res%events)
       if (self%keep_events) then
          self%res%events = self%kept(1:self%n_events)
