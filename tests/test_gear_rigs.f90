@@ -27,7 +27,6 @@ program test_gear_rigs
    call test_online_detector_says_when_not_exact()
    call test_online_detector_replay_over_a_full_log()
    call test_every_bundled_deck_metrics_equal_the_full_series_figures()
-   call test_run_metrics_equal_the_full_series_figures()
    call suite_end()
 
 contains
@@ -361,10 +360,17 @@ contains
                  abs(m2 - 3.2_wp) < 1.0e-12_wp .or. (m2 > 2.0_wp .and. m2 < 3.2_wp))
    end subroutine test_online_detector_replay_over_a_full_log
 
-   !> Every bundled deck, every element: the p2p figures of the run (online
-   !> detector) are those of its whole output series, to the bit. Among them
-   !> start-up runs whose range grows for a long time (dc motor, start-stop,
-   !> helical pair), where the detector has to re-run over its logged extremes.
+   !> Every bundled deck, every element: the p2p figures of the run take the
+   !> extremes between output samples (D-44), so p2p_range is at least the range
+   !> of the samples and of the step ends (disp_max - disp_min, from the same
+   !> t_metrics on), and exceeds the latter by no more than an extreme can lie
+   !> past the step ends around it: (w dt)^2/8 of the amplitude for a mode at w,
+   !> below 1e-2 for any RK4 run that resolves its modes (w dt < 0.28, 22 steps
+   !> a period; the largest here, 1.1e-3, is the branched train's). The swings
+   !> are those of the samples' own detector where the samples resolve them
+   !> (every element but the ones printed). The detector says
+   !> its figures are exact (D-17) on every deck, start-up runs whose range grows
+   !> for a long time included (dc motor, start-stop, helical pair).
    subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures()
       character(len=*), parameter :: decks(*) = [character(len=40) :: 'inputs/branched_train.nml', &
          'inputs/dc_motor_geared_load.nml', 'inputs/gregory_harris_munro.nml', 'inputs/helical_pair.nml', &
@@ -373,47 +379,39 @@ contains
          'verification/table5_1/table5_1.nml', 'verification/table5_4/table5_4.nml']
       type(model_t) :: m
       type(run_result_t) :: r
-      real(wp) :: rng, mean
-      integer :: k, i, n, n_el, n_swung
-      logical :: same, exact
-      call test_begin('every_bundled_deck_metrics_equal_the_full_series_figures')
-      n_el = 0; n_swung = 0; same = .true.; exact = .true.
+      real(wp) :: rng, mean, step_rng, worst
+      integer :: k, i, n, n_el, n_swung, n_same_swings
+      logical :: bounded, exact
+      call test_begin('every_bundled_deck_p2p_between_samples_and_step_ends')
+      n_el = 0; n_swung = 0; n_same_swings = 0; bounded = .true.; exact = .true.; worst = 0.0_wp
       do k = 1, size(decks)
          call load_model(trim(decks(k)), m)
          call run_model(m, r)   ! keeps the series
          do i = 1, size(r%el)
             call peak_to_peak(r%series_t, r%series_disp(i, :), m%run%t_start + m%run%settle_time, p2p_hysteresis, &
                               rng, mean, n)
+            step_rng = r%el(i)%disp_max - r%el(i)%disp_min
             n_el = n_el + 1
-            if (n > 0) n_swung = n_swung + 1
-            if (.not. (r%el(i)%p2p_range == rng .and. r%el(i)%p2p_mean == mean .and. r%el(i)%p2p_swings == n)) then
-               same = .false.
-               write (*, '(a,i0,a,2es24.16)') '    '//trim(decks(k))//' element ', i, ': ', r%el(i)%p2p_mean, mean
+            if (r%el(i)%p2p_swings > 0) n_swung = n_swung + 1
+            if (n == r%el(i)%p2p_swings) n_same_swings = n_same_swings + 1
+            if (step_rng > 0.0_wp) worst = max(worst, (r%el(i)%p2p_range - step_rng)/step_rng)
+            if (.not. (r%el(i)%p2p_range >= rng .and. r%el(i)%p2p_range >= step_rng .and. &
+                       r%el(i)%p2p_range <= step_rng*(1.0_wp + 1.0e-2_wp))) then
+               bounded = .false.
+               write (*, '(a,i0,a,3es24.16)') '    '//trim(decks(k))//' element ', i, ': ', r%el(i)%p2p_range, &
+                  step_rng, rng
             end if
+            if (n /= r%el(i)%p2p_swings) write (*, '(a,i0,a,i0,a,i0,a)') '    '//trim(decks(k))//' element ', i, &
+               ': ', r%el(i)%p2p_swings, ' swings, the samples ', n, ' (resolved between samples)'
             exact = exact .and. r%el(i)%p2p_exact
          end do
       end do
-      write (*, '(a,i0,a,i0,a)') '    ', n_el, ' elements, ', n_swung, ' with swings'
-      call check('p2p range, mean and swings as from the whole series, to the bit', same .and. n_swung >= 20)
-      call check('the detector says so too (p2p_exact)', exact)
+      write (*, '(a,i0,a,i0,a,i0,a,es10.3)') '    ', n_el, ' elements, ', n_swung, ' with swings, ', n_same_swings, &
+         ' with the samples'' swing count; largest p2p_range past the step ends: ', worst
+      call check('p2p range between the samples'' and 1e-2 past the step ends'' range', bounded .and. n_swung >= 20)
+      call check('the swings of the samples on all but a few elements', n_same_swings >= n_el - 3)
+      call check('the detector says its figures are exact (p2p_exact)', exact)
    end subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures
-
-   !> A real run: the metrics it reports (from turning points) equal the figures
-   !> of its whole output series.
-   subroutine test_run_metrics_equal_the_full_series_figures()
-      type(model_t) :: m
-      type(run_result_t) :: r
-      real(wp) :: rng, mean
-      integer :: n
-      call test_begin('run_metrics_equal_the_full_series_figures')
-      call load_model('inputs/gregory_harris_munro.nml', m)
-      call run_model(m, r)   ! keeps the series
-      call peak_to_peak(r%series_t, r%series_disp(2, :), m%run%t_start + m%run%settle_time, p2p_hysteresis, &
-                        rng, mean, n)
-      call check('mesh p2p range as from the whole series', r%el(2)%p2p_range == rng)
-      call check('mesh p2p mean as from the whole series', r%el(2)%p2p_mean == mean)
-      call check('mesh swings as from the whole series', r%el(2)%p2p_swings == n .and. n > 0)
-   end subroutine test_run_metrics_equal_the_full_series_figures
 
    function itoa(i) result(s)
       integer, intent(in) :: i
