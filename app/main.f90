@@ -535,12 +535,14 @@ contains
          if (err%code == err_interrupted) then
             ! the history computed so far was kept (simulate's keep_interrupted)
             sig = interrupt_signal()
-            if (len(model%run%output) > 0 .and. res%t_sampled > -huge(1.0_wp)) then
+            if (len(model%run%output) == 0) then
+               write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; '//no_file_reason(no_output)
+            else if (res%t_sampled > -huge(1.0_wp)) then
                write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; the history up to t = '// &
                   str(res%t_sampled)//' s (the last output time reached) was kept in '//model%run%output// &
                   ", marked incomplete (root attribute status = 'interrupted')"
-            else
-               write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; '//no_file_reason(no_output)
+            else   ! stopped before the first sample, or the file could not be closed (err says why)
+               write (error_unit, '(a)') 'trainsim: '//err%message//' ('//signal_name(sig)//'); no history written'
             end if
             call quit(128 + sig)
          end if
