@@ -118,7 +118,7 @@ contains
       frac = 0.0_wp
       if (self%t_end > self%t0) frac = max(0.0_wp, min(1.0_wp, (t - self%t0)/(self%t_end - self%t0)))
       write (pct, '(f0.1)') 100.0_wp*frac
-      if (pct(1:1) == '.') pct = '0'//pct
+      if (pct(1:1) == '.') pct = '0'//trim(pct)
       line = 'trainsim: t = '//num(t)//' of '//num(self%t_end)//' s ('//trim(pct)//' %), '// &
              str(events)//' events, '//clock_text(wall)//' elapsed'
       if (frac > 0.0_wp) line = line//', about '//clock_text(wall*(1.0_wp - frac)/frac)//' left'
@@ -168,7 +168,7 @@ contains
       n = int(min(max(s, 0.0_wp), 9.0e15_wp), i8)
       if (n < 60) then
          write (buf, '(f0.1,a)') max(s, 0.0_wp), ' s'
-         if (buf(1:1) == '.') buf = '0'//buf
+         if (buf(1:1) == '.') buf = '0'//trim(buf)
       else if (n < 3600) then
          write (buf, '(i0,a,i2.2,a)') n/60, ' min ', mod(n, 60_i8), ' s'
       else
