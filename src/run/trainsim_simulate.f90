@@ -26,6 +26,7 @@ module trainsim_simulate
    use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
    use trainsim_modes, only: rk4_dt_limit
    use trainsim_element, only: lin_state_t, lin_stiffest, lin_start
+   use trainsim_progress, only: progress_t
    implicit none
    private
 
@@ -104,12 +105,22 @@ module trainsim_simulate
 contains
 
    !> Integrate `model` from t_start to t_end with its integrator.
-   !> On error the sink is aborted (no partial output left as if good).
-   subroutine simulate(model, sink, result, err)
+   !> On error the sink is aborted (no partial output left as if good), except
+   !> an interrupt (SIGINT/SIGTERM) with `keep_interrupted`: the sink is then
+   !> closed with what was computed (the samples up to the last output time
+   !> reached, the events so far, the metrics of that span), its run statistics
+   !> saying `completed = .false.`, and `result` holds that part of the run
+   !> (result%stats%t_final: the time reached; result%t_sampled: the last
+   !> output time written); `err` is still the interrupt. With `progress`, the
+   !> driver reports to it once per output time or block of steps.
+   subroutine simulate(model, sink, result, err, keep_interrupted, progress)
       type(model_t), intent(inout), target :: model
       class(sink_t), intent(inout), target :: sink   ! the observer streams the event rows to it
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: keep_interrupted
+      type(progress_t), intent(inout), optional :: progress
+      type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
       class(integrator_t), allocatable, target :: integ
@@ -139,7 +150,9 @@ contains
       call settle_setup(model, settle, err)
       if (allocated(err)) return
       call obs%start(model, t, y, sink, err)
-      if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, settle, err)
+      if (present(progress)) call progress%start(t, model%run%t_end)
+      if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, settle, err, progress)
+      if (present(progress)) call progress%finish()
       model%run%t_end = t_end_deck
       call integ%statistics(stats)
       stats%t_metrics = obs%t_metrics
@@ -148,12 +161,25 @@ contains
       if (settle%on) stats%settle_periods = settle%j
       if (settle%check_only) stats%settle_status = stats%settle_status + 2   ! 3 settled, 4 not (at settle_time)
       call integ%finish()
+      call system_clock(c1)
+      stats%wall_time = real(c1 - c0, wp)/real(rate, wp)
       if (allocated(err)) then
+         if (err%code == err_interrupted .and. obs%started) then
+            if (present(keep_interrupted)) then
+               if (keep_interrupted) then
+                  ! what was computed, closed as a run that did not complete
+                  call obs%finish(model, t, y, stats, sink, result, err_close, interrupted=.true.)
+                  if (allocated(err_close)) then
+                     call sink%abort()
+                     err%message = err%message//'; the history could not be kept: '//err_close%message
+                  end if
+                  return
+               end if
+            end if
+         end if
          call sink%abort()
          return
       end if
-      call system_clock(c1)
-      stats%wall_time = real(c1 - c0, wp)/real(rate, wp)
       call obs%finish(model, t, y, stats, sink, result, err)
       if (allocated(err)) call sink%abort()
    end subroutine simulate
@@ -263,7 +289,7 @@ contains
    end subroutine settle_sample
 
    !> The driver loop: from (t, y) at t_start to t_end.
-   subroutine drive(model, integ, obs, sink, t, y, st, err)
+   subroutine drive(model, integ, obs, sink, t, y, st, err, progress)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
@@ -271,6 +297,7 @@ contains
       real(wp), intent(inout) :: t, y(:)
       type(settle_t), intent(inout) :: st
       type(error_t), allocatable, intent(out) :: err
+      type(progress_t), intent(inout), optional :: progress   !< polled per output time or block
       type(drive_t) :: d
       real(wp) :: t0, t_end, dout, t_out, x, n_real
       integer(i8) :: k, n_out, k_last
@@ -348,6 +375,7 @@ contains
                   end if
                end do
                k = k + model%blk%n
+               if (present(progress)) call progress%poll(t, obs%n_events)
                cycle
             end if
          end if
@@ -356,6 +384,7 @@ contains
          if (allocated(err)) return
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
+         if (present(progress)) call progress%poll(t, obs%n_events)
          k = k + 1
       end do
       t = t_end
