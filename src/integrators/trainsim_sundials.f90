@@ -7,13 +7,15 @@
 !>
 !> Every guard of every element is a root function with direction -1 (a mode
 !> stays valid while its guards are >= 0: only downward crossings are
-!> events). At a root return `advance` returns adv_event; the driver updates
-!> the modes and calls `restart`, which re-initialises the integrator at the
-!> event point: a mode change makes the right-hand side non-smooth there, so no
-!> history (multistep history, or the RK step-size history and interpolant)
-!> is carried across it. The same happens at the breakpoints of the inputs,
-!> which are stop times. Between those the integrator advances in NORMAL mode
-!> to the driver's goal (an output time) and interpolates there.
+!> events). The integrator advances in ONE_STEP mode: `advance` returns every
+!> internal step, and an output time inside a step interpolated on the step's
+!> dense output (GetDky). A root ends the step at the root: the output times
+!> before it are interpolated and returned first, then the root as adv_event
+!> (D-42); the driver updates the modes and calls `restart`, which
+!> re-initialises the integrator at the event point: a mode change makes the
+!> right-hand side non-smooth there, so no history (multistep history, or the
+!> RK step-size history and interpolant) is carried across it. The same
+!> happens at the breakpoints of the inputs, which are stop times.
 !> See docs/integrators.md.
 module trainsim_sundials
    use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_ptr, c_char, c_null_ptr, c_null_char, &
@@ -88,6 +90,10 @@ module trainsim_sundials
       integer(i8) :: steps_to_goal = 0    !< internal steps since the last goal was reached
       integer(c_int), allocatable :: rootdir(:), rootsfound(:)
       logical :: root_pending = .false.   !< rootsfound holds the roots of the last return
+      !> the last internal step ended at a root (t_int, yv) not yet returned: the
+      !> output times before it inside the step are returned first (D-42)
+      logical :: root_ahead = .false.
+      logical :: root_info_ok = .false.   !< rootsfound holds the roots of that root
       real(wp) :: hmax = 0.0_wp, omega_max = 0.0_wp, t_goal = 0.0_wp
       real(wp) :: t_init = 0.0_wp          !< where the integration starts
       integer(i8) :: mxstep = mxstep_min
@@ -439,7 +445,10 @@ contains
    !> One internal step (ONE_STEP mode: the driver and the observer see every
    !> step, so extremes are taken at every internal step), or the goal: a step
    !> that passes t_goal is reported at t_goal, interpolated by the integrator's
-   !> own dense output, and its end on the next call.
+   !> own dense output, and its end on the next call. A step that ends at a
+   !> root (the package stops the step there) is treated alike (D-42): output
+   !> times before the root are interpolated on the step and returned first,
+   !> then the root, as adv_event; never a root beyond t_goal.
    subroutine sun_advance(self, model, t_goal, t, y, status, err)
       class(sundials_integrator_t), intent(inout), target :: self
       type(model_t), intent(inout), target :: model
@@ -465,15 +474,21 @@ contains
          end if
          self%t_int = tret
          if (st == st_root) then
-            ! yv is the state at the root; the integrator restarts there
+            ! yv is the state at the root, where the integrator will restart;
+            ! the step's dense output still covers the times before it
             self%stats%root_returns = self%stats%root_returns + 1
             self%rootsfound = 0
-            if (self%status(self%sun_root_info()) == st_success) self%root_pending = .true.
-            t = tret
-            y = self%yv
-            status = adv_event
-            return
+            self%root_info_ok = self%status(self%sun_root_info()) == st_success
+            self%root_ahead = .true.
          end if
+      end if
+      if (self%root_ahead .and. self%t_int <= t_goal + self%tiny_t) then
+         t = self%t_int                      ! the root, at or before the goal
+         y = self%yv
+         self%root_ahead = .false.
+         self%root_pending = self%root_info_ok
+         status = adv_event
+         return
       end if
       if (self%t_int < t_goal - self%tiny_t) then
          t = self%t_int                      ! an internal step short of the goal
@@ -484,7 +499,7 @@ contains
             call fatal_error(err, 'internal: '//self%prefix//'GetDky failed at t = '//str(t_goal)//' s', err_internal)
             return
          end if
-         t = t_goal                          ! the goal, inside the last step
+         t = t_goal                          ! the goal, inside the last step (before its root, if any)
          y = self%ydky
       else
          t = self%t_int                      ! the step ended on the goal (a stop time)
@@ -524,6 +539,7 @@ contains
       self%t_int = t
       self%steps_to_goal = 0
       self%root_pending = .false.
+      self%root_ahead = .false.
       if (self%status(self%sun_reinit(t)) /= st_success) then
          call fatal_error(err, 'internal: '//self%prefix//'ReInit failed at t = '//str(t)//' s: '// &
                           self%ud%msg(1:self%ud%msg_len), err_internal)
