@@ -36,11 +36,23 @@ module trainsim_sundials
    private
 
    public :: sundials_integrator_t, cv_user_t
-   public :: cv_rhs, cv_jac, cv_roots, cv_error_handler
+   public :: cv_rhs, cv_jac, cv_roots, cv_error_handler, cv_ewt
    public :: cvode_max_step, cvode_abstol
    public :: st_success, st_tstop, st_root, st_too_much_work, st_too_much_acc, st_err_failure, &
              st_conv_failure, st_lin_failure, st_rhs_failure, st_root_failure, st_too_close, st_bad_input, st_other
 
+   !> The node angle that rtol is relative to (D-43), in rad: a node angle's
+   !> tolerance is rtol*angle_resolution + atol_angle, whatever the angle
+   !> itself (how far a node has turned is no measure of what matters: the
+   !> deformations across the elements, and a gear's position in its mesh
+   !> cycle, are). 1e-5 rad is 1 um at a 0.1 m radius, the order of a mesh
+   !> deflection's resolution; the smallest static deflections and clearances
+   !> of the bundled trains are 1e-4 to 1e-3 rad.
+   real(wp), parameter, public :: angle_resolution = 1.0e-5_wp
+   !> Part of |angle| added to an angle's tolerance: 10 units of rounding, so
+   !> that a tight rtol never asks an angle of several rad for more digits than
+   !> double precision holds (SUNDIALS's "too much accuracy" test is 1 unit).
+   real(wp), parameter :: angle_rounding = 10.0_wp*epsilon(1.0_wp)
    !> Fraction of the period of the highest linearised mode (clearances closed)
    !> used as the default maximum step.
    real(wp), parameter :: max_step_fraction = 0.1_wp
@@ -74,6 +86,10 @@ module trainsim_sundials
       real(wp) :: bad_t = 0.0_wp          !< time of that evaluation
       integer :: msg_len = 0
       character(len=512) :: msg = ''      !< last message SUNDIALS reported
+      !> the error weights (cv_ewt, D-43): 1/(rel_i |y_i| + fixed_i); rel_i is
+      !> rtol, or angle_rounding for a node angle (its tolerance does not grow
+      !> with how far it turned, but for the angle's own rounding)
+      real(wp), allocatable :: rel(:), fixed(:)
    end type cv_user_t
 
    type, abstract, extends(integrator_t) :: sundials_integrator_t
@@ -256,6 +272,25 @@ contains
       ierr = 0
    end function cv_roots
 
+   !> The error weights for CVODE's and ERKStep's error test and iterations
+   !> (CVodeWFtolerances, ERKStepWFtolerances; D-43): w_i = 1/(rtol |y_i| + atol_i)
+   !> for speeds, currents and energies as with SVtolerances, w_i = 1/(rtol
+   !> angle_resolution + atol_i) for node angles (cvode_weights). No allocation.
+   integer(c_int) function cv_ewt(sunvec_y, sunvec_ewt, user_data) result(ierr) bind(C)
+      type(N_Vector) :: sunvec_y, sunvec_ewt
+      type(c_ptr), value :: user_data
+      type(cv_user_t), pointer :: ud
+      real(c_double), pointer :: yv(:), w(:)
+      integer :: i
+      call c_f_pointer(user_data, ud)
+      yv => FN_VGetArrayPointer(sunvec_y)
+      w => FN_VGetArrayPointer(sunvec_ewt)
+      do i = 1, size(w)
+         w(i) = 1.0_wp/(ud%rel(i)*abs(yv(i)) + ud%fixed(i))
+      end do
+      ierr = 0
+   end function cv_ewt
+
    !> CVODE's and ARKODE's error and warning messages: kept (the last one) for
    !> our own message instead of being printed to stderr.
    subroutine cv_error_handler(error_code, module, function, msg, user_data) bind(C)
@@ -324,6 +359,25 @@ contains
          max(model%run%rtol, energy_atol_factor)*(1.0_wp + abs(model%energy0))
    end subroutine cvode_abstol
 
+   !> The error weights' parts (cv_ewt, D-43): rel = angle_rounding and fixed =
+   !> rtol angle_resolution + atol_angle for each node angle, rel = rtol and
+   !> fixed = atol (cvode_abstol) for the other states.
+   pure subroutine cvode_weights(model, atol, rel, fixed)
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: atol(:)
+      real(wp), intent(out) :: rel(:), fixed(:)
+      integer :: i, o
+      rel = model%run%rtol
+      fixed = atol
+      do i = 1, size(model%nodes)
+         if (model%speed_of(i) /= 0) cycle
+         if (model%nodes(i)%n%nstates() < 1) cycle
+         o = model%nodes(i)%n%offset
+         rel(o + 1) = angle_rounding
+         fixed(o + 1) = model%run%rtol*angle_resolution + atol(o + 1)
+      end do
+   end subroutine cvode_weights
+
    ! ------------------------------------------------------ the shared cycle
 
    !> Create and set up the SUNDIALS objects for a run from (t, y).
@@ -390,6 +444,8 @@ contains
       self%t_int = t
       self%tiny_t = 1.0e-9_wp*model%run%dt
       call cvode_abstol(model, self%atol)
+      allocate (self%ud%rel(self%n), self%ud%fixed(self%n))
+      call cvode_weights(model, self%atol, self%ud%rel, self%ud%fixed)
       self%rootdir = -1_c_int
       self%rootsfound = 0
       self%ud%model => model
