@@ -536,7 +536,7 @@ contains
       if (is_fixed_step(model%run%integrator)) then
          text = 'dt = '//str(model%run%dt)//' s'
       else
-         text = str(model%run%dt)//' s (the deck''s dt, the event budget''s window)'
+         text = str(model%run%dt)//' s, the deck''s dt'
       end if
    end function window_text
 
