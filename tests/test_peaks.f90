@@ -70,7 +70,7 @@ contains
       call check('cvode-bdf, output every 1e-5 s', f, f_ref, rel_tol=1.0e-3_wp)
    end subroutine test_cvode_peak_matches_rk4_at_any_output_interval
 
-   !> D-43: rtol acts on the node angles through a fixed angle resolution, not
+   !> D-46: rtol acts on the node angles through a fixed angle resolution, not
    !> on how far a node has turned. Before, node angles of about 2.4 rad at the
    !> peak (a zone change under load) carried a tolerance of 2.4 rtol rad, more
    !> than the mesh deflection's resolution there, and cvode-bdf's peak did not

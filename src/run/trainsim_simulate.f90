@@ -176,7 +176,7 @@ contains
          call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
          if (abs(t - t_out) > d%tol) then
-            ! a sample is the solution at its own time, never a later state (D-42)
+            ! a sample is the solution at its own time, never a later state (D-45)
             call fatal_error(err, "internal: integrator '"//model%run%integrator//"' left the state at t = "// &
                              str(t)//' s for the output time '//str(t_out)//' s', err_internal)
             return
