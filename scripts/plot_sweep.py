@@ -17,7 +17,9 @@ size). With two or more swept parameters the runs are grouped by the parameters 
 than --x: one curve per combination of their values, named in the legend with units
 (a 6 x 2 grid against its first parameter: 2 curves of 6 points).
 Failed runs are marked with a red x on the axis; runs whose mesh lost contact (impacts > 0)
-are filled markers when the metric is an element metric. A continuation sweep (runs/branch
+are filled markers when the metric is an element metric. Runs that did not settle within
+their budget (&run settle_tol; runs/settled = 0) are ringed in orange: their figures are of a
+transient, not a steady state. A continuation sweep (runs/branch
 1 up, 2 down) draws each branch as its own curve: up with triangles pointing right, down
 with triangles pointing left, in the order the runs were made.
 """
@@ -99,6 +101,8 @@ def read(path, metric, xname):
         label = f.attrs.get("overrides", b"")
         label = label.decode() if isinstance(label, bytes) else str(label)
         branch = f["runs/branch"][:] if "branch" in f["runs"] else np.zeros(len(status), dtype=int)
+        # 1 settled, 0 not settled within the budget, -1 not asked (older files: none)
+        settled = f["runs/settled"][:] if "settled" in f["runs"] else -np.ones(len(status))
         p_units = {n: parameter_unit(f, n, units) for n in names}
     y_unit = metric_unit(key, units, etype if group == "elements" else None)
     if etype in ("spur_gear", "helical_gear", "ideal_gear"):
@@ -106,7 +110,7 @@ def read(path, metric, xname):
     else:
         words = METRIC_WORDS.get(key, key.replace("_", " "))
     return {"names": names, "xname": xname, "values": values, "x": values[:, names.index(xname)], "y": y,
-            "status": status, "impacts": impacts, "label": label, "branch": branch, "units": units,
+            "status": status, "impacts": impacts, "label": label, "branch": branch, "settled": settled, "units": units,
             "p_units": p_units, "y_unit": y_unit, "y_words": f"{metric}: {words}"}
 
 
@@ -133,7 +137,7 @@ def groups_of(d):
     return out
 
 
-def draw(ax, x, y, status, impacts, order, name, mark, colour=None, failed_label=True):
+def draw(ax, x, y, status, impacts, order, name, mark, settled, colour=None, failed_label=True):
     ok = status[order] == 1
     xs, ys = x[order], y[order]
     line, = ax.plot(xs[ok], ys[ok], "-", lw=1.2, label=name, color=colour, gid="curve")
@@ -144,6 +148,15 @@ def draw(ax, x, y, status, impacts, order, name, mark, colour=None, failed_label
         ax.plot(xs[lost], ys[lost], mark, mfc=c, mec=c, ms=5)
     else:
         ax.plot(xs[ok], ys[ok], mark, color=c, ms=4)
+    unsettled = ok & (settled[order] == 0)
+    if unsettled.any():
+        # one legend entry for the figure (the count of every curve's unsettled runs)
+        first = not hasattr(ax, "n_unsettled")
+        ax.n_unsettled = getattr(ax, "n_unsettled", 0) + int(unsettled.sum())
+        h, = ax.plot(xs[unsettled], ys[unsettled], "o", mfc="none", mec="tab:orange", mew=1.6, ms=11)
+        if first:
+            ax.unsettled_handle = h
+        h.set_label("_")
     failed = status[order] == 2
     if failed.any():
         ax.plot(xs[failed], np.zeros(failed.sum()), "x", color="red", ms=9, mew=2,
@@ -185,7 +198,7 @@ def main(argv=None, prog=None):
                 name = ", ".join(t for t in (name, gtext) if t)
                 name += {0: "", 1: " (up)", 2: " (down)"}[b]
                 mark = {0: "o", 1: ">", 2: "<"}[b]
-                draw(ax, d["x"] * kx, d["y"] * ky, d["status"], d["impacts"], order, name, mark,
+                draw(ax, d["x"] * kx, d["y"] * ky, d["status"], d["impacts"], order, name, mark, d["settled"],
                      colour=f"C{curve % 10}", failed_label=True)
                 curve += 1
                 key = f"f{i}_b{b}" if len(groups) == 1 else f"f{i}_g{g}_b{b}"
@@ -208,6 +221,8 @@ def main(argv=None, prog=None):
     note = "filled: contact lost (impacts > 0)" if impacts is not None else ""
     ax.set_title(f"{a.metric} vs {xname}" + (f"\n{note}" if note else ""), fontsize=10)
     ax.grid(alpha=0.3)
+    if hasattr(ax, "unsettled_handle"):
+        ax.unsettled_handle.set_label(f"not settled within the budget ({ax.n_unsettled} runs): a transient")
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(a.out, dpi=120)

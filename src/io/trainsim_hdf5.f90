@@ -273,6 +273,14 @@ contains
       if (.not. allocated(err)) call finish_events(self, err)
       if (.not. allocated(err)) call write_metrics(self, metrics, err)
       if (.not. allocated(err)) call write_stats(self%file_id, stats, err)
+      ! a run stopped by a signal is kept with what it computed, marked as such
+      if (.not. allocated(err)) then
+         if (stats%completed) then
+            call put_str_attr(self%file_id, 'status', 'complete', err)
+         else
+            call put_str_attr(self%file_id, 'status', 'interrupted', err)
+         end if
+      end if
       if (.not. allocated(err)) then
          do i = 1, n_ds
             call h5dclose_f(self%dset(i), hdferr)
@@ -1108,6 +1116,14 @@ contains
       if (.not. allocated(err)) call put_real_attr(grp, 'wall_time', stats%wall_time, err)
       if (.not. allocated(err)) call put_real_attr(grp, 't_final', stats%t_final, err)
       if (.not. allocated(err)) call put_int_attr(grp, 'completed', completed, err)
+      if (.not. allocated(err)) call put_real_attr(grp, 't_metrics', stats%t_metrics, err)
+      if (stats%settle_status /= 0) then   ! settling until periodic (&run settle_tol)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settled', merge(1, 0, stats%settle_status == 1 .or. &
+                                                                           stats%settle_status == 3), err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_tol_given', merge(1, 0, stats%settle_status <= 2), err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_periods', stats%settle_periods, err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_k', stats%settle_k, err)
+      end if
       call close_group(grp, err)
    end subroutine write_stats
 
