@@ -25,6 +25,7 @@ program test_peaks
    call suite_begin('peak forces independent of the sampling')
    call test_rk4_peak_is_converged_in_dt(f_rk4, t_rk4)
    call test_cvode_peak_matches_rk4_at_any_output_interval(f_rk4)
+   call test_cvode_peak_converges_with_rtol(f_rk4)
    call test_adaptive_methods_see_an_impact_between_output_times()
    call test_oscillator_p2p_is_closed_form_at_coarse_output()
    call test_ghm_380_p2p_independent_of_output_interval()
@@ -61,6 +62,8 @@ contains
       ! RK4's global error at these steps is ~1e-9 relative: the peak must agree to that
       ! level, not to the 1.7e-4 that separated the two sampled "converged" values
       call check('peak mesh force at dt = 5e-7 vs 2e-6 (lbf)', f2, f1, rel_tol=1.0e-7_wp)
+      ! the reference of the issue (1696.3695 lbf, RK4 at dt 2e-6; 1696.36954455 at dt 1e-6)
+      call check('peak mesh force at dt = 2e-6 (lbf)', f1, 1696.3695_wp, abs_tol=5.0e-5_wp)
       call check('mesh torque minimum at dt = 5e-7 vs 2e-6', t2, t1, rel_tol=1.0e-7_wp)
       write (*, '(a)') '    peak mesh force '//str(f1)//' lbf'
    end subroutine test_rk4_peak_is_converged_in_dt
@@ -74,6 +77,24 @@ contains
       call peaks('cvode-bdf', 8.0e-6_wp, 1.0e-5_wp, 1.0e-8_wp, f, tmax)
       call check('cvode-bdf, output every 1e-5 s', f, f_ref, rel_tol=1.0e-3_wp)
    end subroutine test_cvode_peak_matches_rk4_at_any_output_interval
+
+   !> D-46: rtol acts on the node angles through a fixed angle resolution, not
+   !> on how far a node has turned. Before, node angles of about 2.4 rad at the
+   !> peak (a zone change under load) carried a tolerance of 2.4 rtol rad, more
+   !> than the mesh deflection's resolution there, and cvode-bdf's peak did not
+   !> converge as rtol fell (1696.341 at 1e-8, 1696.354 at 1e-9, 1696.358 at 1e-10
+   !> against RK4's 1696.3695). Now rtol 1e-8 gives it to 1e-6 relative (measured
+   !> 6.4e-7), and rtol 1e-10 closer still (1.5e-7).
+   subroutine test_cvode_peak_converges_with_rtol(f_ref)
+      real(wp), intent(in) :: f_ref
+      real(wp) :: f8, f10, tmax
+      call test_begin('cvode_bdf_peak_mesh_force_converges_with_rtol')
+      call peaks('cvode-bdf', 8.0e-6_wp, 1.0e-4_wp, 1.0e-8_wp, f8, tmax)
+      call check('cvode-bdf, rtol 1e-8: peak mesh force (lbf) as converged RK4', f8, f_ref, rel_tol=1.0e-6_wp)
+      call peaks('cvode-bdf', 8.0e-6_wp, 1.0e-4_wp, 1.0e-10_wp, f10, tmax)
+      call check('cvode-bdf, rtol 1e-10: closer to RK4 than at rtol 1e-8', abs(f10 - f_ref) < abs(f8 - f_ref))
+      call check('cvode-bdf, rtol 1e-10: peak mesh force (lbf) as converged RK4', f10, f_ref, rel_tol=3.0e-7_wp)
+   end subroutine test_cvode_peak_converges_with_rtol
 
    !> App. C's single impact (Table 5.3: a 39 us contact) with one output sample
    !> every 100 us: the adaptive methods must still report its peak force, from

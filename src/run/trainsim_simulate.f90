@@ -382,6 +382,12 @@ contains
          t_out = out_time(k)
          call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
+         if (abs(t - t_out) > d%tol) then
+            ! a sample is the solution at its own time, never a later state (D-45)
+            call fatal_error(err, "internal: integrator '"//model%run%integrator//"' left the state at t = "// &
+                             str(t)//' s for the output time '//str(t_out)//' s', err_internal)
+            return
+         end if
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
          if (present(progress)) call progress%poll(t, obs%n_events)
@@ -585,7 +591,7 @@ contains
          call fatal_error(err, 'the modes did not settle at t = '//str(t)//' s: after '//str(max_settle_passes)// &
                           ' passes of the mode update, a guard of '//guard_owner(model, j)// &
                           ' is still below zero; the state there is not consistent with any contact state '// &
-                          '(a runaway state, or a time step above the stability limit)', err_numeric)
+                          '(a runaway state). '//remedy(model), err_numeric)
          return
       end if
       call count_events(model, d, t, n_total, err)
@@ -638,7 +644,7 @@ contains
       call fatal_error(err, 'the modes did not settle at t = '//str(t)//' s: after '//str(max_settle_passes)// &
                        ' passes of the mode update, a guard of '//guard_owner(model, j)// &
                        ' is still below zero; the state there is not consistent with any contact state '// &
-                       '(a runaway state, or a time step above the stability limit)', err_numeric)
+                       '(a runaway state). '//remedy(model), err_numeric)
    end subroutine settle_events
 
    !> Event budget: more than max_events_per_dt events inside one dt is a flood.
@@ -657,9 +663,9 @@ contains
       if (d%window_events <= max_events_per_dt) return
       last = d%ev(max(nev, 1))%element
       call fatal_error(err, 'event flood at t = '//str(t)//' s: more than '//str(max_events_per_dt)// &
-                       ' events within dt = '//str(model%run%dt)//" s (the last: '"// &
+                       ' events within '//window_text(model)//" (the last: '"// &
                        ev_name(d%ev(max(nev, 1))%kind)//"' of element '"//model%elements(last)%e%id//"'). "// &
-                       stability_advice(model), err_numeric)
+                       remedy(model), err_numeric)
    end subroutine count_events
 
    !> Every entry of y within the blow-up limit (NaN is not): the test of
@@ -716,23 +722,41 @@ contains
       type(model_t), intent(inout) :: model
       class(integrator_t), intent(in) :: integ
       character(len=:), allocatable :: text
-      type(integrator_entry_t), allocatable :: rows(:)
-      integer :: i
       associate (unused => integ)
       end associate
-      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
-      do i = 1, size(rows)
-         if (rows(i)%name == model%run%integrator) exit
-      end do
-      if (i <= size(rows)) then
-         if (.not. rows(i)%fixed_step) then
-            text = 'Tighten rtol and the absolute tolerances, or set a smaller max_step; if that does not help, '// &
-                   'check the loads, stiffnesses and inertias of the deck for values out of proportion'
-            return
-         end if
-      end if
-      text = stability_advice(model)
+      text = remedy(model)
    end function blowup_advice
+
+   !> What to try after a numerical failure, for the integrator in use: the
+   !> step dt against RK4's stability limit (fixed-step methods), or the
+   !> tolerances and max_step (adaptive ones, which do not use dt but as the
+   !> output grid when output_interval is 0).
+   function remedy(model) result(text)
+      type(model_t), intent(inout) :: model
+      character(len=:), allocatable :: text
+      character(len=:), allocatable :: h
+      if (is_fixed_step(model%run%integrator)) then
+         text = stability_advice(model)
+         return
+      end if
+      h = 'a smaller max_step'
+      if (model%run%max_step > 0.0_wp) h = 'a smaller max_step (now '//str(model%run%max_step)//' s)'
+      text = "Integrator '"//model%run%integrator//"' chooses its own steps: tighten rtol (now "//str(model%run%rtol)// &
+             ') and the absolute tolerances, or set '//h//'; if that does not help, check the loads, stiffnesses '// &
+             'and inertias of the deck for values out of proportion'
+   end function remedy
+
+   !> The event budget's window in words: dt for a fixed-step method, else the
+   !> same span of time named as the deck's dt (an adaptive method does not step by it).
+   function window_text(model) result(text)
+      type(model_t), intent(in) :: model
+      character(len=:), allocatable :: text
+      if (is_fixed_step(model%run%integrator)) then
+         text = 'dt = '//str(model%run%dt)//' s'
+      else
+         text = str(model%run%dt)//' s, the deck''s dt'
+      end if
+   end function window_text
 
    !> dt against the RK4 stability limit of the stiffest state the run can
    !> reach (every clearance closed, gears at their largest stiffness factor,
