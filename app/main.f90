@@ -164,6 +164,7 @@ program trainsim_main
       call install_interrupt_handlers()
       call do_run(deck_path, out_path, no_output)
    else if (cmd == 'sweep') then
+      call install_interrupt_handlers()
       call do_sweep(deck_path, out_path)
    else
       call do_modes(deck_path, modes_state)
@@ -234,6 +235,11 @@ contains
       character(len=*), intent(in) :: path, out
       type(sweep_summary_t) :: summary
       type(error_t), allocatable :: err
+      if (out == '-') then
+         write (error_unit, '(a)') 'trainsim: error: -o - (no file) does not apply to sweep: a sweep records '// &
+            'and resumes its runs in a file; name one with -o FILE'
+         call quit(2)
+      end if
       sweep_opt%deck_path = path
       sweep_opt%out_path = out
       sweep_opt%sets = sets
@@ -242,7 +248,13 @@ contains
       ! other ranks exit 0: mpirun's status is rank 0's, and a rank that exits non-zero
       ! first makes mpirun kill rank 0 before it has printed why
       if (.not. summary%root) call quit(0)
-      if (allocated(err)) call fail(err)
+      if (allocated(err)) then
+         if (err%code == err_interrupted) then    ! the runs made are recorded: say so, not "no history"
+            write (error_unit, '(a)') 'trainsim: '//err%message
+            call quit(summary%exit_code)
+         end if
+         call fail(err)
+      end if
       write (output_unit, '(a)') 'sweep: '//str(summary%n_now)//' run(s) made, '//str(summary%n_ok)//' of '// &
          str(summary%n_runs)//' ok, '//str(summary%n_failed)//' failed; results in '//summary%path
       call quit(summary%exit_code)
