@@ -126,3 +126,18 @@ void trainsim_digest(const char *s, long long n, char *out)
     }
     snprintf(out, 17, "%016llx", (unsigned long long)h);
 }
+
+/* Give the memory freed since the last call back to the system (glibc malloc_trim):
+ * a sweep builds and frees a model per run, and the holes the allocator keeps would
+ * otherwise raise its peak RSS with the number of runs (docs/benchmarks.md). */
+#if defined(__GLIBC__)
+#include <malloc.h>
+void trainsim_trim_memory(void)
+{
+    malloc_trim(0);
+}
+#else
+void trainsim_trim_memory(void)
+{
+}
+#endif

@@ -43,7 +43,7 @@ module trainsim_sweep_file
       h5pset_obj_track_times_f, h5tclose_f, h5aexists_f, h5aopen_f, h5aclose_f, h5aread_f, h5eset_auto_f, &
       H5F_ACC_EXCL_F, H5F_ACC_RDWR_F, H5F_SCOPE_GLOBAL_F, H5S_SELECT_SET_F, &
       H5P_DATASET_CREATE_F, H5D_ALLOC_TIME_EARLY_F, H5T_NATIVE_DOUBLE, H5T_NATIVE_INTEGER, &
-      h5gopen_f, h5lexists_f, h5lmove_f, h5ldelete_f
+      h5gopen_f, h5lexists_f, h5lmove_f, h5ldelete_f, h5garbage_collect_f
    implicit none
    private
 
@@ -165,6 +165,8 @@ module trainsim_sweep_file
          character(kind=c_char), intent(in) :: path(*)
          integer(c_long_long) :: n
       end function c_free_bytes
+      subroutine c_trim_memory() bind(C, name='trainsim_trim_memory')
+      end subroutine c_trim_memory
       function c_getpid() bind(C, name='getpid') result(pid)
          import :: c_int
          integer(c_int) :: pid
@@ -568,6 +570,9 @@ contains
          end if
       end do
       call clean_messages(self, err)
+      ! the fill and read buffers of the creation and of this open (sized by the number
+      ! of runs) stay in HDF5's free lists unless given back
+      call h5garbage_collect_f(h)
    end subroutine file_open_existing
 
    !> A run's message (a variable-length string, a global-heap object) reaches the disk
@@ -770,8 +775,10 @@ contains
       do k = 1, size(run_value_names)
          call put_slot(self%d_run(k), rec%irun, [rec%run_values(k)], h); hs = min(hs, h)
       end do
-      ! always: a run made again overwrites what an uncommitted attempt left in its slot
-      call put_message(self, rec%irun, rec%message, h); hs = min(hs, h)
+      ! ('' is the fill value; a slot an uncommitted attempt left was cleared by clean_messages)
+      if (len(rec%message) > 0) then
+         call put_message(self, rec%irun, rec%message, h); hs = min(hs, h)
+      end if
       if (self%ne > 0) then
          do k = 1, size(element_metric_names)
             if (element_metric_is_int(k)) then
@@ -823,6 +830,10 @@ contains
          call put_slot_int(self%d_status, j, [self%status(j)], h); hs = min(hs, h)
       end do
       call h5fflush_f(self%file, H5F_SCOPE_GLOBAL_F, h); hs = min(hs, h)
+      ! HDF5 keeps the conversion buffers of each variable-length write in its free
+      ! lists (about 0.7 kB a message): give them back, so memory stays flat
+      call h5garbage_collect_f(h)
+      call c_trim_memory()
       if (hs < 0) call fatal_error(err, "cannot record runs in sweep file '"//self%path//"'"// &
                                    io_reason(self%path), err_io)
    end subroutine file_commit
@@ -930,6 +941,7 @@ contains
          call h5dcreate_f(loc, name, t, sp, d, h, dcpl_id=pl)
          hs = min(hs, h)
          if (h < 0) d = -1
+         call h5garbage_collect_f(h)   ! its fill buffer (sized by the runs) back to the system
       end if
       call h5pclose_f(pl, h)
       call h5sclose_f(sp, h)
