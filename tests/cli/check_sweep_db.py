@@ -300,6 +300,9 @@ def case_status(exe, tmp):
           r.stdout + r.stderr)
     ok, which = same(content(os.path.join(tmp, "ref.h5")), content(os.path.join(tmp, "sw.h5")))
     check("... the file equals the uninterrupted sweep's bits", ok, which)
+    with h5py.File(os.path.join(tmp, "sw.h5"), "r") as f:
+        meaning = f["runs/status"].attrs.get("meaning", "")
+    check("/runs/status says what its values mean", meaning == "0 pending, 1 ok, 2 failed", repr(meaning))
     return 0
 
 
