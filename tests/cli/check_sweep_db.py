@@ -19,7 +19,8 @@ cases:
                file ends equal to an uninterrupted sweep
   signals      SIGINT / SIGTERM part-way: exit 130 / 143, a message with the runs recorded
                and "the same command resumes"; the same command completes the sweep equal
-               to an uninterrupted one
+               to an uninterrupted one; on 2 MPI ranks (when mpirun is there) SIGTERM to
+               the ranks: mpirun exits 143, and the resumed file is equal too
   export       trainsim export on a sweep file: exit 2, "a sweep file", names trainsim plot
   diskfull     (root, a tmpfs; else exit 77 = skipped) a sweep onto a full disk: exit 2 "No
                space left on device", no FILE.part left; the disk filling while runs are
@@ -30,6 +31,7 @@ cases:
 import os
 import random
 import re
+import shutil
 import signal
 import stat
 import subprocess
@@ -338,6 +340,33 @@ def case_signals(exe, tmp):
         check(f"{name}: the same command completes the sweep, equal to an uninterrupted one",
               r.returncode == 0 and f"sweep: {12 - k} run(s) made" in r.stdout and
               same(ref, content(os.path.join(tmp, f"{name}.h5")))[0], r.stdout + r.stderr)
+    mpirun = shutil.which("mpirun")
+    if not mpirun:
+        print("(no mpirun: the MPI part is not run)")
+        return 0
+    # under MPI: SIGTERM to every rank, as a batch system's cancel sends it
+    p = subprocess.Popen([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "s.nml", "-o",
+                          "mpi.h5", "--progress", "0"], cwd=tmp, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         text=True)
+    lines = []
+    for line in p.stderr:
+        lines.append(line)
+        if "built without MPI" in line:
+            p.wait()
+            print("(trainsim built without MPI: the MPI part is not run)")
+            return 0
+        if re.match(r"sweep: [2-9]/12 runs done", line):
+            ranks = subprocess.run(["pgrep", "-P", str(p.pid)], capture_output=True, text=True).stdout.split()
+            for r in ranks:
+                os.kill(int(r), signal.SIGTERM)
+            break
+    err = "".join(lines) + p.stderr.read()
+    p.wait(timeout=TIMEOUT)
+    check("2 MPI ranks, SIGTERM to both: mpirun exits 143, rank 0 says how many runs are recorded",
+          p.returncode == 143 and "sweep interrupted by SIGTERM" in err, f"rc {p.returncode}: {err[-600:]}")
+    r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "s.nml", "-o", "mpi.h5"], tmp)
+    check("... the same command completes it, equal to an uninterrupted sweep",
+          r.returncode == 0 and same(ref, content(os.path.join(tmp, "mpi.h5")))[0], r.stdout + r.stderr)
     return 0
 
 
