@@ -331,7 +331,9 @@ contains
             '  --resume           complete the sweep in FILE (the default when FILE holds this sweep)', &
             '  --progress S       a progress line on stderr every S seconds (0: every run)', &
             '  -h, --help         this text', '', &
-            'exit status: 0 every run ok, 1 some run failed (recorded in the file), 2 bad input or file'
+            'exit status: 0 every run ok, 1 some run failed (recorded in the file), 2 bad input or file', &
+            '             (or FILE written by another sweep now), 130 / 143 stopped by SIGINT / SIGTERM', &
+            '             (the runs made are recorded; the same command resumes)'
       case ('modes')
          write (unit, '(a)') 'usage: trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest]', '', &
             'Natural frequencies and mode shapes of the linearised train, and its RK4 step limit.', &

@@ -392,11 +392,8 @@ contains
          call h5fclose_f(f, h)
          if (h < 0) call mark_hdf5_stuck()
          rc = c_remove(part//c_null_char)
-         if (allocated(err)) then
-            err%message = "cannot write sweep file '"//path//"': "//err%message//io_reason(path)
-         else
-            call fatal_error(err, "cannot write sweep file '"//path//"'"//io_reason(path), err_io)
-         end if
+         ! (the string helpers' own message names a run file's group: not repeated)
+         call fatal_error(err, "cannot write sweep file '"//path//"'"//io_reason(path), err_io)
          return
       end if
       call h5fclose_f(f, h)
