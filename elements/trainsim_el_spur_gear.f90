@@ -21,7 +21,8 @@ module trainsim_el_spur_gear
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: check_magnitude
-   use trainsim_param_list, only: param_list_t, make_param_list, append_params, guarded_product, guarded_ratio
+   use trainsim_param_list, only: param_list_t, make_param_list, append_params, add_choice, guarded_product, &
+      guarded_ratio
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
@@ -380,14 +381,17 @@ contains
       ! c2 k; the driver angle of one tooth, 2 pi / N
       p = make_param_list([character(len=40) :: 'stiffness', 'rb_driver', 'rb_driven', &
                        'teeth', 'contact_ratio', 'approach_angle', &
-                       'half_backlash', 'two_pair_factor', 'truncate_zones', &
+                       'half_backlash', 'two_pair_factor', &
                        'min_approach_velocity', 'initial_contact_velocity', &
                        'gear_ratio', 'base_pitch', 'two_pair_stiffness', &
                        'mesh_period_angle'], &
                        [self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, &
-                        self%cl%b, self%c2, merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, &
+                        self%cl%b, self%c2, self%cl%law%v_min, &
                         self%cl%law%v_initial, guarded_ratio(self%cl%r2, self%cl%r1), guarded_ratio(two_pi*self%cl%r1, self%teeth), &
                         guarded_product(self%c2, self%cl%law%k), guarded_ratio(two_pi, self%teeth)])
+      ! zone_function: the file's attribute truncate_zones (1 = 'truncate', 0 = 'periodic')
+      call add_choice(p, 'truncate_zones', merge(1.0_wp, 0.0_wp, self%truncate), &
+                      merge('truncate', 'periodic', self%truncate))
       if (self%pitch_module > 0.0_wp) then
          call append_params(p, [character(len=40) :: 'teeth_driven', 'module_length', 'pressure_angle_rad', 'face_width'], &
                             [self%teeth2, self%pitch_module, self%phi, self%face])

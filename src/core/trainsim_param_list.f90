@@ -6,12 +6,16 @@ module trainsim_param_list
    implicit none
    private
 
-   public :: param_list_t, guarded_product, guarded_ratio, make_param_list, append_params
+   public :: param_list_t, guarded_product, guarded_ratio, make_param_list, append_params, add_choice
 
    !> Named real parameters of one element or node (derived values included).
+   !> A choice key (a word in the deck) is stored by its code in `values` (the file's
+   !> real attribute) and, for the print-out, by its word in `words` (same index; an
+   !> empty word or unallocated `words`: print the number).
    type :: param_list_t
       type(string_t), allocatable :: names(:)
       real(wp), allocatable :: values(:)
+      type(string_t), allocatable :: words(:)
    end type param_list_t
 contains
 
@@ -30,24 +34,57 @@ contains
       p%values = values
    end function make_param_list
 
-   !> Append `names` and `values` to p (as make_param_list).
+   !> Append `names` and `values` to p (as make_param_list; their words, if p has
+   !> words, are empty).
    pure subroutine append_params(p, names, values)
       type(param_list_t), intent(inout) :: p
       character(len=*), intent(in) :: names(:)
       real(wp), intent(in) :: values(:)
-      type(string_t), allocatable :: all(:)
+      integer :: i
+      do i = 1, size(names)
+         call append_one(p, trim(names(i)), values(i), '')
+      end do
+   end subroutine append_params
+
+   !> Append the choice key `name`, stored as `code`, printed as `word`.
+   pure subroutine add_choice(p, name, code, word)
+      type(param_list_t), intent(inout) :: p
+      character(len=*), intent(in) :: name, word
+      real(wp), intent(in) :: code
+      integer :: j
+      if (.not. allocated(p%words)) then
+         allocate (p%words(size(p%names)))
+         do j = 1, size(p%words)
+            p%words(j)%s = ''
+         end do
+      end if
+      call append_one(p, name, code, word)
+   end subroutine add_choice
+
+   !> One more entry (strings moved, not copied through string_t(...) constructors).
+   pure subroutine append_one(p, name, value, word)
+      type(param_list_t), intent(inout) :: p
+      character(len=*), intent(in) :: name, word
+      real(wp), intent(in) :: value
+      type(string_t), allocatable :: grown(:)
       integer :: i, m
       m = size(p%names)
-      allocate (all(m + size(names)))
+      allocate (grown(m + 1))
       do i = 1, m
-         call move_alloc(p%names(i)%s, all(i)%s)
+         call move_alloc(p%names(i)%s, grown(i)%s)
       end do
-      do i = 1, size(names)
-         all(m + i)%s = trim(names(i))
-      end do
-      call move_alloc(all, p%names)
-      p%values = [p%values, values]
-   end subroutine append_params
+      grown(m + 1)%s = name
+      call move_alloc(grown, p%names)
+      p%values = [p%values, value]
+      if (allocated(p%words)) then
+         allocate (grown(m + 1))
+         do i = 1, m
+            call move_alloc(p%words(i)%s, grown(i)%s)
+         end do
+         grown(m + 1)%s = word
+         call move_alloc(grown, p%words)
+      end if
+   end subroutine append_one
 
    !> a*b for a derived parameter, or huge when that would overflow: a deck value
    !> beyond the accepted range (D-28) must reach the range check that names its

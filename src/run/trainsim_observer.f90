@@ -17,6 +17,7 @@ module trainsim_observer
    use trainsim_model, only: model_t
    use trainsim_element, only: element_slot_t
    use trainsim_signal, only: signal_t
+   use trainsim_input_series, only: input_series_count, input_series_labels, input_drivers, input_series_values
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_full
@@ -72,6 +73,7 @@ module trainsim_observer
       logical :: refine_peaks = .false.
       real(wp), allocatable :: th_prev(:), om_prev(:), force_prev(:), disp_prev(:), torque_prev(:)
       integer, allocatable :: contact_prev(:)
+      integer, allocatable :: drivers(:)             !< nodes with a driving input (trainsim_input_series)
       !> per element: the time up to which its time out of contact is counted by
       !> a local event instant (step_part) past t_prev (-huge: none)
       real(wp), allocatable :: t_counted(:)
@@ -145,6 +147,7 @@ contains
             if (meta%element_disp_units(i)%s == 'length') meta%element_disp_units(i)%s = model%units%length
          end associate
       end do
+      call input_series_labels(model, meta%input_series_names, meta%input_series_units)
       allocate (meta%input_keys(0), meta%input_files(0), meta%input_texts(0))
       do i = 1, size(model%loads)
          call add_input_file(model%loads(i)%torque)
@@ -188,6 +191,8 @@ contains
       allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
       allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
       allocate (self%s%contact(ne), self%s%pairs(ne))
+      self%drivers = input_drivers(model)
+      allocate (self%s%inputs(input_series_count(model)))
       allocate (self%res%el(ne), self%res%events(ne), self%open_row(ne))
       self%open_row = 0
       self%out => sink
@@ -265,6 +270,7 @@ contains
                           self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
          end associate
       end do
+      if (size(self%s%inputs) > 0) call input_series_values(model, self%drivers, t, self%s%inputs)
       if (self%track) call fill_energy(self, model, y)
    end subroutine obs_fill
 
