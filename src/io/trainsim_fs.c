@@ -141,3 +141,50 @@ void trainsim_trim_memory(void)
 {
 }
 #endif
+
+/* Remove the temporaries FILE.<digits>.part of sweeps killed while creating FILE (only
+ * the holder of FILE.lock makes one, so under the lock every such file is stale).
+ * Returns how many were removed. */
+#include <dirent.h>
+int trainsim_remove_stale_parts(const char *path)
+{
+    char dir[4096];
+    const char *base = strrchr(path, '/');
+    size_t nb;
+    DIR *d;
+    struct dirent *e;
+    int removed = 0;
+    if (base) {
+        size_t n = (size_t)(base - path);
+        if (n == 0)
+            n = 1;
+        if (n >= sizeof dir)
+            return 0;
+        memcpy(dir, path, n);
+        dir[n] = '\0';
+        base++;
+    } else {
+        strcpy(dir, ".");
+        base = path;
+    }
+    nb = strlen(base);
+    d = opendir(dir);
+    if (!d)
+        return 0;
+    while ((e = readdir(d)) != NULL) {
+        const char *s = e->d_name, *p;
+        size_t n = strlen(s);
+        if (n <= nb + 6 || strncmp(s, base, nb) != 0 || s[nb] != '.' || strcmp(s + n - 5, ".part") != 0)
+            continue;
+        for (p = s + nb + 1; p < s + n - 5; ++p)
+            if (*p < '0' || *p > '9')
+                break;
+        if (p == s + n - 5) {
+            char full[8192];
+            if (snprintf(full, sizeof full, "%s/%s", dir, s) < (int)sizeof full && unlink(full) == 0)
+                ++removed;
+        }
+    }
+    closedir(d);
+    return removed;
+}

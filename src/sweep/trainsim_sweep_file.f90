@@ -165,6 +165,11 @@ module trainsim_sweep_file
          character(kind=c_char), intent(in) :: path(*)
          integer(c_long_long) :: n
       end function c_free_bytes
+      function c_remove_stale_parts(path) bind(C, name='trainsim_remove_stale_parts') result(n)
+         import :: c_int, c_char
+         character(kind=c_char), intent(in) :: path(*)
+         integer(c_int) :: n
+      end function c_remove_stale_parts
       subroutine c_trim_memory() bind(C, name='trainsim_trim_memory')
       end subroutine c_trim_memory
       function c_getpid() bind(C, name='getpid') result(pid)
@@ -283,6 +288,8 @@ contains
                           self%lock_path//"': "//os_text(info), err_io)
          return
       end if
+      ! a sweep killed while creating FILE left its FILE.<pid>.part: under the lock, stale
+      info = c_remove_stale_parts(path//c_null_char)
       why = path_refusal(path)     ! (again: the path may have changed before the lock was ours)
       if (len(why) > 0) then
          call fatal_error(err, "cannot write sweep file '"//path//"': "//why, err_io)
