@@ -25,6 +25,7 @@ program trainsim_main
                                  key_input_t, key_result_t, key_calc, key_report
    use trainsim_units, only: units_t, make_units
    use trainsim_contact, only: fit_tight, fit_loose, fit_average
+   use trainsim_describe, only: write_description
    implicit none
 
    character(len=:), allocatable :: cmd, deck_path, out_path
@@ -41,6 +42,11 @@ program trainsim_main
          integer(c_int), value :: status
       end subroutine c_exit_now
       !> POSIX readlink(2) (ssize_t is a C long on the 64-bit Linux targets).
+      !> POSIX getpid(2), for a temporary file name of this process.
+      function c_getpid() bind(C, name='getpid') result(pid)
+         import :: c_int
+         integer(c_int) :: pid
+      end function c_getpid
       function c_readlink(path, buf, n) bind(C, name='readlink') result(r)
          import :: c_char, c_long, c_size_t
          character(kind=c_char), intent(in) :: path(*)
@@ -76,6 +82,8 @@ program trainsim_main
       if (cmd == 'key') call do_key()
    case ('export', 'plot')
       call do_script()
+   case ('diagram')
+      call do_diagram()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)
@@ -269,7 +277,8 @@ contains
          '                                integrate the train in DECK; write the HDF5 history', &
          '                                (to FILE, else to the deck''s &run output). --set changes a', &
          '                                deck value (TARGET: node/element id, run, or GROUP#K) or a', &
-         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles);', &
+         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles,', &
+         '                                .settle_max_cycles);', &
          '                                --no-output (or -o -): no history file, even if the deck names one', &
          '  trainsim sweep DECK [-o FILE] [--set ...] [--resume] [--progress S]', &
          '                                every run of the deck''s &sweep groups (serial, or under', &
@@ -293,8 +302,10 @@ contains
          '                                keyed-joint stiffness curve (Ch. IV) and a deck fragment', &
          '  trainsim export FILE.h5 QUANTITY ... | --events | --metrics | --summary json | --spectrum', &
          '                                CSV/JSON of a history (scripts/trainsim_export.py --help)', &
-         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR  -o OUT.png|pdf|svg', &
-         '                                figures of a history (scripts/trainsim_plot.py --help)', &
+         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR | --overview [ID]  -o OUT', &
+         '                                figures of a history or a sweep (scripts/trainsim_plot.py --help)', &
+         '  trainsim diagram DECK -o OUT.svg|png|pdf [--json FILE] [--set ...]', &
+         '                                the train as a block diagram, from the deck alone', &
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
@@ -317,7 +328,8 @@ contains
             '  --no-output, -o -  write no history file, even if the deck names one', &
             '  --set T.KEY=VALUE  change a deck value: T is a node or element id, run, or GROUP#K', &
             '                     (e.g. mesh.half_backlash=2e-4, run.t_end=0.1, load#2.value=-500),', &
-            '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles)', &
+            '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles,', &
+            '                     .settle_max_cycles)', &
             '  -h, --help         this text', '', &
             'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file,', &
             '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)'
@@ -362,6 +374,19 @@ contains
             '  --id ID, --units U         the fragment''s element id; in-lbf-s (default) or si', &
             '  -h, --help                 this text', '', &
             'exit status: 0 success, 2 bad input'
+      case ('diagram')
+         write (unit, '(a)') 'usage: trainsim diagram DECK -o OUT.svg|png|pdf [--json FILE] [--set TARGET.KEY=VALUE ...]', '', &
+            'The train of DECK as a block diagram: nodes as blocks (kind, inertia), elements as', &
+            'connectors (type, ratio, backlash or clearance, stiffness), loads, prescribed speeds and', &
+            'motor voltages as arrows; every unconnected part is drawn as its own piece. The deck is', &
+            'read and built as `run` does (a bad deck: exit 2, the same message); nothing is run.', &
+            'Drawn by scripts/trainsim_diagram.py with matplotlib (no Graphviz needed).', '', &
+            '  -o, --output OUT   the drawing; the format follows the extension', &
+            '  --json FILE        also write the description the drawing is made from (- for stdout);', &
+            '                     without -o only the description is written', &
+            '  --set T.KEY=VALUE  as for run', &
+            '  -h, --help         this text', '', &
+            'exit status: 0 success, 2 bad input or file'
       case ('key')
          write (unit, '(a)') 'usage: trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', '', &
             'The keyed-joint stiffness curve of Ch. IV (eqs. 4.35-4.37): torque, key force, lineal and', &
@@ -692,6 +717,104 @@ contains
       call key_report(q, r, output_unit)
       call quit(0)
    end subroutine do_key
+
+   ! ------------------------------------------------------------ trainsim diagram
+
+   !> trainsim diagram DECK -o OUT [--json FILE] [--set ...]: the deck read and built by
+   !> trainsim itself, its description (trainsim_describe) written as JSON, then drawn by
+   !> scripts/trainsim_diagram.py (run as `export` and `plot` run theirs).
+   subroutine do_diagram()
+      character(len=:), allocatable :: deck_file, out, json, path, script, python, line, ext
+      type(deck_t) :: deck
+      type(deck_group_t), allocatable :: sweeps(:)
+      type(model_t) :: model
+      type(error_t), allocatable :: err
+      integer :: k, u, ios, stat, cstat
+      deck_file = ''
+      out = ''
+      json = ''
+      allocate (sets(0))
+      k = 2
+      do while (k <= nargs)
+         select case (arg(k))
+         case ('-h', '--help')
+            call command_usage('diagram', output_unit)
+            call quit(0)
+         case ('-o', '--output'); out = text_value(k); k = k + 1
+         case ('--json'); json = text_value(k); k = k + 1
+         case ('--set'); call add_set(k); k = k + 1
+         case default
+            if (index(arg(k), '-') == 1 .or. len(deck_file) > 0) then
+               write (error_unit, '(a)') "trainsim: diagram: error: unexpected argument '"//arg(k)// &
+                  "' (try trainsim diagram --help)"
+               call quit(2)
+            end if
+            deck_file = arg(k)
+         end select
+         k = k + 1
+      end do
+      if (len(deck_file) == 0 .or. (len(out) == 0 .and. len(json) == 0)) then
+         write (error_unit, '(a)') 'trainsim: diagram: error: needs a deck and -o OUT.svg|png|pdf (or --json FILE) '// &
+            '(try trainsim diagram --help)'
+         call quit(2)
+      end if
+      ext = ''
+      if (index(out, '.', back=.true.) > 0) ext = out(index(out, '.', back=.true.):)
+      if (len(out) > 0 .and. ext /= '.svg' .and. ext /= '.png' .and. ext /= '.pdf') then
+         write (error_unit, '(a)') "trainsim: diagram: error: output '"//out//"' must end in .svg, .png or .pdf"
+         call quit(2)
+      end if
+      script = ''
+      if (len(out) > 0) then
+         script = find_script('trainsim_diagram.py')
+         if (len(script) == 0) then
+            write (error_unit, '(a)') 'trainsim: diagram: error: cannot find trainsim_diagram.py (looked in '// &
+               '$TRAINSIM_SCRIPTS, <prefix>/share/trainsim/scripts and <build>/../scripts beside the executable)'
+            call quit(2)
+         end if
+      end if
+
+      call read_deck(deck_file, deck, err)
+      if (allocated(err)) call fail(err)
+      call split_sweep_groups(deck, sweeps)   ! a sweep deck is drawn with its own values
+      call prepare_model(deck, sets, model, err)
+      if (allocated(err)) call fail(err)
+
+      if (json == '-') then
+         call write_description(deck, model, output_unit)
+         flush (output_unit)
+         if (len(out) == 0) call quit(0)
+      end if
+      path = json
+      if (json == '-' .or. len(json) == 0) then   ! a temporary file for the script
+         path = env_text('TMPDIR')
+         if (len(path) == 0) path = '/tmp'
+         path = path//'/trainsim-diagram-'//str(int(c_getpid()))//'.json'
+      end if
+      open (newunit=u, file=path, status='replace', action='write', iostat=ios)
+      if (ios /= 0) then
+         write (error_unit, '(a)') "trainsim: diagram: error: cannot write '"//path//"'"
+         call quit(2)
+      end if
+      call write_description(deck, model, u)
+      close (u)
+      if (len(out) == 0) call quit(0)
+
+      python = env_text('TRAINSIM_PYTHON')
+      if (len(python) == 0) python = '/usr/bin/python3'
+      line = quoted(python)//' '//quoted(script)//' '//quoted(path)//' -o '//quoted(out)
+      flush (output_unit)
+      call execute_command_line(line, exitstat=stat, cmdstat=cstat)
+      if (path /= json) then
+         open (newunit=u, file=path, status='old', iostat=ios)
+         if (ios == 0) close (u, status='delete')
+      end if
+      if (cstat /= 0) then
+         write (error_unit, '(a)') 'trainsim: diagram: error: cannot run '//python//' '//script
+         call quit(2)
+      end if
+      call quit(stat)
+   end subroutine do_diagram
 
    ! ------------------------------------------ trainsim export / trainsim plot
 

@@ -1113,6 +1113,14 @@ contains
       if (.not. allocated(err)) call put_real_attr(grp, 'wall_time', stats%wall_time, err)
       if (.not. allocated(err)) call put_real_attr(grp, 't_final', stats%t_final, err)
       if (.not. allocated(err)) call put_int_attr(grp, 'completed', completed, err)
+      if (.not. allocated(err)) call put_real_attr(grp, 't_metrics', stats%t_metrics, err)
+      if (stats%settle_status /= 0) then   ! settling until periodic (&run settle_tol)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settled', merge(1, 0, stats%settle_status == 1 .or. &
+                                                                           stats%settle_status == 3), err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_tol_given', merge(1, 0, stats%settle_status <= 2), err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_periods', stats%settle_periods, err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_k', stats%settle_k, err)
+      end if
       call close_group(grp, err)
    end subroutine write_stats
 

@@ -121,6 +121,21 @@ contains
       write (unit, '(a,i0,a,i0,a)') 'steps ', res%stats%steps, ', RHS evaluations ', res%stats%rhs_evals, &
          ', wall time '//fixed(res%stats%wall_time, 3)//' s'
       write (unit, '(a,i0,a,es12.5,a)') 'events ', res%stats%events, ', final time ', res%t_final, ' s'
+      select case (res%stats%settle_status)
+      case (1)
+         write (unit, '(a,i0,a,es12.5,a,i0,a)') 'settled: the state repeats after ', res%stats%settle_k, &
+            ' period(s) to settle_tol; metrics from t = ', res%stats%t_metrics, ' s (', res%stats%settle_periods, &
+            ' settle periods)'
+      case (2)
+         write (unit, '(a,i0,a)') 'NOT SETTLED: the state did not repeat to settle_tol within settle_max_time (', &
+            res%stats%settle_periods, ' settle periods); the metrics below are of a transient'
+      case (3)
+         write (unit, '(a)') 'settled by settle_time: the state repeats from one settle period to the next to 1e-3'
+      case (4)
+         write (unit, '(a,i0,a)') 'NOT SETTLED by settle_time (', res%stats%settle_periods, ' settle periods): '// &
+            'the state does not repeat from one period to the next to 1e-3; the metrics below are of a '// &
+            'transient. Set &run settle_tol (e.g. 1e-5) to settle until periodic'
+      end select
       if (model%run%track_energy) write (unit, '(a,es10.3,a,es10.3,a)') 'energy balance: max |residual| ', &
          res%energy_residual_max, ' (energy scale ', res%energy_scale, ' '//model%units%torque//')'
       write (unit, '(a)') 'element extremes (torque on the right node in '//model%units%torque// &
@@ -133,10 +148,10 @@ contains
             write (unit, '(a'//we//',1x,a'//wt//',4es15.6,a7,i9,es13.4,es15.6,f8.2)') e%id, e%type_name, &
                m%torque_min, m%torque_max, m%disp_min, m%disp_max, disp_unit(model, e), m%impacts, &
                m%max_approach_velocity, m%max_peak_force, &
-               100.0_wp*m%time_out_of_contact/max(res%t_final - model%run%t_start - model%run%settle_time, tiny(1.0_wp))
+               100.0_wp*m%time_out_of_contact/max(res%t_final - res%stats%t_metrics, tiny(1.0_wp))
          end associate
       end do
-      write (unit, '(a)') 'peak-to-peak displacement after settle_time (range max-min; mean swing between peaks):'
+      write (unit, '(a)') 'peak-to-peak displacement after the settling (range max-min; mean swing between peaks):'
       do i = 1, size(model%elements)
          associate (e => model%elements(i)%e, m => res%el(i))
             write (unit, '(a'//we//',2es15.6,a,i0,a)') e%id, m%p2p_range, m%p2p_mean, &

@@ -91,6 +91,7 @@ module trainsim_sink
       procedure :: update_event => sink_update_event
       procedure :: stores_samples => sink_stores_samples
       procedure :: speeds_only => sink_speeds_only
+      procedure :: metrics_from => sink_metrics_from
    end type sink_t
 
    abstract interface
@@ -131,6 +132,16 @@ module trainsim_sink
    end type null_sink_t
 
 contains
+
+   !> A run that settles until periodic (&run settle_tol) starts its metrics at t,
+   !> known only when it has settled. Default: nothing (a sink that keeps figures of
+   !> its own over the metrics' window, as a sweep's speed range, takes it).
+   subroutine sink_metrics_from(self, t)
+      class(sink_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      associate (u1 => self, u2 => t)
+      end associate
+   end subroutine sink_metrics_from
 
    !> Default abort: nothing to clean up.
    subroutine sink_abort(self)

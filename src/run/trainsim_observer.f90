@@ -201,6 +201,8 @@ contains
       if (self%keep_events) allocate (self%kept(256))
       self%track = model%run%track_energy
       self%t_metrics = model%run%t_start + model%run%settle_time
+      ! settling until periodic: the metrics start when the run has settled (simulate)
+      if (model%run%settle_tol > 0.0_wp) self%t_metrics = huge(1.0_wp)
       self%t_prev = t
       ! the peak-to-peak metrics are computed online (memory independent of the
       ! run length); the whole series of samples is kept in memory only when the
