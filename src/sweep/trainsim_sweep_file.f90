@@ -600,21 +600,24 @@ contains
       integer :: h, hs, k
       logical :: ok, stale
       stale = .false.
-      allocate (msgs(self%n_runs))
-      do k = 1, self%n_runs
+      do k = 1, self%n_runs         ! (nothing kept per run: memory stays flat in the runs)
          call get_message(self, k, m, ok)
          if (self%status(k) == status_pending) then
             if (.not. ok .or. len(m) > 0) stale = .true.
-            msgs(k)%s = ''
          else if (.not. ok) then
             call fatal_error(err, "cannot read the message of run "//str(k)//" of sweep file '"//self%path// &
                              "' (damaged): delete it, or write this sweep to another file with -o", err_io)
             return
-         else
-            msgs(k)%s = m
          end if
       end do
       if (.not. stale) return
+      allocate (msgs(self%n_runs))
+      do k = 1, self%n_runs
+         msgs(k)%s = ''
+         if (self%status(k) == status_pending) cycle
+         call get_message(self, k, m, ok)
+         msgs(k)%s = m
+      end do
       hs = 0
       call h5gopen_f(self%file, 'runs', g, h); hs = min(hs, h)
       if (hs == 0) then
