@@ -17,6 +17,7 @@ program trainsim_main
    use trainsim_sink, only: null_sink_t
    use trainsim_hdf5, only: hdf5_sink_t, hdf5_library_stuck
    use trainsim_report, only: print_summary, print_modes, print_parameters
+   use trainsim_progress, only: progress_t
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
    use trainsim_preload, only: preload_info_t
@@ -309,7 +310,8 @@ contains
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
-         '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)', &
+         '             130 / 143 interrupted by SIGINT / SIGTERM (a run keeps its history so far, marked', &
+         '             interrupted)', &
          'deck format: man trainsim; docs/deck.md (installed in share/doc/trainsim)'
    end subroutine usage
 
@@ -331,8 +333,11 @@ contains
             '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles,', &
             '                     .settle_max_cycles)', &
             '  -h, --help         this text', '', &
+            'A run longer than 2 s prints its progress on stderr: one line rewritten in place on a', &
+            'terminal, a line every 10 s otherwise (TRAINSIM_PROGRESS_INTERVAL=S: every S seconds).', '', &
             'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file,', &
-            '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)'
+            '             130 / 143 interrupted by SIGINT / SIGTERM: the history up to the last output', &
+            '             time reached is kept, marked interrupted (root attribute status)'
       case ('sweep')
          write (unit, '(a)') 'usage: trainsim sweep DECK [-o FILE] [--set TARGET.KEY=VALUE ...] [--resume] [--progress S]', '', &
             'Every run of the &sweep groups of DECK, serially or under mpirun -np N (rank 0 hands', &
@@ -520,8 +525,10 @@ contains
       type(run_result_t) :: res
       type(hdf5_sink_t) :: h5
       type(null_sink_t) :: none
+      type(progress_t) :: progress
       real(wp) :: dt_safe, om, f, z
       logical :: warned
+      integer :: sig
 
       call load(path, model)
       if (len(out) > 0) model%run%output = out
@@ -559,15 +566,46 @@ contains
       if (len(model%run%output) > 0) then
          h5%path = model%run%output
          h5%compression = model%run%compression
-         call simulate(model, h5, res, err)
+         call simulate(model, h5, res, err, keep_interrupted=.true., progress=progress)
       else
-         call simulate(model, none, res, err)
+         call simulate(model, none, res, err, progress=progress)
       end if
-      if (allocated(err)) call fail(err)
+      if (allocated(err)) then
+         if (err%code == err_interrupted) then
+            ! the history computed so far was kept (simulate's keep_interrupted)
+            sig = interrupt_signal()
+            if (len(model%run%output) == 0) then
+               write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; '//no_file_reason(no_output)
+            else if (res%t_sampled > -huge(1.0_wp)) then
+               write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; the history up to t = '// &
+                  str(res%t_sampled)//' s (the last output time reached) was kept in '//model%run%output// &
+                  ", marked incomplete (root attribute status = 'interrupted')"
+            else   ! stopped before the first sample, or the file could not be closed (err says why)
+               write (error_unit, '(a)') 'trainsim: '//err%message//' ('//signal_name(sig)//'); no history written'
+            end if
+            call quit(128 + sig)
+         end if
+         call fail(err)
+      end if
       call print_summary(model, res, output_unit)
-      if (len(model%run%output) > 0) write (output_unit, '(a)') 'history written to '//model%run%output
+      if (len(model%run%output) > 0) then
+         write (output_unit, '(a)') 'history written to '//model%run%output
+      else
+         write (output_unit, '(a)') 'note: '//no_file_reason(no_output)
+      end if
       flush (output_unit)
    end subroutine do_run
+
+   !> Why a run wrote no history file.
+   function no_file_reason(no_output) result(text)
+      logical, intent(in) :: no_output   !< --no-output or -o - was given
+      character(len=:), allocatable :: text
+      if (no_output) then
+         text = 'no history file was written (--no-output or -o -)'
+      else
+         text = 'no history file was written: the deck names no output (set output in &run, or give -o FILE)'
+      end if
+   end function no_file_reason
 
    ! ------------------------------------------------ trainsim gear / trainsim key
 

@@ -13,7 +13,9 @@ usage:
 
 QUANTITY is ID.NAME: a node's theta or omega (drive.omega), an element's torque_left,
 torque_right, displacement, force, contact or pairs (mesh.displacement), a state by
-name (state.drive.speed), or energy.kinetic|potential|dissipated|input|balance.
+name (state.drive.speed), energy.kinetic|potential|dissipated|input|balance, or an input
+of the run as it saw it (input.load.load_torque, input.drive.prescribed_speed,
+input.motor.voltage: the columns of /inputs).
 --t0/--t1 keep samples in [t0, t1] s; --every N keeps every N-th of those. The CSV
 header names each column with its unit, e.g. `mesh.displacement [in]`.
 
@@ -59,14 +61,16 @@ def quantity_names(f):
     names += [f"{i}.{q}" for i in attr_list(f["elements"], "ids") for q in ELEMENT_SETS]
     names += [f"state.{s}" for s in attr_list(f["states"], "column_names")]
     names += [f"energy.{e}" for e in attr_list(f["energy"], "column_names")]
+    if "inputs" in f:
+        names += [f"input.{e}" for e in attr_list(f["inputs"], "column_names")]
     return names
 
 
 def quantity(f, name):
     """(values over all samples, unit) of QUANTITY `name`."""
     head, _, tail = name.partition(".")
-    if head == "energy" or head == "state":
-        ds = f["energy" if head == "energy" else "states"]
+    if head in ("energy", "state", "input") and (head != "input" or "inputs" in f):
+        ds = f[{"energy": "energy", "state": "states", "input": "inputs"}[head]]
         cols = attr_list(ds, "column_names")
         if tail in cols:
             j = cols.index(tail)
@@ -304,23 +308,24 @@ def write_csv(header, cols, out):
 def main(argv=None):
     p = argparse.ArgumentParser(prog="trainsim export", description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file")
-    p.add_argument("quantities", nargs="*")
-    p.add_argument("--t0", type=float)
-    p.add_argument("--t1", type=float)
-    p.add_argument("--every", type=int, default=1)
-    p.add_argument("--events", action="store_true")
-    p.add_argument("--metrics", action="store_true")
-    p.add_argument("--summary", choices=["json"])
-    p.add_argument("--spectrum", action="store_true")
+    p.add_argument("file", help="a history file of trainsim run (HDF5)")
+    p.add_argument("quantities", nargs="*", help="ID.NAME of each column to export (--list shows them)")
+    p.add_argument("--t0", type=float, help="keep samples and events from t0 (s) on")
+    p.add_argument("--t1", type=float, help="keep samples and events up to t1 (s)")
+    p.add_argument("--every", type=int, default=1, help="keep every N-th sample of the window (default 1)")
+    p.add_argument("--events", action="store_true", help="the event table, one row per event")
+    p.add_argument("--metrics", action="store_true", help="the run's figures (/metrics), one row per element")
+    p.add_argument("--summary", choices=["json"], help="the run's description, statistics and metrics as JSON")
+    p.add_argument("--spectrum", action="store_true",
+                   help="impact load spectrum: contacts per peak-force and approach-velocity bin")
     p.add_argument("--force-bins", help="N equal bins (default 10) or edges E0,E1,... of the peak force")
     p.add_argument("--velocity-bins", help="N equal bins (default 10) or edges E0,E1,... of the approach velocity")
     p.add_argument("--bins", help="fixed edges E0,E1,... in the file's force unit: of the peak force "
                                   "(--spectrum) or of the cycle range (--rainflow)")
     p.add_argument("--rainflow", action="store_true", help="rainflow cycles of each element's force (ASTM E1049)")
     p.add_argument("--element", action="append", help="--rainflow: only this element (repeatable)")
-    p.add_argument("--list", action="store_true")
-    p.add_argument("-o", "--output")
+    p.add_argument("--list", action="store_true", help="list every QUANTITY the file holds")
+    p.add_argument("-o", "--output", help="write to this file (default: standard output)")
     a = p.parse_args(argv)
     try:
         f = h5py.File(a.file, "r")

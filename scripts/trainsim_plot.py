@@ -12,7 +12,7 @@ usage:
       branches up and down, failed runs marked (scripts/plot_sweep.py --help)
 
 Y and X are quantities as in trainsim_export.py (mesh.displacement, drive.omega,
-energy.balance, ...). With --x the plot is Y against X (a phase plane, e.g.
+energy.balance, input.load.load_torque, ...). With --x the plot is Y against X (a phase plane, e.g.
 --x mesh.displacement); otherwise against time. --te plots the transmission error of a
 gear pair with the contact threshold (the half backlash: below it the teeth are apart)
 and, on the right axis, the number of tooth pairs in contact (Figs. 5.12-5.14). --events
@@ -283,19 +283,21 @@ def main(argv=None):
         return plot_sweep.main(["--out" if x in ("-o", "--output") else x for x in argv], prog="trainsim plot")
     p = argparse.ArgumentParser(prog="trainsim plot", description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file")
-    p.add_argument("y", nargs="*")
-    p.add_argument("--x")
-    p.add_argument("--te")
-    p.add_argument("--te-spectrum")
+    p.add_argument("file", help="a history file of trainsim run (HDF5), or a sweep file (then: --metric ID.NAME [--x PARAM]; trainsim plot SWEEP.h5 --help)")
+    p.add_argument("y", nargs="*", help="quantities to draw, as in trainsim export (mesh.displacement, "
+                   "drive.omega, input.load.load_torque)")
+    p.add_argument("--x", help="a quantity for the x axis (a phase plane); default: time")
+    p.add_argument("--te", metavar="GEAR", help="the transmission error of gear pair GEAR with its contact "
+                   "threshold and the tooth pairs in contact")
+    p.add_argument("--te-spectrum", metavar="GEAR", help="the amplitude spectrum of GEAR's TE against mesh order")
     p.add_argument("--overview", nargs="?", const="", metavar="ELEMENT",
                    help="the history figure of an element (default: the first clearance element)")
-    p.add_argument("--events", action="store_true")
-    p.add_argument("--t0", type=float)
-    p.add_argument("--t1", type=float)
-    p.add_argument("--data")
+    p.add_argument("--events", action="store_true", help="mark contact events as ticks in a strip under the plot")
+    p.add_argument("--t0", type=float, help="draw from t0 (s) on")
+    p.add_argument("--t1", type=float, help="draw up to t1 (s)")
+    p.add_argument("--data", metavar="OUT.npz", help="also save the plotted arrays (numpy .npz)")
     p.add_argument("--describe", help=argparse.SUPPRESS)   # the axes as JSON (tests)
-    p.add_argument("-o", "--output", required=True)
+    p.add_argument("-o", "--output", required=True, help="the figure: .png, .pdf or .svg")
     a = p.parse_args(argv)
     ext = os.path.splitext(a.output)[1].lower()
     if ext not in (".png", ".pdf", ".svg"):

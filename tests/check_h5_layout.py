@@ -12,7 +12,7 @@ import sys
 import h5py
 import numpy as np
 
-ROOT_ATTRS = ["title", "deck_file", "deck", "units", "trainsim_version", "integrator", "created"]
+ROOT_ATTRS = ["title", "deck_file", "deck", "units", "trainsim_version", "integrator", "created", "status"]
 ELEMENT_REAL = ["torque_left", "torque_right", "displacement", "force"]
 ELEMENT_INT = ["contact", "pairs"]
 ENERGY_NAMES = ["kinetic", "potential", "dissipated", "input", "balance"]
@@ -170,6 +170,11 @@ def check(f):
         c.require(a in rs.attrs, f"/run_stats@{a} missing")
     if c.require("completed" in rs.attrs, "/run_stats@completed missing"):
         c.require(int(rs.attrs["completed"]) in (0, 1), "/run_stats@completed is not 0/1")
+        # status: 'complete', or 'interrupted' for a run stopped by SIGINT/SIGTERM
+        # (the history up to the last output time reached), as run_stats@completed says
+        if "status" in f.attrs:
+            want = "complete" if int(rs.attrs["completed"]) == 1 else "interrupted"
+            c.require(f.attrs["status"] == want, f"root @status is {f.attrs['status']!r}, completed says {want!r}")
 
     check_self_description(f, c, n)
     return c.problems

@@ -117,7 +117,7 @@ class History:
             self.params = {i: {k: float(v) for k, v in f["elements"][i].attrs.items()
                                if np.ndim(v) == 0 and not isinstance(v, str)} for i in self.el_ids}
             self.version = str(f.attrs.get("trainsim_version", ""))
-        m = re.search(r"energy balance: max \|residual\|\s+(\S+) \(energy scale\s+(\S+)(?: [^)]*)?\)", text)
+        m = re.search(r"energy balance: max \|residual\|\s+(\S+) \(energy scale\s+([^\s)]+)[^)]*\)", text)
         self.energy_residual = float(m.group(1)) / float(m.group(2)) if m else float("nan")
 
     def node(self, i):

@@ -15,7 +15,7 @@ module trainsim_int_arkode
                           ARKODE_DORMAND_PRINCE_7_4_5, ARKODE_VERNER_8_5_6, &
                           FARKodeButcherTable_LoadERK, FARKodeButcherTable_Create, FARKodeButcherTable_Free
    use farkode_erkstep_mod, only: FERKStepCreate, FERKStepReInit, FERKStepFree, FERKStepEvolve, &
-                                  FERKStepSVtolerances, FERKStepSetUserData, FERKStepSetTableNum, FERKStepSetTable, &
+                                  FERKStepWFtolerances, FERKStepSetUserData, FERKStepSetTableNum, FERKStepSetTable, &
                                   FERKStepSetMaxStep, FERKStepSetMaxNumSteps, FERKStepSetMaxHnilWarns, &
                                   FERKStepSetStopTime, FERKStepSetErrHandlerFn, &
                                   FERKStepRootInit, FERKStepSetRootDirection, FERKStepSetNoInactiveRootWarn, &
@@ -24,7 +24,7 @@ module trainsim_int_arkode
                                   FERKStepGetEstLocalErrors, FERKStepGetErrWeights, FERKStepGetDky
    use trainsim_kinds, only: wp, i8
    use trainsim_integrator, only: integrator_t
-   use trainsim_sundials, only: sundials_integrator_t, cv_rhs, cv_roots, cv_error_handler, &
+   use trainsim_sundials, only: sundials_integrator_t, cv_rhs, cv_roots, cv_error_handler, cv_ewt, &
                                 st_success, st_tstop, st_root, st_too_much_work, st_too_much_acc, st_err_failure, &
                                 st_rhs_failure, st_root_failure, st_too_close, st_bad_input, st_other
    implicit none
@@ -105,7 +105,7 @@ contains
 
    integer(c_int) function ark_tolerances(self) result(f)
       class(arkode_erk_t), intent(inout), target :: self
-      f = FERKStepSVtolerances(self%mem, self%ud%model%run%rtol, self%nv_atol)
+      f = FERKStepWFtolerances(self%mem, c_funloc(cv_ewt))
    end function ark_tolerances
 
    !> An explicit method has no (non)linear solver.

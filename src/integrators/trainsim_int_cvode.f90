@@ -13,7 +13,7 @@ module trainsim_int_cvode
    use fsunlinsol_dense_mod, only: FSUNLinSol_Dense
    use fsunnonlinsol_fixedpoint_mod, only: FSUNNonlinSol_FixedPoint
    use fcvode_mod, only: FCVodeCreate, FCVodeInit, FCVodeReInit, FCVodeFree, FCVode, &
-                         FCVodeSVtolerances, FCVodeSetUserData, FCVodeSetLinearSolver, FCVodeSetNonlinearSolver, &
+                         FCVodeWFtolerances, FCVodeSetUserData, FCVodeSetLinearSolver, FCVodeSetNonlinearSolver, &
                          FCVodeSetMaxStep, FCVodeSetMaxNumSteps, FCVodeSetStopTime, FCVodeSetErrHandlerFn, &
                          FCVodeSetMaxHnilWarns, FCVodeSetNoInactiveRootWarn, FCVodeSetJacFn, &
                          FCVodeRootInit, FCVodeSetRootDirection, FCVodeGetRootInfo, &
@@ -27,7 +27,7 @@ module trainsim_int_cvode
                          CV_MEM_NULL, CV_ILL_INPUT, CV_BAD_T
    use trainsim_kinds, only: wp, i8
    use trainsim_integrator, only: integrator_t
-   use trainsim_sundials, only: sundials_integrator_t, cv_rhs, cv_jac, cv_roots, cv_error_handler, &
+   use trainsim_sundials, only: sundials_integrator_t, cv_rhs, cv_jac, cv_roots, cv_error_handler, cv_ewt, &
                                 st_success, st_tstop, st_root, st_too_much_work, st_too_much_acc, st_err_failure, &
                                 st_conv_failure, st_lin_failure, st_rhs_failure, st_root_failure, st_too_close, &
                                 st_bad_input, st_other
@@ -107,7 +107,7 @@ contains
 
    integer(c_int) function cv_tolerances(self) result(f)
       class(cvode_t), intent(inout), target :: self
-      f = FCVodeSVtolerances(self%mem, self%ud%model%run%rtol, self%nv_atol)
+      f = FCVodeWFtolerances(self%mem, c_funloc(cv_ewt))
    end function cv_tolerances
 
    !> Fixed-point iteration (Adams), or Newton with the dense solver and the

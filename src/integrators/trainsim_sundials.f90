@@ -7,13 +7,15 @@
 !>
 !> Every guard of every element is a root function with direction -1 (a mode
 !> stays valid while its guards are >= 0: only downward crossings are
-!> events). At a root return `advance` returns adv_event; the driver updates
-!> the modes and calls `restart`, which re-initialises the integrator at the
-!> event point: a mode change makes the right-hand side non-smooth there, so no
-!> history (multistep history, or the RK step-size history and interpolant)
-!> is carried across it. The same happens at the breakpoints of the inputs,
-!> which are stop times. Between those the integrator advances in NORMAL mode
-!> to the driver's goal (an output time) and interpolates there.
+!> events). The integrator advances in ONE_STEP mode: `advance` returns every
+!> internal step, and an output time inside a step interpolated on the step's
+!> dense output (GetDky). A root ends the step at the root: the output times
+!> before it are interpolated and returned first, then the root as adv_event
+!> (D-45); the driver updates the modes and calls `restart`, which
+!> re-initialises the integrator at the event point: a mode change makes the
+!> right-hand side non-smooth there, so no history (multistep history, or the
+!> RK step-size history and interpolant) is carried across it. The same
+!> happens at the breakpoints of the inputs, which are stop times.
 !> See docs/integrators.md.
 module trainsim_sundials
    use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_ptr, c_char, c_null_ptr, c_null_char, &
@@ -34,11 +36,23 @@ module trainsim_sundials
    private
 
    public :: sundials_integrator_t, cv_user_t
-   public :: cv_rhs, cv_jac, cv_roots, cv_error_handler
+   public :: cv_rhs, cv_jac, cv_roots, cv_error_handler, cv_ewt
    public :: cvode_max_step, cvode_abstol
    public :: st_success, st_tstop, st_root, st_too_much_work, st_too_much_acc, st_err_failure, &
              st_conv_failure, st_lin_failure, st_rhs_failure, st_root_failure, st_too_close, st_bad_input, st_other
 
+   !> The node angle that rtol is relative to (D-46), in rad: a node angle's
+   !> tolerance is rtol*angle_resolution + atol_angle, whatever the angle
+   !> itself (how far a node has turned is no measure of what matters: the
+   !> deformations across the elements, and a gear's position in its mesh
+   !> cycle, are). 1e-5 rad is 1 um at a 0.1 m radius, the order of a mesh
+   !> deflection's resolution; the smallest static deflections and clearances
+   !> of the bundled trains are 1e-4 to 1e-3 rad.
+   real(wp), parameter, public :: angle_resolution = 1.0e-5_wp
+   !> Part of |angle| added to an angle's tolerance: 10 units of rounding, so
+   !> that a tight rtol never asks an angle of several rad for more digits than
+   !> double precision holds (SUNDIALS's "too much accuracy" test is 1 unit).
+   real(wp), parameter :: angle_rounding = 10.0_wp*epsilon(1.0_wp)
    !> Fraction of the period of the highest linearised mode (clearances closed)
    !> used as the default maximum step.
    real(wp), parameter :: max_step_fraction = 0.1_wp
@@ -72,6 +86,10 @@ module trainsim_sundials
       real(wp) :: bad_t = 0.0_wp          !< time of that evaluation
       integer :: msg_len = 0
       character(len=512) :: msg = ''      !< last message SUNDIALS reported
+      !> the error weights (cv_ewt, D-46): 1/(rel_i |y_i| + fixed_i); rel_i is
+      !> rtol, or angle_rounding for a node angle (its tolerance does not grow
+      !> with how far it turned, but for the angle's own rounding)
+      real(wp), allocatable :: rel(:), fixed(:)
    end type cv_user_t
 
    type, abstract, extends(integrator_t) :: sundials_integrator_t
@@ -88,6 +106,10 @@ module trainsim_sundials
       integer(i8) :: steps_to_goal = 0    !< internal steps since the last goal was reached
       integer(c_int), allocatable :: rootdir(:), rootsfound(:)
       logical :: root_pending = .false.   !< rootsfound holds the roots of the last return
+      !> the last internal step ended at a root (t_int, yv) not yet returned: the
+      !> output times before it inside the step are returned first (D-45)
+      logical :: root_ahead = .false.
+      logical :: root_info_ok = .false.   !< rootsfound holds the roots of that root
       real(wp) :: hmax = 0.0_wp, omega_max = 0.0_wp, t_goal = 0.0_wp
       real(wp) :: t_init = 0.0_wp          !< where the integration starts
       integer(i8) :: mxstep = mxstep_min
@@ -250,6 +272,25 @@ contains
       ierr = 0
    end function cv_roots
 
+   !> The error weights for CVODE's and ERKStep's error test and iterations
+   !> (CVodeWFtolerances, ERKStepWFtolerances; D-46): w_i = 1/(rtol |y_i| + atol_i)
+   !> for speeds, currents and energies as with SVtolerances, w_i = 1/(rtol
+   !> angle_resolution + atol_i) for node angles (cvode_weights). No allocation.
+   integer(c_int) function cv_ewt(sunvec_y, sunvec_ewt, user_data) result(ierr) bind(C)
+      type(N_Vector) :: sunvec_y, sunvec_ewt
+      type(c_ptr), value :: user_data
+      type(cv_user_t), pointer :: ud
+      real(c_double), pointer :: yv(:), w(:)
+      integer :: i
+      call c_f_pointer(user_data, ud)
+      yv => FN_VGetArrayPointer(sunvec_y)
+      w => FN_VGetArrayPointer(sunvec_ewt)
+      do i = 1, size(w)
+         w(i) = 1.0_wp/(ud%rel(i)*abs(yv(i)) + ud%fixed(i))
+      end do
+      ierr = 0
+   end function cv_ewt
+
    !> CVODE's and ARKODE's error and warning messages: kept (the last one) for
    !> our own message instead of being printed to stderr.
    subroutine cv_error_handler(error_code, module, function, msg, user_data) bind(C)
@@ -318,6 +359,25 @@ contains
          max(model%run%rtol, energy_atol_factor)*(1.0_wp + abs(model%energy0))
    end subroutine cvode_abstol
 
+   !> The error weights' parts (cv_ewt, D-46): rel = angle_rounding and fixed =
+   !> rtol angle_resolution + atol_angle for each node angle, rel = rtol and
+   !> fixed = atol (cvode_abstol) for the other states.
+   pure subroutine cvode_weights(model, atol, rel, fixed)
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: atol(:)
+      real(wp), intent(out) :: rel(:), fixed(:)
+      integer :: i, o
+      rel = model%run%rtol
+      fixed = atol
+      do i = 1, size(model%nodes)
+         if (model%speed_of(i) /= 0) cycle
+         if (model%nodes(i)%n%nstates() < 1) cycle
+         o = model%nodes(i)%n%offset
+         rel(o + 1) = angle_rounding
+         fixed(o + 1) = model%run%rtol*angle_resolution + atol(o + 1)
+      end do
+   end subroutine cvode_weights
+
    ! ------------------------------------------------------ the shared cycle
 
    !> Create and set up the SUNDIALS objects for a run from (t, y).
@@ -384,6 +444,8 @@ contains
       self%t_int = t
       self%tiny_t = 1.0e-9_wp*model%run%dt
       call cvode_abstol(model, self%atol)
+      allocate (self%ud%rel(self%n), self%ud%fixed(self%n))
+      call cvode_weights(model, self%atol, self%ud%rel, self%ud%fixed)
       self%rootdir = -1_c_int
       self%rootsfound = 0
       self%ud%model => model
@@ -439,7 +501,10 @@ contains
    !> One internal step (ONE_STEP mode: the driver and the observer see every
    !> step, so extremes are taken at every internal step), or the goal: a step
    !> that passes t_goal is reported at t_goal, interpolated by the integrator's
-   !> own dense output, and its end on the next call.
+   !> own dense output, and its end on the next call. A step that ends at a
+   !> root (the package stops the step there) is treated alike (D-45): output
+   !> times before the root are interpolated on the step and returned first,
+   !> then the root, as adv_event; never a root beyond t_goal.
    subroutine sun_advance(self, model, t_goal, t, y, status, err)
       class(sundials_integrator_t), intent(inout), target :: self
       type(model_t), intent(inout), target :: model
@@ -465,15 +530,21 @@ contains
          end if
          self%t_int = tret
          if (st == st_root) then
-            ! yv is the state at the root; the integrator restarts there
+            ! yv is the state at the root, where the integrator will restart;
+            ! the step's dense output still covers the times before it
             self%stats%root_returns = self%stats%root_returns + 1
             self%rootsfound = 0
-            if (self%status(self%sun_root_info()) == st_success) self%root_pending = .true.
-            t = tret
-            y = self%yv
-            status = adv_event
-            return
+            self%root_info_ok = self%status(self%sun_root_info()) == st_success
+            self%root_ahead = .true.
          end if
+      end if
+      if (self%root_ahead .and. self%t_int <= t_goal + self%tiny_t) then
+         t = self%t_int                      ! the root, at or before the goal
+         y = self%yv
+         self%root_ahead = .false.
+         self%root_pending = self%root_info_ok
+         status = adv_event
+         return
       end if
       if (self%t_int < t_goal - self%tiny_t) then
          t = self%t_int                      ! an internal step short of the goal
@@ -484,7 +555,7 @@ contains
             call fatal_error(err, 'internal: '//self%prefix//'GetDky failed at t = '//str(t_goal)//' s', err_internal)
             return
          end if
-         t = t_goal                          ! the goal, inside the last step
+         t = t_goal                          ! the goal, inside the last step (before its root, if any)
          y = self%ydky
       else
          t = self%t_int                      ! the step ended on the goal (a stop time)
@@ -524,6 +595,7 @@ contains
       self%t_int = t
       self%steps_to_goal = 0
       self%root_pending = .false.
+      self%root_ahead = .false.
       if (self%status(self%sun_reinit(t)) /= st_success) then
          call fatal_error(err, 'internal: '//self%prefix//'ReInit failed at t = '//str(t)//' s: '// &
                           self%ud%msg(1:self%ud%msg_len), err_internal)

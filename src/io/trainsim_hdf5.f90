@@ -273,6 +273,14 @@ contains
       if (.not. allocated(err)) call finish_events(self, err)
       if (.not. allocated(err)) call write_metrics(self, metrics, err)
       if (.not. allocated(err)) call write_stats(self%file_id, stats, err)
+      ! a run stopped by a signal is kept with what it computed, marked as such
+      if (.not. allocated(err)) then
+         if (stats%completed) then
+            call put_str_attr(self%file_id, 'status', 'complete', err)
+         else
+            call put_str_attr(self%file_id, 'status', 'interrupted', err)
+         end if
+      end if
       if (.not. allocated(err)) then
          do i = 1, n_ds
             call h5dclose_f(self%dset(i), hdferr)

@@ -87,7 +87,7 @@ module trainsim_model
       character(len=:), allocatable :: integrator  !< 'rk4', 'rk4-thesis', 'cvode-bdf', 'cvode-adams', 'arkode-dp', 'arkode-verner'
       character(len=:), allocatable :: output      !< HDF5 file name
       real(wp) :: rtol = 1.0e-8_wp
-      real(wp) :: atol_angle = 1.0e-10_wp, atol_speed = 1.0e-8_wp, atol_current = 1.0e-8_wp
+      real(wp) :: atol_angle = 1.0e-14_wp, atol_speed = 1.0e-8_wp, atol_current = 1.0e-8_wp
       real(wp) :: max_step = 0.0_wp             !< CVODE maximum step (0: from the highest frequency)
       real(wp) :: event_tol = 0.0_wp            !< event time tolerance (0: 1e-9 dt)
       real(wp) :: settle_time = 0.0_wp          !< metrics ignore t < t_start + settle_time

@@ -26,6 +26,7 @@ module trainsim_simulate
    use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
    use trainsim_modes, only: rk4_dt_limit
    use trainsim_element, only: lin_state_t, lin_stiffest, lin_start
+   use trainsim_progress, only: progress_t
    implicit none
    private
 
@@ -104,12 +105,22 @@ module trainsim_simulate
 contains
 
    !> Integrate `model` from t_start to t_end with its integrator.
-   !> On error the sink is aborted (no partial output left as if good).
-   subroutine simulate(model, sink, result, err)
+   !> On error the sink is aborted (no partial output left as if good), except
+   !> an interrupt (SIGINT/SIGTERM) with `keep_interrupted`: the sink is then
+   !> closed with what was computed (the samples up to the last output time
+   !> reached, the events so far, the metrics of that span), its run statistics
+   !> saying `completed = .false.`, and `result` holds that part of the run
+   !> (result%stats%t_final: the time reached; result%t_sampled: the last
+   !> output time written); `err` is still the interrupt. With `progress`, the
+   !> driver reports to it once per output time or block of steps.
+   subroutine simulate(model, sink, result, err, keep_interrupted, progress)
       type(model_t), intent(inout), target :: model
       class(sink_t), intent(inout), target :: sink   ! the observer streams the event rows to it
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: keep_interrupted
+      type(progress_t), intent(inout), optional :: progress
+      type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
       class(integrator_t), allocatable, target :: integ
@@ -139,7 +150,9 @@ contains
       call settle_setup(model, settle, err)
       if (allocated(err)) return
       call obs%start(model, t, y, sink, err)
-      if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, settle, err)
+      if (present(progress)) call progress%start(t, model%run%t_end)
+      if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, settle, err, progress)
+      if (present(progress)) call progress%finish()
       model%run%t_end = t_end_deck
       call integ%statistics(stats)
       stats%t_metrics = obs%t_metrics
@@ -148,12 +161,25 @@ contains
       if (settle%on) stats%settle_periods = settle%j
       if (settle%check_only) stats%settle_status = stats%settle_status + 2   ! 3 settled, 4 not (at settle_time)
       call integ%finish()
+      call system_clock(c1)
+      stats%wall_time = real(c1 - c0, wp)/real(rate, wp)
       if (allocated(err)) then
+         if (err%code == err_interrupted .and. obs%started) then
+            if (present(keep_interrupted)) then
+               if (keep_interrupted) then
+                  ! what was computed, closed as a run that did not complete
+                  call obs%finish(model, t, y, stats, sink, result, err_close, interrupted=.true.)
+                  if (allocated(err_close)) then
+                     call sink%abort()
+                     err%message = err%message//'; the history could not be kept: '//err_close%message
+                  end if
+                  return
+               end if
+            end if
+         end if
          call sink%abort()
          return
       end if
-      call system_clock(c1)
-      stats%wall_time = real(c1 - c0, wp)/real(rate, wp)
       call obs%finish(model, t, y, stats, sink, result, err)
       if (allocated(err)) call sink%abort()
    end subroutine simulate
@@ -263,7 +289,7 @@ contains
    end subroutine settle_sample
 
    !> The driver loop: from (t, y) at t_start to t_end.
-   subroutine drive(model, integ, obs, sink, t, y, st, err)
+   subroutine drive(model, integ, obs, sink, t, y, st, err, progress)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
@@ -271,6 +297,7 @@ contains
       real(wp), intent(inout) :: t, y(:)
       type(settle_t), intent(inout) :: st
       type(error_t), allocatable, intent(out) :: err
+      type(progress_t), intent(inout), optional :: progress   !< polled per output time or block
       type(drive_t) :: d
       real(wp) :: t0, t_end, dout, t_out, x, n_real
       integer(i8) :: k, n_out, k_last
@@ -348,14 +375,22 @@ contains
                   end if
                end do
                k = k + model%blk%n
+               if (present(progress)) call progress%poll(t, obs%n_events)
                cycle
             end if
          end if
          t_out = out_time(k)
          call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
+         if (abs(t - t_out) > d%tol) then
+            ! a sample is the solution at its own time, never a later state (D-45)
+            call fatal_error(err, "internal: integrator '"//model%run%integrator//"' left the state at t = "// &
+                             str(t)//' s for the output time '//str(t_out)//' s', err_internal)
+            return
+         end if
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
+         if (present(progress)) call progress%poll(t, obs%n_events)
          k = k + 1
       end do
       t = t_end
@@ -556,7 +591,7 @@ contains
          call fatal_error(err, 'the modes did not settle at t = '//str(t)//' s: after '//str(max_settle_passes)// &
                           ' passes of the mode update, a guard of '//guard_owner(model, j)// &
                           ' is still below zero; the state there is not consistent with any contact state '// &
-                          '(a runaway state, or a time step above the stability limit)', err_numeric)
+                          '(a runaway state). '//remedy(model), err_numeric)
          return
       end if
       call count_events(model, d, t, n_total, err)
@@ -609,7 +644,7 @@ contains
       call fatal_error(err, 'the modes did not settle at t = '//str(t)//' s: after '//str(max_settle_passes)// &
                        ' passes of the mode update, a guard of '//guard_owner(model, j)// &
                        ' is still below zero; the state there is not consistent with any contact state '// &
-                       '(a runaway state, or a time step above the stability limit)', err_numeric)
+                       '(a runaway state). '//remedy(model), err_numeric)
    end subroutine settle_events
 
    !> Event budget: more than max_events_per_dt events inside one dt is a flood.
@@ -628,9 +663,9 @@ contains
       if (d%window_events <= max_events_per_dt) return
       last = d%ev(max(nev, 1))%element
       call fatal_error(err, 'event flood at t = '//str(t)//' s: more than '//str(max_events_per_dt)// &
-                       ' events within dt = '//str(model%run%dt)//" s (the last: '"// &
+                       ' events within '//window_text(model)//" (the last: '"// &
                        ev_name(d%ev(max(nev, 1))%kind)//"' of element '"//model%elements(last)%e%id//"'). "// &
-                       stability_advice(model), err_numeric)
+                       remedy(model), err_numeric)
    end subroutine count_events
 
    !> Every entry of y within the blow-up limit (NaN is not): the test of
@@ -687,23 +722,41 @@ contains
       type(model_t), intent(inout) :: model
       class(integrator_t), intent(in) :: integ
       character(len=:), allocatable :: text
-      type(integrator_entry_t), allocatable :: rows(:)
-      integer :: i
       associate (unused => integ)
       end associate
-      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
-      do i = 1, size(rows)
-         if (rows(i)%name == model%run%integrator) exit
-      end do
-      if (i <= size(rows)) then
-         if (.not. rows(i)%fixed_step) then
-            text = 'Tighten rtol and the absolute tolerances, or set a smaller max_step; if that does not help, '// &
-                   'check the loads, stiffnesses and inertias of the deck for values out of proportion'
-            return
-         end if
-      end if
-      text = stability_advice(model)
+      text = remedy(model)
    end function blowup_advice
+
+   !> What to try after a numerical failure, for the integrator in use: the
+   !> step dt against RK4's stability limit (fixed-step methods), or the
+   !> tolerances and max_step (adaptive ones, which do not use dt but as the
+   !> output grid when output_interval is 0).
+   function remedy(model) result(text)
+      type(model_t), intent(inout) :: model
+      character(len=:), allocatable :: text
+      character(len=:), allocatable :: h
+      if (is_fixed_step(model%run%integrator)) then
+         text = stability_advice(model)
+         return
+      end if
+      h = 'a smaller max_step'
+      if (model%run%max_step > 0.0_wp) h = 'a smaller max_step (now '//str(model%run%max_step)//' s)'
+      text = "Integrator '"//model%run%integrator//"' chooses its own steps: tighten rtol (now "//str(model%run%rtol)// &
+             ') and the absolute tolerances, or set '//h//'; if that does not help, check the loads, stiffnesses '// &
+             'and inertias of the deck for values out of proportion'
+   end function remedy
+
+   !> The event budget's window in words: dt for a fixed-step method, else the
+   !> same span of time named as the deck's dt (an adaptive method does not step by it).
+   function window_text(model) result(text)
+      type(model_t), intent(in) :: model
+      character(len=:), allocatable :: text
+      if (is_fixed_step(model%run%integrator)) then
+         text = 'dt = '//str(model%run%dt)//' s'
+      else
+         text = str(model%run%dt)//' s, the deck''s dt'
+      end if
+   end function window_text
 
    !> dt against the RK4 stability limit of the stiffest state the run can
    !> reach (every clearance closed, gears at their largest stiffness factor,

@@ -3,7 +3,8 @@
 voltage of the deck is a column, named and with its unit, whose values equal the deck's
 time functions at the sample times (the definitions of docs/deck.md#time-functions,
 written out here independently), to 1e-12 relative; the same with a sweep-style --set
-of a load's amplitude; a deck without inputs has an empty (n, 0) /inputs.
+of a load's amplitude; `trainsim export FILE input.NAME` gives them; a deck without
+inputs has an empty (n, 0) /inputs.
 
 usage: check_input_series.py TRAINSIM_EXE
 """
@@ -96,6 +97,17 @@ with tempfile.TemporaryDirectory() as tmp:
                 err = np.max(np.abs(v[:, j] - ref)) / max(1.0, np.max(np.abs(ref)))
                 check(f'{label}: {name} [{units[j]}] equals its time function (max rel. error {err:.1e} <= 1e-12)',
                       units[j] == unit and err <= 1e-12)
+
+    # the inputs as quantities of trainsim export / plot (input.NAME)
+    r = subprocess.run([EXE, 'export', os.path.join(tmp, 'in.h5'), 'input.motor.voltage'],
+                       capture_output=True, text=True, timeout=120)
+    rows = r.stdout.strip().splitlines()
+    check(f'export input.motor.voltage: exit {r.returncode}, header {rows[0] if rows else None}',
+          r.returncode == 0 and rows[0] == 'time [s],input.motor.voltage [V]')
+    if r.returncode == 0:
+        t_v = np.array([[float(x) for x in row.split(',')] for row in rows[1:]])
+        ref = np.interp(t_v[:, 0], [0.01, 0.03], [2.0, 24.0])
+        check('... its values are the ramp at the sample times (1e-12)', np.max(np.abs(t_v[:, 1] - ref)) <= 1e-12 * 24)
 
     plain = os.path.join(tmp, 'plain.nml')
     with open(plain, 'w') as f:

@@ -67,6 +67,15 @@ def load(text):
 # executable; '{out}' is replaced by the output path; default run deck.nml -o {out}),
 # exit (expected status), stderr (substrings that must appear), optional stdout
 # (substrings that must appear on stdout), optional output (True: out.h5 must exist).
+# F_event_flood.nml of ../shared/repro: a stiff mesh whose zone guard chatters at t = 0
+FLOOD = """&run t_end = 2.0e-4, dt = 5.0e-7, integrator = '{integrator}' /
+&node id = 'a', type = 'inertia', inertia = 7.537e-3 /
+&node id = 'b', type = 'inertia', inertia = 10.082 /
+&element id = 'mesh', type = 'spur_gear', stiffness = 18.03e6, rb_driver = 1.6445, rb_driven = 1.6445,
+         teeth = 28, contact_ratio = 1.638, approach_angle = 0.1838, half_backlash = 0.001 /
+&initial node = 'all', speed = 1e9 /
+"""
+
 CASES = [
     # ---- sanity: the base deck is good, so the failures below are the edits' doing
     dict(name="baseline good deck runs", deck=GOOD, exit=0, stderr=[], output=True),
@@ -344,6 +353,15 @@ CASES = [
     dict(name="unstable time step blows up",
          deck=TABLE5_1.format(t_end=5, dt=0.05),
          exit=1, stderr=["warning", "stability limit", "blew up", "time step"]),
+    # an event flood (F_event_flood.nml of ../shared/repro): the remedy names what the
+    # integrator in use steps by (D-47): dt for rk4, the tolerances for cvode-bdf
+    dict(name="event flood under rk4 names dt against the stability limit",
+         deck=FLOOD.format(integrator="rk4"),
+         exit=1, stderr=["event flood", "dt = 5.0E-7 s", "stability limit"]),
+    dict(name="event flood under cvode-bdf names rtol and max_step, not dt",
+         deck=FLOOD.format(integrator="cvode-bdf"),
+         exit=1, stderr=["event flood", "rtol (now 1.0E-8)", "max_step"],
+         not_stderr=["The time step dt", "take dt below"]),
     dict(name="dt too coarse for the contact mode of an open clearance is warned about",
          deck="&run t_end = 2e-4, dt = 5e-5 /\n"
               "&node type = 'inertia', inertia = 7.537e-3 /\n&node type = 'inertia', inertia = 10.082 /\n"
@@ -399,6 +417,9 @@ def run_case(exe, case):
         for s in case["stderr"]:
             if s not in proc.stderr:
                 problems.append("stderr lacks %r" % s)
+        for s in case.get("not_stderr", []):
+            if s in proc.stderr:
+                problems.append("stderr shows %r" % s)
         for s in case.get("stdout", []):
             if s.lower() not in proc.stdout.lower():
                 problems.append("stdout lacks %r" % s)
