@@ -225,6 +225,7 @@ contains
                return
             end if
             model%nodes(k)%n%id = id
+            model%nodes(k)%n%origin = g%where()
             call model%nodes(k)%n%configure(g, model%units, err); if (allocated(err)) return
             call check_params(g, model%nodes(k)%n%params(), err); if (allocated(err)) return
             call g%check_unused(err, "node type '"//model%nodes(k)%n%type_name//"'"); if (allocated(err)) return
@@ -263,6 +264,7 @@ contains
             end if
             associate (e => model%elements(k)%e)
                e%id = id
+               e%origin = g%where()
                ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1
                if (k <= nn) then
                   lid = model%nodes(k)%n%id

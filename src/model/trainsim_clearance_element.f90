@@ -129,7 +129,7 @@ contains
       type(lin_state_t), intent(in) :: state
       real(wp), intent(in) :: inv_jl, inv_jr
       real(wp), intent(out) :: k(2, 2), c(2, 2)
-      real(wp) :: g(2), f, inv_m, m_eff, cd
+      real(wp) :: g(2), f, inv_m, m_eff, cd, f_load
       k = 0.0_wp
       c = 0.0_wp
       if (.not. (state%contact == lin_contact_closed .or. self%cl%mode /= 0)) return
@@ -139,7 +139,9 @@ contains
       inv_m = self%cl%r1**2*inv_jl + self%cl%r2**2*inv_jr
       m_eff = 0.0_wp
       if (inv_m > 0.0_wp) m_eff = 1.0_wp/inv_m
-      cd = self%cl%law%linear_damping(f, m_eff, state%contact == lin_contact_closed, state%impact_scale)
+      f_load = 0.0_wp
+      if (min(self%cl%r1, self%cl%r2) > 0.0_wp) f_load = state%load_torque/min(self%cl%r1, self%cl%r2)
+      cd = self%cl%law%linear_damping(f, m_eff, state%contact == lin_contact_closed, state%impact_scale, f_load)
       k = self%cl%law%k*f*spread(g, 2, 2)*spread(g, 1, 2)
       c = cd*spread(g, 2, 2)*spread(g, 1, 2)
    end subroutine ce_linearise

@@ -32,19 +32,23 @@ module trainsim_element
    !> The state an element is linearised in (`linearise`, `trainsim modes`, the
    !> RK4 step advice). `impact_scale` in [0, 1] scales the impact damping a
    !> closed contact law can give at most (D-25). A later state (linearised about
-   !> the static preload) is a new `contact` value.
+   !> the static preload) is a new `contact` value. `load_torque`: the largest
+   !> torque the loads can drive through one element (trainsim_modes'
+   !> load_torque_bound; 0: not known), which a contact closed gently under load
+   !> carries at a penetration that sets its damping (D-42).
    type :: lin_state_t
       integer :: contact = lin_contact_initial
       integer :: zone = lin_zone_initial
       real(wp) :: impact_scale = 1.0_wp
+      real(wp) :: load_torque = 0.0_wp
    end type lin_state_t
 
    !> As the run starts: current contact state and mesh zone.
-   type(lin_state_t), parameter :: lin_start = lin_state_t(lin_contact_initial, lin_zone_initial, 1.0_wp)
+   type(lin_state_t), parameter :: lin_start = lin_state_t(lin_contact_initial, lin_zone_initial, 1.0_wp, 0.0_wp)
    !> Every clearance closed, mesh zones as at t_start.
-   type(lin_state_t), parameter :: lin_closed = lin_state_t(lin_contact_closed, lin_zone_initial, 1.0_wp)
+   type(lin_state_t), parameter :: lin_closed = lin_state_t(lin_contact_closed, lin_zone_initial, 1.0_wp, 0.0_wp)
    !> The stiffest state a run can reach: clearances closed, gears at their largest stiffness factor.
-   type(lin_state_t), parameter :: lin_stiffest = lin_state_t(lin_contact_closed, lin_zone_stiffest, 1.0_wp)
+   type(lin_state_t), parameter :: lin_stiffest = lin_state_t(lin_contact_closed, lin_zone_stiffest, 1.0_wp, 0.0_wp)
 
    !> Torque forms of `hot_form` (D-35): none (asked through `torques`), a
    !> clearance open (no force), a closed clearance with the yang_sun or the
@@ -77,6 +81,8 @@ module trainsim_element
    type, abstract :: element_t
       character(len=:), allocatable :: id
       character(len=:), allocatable :: type_name
+      !> where the deck defines it ("deck.nml:5: &element #1"; '' if not from a deck)
+      character(len=:), allocatable :: origin
       integer :: left = 0   !< index of the left (driver) node
       integer :: right = 0  !< index of the right (driven) node
       !> Elements that act on the external loads of their nodes (the keyed joint's

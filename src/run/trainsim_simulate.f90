@@ -24,12 +24,12 @@ module trainsim_simulate
    use trainsim_observer, only: observer_t, run_result_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
-   use trainsim_modes, only: rk4_dt_limit
-   use trainsim_element, only: lin_state_t, lin_stiffest, lin_start
+   use trainsim_modes, only: rk4_dt_limit, limiting_part
+   use trainsim_element, only: lin_state_t, lin_stiffest, lin_start, lin_contact_closed
    implicit none
    private
 
-   public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes
+   public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes, check_fixed_step
 
    !> A state beyond this is a blow-up. Far above any physical angle, speed,
    !> current or energy; its square times any sane coefficient stays finite, so
@@ -46,6 +46,9 @@ module trainsim_simulate
    !> before the blow-up check sees it. Below this factor the check is in time
    !> (a run 10x above the limit, as Table 5.2's, runs with a warning).
    real(wp), parameter :: max_dt_over_limit = 1.0e3_wp
+   !> A limiting eigenvalue with at least this damping ratio (|Re| >= |Im|) is
+   !> damping-dominated: a fixed step above its limit is refused (D-42).
+   real(wp), parameter :: damped_ratio = 0.7071_wp
 
    !> The loop's own bookkeeping (allocated once per run).
    type :: drive_t
@@ -56,6 +59,9 @@ module trainsim_simulate
       real(wp) :: tol = 0.0_wp             !< times closer than this are one instant
       real(wp) :: t_window = 0.0_wp        !< start of the current event-budget window
       integer :: window_events = 0         !< events since t_window
+      !> the last event recorded (element, kind), named by an event flood: a
+      !> settle that took several passes leaves only its last pass in ev
+      integer :: last_element = 0, last_kind = 0
       logical :: may_miss = .false.        !< integ%may_miss_events(), asked once per run
       !> plain steps in blocks (D-38): the integrator takes them, and the
       !> observer's short way folds them (no peak refinement; whole samples at
@@ -360,6 +366,7 @@ contains
          call model%apply_events(t, y, d%fired, d%ev, nev, gels)
          call obs%record_events(model, t, y, d%ev, nev, err, nodes, els)
          if (allocated(err)) return
+         call keep_last_event(d, nev)
          n_total = n_total + nev
          if (.not. region_fired()) exit
       end do
@@ -411,6 +418,7 @@ contains
          call model%apply_events(t, y, d%fired, d%ev, nev)
          call obs%record_events(model, t, y, d%ev, nev, err)
          if (allocated(err)) return
+         call keep_last_event(d, nev)
          n_total = n_total + nev
          call model%guards(t, y, d%g)
          d%fired = d%g < 0.0_wp
@@ -423,24 +431,36 @@ contains
                        '(a runaway state, or a time step above the stability limit)', err_numeric)
    end subroutine settle_events
 
+   !> The last of the nev events just recorded in d%ev, for `count_events`.
+   subroutine keep_last_event(d, nev)
+      type(drive_t), intent(inout) :: d
+      integer, intent(in) :: nev
+      if (nev < 1) return
+      d%last_element = d%ev(nev)%element
+      d%last_kind = d%ev(nev)%kind
+   end subroutine keep_last_event
+
    !> Event budget: more than max_events_per_dt events inside one dt is a flood.
+   !> The message names the last event recorded (d%last_element; the events of
+   !> this call may be spread over several settle passes, or be none).
    subroutine count_events(model, d, t, nev, err)
       type(model_t), intent(inout) :: model
       type(drive_t), intent(inout) :: d
       real(wp), intent(in) :: t
       integer, intent(in) :: nev
       type(error_t), allocatable, intent(out) :: err
-      integer :: last
+      character(len=:), allocatable :: last
       if (t - d%t_window > model%run%dt) then
          d%t_window = t
          d%window_events = 0
       end if
       d%window_events = d%window_events + nev
       if (d%window_events <= max_events_per_dt) return
-      last = d%ev(max(nev, 1))%element
+      last = ''
+      if (d%last_element >= 1 .and. d%last_element <= size(model%elements)) &
+         last = " (the last: '"//ev_name(d%last_kind)//"' of element '"//model%elements(d%last_element)%e%id//"')"
       call fatal_error(err, 'event flood at t = '//str(t)//' s: more than '//str(max_events_per_dt)// &
-                       ' events within dt = '//str(model%run%dt)//" s (the last: '"// &
-                       ev_name(d%ev(max(nev, 1))%kind)//"' of element '"//model%elements(last)%e%id//"'). "// &
+                       ' events within dt = '//str(model%run%dt)//' s'//last//'. '// &
                        stability_advice(model), err_numeric)
    end subroutine count_events
 
@@ -558,19 +578,30 @@ contains
       end do
    end function is_fixed_step
 
-   !> A fixed-step method with dt absurdly far above the stability limit of the
-   !> train as it starts, or with every clearance closed and the gears at their
-   !> stiffest (the state a contact reaches), is refused before the first step
-   !> (max_dt_over_limit). The impact damping is left out: it moves RK4's radius
-   !> only between 2.6 and 2.95, nothing against a factor of 1000.
+   !> A fixed-step method is refused before the first step (exit 2) when
+   !> - dt is absurdly far above the stability limit of the train as it starts,
+   !>   or with every clearance closed and the gears at their stiffest
+   !>   (max_dt_over_limit; impact damping left out: it moves RK4's radius only
+   !>   between 2.6 and 2.95, nothing against a factor of 1000); or
+   !> - dt is above the limit of either state (the stiffest with every contact
+   !>   law's damping at its largest, a gentle closure under the loads included,
+   !>   D-42) and the limiting eigenvalue is damping-dominated (damping ratio >=
+   !>   1/sqrt 2): a step beyond the real-axis radius multiplies every state
+   !>   change by |R(h lambda)| > 1, so no such mode stays unexcited (unlike an
+   !>   undamped mode that the inputs may never touch, D-4).
+   !> The message names the node or element that limits the step alone
+   !> (`limiting_part`), its deck group, and the dt that would do.
+   !> rk4-thesis steps dt/10 in contact; Euler's region reaches 2 on the real axis.
    subroutine check_fixed_step(model, err)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
       type(integrator_entry_t), allocatable :: rows(:)
-      type(lin_state_t) :: states(2)
-      character(len=32), parameter :: state_text(2) = [character(len=32) :: 'the train as it starts', &
-                                                       'the closed contacts']
-      real(wp) :: dt_safe, omega, f_hz
+      type(lin_state_t) :: states(4)
+      character(len=40), parameter :: state_text(4) = [character(len=40) :: 'the train as it starts', &
+                                                       'the closed contacts', 'the train as it starts', &
+                                                       'the stiffest state the run can reach']
+      real(wp) :: dt_safe, omega, f_hz, zeta, h, rescale
+      character(len=:), allocatable :: part, name
       integer :: i, k
       allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
@@ -578,30 +609,91 @@ contains
       end do
       if (i > size(rows)) return
       if (.not. rows(i)%fixed_step) return
-      states = [lin_start, lin_stiffest]
+      name = model%run%integrator
+      rescale = 1.0_wp
+      if (name == 'euler') rescale = 2.0_wp/2.785_wp   ! real-axis radius of Euler's region against RK4's
+      states = [lin_start, lin_stiffest, lin_start, lin_stiffest]
       states(2)%impact_scale = 0.0_wp
-      do k = 1, 2
-         call limit_of(states(k), dt_safe, f_hz)
-         if (.not. model%run%dt/max_dt_over_limit > dt_safe) cycle
-         call fatal_error(err, 'dt = '//str(model%run%dt)//' s is more than '//str(max_dt_over_limit)// &
-                          ' times the RK4 stability limit '//str(dt_safe, 4)//' s of '//trim(state_text(k))// &
-                          ' (the mode at '//str(f_hz, 4)//' Hz): any excitation of that mode would grow by 1e12 '// &
-                          'or more per step. Take dt below the limit, or check the deck for a stiffness, radius or '// &
-                          'inertia out of proportion (a unit slip?)', err_input)
+      do k = 1, 4
+         h = model%run%dt
+         if (name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed) h = h/10.0_wp   ! App. F: dt/10 in contact
+         call limit_of(states(k), dt_safe, f_hz, zeta)
+         dt_safe = dt_safe*rescale
+         if (k <= 2) then
+            if (.not. h/max_dt_over_limit > dt_safe) cycle
+         else
+            if (.not. (h > dt_safe .and. zeta >= damped_ratio)) cycle
+         end if
+         call part_of(states(k), part)
+         if (k <= 2) then
+            call fatal_error(err, 'dt = '//str(model%run%dt)//' s is more than '//str(max_dt_over_limit)// &
+                             " times the stability limit of integrator '"//name//"', "//str(dt_safe, 4)//' s, of '// &
+                             trim(state_text(k))//' ('//mode_text(f_hz, zeta, omega)//'), set by '//part// &
+                             ': any excitation of that mode would grow by 1e12 or more per step. Take dt below '// &
+                             str(dt_safe, 4)//' s, or check the deck for a stiffness, damping, radius or inertia '// &
+                             'out of proportion (a unit slip?)', err_input)
+         else
+            call fatal_error(err, 'dt = '//str(model%run%dt)//" s is above the stability limit of integrator '"// &
+                             name//"', "//str(dt_safe, 4)//' s, of '//trim(state_text(k))//' ('// &
+                             mode_text(f_hz, zeta, omega)//'), set by '//part//'. That mode is damped, so '// &
+                             'every step beyond the limit amplifies it (no wrong answer is given with exit 0 '// &
+                             'instead, D-42): take dt below '//str(dt_safe, 4)//' s'// &
+                             thesis_note(name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed)// &
+                             ", or use integrator = 'cvode-bdf' (implicit: its step has no stability limit)"// &
+                             gentle_hint(part), err_input)
+         end if
          return
       end do
    contains
-      subroutine limit_of(state, dt_lim, f)
+      subroutine limit_of(state, dt_lim, f, z)
          type(lin_state_t), intent(in) :: state
-         real(wp), intent(out) :: dt_lim, f
+         real(wp), intent(out) :: dt_lim, f, z
          type(model_t) :: tmp
          type(error_t), allocatable :: lim_err
          tmp = model
-         f = 0.0_wp
-         call rk4_dt_limit(tmp, state, dt_lim, omega, lim_err, freq_hz=f)
+         f = 0.0_wp; z = 0.0_wp
+         call rk4_dt_limit(tmp, state, dt_lim, omega, lim_err, freq_hz=f, damping_ratio=z)
          if (allocated(lim_err)) dt_lim = huge(1.0_wp)
       end subroutine limit_of
+      subroutine part_of(state, text)
+         type(lin_state_t), intent(in) :: state
+         character(len=:), allocatable, intent(out) :: text
+         type(model_t) :: tmp
+         real(wp) :: h_part
+         tmp = model
+         call limiting_part(tmp, state, text, h_part)
+      end subroutine part_of
    end subroutine check_fixed_step
+
+   !> rk4-thesis in contact: its step there is dt/10.
+   function thesis_note(in_contact) result(text)
+      logical, intent(in) :: in_contact
+      character(len=:), allocatable :: text
+      text = ''
+      if (in_contact) text = ' x 10 (rk4-thesis steps dt/10 in contact)'
+   end function thesis_note
+
+   !> "the mode at 5690.8 Hz, damping ratio 0.17" or "an overdamped mode, |lambda| = 9.1E6 1/s".
+   function mode_text(f_hz, zeta, omega) result(text)
+      real(wp), intent(in) :: f_hz, zeta, omega
+      character(len=:), allocatable :: text
+      if (f_hz > 0.0_wp .and. zeta < 1.0_wp) then
+         text = 'the mode at '//str(f_hz, 5)//' Hz, damping ratio '//str(zeta, 2)
+      else
+         text = 'an overdamped mode, |lambda| = '//str(omega, 4)//' 1/s'
+      end if
+   end function mode_text
+
+   !> The remedy for a yang_sun contact whose damping at the floor velocity sets the limit.
+   function gentle_hint(part) result(text)
+      character(len=*), intent(in) :: part
+      character(len=:), allocatable :: text
+      text = ''
+      if (index(part, 'contact law') > 0) text = '; a yang_sun contact that closes slower than '// &
+         'min_approach_velocity gets the damping of that floor (D = 6(1-e)k/[((2e-1)^2+3) V], eq. (3.12)), '// &
+         'which grows with the load it then carries: a larger min_approach_velocity (or '// &
+         'initial_contact_velocity) lowers it'
+   end function gentle_hint
 
    !> "element 'mesh'" for guard index j of the model.
    function guard_owner(model, j) result(text)
