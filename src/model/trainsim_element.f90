@@ -115,6 +115,7 @@ module trainsim_element
       procedure :: params => el_params
       procedure :: linear_spring => el_linear_spring
       procedure :: hot_form => el_hot_form
+      procedure :: displacement_bound => el_displacement_bound
    end type element_t
 
    !> A slot in the model's element list (arrays of polymorphic objects).
@@ -361,4 +362,16 @@ contains
       end associate
       allocate (p%names(0), p%values(0))
    end function el_params
+
+   !> Largest |displacement| a physical run of this element can reach, given the
+   !> largest torque the loads can drive through it (`load_torque`) and the
+   !> inverse inertias of its nodes; beyond it the run has gone wrong (D-42).
+   !> Default: no bound (huge).
+   pure real(wp) function el_displacement_bound(self, load_torque, inv_jl, inv_jr) result(bound)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: load_torque, inv_jl, inv_jr
+      associate (u1 => self, u2 => load_torque, u3 => inv_jl, u4 => inv_jr)
+      end associate
+      bound = huge(1.0_wp)
+   end function el_displacement_bound
 end module trainsim_element

@@ -24,7 +24,7 @@ module trainsim_simulate
    use trainsim_observer, only: observer_t, run_result_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
-   use trainsim_modes, only: rk4_dt_limit, limiting_part
+   use trainsim_modes, only: rk4_dt_limit, limiting_part, load_torque_bound
    use trainsim_element, only: lin_state_t, lin_stiffest, lin_start, lin_contact_closed
    implicit none
    private
@@ -49,6 +49,10 @@ module trainsim_simulate
    !> A limiting eigenvalue with at least this damping ratio (|Re| >= |Im|) is
    !> damping-dominated: a fixed step above its limit is refused (D-42).
    real(wp), parameter :: damped_ratio = 0.7071_wp
+   !> An energy residual above this fraction of the energy scale is a wrong
+   !> solution, not an integration error (D-42): a correct run keeps it below
+   !> 1e-4 (docs/integrators.md).
+   real(wp), parameter :: energy_residual_limit = 0.1_wp
 
    !> The loop's own bookkeeping (allocated once per run).
    type :: drive_t
@@ -62,6 +66,7 @@ module trainsim_simulate
       !> the last event recorded (element, kind), named by an event flood: a
       !> settle that took several passes leaves only its last pass in ev
       integer :: last_element = 0, last_kind = 0
+      integer :: last_guard = 0            !< the first guard that fired at the last event instant
       logical :: may_miss = .false.        !< integ%may_miss_events(), asked once per run
       !> plain steps in blocks (D-38): the integrator takes them, and the
       !> observer's short way folds them (no peak refinement; whole samples at
@@ -69,6 +74,9 @@ module trainsim_simulate
       logical :: blocks = .false.
       !> blocks, and the output times are the integrator's grid (output_interval = dt)
       logical :: block_samples = .false.
+      !> per element: the largest |displacement| a physical run reaches
+      !> (element%displacement_bound, D-42), checked at the output times
+      real(wp), allocatable :: disp_bound(:)
    end type drive_t
 
 contains
@@ -148,6 +156,7 @@ contains
                  (.not. obs%want_whole .or. dout /= model%run%dt)
       d%block_samples = d%blocks .and. dout == model%run%dt .and. .not. obs%want_whole
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
+      call displacement_bounds(model, d%disp_bound)
       call model%breakpoints(t, t_end, d%bp)
       call set_next_stop(d, integ, t, t_end)
       call integ%start(model, t, y, err)
@@ -175,6 +184,8 @@ contains
                   end if
                end do
                k = k + model%blk%n
+               call check_physical(model, integ, obs, d, t, err)
+               if (allocated(err)) return
                cycle
             end if
          end if
@@ -182,6 +193,8 @@ contains
          call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
          call obs%sample(model, t_out, t, y, sink, err)
+         if (allocated(err)) return
+         call check_physical(model, integ, obs, d, t, err)
          if (allocated(err)) return
          k = k + 1
       end do
@@ -334,6 +347,7 @@ contains
             d%fired = d%g < 0.0_wp
          end if
          if (any(d%fired)) then
+            d%last_guard = findloc(d%fired, .true., 1)
             call settle_events(model, obs, d, t, y, nev, err)
             if (allocated(err)) return
             call count_events(model, d, t, nev, err)
@@ -360,6 +374,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: pass, nev, n_total, j
       if (.not. region_fired()) return
+      d%last_guard = j
       n_total = 0
       do pass = 1, max_settle_passes
          nev = 0
@@ -431,6 +446,94 @@ contains
                        '(a runaway state, or a time step above the stability limit)', err_numeric)
    end subroutine settle_events
 
+   !> Each element's displacement bound (element%displacement_bound) from the
+   !> loads (trainsim_modes' load_torque_bound) and its nodes' inertias.
+   subroutine displacement_bounds(model, bound)
+      type(model_t), intent(in) :: model
+      real(wp), allocatable, intent(out) :: bound(:)
+      real(wp) :: tq
+      integer :: i
+      allocate (bound(size(model%elements)))
+      tq = load_torque_bound(model)
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e)
+            bound(i) = e%displacement_bound(tq, inv_inertia(e%left), inv_inertia(e%right))
+         end associate
+      end do
+   contains
+      real(wp) function inv_inertia(j) result(r)
+         integer, intent(in) :: j
+         r = 0.0_wp
+         if (model%is_held(j) .or. model%nodes(j)%n%is_fixed()) return
+         if (model%nodes(j)%n%inertia() > 0.0_wp) r = 1.0_wp/model%nodes(j)%n%inertia()
+      end function inv_inertia
+   end subroutine displacement_bounds
+
+   !> The checks that a run is still physical, at each output time from the
+   !> observer's running metrics (D-42): no element's displacement beyond its
+   !> bound (a mesh with its teeth through one another), and an energy ledger
+   !> whose residual is below energy_residual_limit of the energy scale. A run
+   !> that fails them ends with exit 1 naming the element, the time, the check
+   !> and a remedy for the integrator in use, instead of a wrong answer with exit 0.
+   subroutine check_physical(model, integ, obs, d, t, err)
+      type(model_t), intent(inout) :: model
+      class(integrator_t), intent(in) :: integ
+      type(observer_t), intent(in) :: obs
+      type(drive_t), intent(in) :: d
+      real(wp), intent(in) :: t
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i
+      real(wp) :: worst, h_part
+      type(model_t) :: tmp
+      character(len=:), allocatable :: part
+      do i = 1, size(d%disp_bound)
+         worst = max(abs(obs%res%el(i)%disp_min), abs(obs%res%el(i)%disp_max))
+         if (.not. worst > d%disp_bound(i)) cycle
+         if (obs%res%el(i)%disp_min > obs%res%el(i)%disp_max) cycle   ! nothing folded yet (settle_time)
+         call fatal_error(err, "integrator '"//model%run%integrator//"': the displacement of element '"// &
+                          model%elements(i)%e%id//"' reached "//str(sign(worst, obs%res%el(i)%disp_max + &
+                          obs%res%el(i)%disp_min), 4)//' by t = '//str(t)//' s, beyond the '//str(d%disp_bound(i), 4)// &
+                          ' a physical run can reach (the clearance plus ten times the largest of the clearance, '// &
+                          'the static deflection under the loads and an impact at 100 in/s): the solution is wrong '// &
+                          '(the displacement-bound check). '//physical_advice(model, integ), err_numeric)
+         return
+      end do
+      if (.not. model%run%track_energy) return
+      if (.not. obs%res%energy_residual_max > energy_residual_limit*obs%res%energy_scale) return
+      tmp = model
+      call limiting_part(tmp, lin_stiffest, part, h_part)
+      call fatal_error(err, "integrator '"//model%run%integrator//"': the energy ledger does not balance by t = "// &
+                       str(t)//' s: residual '//str(obs%res%energy_residual_max, 4)//' against an energy scale of '// &
+                       str(obs%res%energy_scale, 4)//' (more than '//str(energy_residual_limit)//' of it; '// &
+                       'the energy-ledger check): the solution is wrong. The stiffest part of the train is '//part// &
+                       ', with a step limit of its own of '//str(h_part, 4)//' s. '//physical_advice(model, integ), &
+                       err_numeric)
+   end subroutine check_physical
+
+   !> What to try when a run is no longer physical: for a fixed step, a smaller
+   !> dt than RK4's stability limit of the stiffest state (a step near the limit
+   !> of a strongly damped mode is stable but does not resolve it) or an
+   !> implicit method; for an adaptive one, its tolerances.
+   function physical_advice(model, integ) result(text)
+      type(model_t), intent(inout) :: model
+      class(integrator_t), intent(in) :: integ
+      character(len=:), allocatable :: text
+      type(model_t) :: tmp
+      type(error_t), allocatable :: lim_err
+      real(wp) :: dt_safe, omega
+      if (.not. is_fixed_step(model%run%integrator)) then
+         text = blowup_advice(model, integ)
+         if (model%run%integrator(1:5) == 'arkod') text = text//"; or use integrator = 'cvode-bdf' if the train is stiff"
+         return
+      end if
+      tmp = model
+      call rk4_dt_limit(tmp, lin_stiffest, dt_safe, omega, lim_err)
+      text = "Take a smaller dt, or use integrator = 'cvode-bdf'"
+      if (.not. allocated(lim_err) .and. dt_safe < huge(1.0_wp)) text = 'Take dt well below '//str(dt_safe, 4)// &
+         ' s, the RK4 stability limit of the stiffest state the run can reach (a step near the limit of a strongly '// &
+         "damped mode is stable but does not resolve it), or use integrator = 'cvode-bdf'"
+   end function physical_advice
+
    !> The last of the nev events just recorded in d%ev, for `count_events`.
    subroutine keep_last_event(d, nev)
       type(drive_t), intent(inout) :: d
@@ -440,7 +543,7 @@ contains
       d%last_kind = d%ev(nev)%kind
    end subroutine keep_last_event
 
-   !> Event budget: more than max_events_per_dt events inside one dt is a flood.
+   !> Event budget: more than max_events_per_dt events (or event instants) inside one dt is a flood.
    !> The message names the last event recorded (d%last_element; the events of
    !> this call may be spread over several settle passes, or be none).
    subroutine count_events(model, d, t, nev, err)
@@ -454,11 +557,17 @@ contains
          d%t_window = t
          d%window_events = 0
       end if
-      d%window_events = d%window_events + nev
+      ! an instant where guards fired counts once even if no element reported an
+      ! event there (a guard that fires again and again with no mode change is a
+      ! flood too, and was not counted: event_flood_segv.sh ran ~20 s)
+      d%window_events = d%window_events + max(nev, 1)
       if (d%window_events <= max_events_per_dt) return
       last = ''
-      if (d%last_element >= 1 .and. d%last_element <= size(model%elements)) &
+      if (nev > 0 .and. d%last_element >= 1 .and. d%last_element <= size(model%elements)) then
          last = " (the last: '"//ev_name(d%last_kind)//"' of element '"//model%elements(d%last_element)%e%id//"')"
+      else if (d%last_guard > 0) then
+         last = ' (the last: a guard of '//guard_owner(model, d%last_guard)//' fired without a change of mode)'
+      end if
       call fatal_error(err, 'event flood at t = '//str(t)//' s: more than '//str(max_events_per_dt)// &
                        ' events within dt = '//str(model%run%dt)//' s'//last//'. '// &
                        stability_advice(model), err_numeric)
