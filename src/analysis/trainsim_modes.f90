@@ -433,14 +433,15 @@ contains
       end subroutine limit_at
    end subroutine rk4_dt_limit
 
-   !> `state` with every clearance closed gets the largest torque the loads can
-   !> drive through one element (`load_torque_bound`), unless it has one.
+   !> `state` gets the largest torque the loads can drive through one element
+   !> (`load_torque_bound`), unless it has one (a negative one: leave the
+   !> loads out, D-42).
    function with_loads(model, state) result(st)
       type(model_t), intent(in) :: model
       type(lin_state_t), intent(in) :: state
       type(lin_state_t) :: st
       st = state
-      if (st%contact == lin_contact_closed .and. st%load_torque == 0.0_wp) st%load_torque = load_torque_bound(model)
+      if (st%load_torque == 0.0_wp) st%load_torque = load_torque_bound(model)
    end function with_loads
 
    !> The largest torque the external loads can drive through one element over
@@ -547,7 +548,7 @@ contains
                if (b*b >= a) then
                   text = "element '"//e%id//"'"//origin_of(e%origin)//': its damping (c/m = '//str(b, 4)// &
                          ' 1/s against sqrt(k/m) = '//str(sqrt(max(a, 0.0_wp)), 4)//' 1/s'
-                  if (state%contact == lin_contact_closed) text = text//'; a contact law''s damping at its largest'
+                  if (e%n_guards() > 0) text = text//'; its contact law''s damping'
                   text = text//')'
                else
                   text = "element '"//e%id//"'"//origin_of(e%origin)//': its stiffness (sqrt(k/m) = '// &

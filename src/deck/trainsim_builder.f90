@@ -101,6 +101,12 @@ contains
          call g%get_real('event_tol', r%event_tol, err, default=0.0_wp); if (allocated(err)) return
          call g%get_real('settle_time', r%settle_time, err, default=0.0_wp); if (allocated(err)) return
          call g%get_logical('track_energy', r%track_energy, err, default=.true.); if (allocated(err)) return
+         call g%get_real('energy_check', r%energy_check, err, default=0.1_wp); if (allocated(err)) return
+         if (.not. (r%energy_check >= 0.0_wp .and. r%energy_check <= 1.0_wp)) then
+            call fatal_error(err, g%where('energy_check')//': error: energy_check must be in [0, 1] (a fraction of '// &
+                             'the energy scale; 0 turns the check off), got '//str(r%energy_check), err_input)
+            return
+         end if
          call g%get_int('compression', r%compression, err, default=0); if (allocated(err)) return
          if (r%compression < 0 .or. r%compression > 9) then
             call fatal_error(err, g%where('compression')//': error: compression must be a zlib level in [0, 9] '// &

@@ -141,7 +141,7 @@ contains
       m_eff = 0.0_wp
       if (inv_m > 0.0_wp) m_eff = 1.0_wp/inv_m
       f_load = 0.0_wp
-      if (min(self%cl%r1, self%cl%r2) > 0.0_wp) f_load = state%load_torque/min(self%cl%r1, self%cl%r2)
+      if (min(self%cl%r1, self%cl%r2) > 0.0_wp) f_load = max(state%load_torque, 0.0_wp)/min(self%cl%r1, self%cl%r2)
       cd = self%cl%law%linear_damping(f, m_eff, state%contact == lin_contact_closed, state%impact_scale, f_load)
       k = self%cl%law%k*f*spread(g, 2, 2)*spread(g, 1, 2)
       c = cd*spread(g, 2, 2)*spread(g, 1, 2)

@@ -211,7 +211,8 @@ contains
    !> c D p = phi(e(V)) F / V, with V as slow as the floor min_approach_velocity
    !> (or initial_contact_velocity, for a contact closed at t_start). With
    !> `largest` and f_load > 0 (the largest force the loads can drive through
-   !> the contact), the larger of the two is taken.
+   !> the contact), the larger of the two is taken; for the contact in progress
+   !> (not `largest`), its own D at that penetration, c D p = D F / k.
    pure real(wp) function law_linear_damping(self, c, m_eff, largest, scale, f_load) result(cd)
       class(contact_law_t), intent(in) :: self
       real(wp), intent(in) :: c, m_eff, scale
@@ -226,7 +227,13 @@ contains
          end if
          phi = 6.0_wp*(1.0_wp - e)/((2.0_wp*e - 1.0_wp)**2 + 3.0_wp)    ! D V_i / k, eq. (3.12)
          cd = scale*phi*sqrt(c*self%k*m_eff)
-         if (largest .and. present(f_load)) cd = max(cd, scale*self%gentle_damping(f_load))
+         if (present(f_load)) then
+            if (largest) then
+               cd = max(cd, scale*self%gentle_damping(f_load))
+            else if (self%k > 0.0_wp) then
+               cd = max(cd, scale*self%d*f_load/self%k)    ! c D p at p = F/(c k): the contact in progress
+            end if
+         end if
       else
          cd = self%c
       end if
