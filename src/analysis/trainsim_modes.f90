@@ -21,7 +21,7 @@ module trainsim_modes
    private
 
    public :: modes_t, compute_modes, rk4_stability_limit, rk4_dt_bound, rk4_dt_limit, rk4_ray_radius
-   public :: load_torque_bound, limiting_part, with_loads
+   public :: load_torque_bound, limiting_part, with_loads, rk4_dt_quick
 
    !> |lambda h| on the imaginary axis inside which classical RK4 is stable (2 sqrt 2).
    real(wp), parameter :: rk4_stability_limit = 2.0_wp*sqrt(2.0_wp)
@@ -432,6 +432,20 @@ contains
          end do
       end subroutine limit_at
    end subroutine rk4_dt_limit
+
+   !> O(n) bounds for the train in `state` (loads as `with_loads`): |lambda| <=
+   !> `bound` for every eigenvalue, and RK4 is stable for any h <= dt_max
+   !> (`rk4_dt_bound`: Gershgorin). A check that passes with them needs no
+   !> eigenvalues (check_fixed_step, the explicit SUNDIALS check).
+   subroutine rk4_dt_quick(model, state_in, dt_max, bound)
+      type(model_t), intent(inout) :: model
+      type(lin_state_t), intent(in) :: state_in
+      real(wp), intent(out) :: dt_max, bound
+      real(wp), allocatable :: y(:)
+      call model%initial_state(y)
+      call model%init_modes(model%run%t_start, y)
+      call rk4_dt_bound(model, with_loads(model, state_in), y, dt_max, bound)
+   end subroutine rk4_dt_quick
 
    !> `state` gets the largest torque the loads can drive through one element
    !> (`load_torque_bound`), unless it has one (a negative one: leave the

@@ -27,7 +27,7 @@ module trainsim_sundials
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric, err_internal
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
-   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit, limiting_part
+   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit, limiting_part, rk4_dt_quick
    use trainsim_element, only: lin_stiffest, lin_state_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    implicit none
@@ -316,6 +316,9 @@ contains
       what = 'the highest mode ('//str(self%omega_max/two_pi, 4)//' Hz, every clearance closed)'
       st = lin_stiffest
       st%load_torque = -1.0_wp     ! the impact damping, not a gentle closure under load (as check_fixed_step)
+      tmp = model
+      call rk4_dt_quick(tmp, st, dt_rk4, om_damped)   ! O(n): |lambda| <= om_damped
+      if (.not. (model%run%t_end - t)*max(om, om_damped)/self%explicit_limit() > implied_step_budget) return
       tmp = model
       call rk4_dt_limit(tmp, st, dt_rk4, om_damped, lim_err)
       if (.not. allocated(lim_err) .and. om_damped > om) then
