@@ -17,6 +17,7 @@ program trainsim_main
    use trainsim_sink, only: null_sink_t
    use trainsim_hdf5, only: hdf5_sink_t, hdf5_library_stuck
    use trainsim_report, only: print_summary, print_modes, print_parameters
+   use trainsim_progress, only: progress_t
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
    use trainsim_preload, only: preload_info_t
@@ -25,6 +26,7 @@ program trainsim_main
                                  key_input_t, key_result_t, key_calc, key_report
    use trainsim_units, only: units_t, make_units
    use trainsim_contact, only: fit_tight, fit_loose, fit_average
+   use trainsim_describe, only: write_description
    implicit none
 
    character(len=:), allocatable :: cmd, deck_path, out_path
@@ -41,6 +43,11 @@ program trainsim_main
          integer(c_int), value :: status
       end subroutine c_exit_now
       !> POSIX readlink(2) (ssize_t is a C long on the 64-bit Linux targets).
+      !> POSIX getpid(2), for a temporary file name of this process.
+      function c_getpid() bind(C, name='getpid') result(pid)
+         import :: c_int
+         integer(c_int) :: pid
+      end function c_getpid
       function c_readlink(path, buf, n) bind(C, name='readlink') result(r)
          import :: c_char, c_long, c_size_t
          character(kind=c_char), intent(in) :: path(*)
@@ -76,6 +83,8 @@ program trainsim_main
       if (cmd == 'key') call do_key()
    case ('export', 'plot')
       call do_script()
+   case ('diagram')
+      call do_diagram()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)
@@ -257,7 +266,8 @@ contains
          '                                integrate the train in DECK; write the HDF5 history', &
          '                                (to FILE, else to the deck''s &run output). --set changes a', &
          '                                deck value (TARGET: node/element id, run, or GROUP#K) or a', &
-         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles);', &
+         '                                derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles,', &
+         '                                .settle_max_cycles);', &
          '                                --no-output (or -o -): no history file, even if the deck names one', &
          '  trainsim sweep DECK [-o FILE] [--set ...] [--resume] [--progress S]', &
          '                                every run of the deck''s &sweep groups (serial, or under', &
@@ -281,12 +291,15 @@ contains
          '                                keyed-joint stiffness curve (Ch. IV) and a deck fragment', &
          '  trainsim export FILE.h5 QUANTITY ... | --events | --metrics | --summary json | --spectrum', &
          '                                CSV/JSON of a history (scripts/trainsim_export.py --help)', &
-         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR  -o OUT.png|pdf|svg', &
-         '                                figures of a history (scripts/trainsim_plot.py --help)', &
+         '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR | --overview [ID]  -o OUT', &
+         '                                figures of a history or a sweep (scripts/trainsim_plot.py --help)', &
+         '  trainsim diagram DECK -o OUT.svg|png|pdf [--json FILE] [--set ...]', &
+         '                                the train as a block diagram, from the deck alone', &
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
-         '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)', &
+         '             130 / 143 interrupted by SIGINT / SIGTERM (a run keeps its history so far, marked', &
+         '             interrupted)', &
          'deck format: man trainsim; docs/deck.md (installed in share/doc/trainsim)'
    end subroutine usage
 
@@ -305,10 +318,14 @@ contains
             '  --no-output, -o -  write no history file, even if the deck names one', &
             '  --set T.KEY=VALUE  change a deck value: T is a node or element id, run, or GROUP#K', &
             '                     (e.g. mesh.half_backlash=2e-4, run.t_end=0.1, load#2.value=-500),', &
-            '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles)', &
+            '                     or a derived one (GEAR.mesh_frequency, .settle_cycles, .measure_cycles,', &
+            '                     .settle_max_cycles)', &
             '  -h, --help         this text', '', &
+            'A run longer than 2 s prints its progress on stderr: one line rewritten in place on a', &
+            'terminal, a line every 10 s otherwise (TRAINSIM_PROGRESS_INTERVAL=S: every S seconds).', '', &
             'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file,', &
-            '             130 / 143 interrupted by SIGINT / SIGTERM (no history written)'
+            '             130 / 143 interrupted by SIGINT / SIGTERM: the history up to the last output', &
+            '             time reached is kept, marked interrupted (root attribute status)'
       case ('sweep')
          write (unit, '(a)') 'usage: trainsim sweep DECK [-o FILE] [--set TARGET.KEY=VALUE ...] [--resume] [--progress S]', '', &
             'Every run of the &sweep groups of DECK, serially or under mpirun -np N (rank 0 hands', &
@@ -348,6 +365,19 @@ contains
             '  --id ID, --units U         the fragment''s element id; in-lbf-s (default) or si', &
             '  -h, --help                 this text', '', &
             'exit status: 0 success, 2 bad input'
+      case ('diagram')
+         write (unit, '(a)') 'usage: trainsim diagram DECK -o OUT.svg|png|pdf [--json FILE] [--set TARGET.KEY=VALUE ...]', '', &
+            'The train of DECK as a block diagram: nodes as blocks (kind, inertia), elements as', &
+            'connectors (type, ratio, backlash or clearance, stiffness), loads, prescribed speeds and', &
+            'motor voltages as arrows; every unconnected part is drawn as its own piece. The deck is', &
+            'read and built as `run` does (a bad deck: exit 2, the same message); nothing is run.', &
+            'Drawn by scripts/trainsim_diagram.py with matplotlib (no Graphviz needed).', '', &
+            '  -o, --output OUT   the drawing; the format follows the extension', &
+            '  --json FILE        also write the description the drawing is made from (- for stdout);', &
+            '                     without -o only the description is written', &
+            '  --set T.KEY=VALUE  as for run', &
+            '  -h, --help         this text', '', &
+            'exit status: 0 success, 2 bad input or file'
       case ('key')
          write (unit, '(a)') 'usage: trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', '', &
             'The keyed-joint stiffness curve of Ch. IV (eqs. 4.35-4.37): torque, key force, lineal and', &
@@ -481,8 +511,10 @@ contains
       type(run_result_t) :: res
       type(hdf5_sink_t) :: h5
       type(null_sink_t) :: none
+      type(progress_t) :: progress
       real(wp) :: dt_safe, om, f, z
       logical :: warned
+      integer :: sig
 
       call load(path, model)
       if (len(out) > 0) model%run%output = out
@@ -523,15 +555,46 @@ contains
       if (len(model%run%output) > 0) then
          h5%path = model%run%output
          h5%compression = model%run%compression
-         call simulate(model, h5, res, err)
+         call simulate(model, h5, res, err, keep_interrupted=.true., progress=progress)
       else
-         call simulate(model, none, res, err)
+         call simulate(model, none, res, err, progress=progress)
       end if
-      if (allocated(err)) call fail(err)
+      if (allocated(err)) then
+         if (err%code == err_interrupted) then
+            ! the history computed so far was kept (simulate's keep_interrupted)
+            sig = interrupt_signal()
+            if (len(model%run%output) == 0) then
+               write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; '//no_file_reason(no_output)
+            else if (res%t_sampled > -huge(1.0_wp)) then
+               write (error_unit, '(a)') 'trainsim: '//err%message//' by '//signal_name(sig)//'; the history up to t = '// &
+                  str(res%t_sampled)//' s (the last output time reached) was kept in '//model%run%output// &
+                  ", marked incomplete (root attribute status = 'interrupted')"
+            else   ! stopped before the first sample, or the file could not be closed (err says why)
+               write (error_unit, '(a)') 'trainsim: '//err%message//' ('//signal_name(sig)//'); no history written'
+            end if
+            call quit(128 + sig)
+         end if
+         call fail(err)
+      end if
       call print_summary(model, res, output_unit)
-      if (len(model%run%output) > 0) write (output_unit, '(a)') 'history written to '//model%run%output
+      if (len(model%run%output) > 0) then
+         write (output_unit, '(a)') 'history written to '//model%run%output
+      else
+         write (output_unit, '(a)') 'note: '//no_file_reason(no_output)
+      end if
       flush (output_unit)
    end subroutine do_run
+
+   !> Why a run wrote no history file.
+   function no_file_reason(no_output) result(text)
+      logical, intent(in) :: no_output   !< --no-output or -o - was given
+      character(len=:), allocatable :: text
+      if (no_output) then
+         text = 'no history file was written (--no-output or -o -)'
+      else
+         text = 'no history file was written: the deck names no output (set output in &run, or give -o FILE)'
+      end if
+   end function no_file_reason
 
    ! ------------------------------------------------ trainsim gear / trainsim key
 
@@ -681,6 +744,104 @@ contains
       call key_report(q, r, output_unit)
       call quit(0)
    end subroutine do_key
+
+   ! ------------------------------------------------------------ trainsim diagram
+
+   !> trainsim diagram DECK -o OUT [--json FILE] [--set ...]: the deck read and built by
+   !> trainsim itself, its description (trainsim_describe) written as JSON, then drawn by
+   !> scripts/trainsim_diagram.py (run as `export` and `plot` run theirs).
+   subroutine do_diagram()
+      character(len=:), allocatable :: deck_file, out, json, path, script, python, line, ext
+      type(deck_t) :: deck
+      type(deck_group_t), allocatable :: sweeps(:)
+      type(model_t) :: model
+      type(error_t), allocatable :: err
+      integer :: k, u, ios, stat, cstat
+      deck_file = ''
+      out = ''
+      json = ''
+      allocate (sets(0))
+      k = 2
+      do while (k <= nargs)
+         select case (arg(k))
+         case ('-h', '--help')
+            call command_usage('diagram', output_unit)
+            call quit(0)
+         case ('-o', '--output'); out = text_value(k); k = k + 1
+         case ('--json'); json = text_value(k); k = k + 1
+         case ('--set'); call add_set(k); k = k + 1
+         case default
+            if (index(arg(k), '-') == 1 .or. len(deck_file) > 0) then
+               write (error_unit, '(a)') "trainsim: diagram: error: unexpected argument '"//arg(k)// &
+                  "' (try trainsim diagram --help)"
+               call quit(2)
+            end if
+            deck_file = arg(k)
+         end select
+         k = k + 1
+      end do
+      if (len(deck_file) == 0 .or. (len(out) == 0 .and. len(json) == 0)) then
+         write (error_unit, '(a)') 'trainsim: diagram: error: needs a deck and -o OUT.svg|png|pdf (or --json FILE) '// &
+            '(try trainsim diagram --help)'
+         call quit(2)
+      end if
+      ext = ''
+      if (index(out, '.', back=.true.) > 0) ext = out(index(out, '.', back=.true.):)
+      if (len(out) > 0 .and. ext /= '.svg' .and. ext /= '.png' .and. ext /= '.pdf') then
+         write (error_unit, '(a)') "trainsim: diagram: error: output '"//out//"' must end in .svg, .png or .pdf"
+         call quit(2)
+      end if
+      script = ''
+      if (len(out) > 0) then
+         script = find_script('trainsim_diagram.py')
+         if (len(script) == 0) then
+            write (error_unit, '(a)') 'trainsim: diagram: error: cannot find trainsim_diagram.py (looked in '// &
+               '$TRAINSIM_SCRIPTS, <prefix>/share/trainsim/scripts and <build>/../scripts beside the executable)'
+            call quit(2)
+         end if
+      end if
+
+      call read_deck(deck_file, deck, err)
+      if (allocated(err)) call fail(err)
+      call split_sweep_groups(deck, sweeps)   ! a sweep deck is drawn with its own values
+      call prepare_model(deck, sets, model, err)
+      if (allocated(err)) call fail(err)
+
+      if (json == '-') then
+         call write_description(deck, model, output_unit)
+         flush (output_unit)
+         if (len(out) == 0) call quit(0)
+      end if
+      path = json
+      if (json == '-' .or. len(json) == 0) then   ! a temporary file for the script
+         path = env_text('TMPDIR')
+         if (len(path) == 0) path = '/tmp'
+         path = path//'/trainsim-diagram-'//str(int(c_getpid()))//'.json'
+      end if
+      open (newunit=u, file=path, status='replace', action='write', iostat=ios)
+      if (ios /= 0) then
+         write (error_unit, '(a)') "trainsim: diagram: error: cannot write '"//path//"'"
+         call quit(2)
+      end if
+      call write_description(deck, model, u)
+      close (u)
+      if (len(out) == 0) call quit(0)
+
+      python = env_text('TRAINSIM_PYTHON')
+      if (len(python) == 0) python = '/usr/bin/python3'
+      line = quoted(python)//' '//quoted(script)//' '//quoted(path)//' -o '//quoted(out)
+      flush (output_unit)
+      call execute_command_line(line, exitstat=stat, cmdstat=cstat)
+      if (path /= json) then
+         open (newunit=u, file=path, status='old', iostat=ios)
+         if (ios == 0) close (u, status='delete')
+      end if
+      if (cstat /= 0) then
+         write (error_unit, '(a)') 'trainsim: diagram: error: cannot run '//python//' '//script
+         call quit(2)
+      end if
+      call quit(stat)
+   end subroutine do_diagram
 
    ! ------------------------------------------ trainsim export / trainsim plot
 

@@ -25,7 +25,7 @@ module trainsim_el_keyed_joint
    use trainsim_contact, only: fit_tight, fit_loose, fit_average, key_lineal_stiffness
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
+   use trainsim_param_list, only: param_list_t, add_choice, guarded_product, guarded_ratio
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hf_none
    implicit none
@@ -208,8 +208,23 @@ contains
                         self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor, &
                         guarded_product(self%cl%law%k, guarded_product(0.5_wp*self%diameter, 0.5_wp*self%diameter))])
       if (self%cl%law%fit /= 0) then
-         p%names = [p%names, string_t('stiffness_fit'), string_t('key_length')]
-         p%values = [p%values, real(self%cl%law%fit, wp), self%key_length]
+         ! the file's attribute stiffness_fit: 1 tight, 2 loose, 3 average
+         call add_choice(p, 'stiffness_fit', real(self%cl%law%fit, wp), fit_word(self%cl%law%fit))
+         p%names = [p%names, string_t('key_length')]
+         p%values = [p%values, self%key_length]
+         p%words = [p%words, string_t('')]
       end if
    end function key_params
+
+   !> The deck word of a stiffness fit code.
+   pure function fit_word(fit) result(w)
+      integer, intent(in) :: fit
+      character(len=:), allocatable :: w
+      select case (fit)
+      case (fit_tight); w = 'tight'
+      case (fit_loose); w = 'loose'
+      case (fit_average); w = 'average'
+      case default; w = 'constant'
+      end select
+   end function fit_word
 end module trainsim_el_keyed_joint

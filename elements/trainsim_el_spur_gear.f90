@@ -21,7 +21,7 @@ module trainsim_el_spur_gear
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: check_magnitude
-   use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
+   use trainsim_param_list, only: param_list_t, add_choice, guarded_product, guarded_ratio
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
@@ -381,14 +381,17 @@ contains
       ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
       p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), &
                        string_t('teeth'), string_t('contact_ratio'), string_t('approach_angle'), &
-                       string_t('half_backlash'), string_t('two_pair_factor'), string_t('truncate_zones'), &
+                       string_t('half_backlash'), string_t('two_pair_factor'), &
                        string_t('min_approach_velocity'), string_t('initial_contact_velocity'), &
                        string_t('gear_ratio'), string_t('base_pitch'), string_t('two_pair_stiffness'), &
                        string_t('mesh_period_angle')], &
                        values=[self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, &
-                        self%cl%b, self%c2, merge(1.0_wp, 0.0_wp, self%truncate), self%cl%law%v_min, &
+                        self%cl%b, self%c2, self%cl%law%v_min, &
                         self%cl%law%v_initial, guarded_ratio(self%cl%r2, self%cl%r1), guarded_ratio(two_pi*self%cl%r1, self%teeth), &
                         guarded_product(self%c2, self%cl%law%k), guarded_ratio(two_pi, self%teeth)])
+      ! zone_function: the file's attribute truncate_zones (1 = 'truncate', 0 = 'periodic')
+      call add_choice(p, 'truncate_zones', merge(1.0_wp, 0.0_wp, self%truncate), &
+                      merge('truncate', 'periodic', self%truncate))
       if (self%pitch_module > 0.0_wp) then
          p%names = [p%names, string_t('teeth_driven'), string_t('module_length'), string_t('pressure_angle_rad'), &
                     string_t('face_width')]

@@ -41,6 +41,8 @@ module trainsim_node_dc_motor
       procedure :: input_power => motor_input_power
       procedure :: attach_voltage => motor_attach_voltage
       procedure :: state_names => motor_state_names
+      procedure :: driving_input => motor_driving_input
+      procedure :: driving_input_value => motor_driving_input_value
       procedure :: params => motor_params
       procedure :: jacobian => motor_jacobian
       procedure :: breakpoints => motor_breakpoints
@@ -135,6 +137,23 @@ contains
          p = self%voltage%value(t)*i*self%power_per_watt + (self%alpha - self%alpha_e*self%power_per_watt)*i*w
       end associate
    end function motor_input_power
+
+   !> The armature voltage e(t) is the motor's driving input (the history's /inputs).
+   pure subroutine motor_driving_input(self, quantity, unit)
+      class(dc_motor_node_t), intent(in) :: self
+      character(len=:), allocatable, intent(out) :: quantity, unit
+      quantity = ''
+      unit = ''
+      if (.not. self%has_voltage) return
+      quantity = 'voltage'
+      unit = 'V'
+   end subroutine motor_driving_input
+
+   pure real(wp) function motor_driving_input_value(self, t) result(v)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      v = self%voltage%value(t)
+   end function motor_driving_input_value
 
    subroutine motor_attach_voltage(self, sig, where, err)
       class(dc_motor_node_t), intent(inout) :: self

@@ -7,18 +7,29 @@ usage:
   trainsim_export.py FILE --events [--t0 T] [--t1 T] [-o OUT.csv]
   trainsim_export.py FILE --metrics [-o OUT.csv]
   trainsim_export.py FILE --summary json [-o OUT.json]
-  trainsim_export.py FILE --spectrum [--force-bins N] [--velocity-bins N] [-o OUT.csv]
+  trainsim_export.py FILE --spectrum [--force-bins N|--bins E0,E1,...] [--velocity-bins N|E0,E1,...] [-o OUT.csv]
+  trainsim_export.py FILE --rainflow [--element ID ...] [--bins E0,E1,...] [--t0 T] [--t1 T] [-o OUT.csv]
   trainsim_export.py FILE --list
 
 QUANTITY is ID.NAME: a node's theta or omega (drive.omega), an element's torque_left,
 torque_right, displacement, force, contact or pairs (mesh.displacement), a state by
-name (state.drive.speed), or energy.kinetic|potential|dissipated|input|balance.
+name (state.drive.speed), energy.kinetic|potential|dissipated|input|balance, or an input
+of the run as it saw it (input.load.load_torque, input.drive.prescribed_speed,
+input.motor.voltage: the columns of /inputs).
 --t0/--t1 keep samples in [t0, t1] s; --every N keeps every N-th of those. The CSV
 header names each column with its unit, e.g. `mesh.displacement [in]`.
 
 The impact load spectrum counts, per clearance element, the contacts begun (event
 kinds contact_front and contact_rear, as /metrics/impacts) by peak-force bin and by
-approach-velocity bin (N equal bins from 0 to the element's largest value).
+approach-velocity bin: N equal bins from 0 to the element's largest value, or fixed
+edges E0,E1,... (--bins, in the file's force unit; --velocity-bins E0,E1,... in its
+length/s) that stay the same from run to run, so two designs can be compared; fixed
+edges add a row below E0 and one above the last edge, so nothing is dropped.
+
+--rainflow counts the cycles of each element's force series (/elements/force, the mesh
+or contact force; a shaft's torque) by rainflow (ASTM E1049-85 §5.4.4, half cycles
+counted 0.5; scripts/trainsim_rainflow.py): one row per range with its mean and count,
+or with --bins the cycles per range bin, ready for a load-duration (Miner) sum.
 """
 import argparse
 import csv
@@ -28,6 +39,8 @@ import sys
 
 import h5py
 import numpy as np
+
+from trainsim_rainflow import rainflow, rainflow_histogram
 
 NODE_SETS = ("theta", "omega")
 ELEMENT_SETS = ("torque_left", "torque_right", "displacement", "force", "contact", "pairs")
@@ -48,14 +61,16 @@ def quantity_names(f):
     names += [f"{i}.{q}" for i in attr_list(f["elements"], "ids") for q in ELEMENT_SETS]
     names += [f"state.{s}" for s in attr_list(f["states"], "column_names")]
     names += [f"energy.{e}" for e in attr_list(f["energy"], "column_names")]
+    if "inputs" in f:
+        names += [f"input.{e}" for e in attr_list(f["inputs"], "column_names")]
     return names
 
 
 def quantity(f, name):
     """(values over all samples, unit) of QUANTITY `name`."""
     head, _, tail = name.partition(".")
-    if head == "energy" or head == "state":
-        ds = f["energy" if head == "energy" else "states"]
+    if head in ("energy", "state", "input") and (head != "input" or "inputs" in f):
+        ds = f[{"energy": "energy", "state": "states", "input": "inputs"}[head]]
         cols = attr_list(ds, "column_names")
         if tail in cols:
             j = cols.index(tail)
@@ -152,9 +167,29 @@ def summary(f):
     return out
 
 
+def bin_edges(values, bins):
+    """Histogram edges: `bins` a count N (N equal bins from 0 to the largest value) or a
+    list of fixed edges (used as given)."""
+    if isinstance(bins, int):
+        top = float(values.max()) if values.size and values.max() > 0 else 1.0
+        return np.linspace(0.0, top, bins + 1)
+    return np.asarray(bins, dtype=float)
+
+
+def fixed_counts(values, edges):
+    """Counts in [e_k, e_k+1) (the last bin closed), with the count below e_0 and above
+    e_n as an extra first and last bin [-inf, e_0) and (e_n, inf]."""
+    inside, _ = np.histogram(values[(values >= edges[0]) & (values <= edges[-1])], bins=edges)
+    below, above = int((values < edges[0]).sum()), int((values > edges[-1]).sum())
+    return [-np.inf] + edges.tolist() + [np.inf], [below] + inside.tolist() + [above]
+
+
 def impact_spectrum(f, force_bins=10, velocity_bins=10):
     """Per clearance element with impacts: counts by peak-force bin and by approach-velocity bin.
 
+    force_bins, velocity_bins: a count N of equal bins from 0 to the element's largest
+    value, or a list of fixed edges (then a bin below the first and above the last edge
+    is added, so the counts still sum to the impacts).
     Returns {element id: {"impacts": n, "force_edges": [...], "force_counts": [...],
     "velocity_edges": [...], "velocity_counts": [...], "force_unit": u, "velocity_unit": u}}.
     """
@@ -171,11 +206,12 @@ def impact_spectrum(f, force_bins=10, velocity_bins=10):
             continue
         spec = {"impacts": int(rows.sum()), "force_unit": f_units[j], "velocity_unit": d_units[j] + "/s"}
         for key, values, nb in (("force", peak[rows], force_bins), ("velocity", vel[rows], velocity_bins)):
-            top = float(values.max()) if values.size and values.max() > 0 else 1.0
-            edges = np.linspace(0.0, top, nb + 1)
-            counts, _ = np.histogram(values, bins=edges)
-            spec[key + "_edges"] = edges.tolist()
-            spec[key + "_counts"] = counts.tolist()
+            edges = bin_edges(values, nb)
+            if isinstance(nb, int):
+                counts, _ = np.histogram(values, bins=edges)
+                spec[key + "_edges"], spec[key + "_counts"] = edges.tolist(), counts.tolist()
+            else:
+                spec[key + "_edges"], spec[key + "_counts"] = fixed_counts(values, edges)
         out[ident] = spec
     return out
 
@@ -192,6 +228,66 @@ def spectrum_table(spec):
     return header, [list(col) for col in zip(*rows)] if rows else [[] for _ in header]
 
 
+def rainflow_cycles(f, elements=None, t0=None, t1=None):
+    """{element id: (force unit, [(range, mean, count, t_start, t_end)])}: the rainflow
+    cycles of each element's /elements/force column over the window (every element, or
+    the ids in `elements`)."""
+    ids = attr_list(f["elements"], "ids")
+    for ident in elements or []:
+        if ident not in ids:
+            raise ExportError(f"unknown element '{ident}'; elements: {', '.join(ids)}")
+    t = f["time"][:]
+    idx = window(t, t0, t1)
+    units = attr_list(f["elements/force"], "column_units")
+    out = {}
+    for j, ident in enumerate(ids):
+        if elements and ident not in elements:
+            continue
+        x = f["elements/force"][idx, j]
+        tw = t[idx]
+        out[ident] = (units[j], [(r, m, n, tw[a], tw[b]) for r, m, n, a, b in rainflow(x)])
+    return out
+
+
+def rainflow_table(cycles, edges=None):
+    """(header, columns): one row per counted range (element, unit, range, mean, count,
+    the times of its two reversals), or with `edges` the cycles per range bin (a bin
+    below the first edge and one above the last included)."""
+    rows = []
+    if edges is None:
+        header = ["element_id", "unit", "range", "mean", "cycles", "t_from [s]", "t_to [s]"]
+        for ident, (u, cyc) in cycles.items():
+            rows += [[ident, u, float(r), float(m), n, float(ta), float(tb)] for r, m, n, ta, tb in cyc]
+    else:
+        header = ["element_id", "unit", "range_low", "range_high", "cycles"]
+        edges = np.asarray(edges, dtype=float)
+        for ident, (u, cyc) in cycles.items():
+            counts, below, above = rainflow_histogram(cyc, edges)
+            lows, highs = [-np.inf] + edges.tolist(), edges.tolist() + [np.inf]
+            for lo, hi, n in zip(lows, highs, [below] + counts.tolist() + [above]):
+                rows.append([ident, u, lo, hi, float(n)])
+    return header, [list(col) for col in zip(*rows)] if rows else [[] for _ in header]
+
+
+def parse_bins(text, option):
+    """--force-bins / --velocity-bins / --bins: a count N or fixed edges E0,E1,... (increasing)."""
+    if text is None:
+        return None
+    parts = [x for x in text.replace(" ", "").split(",") if x]
+    try:
+        if len(parts) == 1 and "," not in text:
+            n = int(parts[0])
+            if n < 1:
+                raise ExportError(f"{option} must be >= 1, got {n}")
+            return n
+        edges = [float(x) for x in parts]
+    except ValueError:
+        raise ExportError(f"{option}: expected a bin count N or edges E0,E1,... (numbers), got '{text}'")
+    if len(edges) < 2 or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0):
+        raise ExportError(f"{option}: the edges must be at least two finite numbers in increasing order, got '{text}'")
+    return edges
+
+
 def write_csv(header, cols, out):
     w = csv.writer(out, lineterminator="\n")
     w.writerow(header)
@@ -203,19 +299,24 @@ def write_csv(header, cols, out):
 def main(argv=None):
     p = argparse.ArgumentParser(prog="trainsim export", description=__doc__.split("\n\n")[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file")
-    p.add_argument("quantities", nargs="*")
-    p.add_argument("--t0", type=float)
-    p.add_argument("--t1", type=float)
-    p.add_argument("--every", type=int, default=1)
-    p.add_argument("--events", action="store_true")
-    p.add_argument("--metrics", action="store_true")
-    p.add_argument("--summary", choices=["json"])
-    p.add_argument("--spectrum", action="store_true")
-    p.add_argument("--force-bins", type=int, default=10)
-    p.add_argument("--velocity-bins", type=int, default=10)
-    p.add_argument("--list", action="store_true")
-    p.add_argument("-o", "--output")
+    p.add_argument("file", help="a history file of trainsim run (HDF5)")
+    p.add_argument("quantities", nargs="*", help="ID.NAME of each column to export (--list shows them)")
+    p.add_argument("--t0", type=float, help="keep samples and events from t0 (s) on")
+    p.add_argument("--t1", type=float, help="keep samples and events up to t1 (s)")
+    p.add_argument("--every", type=int, default=1, help="keep every N-th sample of the window (default 1)")
+    p.add_argument("--events", action="store_true", help="the event table, one row per event")
+    p.add_argument("--metrics", action="store_true", help="the run's figures (/metrics), one row per element")
+    p.add_argument("--summary", choices=["json"], help="the run's description, statistics and metrics as JSON")
+    p.add_argument("--spectrum", action="store_true",
+                   help="impact load spectrum: contacts per peak-force and approach-velocity bin")
+    p.add_argument("--force-bins", help="N equal bins (default 10) or edges E0,E1,... of the peak force")
+    p.add_argument("--velocity-bins", help="N equal bins (default 10) or edges E0,E1,... of the approach velocity")
+    p.add_argument("--bins", help="fixed edges E0,E1,... in the file's force unit: of the peak force "
+                                  "(--spectrum) or of the cycle range (--rainflow)")
+    p.add_argument("--rainflow", action="store_true", help="rainflow cycles of each element's force (ASTM E1049)")
+    p.add_argument("--element", action="append", help="--rainflow: only this element (repeatable)")
+    p.add_argument("--list", action="store_true", help="list every QUANTITY the file holds")
+    p.add_argument("-o", "--output", help="write to this file (default: standard output)")
     a = p.parse_args(argv)
     try:
         f = h5py.File(a.file, "r")
@@ -231,9 +332,16 @@ def main(argv=None):
                 json.dump(summary(f), buf, indent=2)
                 buf.write("\n")
             elif a.spectrum:
-                if a.force_bins < 1 or a.velocity_bins < 1:
-                    raise ExportError("--force-bins and --velocity-bins must be >= 1")
-                write_csv(*spectrum_table(impact_spectrum(f, a.force_bins, a.velocity_bins)), buf)
+                if a.bins and a.force_bins:
+                    raise ExportError("give --bins or --force-bins, not both")
+                force_bins = parse_bins(a.bins, "--bins") or parse_bins(a.force_bins, "--force-bins") or 10
+                velocity_bins = parse_bins(a.velocity_bins, "--velocity-bins") or 10
+                write_csv(*spectrum_table(impact_spectrum(f, force_bins, velocity_bins)), buf)
+            elif a.rainflow:
+                edges = parse_bins(a.bins, "--bins")
+                if isinstance(edges, int):
+                    raise ExportError("--rainflow --bins needs fixed edges E0,E1,... (in the file's force unit)")
+                write_csv(*rainflow_table(rainflow_cycles(f, a.element, a.t0, a.t1), edges), buf)
             elif a.events:
                 write_csv(*event_table(f, a.t0, a.t1), buf)
             elif a.metrics:
@@ -242,7 +350,7 @@ def main(argv=None):
                 write_csv(*series_table(f, a.quantities, a.t0, a.t1, a.every), buf)
             else:
                 raise ExportError("name a QUANTITY (--list shows them), or --events, --metrics, "
-                                  "--summary json, --spectrum")
+                                  "--summary json, --spectrum, --rainflow")
     except ExportError as e:
         print(f"trainsim export: {a.file}: error: {e}", file=sys.stderr)
         return 2

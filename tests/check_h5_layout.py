@@ -12,7 +12,7 @@ import sys
 import h5py
 import numpy as np
 
-ROOT_ATTRS = ["title", "deck_file", "deck", "units", "trainsim_version", "integrator", "created"]
+ROOT_ATTRS = ["title", "deck_file", "deck", "units", "trainsim_version", "integrator", "created", "status"]
 ELEMENT_REAL = ["torque_left", "torque_right", "displacement", "force"]
 ELEMENT_INT = ["contact", "pairs"]
 ENERGY_NAMES = ["kinetic", "potential", "dissipated", "input", "balance"]
@@ -78,7 +78,7 @@ def check(f):
     for a in ROOT_ATTRS:
         c.require(a in f.attrs, f"root attribute '{a}' missing")
 
-    for name in ["time", "states", "energy", "nodes", "elements", "events", "run_stats", "metrics"]:
+    for name in ["time", "states", "energy", "inputs", "nodes", "elements", "events", "run_stats", "metrics"]:
         c.require(name in f, f"'/{name}' missing")
     if c.problems:
         return c.problems
@@ -99,6 +99,13 @@ def check(f):
     c.require(energy.shape == (n, 5), f"/energy shape {energy.shape}, expected ({n}, 5)")
     if c.require("names" in energy.attrs, "/energy@names missing"):
         c.require(text(energy.attrs["names"]) == ENERGY_NAMES, f"/energy@names = {text(energy.attrs['names'])}")
+
+    inputs = f["inputs"]
+    c.require(inputs.ndim == 2 and inputs.shape[0] == n, f"/inputs shape {inputs.shape}, expected ({n}, n_inputs)")
+    for a in ["names", "column_units"]:
+        if c.require(a in inputs.attrs, f"/inputs@{a} missing"):
+            c.require(len(inputs.attrs[a]) == inputs.shape[1],
+                      f"/inputs@{a} has {len(inputs.attrs[a])} entries for {inputs.shape[1]} columns")
 
     nodes = f["nodes"]
     n_nodes = None
@@ -163,6 +170,11 @@ def check(f):
         c.require(a in rs.attrs, f"/run_stats@{a} missing")
     if c.require("completed" in rs.attrs, "/run_stats@completed missing"):
         c.require(int(rs.attrs["completed"]) in (0, 1), "/run_stats@completed is not 0/1")
+        # status: 'complete', or 'interrupted' for a run stopped by SIGINT/SIGTERM
+        # (the history up to the last output time reached), as run_stats@completed says
+        if "status" in f.attrs:
+            want = "complete" if int(rs.attrs["completed"]) == 1 else "interrupted"
+            c.require(f.attrs["status"] == want, f"root @status is {f.attrs['status']!r}, completed says {want!r}")
 
     check_self_description(f, c, n)
     return c.problems

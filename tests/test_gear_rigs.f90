@@ -25,8 +25,8 @@ program test_gear_rigs
    call test_online_detector_gives_the_same_figures()
    call test_online_detector_on_random_signals()
    call test_online_detector_says_when_not_exact()
+   call test_online_detector_replay_over_a_full_log()
    call test_every_bundled_deck_metrics_equal_the_full_series_figures()
-   call test_run_metrics_equal_the_full_series_figures()
    call suite_end()
 
 contains
@@ -313,10 +313,64 @@ contains
       call check('the range is exact all the same', r1 == r2)
    end subroutine test_online_detector_says_when_not_exact
 
-   !> Every bundled deck, every element: the p2p figures of the run (online
-   !> detector) are those of its whole output series, to the bit. Among them
-   !> start-up runs whose range grows for a long time (dc motor, start-stop,
-   !> helical pair), where the detector has to re-run over its logged extremes.
+   !> The replay when the log is full (issue 20, item 11): short edges early
+   !> (0.3 against a range of 2), folded away by a long square wave; then, at
+   !> a moment the log holds p2p_log_size extremes, a sample that widens the
+   !> range to 3.2 (threshold 0.32 > 0.3). The replay from the folded state
+   !> confirms that state's own running extreme too: one extreme more than the
+   !> log held. (Before, it was written past the log's end: Debug named
+   !> d%log(513), a long Release run ended in SIGSEGV.)
+   subroutine test_online_detector_replay_over_a_full_log()
+      type(p2p_detector_t) :: det
+      real(wp), allocatable :: x(:)
+      real(wp) :: r1, m1, r2, m2
+      integer :: i, n1, n2, n_full
+      logical :: hit
+      call test_begin('online_detector_replay_over_a_full_log')
+      x = [-1.0_wp, 1.0_wp, 0.7_wp, 1.0_wp, 0.7_wp, 1.0_wp]   ! edges of 0.3, confirmed with h = 0.2
+      det%hyst = 0.1_wp
+      do i = 1, size(x)
+         call det%push(x(i))
+      end do
+      hit = .false.; n_full = 0
+      do i = 1, 4000   ! a square wave of +-1: one extreme confirmed per sample
+         x = [x, merge(-1.0_wp, 1.0_wp, mod(i, 2) == 1)]
+         call det%push(x(size(x)))
+         if (det%n_log == size(det%log) .and. det%n > size(det%log) + 100) then
+            n_full = det%n_log
+            hit = .true.
+            exit
+         end if
+      end do
+      call check('the log was folded and is full again', hit)
+      x = [x, -2.2_wp]
+      call det%push(x(size(x)))
+      call check('the replay kept the log within its size', det%n_log <= size(det%log) .and. det%replays > 0)
+      call check('... with every extreme it held (folded, not dropped)', det%n_log >= n_full/2)
+      do i = 1, 600   ! and it goes on: the wave between -2.2 and 1
+         x = [x, merge(-2.2_wp, 1.0_wp, mod(i, 2) == 1)]
+         call det%push(x(size(x)))
+      end do
+      call det%figures(r2, m2, n2)
+      call peak_to_peak_values(x, 0.1_wp, r1, m1, n1)
+      call check('the range is the whole series one (3.2)', r2 == r1 .and. abs(r2 - 3.2_wp) < 1.0e-12_wp)
+      call check('the detector says its figures are not exact (a folded edge of 0.3 is below 0.32)', &
+                 .not. det%exact)
+      call check('its mean swing is a swing of the signal (2 or 3.2)', abs(m2 - 2.0_wp) < 1.0e-12_wp .or. &
+                 abs(m2 - 3.2_wp) < 1.0e-12_wp .or. (m2 > 2.0_wp .and. m2 < 3.2_wp))
+   end subroutine test_online_detector_replay_over_a_full_log
+
+   !> Every bundled deck, every element: the p2p figures of the run take the
+   !> extremes between output samples (D-44), so p2p_range is at least the range
+   !> of the samples and of the step ends (disp_max - disp_min, from the same
+   !> t_metrics on), and exceeds the latter by no more than an extreme can lie
+   !> past the step ends around it: (w dt)^2/8 of the amplitude for a mode at w,
+   !> below 1e-2 for any RK4 run that resolves its modes (w dt < 0.28, 22 steps
+   !> a period; the largest here, 1.1e-3, is the branched train's). The swings
+   !> are those of the samples' own detector where the samples resolve them
+   !> (every element but the ones printed). The detector says
+   !> its figures are exact (D-17) on every deck, start-up runs whose range grows
+   !> for a long time included (dc motor, start-stop, helical pair).
    subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures()
       character(len=*), parameter :: decks(*) = [character(len=40) :: 'inputs/branched_train.nml', &
          'inputs/dc_motor_geared_load.nml', 'inputs/gregory_harris_munro.nml', 'inputs/helical_pair.nml', &
@@ -325,47 +379,39 @@ contains
          'verification/table5_1/table5_1.nml', 'verification/table5_4/table5_4.nml']
       type(model_t) :: m
       type(run_result_t) :: r
-      real(wp) :: rng, mean
-      integer :: k, i, n, n_el, n_swung
-      logical :: same, exact
-      call test_begin('every_bundled_deck_metrics_equal_the_full_series_figures')
-      n_el = 0; n_swung = 0; same = .true.; exact = .true.
+      real(wp) :: rng, mean, step_rng, worst
+      integer :: k, i, n, n_el, n_swung, n_same_swings
+      logical :: bounded, exact
+      call test_begin('every_bundled_deck_p2p_between_samples_and_step_ends')
+      n_el = 0; n_swung = 0; n_same_swings = 0; bounded = .true.; exact = .true.; worst = 0.0_wp
       do k = 1, size(decks)
          call load_model(trim(decks(k)), m)
          call run_model(m, r)   ! keeps the series
          do i = 1, size(r%el)
             call peak_to_peak(r%series_t, r%series_disp(i, :), m%run%t_start + m%run%settle_time, p2p_hysteresis, &
                               rng, mean, n)
+            step_rng = r%el(i)%disp_max - r%el(i)%disp_min
             n_el = n_el + 1
-            if (n > 0) n_swung = n_swung + 1
-            if (.not. (r%el(i)%p2p_range == rng .and. r%el(i)%p2p_mean == mean .and. r%el(i)%p2p_swings == n)) then
-               same = .false.
-               write (*, '(a,i0,a,2es24.16)') '    '//trim(decks(k))//' element ', i, ': ', r%el(i)%p2p_mean, mean
+            if (r%el(i)%p2p_swings > 0) n_swung = n_swung + 1
+            if (n == r%el(i)%p2p_swings) n_same_swings = n_same_swings + 1
+            if (step_rng > 0.0_wp) worst = max(worst, (r%el(i)%p2p_range - step_rng)/step_rng)
+            if (.not. (r%el(i)%p2p_range >= rng .and. r%el(i)%p2p_range >= step_rng .and. &
+                       r%el(i)%p2p_range <= step_rng*(1.0_wp + 1.0e-2_wp))) then
+               bounded = .false.
+               write (*, '(a,i0,a,3es24.16)') '    '//trim(decks(k))//' element ', i, ': ', r%el(i)%p2p_range, &
+                  step_rng, rng
             end if
+            if (n /= r%el(i)%p2p_swings) write (*, '(a,i0,a,i0,a,i0,a)') '    '//trim(decks(k))//' element ', i, &
+               ': ', r%el(i)%p2p_swings, ' swings, the samples ', n, ' (resolved between samples)'
             exact = exact .and. r%el(i)%p2p_exact
          end do
       end do
-      write (*, '(a,i0,a,i0,a)') '    ', n_el, ' elements, ', n_swung, ' with swings'
-      call check('p2p range, mean and swings as from the whole series, to the bit', same .and. n_swung >= 20)
-      call check('the detector says so too (p2p_exact)', exact)
+      write (*, '(a,i0,a,i0,a,i0,a,es10.3)') '    ', n_el, ' elements, ', n_swung, ' with swings, ', n_same_swings, &
+         ' with the samples'' swing count; largest p2p_range past the step ends: ', worst
+      call check('p2p range between the samples'' and 1e-2 past the step ends'' range', bounded .and. n_swung >= 20)
+      call check('the swings of the samples on all but a few elements', n_same_swings >= n_el - 3)
+      call check('the detector says its figures are exact (p2p_exact)', exact)
    end subroutine test_every_bundled_deck_metrics_equal_the_full_series_figures
-
-   !> A real run: the metrics it reports (from turning points) equal the figures
-   !> of its whole output series.
-   subroutine test_run_metrics_equal_the_full_series_figures()
-      type(model_t) :: m
-      type(run_result_t) :: r
-      real(wp) :: rng, mean
-      integer :: n
-      call test_begin('run_metrics_equal_the_full_series_figures')
-      call load_model('inputs/gregory_harris_munro.nml', m)
-      call run_model(m, r)   ! keeps the series
-      call peak_to_peak(r%series_t, r%series_disp(2, :), m%run%t_start + m%run%settle_time, p2p_hysteresis, &
-                        rng, mean, n)
-      call check('mesh p2p range as from the whole series', r%el(2)%p2p_range == rng)
-      call check('mesh p2p mean as from the whole series', r%el(2)%p2p_mean == mean)
-      call check('mesh swings as from the whole series', r%el(2)%p2p_swings == n .and. n > 0)
-   end subroutine test_run_metrics_equal_the_full_series_figures
 
    function itoa(i) result(s)
       integer, intent(in) :: i

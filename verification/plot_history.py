@@ -190,6 +190,14 @@ def print_summary(h):
 
 
 def plot_element(h, j, out, t0=None, t1=None):
+    fig = draw_element(h, j, t0, t1)
+    fig.savefig(out, bbox_inches="tight")
+    plt.close(fig)
+    print(f"  wrote {out}")
+
+
+def draw_element(h, j, t0=None, t1=None):
+    """The figure of element column j (trainsim plot --overview draws it too)."""
     eid = h.ids[j]
     t, x, f, pairs, contact = distinct_samples(h.t, h.disp[:, j], h.force[:, j], h.pairs[:, j], h.contact[:, j])
     sel = np.ones(len(t), dtype=bool)
@@ -265,13 +273,13 @@ def plot_element(h, j, out, t0=None, t1=None):
         ax2.plot(t * tf, pairs, drawstyle="steps-post", color="C2", lw=1.0, label="pairs in contact")
         ax2.set_ylim(-6.0, 2.4)
         ax2.set_yticks([1, 2])
-        ax2.set_ylabel("pairs in contact", color="C2")
+        ax2.set_ylabel("tooth pairs in contact (count)", color="C2")
     else:
         ax2.plot(t * tf, contact, drawstyle="steps-post", color="C2", lw=1.0, label="contact face")
         ax2.set_ylim(-12.0, 1.6)
         ax2.set_yticks([-1, 0, 1])
         ax2.set_yticklabels(["rear", "open", "front"])
-        ax2.set_ylabel("contact", color="C2")
+        ax2.set_ylabel("contact face (front, open, rear)", color="C2")
     h1, l1 = ax_te.get_legend_handles_labels()
     h2, l2 = [], []
     if ax2 is not None:
@@ -314,10 +322,7 @@ def plot_element(h, j, out, t0=None, t1=None):
     cb = fig.colorbar(lc, ax=ax_ph, pad=0.02)
     cb.set_label(f"time ({tu})")
     ax_ph.legend(loc="best", fontsize=8)
-
-    fig.savefig(out, bbox_inches="tight")
-    plt.close(fig)
-    print(f"  wrote {out}")
+    return fig
 
 
 def main(argv=None):

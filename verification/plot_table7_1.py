@@ -6,7 +6,8 @@
 Fig. 7.6: mean peak-to-peak transmission error of both meshes against mesh frequency,
 runs with loss of contact (impacts > 0) filled, Cook's intermittent-contact range
 (about 335-480 teeth/s) shaded. Fig. 7.7: maximum, minimum and range of the torque on
-shaft element 3 against mesh frequency, with the nominal 798.8 lb-in.
+shaft element 3 against mesh frequency, with the nominal 798.8 lb-in. Runs that did not
+settle within their budget (runs/settled = 0, D-43) are ringed in orange in both.
 """
 import argparse
 
@@ -27,6 +28,7 @@ def main():
         x = f["parameters/values"][:, 0]
         ids = [s.decode() for s in f["elements/ids"][:]]
         el = {k: f["elements/" + k][:] for k in ("p2p_mean", "impacts", "torque_min", "torque_max")}
+        unsettled = (f["runs/settled"][:] == 0) if "settled" in f["runs"] else (x != x)
     fig, ax = plt.subplots(figsize=(8, 5))
     ax.axvspan(335, 480, color="0.88", zorder=0, label="Cook: intermittent contact, about 335-480 teeth/s")
     for name, mark in (("mesh1", "o"), ("mesh2", "s")):
@@ -37,6 +39,10 @@ def main():
         c = line.get_color()
         ax.plot(x[~lost], y[~lost], mark, mfc="white", mec=c, ms=5)
         ax.plot(x[lost], y[lost], mark, mfc=c, mec=c, ms=5)
+        if unsettled.any():
+            ax.plot(x[unsettled], y[unsettled], "o", mfc="none", mec="tab:orange", mew=1.6, ms=11,
+                    label=f"not settled within the budget ({unsettled.sum()} runs): a transient" if name == "mesh1"
+                    else "_")
     ax.set_xlabel("mesh frequency (teeth/s)")
     ax.set_ylabel("mean peak-to-peak TE (1e-3 in)")
     ax.set_title("Fig. 7.6: peak-to-peak transmission error vs mesh frequency" + a.title, fontsize=10)
@@ -50,6 +56,10 @@ def main():
     ax.plot(x, tmax, "^-", label="maximum")
     ax.plot(x, tmin, "v-", label="minimum")
     ax.plot(x, tmax - tmin, "o-", label="range")
+    if unsettled.any():
+        for yv, lbl in ((tmax, f"not settled within the budget ({unsettled.sum()} runs): a transient"),
+                        (tmin, "_"), (tmax - tmin, "_")):
+            ax.plot(x[unsettled], yv[unsettled], "o", mfc="none", mec="tab:orange", mew=1.6, ms=11, label=lbl)
     ax.axhline(798.8, color="k", ls="--", lw=1, label="nominal 798.8 lb-in")
     ax.set_xlabel("mesh frequency (teeth/s)")
     ax.set_ylabel("torque on shaft EL3 (lb-in)")

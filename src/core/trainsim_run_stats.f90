@@ -15,5 +15,13 @@ module trainsim_run_stats
       integer(i8) :: block_steps = 0
       real(wp) :: wall_time = 0.0_wp, t_final = 0.0_wp
       logical :: completed = .false.
+      !> settling until periodic (&run settle_tol, D-43): 0 not asked, 1 settled,
+      !> 2 not settled within settle_max_time (the metrics are then of a transient);
+      !> without settle_tol, the verdict at a fixed settle_time (to 1e-3): 3 settled,
+      !> 4 not settled (the metrics are of a transient)
+      integer :: settle_status = 0
+      integer :: settle_periods = 0       !< settle periods run before the metrics started
+      integer :: settle_k = 0             !< the response repeats after k periods (1: periodic; 0: not found)
+      real(wp) :: t_metrics = 0.0_wp      !< start of the metrics' window (t_start + settle_time without settling)
    end type run_stats_t
 end module trainsim_run_stats

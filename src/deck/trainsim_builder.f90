@@ -15,7 +15,7 @@ module trainsim_builder
    implicit none
    private
 
-   public :: build_model, integrator_names
+   public :: build_model, integrator_names, check_run_times
    public :: max_abs_time, max_steps, max_samples
 
    !> Limits of &run (docs/deck.md): beyond them a run cannot end in reasonable time or
@@ -100,6 +100,9 @@ contains
          call g%get_real('max_step', r%max_step, err, default=0.0_wp); if (allocated(err)) return
          call g%get_real('event_tol', r%event_tol, err, default=0.0_wp); if (allocated(err)) return
          call g%get_real('settle_time', r%settle_time, err, default=0.0_wp); if (allocated(err)) return
+         call g%get_real('settle_tol', r%settle_tol, err, default=0.0_wp); if (allocated(err)) return
+         call g%get_real('settle_period', r%settle_period, err, default=0.0_wp); if (allocated(err)) return
+         call g%get_real('settle_max_time', r%settle_max_time, err, default=0.0_wp); if (allocated(err)) return
          call g%get_logical('track_energy', r%track_energy, err, default=.true.); if (allocated(err)) return
          call g%get_real('energy_check', r%energy_check, err, default=0.1_wp); if (allocated(err)) return
          if (.not. (r%energy_check >= 0.0_wp .and. r%energy_check <= 1.0_wp)) then
@@ -180,7 +183,19 @@ contains
          call g%require_nonnegative('max_step', r%max_step, err)
          call g%require_nonnegative('event_tol', r%event_tol, err)
          call g%require_nonnegative('settle_time', r%settle_time, err)
+         call g%require_nonnegative('settle_period', r%settle_period, err)
+         call g%require_nonnegative('settle_max_time', r%settle_max_time, err)
          if (allocated(err)) return
+         if (.not. (r%settle_tol >= 0.0_wp .and. r%settle_tol < 1.0_wp)) then
+            call fatal_error(err, g%where('settle_tol')//': error: settle_tol must be in [0, 1) (0: no settling '// &
+                             'check), got '//str(r%settle_tol), err_input)
+            return
+         end if
+         call check_run_times(r, jac_kind, err)
+         if (allocated(err)) then
+            err%message = g%where(jac_kind)//': error: '//err%message
+            return
+         end if
          ! an interval longer than the run means its first and last sample only: say so
          ! with the run's length, which keeps every sample count derived from it small
          r%output_interval = min(r%output_interval, span)
@@ -196,6 +211,67 @@ contains
          end if
       end associate
    end subroutine read_run
+
+   !> The end of the run's metrics window and of the settling budget against the limits
+   !> of &run, once t_end and settle_time are known (read_run, and again after the derived
+   !> parameters settle_cycles, measure_cycles, settle_max_cycles, which set them):
+   !> settle_time (and settle_max_time) must leave a measured window before t_end, and
+   !> the longest run (t_end, or with settling the budget plus the measured window) must
+   !> be within the time, step and sample limits. `blame` names the &run key to blame; the
+   !> message carries no location (the caller adds the deck line or the --set argument).
+   subroutine check_run_times(r, blame, err)
+      use trainsim_model, only: run_settings_t, settle_budget
+      type(run_settings_t), intent(in) :: r
+      character(len=:), allocatable, intent(out) :: blame
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: span, t_last
+      character(len=:), allocatable :: key
+      blame = ''
+      if (.not. (abs(r%t_end) <= max_abs_time)) then
+         call refuse('t_end', 't_end = '//str(r%t_end)//' is beyond the time limit of +-'//str(max_abs_time)//' s')
+         return
+      end if
+      if (.not. (r%settle_time < r%t_end - r%t_start)) then
+         call refuse('settle_time', 'settle_time = '//str(r%settle_time)//' s reaches the end of the run (t_end - '// &
+                     't_start = '//str(r%t_end - r%t_start)//' s): no time would be left to measure the metrics in; '// &
+                     'take a settle_time below that or a later t_end')
+         return
+      end if
+      if (r%settle_tol > 0.0_wp .and. r%settle_max_time > 0.0_wp .and. r%settle_max_time < r%settle_time) then
+         call refuse('settle_max_time', 'settle_max_time = '//str(r%settle_max_time)//' s is shorter than '// &
+                     'settle_time = '//str(r%settle_time)//' s (the least settling)')
+         return
+      end if
+      t_last = r%t_end
+      key = 't_end'
+      if (r%settle_tol > 0.0_wp) then
+         t_last = r%t_end + settle_budget(r) - r%settle_time
+         key = 'settle_max_time'
+      end if
+      if (.not. (abs(t_last) <= max_abs_time)) then
+         call refuse(key, 'the run may last until t = '//str(t_last)//' s (the settling budget plus the measured '// &
+                     'window), beyond the time limit of +-'//str(max_abs_time)//' s')
+         return
+      end if
+      span = t_last - r%t_start
+      if (span/max_steps > r%dt) then
+         call refuse(key, 'time step dt = '//str(r%dt)//' s would take more than 1e12 steps over the run of '// &
+                     str(span)//' s, beyond the time limit')
+      else if (r%output_interval > 0.0_wp .and. span/max_samples > r%output_interval) then
+         call refuse(key, 'output_interval = '//str(r%output_interval)//' s would write more than 1e9 samples '// &
+                     'over the run of '//str(span)//' s, beyond the time limit of the output')
+      else if (r%output_interval == 0.0_wp .and. span/max_samples > r%dt) then
+         call refuse(key, 'output_interval = 0 stores a sample every dt = '//str(r%dt)//' s: more than 1e9 '// &
+                     'samples over the run of '//str(span)//' s, beyond the time limit of the output')
+      end if
+   contains
+      subroutine refuse(k, text)
+         character(len=*), intent(in) :: k, text
+         call fatal_error(err, text, err_input)
+         blame = k
+      end subroutine refuse
+   end subroutine check_run_times
+
 
    subroutine read_nodes(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck

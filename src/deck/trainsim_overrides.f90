@@ -22,8 +22,8 @@ module trainsim_overrides
    public :: split_sweep_groups, derived_keys, is_derived_key, resolve_target
 
    !> The derived parameters (applied to the model, not to a deck group).
-   character(len=*), parameter :: derived_keys(3) = [character(len=14) :: 'mesh_frequency', 'settle_cycles', &
-                                                     'measure_cycles']
+   character(len=*), parameter :: derived_keys(4) = [character(len=17) :: 'mesh_frequency', 'settle_cycles', &
+                                                     'measure_cycles', 'settle_max_cycles']
 
    !> One `TARGET.KEY = VALUE[, VALUE ...]`.
    type :: override_t

@@ -69,7 +69,7 @@ module trainsim_hdf5
    !> Indices into hdf5_sink_t%dset.
    integer, parameter :: ds_time = 1, ds_states = 2, ds_theta = 3, ds_omega = 4, &
       ds_energy = 5, ds_tl = 6, ds_tr = 7, ds_disp = 8, ds_force = 9, ds_contact = 10, &
-      ds_pairs = 11, n_ds = 11
+      ds_pairs = 11, ds_inputs = 12, n_ds = 12
 
    !> Columns of /events, in the order they are created (docs/output-format.md).
    integer, parameter :: n_evc = 15
@@ -97,7 +97,7 @@ module trainsim_hdf5
       logical, private :: part_made = .false.     ! the .part file may exist
       integer(hid_t), private :: file_id = -1
       integer(hid_t), private :: dset(n_ds) = -1
-      integer, private :: n_states = 0, n_nodes = 0, n_el = 0, rows = 0
+      integer, private :: n_states = 0, n_nodes = 0, n_el = 0, n_in = 0, rows = 0
       !> Units of the run (length, force, torque, energy) and of each element's
       !> displacement and force columns (for the `units` attributes).
       character(len=:), allocatable, private :: u_len, u_force, u_torque, u_energy
@@ -105,7 +105,7 @@ module trainsim_hdf5
       integer, private :: n_buf = 0                ! samples in the block buffers
       integer(hsize_t), private :: n_written = 0   ! samples already in the file
       real(wp), allocatable, private :: b_time(:), b_states(:, :), b_theta(:, :), &
-         b_omega(:, :), b_energy(:, :), b_tl(:, :), b_tr(:, :), b_disp(:, :), b_force(:, :)
+         b_omega(:, :), b_energy(:, :), b_tl(:, :), b_tr(:, :), b_disp(:, :), b_force(:, :), b_inputs(:, :)
       integer, allocatable, private :: b_contact(:, :), b_pairs(:, :)
       integer(hid_t), private :: ev_grp = -1, ev_dset(n_evc) = -1
       type(event_t), allocatable, private :: ev_buf(:)
@@ -208,7 +208,7 @@ contains
           bad_size_r(s%omega, self%n_nodes) .or. bad_size_r(s%torque_left, self%n_el) .or. &
           bad_size_r(s%torque_right, self%n_el) .or. bad_size_r(s%displacement, self%n_el) .or. &
           bad_size_r(s%force, self%n_el) .or. bad_size_i(s%contact, self%n_el) .or. &
-          bad_size_i(s%pairs, self%n_el)) then
+          bad_size_i(s%pairs, self%n_el) .or. bad_size_r(s%inputs, self%n_in)) then
          call fatal_error(err, "HDF5 sink '"//self%path//"': sample arrays do not match the run "// &
                           "description ("//str(self%n_states)//' states, '//str(self%n_nodes)// &
                           ' nodes, '//str(self%n_el)//' elements)', err_internal)
@@ -232,6 +232,7 @@ contains
          self%b_contact(:, k) = s%contact
          self%b_pairs(:, k) = s%pairs
       end if
+      if (self%n_in > 0) self%b_inputs(:, k) = s%inputs
       self%n_buf = k
 
       if (self%n_buf == self%rows) then
@@ -272,6 +273,14 @@ contains
       if (.not. allocated(err)) call finish_events(self, err)
       if (.not. allocated(err)) call write_metrics(self, metrics, err)
       if (.not. allocated(err)) call write_stats(self%file_id, stats, err)
+      ! a run stopped by a signal is kept with what it computed, marked as such
+      if (.not. allocated(err)) then
+         if (stats%completed) then
+            call put_str_attr(self%file_id, 'status', 'complete', err)
+         else
+            call put_str_attr(self%file_id, 'status', 'interrupted', err)
+         end if
+      end if
       if (.not. allocated(err)) then
          do i = 1, n_ds
             call h5dclose_f(self%dset(i), hdferr)
@@ -427,6 +436,7 @@ contains
       self%n_states = count_of(meta%state_names)
       self%n_nodes = count_of(meta%node_ids)
       self%n_el = count_of(meta%element_ids)
+      self%n_in = count_of(meta%input_series_names)
       call set_units(self, meta)
       self%rows = self%block_rows
       self%n_buf = 0
@@ -488,6 +498,15 @@ contains
       if (allocated(err)) return
       call label_columns(self%dset(ds_energy), to_list(energy_names), same_units(5, self%u_energy), &
                          self%u_energy, err)
+      if (allocated(err)) return
+
+      ! the input series as the run saw them (loads, prescribed speeds, voltages)
+      call make_series(self%file_id, 'inputs', 2, self%n_in, self%rows, H5T_NATIVE_DOUBLE, level, &
+                       self%dset(ds_inputs), err)
+      if (allocated(err)) return
+      call put_names_attr(self%dset(ds_inputs), 'names', meta%input_series_names, self%n_in, err)
+      if (allocated(err)) return
+      call label_columns(self%dset(ds_inputs), meta%input_series_names, units_of(meta%input_series_units), '1', err)
       if (allocated(err)) return
 
       call make_node_group(self, meta, level, err)
@@ -765,7 +784,7 @@ contains
       r = self%rows
       call free_buffers(self)
       allocate (self%b_time(r), self%b_energy(5, r))
-      allocate (self%b_states(self%n_states, r))
+      allocate (self%b_states(self%n_states, r), self%b_inputs(self%n_in, r))
       allocate (self%b_theta(self%n_nodes, r), self%b_omega(self%n_nodes, r))
       allocate (self%b_tl(self%n_el, r), self%b_tr(self%n_el, r), self%b_disp(self%n_el, r), &
                 self%b_force(self%n_el, r), self%b_contact(self%n_el, r), self%b_pairs(self%n_el, r))
@@ -777,6 +796,7 @@ contains
       if (allocated(self%b_time)) deallocate (self%b_time)
       if (allocated(self%b_energy)) deallocate (self%b_energy)
       if (allocated(self%b_states)) deallocate (self%b_states)
+      if (allocated(self%b_inputs)) deallocate (self%b_inputs)
       if (allocated(self%b_theta)) deallocate (self%b_theta)
       if (allocated(self%b_omega)) deallocate (self%b_omega)
       if (allocated(self%b_tl)) deallocate (self%b_tl)
@@ -816,6 +836,8 @@ contains
                                                self%n_written, '/elements/contact', err)
       if (.not. allocated(err)) call append_i2(self%dset(ds_pairs), self%b_pairs(:, 1:nb), &
                                                self%n_written, '/elements/pairs', err)
+      if (.not. allocated(err)) call append_r2(self%dset(ds_inputs), self%b_inputs(:, 1:nb), &
+                                               self%n_written, '/inputs', err)
       if (allocated(err)) return
       self%n_written = self%n_written + int(nb, hsize_t)
       self%n_buf = 0
@@ -1094,6 +1116,14 @@ contains
       if (.not. allocated(err)) call put_real_attr(grp, 'wall_time', stats%wall_time, err)
       if (.not. allocated(err)) call put_real_attr(grp, 't_final', stats%t_final, err)
       if (.not. allocated(err)) call put_int_attr(grp, 'completed', completed, err)
+      if (.not. allocated(err)) call put_real_attr(grp, 't_metrics', stats%t_metrics, err)
+      if (stats%settle_status /= 0) then   ! settling until periodic (&run settle_tol)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settled', merge(1, 0, stats%settle_status == 1 .or. &
+                                                                           stats%settle_status == 3), err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_tol_given', merge(1, 0, stats%settle_status <= 2), err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_periods', stats%settle_periods, err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'settle_k', stats%settle_k, err)
+      end if
       call close_group(grp, err)
    end subroutine write_stats
 
@@ -1469,6 +1499,17 @@ contains
          call put_str_attr(dset, 'units', 'mixed: see column_units', err)
       end if
    end subroutine label_columns
+
+   !> The units of a list that may be unallocated (none).
+   pure function units_of(list) result(units)
+      type(string_t), allocatable, intent(in) :: list(:)
+      type(string_t), allocatable :: units(:)
+      if (allocated(list)) then
+         units = list
+      else
+         allocate (units(0))
+      end if
+   end function units_of
 
    !> `n` copies of one unit.
    pure function same_units(n, unit) result(list)

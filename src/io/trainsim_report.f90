@@ -5,6 +5,8 @@ module trainsim_report
    use trainsim_observer, only: run_result_t
    use trainsim_modes, only: modes_t
    use trainsim_sink, only: param_list_t
+   use trainsim_element, only: element_t
+   use trainsim_strings, only: str
    implicit none
    private
 
@@ -12,58 +14,168 @@ module trainsim_report
 
 contains
 
-   !> Element parameters as used (derived values included).
+   !> Element parameters as used (derived values included; a choice key by its word),
+   !> and, with initial_state = 'preload', the initial angles the preload found.
    subroutine print_parameters(model, unit)
       type(model_t), intent(in) :: model
       integer, intent(in) :: unit
-      integer :: i, j
+      integer :: i, j, w
       type(param_list_t) :: p
+      character(len=:), allocatable :: fmt_num, fmt_word
       do i = 1, size(model%elements)
          p = model%elements(i)%e%params()
          if (size(p%names) == 0) cycle
          write (unit, '(a)') 'element '//model%elements(i)%e%id//' ('//model%elements(i)%e%type_name//'):'
+         w = 24
          do j = 1, size(p%names)
-            write (unit, '(4x,a24,1x,es15.7)') p%names(j)%s, p%values(j)
+            w = max(w, len(p%names(j)%s))
+         end do
+         fmt_num = '(4x,a'//str(w)//',1x,es15.7)'
+         fmt_word = '(4x,a'//str(w)//',1x,a15)'
+         do j = 1, size(p%names)
+            if (has_word(p, j)) then
+               write (unit, fmt_word) p%names(j)%s, p%words(j)%s
+            else
+               write (unit, fmt_num) p%names(j)%s, p%values(j)
+            end if
          end do
       end do
+      if (model%run%preload) then
+         w = id_width(model, nodes=.true.)
+         write (unit, '(a)') 'initial angles from the static preload (initial_state = ''preload''), rad:'
+         do i = 1, size(model%nodes)
+            associate (nd => model%nodes(i)%n)
+               if (nd%nstates() == 0 .or. model%is_held(i)) cycle
+               write (unit, '(4x,a'//str(w)//',es18.9)') nd%id, nd%theta0
+            end associate
+         end do
+      end if
    end subroutine print_parameters
+
+   !> Whether parameter j of p is printed as a word.
+   pure logical function has_word(p, j)
+      type(param_list_t), intent(in) :: p
+      integer, intent(in) :: j
+      has_word = .false.
+      if (.not. allocated(p%words)) return
+      if (j > size(p%words)) return
+      has_word = len(p%words(j)%s) > 0
+   end function has_word
+
+   !> Column width that holds every node id (nodes) or element id, at least 12.
+   pure integer function id_width(model, nodes) result(w)
+      type(model_t), intent(in) :: model
+      logical, intent(in) :: nodes
+      integer :: i
+      w = 12
+      if (nodes) then
+         do i = 1, size(model%nodes)
+            w = max(w, len(model%nodes(i)%n%id))
+         end do
+      else
+         do i = 1, size(model%elements)
+            w = max(w, len(model%elements(i)%e%id))
+         end do
+      end if
+   end function id_width
+
+   !> The unit of element e's displacement in this unit system.
+   function disp_unit(model, e) result(u)
+      type(model_t), intent(in) :: model
+      class(element_t), intent(in) :: e
+      character(len=:), allocatable :: u
+      u = e%displacement_unit()
+      if (u == 'length') u = model%units%length
+   end function disp_unit
+
+   !> A fixed-point number with its leading zero (f0.d writes .174).
+   function fixed(x, d) result(s)
+      real(wp), intent(in) :: x
+      integer, intent(in) :: d
+      character(len=:), allocatable :: s
+      character(len=40) :: buf
+      write (buf, '(f0.'//str(d)//')') x
+      s = trim(adjustl(buf))
+      if (s(1:1) == '.') s = '0'//s
+      if (len(s) > 1) then
+         if (s(1:2) == '-.') s = '-0'//s(2:)
+      end if
+   end function fixed
 
    !> What an engineer reads after a run.
    subroutine print_summary(model, res, unit)
       type(model_t), intent(in) :: model
       type(run_result_t), intent(in) :: res
       integer, intent(in) :: unit
-      integer :: i, k
+      integer :: i, w, wn, ns
+      character(len=:), allocatable :: we, wt
+      logical :: motors
+      w = id_width(model, nodes=.false.)
+      we = str(w)
+      ns = 12   ! the type column
+      do i = 1, size(model%elements)
+         ns = max(ns, len(model%elements(i)%e%type_name))
+      end do
+      wt = str(ns)
       write (unit, '(a)') '--- run summary ---'
-      write (unit, '(a,i0,a,i0,a,f0.3,a)') 'steps ', res%stats%steps, ', RHS evaluations ', res%stats%rhs_evals, &
-         ', wall time ', res%stats%wall_time, ' s'
+      write (unit, '(a,i0,a,i0,a)') 'steps ', res%stats%steps, ', RHS evaluations ', res%stats%rhs_evals, &
+         ', wall time '//fixed(res%stats%wall_time, 3)//' s'
       write (unit, '(a,i0,a,es12.5,a)') 'events ', res%stats%events, ', final time ', res%t_final, ' s'
+      select case (res%stats%settle_status)
+      case (1)
+         write (unit, '(a,i0,a,es12.5,a,i0,a)') 'settled: the state repeats after ', res%stats%settle_k, &
+            ' period(s) to settle_tol; metrics from t = ', res%stats%t_metrics, ' s (', res%stats%settle_periods, &
+            ' settle periods)'
+      case (2)
+         write (unit, '(a,i0,a)') 'NOT SETTLED: the state did not repeat to settle_tol within settle_max_time (', &
+            res%stats%settle_periods, ' settle periods); the metrics below are of a transient'
+      case (3)
+         write (unit, '(a)') 'settled by settle_time: the state repeats from one settle period to the next to 1e-3'
+      case (4)
+         write (unit, '(a,i0,a)') 'NOT SETTLED by settle_time (', res%stats%settle_periods, ' settle periods): '// &
+            'the state does not repeat from one period to the next to 1e-3; the metrics below are of a '// &
+            'transient. Set &run settle_tol (e.g. 1e-5) to settle until periodic'
+      end select
       if (model%run%track_energy) write (unit, '(a,es10.3,a,es10.3,a)') 'energy balance: max |residual| ', &
-         res%energy_residual_max, ' (energy scale ', res%energy_scale, ')'
-      write (unit, '(a)') 'element extremes (torque on the right node, torque units; displacement, its own unit):'
-      write (unit, '(a16,1x,a19,4a15,a9,a13,a15,a8)') 'element', 'type', 'torque min', 'torque max', 'disp min', &
-         'disp max', 'impacts', 'max V_i', 'max peak F', 'open %'
+         res%energy_residual_max, ' (energy scale ', res%energy_scale, ' '//model%units%torque//')'
+      write (unit, '(a)') 'element extremes (torque on the right node in '//model%units%torque// &
+         '; displacement in the unit of its column; peak force in '//model%units%force// &
+         ', approach velocity V_i in '//model%units%length//'/s):'
+      write (unit, '(a'//we//',1x,a'//wt//',4a15,a7,a9,a13,a15,a8)') 'element', 'type', 'torque min', 'torque max', &
+         'disp min', 'disp max', 'unit', 'impacts', 'max V_i', 'max peak F', 'open %'
       do i = 1, size(model%elements)
          associate (e => model%elements(i)%e, m => res%el(i))
-            write (unit, '(a16,1x,a19,4es15.6,i9,es13.4,es15.6,f8.2)') e%id, e%type_name, m%torque_min, m%torque_max, &
-               m%disp_min, m%disp_max, m%impacts, m%max_approach_velocity, m%max_peak_force, &
-               100.0_wp*m%time_out_of_contact/max(res%t_final - model%run%t_start - model%run%settle_time, tiny(1.0_wp))
+            write (unit, '(a'//we//',1x,a'//wt//',4es15.6,a7,i9,es13.4,es15.6,f8.2)') e%id, e%type_name, &
+               m%torque_min, m%torque_max, m%disp_min, m%disp_max, disp_unit(model, e), m%impacts, &
+               m%max_approach_velocity, m%max_peak_force, &
+               100.0_wp*m%time_out_of_contact/max(res%t_final - res%stats%t_metrics, tiny(1.0_wp))
          end associate
       end do
-      write (unit, '(a)') 'peak-to-peak displacement after settle_time (range max-min; mean swing between peaks):'
+      write (unit, '(a)') 'peak-to-peak displacement after the settling (range max-min; mean swing between peaks):'
       do i = 1, size(model%elements)
          associate (e => model%elements(i)%e, m => res%el(i))
-            write (unit, '(a16,2es15.6,a,i0,a)') e%id, m%p2p_range, m%p2p_mean, '  (', m%p2p_swings, ' swings)'
+            write (unit, '(a'//we//',2es15.6,a,i0,a)') e%id, m%p2p_range, m%p2p_mean, &
+               ' '//disp_unit(model, e)//'  (', m%p2p_swings, ' swings)'
          end associate
       end do
+      wn = id_width(model, nodes=.true.)
       write (unit, '(a)') 'final state:'
-      k = 0
+      motors = .false.
+      do i = 1, size(model%nodes)
+         motors = motors .or. model%nodes(i)%n%nstates() > 2
+      end do
+      if (motors) then   ! a DC motor's third state is its armature current
+         write (unit, '(4x,a'//str(wn)//',3a18)') 'node', 'angle (rad)', 'speed (rad/s)', 'current (A)'
+      else
+         write (unit, '(4x,a'//str(wn)//',2a18)') 'node', 'angle (rad)', 'speed (rad/s)'
+      end if
       do i = 1, size(model%nodes)
          associate (nd => model%nodes(i)%n)
-            if (model%is_held(i) .or. nd%nstates() == 0) then
-               write (unit, '(4x,a12,a)') nd%id, '  (held)'
+            ns = nd%nstates()
+            if (model%is_held(i) .or. ns == 0) then
+               write (unit, '(4x,a'//str(wn)//',a)') nd%id, '  (held)'
             else
-               write (unit, '(4x,a12,3es18.9)') nd%id, res%y_final(nd%offset + 1:nd%offset + nd%nstates())
+               write (unit, '(4x,a'//str(wn)//',3es18.9)') nd%id, res%y_final(nd%offset + 1:nd%offset + ns)
             end if
          end associate
       end do
@@ -83,7 +195,7 @@ contains
             write (unit, '(a,i3,a,f16.6,a)') 'mode', j, ':', modes%freq_hz(j), ' Hz'
          end if
          do i = 1, modes%n
-            write (unit, '(8x,a12,f12.6)') model%nodes(modes%node(i))%n%id, modes%shape(i, j)
+            write (unit, '(8x,a'//str(id_width(model, nodes=.true.))//',f12.6)') model%nodes(modes%node(i))%n%id, modes%shape(i, j)
          end do
       end do
    end subroutine print_modes

@@ -37,6 +37,9 @@ module trainsim_sink
       !> Files the deck read (table_file): the path as the deck wrote it, the path
       !> opened, and the text, embedded beside the deck (unallocated: none).
       type(string_t), allocatable :: input_keys(:), input_files(:), input_texts(:)
+      !> The input series (loads, prescribed speeds, motor voltages) of /inputs: names
+      !> and units (trainsim_input_series; unallocated: none).
+      type(string_t), allocatable :: input_series_names(:), input_series_units(:)
    end type run_meta_t
 
    !> One output sample (all arrays sized at run start; no allocation per sample).
@@ -51,6 +54,7 @@ module trainsim_sink
       real(wp), allocatable :: force(:)        !< contact/mesh force (or shaft torque)
       integer, allocatable :: contact(:)       !< +1 front, 0 none, -1 rear
       integer, allocatable :: pairs(:)         !< tooth pairs in contact (0 if n/a)
+      real(wp), allocatable :: inputs(:)       !< the input series at t (run_meta_t%input_series_names)
       !> kinetic, potential, dissipated, work input, balance residual
       real(wp) :: energy(5) = 0.0_wp
    end type sample_t
@@ -87,6 +91,7 @@ module trainsim_sink
       procedure :: update_event => sink_update_event
       procedure :: stores_samples => sink_stores_samples
       procedure :: speeds_only => sink_speeds_only
+      procedure :: metrics_from => sink_metrics_from
    end type sink_t
 
    abstract interface
@@ -127,6 +132,16 @@ module trainsim_sink
    end type null_sink_t
 
 contains
+
+   !> A run that settles until periodic (&run settle_tol) starts its metrics at t,
+   !> known only when it has settled. Default: nothing (a sink that keeps figures of
+   !> its own over the metrics' window, as a sweep's speed range, takes it).
+   subroutine sink_metrics_from(self, t)
+      class(sink_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      associate (u1 => self, u2 => t)
+      end associate
+   end subroutine sink_metrics_from
 
    !> Default abort: nothing to clean up.
    subroutine sink_abort(self)

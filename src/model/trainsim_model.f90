@@ -15,7 +15,7 @@ module trainsim_model
    implicit none
    private
 
-   public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds
+   public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
    !> Kinds of node on the hot path.
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
@@ -91,6 +91,12 @@ module trainsim_model
       real(wp) :: max_step = 0.0_wp             !< CVODE maximum step (0: from the highest frequency)
       real(wp) :: event_tol = 0.0_wp            !< event time tolerance (0: 1e-9 dt)
       real(wp) :: settle_time = 0.0_wp          !< metrics ignore t < t_start + settle_time
+      !> settle until periodic (docs/sweeps.md#settling): 0 off; else the state sampled
+      !> every settle_period must repeat to this relative tolerance (or with k <= 8
+      !> periods) before the metrics start, within settle_max_time after t_start
+      real(wp) :: settle_tol = 0.0_wp
+      real(wp) :: settle_period = 0.0_wp        !< s (0: the first gear pair's mesh period at t_start)
+      real(wp) :: settle_max_time = 0.0_wp      !< s (0: 1000 settle periods)
       logical :: track_energy = .true.          !< integrate dissipated energy and work input
       !> a run whose energy residual ends above this fraction of its energy
       !> scale fails (exit 1, D-42); 0: no such check
@@ -2422,4 +2428,11 @@ contains
          if (.not. changed) exit
       end do
    end subroutine rigid_speeds
+   !> The settling budget (s after t_start) of a run with settle_tol > 0: settle_max_time,
+   !> or 1000 settle periods (at least settle_time) when it is 0.
+   pure real(wp) function settle_budget(r) result(span)
+      type(run_settings_t), intent(in) :: r
+      span = r%settle_max_time
+      if (span == 0.0_wp) span = max(1000.0_wp*r%settle_period, r%settle_time)
+   end function settle_budget
 end module trainsim_model

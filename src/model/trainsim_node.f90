@@ -37,6 +37,8 @@ module trainsim_node
       procedure :: is_fixed => nd_is_fixed
       procedure :: can_prescribe_speed => nd_can_prescribe_speed
       procedure :: attach_voltage => nd_attach_voltage
+      procedure :: driving_input => nd_driving_input
+      procedure :: driving_input_value => nd_driving_input_value
       procedure :: state_names => nd_state_names
       procedure :: params => nd_params
       procedure :: jacobian => nd_jacobian
@@ -184,6 +186,26 @@ contains
       call fatal_error(err, where//": error: node '"//self%id//"' of type '"//self%type_name// &
                        "' has no voltage input (only type 'dc_motor' has)", err_input)
    end subroutine nd_attach_voltage
+
+   !> The time function that drives the node itself, for the history's /inputs
+   !> (a DC motor's voltage): its quantity and unit, '' when there is none (the default).
+   pure subroutine nd_driving_input(self, quantity, unit)
+      class(node_t), intent(in) :: self
+      character(len=:), allocatable, intent(out) :: quantity, unit
+      associate (unused => self)
+      end associate
+      quantity = ''
+      unit = ''
+   end subroutine nd_driving_input
+
+   !> The value at t of the node's driving input (see `driving_input`); 0 by default.
+   pure real(wp) function nd_driving_input_value(self, t) result(v)
+      class(node_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      associate (u1 => self, u2 => t)
+      end associate
+      v = 0.0_wp
+   end function nd_driving_input_value
 
    !> Names of the node's states, for the output file.
    pure subroutine nd_state_names(self, names)

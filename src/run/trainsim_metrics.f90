@@ -12,7 +12,7 @@ module trainsim_metrics
    implicit none
    private
 
-   public :: peak_to_peak, peak_to_peak_values, p2p_detector_t, push_samples, push_block
+   public :: peak_to_peak, peak_to_peak_values, p2p_detector_t, push_samples, push_block, push_value, turn_extreme
 
    !> State of the hysteresis peak detector (as in peak_to_peak_values).
    type :: p2p_state_t
@@ -208,11 +208,15 @@ contains
       end if
    contains
       !> The detector again with threshold self%h: from the folded state over
-      !> the logged extremes and the running extreme (the log is rewritten with
-      !> the extremes confirmed now, never more than before).
+      !> the logged extremes and the running extreme. The log is rewritten in
+      !> place with the extremes confirmed now: feeding log(i) confirms at most
+      !> one, so the i-th write lands at or before i, on an entry already read.
+      !> The running extreme fed last can confirm one more than the log held
+      !> (the folded state's own running extreme, confirmed by log(1), is not
+      !> in the log): that one goes through `keep`, which folds a full log.
       subroutine replay(d)
          type(p2p_detector_t), intent(inout) :: d
-         real(wp) :: c, v
+         real(wp) :: c
          integer :: i, n_old
          logical :: conf
          real(wp) :: e
@@ -222,16 +226,19 @@ contains
          d%s = d%f
          d%e_min = d%e_min_f
          d%n_log = 0
-         do i = 1, n_old + 1
-            v = c
-            if (i <= n_old) v = d%log(i)
-            call feed(d%s, v, d%h, conf, e)
+         do i = 1, n_old
+            call feed(d%s, d%log(i), d%h, conf, e)
             if (conf) then
                d%e_min = min(d%e_min, e)
                d%n_log = d%n_log + 1
                d%log(d%n_log) = d%s%last_ext
             end if
          end do
+         call feed(d%s, c, d%h, conf, e)
+         if (conf) then
+            d%e_min = min(d%e_min, e)
+            call keep(d, d%s%last_ext)
+         end if
       end subroutine replay
    end subroutine det_push
 
@@ -281,6 +288,33 @@ contains
          end associate
       end do
    end subroutine push_block
+
+   !> One value x (a sample, or an extreme between samples) to detector d (push_one).
+   subroutine push_value(d, x)
+      type(p2p_detector_t), intent(inout) :: d
+      real(wp), intent(in) :: x
+      call push_one(d, x)
+   end subroutine push_value
+
+   !> The extreme of the parabola through (ta, da), (tb, db), (tc, dc), where
+   !> ta < tb < tc and db is a strict turning point of the three (db - da and
+   !> dc - db of opposite signs): its value x and time tx, in (ta, tc). On a
+   !> smooth signal sampled every h, x is the signal's extreme to O(h^4) (a
+   !> sine with 50 points a period: 6e-6 of its amplitude; the point db alone:
+   !> 2e-3). D-44.
+   pure subroutine turn_extreme(ta, tb, tc, da, db, dc, x, tx)
+      real(wp), intent(in) :: ta, tb, tc, da, db, dc
+      real(wp), intent(out) :: x, tx
+      real(wp) :: s1, s2, c1, c2
+      s1 = (db - da)/(tb - ta)          ! the slopes on each side
+      s2 = (dc - db)/(tc - tb)
+      c2 = (s2 - s1)/(tc - ta)          ! p(t) = db + c1 (t - tb) + c2 (t - tb)^2
+      c1 = s1 + c2*(tb - ta)
+      x = db; tx = tb
+      if (.not. c2 /= 0.0_wp) return    ! opposite slopes too small to differ (underflow)
+      x = db - c1*c1/(4.0_wp*c2)
+      tx = tb - c1/(2.0_wp*c2)
+   end subroutine turn_extreme
 
    !> One sample x to detector d: det_push's own steps written out for the
    !> usual sample, one inside the range seen so far (the threshold does not

@@ -17,10 +17,11 @@ module trainsim_observer
    use trainsim_model, only: model_t
    use trainsim_element, only: element_slot_t
    use trainsim_signal, only: signal_t
+   use trainsim_input_series, only: input_series_count, input_series_labels, input_drivers, input_series_values
    use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
    use trainsim_version, only: version_full
-   use trainsim_metrics, only: p2p_detector_t, push_samples, push_block
+   use trainsim_metrics, only: p2p_detector_t, push_samples, push_block, push_value, turn_extreme
    implicit none
    private
 
@@ -39,6 +40,8 @@ module trainsim_observer
       type(element_metrics_t), allocatable :: el(:)
       real(wp), allocatable :: y_final(:)
       real(wp) :: t_final = 0.0_wp
+      !> the last output time handed to the sink (the end of the history)
+      real(wp) :: t_sampled = -huge(1.0_wp)
       real(wp) :: energy_residual_max = 0.0_wp  !< max |stored + dissipated - input - E0|
       real(wp) :: energy_scale = 0.0_wp         !< max of stored energy and work input
       real(wp), allocatable :: series_t(:), series_disp(:, :)   !< (element, sample) if keep_series
@@ -62,16 +65,34 @@ module trainsim_observer
       logical :: keep_events = .false.               !< keep the whole table in `kept` (run%keep_events)
       type(event_t), allocatable :: kept(:)
       class(sink_t), pointer :: out => null()       !< the run's sink (set by start)
+      logical :: started = .false.                   !< start opened the sink and took the first sample
+      real(wp) :: t_sampled = -huge(1.0_wp)          !< the last output time handed to the sink
       real(wp) :: t_prev = 0.0_wp, t_metrics = 0.0_wp
       integer :: n_series = 0
       logical :: keep = .false.                      !< keep the whole series of samples (keep_series)
       type(p2p_detector_t), allocatable :: turns(:)  !< per element: peak-to-peak detector of the displacement
+      !> The extremes of each element's displacement between output samples
+      !> (D-44): the displacement at the last two step ends (turn_d1 at
+      !> turn_t1, the later), per element. A turning point of the step-end
+      !> sequence (fixed-step integrators) gives the extreme of the parabola
+      !> through the three; with peak refinement (adaptive integrators) the
+      !> displacement rate changing sign over a step gives the extreme on the
+      !> step's cubic Hermite interpolant. Either goes to the detector between
+      !> the samples around it.
+      !> A step end closer than turn_gap (a quarter of dt) to the last one taken
+      !> (a step cut short by an event or an output time) is passed over: the
+      !> parabola through points that close would be set by rounding.
+      real(wp), allocatable :: turn_d1(:), turn_d2(:)
+      real(wp) :: turn_t1 = 0.0_wp, turn_t2 = 0.0_wp, turn_gap = 0.0_wp
+      integer, allocatable :: turn_hits(:)   !< a block's turning points (at most one a step: sized to the block)
+      logical :: turn_init = .false.
       logical :: track = .false.
       !> Locate contact-force and displacement peaks inside each step (adaptive
       !> integrators, whose steps are long): the previous step end is kept.
       logical :: refine_peaks = .false.
       real(wp), allocatable :: th_prev(:), om_prev(:), force_prev(:), disp_prev(:), torque_prev(:)
       integer, allocatable :: contact_prev(:)
+      integer, allocatable :: drivers(:)             !< nodes with a driving input (trainsim_input_series)
       !> per element: the time up to which its time out of contact is counted by
       !> a local event instant (step_part) past t_prev (-huge: none)
       real(wp), allocatable :: t_counted(:)
@@ -145,6 +166,7 @@ contains
             if (meta%element_disp_units(i)%s == 'length') meta%element_disp_units(i)%s = model%units%length
          end associate
       end do
+      call input_series_labels(model, meta%input_series_names, meta%input_series_units)
       allocate (meta%input_keys(0), meta%input_files(0), meta%input_texts(0))
       do i = 1, size(model%loads)
          call add_input_file(model%loads(i)%torque)
@@ -188,6 +210,8 @@ contains
       allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
       allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
       allocate (self%s%contact(ne), self%s%pairs(ne))
+      self%drivers = input_drivers(model)
+      allocate (self%s%inputs(input_series_count(model)))
       allocate (self%res%el(ne), self%res%events(ne), self%open_row(ne))
       self%open_row = 0
       self%out => sink
@@ -196,12 +220,17 @@ contains
       if (self%keep_events) allocate (self%kept(256))
       self%track = model%run%track_energy
       self%t_metrics = model%run%t_start + model%run%settle_time
+      ! settling until periodic: the metrics start when the run has settled (simulate)
+      if (model%run%settle_tol > 0.0_wp) self%t_metrics = huge(1.0_wp)
       self%t_prev = t
       ! the peak-to-peak metrics are computed online (memory independent of the
       ! run length); the whole series of samples is kept in memory only when the
       ! caller asks (keep_series)
       allocate (self%turns(ne))
       self%turns%hyst = p2p_hysteresis
+      allocate (self%turn_d1(ne), self%turn_d2(ne))
+      self%turn_init = .false.
+      self%turn_gap = 0.25_wp*model%run%dt
       self%keep = model%run%keep_series
       self%take_samples = sink%stores_samples()
       self%speeds_only = self%take_samples .and. sink%speeds_only()
@@ -219,6 +248,7 @@ contains
       if (allocated(err)) return
       call self%step(model, t, y)
       call self%sample(model, t, t, y, sink, err)
+      self%started = .not. allocated(err)
    end subroutine obs_start
 
    !> Evaluate the recorded quantities at (t, y) into the sample buffer. When
@@ -265,6 +295,7 @@ contains
                           self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
          end associate
       end do
+      if (size(self%s%inputs) > 0) call input_series_values(model, self%drivers, t, self%s%inputs)
       if (self%track) call fill_energy(self, model, y)
    end subroutine obs_fill
 
@@ -383,7 +414,10 @@ contains
          self%res%series_theta(:, self%n_series) = self%s%theta
          self%res%series_omega(:, self%n_series) = self%s%omega
       end if
-      if (self%take_samples) call sink%write_sample(self%s, err)
+      if (self%take_samples) then
+         call sink%write_sample(self%s, err)
+         self%t_sampled = self%s%t
+      end if
    end subroutine obs_emit
 
    !> After every step of the integrator: update the metrics at (t, y).
@@ -417,15 +451,101 @@ contains
                end if
                call fold_energy(self)
             end if
+            call track_turns(self, t)
             self%t_prev = t
             return
          end if
       end if
       call self%fill(model, t, y)
-      if (self%refine_peaks) call self%refine(model, t)
+      if (self%refine_peaks) then
+         call self%refine(model, t)
+         call refine_turns(self, model, t)
+      else
+         call track_turns(self, t)
+      end if
       call self%update_metrics(model, t)
       if (self%refine_peaks) call self%keep_step_end()
    end subroutine obs_step
+
+   !> The step end t (the displacements in the sample buffer) into each
+   !> element's last three step ends: where the middle one is a turning point,
+   !> the extreme of the parabola through the three to the element's
+   !> peak-to-peak detector (from t_metrics on). Only a turning point costs
+   !> more than the compare and the shift (D-44). A step end within turn_gap of
+   !> the last one is passed over.
+   subroutine track_turns(self, t)
+      type(observer_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer :: i
+      real(wp) :: d, x, tx
+      if (.not. self%turn_init) then   ! the run's first point: no turn before it
+         self%turn_d1 = self%s%displacement
+         self%turn_d2 = self%s%displacement
+         self%turn_t1 = t; self%turn_t2 = t
+         self%turn_init = .true.
+         return
+      end if
+      if (.not. t - self%turn_t1 >= self%turn_gap) return
+      do i = 1, size(self%turn_d1)
+         d = self%s%displacement(i)
+         if ((d - self%turn_d1(i))*(self%turn_d1(i) - self%turn_d2(i)) < 0.0_wp) then
+            call turn_extreme(self%turn_t2, self%turn_t1, t, self%turn_d2(i), self%turn_d1(i), d, x, tx)
+            if (tx >= self%t_metrics) call push_value(self%turns(i), x)
+         end if
+         self%turn_d2(i) = self%turn_d1(i)
+         self%turn_d1(i) = d
+      end do
+      self%turn_t2 = self%turn_t1
+      self%turn_t1 = t
+   end subroutine track_turns
+
+   !> With peak refinement: the extremes of each element's displacement inside
+   !> the step (t_prev, t], where its rate changes sign between the step's
+   !> ends, located on the cubic Hermite interpolant of its nodes (as
+   !> obs_refine's peaks) by bisection on the rate, to the element's
+   !> peak-to-peak detector (from t_metrics on). The displacement is affine in
+   !> the node angles (every element's is), so its rate is the displacement of
+   !> the node speeds less that of zero angles.
+   subroutine refine_turns(self, model, t)
+      type(observer_t), intent(inout) :: self
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: t
+      integer, parameter :: n_bisect = 60
+      real(wp) :: h, r0, r1, a, b, c, rc, thl, wl, thr, wr, x
+      integer :: i, l, r, it
+      h = t - self%t_prev
+      if (.not. h > 0.0_wp) return
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e)
+            l = e%left; r = e%right
+            r0 = rate(self%om_prev(l), self%om_prev(r))
+            r1 = rate(self%s%omega(l), self%s%omega(r))
+            if (.not. r0*r1 < 0.0_wp) cycle
+            a = 0.0_wp; b = 1.0_wp
+            do it = 1, n_bisect
+               c = 0.5_wp*(a + b)
+               call hermite(self%th_prev(l), self%om_prev(l), self%s%theta(l), self%s%omega(l), h, c, thl, wl)
+               call hermite(self%th_prev(r), self%om_prev(r), self%s%theta(r), self%s%omega(r), h, c, thr, wr)
+               rc = rate(wl, wr)
+               if (rc*r0 > 0.0_wp) then
+                  a = c
+               else
+                  b = c
+               end if
+            end do
+            c = 0.5_wp*(a + b)
+            call hermite(self%th_prev(l), self%om_prev(l), self%s%theta(l), self%s%omega(l), h, c, thl, wl)
+            call hermite(self%th_prev(r), self%om_prev(r), self%s%theta(r), self%s%omega(r), h, c, thr, wr)
+            x = e%displacement(thl, thr)
+            if (self%t_prev + c*h >= self%t_metrics) call push_value(self%turns(i), x)
+         end associate
+      end do
+   contains
+      real(wp) function rate(w_l, w_r)
+         real(wp), intent(in) :: w_l, w_r
+         rate = model%elements(i)%e%displacement(w_l, w_r) - model%elements(i)%e%displacement(0.0_wp, 0.0_wp)
+      end function rate
+   end subroutine refine_turns
 
    !> The steps of a block an integrator has just taken (model%blk, D-38),
    !> folded into the metrics as `step` would fold them one by one (its short
@@ -461,7 +581,7 @@ contains
                call fold_energy(self)
             end do
          end if
-         if (samples .and. j0 <= n) call push_block(self%turns, b%disp, j0, n)
+         call block_turns(self, b%t, b%disp, n, j0, samples)
          if (samples .and. self%speeds_only) then
             do j = 1, n
                self%s%t = b%t(j)
@@ -469,6 +589,7 @@ contains
                call self%out%write_sample(self%s, err)
                if (allocated(err)) return
             end do
+            self%t_sampled = b%t(n)
          end if
          self%s%displacement(:) = b%disp(:, n)
          self%s%t = b%t(n)
@@ -476,6 +597,86 @@ contains
          self%t_prev = b%t(n)
       end associate
    end subroutine obs_fold_block
+
+   !> `track_turns` over the n steps of a block, element by element (the same
+   !> arithmetic on the same values: the block's columns are what `step` reads
+   !> step by step); with `samples`, each step's displacement (from step j0 on)
+   !> to the detector too, after the extreme found at that step, as `step` and
+   !> then `sample` push them. A block's steps end on the grid (D-38): all but
+   !> the first are whole steps, so only the first can be passed over for
+   !> turn_gap. The scan for turning points is a kernel of its own (turn_scan);
+   !> only its hits are worked on.
+   subroutine block_turns(self, tc, disp, n, j0, samples)
+      type(observer_t), intent(inout) :: self
+      real(wp), intent(in) :: tc(:), disp(:, :)
+      integer, intent(in) :: n, j0
+      logical, intent(in) :: samples
+      integer :: i, j, jj, q, nh, js
+      real(wp) :: d1, d2, ta, tb, da, db, x, tx, t1, t2
+      if (.not. allocated(self%turn_hits)) allocate (self%turn_hits(size(tc)))
+      if (size(self%turn_hits) < n) then
+         deallocate (self%turn_hits)
+         allocate (self%turn_hits(size(tc)))
+      end if
+      t1 = self%turn_t1; t2 = self%turn_t2
+      js = 1   ! the first column taken
+      if (.not. tc(1) - t1 >= self%turn_gap) js = 2
+      if (js > n) return
+      do i = 1, size(self%turn_d1)
+         d1 = self%turn_d1(i); d2 = self%turn_d2(i)
+         call turn_scan(size(disp, 1), size(disp, 2), i, js, n, disp, self%turn_d1(i), self%turn_d2(i), &
+                        self%turn_hits, nh)
+         jj = j0   ! the next sample to push
+         do q = 1, nh
+            j = self%turn_hits(q)
+            ! the two points taken before step j's end: in the block, or the last ones before it
+            if (j - 2 >= js) then
+               ta = tc(j - 2); da = disp(i, j - 2); tb = tc(j - 1); db = disp(i, j - 1)
+            else if (j - 1 >= js) then
+               ta = t1; da = d1; tb = tc(j - 1); db = disp(i, j - 1)
+            else
+               ta = t2; da = d2; tb = t1; db = d1
+            end if
+            call turn_extreme(ta, tb, tc(j), da, db, disp(i, j), x, tx)
+            if (tx >= self%t_metrics) then
+               if (samples .and. jj < j) call push_block(self%turns(i:i), disp(i:i, :), jj, j - 1)
+               jj = max(jj, j)
+               call push_value(self%turns(i), x)
+            end if
+         end do
+         if (samples .and. jj <= n) call push_block(self%turns(i:i), disp(i:i, :), jj, n)
+      end do
+      if (n > js) then
+         self%turn_t2 = tc(n - 1)
+      else
+         self%turn_t2 = self%turn_t1
+      end if
+      self%turn_t1 = tc(n)
+   end subroutine block_turns
+
+   !> The steps j = js .. n of a block (columns of disp, (element, step)) at
+   !> whose end element i's point before is a turning point (`track_turns`'
+   !> test), into hits(1:nh), from the element's last two points d1 (later),
+   !> d2, which are advanced to the block's last two.
+   pure subroutine turn_scan(ne, cap, i, js, n, disp, d1, d2, hits, nh)
+      integer, intent(in) :: ne, cap, i, js, n
+      real(wp), intent(in) :: disp(ne, cap)
+      real(wp), intent(inout) :: d1, d2
+      integer, intent(inout) :: hits(cap)
+      integer, intent(out) :: nh
+      integer :: j
+      real(wp) :: a, b, d
+      a = d1; b = d2; nh = 0
+      do j = js, n
+         d = disp(i, j)
+         if ((d - a)*(a - b) < 0.0_wp) then
+            nh = nh + 1
+            hits(nh) = j
+         end if
+         b = a; a = d
+      end do
+      d1 = a; d2 = b
+   end subroutine turn_scan
 
    !> `fold_ws` over the n steps of a block, element by element (explicit-shape
    !> arrays: the block's columns, (element, step)). A contact's mode does not
@@ -774,7 +975,10 @@ contains
          end if
          self%s%t = t_out
          if (t_out >= self%t_metrics) call push_samples(self%turns, self%s%displacement)
-         if (self%speeds_only) call sink%write_sample(self%s, err)
+         if (self%speeds_only) then
+            call sink%write_sample(self%s, err)
+            self%t_sampled = t_out
+         end if
          return
       end if
       if (self%s%t /= t .or. .not. self%s_whole) call self%fill(model, t, y)
@@ -886,8 +1090,11 @@ contains
    end subroutine obs_record_events
 
    !> End of a successful run: the rows of contacts still open to the sink,
-   !> close the sink and fill the result.
-   subroutine obs_finish(self, model, t, y, stats, sink, result, err)
+   !> close the sink and fill the result. With `interrupted`, the end of a run
+   !> stopped at t by a signal: the history ends at the last output time
+   !> already written (the state at t is not added), and the statistics say
+   !> the run did not complete.
+   subroutine obs_finish(self, model, t, y, stats, sink, result, err, interrupted)
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
@@ -895,8 +1102,12 @@ contains
       class(sink_t), intent(inout) :: sink
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: interrupted
       type(event_t) :: no_rows(0)
       integer :: i
+      logical :: stopped
+      stopped = .false.
+      if (present(interrupted)) stopped = interrupted
       ! contacts still open at the end count towards the peak force; their rows
       ! get the peak force so far (duration stays -1)
       do i = 1, size(model%elements)
@@ -909,7 +1120,7 @@ contains
             if (self%keep_events) self%kept(self%open_row(i)) = self%res%events(i)
          end if
       end do
-      if (self%s%t < t) then   ! make sure the final state is in the file
+      if (self%s%t < t .and. .not. stopped) then   ! make sure the final state is in the file
          call self%fill(model, t, y)
          call self%emit(sink, err)
          if (allocated(err)) return
@@ -917,7 +1128,8 @@ contains
       self%res%stats = stats
       self%res%stats%events = int(self%n_events, i8)
       self%res%stats%t_final = t
-      self%res%stats%completed = .true.
+      self%res%stats%completed = .not. stopped
+      self%res%t_sampled = self%t_sampled
       deallocate (self%res%events)
       if (self%keep_events) then
          self%res%events = self%kept(1:self%n_events)

@@ -17,7 +17,7 @@ module trainsim_simulate
    use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric, err_interrupted, err_input
    use trainsim_interrupt, only: signal_caught
    use trainsim_strings, only: str
-   use trainsim_model, only: model_t
+   use trainsim_model, only: model_t, settle_budget
    use trainsim_event, only: event_t, ev_name
    use trainsim_sink, only: sink_t
    use trainsim_run_stats, only: run_stats_t
@@ -26,10 +26,11 @@ module trainsim_simulate
    use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
    use trainsim_modes, only: rk4_dt_limit, limiting_part, load_torque_bound, rk4_dt_quick
    use trainsim_element, only: lin_state_t, lin_stiffest, lin_start, lin_contact_closed
+   use trainsim_progress, only: progress_t
    implicit none
    private
 
-   public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes, check_fixed_step
+   public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes, settle_kmax, check_fixed_step
 
    !> A state beyond this is a blow-up. Far above any physical angle, speed,
    !> current or energy; its square times any sane coefficient stays finite, so
@@ -49,6 +50,42 @@ module trainsim_simulate
    !> A limiting eigenvalue with at least this damping ratio (|Re| >= |Im|) is
    !> damping-dominated: a fixed step above its limit is refused (D-42).
    real(wp), parameter :: damped_ratio = 0.7071_wp
+
+   !> Settling until periodic (D-43): the longest attractor period looked for, in
+   !> settle periods.
+   integer, parameter :: settle_kmax = 8
+   !> The tolerance of the verdict at settle_time of a run with no settle_tol (D-43).
+   real(wp), parameter :: settle_check_tol = 1.0e-3_wp
+
+   !> Settling until periodic (&run settle_tol, D-43): the state is sampled at
+   !> t_start + j T (T = settle_period), once per period, outside the step loop. The
+   !> state is every element's displacement (its deformation: relative angle, or
+   !> transmission error) and every node's speed; sample j is compared with samples
+   !> j - k, k = 1 .. settle_kmax, component by component, relative to the largest
+   !> magnitude the component has had at the samples so far (one scale for all
+   !> speeds, which share a unit; one per element, whose units differ):
+   !>     r_k(j) = max_c |x_c(j) - x_c(j - k)| / s_c.
+   !> Settled (periodic) at the first j with t_j >= t_start + settle_time and
+   !> r_1(j) <= tol; an attractor of k > 1 periods when r_k <= tol at two successive
+   !> samples while r_1 > sqrt(tol) (far from repeating after one period: a transient
+   !> decaying towards a 1-periodic state has r_k ~ r_1 and reaches tol with k = 1
+   !> within a period or two). Not settled when t_start + settle_max_time passes first.
+   !> The metrics then start at t_j and the run ends a measured window later (the
+   !> deck's t_end - t_start - settle_time, a whole number of the k periods).
+   type :: settle_t
+      logical :: on = .false., done = .false.
+      !> no settle_tol but a settle_time and a period: only a verdict at settle_time
+      !> (to check_tol), the run and its metrics unchanged
+      logical :: check_only = .false.
+      real(wp) :: period = 0.0_wp, tol = 0.0_wp, t_min = 0.0_wp, t_budget = 0.0_wp, measure = 0.0_wp
+      real(wp) :: t0 = 0.0_wp, t_next = 0.0_wp, t_settled = 0.0_wp
+      integer :: j = -1                 !< index of the last sample (sample 0: t_start)
+      integer :: k = 0                  !< periods of the attractor found (0: none)
+      integer :: status = 0             !< run_stats_t%settle_status
+      real(wp), allocatable :: x(:, :)  !< (component, 0:settle_kmax) ring of samples
+      real(wp), allocatable :: scale(:) !< per component: largest magnitude so far
+      integer :: hits(settle_kmax) = 0  !< per k: successive samples with r_k <= tol
+   end type settle_t
 
    !> The loop's own bookkeeping (allocated once per run).
    type :: drive_t
@@ -81,18 +118,31 @@ module trainsim_simulate
 contains
 
    !> Integrate `model` from t_start to t_end with its integrator.
-   !> On error the sink is aborted (no partial output left as if good).
-   subroutine simulate(model, sink, result, err)
+   !> On error the sink is aborted (no partial output left as if good), except
+   !> an interrupt (SIGINT/SIGTERM) with `keep_interrupted`: the sink is then
+   !> closed with what was computed (the samples up to the last output time
+   !> reached, the events so far, the metrics of that span), its run statistics
+   !> saying `completed = .false.`, and `result` holds that part of the run
+   !> (result%stats%t_final: the time reached; result%t_sampled: the last
+   !> output time written); `err` is still the interrupt. With `progress`, the
+   !> driver reports to it once per output time or block of steps.
+   subroutine simulate(model, sink, result, err, keep_interrupted, progress)
       type(model_t), intent(inout), target :: model
       class(sink_t), intent(inout), target :: sink   ! the observer streams the event rows to it
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: keep_interrupted
+      type(progress_t), intent(inout), optional :: progress
+      type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
       class(integrator_t), allocatable, target :: integ
       real(wp), allocatable :: y(:)
       real(wp) :: t
       integer(i8) :: c0, c1, rate
+
+      type(settle_t) :: settle
+      real(wp) :: t_end_deck
 
       call system_clock(c0, rate)
       call make_integrator(model%run%integrator, integ)
@@ -107,28 +157,160 @@ contains
       call model%initial_state(y)
       call model%init_modes(t, y)
       obs%refine_peaks = .not. is_fixed_step(model%run%integrator)
+      ! settling until periodic: the integrator and the loop run to the latest end the
+      ! budget allows; the loop ends the run a measured window after the settling
+      t_end_deck = model%run%t_end
+      call settle_setup(model, settle, err)
+      if (allocated(err)) return
       call obs%start(model, t, y, sink, err)
-      if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, err)
+      if (present(progress)) call progress%start(t, model%run%t_end)
+      if (.not. allocated(err)) call drive(model, integ, obs, sink, t, y, settle, err, progress)
+      if (present(progress)) call progress%finish()
+      model%run%t_end = t_end_deck
       call integ%statistics(stats)
+      stats%t_metrics = obs%t_metrics
+      stats%settle_status = settle%status
+      stats%settle_k = settle%k
+      if (settle%on) stats%settle_periods = settle%j
+      if (settle%check_only) stats%settle_status = stats%settle_status + 2   ! 3 settled, 4 not (at settle_time)
       call integ%finish()
+      call system_clock(c1)
+      stats%wall_time = real(c1 - c0, wp)/real(rate, wp)
       if (allocated(err)) then
+         if (err%code == err_interrupted .and. obs%started) then
+            if (present(keep_interrupted)) then
+               if (keep_interrupted) then
+                  ! what was computed, closed as a run that did not complete
+                  call obs%finish(model, t, y, stats, sink, result, err_close, interrupted=.true.)
+                  if (allocated(err_close)) then
+                     call sink%abort()
+                     err%message = err%message//'; the history could not be kept: '//err_close%message
+                  end if
+                  return
+               end if
+            end if
+         end if
          call sink%abort()
          return
       end if
-      call system_clock(c1)
-      stats%wall_time = real(c1 - c0, wp)/real(rate, wp)
       call obs%finish(model, t, y, stats, sink, result, err)
       if (allocated(err)) call sink%abort()
    end subroutine simulate
 
+   !> Settling until periodic (settle_t): set up from &run, and model%run%t_end moved
+   !> to the latest end the settling budget allows (simulate puts it back).
+   subroutine settle_setup(model, st, err)
+      type(model_t), intent(inout) :: model
+      type(settle_t), intent(inout) :: st
+      type(error_t), allocatable, intent(out) :: err
+      integer :: n
+      if (.not. model%run%settle_tol > 0.0_wp) then
+         ! a fixed settle_time: say whether the response has settled by then
+         if (.not. (model%run%settle_time > 0.0_wp .and. model%run%settle_period > 0.0_wp)) return
+         st%check_only = .true.
+      else if (.not. model%run%settle_period > 0.0_wp) then
+         call fatal_error(err, '&run settle_tol = '//str(model%run%settle_tol)//' needs a settle_period: give '// &
+                          '&run settle_period (s), or a gear pair with teeth whose mesh period sets it', err_input)
+         return
+      end if
+      st%on = .true.
+      st%period = model%run%settle_period
+      st%tol = model%run%settle_tol
+      st%t0 = model%run%t_start
+      st%t_min = model%run%t_start + model%run%settle_time
+      st%t_budget = model%run%t_start + settle_budget(model%run)
+      if (st%check_only) then
+         st%tol = settle_check_tol
+         st%t_budget = st%t_min
+      end if
+      st%measure = model%run%t_end - st%t_min
+      st%t_next = st%t0
+      n = size(model%elements) + size(model%nodes)
+      allocate (st%x(n, 0:settle_kmax), st%scale(n))
+      st%x = 0.0_wp
+      st%scale = 0.0_wp
+      if (st%check_only) return
+      model%run%t_end = st%t_budget + st%measure + real(settle_kmax + 1, wp)*st%period
+   end subroutine settle_setup
+
+   !> Sample the state at (t, y), a settle instant t0 + j T, and decide whether the
+   !> response has settled (settle_t); when it has (or the budget is spent), the
+   !> observer's metrics start at t and `t_end` becomes the end of the measured window.
+   subroutine settle_sample(model, obs, sink, st, t, y, t_end)
+      type(model_t), intent(inout) :: model
+      type(observer_t), intent(inout) :: obs
+      class(sink_t), intent(inout) :: sink
+      type(settle_t), intent(inout) :: st
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: t_end
+      integer :: ne, e, l, r, c, p, slot, k, kk
+      real(wp) :: f, w, r1, measure
+      ne = size(model%elements)
+      st%j = st%j + 1
+      slot = modulo(st%j, settle_kmax + 1)
+      call model%kinematics(t, y)
+      do e = 1, ne
+         associate (el => model%elements(e)%e)
+            l = el%left; r = el%right
+            call el%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), st%x(e, slot), f, c, p)
+         end associate
+      end do
+      st%x(ne + 1:, slot) = model%omega
+      st%scale(1:ne) = max(st%scale(1:ne), abs(st%x(1:ne, slot)))
+      w = max(maxval(st%scale(ne + 1:)), maxval(abs(model%omega)))
+      st%scale(ne + 1:) = w
+      st%t_next = st%t0 + real(st%j + 1, wp)*st%period
+      r1 = huge(1.0_wp)
+      do k = 1, min(settle_kmax, st%j)
+         f = maxval(abs(st%x(:, slot) - st%x(:, modulo(st%j - k, settle_kmax + 1)))/max(st%scale, tiny(1.0_wp)))
+         if (k == 1) r1 = f
+         if (f <= st%tol) then
+            st%hits(k) = st%hits(k) + 1
+         else
+            st%hits(k) = 0
+         end if
+      end do
+      if (t < st%t_min - 1.0e-9_wp*st%period) return
+      kk = 0
+      if (st%hits(1) >= 1) then
+         kk = 1
+      else if (r1 > sqrt(st%tol)) then
+         do k = 2, min(settle_kmax, st%j)
+            if (st%hits(k) >= 2) then
+               kk = k
+               exit
+            end if
+         end do
+      end if
+      if (kk > 0) then
+         st%status = 1
+         st%k = kk
+      else if (t >= st%t_budget - 1.0e-9_wp*st%period) then
+         st%status = 2
+      else
+         return
+      end if
+      st%done = .true.
+      st%t_settled = t
+      if (st%check_only) return
+      measure = st%measure
+      if (kk > 1) measure = real(kk, wp)*st%period*max(1.0_wp, aint(measure/(real(kk, wp)*st%period) + 1.0_wp - &
+                                                                      1.0e-9_wp))
+      t_end = t + measure
+      obs%t_metrics = t
+      call sink%metrics_from(t)
+   end subroutine settle_sample
+
    !> The driver loop: from (t, y) at t_start to t_end.
-   subroutine drive(model, integ, obs, sink, t, y, err)
+   subroutine drive(model, integ, obs, sink, t, y, st, err, progress)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
       class(sink_t), intent(inout) :: sink
       real(wp), intent(inout) :: t, y(:)
+      type(settle_t), intent(inout) :: st
       type(error_t), allocatable, intent(out) :: err
+      type(progress_t), intent(inout), optional :: progress   !< polled per output time or block
       type(drive_t) :: d
       real(wp) :: t0, t_end, dout, t_out, x, n_real
       integer(i8) :: k, n_out, k_last
@@ -164,16 +346,40 @@ contains
       call settle_if_fired(model, integ, obs, d, t, y, .false., err)
       if (allocated(err)) return
 
+      if (st%on) then   ! sample 0: the start
+         call settle_sample(model, obs, sink, st, t, y, t_end)
+         if (st%done) call end_moved()
+      end if
+
       k = 1
       do while (k <= n_out)
-         if (d%block_samples .and. k < n_out) then
+         if (st%on .and. .not. st%done) then
+            ! the next settle instant before the next output time: advance to it
+            if (st%t_next <= out_time(k) + d%tol) then
+               ! (an instant within the tolerance of the output time is that time)
+               t_out = st%t_next
+               if (abs(t_out - out_time(k)) <= d%tol) t_out = out_time(k)
+               call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
+               if (allocated(err)) return
+               call settle_sample(model, obs, sink, st, t, y, t_end)
+               if (st%done) call end_moved()
+               cycle
+            end if
+         end if
+         if (d%block_samples .and. k < n_out .and. t < out_time(k) - d%tol) then
             ! plain steps in blocks (D-38), each step's end an output time:
             ! k .. k_last at most (not the last, t_end, which may lie off the grid
-            ! by less than the instant tolerance)
+            ! by less than the instant tolerance), nor past the next settle instant
             k_last = min(k + int(model%blk%cap, i8) - 1, n_out - 1)
-            call run_block(model, integ, obs, d, min(out_time(k_last), integ%t_stop), .true., t, y, folded, err)
+            if (st%on .and. .not. st%done) then
+               do while (k_last >= k .and. out_time(k_last) > st%t_next - d%tol)
+                  k_last = k_last - 1
+               end do
+            end if
+            folded = .false.
+            if (k_last >= k) call run_block(model, integ, obs, d, min(out_time(k_last), integ%t_stop), .true., t, y, folded, err)
             if (allocated(err)) return
-            if (folded) then
+            if (k_last >= k .and. folded) then
                ! the block's steps ended on output times k, k + 1, ... (one grid)
                do j = 1, model%blk%n
                   if (model%blk%t(j) /= out_time(k + j - 1)) then
@@ -185,6 +391,7 @@ contains
                k = k + model%blk%n
                call check_physical(model, obs, d, t, err)
                if (allocated(err)) return
+               if (present(progress)) call progress%poll(t, obs%n_events)
                cycle
             end if
          end if
@@ -195,11 +402,22 @@ contains
          if (allocated(err)) return
          call check_physical(model, obs, d, t, err)
          if (allocated(err)) return
+         if (present(progress)) call progress%poll(t, obs%n_events)
          k = k + 1
       end do
       t = t_end
       call check_ledger(model, obs, d, t, err)
    contains
+      !> The settling moved t_end (earlier than the budget's end): the output times
+      !> up to the new t_end, the last one moved to it.
+      subroutine end_moved()
+         x = max((t_end - t0)/dout - 1.0e-6_wp, 0.0_wp)
+         n_real = aint(x)
+         if (x > n_real) n_real = n_real + 1.0_wp
+         n_out = max(int(min(max(n_real, 1.0_wp), 9.0e18_wp), i8), k)
+         model%run%t_end = t_end
+         call set_next_stop(d, integ, t, t_end)
+      end subroutine end_moved
       !> Output time k: t0 + k dout, the last one t_end.
       real(wp) function out_time(kk) result(tk)
          integer(i8), intent(in) :: kk

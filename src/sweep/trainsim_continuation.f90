@@ -3,13 +3,17 @@
 !> raised or lowered step by step (the thesis's §5.2.5 experiment), so that a jump
 !> hysteresis can show; a fixed-start run cannot show one.
 !>
-!> The next run keeps the angles and re-scales the speeds to its operating point: node
-!> i starts at w_end,i * w0_new,i / w0_old,i, where w0_new is the speed `mesh_frequency`
-!> sets for the new run and w0_old the speed the run before it started from (itself
-!> re-scaled, if that run continued one: the sweep file keeps it as
-!> /nodes/start_speed, so a killed branch resumes with the same bits), so the vibration
-!> rides on the new speed in the same proportion; where w0_old,i = 0 the offset
-!> w_end,i - w0_old,i is kept instead.
+!> The next run keeps the angles and moves the speeds from the previous run's nominal
+!> operating point to its own (D-42): node i starts at
+!>     w_end,i + (W_new,i - W_old,i),
+!> where W is a run's nominal speed of the node (its initial speed as the deck and the
+!> run's `mesh_frequency` set it, or its prescribed speed at t_start), W_old that of the
+!> run before (computed again from the deck and that run's values, so a resumed branch
+!> needs only the end state the sweep file keeps). The nominal speeds turn the train
+!> rigidly (W_l = kappa W_r across every element), so the shift changes no speed across
+!> any element: the deformations and their rates, the vibration, are carried over
+!> unchanged and only the rigid rotation moves to the new operating point. A nominal
+!> speed of 0, or the same nominal in every run, carries the end speeds as they are.
 !> A held node continues its angle (its prescribed speed is the new run's); a fixed
 !> node stays. Motor currents and the contact law's memory are those of a fresh start
 !> (a contact closed at the start has D = 0 unless initial_contact_velocity, D-13).
@@ -19,12 +23,12 @@ module trainsim_continuation
    implicit none
    private
 
-   public :: chain_state_t, save_end_state, start_from
+   public :: chain_state_t, save_end_state, start_from, nominal_speeds
 
    !> The end state of a run, kept by the rank that made it.
    type :: chain_state_t
       integer :: irun = 0                       !< the run it ends (0: none)
-      real(wp), allocatable :: theta(:), omega(:), omega0(:)   !< per node
+      real(wp), allocatable :: theta(:), omega(:), omega0(:)   !< per node (omega0: the run's start speeds)
    end type chain_state_t
 
 contains
@@ -44,12 +48,33 @@ contains
       st%omega0 = [(model%nodes(i)%n%omega0, i=1, size(model%nodes))]
    end subroutine save_end_state
 
-   !> Start `model` (prepared for the next run) from the end state `st`.
-   subroutine start_from(model, st)
+   !> The nominal speed of every node of a prepared model (before any start_from): a
+   !> held node's prescribed speed at t_start, a fixed node's 0, else its initial speed.
+   function nominal_speeds(model) result(w)
+      type(model_t), intent(in) :: model
+      real(wp) :: w(size(model%nodes))
+      integer :: i, s
+      do i = 1, size(model%nodes)
+         s = model%speed_of(i)
+         if (model%nodes(i)%n%is_fixed()) then
+            w(i) = 0.0_wp
+         else if (s /= 0) then
+            w(i) = model%speeds(s)%value(model%run%t_start)
+         else
+            w(i) = model%nodes(i)%n%omega0
+         end if
+      end do
+   end function nominal_speeds
+
+   !> Start `model` (prepared for the next run) from the end state `st` of the run
+   !> before it, whose nominal speeds were `w_old` (nominal_speeds of its model).
+   subroutine start_from(model, st, w_old)
       type(model_t), intent(inout) :: model
       type(chain_state_t), intent(in) :: st
+      real(wp), intent(in) :: w_old(:)
+      real(wp) :: w_new(size(model%nodes))
       integer :: i, s
-      real(wp) :: w0
+      w_new = nominal_speeds(model)
       do i = 1, size(model%nodes)
          associate (nd => model%nodes(i)%n)
             if (nd%is_fixed()) cycle
@@ -59,12 +84,7 @@ contains
                cycle
             end if
             nd%theta0 = st%theta(i)
-            w0 = nd%omega0
-            if (st%omega0(i) /= 0.0_wp) then
-               nd%omega0 = st%omega(i)*(w0/st%omega0(i))
-            else
-               nd%omega0 = w0 + (st%omega(i) - st%omega0(i))
-            end if
+            nd%omega0 = st%omega(i) + (w_new(i) - w_old(i))
          end associate
       end do
    end subroutine start_from

@@ -9,6 +9,13 @@
 !>   With no prescribed speed there, only the initial speeds are set.
 !> - `settle_cycles` n_s: run%settle_time = n_s / f.
 !> - `measure_cycles` n_m: run%t_end = t_start + settle_time + n_m / f.
+!> - `settle_max_cycles` n_b: run%settle_max_time = n_b / f (the settling budget,
+!>   with `&run settle_tol`).
+!>
+!> Each of the three cycle keys also sets run%settle_period = 1 / f, the mesh period
+!> at which a run with settle_tol compares its state (docs/sweeps.md#settling). After
+!> each, the run's times are checked against the limits of &run (check_run_times), so
+!> a cycle count cannot take a run beyond what `t_end` itself may be.
 !>
 !> f in the cycle counts is the pair's mesh frequency as the run starts (after any
 !> `mesh_frequency`): from the driver's prescribed speed at t_start, else its initial speed.
@@ -20,21 +27,26 @@ module trainsim_derived
    use trainsim_signal, only: constant_signal
    use trainsim_param_list, only: param_list_t
    use trainsim_overrides, only: override_t, derived_keys
+   use trainsim_builder, only: check_run_times
+   use trainsim_limits, only: in_range
    implicit none
    private
 
-   public :: apply_derived, set_mesh_frequency, mesh_frequency_of
+   public :: apply_derived, set_mesh_frequency, mesh_frequency_of, default_settle_period
 
 contains
 
    !> Apply the derived overrides of `ovs` to `model`: every mesh_frequency first (in
-   !> order), then settle_cycles, then measure_cycles.
+   !> order), then settle_cycles, then measure_cycles, then settle_max_cycles.
    subroutine apply_derived(model, ovs, err)
       type(model_t), intent(inout) :: model
       type(override_t), intent(in) :: ovs(:)
       type(error_t), allocatable, intent(out) :: err
       integer :: pass, k, ie
       real(wp) :: v, f
+      character(len=:), allocatable :: blame
+      integer :: by_pass(size(derived_keys))   ! the override that set each pass's key (0: none)
+      by_pass = 0
 
       do pass = 1, size(derived_keys)
          do k = 1, size(ovs)
@@ -54,26 +66,81 @@ contains
                if (.not. f > 0.0_wp) then
                   call fatal_error(err, "error: the mesh frequency of '"//ovs(k)%target// &
                                    "' is 0 as the run starts, so a time in mesh cycles is undefined", err_input)
-               else if (pass == 2) then
-                  model%run%settle_time = v/f
                else
-                  model%run%t_end = model%run%t_start + model%run%settle_time + v/f
-                  if (model%run%dt > model%run%t_end - model%run%t_start) &
+                  model%run%settle_period = 1.0_wp/f
+                  select case (pass)
+                  case (2)
+                     model%run%settle_time = v/f
+                  case (3)
+                     model%run%t_end = model%run%t_start + model%run%settle_time + v/f
+                  case default
+                     model%run%settle_max_time = v/f
+                  end select
+                  if (pass == 3 .and. model%run%dt > model%run%t_end - model%run%t_start) &
                      call fatal_error(err, 'error: dt = '//str(model%run%dt)//' is longer than the run ('// &
                                       str(model%run%t_end - model%run%t_start)//' s)', err_input)
+                  by_pass(pass) = k
                end if
             end select
             if (allocated(err)) then
-               if (index(err%message, 'error: ') == 1) then
-                  err%message = ovs(k)%origin//': '//err%message
-               else
-                  err%message = ovs(k)%origin//': error: '//err%message
-               end if
+               call blame_override(k)
                return
             end if
          end do
       end do
+      ! the times the cycle keys set, against the limits of &run (once all are set)
+      if (all(by_pass(2:) == 0)) return
+      call check_run_times(model%run, blame, err)
+      if (.not. allocated(err)) return
+      select case (blame)
+      case ('t_end'); k = by_pass(3)
+      case ('settle_time'); k = by_pass(2)
+      case default; k = by_pass(4)
+      end select
+      if (k == 0) k = maxval(by_pass(2:))
+      err%message = 'error: &run '//blame//' (from '//ovs(k)%key//'): '//err%message
+      call blame_override(k)
+   contains
+      subroutine blame_override(kk)
+         integer, intent(in) :: kk
+         if (index(err%message, 'error: ') == 1) then
+            err%message = ovs(kk)%origin//': '//err%message
+         else
+            err%message = ovs(kk)%origin//': error: '//err%message
+         end if
+      end subroutine blame_override
    end subroutine apply_derived
+
+   !> &run settle_tol or settle_time without a settle_period (and no cycle key that sets
+   !> it): the mesh period at t_start of the first gear pair with teeth, then the run's
+   !> times against the limits (the default budget is 1000 periods). With settle_tol, an
+   !> error if there is no gear pair; with settle_time alone (a verdict at settle_time,
+   !> D-43), no period and no verdict.
+   subroutine default_settle_period(model, err)
+      type(model_t), intent(inout) :: model
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: blame
+      integer :: ie
+      real(wp) :: f
+      if (model%run%settle_period /= 0.0_wp) return
+      if (.not. (model%run%settle_tol > 0.0_wp .or. model%run%settle_time > 0.0_wp)) return
+      do ie = 1, size(model%elements)
+         if (driver_teeth(model, ie) > 0.0_wp) exit
+      end do
+      f = 0.0_wp
+      if (ie <= size(model%elements)) f = mesh_frequency_of(model, ie)
+      if (.not. f > 0.0_wp .and. .not. model%run%settle_tol > 0.0_wp) return   ! no verdict at settle_time
+      if (.not. f > 0.0_wp) then
+         call fatal_error(err, 'error: &run settle_tol needs the period at which the state is compared: give '// &
+                          '&run settle_period (s); no gear pair with teeth turns at t_start to give its mesh period', &
+                          err_input)
+         return
+      end if
+      model%run%settle_period = 1.0_wp/f
+      call check_run_times(model%run, blame, err)
+      if (allocated(err)) err%message = 'error: &run '//blame//' (with settle_period = '//str(1.0_wp/f)// &
+                                        " s, the mesh period of '"//model%elements(ie)%e%id//"'): "//err%message
+   end subroutine default_settle_period
 
    !> The single positive real value of a derived override.
    subroutine value_of(ov, v, err)
@@ -148,6 +215,12 @@ contains
          end if
          if (model%nodes(e%left)%n%is_fixed()) then
             call fatal_error(err, "error: the driver of '"//e%id//"' is a fixed node", err_input)
+            return
+         end if
+         if (.not. in_range(two_pi*f/teeth)) then
+            call fatal_error(err, 'error: mesh_frequency = '//str(f)//" gives the driver of '"//e%id// &
+                             "' a speed of "//str(two_pi*f/teeth)//' rad/s, beyond the magnitude limit of the deck''s '// &
+                             'speeds (1e20)', err_input)
             return
          end if
          nn = size(model%nodes)

@@ -9,7 +9,7 @@ module trainsim_prepare
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
    use trainsim_overrides, only: override_t, apply_overrides, localize_error, describe_overrides
-   use trainsim_derived, only: apply_derived
+   use trainsim_derived, only: apply_derived, default_settle_period
    use trainsim_preload, only: preload_info_t, apply_preload
    implicit none
    private
@@ -36,6 +36,7 @@ contains
       if (.not. allocated(err)) call build_model(work, model, err)
       if (.not. allocated(err)) model%overrides = describe_overrides(ovs)
       if (.not. allocated(err)) call apply_derived(model, ovs, err)
+      if (.not. allocated(err)) call default_settle_period(model, err)
       if (.not. allocated(err) .and. model%run%preload) call apply_preload(model, info, err)
       if (present(preload)) preload = info
       if (allocated(err)) call localize_error(err, deck%file, ovs)

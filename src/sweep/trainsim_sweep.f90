@@ -29,7 +29,7 @@ module trainsim_sweep
    use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t
    use trainsim_observer, only: run_result_t, make_meta
    use trainsim_simulate, only: simulate
-   use trainsim_continuation, only: chain_state_t, save_end_state, start_from
+   use trainsim_continuation, only: chain_state_t, save_end_state, start_from, nominal_speeds
    use trainsim_mpi, only: comm_init, comm_finalize, comm_rank, comm_size, comm_send_record, &
       comm_poll_record, comm_stop_polling, comm_send_index, comm_recv_index, comm_bcast_int, comm_bcast_reals, &
       comm_sum_reals, comm_min_int
@@ -97,6 +97,7 @@ module trainsim_sweep
       procedure :: open => ssink_open
       procedure :: write_sample => ssink_sample
       procedure :: speeds_only => ssink_speeds_only
+      procedure :: metrics_from => ssink_metrics_from
       procedure :: close => ssink_close
    end type sweep_sink_t
 
@@ -687,7 +688,7 @@ contains
       type(sweep_record_t), intent(inout) :: rec
       type(chain_state_t), intent(inout) :: st
       type(master_t), intent(inout), target, optional :: m
-      type(model_t) :: model
+      type(model_t) :: model, before
       type(sweep_sink_t) :: sink
       type(run_result_t) :: res
       type(error_t), allocatable :: err
@@ -717,7 +718,10 @@ contains
             end if
          end if
          if (st%irun == spec%prev(irun)) then
-            call start_from(model, st)
+            ! the nominal speeds of the run before, from the deck and its values
+            ovs = run_overrides(opt, spec, spec%prev(irun), err)
+            if (.not. allocated(err)) call prepare_model(deck, ovs, before, err)
+            if (.not. allocated(err)) call start_from(model, st, nominal_speeds(before))
          else
             call fatal_error(err, 'internal error: continuation run '//str(irun)//' given to a rank without the '// &
                              'end state of run '//str(spec%prev(irun)), err_input)
@@ -727,6 +731,7 @@ contains
       if (.not. allocated(err)) then
          model%run%output = ''
          sink%t_metrics = model%run%t_start + model%run%settle_time
+         if (model%run%settle_tol > 0.0_wp) sink%t_metrics = huge(1.0_wp)   ! until settled (metrics_from)
          if (present(m)) then
             if (m%n_ranks > 1) then
                sink%master => m
@@ -762,6 +767,13 @@ contains
          rec%run_values(3) = real(res%stats%events, wp)
          rec%run_values(4) = 0.0_wp
          if (res%energy_scale > 0.0_wp) rec%run_values(4) = res%energy_residual_max/res%energy_scale
+         select case (res%stats%settle_status)
+         case (1, 3); rec%run_values(5) = 1.0_wp
+         case (2, 4); rec%run_values(5) = 0.0_wp
+         case default; rec%run_values(5) = -1.0_wp
+         end select
+         rec%run_values(6) = real(res%stats%settle_periods, wp)
+         rec%run_values(7) = real(res%stats%settle_k, wp)
       end if
       call system_clock(c1)
       rec%wall = real(c1 - c0, wp)/real(rate, wp)
@@ -794,6 +806,13 @@ contains
          if (c - self%master%last_service >= self%poll_ticks) call self%master%service()
       end if
    end subroutine ssink_sample
+
+   !> The run has settled at t: the speed range starts there.
+   subroutine ssink_metrics_from(self, t)
+      class(sweep_sink_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      self%t_metrics = t
+   end subroutine ssink_metrics_from
 
    !> A sweep run reads the node speeds of its samples only (their range).
    pure logical function ssink_speeds_only(self) result(only)

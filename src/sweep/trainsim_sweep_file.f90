@@ -55,9 +55,13 @@ module trainsim_sweep_file
    !> branch starts from, trainsim_continuation, also when a killed sweep is resumed).
    character(len=*), parameter :: node_metric_names(5) = [character(len=11) :: 'speed_min', 'speed_max', &
                                                           'end_angle', 'end_speed', 'start_speed']
-   !> Per-run figures besides the metrics.
-   character(len=*), parameter :: run_value_names(4) = [character(len=15) :: 'steps', 'rhs_evals', 'events', &
-                                                        'energy_residual']
+   !> Per-run figures besides the metrics; the last three say whether the run settled
+   !> (&run settle_tol, D-43): settled 1 yes, 0 not within the budget (its metrics are of
+   !> a transient), -1 not asked; settle_periods, settle_k as in a run file's /run_stats.
+   integer, parameter :: n_run_values = 7
+   character(len=*), parameter :: run_value_names(n_run_values) = [character(len=15) :: 'steps', 'rhs_evals', &
+                                                                   'events', 'energy_residual', 'settled', &
+                                                                   'settle_periods', 'settle_k']
    integer, parameter :: n_head = 4   ! irun, status, rank, wall time
 
    !> What the file describes (the same on every rank: built from the deck).
@@ -76,7 +80,7 @@ module trainsim_sweep_file
    type :: sweep_record_t
       integer :: irun = 0, status = status_pending, rank = 0
       real(wp) :: wall = 0.0_wp
-      real(wp) :: run_values(4) = 0.0_wp
+      real(wp) :: run_values(n_run_values) = 0.0_wp
       real(wp), allocatable :: el(:, :)      !< (element metric, element)
       real(wp), allocatable :: node(:, :)    !< (node metric, node)
       character(len=:), allocatable :: message
@@ -89,7 +93,7 @@ module trainsim_sweep_file
       character(len=:), allocatable :: path
       integer(hid_t) :: file = -1
       integer(hid_t) :: d_status = -1, d_wall = -1, d_rank = -1, d_message = -1, t_message = -1
-      integer(hid_t) :: d_run(4) = -1
+      integer(hid_t) :: d_run(n_run_values) = -1
       integer(hid_t) :: d_el(15) = -1, d_node(5) = -1
       integer :: ne = 0, nn = 0, n_runs = 0
       integer, allocatable :: status(:)      !< as in the file once committed
@@ -140,7 +144,7 @@ contains
       ne = size(self%el, 2); nn = size(self%node, 2)
       buf(1:n_head) = [real(self%irun, wp), real(self%status, wp), real(self%rank, wp), self%wall]
       k = n_head
-      buf(k + 1:k + 4) = self%run_values; k = k + 4
+      buf(k + 1:k + n_run_values) = self%run_values; k = k + n_run_values
       buf(k + 1:k + size(self%el)) = reshape(self%el, [size(self%el)]); k = k + size(self%el)
       buf(k + 1:k + size(self%node)) = reshape(self%node, [size(self%node)])
    end subroutine record_pack
@@ -152,7 +156,7 @@ contains
       integer :: k
       self%irun = nint(buf(1)); self%status = nint(buf(2)); self%rank = nint(buf(3)); self%wall = buf(4)
       k = n_head
-      self%run_values = buf(k + 1:k + 4); k = k + 4
+      self%run_values = buf(k + 1:k + n_run_values); k = k + n_run_values
       self%el = reshape(buf(k + 1:k + size(self%el)), shape(self%el)); k = k + size(self%el)
       self%node = reshape(buf(k + 1:k + size(self%node)), shape(self%node))
    end subroutine record_unpack

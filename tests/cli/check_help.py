@@ -37,6 +37,26 @@ for cmd in commands:
         check(f"trainsim {cmd} {flag} prints the usage of {cmd}",
               r.stdout.startswith(f"usage: trainsim {cmd} "), r.stdout[:200])
         texts.append(r.stdout)
+
+
+def undescribed(text):
+    """Options and arguments of an argparse help text that have no description."""
+    lines, bare = text.splitlines(), []
+    for i, line in enumerate(lines):
+        m = re.match(r"^  (\S.*?)(\s{2,}\S.*)?$", line)
+        if not m or line.startswith("usage") or m.group(1).startswith("-h, --help"):
+            continue
+        nxt = lines[i + 1] if i + 1 < len(lines) else ""
+        if m.group(2) is None and not re.match(r"^\s{10,}\S", nxt):
+            bare.append(m.group(1))
+    return bare
+
+
+# the Python commands (argparse): every option and argument says what it does
+for cmd in ("export", "plot"):
+    if cmd in commands:
+        bare = undescribed(run(cmd, "--help").stdout)
+        check(f"trainsim {cmd} --help describes every option", not bare, bare)
 r = run("run")
 check("trainsim run without a deck still exits 2", r.returncode == 2, r.returncode)
 r = run("nosuch", "--help")

@@ -359,12 +359,19 @@ def group_interrupt(exe):
                 problems.append("exit %d, expected %d" % (rc, code))
             if "interrupted at t = " not in se or signal.Signals(sig).name not in se:
                 problems.append("stderr does not say interrupted by %s" % signal.Signals(sig).name)
-            if os.path.exists(out):
-                problems.append("an output file was published")
+            # what was computed is kept, marked incomplete (issue 20, item 8)
+            if not os.path.exists(out):
+                problems.append("the history computed so far was not kept")
+            else:
+                with h5py.File(out, "r") as f:
+                    if f.attrs.get("status") != "interrupted" or int(f["run_stats"].attrs["completed"]) != 0:
+                        problems.append("the kept file is not marked interrupted")
+                    if not f["time"].shape[0] > 1:
+                        problems.append("the kept file has no samples after the first")
             if parts_in(tmp):
                 problems.append("temporary file left: %s" % parts_in(tmp))
             problems += ["crash: %r" % c for c in crashed(so, se)]
-            check("%s during a %s run: exit %d, parameters on stdout, no file left" %
+            check("%s during a %s run: exit %d, parameters on stdout, the history kept, marked interrupted" %
                   (signal.Signals(sig).name, integ, code), not problems,
                   "; ".join(problems) + " | stderr: " + se.strip()[-300:])
 
