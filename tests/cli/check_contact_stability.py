@@ -76,7 +76,7 @@ def run(text, tmp):
 
 
 def summary(out):
-    m = re.search(r"max \|residual\|\s+(\S+) \(energy scale\s+(\S+)\)", out)
+    m = re.search(r"max \|residual\|\s+(\S+) \(energy scale\s+([^\s)]+)", out)
     res, scale = (float(m.group(1)), float(m.group(2))) if m else (math.nan, math.nan)
     d = re.search(r"^\s+mesh\s+spur_gear\s+(\S+)\s+(\S+)\s+(\S+)\s+(\S+)", out, re.M)
     dmin, dmax = (float(d.group(3)), float(d.group(4))) if d else (math.nan, math.nan)
