@@ -12,7 +12,7 @@ program trainsim_main
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
    use trainsim_element, only: lin_state_t, lin_start, lin_stiffest, lin_contact_closed, &
                                lin_zone_initial, lin_zone_single, lin_zone_stiffest
-   use trainsim_simulate, only: simulate
+   use trainsim_simulate, only: simulate, check_fixed_step
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: null_sink_t
    use trainsim_hdf5, only: hdf5_sink_t, hdf5_library_stuck
@@ -536,6 +536,9 @@ contains
       write (output_unit, '(a)') 'trainsim '//version_full()//': '//path//'  ('//model%title//')'
       call print_parameters(model, output_unit)
       flush (output_unit)   ! kept even if the run is interrupted or crashes
+      ! a step the run would refuse is refused before any warning about it (D-42)
+      call check_fixed_step(model, err)
+      if (allocated(err)) call fail(err)
       if (model%run%integrator(1:3) == 'rk4') then
          ! RK4 step advice from the damped linearised train (D-25): first as it starts
          warned = .false.
