@@ -12,7 +12,7 @@ program trainsim_main
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
    use trainsim_element, only: lin_state_t, lin_start, lin_stiffest, lin_contact_closed, &
                                lin_zone_initial, lin_zone_single, lin_zone_stiffest
-   use trainsim_simulate, only: simulate
+   use trainsim_simulate, only: simulate, check_fixed_step
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: null_sink_t
    use trainsim_hdf5, only: hdf5_sink_t, hdf5_library_stuck
@@ -181,6 +181,7 @@ program trainsim_main
       call install_interrupt_handlers()
       call do_run(deck_path, out_path, no_output)
    else if (cmd == 'sweep') then
+      call install_interrupt_handlers()
       call do_sweep(deck_path, out_path)
    else
       call do_modes(deck_path, modes_state)
@@ -251,6 +252,11 @@ contains
       character(len=*), intent(in) :: path, out
       type(sweep_summary_t) :: summary
       type(error_t), allocatable :: err
+      if (out == '-') then
+         write (error_unit, '(a)') 'trainsim: error: -o - (no file) does not apply to sweep: a sweep records '// &
+            'and resumes its runs in a file; name one with -o FILE'
+         call quit(2)
+      end if
       sweep_opt%deck_path = path
       sweep_opt%out_path = out
       sweep_opt%sets = sets
@@ -259,7 +265,13 @@ contains
       ! other ranks exit 0: mpirun's status is rank 0's, and a rank that exits non-zero
       ! first makes mpirun kill rank 0 before it has printed why
       if (.not. summary%root) call quit(0)
-      if (allocated(err)) call fail(err)
+      if (allocated(err)) then
+         if (err%code == err_interrupted) then    ! the runs made are recorded: say so, not "no history"
+            write (error_unit, '(a)') 'trainsim: '//err%message
+            call quit(summary%exit_code)
+         end if
+         call fail(err)
+      end if
       write (output_unit, '(a)') 'sweep: '//str(summary%n_now)//' run(s) made, '//str(summary%n_ok)//' of '// &
          str(summary%n_runs)//' ok, '//str(summary%n_failed)//' failed; results in '//summary%path
       call quit(summary%exit_code)
@@ -345,7 +357,9 @@ contains
             '  --resume           complete the sweep in FILE (the default when FILE holds this sweep)', &
             '  --progress S       a progress line on stderr every S seconds (0: every run)', &
             '  -h, --help         this text', '', &
-            'exit status: 0 every run ok, 1 some run failed (recorded in the file), 2 bad input or file'
+            'exit status: 0 every run ok, 1 some run failed (recorded in the file), 2 bad input or file', &
+            '             (or FILE written by another sweep now), 130 / 143 stopped by SIGINT / SIGTERM', &
+            '             (the runs made are recorded; the same command resumes)'
       case ('modes')
          write (unit, '(a)') 'usage: trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest]', '', &
             'Natural frequencies and mode shapes of the linearised train, and its RK4 step limit.', &
@@ -567,6 +581,9 @@ contains
       write (output_unit, '(a)') 'trainsim '//version_full()//': '//path//'  ('//model%title//')'
       call print_parameters(model, output_unit)
       flush (output_unit)   ! kept even if the run is interrupted or crashes
+      ! a step the run would refuse is refused before any warning about it (D-42)
+      call check_fixed_step(model, err)
+      if (allocated(err)) call fail(err)
       if (model%run%integrator(1:3) == 'rk4') then
          ! RK4 step advice from the damped linearised train (D-25): first as it starts
          warned = .false.

@@ -95,7 +95,7 @@ def run_walls(path):
 
 
 def interleaved(exe, deck, configs, reps, tmp, idle=0.0):
-    """{ranks: [(wall, cpu, sum of run walls, ranks of the runs), ...]} over `reps` rounds."""
+    """{ranks: [(wall, cpu, sum of run walls, ranks of the runs, sweep phase wall), ...]} over `reps` rounds."""
     out = {r: [] for r in configs}
     for i in range(reps):
         if idle > 0:
@@ -172,7 +172,7 @@ def tiny(exe, args, tmp, have_mpi):
     for r in configs:
         walls = [x[0] for x in res[r]]
         i = walls.index(statistics.median(walls)) if len(walls) % 2 else 0
-        wall, _, rw, rk = res[r][i]
+        wall, _, rw, rk, _ = res[r][i]   # (wall, cpu, run walls, ranks, sweep phase)
         over = (wall * min(r, cores) - rw) / n
         per_rank = " / ".join(str(int((rk == k).sum())) for k in sorted(set(rk.tolist())))
         print(f"| {r} | {wall:.3f} s | {wall / n * 1e3:.2f} ms | {over * 1e3:.2f} ms | {rw:.3f} s | {per_rank} |")

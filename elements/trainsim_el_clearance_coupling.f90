@@ -9,7 +9,7 @@ module trainsim_el_clearance_coupling
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t
+   use trainsim_param_list, only: param_list_t, make_param_list
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_element, only: element_t
    implicit none
@@ -71,7 +71,7 @@ contains
       type(param_list_t) :: p
       ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
       ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('clearance'), string_t('stiffness'), string_t('contact_damping'), string_t('radius')], &
-                       values=[2.0_wp*self%cl%b, self%cl%law%k, self%cl%law%c, self%radius])
+      p = make_param_list([character(len=40) :: 'clearance', 'stiffness', 'contact_damping', 'radius'], &
+                       [2.0_wp*self%cl%b, self%cl%law%k, self%cl%law%c, self%radius])
    end function cc_params
 end module trainsim_el_clearance_coupling

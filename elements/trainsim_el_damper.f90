@@ -80,7 +80,7 @@ contains
       class(damper_t), intent(in) :: self
       type(param_list_t) :: p
       allocate (p%names(1), p%values(1))
-      p%names(1) = string_t('damping')
+      p%names(1)%s = 'damping'
       p%values(1) = self%c
    end function damper_params
 end module trainsim_el_damper

@@ -12,7 +12,7 @@ module trainsim_el_helical_gear
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
+   use trainsim_param_list, only: param_list_t, make_param_list, guarded_product, guarded_ratio
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hf_none
@@ -197,14 +197,13 @@ contains
    function hel_params(self) result(p)
       class(helical_gear_t), intent(in) :: self
       type(param_list_t) :: p
-      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
-      p = param_list_t(names=[string_t('rb_driver'), string_t('rb_driven'), string_t('teeth'), &
-                       string_t('profile_contact_ratio'), string_t('face_contact_ratio'), &
-                       string_t('base_helix_angle_rad'), string_t('transverse_base_pitch'), &
-                       string_t('face_width'), string_t('youngs_modulus'), string_t('stiffness_per_length'), &
-                       string_t('mean_mesh_stiffness'), string_t('approach_angle'), &
-                       string_t('half_backlash'), string_t('gear_ratio'), string_t('total_contact_ratio')], &
-                       values=[self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, &
+      p = make_param_list([character(len=40) :: 'rb_driver', 'rb_driven', 'teeth', &
+                       'profile_contact_ratio', 'face_contact_ratio', &
+                       'base_helix_angle_rad', 'transverse_base_pitch', &
+                       'face_width', 'youngs_modulus', 'stiffness_per_length', &
+                       'mean_mesh_stiffness', 'approach_angle', &
+                       'half_backlash', 'gear_ratio', 'total_contact_ratio'], &
+                       [self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, &
                         self%face, self%youngs, self%cl%law%k, &
                         self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b, &
                         guarded_ratio(self%cl%r2, self%cl%r1), self%mp + self%mf])

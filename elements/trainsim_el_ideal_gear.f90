@@ -7,7 +7,7 @@ module trainsim_el_ideal_gear
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t, guarded_product, guarded_ratio
+   use trainsim_param_list, only: param_list_t, make_param_list, guarded_product, guarded_ratio
    use trainsim_element, only: element_t
    implicit none
    private
@@ -134,9 +134,8 @@ contains
       class(ideal_gear_t), intent(in) :: self
       type(param_list_t) :: p
       ! derived: gear_ratio = omega_driver / omega_driven = r2 / r1
-      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
-      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), &
-                       string_t('gear_ratio')], &
-                       values=[self%k, self%r1, self%r2, guarded_ratio(self%r2, self%r1)])
+      p = make_param_list([character(len=40) :: 'stiffness', 'rb_driver', 'rb_driven', &
+                       'gear_ratio'], &
+                       [self%k, self%r1, self%r2, guarded_ratio(self%r2, self%r1)])
    end function gear_params
 end module trainsim_el_ideal_gear

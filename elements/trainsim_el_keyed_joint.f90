@@ -25,7 +25,8 @@ module trainsim_el_keyed_joint
    use trainsim_contact, only: fit_tight, fit_loose, fit_average, key_lineal_stiffness
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t, add_choice, guarded_product, guarded_ratio
+   use trainsim_param_list, only: param_list_t, make_param_list, append_params, add_choice, guarded_product, &
+      guarded_ratio
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hf_none
    implicit none
@@ -198,21 +199,18 @@ contains
       class(keyed_joint_t), intent(in) :: self
       type(param_list_t) :: p
       ! derived: angular stiffness k (d/2)^2 (torque/rad)
-      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
-      p = param_list_t(names=[string_t('diameter'), string_t('half_clearance'), string_t('stiffness'), &
-                       string_t('friction'), string_t('phi'), string_t('load_radius'), &
-                       string_t('friction_angle'), string_t('min_approach_velocity'), &
-                       string_t('friction_velocity'), string_t('friction_capacity_per_hub_torque'), &
-                       string_t('angular_stiffness')], &
-                       values=[self%diameter, self%cl%b, self%cl%law%k, self%mu, self%phi, self%load_radius, &
+      p = make_param_list([character(len=40) :: 'diameter', 'half_clearance', 'stiffness', &
+                       'friction', 'phi', 'load_radius', &
+                       'friction_angle', 'min_approach_velocity', &
+                       'friction_velocity', 'friction_capacity_per_hub_torque', &
+                       'angular_stiffness'], &
+                       [self%diameter, self%cl%b, self%cl%law%k, self%mu, self%phi, self%load_radius, &
                         self%friction_angle, self%cl%law%v_min, self%friction_velocity, self%fric_factor, &
                         guarded_product(self%cl%law%k, guarded_product(0.5_wp*self%diameter, 0.5_wp*self%diameter))])
       if (self%cl%law%fit /= 0) then
          ! the file's attribute stiffness_fit: 1 tight, 2 loose, 3 average
          call add_choice(p, 'stiffness_fit', real(self%cl%law%fit, wp), fit_word(self%cl%law%fit))
-         p%names = [p%names, string_t('key_length')]
-         p%values = [p%values, self%key_length]
-         p%words = [p%words, string_t('')]
+         call append_params(p, [character(len=40) :: 'key_length'], [self%key_length])
       end if
    end function key_params
 

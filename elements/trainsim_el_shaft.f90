@@ -6,7 +6,7 @@ module trainsim_el_shaft
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t
+   use trainsim_param_list, only: param_list_t, make_param_list
    use trainsim_element, only: element_t, lin_state_t
    implicit none
    private
@@ -113,7 +113,7 @@ contains
       type(param_list_t) :: p
       ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
       ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('stiffness'), string_t('damping')], &
-                       values=[self%k, self%c])
+      p = make_param_list([character(len=40) :: 'stiffness', 'damping'], &
+                       [self%k, self%c])
    end function shaft_params
 end module trainsim_el_shaft

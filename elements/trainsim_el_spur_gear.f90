@@ -21,7 +21,8 @@ module trainsim_el_spur_gear
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: check_magnitude
-   use trainsim_param_list, only: param_list_t, add_choice, guarded_product, guarded_ratio
+   use trainsim_param_list, only: param_list_t, make_param_list, append_params, add_choice, guarded_product, &
+      guarded_ratio
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
@@ -378,14 +379,13 @@ contains
       type(param_list_t) :: p
       ! derived: gear_ratio = omega_driver / omega_driven = r2 / r1; base pitch 2 pi r1 / N;
       ! c2 k; the driver angle of one tooth, 2 pi / N
-      ! one structure constructor (gfortran 12 false -Wuninitialized otherwise)
-      p = param_list_t(names=[string_t('stiffness'), string_t('rb_driver'), string_t('rb_driven'), &
-                       string_t('teeth'), string_t('contact_ratio'), string_t('approach_angle'), &
-                       string_t('half_backlash'), string_t('two_pair_factor'), &
-                       string_t('min_approach_velocity'), string_t('initial_contact_velocity'), &
-                       string_t('gear_ratio'), string_t('base_pitch'), string_t('two_pair_stiffness'), &
-                       string_t('mesh_period_angle')], &
-                       values=[self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, &
+      p = make_param_list([character(len=40) :: 'stiffness', 'rb_driver', 'rb_driven', &
+                       'teeth', 'contact_ratio', 'approach_angle', &
+                       'half_backlash', 'two_pair_factor', &
+                       'min_approach_velocity', 'initial_contact_velocity', &
+                       'gear_ratio', 'base_pitch', 'two_pair_stiffness', &
+                       'mesh_period_angle'], &
+                       [self%cl%law%k, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, &
                         self%cl%b, self%c2, self%cl%law%v_min, &
                         self%cl%law%v_initial, guarded_ratio(self%cl%r2, self%cl%r1), guarded_ratio(two_pi*self%cl%r1, self%teeth), &
                         guarded_product(self%c2, self%cl%law%k), guarded_ratio(two_pi, self%teeth)])
@@ -393,9 +393,8 @@ contains
       call add_choice(p, 'truncate_zones', merge(1.0_wp, 0.0_wp, self%truncate), &
                       merge('truncate', 'periodic', self%truncate))
       if (self%pitch_module > 0.0_wp) then
-         p%names = [p%names, string_t('teeth_driven'), string_t('module_length'), string_t('pressure_angle_rad'), &
-                    string_t('face_width')]
-         p%values = [p%values, self%teeth2, self%pitch_module, self%phi, self%face]
+         call append_params(p, [character(len=40) :: 'teeth_driven', 'module_length', 'pressure_angle_rad', 'face_width'], &
+                            [self%teeth2, self%pitch_module, self%phi, self%face])
       end if
    end function spur_params
 end module trainsim_el_spur_gear

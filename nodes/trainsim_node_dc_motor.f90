@@ -11,7 +11,7 @@ module trainsim_node_dc_motor
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: check_magnitude
    use trainsim_signal, only: signal_t, constant_signal
-   use trainsim_param_list, only: param_list_t
+   use trainsim_param_list, only: param_list_t, make_param_list
    use trainsim_node, only: node_t
    implicit none
    private
@@ -205,8 +205,8 @@ contains
       type(param_list_t) :: p
       ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
       ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('inertia'), string_t('damping'), string_t('torque_constant'), string_t('inductance'), &
-                              string_t('resistance'), string_t('back_emf_constant')], &
-                       values=[self%j, self%d, self%alpha, self%l, self%r, self%alpha_e])
+      p = make_param_list([character(len=40) :: 'inertia', 'damping', 'torque_constant', 'inductance', &
+                              'resistance', 'back_emf_constant'], &
+                       [self%j, self%d, self%alpha, self%l, self%r, self%alpha_e])
    end function motor_params
 end module trainsim_node_dc_motor

@@ -6,7 +6,7 @@ module trainsim_node_inertia
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t
+   use trainsim_param_list, only: param_list_t, make_param_list
    use trainsim_node, only: node_t
    implicit none
    private
@@ -112,7 +112,7 @@ contains
       type(param_list_t) :: p
       ! One structure constructor: assigning p%names, then p%values trips gfortran 12's
       ! false -Wuninitialized on the descriptors of the unallocated components.
-      p = param_list_t(names=[string_t('inertia'), string_t('damping')], &
-                       values=[self%j, self%d])
+      p = make_param_list([character(len=40) :: 'inertia', 'damping'], &
+                       [self%j, self%d])
    end function inertia_params
 end module trainsim_node_inertia

@@ -87,6 +87,15 @@ def quantity(f, name):
                       f"{'/'.join(ELEMENT_SETS)}, state.NAME or energy.NAME; --list shows them all)")
 
 
+def check_history(f, path):
+    """Refuse a sweep file: export reads the history of one run."""
+    if str(f.attrs.get("format", "")) == "trainsim-sweep":
+        raise ExportError("it is a sweep file (trainsim sweep), not the history of one run: plot a metric "
+                          f"against the swept parameter with `trainsim plot {path} --metric ID.NAME -o OUT.png`, "
+                          "or read its /elements/NAME and /nodes/NAME datasets (one column per run, "
+                          "docs/sweeps.md) with h5py")
+
+
 def window(t, t0=None, t1=None, every=1):
     """Indices of the samples in [t0, t1], every `every`-th."""
     if every < 1:
@@ -326,6 +335,7 @@ def main(argv=None):
     buf = io.StringIO()
     try:
         with f:
+            check_history(f, a.file)
             if a.list:
                 buf.write("\n".join(quantity_names(f)) + "\n")
             elif a.summary:
@@ -353,6 +363,11 @@ def main(argv=None):
                                   "--summary json, --spectrum, --rainflow")
     except ExportError as e:
         print(f"trainsim export: {a.file}: error: {e}", file=sys.stderr)
+        return 2
+    except (KeyError, OSError, ValueError) as e:
+        # a history whose groups are missing or unreadable (damaged, or written by another program)
+        print(f"trainsim export: {a.file}: error: not a readable trainsim history (damaged, or not written by "
+              f"trainsim run): {e}", file=sys.stderr)
         return 2
     if a.output and a.output != "-":
         with open(a.output, "w") as out:

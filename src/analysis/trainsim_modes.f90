@@ -21,6 +21,7 @@ module trainsim_modes
    private
 
    public :: modes_t, compute_modes, rk4_stability_limit, rk4_dt_bound, rk4_dt_limit, rk4_ray_radius
+   public :: load_torque_bound, limiting_part, with_loads, rk4_dt_quick
 
    !> |lambda h| on the imaginary axis inside which classical RK4 is stable (2 sqrt 2).
    real(wp), parameter :: rk4_stability_limit = 2.0_wp*sqrt(2.0_wp)
@@ -202,14 +203,22 @@ contains
 
    !> Smallest radius of RK4's stability region over the closed left half-plane
    !> (about 2.6, in a direction between the imaginary and the real axis).
+   !> Computed once (about 16 million instructions) and kept: the refusal
+   !> check and the explicit SUNDIALS check ask for it at every run's start.
    real(wp) function rk4_min_radius() result(r)
       integer :: i
       real(wp) :: phi
+      real(wp), save :: kept = -1.0_wp
+      if (kept > 0.0_wp) then
+         r = kept
+         return
+      end if
       r = huge(1.0_wp)
       do i = 0, 180
          phi = 0.5_wp*two_pi*(0.25_wp + real(i, wp)/360.0_wp)   ! pi/2 .. 3 pi/2
          r = min(r, rk4_ray_radius(cmplx(min(cos(phi), 0.0_wp), sin(phi), wp)))
       end do
+      kept = r   ! the same value from any thread: a race here is benign
    end function rk4_min_radius
 
    !> O(n) step bound for large trains: Gershgorin's theorem on the linearised
@@ -286,22 +295,24 @@ contains
    !> The largest step h for which every h lambda of the linearised train in
    !> `state` lies in RK4's stability region (D-25). With every clearance closed
    !> the impact damping is swept from none to the law's largest and the
-   !> smallest limit is returned. `omega_crit` is |lambda| of the limiting
+   !> smallest limit is returned; so is the damping of a contact closed gently
+   !> under the loads (`with_loads`, D-42). `omega_crit` is |lambda| of the limiting
    !> eigenvalue (rad/s); `freq_hz` its damped frequency |Im lambda|/2 pi and
    !> `damping_ratio` -Re lambda/|lambda|. dt_max = huge when nothing limits it.
-   subroutine rk4_dt_limit(model, state, dt_max, omega_crit, err, freq_hz, damping_ratio)
+   subroutine rk4_dt_limit(model, state_in, dt_max, omega_crit, err, freq_hz, damping_ratio)
       type(model_t), intent(inout) :: model
-      type(lin_state_t), intent(in) :: state
+      type(lin_state_t), intent(in) :: state_in
       real(wp), intent(out) :: dt_max, omega_crit
       type(error_t), allocatable, intent(out) :: err
       real(wp), intent(out), optional :: freq_hz, damping_ratio
       real(wp), allocatable :: y(:), inv_j(:)
       real(wp) :: h(0:n_scale), a, b, c, d, fc, fd
       complex(wp) :: lam(0:n_scale), lc, ld
-      type(lin_state_t) :: st
+      type(lin_state_t) :: st, state
       integer :: j, jmin, it
       real(wp), parameter :: gr = 0.6180339887498949_wp   ! golden section
 
+      state = with_loads(model, state_in)
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
       if (model%n_states > dense_state_limit) then
@@ -429,4 +440,153 @@ contains
          end do
       end subroutine limit_at
    end subroutine rk4_dt_limit
+
+   !> O(n) bounds for the train in `state` (loads as `with_loads`): |lambda| <=
+   !> `bound` for every eigenvalue, and RK4 is stable for any h <= dt_max
+   !> (`rk4_dt_bound`: Gershgorin). A check that passes with them needs no
+   !> eigenvalues (check_fixed_step, the explicit SUNDIALS check).
+   subroutine rk4_dt_quick(model, state_in, dt_max, bound)
+      type(model_t), intent(inout) :: model
+      type(lin_state_t), intent(in) :: state_in
+      real(wp), intent(out) :: dt_max, bound
+      real(wp), allocatable :: y(:)
+      call model%initial_state(y)
+      call model%init_modes(model%run%t_start, y)
+      call rk4_dt_bound(model, with_loads(model, state_in), y, dt_max, bound)
+   end subroutine rk4_dt_quick
+
+   !> `state` gets the largest torque the loads can drive through one element
+   !> (`load_torque_bound`), unless it has one (a negative one: leave the
+   !> loads out, D-42).
+   function with_loads(model, state) result(st)
+      type(model_t), intent(in) :: model
+      type(lin_state_t), intent(in) :: state
+      type(lin_state_t) :: st
+      st = state
+      if (st%load_torque == 0.0_wp) st%load_torque = load_torque_bound(model)
+   end function with_loads
+
+   !> The largest torque the external loads can drive through one element over
+   !> the run (D-42): the larger of the sum of every load's largest positive
+   !> value and the sum of its largest negative one, each sampled at 1001 points
+   !> of [t_start, t_end] and at its table knots. Exact for one driving load
+   !> against a held node, for a drive balanced by a load, and for a free train
+   !> driven on one side; a bound, not a solution of the static problem.
+   real(wp) function load_torque_bound(model) result(tq)
+      type(model_t), intent(in) :: model
+      real(wp), allocatable :: bp(:)
+      real(wp) :: pos, neg, v, t0, t1, vp, vn
+      integer :: i, j
+      integer, parameter :: n_sample = 1000
+      pos = 0.0_wp; neg = 0.0_wp
+      t0 = model%run%t_start; t1 = model%run%t_end
+      if (.not. allocated(model%loads)) then
+         tq = 0.0_wp
+         return
+      end if
+      do i = 1, size(model%loads)
+         vp = 0.0_wp; vn = 0.0_wp
+         do j = 0, n_sample
+            v = model%loads(i)%torque%value(t0 + (t1 - t0)*real(j, wp)/n_sample)
+            if (v == v) then
+               vp = max(vp, v); vn = min(vn, v)
+            end if
+         end do
+         call model%loads(i)%torque%breakpoints(bp)
+         do j = 1, size(bp)
+            if (bp(j) < t0 .or. bp(j) > t1) cycle
+            v = model%loads(i)%torque%value(bp(j))
+            if (v == v) then
+               vp = max(vp, v); vn = min(vn, v)
+            end if
+         end do
+         pos = pos + vp
+         neg = neg - vn
+      end do
+      tq = min(max(pos, neg), huge(1.0_wp))
+   end function load_torque_bound
+
+   !> The node or element of `model` that alone (its own inertias behind it,
+   !> the rest of the train held) has the smallest RK4 step limit in `state`:
+   !> a node's own damping (-d(speed rate)/d(speed)), an element's reduced
+   !> two-inertia system lambda^2 + (c/m) lambda + k/m = 0 from its
+   !> `linearise` (the contact damping of its law at its worst, D-25/D-42).
+   !> `text` names it, its deck group and what limits it; `h_part` is its limit.
+   !> For messages only (refusals and advice), never on the hot path.
+   subroutine limiting_part(model, state_in, text, h_part)
+      type(model_t), intent(inout) :: model
+      type(lin_state_t), intent(in) :: state_in
+      character(len=:), allocatable, intent(out) :: text
+      real(wp), intent(out) :: h_part
+      type(lin_state_t) :: state
+      real(wp), allocatable :: y(:), inv_j(:), f0(:), f1(:), yp(:)
+      real(wp) :: ke(2, 2), ce(2, 2), a, b, disc, h, hl, dl
+      complex(wp) :: lam
+      integer :: i, o
+      state = with_loads(model, state_in)
+      call model%initial_state(y)
+      call model%init_modes(model%run%t_start, y)
+      call inverse_inertias(model, inv_j)
+      allocate (f0(size(y)), f1(size(y)), yp(size(y)))
+      h_part = huge(1.0_wp)
+      text = 'no single node or element'
+      do i = 1, size(model%nodes)
+         if (model%is_held(i)) cycle
+         associate (nd => model%nodes(i)%n)
+            if (nd%nstates() < 2) cycle
+            o = nd%offset
+            f0 = 0.0_wp; f1 = 0.0_wp
+            call nd%derivatives(model%run%t_start, y, 0.0_wp, f0)
+            yp = y
+            h = 1.0e-6_wp*max(1.0_wp, abs(y(o + 2)))
+            yp(o + 2) = y(o + 2) + h
+            call nd%derivatives(model%run%t_start, yp, 0.0_wp, f1)
+            dl = -(f1(o + 2) - f0(o + 2))/h          ! decay rate of the node's speed alone, 1/s
+            if (.not. dl > 0.0_wp) cycle
+            hl = rk4_ray_radius((-1.0_wp, 0.0_wp))/dl
+            if (hl < h_part) then
+               h_part = hl
+               text = "node '"//nd%id//"'"//origin_of(nd%origin)//': its own damping (key damping) '// &
+                      'decays its speed at '//str(dl, 4)//' 1/s'
+            end if
+         end associate
+      end do
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e)
+            call e%linearise(state, inv_j(e%left), inv_j(e%right), ke, ce)
+            a = ke(1, 1)*inv_j(e%left) + ke(2, 2)*inv_j(e%right)     ! k/m of the relative motion
+            b = ce(1, 1)*inv_j(e%left) + ce(2, 2)*inv_j(e%right)     ! c/m
+            if (.not. (a > 0.0_wp .or. b > 0.0_wp)) cycle
+            disc = b*b - 4.0_wp*a
+            if (disc >= 0.0_wp) then
+               lam = cmplx(-0.5_wp*(b + sqrt(disc)), 0.0_wp, wp)
+            else
+               lam = cmplx(-0.5_wp*b, 0.5_wp*sqrt(-disc), wp)
+            end if
+            if (.not. abs(lam) > 0.0_wp) cycle
+            hl = rk4_ray_radius(lam/abs(lam))/abs(lam)
+            if (hl < h_part) then
+               h_part = hl
+               if (b*b >= a) then
+                  text = "element '"//e%id//"'"//origin_of(e%origin)//': its damping (c/m = '//str(b, 4)// &
+                         ' 1/s against sqrt(k/m) = '//str(sqrt(max(a, 0.0_wp)), 4)//' 1/s'
+                  if (e%n_guards() > 0) text = text//'; its contact law''s damping'
+                  text = text//')'
+               else
+                  text = "element '"//e%id//"'"//origin_of(e%origin)//': its stiffness (sqrt(k/m) = '// &
+                         str(sqrt(a), 4)//' rad/s)'
+               end if
+            end if
+         end associate
+      end do
+   contains
+      function origin_of(where) result(s)
+         character(len=:), allocatable, intent(in) :: where
+         character(len=:), allocatable :: s
+         s = ''
+         if (allocated(where)) then
+            if (len(where) > 0) s = ' ('//where//')'
+         end if
+      end function origin_of
+   end subroutine limiting_part
 end module trainsim_modes

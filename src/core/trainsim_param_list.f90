@@ -6,7 +6,7 @@ module trainsim_param_list
    implicit none
    private
 
-   public :: param_list_t, guarded_product, guarded_ratio, add_choice
+   public :: param_list_t, guarded_product, guarded_ratio, make_param_list, append_params, add_choice
 
    !> Named real parameters of one element or node (derived values included).
    !> A choice key (a word in the deck) is stored by its code in `values` (the file's
@@ -18,6 +18,33 @@ module trainsim_param_list
       type(string_t), allocatable :: words(:)
    end type param_list_t
 contains
+
+   !> The list of `names` (blank-padded) and `values`. (Not an array constructor of
+   !> string_t structure constructors: gfortran 12 leaks their strings, and params() is
+   !> called several times per model build, so a 10^5-run sweep grew without bound.)
+   pure function make_param_list(names, values) result(p)
+      character(len=*), intent(in) :: names(:)
+      real(wp), intent(in) :: values(:)
+      type(param_list_t) :: p
+      integer :: i
+      allocate (p%names(size(names)))
+      do i = 1, size(names)
+         p%names(i)%s = trim(names(i))
+      end do
+      p%values = values
+   end function make_param_list
+
+   !> Append `names` and `values` to p (as make_param_list; their words, if p has
+   !> words, are empty).
+   pure subroutine append_params(p, names, values)
+      type(param_list_t), intent(inout) :: p
+      character(len=*), intent(in) :: names(:)
+      real(wp), intent(in) :: values(:)
+      integer :: i
+      do i = 1, size(names)
+         call append_one(p, trim(names(i)), values(i), '')
+      end do
+   end subroutine append_params
 
    !> Append the choice key `name`, stored as `code`, printed as `word`.
    pure subroutine add_choice(p, name, code, word)
@@ -31,10 +58,33 @@ contains
             p%words(j)%s = ''
          end do
       end if
-      p%names = [p%names, string_t(name)]
-      p%values = [p%values, code]
-      p%words = [p%words, string_t(word)]
+      call append_one(p, name, code, word)
    end subroutine add_choice
+
+   !> One more entry (strings moved, not copied through string_t(...) constructors).
+   pure subroutine append_one(p, name, value, word)
+      type(param_list_t), intent(inout) :: p
+      character(len=*), intent(in) :: name, word
+      real(wp), intent(in) :: value
+      type(string_t), allocatable :: grown(:)
+      integer :: i, m
+      m = size(p%names)
+      allocate (grown(m + 1))
+      do i = 1, m
+         call move_alloc(p%names(i)%s, grown(i)%s)
+      end do
+      grown(m + 1)%s = name
+      call move_alloc(grown, p%names)
+      p%values = [p%values, value]
+      if (allocated(p%words)) then
+         allocate (grown(m + 1))
+         do i = 1, m
+            call move_alloc(p%words(i)%s, grown(i)%s)
+         end do
+         grown(m + 1)%s = word
+         call move_alloc(grown, p%words)
+      end if
+   end subroutine append_one
 
    !> a*b for a derived parameter, or huge when that would overflow: a deck value
    !> beyond the accepted range (D-28) must reach the range check that names its

@@ -36,9 +36,16 @@ module trainsim_integrator_registry
 contains
 
    !> The table.
+   !> (Built once: gfortran 12 leaks the strings of this array constructor, and every
+   !> model build and run reads the table.)
    function integrator_registry() result(rows)
       type(integrator_entry_t), allocatable :: rows(:)
-      rows = [ &
+      type(integrator_entry_t), allocatable, save :: table(:)
+      if (allocated(table)) then
+         rows = table
+         return
+      end if
+      table = [ &
              integrator_entry_t('rk4', 'classical RK4 on the dt grid with located events (default)', 4, .true., .true., new_rk4), &
              integrator_entry_t('rk4-thesis', 'the thesis''s RK4 (App. F): modes frozen per step, dt/10 in contact', &
                                 4, .true., .false., new_rk4_thesis), &
@@ -50,6 +57,7 @@ contains
              integrator_entry_t('arkode-verner', 'SUNDIALS ARKODE ERKStep, Verner 6(5)', 6, .false., .true., new_arkode_verner), &
              integrator_entry_t('euler', 'explicit Euler with located events (first order; tests and teaching)', &
                                 1, .true., .true., new_euler)]
+      rows = table
    end function integrator_registry
 
    !> Allocate the integrator called `name`; unallocated if the name is unknown.

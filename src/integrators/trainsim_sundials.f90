@@ -29,8 +29,8 @@ module trainsim_sundials
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric, err_internal
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
-   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit
-   use trainsim_element, only: lin_stiffest
+   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit, limiting_part, rk4_dt_quick
+   use trainsim_element, only: lin_stiffest, lin_state_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    implicit none
    private
@@ -337,6 +337,46 @@ contains
       end if
    end subroutine cvode_max_step
 
+   !> An explicit method's step is held below explicit_limit/|lambda| for the
+   !> largest |lambda| of the damped train in its stiffest state (every
+   !> clearance closed, every contact law's damping at its largest, D-42; an
+   !> overdamped contact or node limits it as much as a stiff one): a run that
+   !> would take more than implied_step_budget such steps is refused before the
+   !> first step, naming the node or element that limits it.
+   subroutine explicit_stiffness_check(self, model, t, err)
+      class(sundials_integrator_t), intent(in) :: self
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: t
+      type(error_t), allocatable, intent(out) :: err
+      type(model_t) :: tmp
+      type(error_t), allocatable :: lim_err
+      real(wp) :: om, dt_rk4, om_damped, h_part
+      character(len=:), allocatable :: part, what
+      type(lin_state_t) :: st
+      om = self%omega_max
+      what = 'the highest mode ('//str(self%omega_max/two_pi, 4)//' Hz, every clearance closed)'
+      st = lin_stiffest
+      st%load_torque = -1.0_wp     ! the impact damping, not a gentle closure under load (as check_fixed_step)
+      tmp = model
+      call rk4_dt_quick(tmp, st, dt_rk4, om_damped)   ! O(n): |lambda| <= om_damped
+      if (.not. (model%run%t_end - t)*max(om, om_damped)/self%explicit_limit() > implied_step_budget) return
+      tmp = model
+      call rk4_dt_limit(tmp, st, dt_rk4, om_damped, lim_err)
+      if (.not. allocated(lim_err) .and. om_damped > om) then
+         om = om_damped
+         what = 'the damped train with every clearance closed (|lambda| = '//str(om_damped, 4)//' 1/s)'
+      end if
+      if (.not. om > 0.0_wp) return
+      if (.not. (model%run%t_end - t)*om/self%explicit_limit() > implied_step_budget) return
+      tmp = model
+      call limiting_part(tmp, st, part, h_part)
+      call fatal_error(err, "integrator '"//self%name//"' is explicit: its step is held below "// &
+                       str(self%explicit_limit()/om, 4)//' s by '//what//', set by '//part// &
+                       ', so the run of '//str(model%run%t_end - t)//' s would take more than '// &
+                       str(implied_step_budget)//" steps: this train is stiff; use integrator = 'cvode-bdf' "// &
+                       '(implicit: its step has no stability limit)', err_numeric)
+   end subroutine explicit_stiffness_check
+
    !> Absolute tolerance of each state: node angles atol_angle, speeds
    !> atol_speed, a motor's current (third state) atol_current; the two
    !> energy-accounting states max(rtol, 1e-6)*(1 + |E0|) (loose: they are
@@ -400,15 +440,9 @@ contains
       call cvode_max_step(model, self%hmax, self%omega_max)
       dout = model%run%output_interval
       if (.not. dout > 0.0_wp) dout = model%run%dt
-      if (self%explicit_limit() > 0.0_wp .and. self%omega_max > 0.0_wp) then
-         if ((model%run%t_end - t)*self%omega_max/self%explicit_limit() > implied_step_budget) then
-            call fatal_error(err, "integrator '"//self%name//"' is explicit: its step is held below "// &
-                             str(self%explicit_limit()/self%omega_max, 4)//' s by the highest mode ('// &
-                             str(self%omega_max/two_pi, 4)//' Hz, every clearance closed), so the run of '// &
-                             str(model%run%t_end - t)//' s would take more than '//str(implied_step_budget)// &
-                             " steps: this train is stiff; use integrator = 'cvode-bdf'", err_numeric)
-            return
-         end if
+      if (self%explicit_limit() > 0.0_wp) then
+         call explicit_stiffness_check(self, model, t, err)
+         if (allocated(err)) return
       end if
       if (self%hmax > 0.0_wp) then
          if ((model%run%t_end - t)/self%hmax > 1.0e12_wp) then

@@ -40,7 +40,7 @@ module trainsim_hdf5
    implicit none
    private
 
-   public :: hdf5_sink_t, hdf5_library_stuck
+   public :: hdf5_sink_t, hdf5_library_stuck, mark_hdf5_stuck
    !> String helpers shared with the sweep file (src/sweep/trainsim_sweep_file.f90).
    public :: make_string_type, vlen_pointers, put_str_attr, put_column_s, write_deck_files
 
@@ -363,6 +363,11 @@ contains
 
    !> True if HDF5 holds a file it could not close: the program must then end without
    !> the library's exit handler (after flushing its own output), or it crashes there.
+   !> Record that HDF5 failed to close a file of another module (the sweep file).
+   subroutine mark_hdf5_stuck()
+      hdf5_stuck = .true.
+   end subroutine mark_hdf5_stuck
+
    logical function hdf5_library_stuck()
       hdf5_library_stuck = hdf5_stuck
    end function hdf5_library_stuck

@@ -6,7 +6,7 @@
 module trainsim_clearance_element
    use trainsim_kinds, only: wp
    use trainsim_event, only: event_t
-   use trainsim_contact, only: clearance_t, law_yang_sun, law_linear, fit_none
+   use trainsim_contact, only: clearance_t, law_yang_sun, law_linear, fit_none, v_plausible_ips
    use trainsim_element, only: element_t, lin_state_t, lin_contact_closed, hot_form_t, hf_none, hf_open, &
                                hf_yang_sun, hf_linear, hg_faces
    implicit none
@@ -38,6 +38,7 @@ module trainsim_clearance_element
       procedure :: in_contact => ce_in_contact
       procedure :: status => ce_status
       procedure :: hot_form => ce_hot_form
+      procedure :: displacement_bound => ce_displacement_bound
    end type clearance_element_t
 
 contains
@@ -129,7 +130,7 @@ contains
       type(lin_state_t), intent(in) :: state
       real(wp), intent(in) :: inv_jl, inv_jr
       real(wp), intent(out) :: k(2, 2), c(2, 2)
-      real(wp) :: g(2), f, inv_m, m_eff, cd
+      real(wp) :: g(2), f, inv_m, m_eff, cd, f_load
       k = 0.0_wp
       c = 0.0_wp
       if (.not. (state%contact == lin_contact_closed .or. self%cl%mode /= 0)) return
@@ -139,7 +140,9 @@ contains
       inv_m = self%cl%r1**2*inv_jl + self%cl%r2**2*inv_jr
       m_eff = 0.0_wp
       if (inv_m > 0.0_wp) m_eff = 1.0_wp/inv_m
-      cd = self%cl%law%linear_damping(f, m_eff, state%contact == lin_contact_closed, state%impact_scale)
+      f_load = 0.0_wp
+      if (min(self%cl%r1, self%cl%r2) > 0.0_wp) f_load = max(state%load_torque, 0.0_wp)/min(self%cl%r1, self%cl%r2)
+      cd = self%cl%law%linear_damping(f, m_eff, state%contact == lin_contact_closed, state%impact_scale, f_load)
       k = self%cl%law%k*f*spread(g, 2, 2)*spread(g, 1, 2)
       c = cd*spread(g, 2, 2)*spread(g, 1, 2)
    end subroutine ce_linearise
@@ -278,4 +281,25 @@ contains
          form%dmp = self%cl%law%c
       end if
    end subroutine clearance_hot_form
+
+   !> |delta| a physical run can reach (D-42): the half clearance b plus ten
+   !> times the largest of b, the static penetration under the loads
+   !> F/k (F = load_torque/min(r1, r2), the single-pair stiffness k) and the
+   !> penetration of an impact at the largest plausible approach velocity
+   !> V sqrt(m_eff/k) (v_plausible_ips, D-25). A mesh beyond it has its teeth
+   !> through one another. No bound for a law without a constant stiffness
+   !> (the keyed joint's load-dependent fit).
+   pure real(wp) function ce_displacement_bound(self, load_torque, inv_jl, inv_jr) result(bound)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(in) :: load_torque, inv_jl, inv_jr
+      real(wp) :: k, r, inv_m, p
+      bound = huge(1.0_wp)
+      k = self%cl%law%k
+      r = min(self%cl%r1, self%cl%r2)
+      if (.not. (k > 0.0_wp .and. r > 0.0_wp) .or. self%cl%law%fit /= fit_none) return
+      p = max(self%cl%b, load_torque/r/k)
+      inv_m = self%cl%r1**2*inv_jl + self%cl%r2**2*inv_jr
+      if (inv_m > 0.0_wp) p = max(p, v_plausible_ips/self%cl%law%v_to_ips*sqrt(1.0_wp/(inv_m*k)))
+      bound = self%cl%b + 10.0_wp*p
+   end function ce_displacement_bound
 end module trainsim_clearance_element

@@ -75,6 +75,7 @@ module trainsim_contact
       procedure :: force_partials => law_force_partials
       procedure :: lowest_restitution => law_lowest_restitution
       procedure :: linear_damping => law_linear_damping
+      procedure :: gentle_damping => law_gentle_damping
    end type contact_law_t
 
    !> A clearance between two nodes with lever arms r1, r2 and half clearance b.
@@ -208,10 +209,19 @@ contains
    !> independent of V_i except through e. `largest`: e is the law's lowest
    !> (any contact that may still begin), else the contact in progress's e.
    !> `scale` multiplies it (0..1). linear, elasto_backlash: the viscous d.
-   pure real(wp) function law_linear_damping(self, c, m_eff, largest, scale) result(cd)
+   !>
+   !> A contact that closes gently and then carries a load is not bounded by
+   !> that (D-42): at the static penetration p = F/(c k) its damping is
+   !> c D p = phi(e(V)) F / V, with V as slow as the floor min_approach_velocity
+   !> (or initial_contact_velocity, for a contact closed at t_start). With
+   !> `largest` and f_load > 0 (the largest force the loads can drive through
+   !> the contact), the larger of the two is taken; for the contact in progress
+   !> (not `largest`), its own D at that penetration, c D p = D F / k.
+   pure real(wp) function law_linear_damping(self, c, m_eff, largest, scale, f_load) result(cd)
       class(contact_law_t), intent(in) :: self
       real(wp), intent(in) :: c, m_eff, scale
       logical, intent(in) :: largest
+      real(wp), intent(in), optional :: f_load
       real(wp) :: e, phi
       if (self%law == law_yang_sun) then
          if (largest) then
@@ -221,10 +231,37 @@ contains
          end if
          phi = 6.0_wp*(1.0_wp - e)/((2.0_wp*e - 1.0_wp)**2 + 3.0_wp)    ! D V_i / k, eq. (3.12)
          cd = scale*phi*sqrt(c*self%k*m_eff)
+         if (present(f_load)) then
+            if (largest) then
+               cd = max(cd, scale*self%gentle_damping(f_load))
+            else if (self%k > 0.0_wp) then
+               cd = max(cd, scale*self%d*f_load/self%k)    ! c D p at p = F/(c k): the contact in progress
+            end if
+         end if
       else
          cd = self%c
       end if
    end function law_linear_damping
+
+   !> yang_sun: damping c D p of a contact closed at the slowest approach the law
+   !> allows and carrying force f at its static penetration p = f/(c k):
+   !> phi(e(V)) f / V (eq. (3.12)), V the floor min_approach_velocity or a
+   !> smaller initial_contact_velocity (D-42). 0 for the other laws.
+   pure real(wp) function law_gentle_damping(self, f) result(cd)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: f
+      cd = 0.0_wp
+      if (self%law /= law_yang_sun .or. .not. f > 0.0_wp) return
+      if (self%v_min > 0.0_wp) cd = phi_over_v(self%v_min)
+      if (self%v_initial > 0.0_wp) cd = max(cd, phi_over_v(self%v_initial))
+   contains
+      pure real(wp) function phi_over_v(v) result(r)
+         real(wp), intent(in) :: v
+         real(wp) :: e
+         e = self%restitution(v)
+         r = 6.0_wp*(1.0_wp - e)/((2.0_wp*e - 1.0_wp)**2 + 3.0_wp)*f/v
+      end function phi_over_v
+   end function law_gentle_damping
 
    !> A contact begins with approach velocity v_i: fix e and D for its duration.
    !> `initial` marks a contact already closed at t_start (MODEL-NOTES 11).

@@ -32,19 +32,23 @@ module trainsim_element
    !> The state an element is linearised in (`linearise`, `trainsim modes`, the
    !> RK4 step advice). `impact_scale` in [0, 1] scales the impact damping a
    !> closed contact law can give at most (D-25). A later state (linearised about
-   !> the static preload) is a new `contact` value.
+   !> the static preload) is a new `contact` value. `load_torque`: the largest
+   !> torque the loads can drive through one element (trainsim_modes'
+   !> load_torque_bound; 0: not known), which a contact closed gently under load
+   !> carries at a penetration that sets its damping (D-42).
    type :: lin_state_t
       integer :: contact = lin_contact_initial
       integer :: zone = lin_zone_initial
       real(wp) :: impact_scale = 1.0_wp
+      real(wp) :: load_torque = 0.0_wp
    end type lin_state_t
 
    !> As the run starts: current contact state and mesh zone.
-   type(lin_state_t), parameter :: lin_start = lin_state_t(lin_contact_initial, lin_zone_initial, 1.0_wp)
+   type(lin_state_t), parameter :: lin_start = lin_state_t(lin_contact_initial, lin_zone_initial, 1.0_wp, 0.0_wp)
    !> Every clearance closed, mesh zones as at t_start.
-   type(lin_state_t), parameter :: lin_closed = lin_state_t(lin_contact_closed, lin_zone_initial, 1.0_wp)
+   type(lin_state_t), parameter :: lin_closed = lin_state_t(lin_contact_closed, lin_zone_initial, 1.0_wp, 0.0_wp)
    !> The stiffest state a run can reach: clearances closed, gears at their largest stiffness factor.
-   type(lin_state_t), parameter :: lin_stiffest = lin_state_t(lin_contact_closed, lin_zone_stiffest, 1.0_wp)
+   type(lin_state_t), parameter :: lin_stiffest = lin_state_t(lin_contact_closed, lin_zone_stiffest, 1.0_wp, 0.0_wp)
 
    !> Torque forms of `hot_form` (D-35): none (asked through `torques`), a
    !> clearance open (no force), a closed clearance with the yang_sun or the
@@ -77,6 +81,8 @@ module trainsim_element
    type, abstract :: element_t
       character(len=:), allocatable :: id
       character(len=:), allocatable :: type_name
+      !> where the deck defines it ("deck.nml:5: &element #1"; '' if not from a deck)
+      character(len=:), allocatable :: origin
       integer :: left = 0   !< index of the left (driver) node
       integer :: right = 0  !< index of the right (driven) node
       !> Elements that act on the external loads of their nodes (the keyed joint's
@@ -109,6 +115,7 @@ module trainsim_element
       procedure :: params => el_params
       procedure :: linear_spring => el_linear_spring
       procedure :: hot_form => el_hot_form
+      procedure :: displacement_bound => el_displacement_bound
    end type element_t
 
    !> A slot in the model's element list (arrays of polymorphic objects).
@@ -355,4 +362,16 @@ contains
       end associate
       allocate (p%names(0), p%values(0))
    end function el_params
+
+   !> Largest |displacement| a physical run of this element can reach, given the
+   !> largest torque the loads can drive through it (`load_torque`) and the
+   !> inverse inertias of its nodes; beyond it the run has gone wrong (D-42).
+   !> Default: no bound (huge).
+   pure real(wp) function el_displacement_bound(self, load_torque, inv_jl, inv_jr) result(bound)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: load_torque, inv_jl, inv_jr
+      associate (u1 => self, u2 => load_torque, u3 => inv_jl, u4 => inv_jr)
+      end associate
+      bound = huge(1.0_wp)
+   end function el_displacement_bound
 end module trainsim_element

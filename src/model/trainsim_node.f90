@@ -18,6 +18,8 @@ module trainsim_node
    type, abstract :: node_t
       character(len=:), allocatable :: id
       character(len=:), allocatable :: type_name
+      !> where the deck defines it ("deck.nml:3: &node #1"; '' if not from a deck)
+      character(len=:), allocatable :: origin
       integer :: offset = 0            !< y(offset+1:offset+nstates()) are this node's states
       real(wp) :: theta0 = 0.0_wp      !< initial angle
       real(wp) :: omega0 = 0.0_wp      !< initial speed

@@ -80,9 +80,16 @@ contains
    end function node_registry
 
    !> THE ELEMENT TABLE: one row per element type.
+   !> (Built once: gfortran 12 leaks the strings of an array constructor of rows, about
+   !> 10 kB a call, and every model build calls it; a 10^5-run sweep grew by 1 GB.)
    subroutine element_table(rows)
       type(element_row_t), allocatable, intent(out) :: rows(:)
-      rows = [ &
+      type(element_row_t), allocatable, save :: table(:)
+      if (allocated(table)) then
+         rows = table
+         return
+      end if
+      table = [ &
              element_row('shaft', 'el1', 'massless visco-elastic torsion spring (App. H, eqs. H.1-H.2)', &
                          'stiffness = 5.0e4, damping = 2.0', 'stiffness', 'damping', new_shaft), &
              element_row('keyed_joint', 'el2', 'shaft and hub keyed with clearance (Ch. IV, eqs. H.3-H.14)', &
@@ -106,12 +113,18 @@ contains
              element_row('damper', '', 'torsional viscous damper (dashpot), T = c (w_l - w_r)', &
                          'damping = 40.0', 'damping', '', new_damper) &
              ]
+      rows = table
    end subroutine element_table
 
    !> THE NODE TABLE: one row per node type.
    subroutine node_table(rows)
       type(node_row_t), allocatable, intent(out) :: rows(:)
-      rows = [ &
+      type(node_row_t), allocatable, save :: table(:)      ! (built once, as the element table)
+      if (allocated(table)) then
+         rows = table
+         return
+      end if
+      table = [ &
              node_row('inertia', 'n01', 'rigid disk with viscous damping to ground (eqs. G.1-G.2)', &
                       'inertia = 0.5, damping = 0.3', 'inertia', 'damping', new_inertia_node), &
              node_row('fixed', 'ground', 'ground: a node that does not move', '', '', '', new_fixed_node), &
@@ -120,6 +133,7 @@ contains
                       'back_emf_constant = 0.0565', 'inertia torque_constant inductance resistance back_emf_constant', &
                       'damping', new_dc_motor_node) &
              ]
+      rows = table
    end subroutine node_table
 
    !> Canonical element type names, in table order.

@@ -24,13 +24,13 @@ module trainsim_simulate
    use trainsim_observer, only: observer_t, run_result_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
-   use trainsim_modes, only: rk4_dt_limit
-   use trainsim_element, only: lin_state_t, lin_stiffest, lin_start
+   use trainsim_modes, only: rk4_dt_limit, limiting_part, load_torque_bound, rk4_dt_quick
+   use trainsim_element, only: lin_state_t, lin_stiffest, lin_start, lin_contact_closed
    use trainsim_progress, only: progress_t
    implicit none
    private
 
-   public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes, settle_kmax
+   public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes, settle_kmax, check_fixed_step
 
    !> A state beyond this is a blow-up. Far above any physical angle, speed,
    !> current or energy; its square times any sane coefficient stays finite, so
@@ -47,6 +47,9 @@ module trainsim_simulate
    !> before the blow-up check sees it. Below this factor the check is in time
    !> (a run 10x above the limit, as Table 5.2's, runs with a warning).
    real(wp), parameter :: max_dt_over_limit = 1.0e3_wp
+   !> A limiting eigenvalue with at least this damping ratio (|Re| >= |Im|) is
+   !> damping-dominated: a fixed step above its limit is refused (D-42).
+   real(wp), parameter :: damped_ratio = 0.7071_wp
 
    !> Settling until periodic (D-43): the longest attractor period looked for, in
    !> settle periods.
@@ -93,6 +96,10 @@ module trainsim_simulate
       real(wp) :: tol = 0.0_wp             !< times closer than this are one instant
       real(wp) :: t_window = 0.0_wp        !< start of the current event-budget window
       integer :: window_events = 0         !< events since t_window
+      !> the last event recorded (element, kind), named by an event flood: a
+      !> settle that took several passes leaves only its last pass in ev
+      integer :: last_element = 0, last_kind = 0
+      integer :: last_guard = 0            !< the first guard that fired at the last event instant
       logical :: may_miss = .false.        !< integ%may_miss_events(), asked once per run
       !> plain steps in blocks (D-38): the integrator takes them, and the
       !> observer's short way folds them (no peak refinement; whole samples at
@@ -100,6 +107,12 @@ module trainsim_simulate
       logical :: blocks = .false.
       !> blocks, and the output times are the integrator's grid (output_interval = dt)
       logical :: block_samples = .false.
+      !> per element: the largest |displacement| a physical run reaches
+      !> (element%displacement_bound, D-42), checked at the output times
+      real(wp), allocatable :: disp_bound(:)
+      !> first output time at which the energy residual exceeded
+      !> run%energy_check of the energy scale so far (-1: not yet)
+      real(wp) :: t_ledger = -1.0_wp
    end type drive_t
 
 contains
@@ -324,6 +337,7 @@ contains
                  (.not. obs%want_whole .or. dout /= model%run%dt)
       d%block_samples = d%blocks .and. dout == model%run%dt .and. .not. obs%want_whole
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
+      call displacement_bounds(model, d%disp_bound)
       call model%breakpoints(t, t_end, d%bp)
       call set_next_stop(d, integ, t, t_end)
       call integ%start(model, t, y, err)
@@ -375,6 +389,8 @@ contains
                   end if
                end do
                k = k + model%blk%n
+               call check_physical(model, obs, d, t, err)
+               if (allocated(err)) return
                if (present(progress)) call progress%poll(t, obs%n_events)
                cycle
             end if
@@ -390,10 +406,13 @@ contains
          end if
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
+         call check_physical(model, obs, d, t, err)
+         if (allocated(err)) return
          if (present(progress)) call progress%poll(t, obs%n_events)
          k = k + 1
       end do
       t = t_end
+      call check_ledger(model, obs, d, t, err)
    contains
       !> The settling moved t_end (earlier than the budget's end): the output times
       !> up to the new t_end, the last one moved to it.
@@ -552,6 +571,7 @@ contains
             d%fired = d%g < 0.0_wp
          end if
          if (any(d%fired)) then
+            d%last_guard = findloc(d%fired, .true., 1)
             call settle_events(model, obs, d, t, y, nev, err)
             if (allocated(err)) return
             call count_events(model, d, t, nev, err)
@@ -578,12 +598,14 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: pass, nev, n_total, j
       if (.not. region_fired()) return
+      d%last_guard = j
       n_total = 0
       do pass = 1, max_settle_passes
          nev = 0
          call model%apply_events(t, y, d%fired, d%ev, nev, gels)
          call obs%record_events(model, t, y, d%ev, nev, err, nodes, els)
          if (allocated(err)) return
+         call keep_last_event(d, nev)
          n_total = n_total + nev
          if (.not. region_fired()) exit
       end do
@@ -635,6 +657,7 @@ contains
          call model%apply_events(t, y, d%fired, d%ev, nev)
          call obs%record_events(model, t, y, d%ev, nev, err)
          if (allocated(err)) return
+         call keep_last_event(d, nev)
          n_total = n_total + nev
          call model%guards(t, y, d%g)
          d%fired = d%g < 0.0_wp
@@ -647,24 +670,152 @@ contains
                        '(a runaway state). '//remedy(model), err_numeric)
    end subroutine settle_events
 
-   !> Event budget: more than max_events_per_dt events inside one dt is a flood.
+   !> Each element's displacement bound (element%displacement_bound) from the
+   !> loads (trainsim_modes' load_torque_bound) and its nodes' inertias.
+   subroutine displacement_bounds(model, bound)
+      type(model_t), intent(in) :: model
+      real(wp), allocatable, intent(out) :: bound(:)
+      real(wp) :: tq
+      integer :: i
+      allocate (bound(size(model%elements)))
+      tq = load_torque_bound(model)
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e)
+            bound(i) = e%displacement_bound(tq, inv_inertia(e%left), inv_inertia(e%right))
+         end associate
+      end do
+   contains
+      real(wp) function inv_inertia(j) result(r)
+         integer, intent(in) :: j
+         r = 0.0_wp
+         if (model%is_held(j) .or. model%nodes(j)%n%is_fixed()) return
+         if (model%nodes(j)%n%inertia() > 0.0_wp) r = 1.0_wp/model%nodes(j)%n%inertia()
+      end function inv_inertia
+   end subroutine displacement_bounds
+
+   !> The checks that a run is still physical, at each output time from the
+   !> observer's running metrics (D-42): no element's displacement beyond its
+   !> bound (a mesh with its teeth through one another) ends the run at once;
+   !> the first time the energy residual passes run%energy_check of the
+   !> scale so far is kept for `check_ledger`. A run that fails them ends with
+   !> exit 1 naming the element, the time, the check and a remedy for the
+   !> integrator in use, instead of a wrong answer with exit 0.
+   subroutine check_physical(model, obs, d, t, err)
+      type(model_t), intent(inout) :: model
+      type(observer_t), intent(in) :: obs
+      type(drive_t), intent(inout) :: d
+      real(wp), intent(in) :: t
+      type(error_t), allocatable, intent(out) :: err
+      integer :: i
+      real(wp) :: worst
+      do i = 1, size(d%disp_bound)
+         worst = max(abs(obs%res%el(i)%disp_min), abs(obs%res%el(i)%disp_max))
+         if (.not. worst > d%disp_bound(i)) cycle
+         if (obs%res%el(i)%disp_min > obs%res%el(i)%disp_max) cycle   ! nothing folded yet (settle_time)
+         call fatal_error(err, "integrator '"//model%run%integrator//"': the displacement of element '"// &
+                          model%elements(i)%e%id//"' reached "//str(sign(worst, obs%res%el(i)%disp_max + &
+                          obs%res%el(i)%disp_min), 4)//' by t = '//str(t)//' s, beyond the '//str(d%disp_bound(i), 4)// &
+                          ' a physical run can reach (the clearance plus ten times the largest of the clearance, '// &
+                          'the static deflection under the loads and an impact at 100 in/s): the solution is wrong '// &
+                          '(the displacement-bound check). '//physical_advice(model), err_numeric)
+         return
+      end do
+      if (d%t_ledger < 0.0_wp .and. model%run%track_energy .and. model%run%energy_check > 0.0_wp) then
+         if (obs%res%energy_residual_max > model%run%energy_check*obs%res%energy_scale) d%t_ledger = t
+      end if
+   end subroutine check_physical
+
+   !> The energy ledger at the end of the run (D-42): a residual above
+   !> run%energy_check (default 0.1) of the run's energy scale is a wrong
+   !> solution, not an integration error: a correct run keeps it near 1e-6,
+   !> RK4 at 0.95 x its stability limit below 1e-3 (check_dt_advice); a
+   !> blown-up one has it equal to the scale. Judged at the end, where the scale
+   !> is the run's: early on, one coarse step at an impact can be comparable to
+   !> a scale that is still small (loads_table_ramp at 0.95 x its limit: 0.67
+   !> at t = 0.022 s, 4e-4 at the end).
+   subroutine check_ledger(model, obs, d, t, err)
+      type(model_t), intent(inout) :: model
+      type(observer_t), intent(in) :: obs
+      type(drive_t), intent(in) :: d
+      real(wp), intent(in) :: t
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: h_part, t_first
+      type(model_t) :: tmp
+      character(len=:), allocatable :: part
+      if (.not. model%run%track_energy .or. .not. model%run%energy_check > 0.0_wp) return
+      if (.not. obs%res%energy_residual_max > model%run%energy_check*obs%res%energy_scale) return
+      t_first = t
+      if (d%t_ledger >= 0.0_wp) t_first = d%t_ledger
+      tmp = model
+      call limiting_part(tmp, lin_stiffest, part, h_part)
+      call fatal_error(err, "integrator '"//model%run%integrator//"': the energy ledger does not balance: at t = "// &
+                       str(t)//' s the largest residual is '//str(obs%res%energy_residual_max, 4)// &
+                       ' against an energy scale of '//str(obs%res%energy_scale, 4)//' (more than energy_check = '// &
+                       str(model%run%energy_check)//' of it, first at t = '//str(t_first)//' s; the energy-ledger '// &
+                       'check): the solution is wrong. The stiffest part of the train is '//part// &
+                       ', with a step limit of its own of '//str(h_part, 4)//' s. '//physical_advice(model), &
+                       err_numeric)
+   end subroutine check_ledger
+
+   !> What to try when a run is no longer physical: for a fixed step, a smaller
+   !> dt than RK4's stability limit of the stiffest state (a step near the limit
+   !> of a strongly damped mode is stable but does not resolve it) or an
+   !> implicit method; for an adaptive one, its tolerances.
+   function physical_advice(model) result(text)
+      type(model_t), intent(inout) :: model
+      character(len=:), allocatable :: text
+      type(model_t) :: tmp
+      type(error_t), allocatable :: lim_err
+      real(wp) :: dt_safe, omega
+      if (.not. is_fixed_step(model%run%integrator)) then
+         text = remedy(model)
+         if (index(model%run%integrator, 'arkode') == 1) text = text//"; or use integrator = 'cvode-bdf' if the train is stiff"
+         return
+      end if
+      tmp = model
+      call rk4_dt_limit(tmp, lin_stiffest, dt_safe, omega, lim_err)
+      text = "Take a smaller dt, or use integrator = 'cvode-bdf'"
+      if (.not. allocated(lim_err) .and. dt_safe < huge(1.0_wp)) text = 'Take dt well below '//str(dt_safe, 4)// &
+         ' s, the RK4 stability limit of the stiffest state the run can reach (a step near the limit of a strongly '// &
+         "damped mode is stable but does not resolve it), or use integrator = 'cvode-bdf'"
+   end function physical_advice
+
+   !> The last of the nev events just recorded in d%ev, for `count_events`.
+   subroutine keep_last_event(d, nev)
+      type(drive_t), intent(inout) :: d
+      integer, intent(in) :: nev
+      if (nev < 1) return
+      d%last_element = d%ev(nev)%element
+      d%last_kind = d%ev(nev)%kind
+   end subroutine keep_last_event
+
+   !> Event budget: more than max_events_per_dt events (or event instants) inside one dt is a flood.
+   !> The message names the last event recorded (d%last_element; the events of
+   !> this call may be spread over several settle passes, or be none).
    subroutine count_events(model, d, t, nev, err)
       type(model_t), intent(inout) :: model
       type(drive_t), intent(inout) :: d
       real(wp), intent(in) :: t
       integer, intent(in) :: nev
       type(error_t), allocatable, intent(out) :: err
-      integer :: last
+      character(len=:), allocatable :: last
       if (t - d%t_window > model%run%dt) then
          d%t_window = t
          d%window_events = 0
       end if
-      d%window_events = d%window_events + nev
+      ! an instant where guards fired counts once even if no element reported an
+      ! event there (a guard that fires again and again with no mode change is a
+      ! flood too, and was not counted: event_flood_segv.sh ran ~20 s)
+      d%window_events = d%window_events + max(nev, 1)
       if (d%window_events <= max_events_per_dt) return
-      last = d%ev(max(nev, 1))%element
+      last = ''
+      if (nev > 0 .and. d%last_element >= 1 .and. d%last_element <= size(model%elements)) then
+         last = " (the last: '"//ev_name(d%last_kind)//"' of element '"//model%elements(d%last_element)%e%id//"')"
+      else if (d%last_guard > 0) then
+         last = ' (the last: a guard of '//guard_owner(model, d%last_guard)//' fired without a change of mode)'
+      end if
       call fatal_error(err, 'event flood at t = '//str(t)//' s: more than '//str(max_events_per_dt)// &
-                       ' events within '//window_text(model)//" (the last: '"// &
-                       ev_name(d%ev(max(nev, 1))%kind)//"' of element '"//model%elements(last)%e%id//"'). "// &
+                       ' events within '//window_text(model)//last//'. '// &
                        remedy(model), err_numeric)
    end subroutine count_events
 
@@ -800,19 +951,30 @@ contains
       end do
    end function is_fixed_step
 
-   !> A fixed-step method with dt absurdly far above the stability limit of the
-   !> train as it starts, or with every clearance closed and the gears at their
-   !> stiffest (the state a contact reaches), is refused before the first step
-   !> (max_dt_over_limit). The impact damping is left out: it moves RK4's radius
-   !> only between 2.6 and 2.95, nothing against a factor of 1000.
+   !> A fixed-step method is refused before the first step (exit 2) when
+   !> - dt is absurdly far above the stability limit of the train as it starts,
+   !>   or with every clearance closed and the gears at their stiffest
+   !>   (max_dt_over_limit; impact damping left out: it moves RK4's radius only
+   !>   between 2.6 and 2.95, nothing against a factor of 1000); or
+   !> - dt is above the limit of either state (the stiffest with every contact
+   !>   law's damping at its largest, a gentle closure under the loads included,
+   !>   D-42) and the limiting eigenvalue is damping-dominated (damping ratio >=
+   !>   1/sqrt 2): a step beyond the real-axis radius multiplies every state
+   !>   change by |R(h lambda)| > 1, so no such mode stays unexcited (unlike an
+   !>   undamped mode that the inputs may never touch, D-4).
+   !> The message names the node or element that limits the step alone
+   !> (`limiting_part`), its deck group, and the dt that would do.
+   !> rk4-thesis steps dt/10 in contact; Euler's region reaches 2 on the real axis.
    subroutine check_fixed_step(model, err)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
       type(integrator_entry_t), allocatable :: rows(:)
-      type(lin_state_t) :: states(2)
-      character(len=32), parameter :: state_text(2) = [character(len=32) :: 'the train as it starts', &
-                                                       'the closed contacts']
-      real(wp) :: dt_safe, omega, f_hz
+      type(lin_state_t) :: states(4)
+      character(len=40), parameter :: state_text(4) = [character(len=40) :: 'the train as it starts', &
+                                                       'the closed contacts', 'the train as it starts', &
+                                                       'the stiffest state the run can reach']
+      real(wp) :: dt_safe, omega, f_hz, zeta, h, rescale
+      character(len=:), allocatable :: part, name, limit_name
       integer :: i, k
       allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
@@ -820,30 +982,116 @@ contains
       end do
       if (i > size(rows)) return
       if (.not. rows(i)%fixed_step) return
-      states = [lin_start, lin_stiffest]
+      name = model%run%integrator
+      limit_name = "the stability limit of integrator '"//name//"',"
+      if (name(1:3) == 'rk4') limit_name = 'the RK4 stability limit'
+      rescale = 1.0_wp
+      if (name == 'euler') rescale = 2.0_wp/2.785_wp   ! real-axis radius of Euler's region against RK4's
+      states = [lin_start, lin_stiffest, lin_start, lin_stiffest]
       states(2)%impact_scale = 0.0_wp
-      do k = 1, 2
-         call limit_of(states(k), dt_safe, f_hz)
-         if (.not. model%run%dt/max_dt_over_limit > dt_safe) cycle
-         call fatal_error(err, 'dt = '//str(model%run%dt)//' s is more than '//str(max_dt_over_limit)// &
-                          ' times the RK4 stability limit '//str(dt_safe, 4)//' s of '//trim(state_text(k))// &
-                          ' (the mode at '//str(f_hz, 4)//' Hz): any excitation of that mode would grow by 1e12 '// &
-                          'or more per step. Take dt below the limit, or check the deck for a stiffness, radius or '// &
-                          'inertia out of proportion (a unit slip?)', err_input)
+      ! contacts that may close later: the impact damping of D-25, not a gentle
+      ! closure at the floor velocity under load, which a run need not reach
+      ! (Chapter III case II with Smith's law closes at 21 in/s and runs right);
+      ! the contacts closed at t_start have their own D (states(3)), and what a
+      ! run does reach is caught at the output times (check_physical)
+      states(4)%load_torque = -1.0_wp
+      do k = 1, 4
+         h = model%run%dt
+         if (name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed) h = h/10.0_wp   ! App. F: dt/10 in contact
+         ! the O(n) bound first: within it, every eigenvalue is stable (no eigenvalue problem)
+         call quick_limit(states(k), dt_safe)
+         if (k <= 2) then
+            if (.not. h/max_dt_over_limit > dt_safe*rescale) cycle
+         else
+            if (.not. h > dt_safe*rescale) cycle
+         end if
+         call limit_of(states(k), dt_safe, f_hz, zeta)
+         dt_safe = dt_safe*rescale
+         if (k <= 2) then
+            if (.not. h/max_dt_over_limit > dt_safe) cycle
+         else
+            if (.not. (h > dt_safe .and. zeta >= damped_ratio)) cycle
+         end if
+         call part_of(states(k), part)
+         if (k <= 2) then
+            call fatal_error(err, 'dt = '//str(model%run%dt)//' s is more than '//str(max_dt_over_limit)// &
+                             ' times '//limit_name//' '//str(dt_safe, 4)//' s of '// &
+                             trim(state_text(k))//' ('//mode_text(f_hz, zeta, omega)//'), set by '//part// &
+                             ': any excitation of that mode would grow by 1e12 or more per step. Take dt below '// &
+                             str(dt_safe, 4)//' s, or check the deck for a stiffness, damping, radius or inertia '// &
+                             'out of proportion (a unit slip?)', err_input)
+         else
+            call fatal_error(err, 'dt = '//str(model%run%dt)//' s is above '//limit_name//' '// &
+                             str(dt_safe, 4)//' s of '//trim(state_text(k))//' ('// &
+                             mode_text(f_hz, zeta, omega)//'), set by '//part//'. That mode is damped, so '// &
+                             'every step beyond the limit amplifies it (no wrong answer is given with exit 0 '// &
+                             'instead, D-42): take dt below '//str(dt_safe, 4)//' s'// &
+                             thesis_note(name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed)// &
+                             ", or use integrator = 'cvode-bdf' (implicit: its step has no stability limit)"// &
+                             gentle_hint(part), err_input)
+         end if
          return
       end do
    contains
-      subroutine limit_of(state, dt_lim, f)
+      subroutine quick_limit(state, dt_lim)
          type(lin_state_t), intent(in) :: state
-         real(wp), intent(out) :: dt_lim, f
+         real(wp), intent(out) :: dt_lim
+         type(model_t) :: tmp
+         real(wp) :: bound
+         tmp = model
+         call rk4_dt_quick(tmp, state, dt_lim, bound)
+      end subroutine quick_limit
+      subroutine limit_of(state, dt_lim, f, z)
+         type(lin_state_t), intent(in) :: state
+         real(wp), intent(out) :: dt_lim, f, z
          type(model_t) :: tmp
          type(error_t), allocatable :: lim_err
          tmp = model
-         f = 0.0_wp
-         call rk4_dt_limit(tmp, state, dt_lim, omega, lim_err, freq_hz=f)
+         f = 0.0_wp; z = 0.0_wp
+         call rk4_dt_limit(tmp, state, dt_lim, omega, lim_err, freq_hz=f, damping_ratio=z)
          if (allocated(lim_err)) dt_lim = huge(1.0_wp)
       end subroutine limit_of
+      subroutine part_of(state, text)
+         type(lin_state_t), intent(in) :: state
+         character(len=:), allocatable, intent(out) :: text
+         type(model_t) :: tmp
+         real(wp) :: h_part
+         tmp = model
+         call limiting_part(tmp, state, text, h_part)
+      end subroutine part_of
    end subroutine check_fixed_step
+
+   !> rk4-thesis in contact: its step there is dt/10.
+   function thesis_note(in_contact) result(text)
+      logical, intent(in) :: in_contact
+      character(len=:), allocatable :: text
+      text = ''
+      if (in_contact) text = ' x 10 (rk4-thesis steps dt/10 in contact)'
+   end function thesis_note
+
+   !> "the mode at 5690.8 Hz, damping ratio 0.17" or "an overdamped mode, |lambda| = 9.1E6 1/s".
+   function mode_text(f_hz, zeta, omega) result(text)
+      real(wp), intent(in) :: f_hz, zeta, omega
+      character(len=:), allocatable :: text
+      character(len=8) :: z
+      if (f_hz > 0.0_wp .and. zeta < 1.0_wp) then
+         write (z, '(f4.2)') max(zeta, 0.0_wp)
+         text = 'the mode at '//str(f_hz, 5)//' Hz, damping ratio '//trim(z)
+      else
+         text = 'an overdamped mode, |lambda| = '//str(omega, 4)//' 1/s'
+      end if
+   end function mode_text
+
+   !> The remedy for a yang_sun contact whose damping at the floor velocity sets the limit.
+   function gentle_hint(part) result(text)
+      character(len=*), intent(in) :: part
+      character(len=:), allocatable :: text
+      text = ''
+      if (index(part, 'contact law') > 0) text = '; if it is a yang_sun contact: one that closes slower than '// &
+         'min_approach_velocity gets the damping of that floor (D = 6(1-e)k/[((2e-1)^2+3) V], eq. (3.12)), '// &
+         'which grows with the load it then carries: a larger min_approach_velocity (or '// &
+         'initial_contact_velocity) lowers it'
+   end function gentle_hint
 
    !> "element 'mesh'" for guard index j of the model.
    function guard_owner(model, j) result(text)

@@ -13,10 +13,11 @@
 !> (trainsim_prepare); no history is written. A run that fails (blow-up, solver failure)
 !> is recorded with its message and the sweep goes on.
 module trainsim_sweep
-   use, intrinsic :: iso_c_binding, only: c_int
+   use, intrinsic :: iso_c_binding, only: c_int, c_char, c_long_long, c_null_char
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
    use trainsim_kinds, only: wp, i8
-   use trainsim_error, only: error_t, fatal_error, err_input, err_io
+   use trainsim_error, only: error_t, fatal_error, err_input, err_io, err_interrupted
+   use trainsim_interrupt, only: signal_caught, interrupt_signal, signal_name
    use trainsim_strings, only: string_t, str, to_lower, join
    use trainsim_version, only: version_full
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
@@ -25,7 +26,7 @@ module trainsim_sweep
    use trainsim_prepare, only: prepare_model
    use trainsim_sweep_spec, only: sweep_spec_t, read_sweep_spec
    use trainsim_sweep_file, only: sweep_file_t, sweep_layout_t, sweep_record_t, element_metric_names, &
-      node_metric_names, status_pending, status_ok, status_failed, record_size
+      node_metric_names, status_pending, status_ok, status_failed, record_size, status_names
    use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t
    use trainsim_observer, only: run_result_t, make_meta
    use trainsim_simulate, only: simulate
@@ -52,7 +53,8 @@ module trainsim_sweep
    !> What the sweep did (on rank 0; other ranks know only exit_code and root).
    type :: sweep_summary_t
       logical :: root = .true.
-      integer :: exit_code = 0          !< 0 all ok, 1 some run failed, 2 input or file error
+      integer :: exit_code = 0          !< 0 all ok, 1 some run failed, 2 input or file error,
+                                        !< 128 + signal: interrupted (SIGINT, SIGTERM)
       integer :: n_runs = 0, n_before = 0, n_now = 0, n_ok = 0, n_failed = 0
       real(wp) :: elapsed = 0.0_wp
       character(len=:), allocatable :: path
@@ -71,6 +73,7 @@ module trainsim_sweep
       real(wp) :: interval = 5.0_wp
       logical :: tty = .false.
       type(error_t), allocatable :: err    !< a write error met while servicing
+      logical :: interrupted = .false.     !< SIGINT/SIGTERM: hand out no more runs
       !> continuation: per run, the run it starts from (0: none) and the run that
       !> starts from it; a successor goes to the rank that made its predecessor
       integer, allocatable :: prev(:), next_of(:)
@@ -113,6 +116,12 @@ module trainsim_sweep
          integer(c_int), value :: fd
          integer(c_int) :: rc
       end function c_isatty
+      subroutine c_digest(s, n, out) bind(C, name='trainsim_digest')
+         import :: c_char, c_long_long
+         character(kind=c_char), intent(in) :: s(*)
+         integer(c_long_long), value :: n
+         character(kind=c_char), intent(out) :: out(*)
+      end subroutine c_digest
    end interface
 
 contains
@@ -156,7 +165,7 @@ contains
       type(sweep_layout_t) :: lay
       type(master_t), target :: m
       real(wp), allocatable :: cost(:), done(:, :)
-      integer :: i, bad
+      integer :: i, bad, stop_now
 
       call setup(opt, deck, spec, lay, err)
       if (allocated(err)) then
@@ -169,6 +178,15 @@ contains
       bad = i
       call comm_sum_reals(cost)
       call comm_min_int(bad)
+      stop_now = merge(0, 1, signal_caught /= 0)
+      call comm_min_int(stop_now)            ! a signal on any rank stops every rank
+      if (stop_now == 0) then
+         call fatal_error(err, 'sweep interrupted while its runs were checked, before the first run: '// &
+                          'nothing recorded', err_interrupted)
+         summary%exit_code = 128 + max(interrupt_signal(), 0)
+         if (interrupt_signal() == 0) summary%exit_code = 130
+         return
+      end if
       if (bad <= spec%n_runs) then
          if (summary%root .and. i /= bad) then
             call validate_runs(opt, deck, spec, bad - 1, spec%n_runs, cost, i, err)   ! run `bad` alone
@@ -196,6 +214,10 @@ contains
       m%ne = size(lay%element_ids); m%nn = size(lay%node_ids); m%n_runs = lay%n_runs
       call open_file(m, opt, summary%path, lay, err)
       if (.not. allocated(err)) then
+         if (m%file%n_invalid > 0 .and. opt%progress_unit >= 0) then
+            write (opt%progress_unit, '(a)') 'sweep: '//str(m%file%n_invalid)//' run(s) of '//summary%path// &
+               ' had an invalid status ('//str(m%file%invalid_value)//'; valid: '//status_list()//'): made again'
+         end if
          m%pending = longest_first(pack([(i, i=1, lay%n_runs)], m%file%status == status_pending), cost)
          call setup_chains(m, spec, done, err)
       end if
@@ -233,6 +255,15 @@ contains
       if (allocated(m%err)) then
          call move_alloc(m%err, err)
          summary%exit_code = 2
+         return
+      end if
+      if (m%interrupted) then
+         if (m%unit >= 0 .and. m%tty) write (m%unit, '(a)') ''
+         i = count(m%file%status /= status_pending)
+         call fatal_error(err, 'sweep interrupted by '//signal_name(interrupt_signal())//': '//str(i)//' of '// &
+                          str(lay%n_runs)//' run(s) recorded in '//summary%path//' ('//str(m%n_now)// &
+                          ' made now); the same command resumes the sweep', err_interrupted)
+         summary%exit_code = 128 + interrupt_signal()
          return
       end if
       call m%progress(final=.true.)
@@ -291,6 +322,7 @@ contains
          sets(i)%s = opt%sets(i)%origin
       end do
       lay%overrides = join(sets, ' ')
+      lay%fingerprint = fingerprint(deck, lay)
       lay%param_names = spec%names
       lay%param_values = spec%values
       lay%n_runs = spec%n_runs
@@ -316,6 +348,75 @@ contains
       call fatal_error(err, warnings(1)%s(1:p - 1)//': error: '//warnings(1)%s(p + 11:)// &
                        ' (a warning, made an error by --strict)', err_input)
    end subroutine strict_error
+
+   !> What decides the sweep's results, one item a line: the parsed deck (groups, keys,
+   !> values: a comment or a blank does not change it), each table file's contents,
+   !> the --set overrides and the trainsim version. Items are compared by line when
+   !> an existing file is continued (trainsim_sweep_file, "holds another sweep").
+   function fingerprint(deck, lay) result(fp)
+      type(deck_t), intent(in) :: deck
+      type(sweep_layout_t), intent(in) :: lay
+      character(len=:), allocatable :: fp
+      integer :: k
+      fp = 'deck '//digest(canonical_deck(deck))
+      if (allocated(lay%input_files)) then
+         do k = 1, size(lay%input_files)
+            fp = fp//new_line('a')//'file '//digest(lay%input_texts(k)%s)//' '//lay%input_files(k)%s
+         end do
+      end if
+      fp = fp//new_line('a')//'overrides '//lay%overrides//new_line('a')//'version '//lay%version
+   end function fingerprint
+
+   !> The deck as parsed: "&group key=v1,v2 ... /" a line, strings quoted.
+   function canonical_deck(deck) result(t)
+      type(deck_t), intent(in) :: deck
+      character(len=:), allocatable :: t
+      integer :: g, e, v
+      t = ''
+      if (.not. allocated(deck%groups)) return
+      do g = 1, size(deck%groups)
+         associate (grp => deck%groups(g))
+            t = t//'&'//grp%name
+            if (allocated(grp%entries)) then
+               do e = 1, size(grp%entries)
+                  t = t//' '//grp%entries(e)%key//'='
+                  do v = 1, size(grp%entries(e)%values)
+                     if (v > 1) t = t//','
+                     if (grp%entries(e)%quoted(v)) then
+                        t = t//"'"//grp%entries(e)%values(v)%s//"'"
+                     else
+                        t = t//grp%entries(e)%values(v)%s
+                     end if
+                  end do
+               end do
+            end if
+            t = t//' /'//new_line('a')
+         end associate
+      end do
+   end function canonical_deck
+
+   !> 16 hex digits (FNV-1a 64) of `text`.
+   function digest(text) result(d)
+      character(len=*), intent(in) :: text
+      character(len=16) :: d
+      character(kind=c_char) :: out(17)
+      integer :: i
+      call c_digest(text, int(len(text), c_long_long), out)
+      do i = 1, 16
+         d(i:i) = out(i)
+      end do
+   end function digest
+
+   !> "0 pending, 1 ok, 2 failed".
+   function status_list() result(s)
+      character(len=:), allocatable :: s
+      integer :: k
+      s = ''
+      do k = lbound(status_names, 1), ubound(status_names, 1)
+         if (len(s) > 0) s = s//', '
+         s = s//str(k)//' '//trim(status_names(k))
+      end do
+   end function status_list
 
    !> The overrides of run irun: --set first, then the run's sweep values.
    function run_overrides(opt, spec, irun, err) result(ovs)
@@ -352,6 +453,7 @@ contains
       cost = 0.0_wp
       bad = spec%n_runs + 1
       do i = first + 1, spec%n_runs, stride
+         if (signal_caught /= 0) return       ! (the caller stops every rank)
          if (allocated(ovs)) deallocate (ovs)
          allocate (ovs, source=run_overrides(opt, spec, i, err))   ! not `ovs = ...`: gfortran 12 false -Wuninitialized
          if (.not. allocated(err)) call prepare_model(deck, ovs, model, err)
@@ -391,15 +493,7 @@ contains
       character(len=*), intent(in) :: path
       type(sweep_layout_t), intent(in) :: lay
       type(error_t), allocatable, intent(out) :: err
-      logical :: exists
-      inquire (file=path, exist=exists)
-      if (exists) then
-         call m%file%open_existing(path, lay, err)
-      else if (opt%resume) then
-         call fatal_error(err, "nothing to resume: sweep file '"//path//"' does not exist", err_io)
-      else
-         call m%file%create(path, lay, err)
-      end if
+      call m%file%open(path, lay, opt%resume, err)
    end subroutine open_file
 
    ! ------------------------------------------------------------------------------------------
@@ -424,7 +518,11 @@ contains
          if (.not. allocated(m%err)) irun = m%take(last)
          if (irun > 0) then
             call run_one(opt, deck, spec, lay, done, irun, 0, rec, st, m)
-            call m%record(rec)
+            if (rec%status == status_pending) then
+               m%interrupted = .true.         ! stopped by a signal: not recorded, made again on resume
+            else
+               call m%record(rec)
+            end if
             last = irun
          else
             if (m%stopped == m%n_ranks - 1) exit
@@ -442,6 +540,8 @@ contains
       integer, intent(in) :: after
       integer :: j
       irun = 0
+      if (signal_caught /= 0) self%interrupted = .true.
+      if (self%interrupted) return
       if (allocated(self%next_of) .and. after > 0) then
          j = self%next_of(after)
          if (j > 0) then
@@ -532,7 +632,11 @@ contains
          call comm_poll_record(buf, found, src, rec%message)
          if (.not. found) exit
          call rec%unpack(buf)
-         if (rec%irun > 0) call self%record(rec)
+         if (rec%irun > 0 .and. rec%status == status_pending) then
+            self%interrupted = .true.         ! the worker's run was stopped by a signal
+         else if (rec%irun > 0) then
+            call self%record(rec)
+         end if
          irun = 0
          if (.not. allocated(self%err)) irun = self%take(rec%irun)
          call comm_send_index(src, irun)
@@ -760,6 +864,7 @@ contains
       end if
       if (allocated(err)) then
          rec%status = status_failed
+         if (err%code == err_interrupted) rec%status = status_pending   ! not made: made again on resume
          rec%message = err%message
       else
          rec%status = status_ok
