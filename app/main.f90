@@ -581,7 +581,7 @@ contains
       write (output_unit, '(a)') 'trainsim '//version_full()//': '//path//'  ('//model%title//')'
       call print_parameters(model, output_unit)
       flush (output_unit)   ! kept even if the run is interrupted or crashes
-      ! a step the run would refuse is refused before any warning about it (D-42)
+      ! a step the run would refuse is refused before any warning about it (D-55)
       call check_fixed_step(model, err)
       if (allocated(err)) call fail(err)
       if (model%run%integrator(1:3) == 'rk4') then

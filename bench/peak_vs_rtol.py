@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Work-precision of a peak under the adaptive integrators (issue 20 item 5, D-46):
+"""Work-precision of a peak under the adaptive integrators (issue 20 item 5, D-50):
 the start-stop deck's peak mesh force (inputs/start_stop_two_clearances.nml, t_end 2 s,
 energy tracking off, as tests/test_peaks.f90) against rtol, and against the RHS
 evaluations it cost, for cvode-bdf, cvode-adams and arkode-dp.
@@ -9,7 +9,7 @@ evaluations it cost, for cvode-bdf, cvode-adams and arkode-dp.
 
 The reference is event-located RK4 at dt 1e-6 (1696.36954455 lbf; at dt 2e-6
 1696.36954430: the two agree to 1.5e-10). With --before, the same runs of another
-build (main before D-46) are drawn dashed. Each run takes 1-5 s in Release.
+build (main before D-50) are drawn dashed. Each run takes 1-5 s in Release.
 """
 import argparse
 import csv
@@ -81,7 +81,7 @@ def plot(rows, ref, png):
             pts = [r for r in rows if r["build"] == build and r["integrator"] == m]
             if not pts:
                 continue
-            lab = f"{m} ({'before D-46' if build == 'before' else 'D-46'})"
+            lab = f"{m} ({'before D-50' if build == 'before' else 'D-50'})"
             err = [max(p["rel_err"], 1e-12) for p in pts]
             axes[0].loglog([p["rtol"] for p in pts], err, ls, marker="o", color=color[m], label=lab,
                            alpha=1.0 if build == "after" else 0.6)

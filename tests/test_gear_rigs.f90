@@ -361,7 +361,7 @@ contains
    end subroutine test_online_detector_replay_over_a_full_log
 
    !> Every bundled deck, every element: the p2p figures of the run take the
-   !> extremes between output samples (D-44), so p2p_range is at least the range
+   !> extremes between output samples (D-48), so p2p_range is at least the range
    !> of the samples and of the step ends (disp_max - disp_min, from the same
    !> t_metrics on), and exceeds the latter by no more than an extreme can lie
    !> past the step ends around it: (w dt)^2/8 of the amplitude for a mode at w,

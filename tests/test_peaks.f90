@@ -78,7 +78,7 @@ contains
       call check('cvode-bdf, output every 1e-5 s', f, f_ref, rel_tol=1.0e-3_wp)
    end subroutine test_cvode_peak_matches_rk4_at_any_output_interval
 
-   !> D-46: rtol acts on the node angles through a fixed angle resolution, not
+   !> D-50: rtol acts on the node angles through a fixed angle resolution, not
    !> on how far a node has turned. Before, node angles of about 2.4 rad at the
    !> peak (a zone change under load) carried a tolerance of 2.4 rtol rad, more
    !> than the mesh deflection's resolution there, and cvode-bdf's peak did not
@@ -124,7 +124,7 @@ contains
                     rel_tol=4.1e-4_wp)
       end do
    end subroutine test_adaptive_methods_see_an_impact_between_output_times
-   !> Peak-to-peak of a linear oscillator (issue 20, item 6; D-44): an inertia of 1
+   !> Peak-to-peak of a linear oscillator (issue 20, item 6; D-48): an inertia of 1
    !> on a shaft of stiffness (20 pi)^2 to ground, starting at 1 rad/s from zero
    !> twist: twist sin(w t)/w, w = 20 pi (10 Hz), so p2p_range = p2p_mean = 2/w and 10
    !> swings in 1 s. The output interval, 1/60 s, puts 6 samples in a period, the

@@ -290,7 +290,7 @@ contains
       call check('energy lost within 2x the global path''s (RK4''s loss at omega dt = 1)', &
                  abs(m1%ledger) <= 2.0_wp*abs(g1%ledger) .and. m1%ledger < 0.0_wp)
       call load_model_text(deck, m)
-      m%run%energy_check = 0.0_wp   ! RK4 loses a third of the energy here on purpose (D-42's check would stop it)
+      m%run%energy_check = 0.0_wp   ! RK4 loses a third of the energy here on purpose (D-55's check would stop it)
       call run_model(m, res)
       call check('through simulate: the same events as the mini-driver', size(res%events) == m1%nev)
    end subroutine coarse_chain

@@ -1,6 +1,6 @@
 !> Every output sample is the solution at its own time, under every integrator
 !> of the registry (a row added later is tested without editing this suite).
-!> Before D-45 the SUNDIALS integrators (ONE_STEP mode) returned a root that
+!> Before D-49 the SUNDIALS integrators (ONE_STEP mode) returned a root that
 !> lay beyond the output time in the same internal step, and the driver took
 !> the state at the root as the sample: on tests/decks/sample_before_event.nml
 !> 3-7 of 501 samples of node a were off its closed form by up to 1.2e-2, and

@@ -147,7 +147,7 @@ class Sweep:
             self.param = names[0]
             self.status = f["runs/status"][:]
             self.branch = f["runs/branch"][:] if "branch" in f["runs"] else np.zeros(len(self.x), int)
-            # 1 settled until periodic, 0 not within the budget (a transient), -1 not asked (D-43)
+            # 1 settled until periodic, 0 not within the budget (a transient), -1 not asked (D-44)
             self.settled = f["runs/settled"][:] if "settled" in f["runs"] else -np.ones(len(self.x))
             ids = strs(f["elements/ids"][:])
             self.el = {k: f["elements"][k][:] for k in f["elements"] if k not in ("ids", "types")}
@@ -789,7 +789,7 @@ of about 0.00325 inch at a mesh frequency of about 385 teeth/s, while the simula
 0.0022 inch at 460 teeth/s." The experiment jumped at 447 teeth/s going up and 380 going down.
 `inputs/sweep_ghm_mesh_frequency.nml`: 385–645 teeth/s in 27 steps of 10, each run settling for at least 100
 mesh cycles and until its state repeats from one mesh period to the next to 1e-5 (at most 2000 cycles:
-[D-43](../docs/decisions.md); a run that does not is marked † below), then measured over 60 (`p2p_mean` of the mesh, the mean swing between successive peaks: Cook's
+[D-44](../docs/decisions.md); a run that does not is marked † below), then measured over 60 (`p2p_mean` of the mesh, the mean swing between successive peaks: Cook's
 "average peak-to-peak error", [D-17](../docs/decisions.md)). Run with the default
 `initial_contact_velocity = 0` and with 0.1 in/s ([D-13](../docs/decisions.md)), and by continuation
 (`inputs/sweep_ghm_continuation.nml`, each run from the end of the one before, each branch from the
@@ -1042,7 +1042,7 @@ This is an open discrepancy with the thesis.
     note71 = f"""Cook's 0.02 s runs from the printed angles lose contact at {bw} teeth/s in trainsim: the start
 transient of the 260 teeth/s row above, at every speed. In the steady state (at least 100 settling mesh
 cycles, then until the state repeats from one mesh period to the next to 1e-3 within 2000 cycles,
-[D-43](../docs/decisions.md); 60 measured) contact is lost at {bs} teeth/s. The onset agrees with the thesis's
+[D-44](../docs/decisions.md); 60 measured) contact is lost at {bs} teeth/s. The onset agrees with the thesis's
 330–340. The band ends at {off:.0f}, not about 480, and contact is lost again at {high} teeth/s, where the
 thesis reports none. The reasons are those of Fig. 5.11 (undamped rig, D-13, zone phase). {n_uns71} of the
 23 steady-state runs do not settle (†, the figures of a transient): the impacting ones never repeat

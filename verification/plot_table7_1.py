@@ -7,7 +7,7 @@ Fig. 7.6: mean peak-to-peak transmission error of both meshes against mesh frequ
 runs with loss of contact (impacts > 0) filled, Cook's intermittent-contact range
 (about 335-480 teeth/s) shaded. Fig. 7.7: maximum, minimum and range of the torque on
 shaft element 3 against mesh frequency, with the nominal 798.8 lb-in. Runs that did not
-settle within their budget (runs/settled = 0, D-43) are ringed in orange in both.
+settle within their budget (runs/settled = 0, D-44) are ringed in orange in both.
 """
 import argparse
 

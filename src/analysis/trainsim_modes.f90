@@ -296,7 +296,7 @@ contains
    !> `state` lies in RK4's stability region (D-25). With every clearance closed
    !> the impact damping is swept from none to the law's largest and the
    !> smallest limit is returned; so is the damping of a contact closed gently
-   !> under the loads (`with_loads`, D-42). `omega_crit` is |lambda| of the limiting
+   !> under the loads (`with_loads`, D-55). `omega_crit` is |lambda| of the limiting
    !> eigenvalue (rad/s); `freq_hz` its damped frequency |Im lambda|/2 pi and
    !> `damping_ratio` -Re lambda/|lambda|. dt_max = huge when nothing limits it.
    subroutine rk4_dt_limit(model, state_in, dt_max, omega_crit, err, freq_hz, damping_ratio)
@@ -457,7 +457,7 @@ contains
 
    !> `state` gets the largest torque the loads can drive through one element
    !> (`load_torque_bound`), unless it has one (a negative one: leave the
-   !> loads out, D-42).
+   !> loads out, D-55).
    function with_loads(model, state) result(st)
       type(model_t), intent(in) :: model
       type(lin_state_t), intent(in) :: state
@@ -467,7 +467,7 @@ contains
    end function with_loads
 
    !> The largest torque the external loads can drive through one element over
-   !> the run (D-42): the larger of the sum of every load's largest positive
+   !> the run (D-55): the larger of the sum of every load's largest positive
    !> value and the sum of its largest negative one, each sampled at 1001 points
    !> of [t_start, t_end] and at its table knots. Exact for one driving load
    !> against a held node, for a drive balanced by a load, and for a free train
@@ -510,7 +510,7 @@ contains
    !> the rest of the train held) has the smallest RK4 step limit in `state`:
    !> a node's own damping (-d(speed rate)/d(speed)), an element's reduced
    !> two-inertia system lambda^2 + (c/m) lambda + k/m = 0 from its
-   !> `linearise` (the contact damping of its law at its worst, D-25/D-42).
+   !> `linearise` (the contact damping of its law at its worst, D-25/D-55).
    !> `text` names it, its deck group and what limits it; `h_part` is its limit.
    !> For messages only (refusals and advice), never on the hot path.
    subroutine limiting_part(model, state_in, text, h_part)

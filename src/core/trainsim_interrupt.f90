@@ -2,7 +2,7 @@
 !> polls the flag (`signal_caught`, read as a plain variable) once per step and
 !> stops with an error value, so the
 !> program unwinds normally (`trainsim run`: the history so far kept, marked
-!> interrupted, D-42; stdout flushed) and exits with 128 + the signal number.
+!> interrupted, D-46; stdout flushed) and exits with 128 + the signal number.
 !>
 !> A second signal while the first is still pending restores the default action and
 !> re-raises it, so a run stuck where no one polls can still be stopped.

@@ -15,7 +15,7 @@ module trainsim_run_stats
       integer(i8) :: block_steps = 0
       real(wp) :: wall_time = 0.0_wp, t_final = 0.0_wp
       logical :: completed = .false.
-      !> settling until periodic (&run settle_tol, D-43): 0 not asked, 1 settled,
+      !> settling until periodic (&run settle_tol, D-44): 0 not asked, 1 settled,
       !> 2 not settled within settle_max_time (the metrics are then of a transient);
       !> without settle_tol, the verdict at a fixed settle_time (to 1e-3): 3 settled,
       !> 4 not settled (the metrics are of a transient)

@@ -13,7 +13,7 @@
 !>   taken, t < t_goal) or `adv_event` (a guard of the current modes went
 !>   negative: t <= t_goal is the located crossing, the modes are not yet
 !>   updated). An event beyond t_goal is held until t_goal has been returned
-!>   (from the step's dense output): a sample is never a later state (D-45).
+!>   (from the step's dense output): a sample is never a later state (D-49).
 !> - `restart` is called after the driver changed the modes or passed a
 !>   breakpoint: the right-hand side is not smooth across (t, y), so no history
 !>   may be carried over. It gives the next stop time. A caller that changes y

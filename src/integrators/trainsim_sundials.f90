@@ -11,7 +11,7 @@
 !> internal step, and an output time inside a step interpolated on the step's
 !> dense output (GetDky). A root ends the step at the root: the output times
 !> before it are interpolated and returned first, then the root as adv_event
-!> (D-45); the driver updates the modes and calls `restart`, which
+!> (D-49); the driver updates the modes and calls `restart`, which
 !> re-initialises the integrator at the event point: a mode change makes the
 !> right-hand side non-smooth there, so no history (multistep history, or the
 !> RK step-size history and interpolant) is carried across it. The same
@@ -41,7 +41,7 @@ module trainsim_sundials
    public :: st_success, st_tstop, st_root, st_too_much_work, st_too_much_acc, st_err_failure, &
              st_conv_failure, st_lin_failure, st_rhs_failure, st_root_failure, st_too_close, st_bad_input, st_other
 
-   !> The node angle that rtol is relative to (D-46), in rad: a node angle's
+   !> The node angle that rtol is relative to (D-50), in rad: a node angle's
    !> tolerance is rtol*angle_resolution + atol_angle, whatever the angle
    !> itself (how far a node has turned is no measure of what matters: the
    !> deformations across the elements, and a gear's position in its mesh
@@ -86,7 +86,7 @@ module trainsim_sundials
       real(wp) :: bad_t = 0.0_wp          !< time of that evaluation
       integer :: msg_len = 0
       character(len=512) :: msg = ''      !< last message SUNDIALS reported
-      !> the error weights (cv_ewt, D-46): 1/(rel_i |y_i| + fixed_i); rel_i is
+      !> the error weights (cv_ewt, D-50): 1/(rel_i |y_i| + fixed_i); rel_i is
       !> rtol, or angle_rounding for a node angle (its tolerance does not grow
       !> with how far it turned, but for the angle's own rounding)
       real(wp), allocatable :: rel(:), fixed(:)
@@ -107,7 +107,7 @@ module trainsim_sundials
       integer(c_int), allocatable :: rootdir(:), rootsfound(:)
       logical :: root_pending = .false.   !< rootsfound holds the roots of the last return
       !> the last internal step ended at a root (t_int, yv) not yet returned: the
-      !> output times before it inside the step are returned first (D-45)
+      !> output times before it inside the step are returned first (D-49)
       logical :: root_ahead = .false.
       logical :: root_info_ok = .false.   !< rootsfound holds the roots of that root
       real(wp) :: hmax = 0.0_wp, omega_max = 0.0_wp, t_goal = 0.0_wp
@@ -273,7 +273,7 @@ contains
    end function cv_roots
 
    !> The error weights for CVODE's and ERKStep's error test and iterations
-   !> (CVodeWFtolerances, ERKStepWFtolerances; D-46): w_i = 1/(rtol |y_i| + atol_i)
+   !> (CVodeWFtolerances, ERKStepWFtolerances; D-50): w_i = 1/(rtol |y_i| + atol_i)
    !> for speeds, currents and energies as with SVtolerances, w_i = 1/(rtol
    !> angle_resolution + atol_i) for node angles (cvode_weights). No allocation.
    integer(c_int) function cv_ewt(sunvec_y, sunvec_ewt, user_data) result(ierr) bind(C)
@@ -339,7 +339,7 @@ contains
 
    !> An explicit method's step is held below explicit_limit/|lambda| for the
    !> largest |lambda| of the damped train in its stiffest state (every
-   !> clearance closed, every contact law's damping at its largest, D-42; an
+   !> clearance closed, every contact law's damping at its largest, D-55; an
    !> overdamped contact or node limits it as much as a stiff one): a run that
    !> would take more than implied_step_budget such steps is refused before the
    !> first step, naming the node or element that limits it.
@@ -399,7 +399,7 @@ contains
          max(model%run%rtol, energy_atol_factor)*(1.0_wp + abs(model%energy0))
    end subroutine cvode_abstol
 
-   !> The error weights' parts (cv_ewt, D-46): rel = angle_rounding and fixed =
+   !> The error weights' parts (cv_ewt, D-50): rel = angle_rounding and fixed =
    !> rtol angle_resolution + atol_angle for each node angle, rel = rtol and
    !> fixed = atol (cvode_abstol) for the other states.
    pure subroutine cvode_weights(model, atol, rel, fixed)
@@ -536,7 +536,7 @@ contains
    !> step, so extremes are taken at every internal step), or the goal: a step
    !> that passes t_goal is reported at t_goal, interpolated by the integrator's
    !> own dense output, and its end on the next call. A step that ends at a
-   !> root (the package stops the step there) is treated alike (D-45): output
+   !> root (the package stops the step there) is treated alike (D-49): output
    !> times before the root are interpolated on the step and returned first,
    !> then the root, as adv_event; never a root beyond t_goal.
    subroutine sun_advance(self, model, t_goal, t, y, status, err)

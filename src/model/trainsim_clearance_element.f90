@@ -282,7 +282,7 @@ contains
       end if
    end subroutine clearance_hot_form
 
-   !> |delta| a physical run can reach (D-42): the half clearance b plus ten
+   !> |delta| a physical run can reach (D-55): the half clearance b plus ten
    !> times the largest of b, the static penetration under the loads
    !> F/k (F = load_torque/min(r1, r2), the single-pair stiffness k) and the
    !> penetration of an impact at the largest plausible approach velocity

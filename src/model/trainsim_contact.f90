@@ -211,7 +211,7 @@ contains
    !> `scale` multiplies it (0..1). linear, elasto_backlash: the viscous d.
    !>
    !> A contact that closes gently and then carries a load is not bounded by
-   !> that (D-42): at the static penetration p = F/(c k) its damping is
+   !> that (D-55): at the static penetration p = F/(c k) its damping is
    !> c D p = phi(e(V)) F / V, with V as slow as the floor min_approach_velocity
    !> (or initial_contact_velocity, for a contact closed at t_start). With
    !> `largest` and f_load > 0 (the largest force the loads can drive through
@@ -246,7 +246,7 @@ contains
    !> yang_sun: damping c D p of a contact closed at the slowest approach the law
    !> allows and carrying force f at its static penetration p = f/(c k):
    !> phi(e(V)) f / V (eq. (3.12)), V the floor min_approach_velocity or a
-   !> smaller initial_contact_velocity (D-42). 0 for the other laws.
+   !> smaller initial_contact_velocity (D-55). 0 for the other laws.
    pure real(wp) function law_gentle_damping(self, f) result(cd)
       class(contact_law_t), intent(in) :: self
       real(wp), intent(in) :: f

@@ -35,7 +35,7 @@ module trainsim_element
    !> the static preload) is a new `contact` value. `load_torque`: the largest
    !> torque the loads can drive through one element (trainsim_modes'
    !> load_torque_bound; 0: not known), which a contact closed gently under load
-   !> carries at a penetration that sets its damping (D-42).
+   !> carries at a penetration that sets its damping (D-55).
    type :: lin_state_t
       integer :: contact = lin_contact_initial
       integer :: zone = lin_zone_initial
@@ -365,7 +365,7 @@ contains
 
    !> Largest |displacement| a physical run of this element can reach, given the
    !> largest torque the loads can drive through it (`load_torque`) and the
-   !> inverse inertias of its nodes; beyond it the run has gone wrong (D-42).
+   !> inverse inertias of its nodes; beyond it the run has gone wrong (D-55).
    !> Default: no bound (huge).
    pure real(wp) function el_displacement_bound(self, load_torque, inv_jl, inv_jr) result(bound)
       class(element_t), intent(in) :: self

@@ -99,7 +99,7 @@ module trainsim_model
       real(wp) :: settle_max_time = 0.0_wp      !< s (0: 1000 settle periods)
       logical :: track_energy = .true.          !< integrate dissipated energy and work input
       !> a run whose energy residual ends above this fraction of its energy
-      !> scale fails (exit 1, D-42); 0: no such check
+      !> scale fails (exit 1, D-55); 0: no such check
       real(wp) :: energy_check = 0.1_wp
       logical :: keep_series = .false.          !< keep displacement series in memory (sweeps)
       logical :: keep_events = .false.          !< keep the whole event table in the result (else streamed to the sink only)

@@ -301,7 +301,7 @@ contains
    !> dc - db of opposite signs): its value x and time tx, in (ta, tc). On a
    !> smooth signal sampled every h, x is the signal's extreme to O(h^4) (a
    !> sine with 50 points a period: 6e-6 of its amplitude; the point db alone:
-   !> 2e-3). D-44.
+   !> 2e-3). D-48.
    pure subroutine turn_extreme(ta, tb, tc, da, db, dc, x, tx)
       real(wp), intent(in) :: ta, tb, tc, da, db, dc
       real(wp), intent(out) :: x, tx

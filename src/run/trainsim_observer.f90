@@ -72,7 +72,7 @@ module trainsim_observer
       logical :: keep = .false.                      !< keep the whole series of samples (keep_series)
       type(p2p_detector_t), allocatable :: turns(:)  !< per element: peak-to-peak detector of the displacement
       !> The extremes of each element's displacement between output samples
-      !> (D-44): the displacement at the last two step ends (turn_d1 at
+      !> (D-48): the displacement at the last two step ends (turn_d1 at
       !> turn_t1, the later), per element. A turning point of the step-end
       !> sequence (fixed-step integrators) gives the extreme of the parabola
       !> through the three; with peak refinement (adaptive integrators) the
@@ -471,7 +471,7 @@ contains
    !> element's last three step ends: where the middle one is a turning point,
    !> the extreme of the parabola through the three to the element's
    !> peak-to-peak detector (from t_metrics on). Only a turning point costs
-   !> more than the compare and the shift (D-44). A step end within turn_gap of
+   !> more than the compare and the shift (D-48). A step end within turn_gap of
    !> the last one is passed over.
    subroutine track_turns(self, t)
       type(observer_t), intent(inout) :: self

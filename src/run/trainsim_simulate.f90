@@ -48,16 +48,16 @@ module trainsim_simulate
    !> (a run 10x above the limit, as Table 5.2's, runs with a warning).
    real(wp), parameter :: max_dt_over_limit = 1.0e3_wp
    !> A limiting eigenvalue with at least this damping ratio (|Re| >= |Im|) is
-   !> damping-dominated: a fixed step above its limit is refused (D-42).
+   !> damping-dominated: a fixed step above its limit is refused (D-55).
    real(wp), parameter :: damped_ratio = 0.7071_wp
 
-   !> Settling until periodic (D-43): the longest attractor period looked for, in
+   !> Settling until periodic (D-44): the longest attractor period looked for, in
    !> settle periods.
    integer, parameter :: settle_kmax = 8
-   !> The tolerance of the verdict at settle_time of a run with no settle_tol (D-43).
+   !> The tolerance of the verdict at settle_time of a run with no settle_tol (D-44).
    real(wp), parameter :: settle_check_tol = 1.0e-3_wp
 
-   !> Settling until periodic (&run settle_tol, D-43): the state is sampled at
+   !> Settling until periodic (&run settle_tol, D-44): the state is sampled at
    !> t_start + j T (T = settle_period), once per period, outside the step loop. The
    !> state is every element's displacement (its deformation: relative angle, or
    !> transmission error) and every node's speed; sample j is compared with samples
@@ -108,7 +108,7 @@ module trainsim_simulate
       !> blocks, and the output times are the integrator's grid (output_interval = dt)
       logical :: block_samples = .false.
       !> per element: the largest |displacement| a physical run reaches
-      !> (element%displacement_bound, D-42), checked at the output times
+      !> (element%displacement_bound, D-55), checked at the output times
       real(wp), allocatable :: disp_bound(:)
       !> first output time at which the energy residual exceeded
       !> run%energy_check of the energy scale so far (-1: not yet)
@@ -399,7 +399,7 @@ contains
          call advance_to(model, integ, obs, d, t_out, t_end, t, y, err)
          if (allocated(err)) return
          if (abs(t - t_out) > d%tol) then
-            ! a sample is the solution at its own time, never a later state (D-45)
+            ! a sample is the solution at its own time, never a later state (D-49)
             call fatal_error(err, "internal: integrator '"//model%run%integrator//"' left the state at t = "// &
                              str(t)//' s for the output time '//str(t_out)//' s', err_internal)
             return
@@ -694,7 +694,7 @@ contains
    end subroutine displacement_bounds
 
    !> The checks that a run is still physical, at each output time from the
-   !> observer's running metrics (D-42): no element's displacement beyond its
+   !> observer's running metrics (D-55): no element's displacement beyond its
    !> bound (a mesh with its teeth through one another) ends the run at once;
    !> the first time the energy residual passes run%energy_check of the
    !> scale so far is kept for `check_ledger`. A run that fails them ends with
@@ -725,7 +725,7 @@ contains
       end if
    end subroutine check_physical
 
-   !> The energy ledger at the end of the run (D-42): a residual above
+   !> The energy ledger at the end of the run (D-55): a residual above
    !> run%energy_check (default 0.1) of the run's energy scale is a wrong
    !> solution, not an integration error: a correct run keeps it near 1e-6,
    !> RK4 at 0.95 x its stability limit below 1e-3 (check_dt_advice); a
@@ -958,7 +958,7 @@ contains
    !>   between 2.6 and 2.95, nothing against a factor of 1000); or
    !> - dt is above the limit of either state (the stiffest with every contact
    !>   law's damping at its largest, a gentle closure under the loads included,
-   !>   D-42) and the limiting eigenvalue is damping-dominated (damping ratio >=
+   !>   D-55) and the limiting eigenvalue is damping-dominated (damping ratio >=
    !>   1/sqrt 2): a step beyond the real-axis radius multiplies every state
    !>   change by |R(h lambda)| > 1, so no such mode stays unexcited (unlike an
    !>   undamped mode that the inputs may never touch, D-4).
@@ -1025,7 +1025,7 @@ contains
                              str(dt_safe, 4)//' s of '//trim(state_text(k))//' ('// &
                              mode_text(f_hz, zeta, omega)//'), set by '//part//'. That mode is damped, so '// &
                              'every step beyond the limit amplifies it (no wrong answer is given with exit 0 '// &
-                             'instead, D-42): take dt below '//str(dt_safe, 4)//' s'// &
+                             'instead, D-55): take dt below '//str(dt_safe, 4)//' s'// &
                              thesis_note(name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed)// &
                              ", or use integrator = 'cvode-bdf' (implicit: its step has no stability limit)"// &
                              gentle_hint(part), err_input)

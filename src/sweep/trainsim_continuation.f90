@@ -4,7 +4,7 @@
 !> hysteresis can show; a fixed-start run cannot show one.
 !>
 !> The next run keeps the angles and moves the speeds from the previous run's nominal
-!> operating point to its own (D-42): node i starts at
+!> operating point to its own (D-43): node i starts at
 !>     w_end,i + (W_new,i - W_old,i),
 !> where W is a run's nominal speed of the node (its initial speed as the deck and the
 !> run's `mesh_frequency` set it, or its prescribed speed at t_start), W_old that of the

@@ -116,7 +116,7 @@ contains
    !> it): the mesh period at t_start of the first gear pair with teeth, then the run's
    !> times against the limits (the default budget is 1000 periods). With settle_tol, an
    !> error if there is no gear pair; with settle_time alone (a verdict at settle_time,
-   !> D-43), no period and no verdict.
+   !> D-44), no period and no verdict.
    subroutine default_settle_period(model, err)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err

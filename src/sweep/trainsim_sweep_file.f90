@@ -73,7 +73,7 @@ module trainsim_sweep_file
    character(len=*), parameter :: node_metric_names(5) = [character(len=11) :: 'speed_min', 'speed_max', &
                                                           'end_angle', 'end_speed', 'start_speed']
    !> Per-run figures besides the metrics; the last three say whether the run settled
-   !> (&run settle_tol, D-43): settled 1 yes, 0 not within the budget (its metrics are of
+   !> (&run settle_tol, D-44): settled 1 yes, 0 not within the budget (its metrics are of
    !> a transient), -1 not asked; settle_periods, settle_k as in a run file's /run_stats.
    integer, parameter :: n_run_values = 7
    character(len=*), parameter :: run_value_names(n_run_values) = [character(len=15) :: 'steps', 'rhs_evals', &

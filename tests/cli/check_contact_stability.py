@@ -1,4 +1,4 @@
-"""No wrong answer with exit 0 (issue 20 item 3, D-42): a sweep of contact law x
+"""No wrong answer with exit 0 (issue 20 item 3, D-55): a sweep of contact law x
 damping x start x integrator x dt on one loaded gear mesh (the GHM rig's mesh,
 798.8 lb-in through it, as ../shared/repro/smith_law_creep.nml). Every run must
   - exit 2 (refused before the first step) or 1 (stopped while running), with a

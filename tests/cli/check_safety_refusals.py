@@ -1,4 +1,4 @@
-"""Issue 20 items 3 and 11 (D-42, D-43): the reproducers of tests/decks/safety end as
+"""Issue 20 items 3 and 11 (D-55, D-56): the reproducers of tests/decks/safety end as
 they must, quickly, with a message that names the part to blame:
   - smith_law_creep.nml (rk4, dt 8e-6, a Smith-law mesh closed at the floor
     velocity under 798.8 lb-in): exit 2 before the first step, naming element
@@ -43,7 +43,7 @@ def check(name, cond, detail):
     failed += 0 if cond else 1
 
 
-# Smith law: the hand value of the limit (D-42), from the deck's numbers
+# Smith law: the hand value of the limit (D-55), from the deck's numbers
 k, rb, j, v = 234500.0, 3.7588, 0.987, 1.0e-3
 e = (1.0 - 2.718281828459045 ** (-0.0263 * v)) / 3.0              # eq. (3.20)
 phi = 6.0 * (1.0 - e) / ((2.0 * e - 1.0) ** 2 + 3.0)              # eq. (3.12): D V / k

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Settling until periodic (D-43), continuation start states (D-42) and the limits of the
-derived run times (D-44). One case per CTest entry:
+"""Settling until periodic (D-44), continuation start states (D-43) and the limits of the
+derived run times (D-45). One case per CTest entry:
 
     /usr/bin/python3 tests/cli/check_settle.py <trainsim> <case>
 
@@ -92,7 +92,7 @@ def closed_form(omega_f):
 
 
 def predicted(omega_f, tol, k_want):
-    """First sample j at which the documented criterion (D-43) holds on the closed form:
+    """First sample j at which the documented criterion (D-44) holds on the closed form:
     r_k(j) = max(|dx| / max|x|, |dv| / max|v|) over samples 0..j; k = 1 at r_1 <= tol,
     k = 2 at r_2 <= tol at two successive samples with r_1 > sqrt(tol)."""
     x, v = closed_form(omega_f)

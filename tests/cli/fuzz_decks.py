@@ -205,7 +205,7 @@ REGRESSIONS = [
      "&load node = 'b', kind = 'start_stop', value = 1.0, t_accel = 0.001, t_cruise = 0.0, t_decel = 0.001,\n"
      "  cycles = 2147483647 /\n", 2, ["deck.nml:6:", "'cycles'", "<= 1000000", "2147483647"]),
     # 'Fortran runtime error: End of record' writing a mode above 1e38 Hz with f0.1 into 40 characters;
-    # since the plausibility checks (D-42) such a train (gear radii of 1e20) is refused first
+    # since the plausibility checks (D-57) such a train (gear radii of 1e20) is refused first
     ("RK4 warning names a mode above 1e38 Hz", "&run t_end = 1.0e-3, dt = 1.0e-4 /\n"
      "&node id = 'a', type = 'inertia', inertia = 1.0e-20 /\n&node id = 'b', type = 'inertia', inertia = 1.0e-20 /\n"
      "&element type = 'ideal_gear', stiffness = 1.0e20, rb_driver = 1.0e20, rb_driven = 1.0e20 /\n"

@@ -384,7 +384,7 @@ CASES = [
          deck=TABLE5_1.format(t_end=5, dt=0.05),
          exit=1, stderr=["warning", "stability limit", "blew up", "time step"]),
     # an event flood (F_event_flood.nml of ../shared/repro): the remedy names what the
-    # integrator in use steps by (D-47): dt for rk4, the tolerances for cvode-bdf
+    # integrator in use steps by (D-51): dt for rk4, the tolerances for cvode-bdf
     dict(name="event flood under rk4 names dt against the stability limit",
          deck=FLOOD.format(integrator="rk4"),
          exit=1, stderr=["event flood", "dt = 5.0E-7 s", "stability limit"]),
