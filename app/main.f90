@@ -379,13 +379,13 @@ contains
             '  --teeth N1 [N2]            teeth of the driver (and the driven gear)', &
             '  --diametral-pitch P        1/in; or --module M in mm', &
             '  --pressure-angle DEG       default 20', &
-            '  --face-width F             face width', &
-            '  --backlash B               total backlash along the line of action', &
+            '  --face-width F             face width (in; m with --units si)', &
+            '  --backlash B               total backlash along the line of action (in; m with --units si)', &
             '  --youngs-modulus E, --density RHO   material (steel by default)', &
             '  --stiffness-per-width KW, --stiffness K   the mesh stiffness instead of eq. 3.9', &
             '  --frequency HZ             the inertias that put each gear at HZ on the mesh', &
             '  --approach-velocity V      Goldsmith''s e and the damping D of eq. 3.12 at V', &
-            '  --id ID, --units U         the fragment''s element id; in-lbf-s (default) or si', &
+            '  --id ID, --units U         the fragment''s element id (its nodes ID_driver, ID_driven); in-lbf-s or si', &
             '  -h, --help                 this text', '', &
             'exit status: 0 success, 2 bad input'
       case ('diagram')

@@ -63,6 +63,12 @@ contains
       type(units_t), intent(in) :: units
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: zeta_deg, e_default
+      if (grp%has('backlash')) then   ! the spur geometry form's key (D-62)
+         call fatal_error(err, grp%where('backlash')//": error: a helical_gear takes 'half_backlash', half the "// &
+                          "TOTAL backlash along the line of action ('backlash' is the spur_gear geometry form's key): "// &
+                          'give half_backlash = half your value, in '//units%length, err_input)
+         return
+      end if
       call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
       call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
       call grp%get_real('teeth', self%teeth, err); if (allocated(err)) return
@@ -87,9 +93,11 @@ contains
          call fatal_error(err, grp%where('base_helix_angle')//': error: must be in (0, 60) degrees, got '// &
                           str(zeta_deg), err_input)
       else if (.not. self%face > 0.0_wp) then
-         call fatal_error(err, grp%where('face_width')//': error: must be > 0, got '//str(self%face), err_input)
+         call fatal_error(err, grp%where('face_width')//': error: must be > 0, got '//str(self%face)//' '// &
+                          units%length, err_input)
       else if (.not. self%cl%b >= 0.0_wp) then
-         call fatal_error(err, grp%where('half_backlash')//': error: must be >= 0, got '//str(self%cl%b), err_input)
+         call fatal_error(err, grp%where('half_backlash')//': error: must be >= 0, got '//str(self%cl%b)//' '//units%length, &
+                          err_input)
       else if (.not. self%youngs > 0.0_wp) then
          call fatal_error(err, grp%where('youngs_modulus')//': error: must be > 0, got '//str(self%youngs), err_input)
       end if

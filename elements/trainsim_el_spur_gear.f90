@@ -132,6 +132,14 @@ contains
             call fatal_error(err, grp%where('module')//': error: give diametral_pitch or module, not both', err_input)
             return
          end if
+         if (grp%has('half_backlash')) then   ! the constants form's key in the geometry form (D-62)
+            call fatal_error(err, grp%where('half_backlash')//": error: half_backlash belongs to TRAIN's constants "// &
+                             'form (rb_driver, rb_driven, teeth, ...); this group gives module or diametral_pitch, '// &
+                             "so it is in the geometry form, whose key is 'backlash': the TOTAL backlash along the "// &
+                             'line of action, 2 x half_backlash (give backlash = 2 x your value, in '//units%length//')', &
+                             err_input)
+            return
+         end if
          call grp%get_real('teeth_driver', self%teeth, err); if (allocated(err)) return
          call grp%get_real('teeth_driven', self%teeth2, err); if (allocated(err)) return
          call grp%get_real('pressure_angle', self%phi, err, default=20.0_wp); if (allocated(err)) return
@@ -148,7 +156,11 @@ contains
          end if
          call grp%require_positive('teeth_driver', self%teeth, err); if (allocated(err)) return
          call grp%require_positive('teeth_driven', self%teeth2, err); if (allocated(err)) return
-         call grp%require_positive('face_width', self%face, err); if (allocated(err)) return
+         if (.not. self%face > 0.0_wp) then
+            call fatal_error(err, grp%where('face_width')//': error: face_width must be > 0, got '//str(self%face)// &
+                             ' '//units%length, err_input)
+            return
+         end if
          ! ranges before the geometry arithmetic (squares of radii): D-26, D-28
          call check_teeth('teeth_driver', self%teeth)
          call check_teeth('teeth_driven', self%teeth2)
@@ -162,7 +174,8 @@ contains
             return
          end if
          if (.not. bl >= 0.0_wp) then
-            call fatal_error(err, grp%where('backlash')//': error: backlash must be >= 0, got '//str(bl), err_input)
+            call fatal_error(err, grp%where('backlash')//': error: backlash must be >= 0, got '//str(bl)//' '// &
+                             units%length, err_input)
             return
          end if
          self%phi = self%phi*pi/180.0_wp
@@ -180,6 +193,14 @@ contains
          call grp%get_real('stiffness', k, err, default=kw*self%face); if (allocated(err)) return
          self%cl%law%k = k
       else
+         if (grp%has('backlash')) then   ! the geometry form's key in the constants form (D-62)
+            call fatal_error(err, grp%where('backlash')//": error: backlash (the TOTAL backlash along the line of "// &
+                             'action) belongs to the geometry form (module or diametral_pitch, teeth_driver, '// &
+                             "teeth_driven, face_width); this group gives neither module nor diametral_pitch, so it "// &
+                             "is in TRAIN's constants form, whose key is 'half_backlash' = backlash / 2 (give "// &
+                             'half_backlash = half your value, in '//units%length//')', err_input)
+            return
+         end if
          call grp%get_real('stiffness', self%cl%law%k, err); if (allocated(err)) return
          call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
          call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
@@ -192,7 +213,7 @@ contains
          call grp%require_positive('teeth', self%teeth, err); if (allocated(err)) return
          if (.not. self%cl%b >= 0.0_wp) then
             call fatal_error(err, grp%where('half_backlash')//': error: half_backlash must be >= 0, got '// &
-                             str(self%cl%b), err_input)
+                             str(self%cl%b)//' '//units%length, err_input)
             return
          end if
       end if

@@ -375,10 +375,14 @@ contains
       type(gear_input_t), intent(in) :: inp
       type(gear_result_t), intent(in) :: res
       integer, intent(in) :: unit
-      character(len=:), allocatable :: l, id, mass_unit
+      character(len=:), allocatable :: l, id, mass_unit, n1, n2
       l = inp%units%length
       id = 'mesh'
-      if (allocated(inp%id)) id = inp%id
+      n1 = 'gear1'; n2 = 'gear2'
+      if (allocated(inp%id)) then   ! nodes after the id, so several stages paste into one deck (D-62)
+         id = inp%id
+         n1 = id//'_driver'; n2 = id//'_driven'
+      end if
       mass_unit = inp%units%force//'*s^2/'//l//'^4'
       write (unit, '(a)') 'spur gear pair ('//inp%units%name//'; App. E, eqs. 3.9, 3.12)'
       write (unit, '(a)') '  teeth                 '//str(inp%teeth1)//' : '//str(inp%teeth2)// &
@@ -414,16 +418,17 @@ contains
       write (unit, '(a)') ''
       write (unit, '(a)') '! deck fragment (trainsim gear): nodes and mesh, TRAIN''s seven constants'
       if (inp%units%name == 'si') write (unit, '(a)') "! needs &run units = 'si'"
-      write (unit, '(a)') "&node id = 'gear1', type = 'inertia', inertia = "//str(res%j1, 6)//' /'
-      write (unit, '(a)') "&element id = '"//id//"', type = 'spur_gear', stiffness = "//str(res%stiffness, 6)// &
+      write (unit, '(a)') "&node id = '"//n1//"', type = 'inertia', inertia = "//str(res%j1, 6)//' /'
+      write (unit, '(a)') "&element id = '"//id//"', type = 'spur_gear', left = '"//n1//"', right = '"//n2//"',"
+      write (unit, '(a)') '   stiffness = '//str(res%stiffness, 6)// &
          ', rb_driver = '//str(res%rb1, 7)//', rb_driven = '//str(res%rb2, 7)//','
       write (unit, '(a)') '   teeth = '//str(inp%teeth1)//', contact_ratio = '//str(res%contact_ratio, 7)// &
          ', approach_angle = '//str(res%approach_angle, 7)//', half_backlash = '//str(res%half_backlash, 6)//' /'
       if (inp%target_frequency /= unset) then
-         write (unit, '(a)') "&node id = 'gear2', type = 'inertia', inertia = "//str(res%j2_target, 6)// &
+         write (unit, '(a)') "&node id = '"//n2//"', type = 'inertia', inertia = "//str(res%j2_target, 6)// &
             ' /   ! driven gear at '//fx(inp%target_frequency, 1)//' Hz'
       else
-         write (unit, '(a)') "&node id = 'gear2', type = 'inertia', inertia = "//str(res%j2, 6)//' /'
+         write (unit, '(a)') "&node id = '"//n2//"', type = 'inertia', inertia = "//str(res%j2, 6)//' /'
       end if
    end subroutine gear_report
 

@@ -45,7 +45,7 @@ contains
       ! 50 bytes a run of a sweep)
       groups(1)%s = 'run'; groups(2)%s = 'node'; groups(3)%s = 'element'; groups(4)%s = 'load'
       groups(5)%s = 'initial'
-      call deck%check_group_names(groups, err)
+      call deck%check_group_names(groups, err, also='sweep (read by trainsim sweep)')
       if (allocated(err)) return
       model%deck_file = deck%file
       call move_alloc(deck%text, model%deck_text)   ! not copied: a deck may be 100 MB

@@ -649,13 +649,19 @@ contains
       end do
    end function deck_count_groups
 
-   !> Error for the first group whose name is not in `allowed` (case-insensitive).
-   subroutine deck_check_group_names(self, allowed, err)
+   !> Error for the first group whose name is not in `allowed` (case-insensitive). `also`
+   !> (e.g. "sweep (read by trainsim sweep)") names groups another reader takes out of the
+   !> deck before this check; the message lists them with the others.
+   subroutine deck_check_group_names(self, allowed, err, also)
       class(deck_t), intent(in) :: self
       type(string_t), intent(in) :: allowed(:)
       type(error_t), allocatable, intent(out) :: err
+      character(len=*), intent(in), optional :: also
       integer :: i, k
       logical :: ok
+      character(len=:), allocatable :: more
+      more = ''
+      if (present(also)) more = ', '//also
       if (.not. allocated(self%groups)) return
       do i = 1, size(self%groups)
          ok = .false.
@@ -668,7 +674,7 @@ contains
          if (.not. ok) then
             call fatal_error(err, self%groups(i)%file//':'//str(self%groups(i)%line)// &
                              ": error: unknown group '&"//self%groups(i)%name// &
-                             "'; valid groups are: "//join(allowed, ', '), err_input)
+                             "'; valid groups are: "//join(allowed, ', ')//more, err_input)
             return
          end if
       end do
@@ -755,11 +761,15 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=*), intent(in), optional :: context
       character(len=:), allocatable :: msg
-      integer :: k
+      integer :: k, best
       if (.not. allocated(self%entries)) return
       do k = 1, size(self%entries)
          if (self%entries(k)%used) cycle
          msg = "unknown key '"//self%entries(k)%key//"'"
+         if (allocated(self%queried)) then
+            best = closest_key(self%entries(k)%key, self%queried)
+            if (best > 0) msg = msg//"; did you mean '"//self%queried(best)%s//"'?"
+         end if
          if (present(context)) then
             if (len_trim(context) > 0) msg = msg//' for '//trim(context)
          end if
@@ -920,11 +930,21 @@ contains
       logical, intent(in) :: has_default
       integer, intent(out) :: k
       type(error_t), allocatable, intent(out) :: err
+      integer :: j
       call record_query(self, key)
       k = find(self, key)
       if (k == 0) then
-         if (.not. has_default) call fail(self, err, self%line, "missing required key '"// &
-                                          to_lower(key)//"' ("//what//')')
+         if (.not. has_default) then
+            ! a misspelt key is reported on its own line, before the key it stands for (D-62)
+            j = near_miss(self, key)
+            if (j > 0) then
+               call fail(self, err, self%entries(j)%line, "unknown key '"//self%entries(j)%key// &
+                         "'; did you mean '"//to_lower(key)//"'? (the required key '"//to_lower(key)// &
+                         "' ("//what//') is missing)')
+            else
+               call fail(self, err, self%line, "missing required key '"//to_lower(key)//"' ("//what//')')
+            end if
+         end if
          return
       end if
       self%entries(k)%used = .true.
@@ -994,6 +1014,93 @@ contains
          end if
       end do
    end function find
+
+   !> Index of the entry not yet read whose key is a likely misspelling of `key` (0: none):
+   !> the closest by edit distance within the threshold of `is_near`, not itself a queried key.
+   integer function near_miss(self, key) result(best)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      integer :: j, d, dbest
+      logical :: asked
+      best = 0
+      dbest = huge(1)
+      if (.not. allocated(self%entries)) return
+      do j = 1, size(self%entries)
+         if (self%entries(j)%used) cycle
+         asked = .false.
+         if (allocated(self%queried)) asked = any_is(self%queried, self%entries(j)%key)
+         if (asked) cycle
+         d = edit_distance(self%entries(j)%key, to_lower(key))
+         if (is_near(d, to_lower(key)) .and. d < dbest) then
+            best = j
+            dbest = d
+         end if
+      end do
+   end function near_miss
+
+   !> Index in `keys` of the closest key to `word` within the threshold of `is_near` (0: none).
+   integer function closest_key(word, keys) result(best)
+      character(len=*), intent(in) :: word
+      type(string_t), intent(in) :: keys(:)
+      integer :: j, d, dbest
+      best = 0
+      dbest = huge(1)
+      do j = 1, size(keys)
+         d = edit_distance(word, keys(j)%s)
+         if (is_near(d, keys(j)%s) .and. d < dbest) then
+            best = j
+            dbest = d
+         end if
+      end do
+   end function closest_key
+
+   !> A distance `d` to `key` counts as a misspelling: 1 <= d <= 2 and d <= len(key)/3
+   !> (so 'dt' does not suggest 't_end', but 'teeth_drivn' suggests 'teeth_driven').
+   logical function is_near(d, key) result(yes)
+      integer, intent(in) :: d
+      character(len=*), intent(in) :: key
+      yes = d >= 1 .and. d <= min(2, max(1, len(key)/3))
+   end function is_near
+
+   logical function any_is(list, word) result(yes)
+      type(string_t), intent(in) :: list(:)
+      character(len=*), intent(in) :: word
+      integer :: j
+      yes = .false.
+      do j = 1, size(list)
+         if (list(j)%s == word) then
+            yes = .true.
+            return
+         end if
+      end do
+   end function any_is
+
+   !> Optimal-string-alignment distance (Damerau-Levenshtein without repeated edits of a
+   !> substring): insertions, deletions, substitutions and swaps of neighbours cost 1.
+   integer function edit_distance(a, b) result(dist)
+      character(len=*), intent(in) :: a, b
+      integer, allocatable :: d(:, :)
+      integer :: i, j, m, n, cost
+      m = len(a)
+      n = len(b)
+      allocate (d(0:m, 0:n))
+      do i = 0, m
+         d(i, 0) = i
+      end do
+      do j = 0, n
+         d(0, j) = j
+      end do
+      do j = 1, n
+         do i = 1, m
+            cost = merge(0, 1, a(i:i) == b(j:j))
+            d(i, j) = min(d(i - 1, j) + 1, d(i, j - 1) + 1, d(i - 1, j - 1) + cost)
+            if (i > 1 .and. j > 1) then
+               if (a(i:i) == b(j - 1:j - 1) .and. a(i - 1:i - 1) == b(j:j)) d(i, j) = min(d(i, j), d(i - 2, j - 2) + 1)
+            end if
+         end do
+      end do
+      dist = d(m, n)
+   end function edit_distance
 
    !> Add `key` (lower case) to the group's list of queried keys, once.
    subroutine record_query(self, key)

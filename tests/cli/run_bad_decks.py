@@ -19,6 +19,7 @@ One line per case (ok/FAIL), then ``N passed, M failed``; exit status 1 if M > 0
 """
 
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -56,6 +57,13 @@ TABLE5_1 = (
     "&initial node = 'n2', angle = 0.02353 /\n"
     "&initial node = 'n3', angle = -0.03449 /\n"
 )
+
+
+# A spur_gear in the geometry form; {units} goes into &run, {k1} on line 5, {k2} on line 6.
+GEOM = ("&run t_end = 0.01, dt = 1.0e-6{units} /\n" + NODES +
+        "&element id = 'mesh', type = 'spur_gear', diametral_pitch = 8.0,\n"
+        "         {k1}, face_width = 0.7,\n"
+        "         {k2} /\n")
 
 
 def load(text):
@@ -305,6 +313,47 @@ CASES = [
          deck=load("node = 'b', kind = 'table', table_file = 'rows.txt'"),
          files={"rows.txt": b"0.0 1.0\r\n1.0 2.0\r\n2.0 x\r\n"},
          exit=2, stderr=["deck.nml:5:", "table_file", "rows.txt:3:", "expected two numbers"]),
+
+    # ---- issue 21 item 4: messages that find the line (D-62)
+    dict(name="misspelt required key in spur_gear geometry form: its own line, did you mean",
+         deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_drivn = 56", k2="backlash = 0.004"),
+         exit=2, stderr=["deck.nml:5:", "unknown key 'teeth_drivn'", "did you mean 'teeth_driven'?",
+                         "required key 'teeth_driven'"]),
+    dict(name="misspelt required key in a shaft: its own line, did you mean",
+         deck=RUN + NODES + "&element id = 's1', type = 'shaft',\n         stifness = 1.0e5 /\n",
+         exit=2, stderr=["deck.nml:5:", "unknown key 'stifness'", "did you mean 'stiffness'?"]),
+    dict(name="misspelt optional key: unknown key with did you mean",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0,\n      dampng = 0.1 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
+         exit=2, stderr=["deck.nml:3:", "unknown key 'dampng'", "did you mean 'damping'?", "valid keys are"]),
+    dict(name="far-off unknown key suggests nothing",
+         deck="&run t_end = 0.01, dt = 1.0e-4, colour = 3.0 /\n" + NODES + SHAFT,
+         exit=2, stderr=["deck.nml:1:", "unknown key 'colour'", "valid keys are"], not_stderr=["did you mean"]),
+    dict(name="unknown group lists every group the reader takes, sweep too",
+         deck=RUN + NODES + SHAFT + "&sweeps parameter = 's1.stiffness', values = 1e5 /\n",
+         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, sweep"]),
+    dict(name="half_backlash in the spur_gear geometry form is explained (in-lbf-s)",
+         deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="half_backlash = 0.002"),
+         exit=2, stderr=["deck.nml:6:", "half_backlash belongs to TRAIN's constants form", "geometry form",
+                         "TOTAL backlash", "2 x half_backlash", "in in)"]),
+    dict(name="backlash in the spur_gear constants form is explained (SI)",
+         deck="&run t_end = 0.01, dt = 1.0e-6, units = 'si' /\n" + NODES +
+         "&element id = 'mesh', type = 'spur_gear', stiffness = 3.0e9, rb_driver = 0.04, rb_driven = 0.08,\n"
+         "         teeth = 28, contact_ratio = 1.6, approach_angle = 0.18,\n         backlash = 1.0e-4 /\n",
+         exit=2, stderr=["deck.nml:6:", "'backlash'", "geometry form", "constants form", "'half_backlash' = backlash / 2",
+                         "in m)"]),
+    dict(name="backlash in a helical_gear is explained",
+         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
+         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         backlash = 0.004 /\n",
+         exit=2, stderr=["deck.nml:6:", "helical_gear takes 'half_backlash'", "half your value, in in"]),
+    dict(name="negative backlash in an SI geometry deck names the unit m",
+         deck=GEOM.format(units=", units = 'si'", k1="teeth_driver = 28, teeth_driven = 56", k2="backlash = -1.0e-4")
+         .replace("diametral_pitch = 8.0, face_width = 0.7", "module = 3.0, face_width = 0.02"),
+         exit=2, stderr=["deck.nml:6:", "backlash must be >= 0", " m"], stderr_re=[r"got -\S+ m$"]),
+    dict(name="zero face width in an in-lbf-s geometry deck names the unit in",
+         deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="backlash = 0.004")
+         .replace("face_width = 0.7", "face_width = 0.0"),
+         exit=2, stderr=["deck.nml:5:", "face_width must be > 0"], stderr_re=[r"got \S+ in$"]),
 ] + [
     # list-directed READ took these (a '/' or ',,' kept the line before's value, '2*30' a
     # repeat count, extra columns and text were ignored): each is now its line's error
@@ -450,6 +499,9 @@ def run_case(exe, case):
         for s in case.get("not_stderr", []):
             if s in proc.stderr:
                 problems.append("stderr shows %r" % s)
+        for s in case.get("stderr_re", []):   # a pattern per line (re.M): a unit after a value
+            if not re.search(s, proc.stderr, re.M):
+                problems.append("stderr lacks a match of %r" % s)
         for s in case.get("stdout", []):
             if s.lower() not in proc.stdout.lower():
                 problems.append("stdout lacks %r" % s)
