@@ -291,7 +291,19 @@ contains
          if (.not. allocated(err)) return
          call check('exact message: '//err%message, err%message == &
                     "g.nml:2: error: &element #1 (id 'e1'): unknown key 'stifness' for element type 'shaft'; "// &
-                    'valid keys are: id, type, stiffness, damping, left')
+                    "did you mean 'stiffness'?; valid keys are: id, type, stiffness, damping, left")
+         ! required and absent, with a near miss in the group: the near miss on its own line (D-62)
+         call g%get_real('stiffness', x, err)
+         call check('required key misspelt: reported on its line', allocated(err))
+         if (.not. allocated(err)) return
+         call check('exact message: '//err%message, err%message == &
+                    "g.nml:2: error: &element #1 (id 'e1'): unknown key 'stifness'; did you mean 'stiffness'? "// &
+                    "(the required key 'stiffness' (a real number) is missing)")
+         call g%get_real('damping', x, err)
+         call check('required key, no near miss: missing at the group line', allocated(err))
+         if (.not. allocated(err)) return
+         call check('exact message: '//err%message, err%message == &
+                    "g.nml:1: error: &element #1 (id 'e1'): missing required key 'damping' (a real number)")
          call check('has does not mark used', .not. g%entries(4)%used)
          call g%get_real('stifness', x, err)
          call g%get_real('left', x, err)

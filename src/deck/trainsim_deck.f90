@@ -766,12 +766,12 @@ contains
       do k = 1, size(self%entries)
          if (self%entries(k)%used) cycle
          msg = "unknown key '"//self%entries(k)%key//"'"
+         if (present(context)) then
+            if (len_trim(context) > 0) msg = msg//' for '//trim(context)
+         end if
          if (allocated(self%queried)) then
             best = closest_key(self%entries(k)%key, self%queried)
             if (best > 0) msg = msg//"; did you mean '"//self%queried(best)%s//"'?"
-         end if
-         if (present(context)) then
-            if (len_trim(context) > 0) msg = msg//' for '//trim(context)
          end if
          if (allocated(self%queried)) then
             if (size(self%queried) > 0) then

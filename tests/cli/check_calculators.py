@@ -60,6 +60,28 @@ with tempfile.TemporaryDirectory() as tmp:
             ta, tb = a['events/time'][0], b['events/time'][0]
             check(f'first contact at {ta:.6g} s = {tb:.6g} s (1e-3)', abs(ta - tb) <= 1e-3 * tb)
 
+    # issue 21 item 4 (D-62): three stages of `gear --id` pasted into one deck do not clash
+    frags = []
+    for sid, teeth in (('s1', ['20', '40']), ('s2', ['22', '44']), ('s3', ['25', '50'])):
+        g3 = run(['gear', '--teeth'] + teeth + ['--diametral-pitch', '8', '--face-width', '0.7',
+                                                '--backlash', '0.004', '--id', sid])
+        check(f'gear --id {sid} exits 0', g3.returncode == 0)
+        frag = fragment(g3.stdout)
+        check(f"gear --id {sid}: nodes '{sid}_driver', '{sid}_driven' and the mesh joins them",
+              f"&node id = '{sid}_driver'" in frag and f"&node id = '{sid}_driven'" in frag
+              and f"left = '{sid}_driver', right = '{sid}_driven'" in frag)
+        frags.append(frag)
+    deck = os.path.join(tmp, 'three.nml')
+    with open(deck, 'w') as f:
+        f.write("&run title = 'three stages', t_end = 2.0e-3, dt = 5.0e-7, integrator = 'rk4' /\n")
+        f.write(''.join(frags))
+        f.write("&element id = 'shaft12', type = 'shaft', left = 's1_driven', right = 's2_driver', stiffness = 1.0e5 /\n")
+        f.write("&element id = 'shaft23', type = 'shaft', left = 's2_driven', right = 's3_driver', stiffness = 1.0e5 /\n")
+        f.write("&initial node = 's1_driver', speed = 10.0 /\n")
+    r3 = run(['run', deck, '-o', os.path.join(tmp, 'three.h5')])
+    # a clash would be the refusal "duplicate node id" (exit 2)
+    check('three gear --id fragments joined by shafts build and run: ' + r3.stderr.strip()[:300], r3.returncode == 0)
+
     k = run(['key', '--diameter', '1.0', '--key-length', '1.5', '--clearance', '0.002', '--fit', 'average'])
     check('key exits 0', k.returncode == 0)
     deck = os.path.join(tmp, 'key.nml')
