@@ -63,12 +63,13 @@ contains
       type(units_t), intent(in) :: units
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: zeta_deg, e_default
-      if (grp%has('backlash')) then   ! the spur geometry form's key (D-62)
+      if (grp%holds('backlash')) then   ! the spur geometry form's key (D-62)
          call fatal_error(err, grp%where('backlash')//": error: a helical_gear takes 'half_backlash', half the "// &
                           "TOTAL backlash along the line of action ('backlash' is the spur_gear geometry form's key): "// &
                           'give half_backlash = half your value, in '//units%length, err_input)
          return
       end if
+      call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
       call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
       call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
       call grp%get_real('teeth', self%teeth, err); if (allocated(err)) return

@@ -46,6 +46,7 @@ contains
       associate (unused => units)
       end associate
       call grp%get_real('stiffness', self%k, err); if (allocated(err)) return
+      call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
       call grp%get_real('rb_driver', self%r1, err); if (allocated(err)) return
       call grp%get_real('rb_driven', self%r2, err); if (allocated(err)) return
       if (.not. self%k > 0.0_wp) then

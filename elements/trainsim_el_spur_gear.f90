@@ -132,7 +132,7 @@ contains
             call fatal_error(err, grp%where('module')//': error: give diametral_pitch or module, not both', err_input)
             return
          end if
-         if (grp%has('half_backlash')) then   ! the constants form's key in the geometry form (D-62)
+         if (grp%holds('half_backlash')) then   ! the constants form's key in the geometry form (D-62)
             call fatal_error(err, grp%where('half_backlash')//": error: half_backlash belongs to TRAIN's constants "// &
                              'form (rb_driver, rb_driven, teeth, ...); this group gives module or diametral_pitch, '// &
                              "so it is in the geometry form, whose key is 'backlash': the TOTAL backlash along the "// &
@@ -140,6 +140,7 @@ contains
                              err_input)
             return
          end if
+         call grp%expect([character(len=12) :: 'teeth_driver', 'teeth_driven'])   ! a step apart (D-62)
          call grp%get_real('teeth_driver', self%teeth, err); if (allocated(err)) return
          call grp%get_real('teeth_driven', self%teeth2, err); if (allocated(err)) return
          call grp%get_real('pressure_angle', self%phi, err, default=20.0_wp); if (allocated(err)) return
@@ -193,7 +194,7 @@ contains
          call grp%get_real('stiffness', k, err, default=kw*self%face); if (allocated(err)) return
          self%cl%law%k = k
       else
-         if (grp%has('backlash')) then   ! the geometry form's key in the constants form (D-62)
+         if (grp%holds('backlash')) then   ! the geometry form's key in the constants form (D-62)
             call fatal_error(err, grp%where('backlash')//": error: backlash (the TOTAL backlash along the line of "// &
                              'action) belongs to the geometry form (module or diametral_pitch, teeth_driver, '// &
                              "teeth_driven, face_width); this group gives neither module nor diametral_pitch, so it "// &
@@ -202,6 +203,7 @@ contains
             return
          end if
          call grp%get_real('stiffness', self%cl%law%k, err); if (allocated(err)) return
+         call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
          call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
          call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
          call grp%get_real('teeth', self%teeth, err); if (allocated(err)) return

@@ -35,6 +35,8 @@ module trainsim_deck
       type(string_t), allocatable, private :: queried(:)
    contains
       procedure :: has => group_has
+      procedure :: holds => group_holds
+      procedure :: expect => group_expect
       procedure :: get_real => group_get_real
       procedure :: get_int => group_get_int
       procedure :: get_logical => group_get_logical
@@ -691,6 +693,25 @@ contains
       call record_query(self, key)
       yes = find(self, key) > 0
    end function group_has
+
+   !> True if the group has an entry `key`, WITHOUT recording `key` as a valid key (for a
+   !> key of another form of the group, to explain it: D-62).
+   logical function group_holds(self, key) result(yes)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      yes = find(self, key) > 0
+   end function group_holds
+
+   !> Record `keys` as valid before reading them: keys a step apart (rb_driver, rb_driven)
+   !> are then never taken for a misspelling of one another when one is missing (D-62).
+   subroutine group_expect(self, keys)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: keys(:)
+      integer :: j
+      do j = 1, size(keys)
+         call record_query(self, trim(keys(j)))
+      end do
+   end subroutine group_expect
 
    !> Number of values given for `key` (0 if absent). Records `key` as a valid key.
    integer function group_count_values(self, key) result(n)

@@ -158,6 +158,7 @@ contains
          call set_table(sig, tt, vv)
       case ('start_stop')
          call grp%get_real('value', vc, err); if (allocated(err)) return
+         call grp%expect([character(len=7) :: 't_accel', 't_decel'])   ! a step apart (D-62)
          call grp%get_real('t_accel', ta, err); if (allocated(err)) return
          call grp%get_real('t_cruise', tc, err); if (allocated(err)) return
          call grp%get_real('t_decel', td, err); if (allocated(err)) return
