@@ -419,11 +419,11 @@ contains
       write (unit, '(a)') '! deck fragment (trainsim gear): nodes and mesh, TRAIN''s seven constants'
       if (inp%units%name == 'si') write (unit, '(a)') "! needs &run units = 'si'"
       write (unit, '(a)') "&node id = '"//n1//"', type = 'inertia', inertia = "//str(res%j1, 6)//' /'
-      write (unit, '(a)') "&element id = '"//id//"', type = 'spur_gear', left = '"//n1//"', right = '"//n2//"',"
-      write (unit, '(a)') '   stiffness = '//str(res%stiffness, 6)// &
+      write (unit, '(a)') "&element id = '"//id//"', type = 'spur_gear', stiffness = "//str(res%stiffness, 6)// &
          ', rb_driver = '//str(res%rb1, 7)//', rb_driven = '//str(res%rb2, 7)//','
       write (unit, '(a)') '   teeth = '//str(inp%teeth1)//', contact_ratio = '//str(res%contact_ratio, 7)// &
-         ', approach_angle = '//str(res%approach_angle, 7)//', half_backlash = '//str(res%half_backlash, 6)//' /'
+         ', approach_angle = '//str(res%approach_angle, 7)//', half_backlash = '//str(res%half_backlash, 6)//','
+      write (unit, '(a)') "   left = '"//n1//"', right = '"//n2//"' /"
       if (inp%target_frequency /= unset) then
          write (unit, '(a)') "&node id = '"//n2//"', type = 'inertia', inertia = "//str(res%j2_target, 6)// &
             ' /   ! driven gear at '//fx(inp%target_frequency, 1)//' Hz'
