@@ -15,7 +15,7 @@ module trainsim_el_helical_gear
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_product, guarded_ratio
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
-   use trainsim_element, only: element_t, hot_form_t, hf_none
+   use trainsim_element, only: element_t, accept_carrier, hot_form_t, hf_none
    use trainsim_el_spur_gear, only: tooth_phase, max_teeth
    implicit none
    private
@@ -63,6 +63,7 @@ contains
       type(units_t), intent(in) :: units
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: zeta_deg, e_default
+      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-63)
       if (grp%holds('backlash')) then   ! the spur geometry form's key (D-62)
          call fatal_error(err, grp%where('backlash')//": error: a helical_gear takes 'half_backlash', half the "// &
                           "TOTAL backlash along the line of action ('backlash' is the spur_gear geometry form's key): "// &

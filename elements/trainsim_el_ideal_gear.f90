@@ -8,7 +8,7 @@ module trainsim_el_ideal_gear
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_product, guarded_ratio
-   use trainsim_element, only: element_t
+   use trainsim_element, only: element_t, accept_carrier
    implicit none
    private
 
@@ -45,6 +45,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       associate (unused => units)
       end associate
+      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-63)
       call grp%get_real('stiffness', self%k, err); if (allocated(err)) return
       call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
       call grp%get_real('rb_driver', self%r1, err); if (allocated(err)) return

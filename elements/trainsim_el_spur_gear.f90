@@ -26,7 +26,7 @@ module trainsim_el_spur_gear
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
-   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone
+   use trainsim_element, only: element_t, accept_carrier, hot_form_t, hg_faces_zone
    implicit none
    private
 
@@ -122,6 +122,7 @@ contains
       character(len=:), allocatable :: zf
       real(wp) :: pd, modl, kw, bl, r1p, r2p, k, kdef
       logical :: geometry, has_pitch, has_module
+      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-63)
 
       ! both asked (has records the query), so neither key is reported as unknown
       has_pitch = grp%has('diametral_pitch')

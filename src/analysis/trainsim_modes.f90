@@ -16,7 +16,7 @@ module trainsim_modes
    use trainsim_error, only: error_t, fatal_error, err_numeric, err_input
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
-   use trainsim_element, only: lin_state_t, lin_start, lin_closed, lin_contact_closed
+   use trainsim_element, only: element_t, lin_state_t, lin_start, lin_closed, lin_contact_closed, max_ports
    implicit none
    private
 
@@ -79,8 +79,8 @@ contains
       type(lin_state_t), intent(in), optional :: state
       integer, allocatable :: dof(:)
       real(wp), allocatable :: k(:, :), m(:, :), w(:), work(:), y(:), inv_j(:)
-      real(wp) :: ke(2, 2), ce(2, 2), lam_max, big
-      integer :: i, n, info, il, ir, a, b, j, imax
+      real(wp) :: ke(max_ports, max_ports), ce(max_ports, max_ports), lam_max, big
+      integer :: i, n, info, a, b, j, imax, np, ends(max_ports)
       type(lin_state_t) :: st
 
       allocate (dof(size(model%nodes)))
@@ -116,23 +116,11 @@ contains
          m(i, i) = model%nodes(modes%node(i))%n%inertia()
       end do
       do j = 1, size(model%elements)
-         associate (e => model%elements(j)%e)
-            call e%linearise(st, inv_j(e%left), inv_j(e%right), ke, ce)
-         end associate
-         il = dof(model%elements(j)%e%left)
-         ir = dof(model%elements(j)%e%right)
-         do a = 1, 2
-            do b = 1, 2
-               if (a == 1) then
-                  i = il
-               else
-                  i = ir
-               end if
-               if (b == 1) then
-                  info = il
-               else
-                  info = ir
-               end if
+         call linearise_ports(model%elements(j)%e, st, inv_j, ends, np, ke, ce)
+         do a = 1, np                                      ! over the element's ports (D-63)
+            do b = 1, np
+               i = dof(ends(a))
+               info = dof(ends(b))
                if (i > 0 .and. info > 0) k(i, info) = k(i, info) + ke(a, b)
             end do
          end do
@@ -158,6 +146,25 @@ contains
    end subroutine compute_modes
 
    !> Inverse inertia of every node (0 for fixed and prescribed-speed nodes).
+   !> Element e linearised over its np ports (D-63): their nodes ends(1:np), ke and
+   !> ce (1:np, 1:np); `linearise` for two, `port_linearise` beyond (inv_j: all nodes').
+   pure subroutine linearise_ports(e, state, inv_j, ends, np, ke, ce)
+      class(element_t), intent(in) :: e
+      type(lin_state_t), intent(in) :: state
+      real(wp), intent(in) :: inv_j(:)
+      integer, intent(out) :: ends(max_ports), np
+      real(wp), intent(out) :: ke(max_ports, max_ports), ce(max_ports, max_ports)
+      integer :: p
+      np = e%n_ports()
+      ends = 0; ke = 0.0_wp; ce = 0.0_wp
+      ends(1:np) = [(e%port(p), p=1, np)]
+      if (np == 2) then
+         call e%linearise(state, inv_j(e%left), inv_j(e%right), ke(1:2, 1:2), ce(1:2, 1:2))
+      else
+         call e%port_linearise(state, inv_j(ends(1:np)), ke(1:np, 1:np), ce(1:np, 1:np))
+      end if
+   end subroutine linearise_ports
+
    subroutine inverse_inertias(model, inv_j)
       type(model_t), intent(in) :: model
       real(wp), allocatable, intent(out) :: inv_j(:)
@@ -234,8 +241,8 @@ contains
       real(wp), intent(in) :: y(:)
       real(wp), intent(out) :: dt_max, bound
       real(wp), allocatable :: inv_j(:), row_k(:), row_c(:), dtq(:), own(:), f0(:), f1(:), yp(:)
-      real(wp) :: ke(2, 2), ce(2, 2), t0, h, g_k, rest
-      integer :: i, k, r, o, ns, p, na, ends(2)
+      real(wp) :: ke(max_ports, max_ports), ce(max_ports, max_ports), t0, h, g_k, rest
+      integer :: i, k, r, o, ns, p, na, ends(max_ports), np
       t0 = model%run%t_start
       call inverse_inertias(model, inv_j)
       allocate (row_k(size(model%nodes)), row_c(size(model%nodes)), dtq(size(model%nodes)))
@@ -265,14 +272,11 @@ contains
          end associate
       end do
       do i = 1, size(model%elements)
-         associate (e => model%elements(i)%e)
-            call e%linearise(state, inv_j(e%left), inv_j(e%right), ke, ce)
-            ends = [e%left, e%right]
-         end associate
-         do p = 1, 2
+         call linearise_ports(model%elements(i)%e, state, inv_j, ends, np, ke, ce)
+         do p = 1, np
             na = ends(p)
-            row_k(na) = row_k(na) + dtq(na)*(abs(ke(p, 1)) + abs(ke(p, 2)))
-            row_c(na) = row_c(na) + dtq(na)*(abs(ce(p, 1)) + abs(ce(p, 2)))
+            row_k(na) = row_k(na) + dtq(na)*sum(abs(ke(p, 1:np)))
+            row_c(na) = row_c(na) + dtq(na)*sum(abs(ce(p, 1:np)))
          end do
       end do
       g_k = 0.0_wp
@@ -376,8 +380,9 @@ contains
          complex(wp), intent(out) :: lam_crit
          type(error_t), allocatable, intent(out) :: err
          real(wp), allocatable :: amat(:, :), wr(:), wi(:), work(:)
-         real(wp) :: dtq(3, size(model%nodes)), ke(2, 2), ce(2, 2), jt(2, 4), vl(1, 1), vr(1, 1), big, hl, re
-         integer :: n, i, k, p, q, na, nb, row, ends(2), info
+         real(wp) :: dtq(3, size(model%nodes)), ke(max_ports, max_ports), ce(max_ports, max_ports), &
+                     jt(max_ports, 2*max_ports), vl(1, 1), vr(1, 1), big, hl, re
+         integer :: n, i, k, p, q, na, nb, row, ends(max_ports), info, np
          complex(wp) :: l
          n = model%n_states
          hmax = huge(1.0_wp)
@@ -394,19 +399,17 @@ contains
          end do
          ! element torques -K theta - C omega on the node rows (as model%jacobian)
          do i = 1, size(model%elements)
-            associate (e => model%elements(i)%e)
-               call e%linearise(s, inv_j(e%left), inv_j(e%right), ke, ce)
-               ends = [e%left, e%right]
-            end associate
-            jt(:, 1) = -ke(:, 1); jt(:, 2) = -ce(:, 1)
-            jt(:, 3) = -ke(:, 2); jt(:, 4) = -ce(:, 2)
-            do p = 1, 2
+            call linearise_ports(model%elements(i)%e, s, inv_j, ends, np, ke, ce)
+            do q = 1, np
+               jt(:, 2*q - 1) = -ke(:, q); jt(:, 2*q) = -ce(:, q)
+            end do
+            do p = 1, np
                na = ends(p)
                if (model%is_held(na)) cycle
                do k = 1, model%nodes(na)%n%nstates()
                   if (dtq(k, na) == 0.0_wp) cycle
                   row = model%nodes(na)%n%offset + k
-                  do q = 1, 2
+                  do q = 1, np
                      nb = ends(q)
                      if (model%is_held(nb) .or. model%nodes(nb)%n%nstates() < 2) cycle
                      amat(row, model%nodes(nb)%n%offset + 1) = amat(row, model%nodes(nb)%n%offset + 1) + &
@@ -520,9 +523,9 @@ contains
       real(wp), intent(out) :: h_part
       type(lin_state_t) :: state
       real(wp), allocatable :: y(:), inv_j(:), f0(:), f1(:), yp(:)
-      real(wp) :: ke(2, 2), ce(2, 2), a, b, disc, h, hl, dl
+      real(wp) :: ke(max_ports, max_ports), ce(max_ports, max_ports), a, b, disc, h, hl, dl
       complex(wp) :: lam
-      integer :: i, o
+      integer :: i, o, p, np, ends(max_ports)
       state = with_loads(model, state_in)
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
@@ -553,9 +556,13 @@ contains
       end do
       do i = 1, size(model%elements)
          associate (e => model%elements(i)%e)
-            call e%linearise(state, inv_j(e%left), inv_j(e%right), ke, ce)
-            a = ke(1, 1)*inv_j(e%left) + ke(2, 2)*inv_j(e%right)     ! k/m of the relative motion
-            b = ce(1, 1)*inv_j(e%left) + ce(2, 2)*inv_j(e%right)     ! c/m
+            call linearise_ports(e, state, inv_j, ends, np, ke, ce)
+            a = ke(1, 1)*inv_j(ends(1)) + ke(2, 2)*inv_j(ends(2))     ! k/m of the relative motion
+            b = ce(1, 1)*inv_j(ends(1)) + ce(2, 2)*inv_j(ends(2))     ! c/m
+            do p = 3, np                                              ! further ports (D-63)
+               a = a + ke(p, p)*inv_j(ends(p))
+               b = b + ce(p, p)*inv_j(ends(p))
+            end do
             if (.not. (a > 0.0_wp .or. b > 0.0_wp)) cycle
             disc = b*b - 4.0_wp*a
             if (disc >= 0.0_wp) then

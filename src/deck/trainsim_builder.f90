@@ -10,6 +10,7 @@ module trainsim_builder
    use trainsim_signal, only: signal_t, signal_from_group
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
+   use trainsim_element, only: element_t
    use trainsim_integrator_registry, only: integrator_names
    use trainsim_id_table, only: id_table_t
    use trainsim_plausibility, only: check_plausibility
@@ -392,12 +393,58 @@ contains
                   return
                end if
                call e%configure(g, model%units, err); if (allocated(err)) return
+               call read_ports(g, e, node_ids, err); if (allocated(err)) return
                call check_params(g, e%params(), err); if (allocated(err)) return
                call g%check_unused(err, "element type '"//e%type_name//"'"); if (allocated(err)) return
             end associate
          end associate
       end do
    end subroutine read_elements
+
+   !> The further ports an n-port element named in `configure` (its port_keys,
+   !> D-63, e.g. a gear pair's `carrier`): each key's node, which must be
+   !> defined and none of the element's other ports.
+   subroutine read_ports(g, e, node_ids, err)
+      type(deck_group_t), intent(inout) :: g
+      class(element_t), intent(inout) :: e
+      type(id_table_t), intent(in) :: node_ids
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: pid
+      integer :: k, j
+      if (.not. allocated(e%port_keys)) allocate (e%port_keys(0))
+      if (allocated(e%more_ports)) deallocate (e%more_ports)
+      allocate (e%more_ports(size(e%port_keys)))
+      e%more_ports = 0
+      do k = 1, size(e%port_keys)
+         associate (key => e%port_keys(k)%s)
+            call g%get_string(key, pid, err); if (allocated(err)) return
+            e%more_ports(k) = node_ids%get(pid)
+            if (e%more_ports(k) == 0) then
+               call fatal_error(err, g%where(key)//": error: element '"//e%id//"' has "//key//" = '"//pid// &
+                                "', a node which is not defined", err_input)
+               return
+            end if
+            do j = 1, k + 1
+               if (e%port(j) /= e%more_ports(k)) cycle
+               call fatal_error(err, g%where(key)//": error: element '"//e%id//"' has "//key//" = '"//pid// &
+                                "', which is already its "//trim(port_name(j))//" node; an element's ports are "// &
+                                'distinct nodes (give the '//key//' a node of its own)', err_input)
+               return
+            end do
+         end associate
+      end do
+   contains
+      !> The deck key of port j.
+      function port_name(j) result(name)
+         integer, intent(in) :: j
+         character(len=:), allocatable :: name
+         select case (j)
+         case (1); name = 'left'
+         case (2); name = 'right'
+         case default; name = e%port_keys(j - 2)%s
+         end select
+      end function port_name
+   end subroutine read_ports
 
    subroutine read_loads(deck, model, node_ids, err)
       type(deck_t), intent(inout) :: deck

@@ -457,13 +457,15 @@ contains
       type(model_t), intent(in) :: model
       integer, allocatable, intent(out) :: piece(:)
       integer, allocatable :: parent(:)
-      integer :: i, a, b, np
+      integer :: i, a, b, np, k
       allocate (parent(size(model%nodes)), piece(size(model%nodes)))
       parent = [(i, i=1, size(model%nodes))]
       do i = 1, size(model%elements)
-         a = root(model%elements(i)%e%left)
-         b = root(model%elements(i)%e%right)
-         if (a /= b) parent(max(a, b)) = min(a, b)
+         do k = 2, model%elements(i)%e%n_ports()        ! every port joins port 1's piece (D-63)
+            a = root(model%elements(i)%e%left)
+            b = root(model%elements(i)%e%port(k))
+            if (a /= b) parent(max(a, b)) = min(a, b)
+         end do
       end do
       np = 0
       piece = 0

@@ -178,6 +178,10 @@ contains
       self%el_states(1:3:2, :) = 1   ! empty ranges (1:0) for held nodes
       self%el_states(2:4:2, :) = 0
       do e = 1, size(model%elements)
+         if (model%elements(e)%e%n_ports() > 2) then   ! an n-port element (D-63): its guards may read every state
+            self%el_states(1:2, e) = [1, model%n_states]
+            cycle
+         end if
          do side = 1, 2
             nd = model%elements(e)%e%left
             if (side == 2) nd = model%elements(e)%e%right
@@ -236,7 +240,7 @@ contains
             call grow(p%d3, p%e3, p%k3)
             p%d2 = p%k3
             call grow(p%d2, p%e2, p%k2)
-            p%used = 2*size(p%k2) < nn
+            p%used = 2*size(p%k2) < nn .and. .not. model%nport   ! (parts by left and right only)
             p%sk2 = states_of(p%k2)
             p%sk3 = states_of(p%k3)
             p%sk4 = states_of(p%k4)
@@ -874,7 +878,7 @@ contains
       real(wp) :: ts
       ok = .false.
       nn = size(model%nodes)
-      if (.not. self%multirate .or. nn < mr_min_nodes .or. mr_small*(2*mr_depth + 4) > nn) return
+      if (.not. self%multirate .or. model%nport .or. nn < mr_min_nodes .or. mr_small*(2*mr_depth + 4) > nn) return
       ! clear the marks of the last region
       do k = 1, self%n_l
          self%in_l(self%l_nodes(k)) = .false.

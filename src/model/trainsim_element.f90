@@ -7,6 +7,11 @@
 !> Sign convention: `torques` returns the torque the element puts ON its left
 !> node (tl) and ON its right node (tr), positive in the direction of positive
 !> rotation. TRAIN's RTRQ of element i is -tl, its LTRQ seen by node i+1 is tr.
+!>
+!> Ports (D-63): left, right are ports 1, 2; an n-port element has more
+!> (`more_ports`, deck keys `port_keys`) and answers the `port_*` procedures on
+!> arrays over its ports. Their defaults serve two ports and two ports on a
+!> carrier (port 3, `accept_carrier`): the element's physics in its frame.
 module trainsim_element
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -14,14 +19,18 @@ module trainsim_element
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t
    use trainsim_event, only: event_t
+   use trainsim_strings, only: string_t
    implicit none
    private
 
-   public :: element_t, element_slot_t
+   public :: element_t, element_slot_t, max_ports, accept_carrier
    public :: lin_state_t, lin_start, lin_closed, lin_stiffest
    public :: lin_contact_initial, lin_contact_closed
    public :: lin_zone_initial, lin_zone_single, lin_zone_stiffest
    public :: hot_form_t, hf_none, hf_open, hf_yang_sun, hf_linear, hg_none, hg_faces, hg_faces_zone
+
+   !> Most ports of one element (the model's buffers for one element's ports).
+   integer, parameter :: max_ports = 4
 
    !> Contact state of a linearisation: as at t_start, or every clearance closed.
    integer, parameter :: lin_contact_initial = 1, lin_contact_closed = 2
@@ -93,6 +102,18 @@ module trainsim_element
       !> this in `configure`, so the energy ledger asks only them.
       logical :: supplies_power = .false.
       real(wp) :: ext_left = 0.0_wp, ext_right = 0.0_wp
+      !> Nodes of the ports after left (port 1) and right (port 2), in the order
+      !> of `port_keys` (set by the builder; unallocated or empty: two ports).
+      integer, allocatable :: more_ports(:)
+      !> The deck keys that name the further ports, set by `configure` (the
+      !> builder reads each as a node id into more_ports).
+      type(string_t), allocatable :: port_keys(:)
+      !> On a carrier (port 3, D-63): the sense s of the right port's angle in
+      !> the carrier's frame, thr' = thr - s thc (the left port's is +1,
+      !> thl' = thl - thc): -1 for an external gear pair, whose driven gear
+      !> turns against the driver (TRAIN counts each gear's angle in its own
+      !> sense of rotation), +1 for an internal (ring) gear.
+      real(wp) :: carrier_sense = -1.0_wp
    contains
       procedure(configure_i), deferred :: configure
       procedure(torques_i), deferred :: torques
@@ -116,6 +137,20 @@ module trainsim_element
       procedure :: linear_spring => el_linear_spring
       procedure :: hot_form => el_hot_form
       procedure :: displacement_bound => el_displacement_bound
+      procedure, non_overridable :: n_ports => el_n_ports
+      procedure, non_overridable :: port => el_port
+      procedure, non_overridable :: frame => el_frame
+      procedure :: port_torques => el_port_torques
+      procedure :: port_torques_dissipation => el_port_torques_dissipation
+      procedure :: port_input_power => el_port_input_power
+      procedure :: port_potential_energy => el_port_potential_energy
+      procedure :: port_guards => el_port_guards
+      procedure :: port_init_mode => el_port_init_mode
+      procedure :: port_update_mode => el_port_update_mode
+      procedure :: port_status => el_port_status
+      procedure, non_overridable :: status_at => el_status_at
+      procedure :: port_jacobian => el_port_jacobian
+      procedure :: port_linearise => el_port_linearise
    end type element_t
 
    !> A slot in the model's element list (arrays of polymorphic objects).
@@ -374,4 +409,192 @@ contains
       end associate
       bound = huge(1.0_wp)
    end function el_displacement_bound
+   !> A two-port element that may sit on a carrier (a gear pair's housing,
+   !> D-63) calls this in `configure`: with the deck key `carrier` the carrier
+   !> becomes its port 3 (the builder resolves the node) and the port
+   !> defaults evaluate the element in the carrier's frame; `sense` is the
+   !> right port's sense relative to the carrier (carrier_sense).
+   subroutine accept_carrier(self, grp, sense)
+      class(element_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      real(wp), intent(in) :: sense
+      self%carrier_sense = sense
+      if (grp%has('carrier')) then
+         self%port_keys = [string_t('carrier')]
+      else
+         allocate (self%port_keys(0))
+      end if
+   end subroutine accept_carrier
+
+   !> Number of ports: 2 (left, right) and the further ones.
+   pure integer function el_n_ports(self) result(n)
+      class(element_t), intent(in) :: self
+      n = 2
+      if (allocated(self%more_ports)) n = 2 + size(self%more_ports)
+   end function el_n_ports
+
+   !> Node of port k (1 left, 2 right, then more_ports).
+   pure integer function el_port(self, k) result(node)
+      class(element_t), intent(in) :: self
+      integer, intent(in) :: k
+      select case (k)
+      case (1); node = self%left
+      case (2); node = self%right
+      case default; node = self%more_ports(k - 2)
+      end select
+   end function el_port
+
+   !> The two-port kinematics x = (thl, wl, thr, wr) the element's own
+   !> procedures see at its ports' angles th and speeds w: as given for two
+   !> ports, relative to the carrier (port 3) for an element on one:
+   !> thl' = thl - thc, thr' = thr - s thc (s = carrier_sense), speeds alike.
+   pure subroutine el_frame(self, th, w, x)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp), intent(out) :: x(4)
+      if (size(th) < 3) then
+         x = [th(1), w(1), th(2), w(2)]
+      else
+         x = [th(1) - th(3), w(1) - w(3), th(2) - self%carrier_sense*th(3), w(2) - self%carrier_sense*w(3)]
+      end if
+   end subroutine el_frame
+
+   !> Torques t(k) on every port k at the ports' angles th and speeds w.
+   !> Default: `torques` in the frame (el_frame); on a carrier, the carrier
+   !> takes the reaction of both, t3 = -(t1 + s t2) (the housing's torque
+   !> balance, D-63; by virtual work on thl', thr').
+   pure subroutine el_port_torques(self, th, w, t)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp), intent(out) :: t(:)
+      real(wp) :: x(4)
+      call self%frame(th, w, x)
+      call self%torques(x(1), x(2), x(3), x(4), t(1), t(2))
+      if (size(t) > 2) t(3) = -(t(1) + self%carrier_sense*t(2))
+   end subroutine el_port_torques
+
+   !> `port_torques` and the power dissipated; below, each two-port procedure in the frame.
+   pure subroutine el_port_torques_dissipation(self, th, w, t, p)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp), intent(out) :: t(:), p
+      real(wp) :: x(4)
+      call self%frame(th, w, x)
+      call self%torques_dissipation(x(1), x(2), x(3), x(4), t(1), t(2), p)
+      if (size(t) > 2) t(3) = -(t(1) + self%carrier_sense*t(2))
+   end subroutine el_port_torques_dissipation
+
+   pure real(wp) function el_port_input_power(self, th, w) result(p)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp) :: x(4)
+      call self%frame(th, w, x)
+      p = self%input_power(x(1), x(2), x(3), x(4))
+   end function el_port_input_power
+
+   pure real(wp) function el_port_potential_energy(self, th) result(e)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:)
+      real(wp) :: x(4)
+      call self%frame(th, th, x)
+      e = self%potential_energy(x(1), x(3))
+   end function el_port_potential_energy
+
+   !> (a gear's zone follows the driver's angle relative to its carrier)
+   pure subroutine el_port_guards(self, th, w, g)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp), intent(out) :: g(:)
+      real(wp) :: x(4)
+      call self%frame(th, w, x)
+      call self%guards(x(1), x(2), x(3), x(4), g)
+   end subroutine el_port_guards
+
+   subroutine el_port_init_mode(self, th, w)
+      class(element_t), intent(inout) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp) :: x(4)
+      call self%frame(th, w, x)
+      call self%init_mode(x(1), x(2), x(3), x(4))
+   end subroutine el_port_init_mode
+
+   subroutine el_port_update_mode(self, t, th, w, fired, ev, nev)
+      class(element_t), intent(inout) :: self
+      real(wp), intent(in) :: t, th(:), w(:)
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(out) :: nev
+      real(wp) :: x(4)
+      call self%frame(th, w, x)
+      call self%update_mode(t, x(1), x(2), x(3), x(4), fired, ev, nev)
+   end subroutine el_port_update_mode
+
+   !> (the mesh's own displacement and force)
+   pure subroutine el_port_status(self, th, w, disp, force, contact, pairs)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      real(wp) :: x(4)
+      call self%frame(th, w, x)
+      call self%status(x(1), x(2), x(3), x(4), disp, force, contact, pairs)
+   end subroutine el_port_status
+
+   !> `status` (two ports) or `port_status` at the angles and speeds of every
+   !> node of the model (theta, omega): the recorder's one call for any element.
+   pure subroutine el_status_at(self, theta, omega, disp, force, contact, pairs)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: theta(:), omega(:)
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      real(wp) :: th(max_ports), w(max_ports)
+      integer :: k, np
+      np = self%n_ports()
+      if (np == 2) then
+         call self%status(theta(self%left), omega(self%left), theta(self%right), omega(self%right), disp, force, &
+                          contact, pairs)
+         return
+      end if
+      th(1:np) = [(theta(self%port(k)), k=1, np)]
+      w(1:np) = [(omega(self%port(k)), k=1, np)]
+      call self%port_status(th(1:np), w(1:np), disp, force, contact, pairs)
+   end subroutine el_status_at
+
+   !> Partial derivatives jt(i, 2k-1) = d t_i / d th_k, jt(i, 2k) = d t_i / d w_k
+   !> over the np ports. Default: `torque_jacobian` in the frame, by the chain
+   !> rule through el_frame's linear map (and t3 = -(t1 + s t2)).
+   pure subroutine el_port_jacobian(self, th, w, jt)
+      class(element_t), intent(in) :: self
+      real(wp), intent(in) :: th(:), w(:)
+      real(wp), intent(out) :: jt(:, :)
+      real(wp) :: x(4), j2(2, 4), s
+      call self%frame(th, w, x)
+      call self%torque_jacobian(x(1), x(2), x(3), x(4), j2)
+      jt = 0.0_wp
+      jt(1:2, 1:4) = j2
+      if (size(th) < 3) return
+      s = self%carrier_sense
+      jt(1:2, 5) = -(j2(:, 1) + s*j2(:, 3))
+      jt(1:2, 6) = -(j2(:, 2) + s*j2(:, 4))
+      jt(3, :) = -(jt(1, :) + s*jt(2, :))
+   end subroutine el_port_jacobian
+
+   !> Linearised stiffness k and damping c over the np ports (as `linearise`,
+   !> inv_j the ports' inverse inertias). Default: `linearise` in the frame,
+   !> k = A^T k2 A with A the frame's map (thl', thr') = A (th_1 .. th_np).
+   pure subroutine el_port_linearise(self, state, inv_j, k, c)
+      class(element_t), intent(in) :: self
+      type(lin_state_t), intent(in) :: state
+      real(wp), intent(in) :: inv_j(:)
+      real(wp), intent(out) :: k(:, :), c(:, :)
+      real(wp) :: k2(2, 2), c2(2, 2), a(2, max_ports)
+      integer :: np
+      np = size(inv_j)
+      call self%linearise(state, inv_j(1), inv_j(2), k2, c2)
+      a = 0.0_wp
+      a(1, 1) = 1.0_wp; a(2, 2) = 1.0_wp
+      if (np > 2) a(:, 3) = [-1.0_wp, -self%carrier_sense]
+      k = matmul(transpose(a(:, 1:np)), matmul(k2, a(:, 1:np)))
+      c = matmul(transpose(a(:, 1:np)), matmul(c2, a(:, 1:np)))
+   end subroutine el_port_linearise
 end module trainsim_element

@@ -10,7 +10,7 @@ module trainsim_model
    use trainsim_signal, only: signal_t
    use trainsim_node, only: node_t, node_slot_t
    use trainsim_element, only: element_t, element_slot_t, lin_closed, hot_form_t, hf_none, hf_open, hf_yang_sun, &
-                               hf_linear, hg_none, hg_faces, hg_faces_zone
+                               hf_linear, hg_none, hg_faces, hg_faces_zone, max_ports
    use trainsim_event, only: event_t, max_update_events
    implicit none
    private
@@ -156,6 +156,9 @@ module trainsim_model
       integer, allocatable :: guard_offset(:)    !< per element
       real(wp) :: energy0 = 0.0_wp               !< stored energy at t_start
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
+      !> Some element has more than two ports (D-63): such elements go the
+      !> general path only (no simple kernels, no local steps of RK4).
+      logical :: nport = .false.
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
       !> Per element: its torque on its left (1) and right (2) node at the last full RHS.
@@ -284,8 +287,10 @@ contains
       self%n_y = self%n_states
       if (self%run%track_energy) self%n_y = self%n_states + 2
       self%any_needs_loads = .false.
+      self%nport = .false.
       do i = 1, ne
          if (self%elements(i)%e%needs_loads) self%any_needs_loads = .true.
+         if (self%elements(i)%e%n_ports() > 2) self%nport = .true.
       end do
       if (allocated(self%guard_offset)) deallocate (self%guard_offset)
       allocate (self%guard_offset(ne))
@@ -365,7 +370,7 @@ contains
             self%fe(i)%ng = e%n_guards()
             if (self%fe(i)%ng > 0) self%n_norow = self%n_norow + 1   ! its row: not yet (form 0)
             call e%linear_spring(lin, k, c, r1, r2)
-            if (lin) lin = linear_element_agrees(e, k, c, r1, r2)
+            if (lin) lin = linear_element_agrees(e, k, c, r1, r2) .and. e%n_ports() == 2
             self%fe(i)%linear = lin
             self%fe(i)%form = 0
             if (lin) then
@@ -428,7 +433,8 @@ contains
          if (self%fe(i)%l /= i .or. self%fe(i)%r /= i + 1) self%chain = .false.
       end do
       self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
-                    .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0
+                    .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0 &
+                    .and. .not. self%nport
       ! elements whose recorded status the observer may take from the workspace
       if (allocated(self%status_in_ws)) deallocate (self%status_in_ws)
       allocate (self%status_in_ws(ne))
@@ -749,6 +755,8 @@ contains
             else if (e%form >= lf_open) then                               ! a clearance's hot form (D-35)
                call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
                if (track) pdiss = pdiss + f
+            else if (self%nport) then
+               call nport_torques(self, i, track, tl, tr, pdiss, pin)      ! (its further ports' torques added)
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
                if (track) then
@@ -1385,11 +1393,112 @@ contains
             tr = f*e%r2
          else if (e%form >= lf_open) then                                  ! a clearance's hot form (D-35)
             call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
+         else if (self%nport) then
+            call port_torques_2(self, i, tl, tr)
          else
             call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
          end if
       end associate
    end subroutine model_element_torques
+
+   !> The nodes of element i's ports and their angles and speeds in the
+   !> workspace (th, w, ends: 1 .. n_ports of the element; D-63).
+   pure subroutine port_kinematics(self, i, ends, th, w)
+      type(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      integer, intent(out) :: ends(max_ports)
+      real(wp), intent(out) :: th(max_ports), w(max_ports)
+      integer :: k
+      ends = 0; th = 0.0_wp; w = 0.0_wp
+      do k = 1, self%elements(i)%e%n_ports()
+         ends(k) = self%elements(i)%e%port(k)
+         th(k) = self%theta(ends(k))
+         w(k) = self%omega(ends(k))
+      end do
+   end subroutine port_kinematics
+
+   !> An n-port element i (D-63) at the workspace's kinematics, in the general
+   !> RHS: its torques on ports 1 and 2 in tl, tr (added by the caller as a
+   !> two-port element's), those on its further ports added to their nodes
+   !> here; with `track` its dissipation and input power added to pdiss, pin.
+   !> A two-port element: `torques` (and its powers), as the general RHS asks.
+   subroutine nport_torques(self, i, track, tl, tr, pdiss, pin)
+      type(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      logical, intent(in) :: track
+      real(wp), intent(out) :: tl, tr
+      real(wp), intent(inout) :: pdiss, pin
+      real(wp) :: th(max_ports), w(max_ports), t(max_ports), p
+      integer :: np, k, ends(max_ports)
+      associate (e => self%elements(i)%e)
+         np = e%n_ports()
+         call port_kinematics(self, i, ends, th, w)
+         if (np == 2) then
+            call e%torques(th(1), w(1), th(2), w(2), tl, tr)
+            if (track) then
+               pdiss = pdiss + e%dissipation_power(th(1), w(1), th(2), w(2))
+               if (e%supplies_power) pin = pin + e%input_power(th(1), w(1), th(2), w(2))
+            end if
+            return
+         end if
+         call e%port_torques_dissipation(th(1:np), w(1:np), t(1:np), p)
+         if (track) then
+            pdiss = pdiss + p
+            if (e%supplies_power) pin = pin + e%port_input_power(th(1:np), w(1:np))
+         end if
+         do k = 3, np
+            self%torque(ends(k)) = self%torque(ends(k)) + t(k)
+         end do
+         tl = t(1)
+         tr = t(2)
+      end associate
+   end subroutine nport_torques
+
+   !> Element i's torques on its ports 1 and 2 (left, right) at the
+   !> workspace's kinematics, through `port_torques` (any number of ports).
+   subroutine port_torques_2(self, i, tl, tr)
+      type(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(out) :: tl, tr
+      real(wp) :: th(max_ports), w(max_ports), t(max_ports)
+      integer :: np, ends(max_ports)
+      np = self%elements(i)%e%n_ports()
+      call port_kinematics(self, i, ends, th, w)
+      call self%elements(i)%e%port_torques(th(1:np), w(1:np), t(1:np))
+      tl = t(1)
+      tr = t(2)
+   end subroutine port_torques_2
+
+   !> Elastic energy of element i (not a linear spring of the fast path) at
+   !> the workspace's angles: `potential_energy`, or over its ports (D-63).
+   real(wp) function element_potential(self, i) result(e)
+      type(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp) :: th(max_ports), w(max_ports)
+      integer :: np, ends(max_ports)
+      np = self%elements(i)%e%n_ports()
+      if (np == 2) then
+         e = self%elements(i)%e%potential_energy(self%theta(self%fe(i)%l), self%theta(self%fe(i)%r))
+      else
+         call port_kinematics(self, i, ends, th, w)
+         e = self%elements(i)%e%port_potential_energy(th(1:np))
+      end if
+   end function element_potential
+
+   !> `update_mode` of an n-port element i (D-63) at the workspace's kinematics.
+   subroutine port_update(self, i, t, fired, ev, nev)
+      type(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: t
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(out) :: nev
+      real(wp) :: th(max_ports), w(max_ports)
+      integer :: np, ends(max_ports)
+      np = self%elements(i)%e%n_ports()
+      call port_kinematics(self, i, ends, th, w)
+      call self%elements(i)%e%port_update_mode(t, th(1:np), w(1:np), fired, ev, nev)
+   end subroutine port_update
 
    !> Elastic energy in all elements at the kinematics in the workspace.
    real(wp) function model_potential_energy(self) result(e)
@@ -1402,7 +1511,7 @@ contains
          if (self%fe(i)%linear) then
             e = e + 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
          else
-            e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+            e = e + element_potential(self, i)
          end if
       end do
    end function model_potential_energy
@@ -1593,9 +1702,9 @@ contains
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: jac(:, :)
-      real(wp) :: dtq(3, size(self%nodes)), jt(2, 4)
-      integer :: i, a, b, k, na, nb, row, ia, ib
-      integer :: ends(2)
+      real(wp) :: dtq(3, size(self%nodes)), jt(max_ports, 2*max_ports), th(max_ports), w(max_ports)
+      integer :: i, a, b, k, na, nb, row, ia, ib, np
+      integer :: ends(max_ports)
       jac = 0.0_wp
       dtq = 0.0_wp
       call self%kinematics(t, y)
@@ -1608,16 +1717,22 @@ contains
       end do
       do i = 1, size(self%elements)
          associate (e => self%elements(i)%e)
-            ends = [e%left, e%right]
-            call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
-                                   self%omega(e%right), jt)
-            do a = 1, 2
+            np = e%n_ports()
+            if (np == 2) then
+               ends(1:2) = [e%left, e%right]
+               call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
+                                      self%omega(e%right), jt(1:2, 1:4))
+            else                                                  ! an n-port element (D-63)
+               call port_kinematics(self, i, ends, th, w)
+               call e%port_jacobian(th(1:np), w(1:np), jt(1:np, 1:2*np))
+            end if
+            do a = 1, np
                na = ends(a)
                if (self%speed_of(na) /= 0) cycle
                do k = 1, self%nodes(na)%n%nstates()
                   if (dtq(k, na) == 0.0_wp) cycle
                   row = self%nodes(na)%n%offset + k
-                  do b = 1, 2
+                  do b = 1, np
                      nb = ends(b)
                      if (self%speed_of(nb) /= 0 .or. self%nodes(nb)%n%nstates() < 2) cycle
                      ia = self%nodes(nb)%n%offset + 1
@@ -1740,9 +1855,19 @@ contains
       integer, intent(in) :: i, o
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: g(:)
-      integer :: n
-      real(wp) :: thl, wl, thr, wr, gh(4)
+      integer :: n, k, np
+      real(wp) :: thl, wl, thr, wr, gh(4), th(max_ports), w(max_ports)
       n = self%fe(i)%ng
+      if (self%nport) then
+         np = self%elements(i)%e%n_ports()
+         if (np > 2) then                                   ! an n-port element (D-63): every port from y
+            do k = 1, np
+               call node_kinematics(self, self%elements(i)%e%port(k), t, y, th(k), w(k))
+            end do
+            call self%elements(i)%e%port_guards(th(1:np), w(1:np), g(o + 1:o + n))
+            return
+         end if
+      end if
       ! a plain inertia's angle and speed straight from y (no call on every step)
       if (self%fe(i)%yl > 0) then
          thl = y(self%fe(i)%yl)
@@ -1925,13 +2050,20 @@ contains
    subroutine model_init_modes(self, t, y)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
-      integer :: i, l, r
+      integer :: i, l, r, np, ends(max_ports)
+      real(wp) :: th(max_ports), w(max_ports)
       call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
       call self%kinematics(t, y)
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left
          r = self%elements(i)%e%right
-         call self%elements(i)%e%init_mode(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
+         np = self%elements(i)%e%n_ports()
+         if (np > 2) then                                   ! an n-port element (D-63)
+            call port_kinematics(self, i, ends, th, w)
+            call self%elements(i)%e%port_init_mode(th(1:np), w(1:np))
+         else
+            call self%elements(i)%e%init_mode(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
+         end if
          call refresh_hot(self, i)
       end do
       self%energy0 = self%stored_energy(t, y)
@@ -1978,6 +2110,10 @@ contains
       associate (e => self%elements(i)%e, q => self%fe(i))
          call e%hot_form(h)
          if (q%linear .or. e%needs_loads .or. e%supplies_power) h%kind = hf_none
+         if (e%n_ports() > 2) then                         ! the hot forms have two ports (D-63)
+            h%kind = hf_none
+            h%guards = hg_none
+         end if
          ng = q%ng
          if (.not. ((h%guards == hg_faces .and. ng == 2) .or. (h%guards == hg_faces_zone .and. ng == 4))) &
             h%guards = hg_none
@@ -2201,8 +2337,12 @@ contains
          if (.not. any(fired(o + 1:o + n))) cycle
          l = self%fe(i)%l
          r = self%fe(i)%r
-         call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
-                                             fired(o + 1:o + n), local, m)
+         if (self%elements(i)%e%n_ports() > 2) then          ! an n-port element (D-63; all kinematics known:
+            call port_update(self, i, t, fired(o + 1:o + n), local, m)   ! no local steps with one)
+         else
+            call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
+                                                fired(o + 1:o + n), local, m)
+         end if
          call refresh_hot(self, i)
          if (nev + m > size(events)) then
             allocate (grown(max(2*size(events), nev + m, 16)))
@@ -2225,12 +2365,10 @@ contains
    contains
       !> The elastic energy of the elements els at the kinematics in the workspace.
       real(wp) function els_energy() result(e)
-         integer :: p, ll, rr
+         integer :: p
          e = 0.0_wp
          do p = 1, size(els)
-            ll = self%fe(els(p))%l
-            rr = self%fe(els(p))%r
-            e = e + self%elements(els(p))%e%potential_energy(self%theta(ll), self%theta(rr))
+            e = e + element_potential(self, els(p))
          end do
       end function els_energy
    end subroutine model_apply_events
@@ -2284,7 +2422,7 @@ contains
          if (self%fe(i)%linear) then
             pe = 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
          else
-            pe = self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
+            pe = element_potential(self, i)
          end if
          e = e + pe
          pot = pot + pe

@@ -259,7 +259,7 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
-      integer :: i, l, r
+      integer :: i
       logical :: ws
       ws = model%ws_step_end .and. model%ws_t == t
       self%s_whole = .true.
@@ -289,11 +289,8 @@ contains
                cycle
             end if
          end if
-         associate (e => model%elements(i)%e)
-            l = e%left; r = e%right
-            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
-                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
-         end associate
+         call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
+                                            self%s%contact(i), self%s%pairs(i))
       end do
       if (size(self%s%inputs) > 0) call input_series_values(model, self%drivers, t, self%s%inputs)
       if (self%track) call fill_energy(self, model, y)
@@ -344,7 +341,7 @@ contains
       real(wp), intent(inout), contiguous :: disp(:)
       type(element_metrics_t), intent(inout), contiguous :: m(:)
       type(event_t), intent(inout), contiguous :: events(:)
-      integer :: i, k, l, r, c, p
+      integer :: i, k, c, p
       real(wp) :: d, f, torque, t0
       do i = 1, size(elements)
          if (in_ws(i)) then
@@ -352,8 +349,7 @@ contains
             f = el_force(i)
             c = el_contact(i)
          else
-            l = elements(i)%e%left; r = elements(i)%e%right
-            call elements(i)%e%status(theta(l), omega(l), theta(r), omega(r), d, f, c, p)
+            call elements(i)%e%status_at(theta, omega, d, f, c, p)
          end if
          torque = el_torque(2, i)
          disp(i) = d
@@ -751,7 +747,7 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       integer, intent(in) :: nodes(:), els(:)
-      integer :: k, i, l, r
+      integer :: k, i
       call model%kinematics_part(t, y, nodes)
       if (model%any_needs_loads) call model%apply_loads(t)
       self%s%t = -huge(1.0_wp)
@@ -763,11 +759,8 @@ contains
       do k = 1, size(els)
          i = els(k)
          call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
-         associate (e => model%elements(i)%e)
-            l = e%left; r = e%right
-            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
-                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
-         end associate
+         call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
+                                            self%s%contact(i), self%s%pairs(i))
       end do
    end subroutine obs_fill_part
 
@@ -841,6 +834,7 @@ contains
       if (.not. h > 0.0_wp) return
       do i = 1, size(model%elements)
          if (self%s%contact(i) == 0 .or. self%s%contact(i) /= self%contact_prev(i)) cycle
+         if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
          l = model%elements(i)%e%left
          r = model%elements(i)%e%right
          ! 1: |force| maximum, 2: displacement extreme on the contact side,

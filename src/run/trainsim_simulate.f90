@@ -243,17 +243,14 @@ contains
       type(settle_t), intent(inout) :: st
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(inout) :: t_end
-      integer :: ne, e, l, r, c, p, slot, k, kk
+      integer :: ne, e, c, p, slot, k, kk
       real(wp) :: f, w, r1, measure
       ne = size(model%elements)
       st%j = st%j + 1
       slot = modulo(st%j, settle_kmax + 1)
       call model%kinematics(t, y)
       do e = 1, ne
-         associate (el => model%elements(e)%e)
-            l = el%left; r = el%right
-            call el%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), st%x(e, slot), f, c, p)
-         end associate
+         call model%elements(e)%e%status_at(model%theta, model%omega, st%x(e, slot), f, c, p)
       end do
       st%x(ne + 1:, slot) = model%omega
       st%scale(1:ne) = max(st%scale(1:ne), abs(st%x(1:ne, slot)))

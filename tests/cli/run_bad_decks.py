@@ -44,6 +44,10 @@ NODES = (
 )
 SHAFT = "&element id = 's1', type = 'shaft', stiffness = 1.0e5 /\n"
 GOOD = RUN + NODES + SHAFT
+# A housing node (line 4) and a gear pair on it (line 5, its carrier given by the case).
+HOUSING = "&node id = 'h', type = 'inertia', inertia = 2.0 /\n"
+GEAR = ("&element id = 'g', type = 'ideal_gear', left = 'a', right = 'b', carrier = '{carrier}', "
+        "stiffness = 1.0e5, rb_driver = 1.0, rb_driven = 2.0 /\n")
 
 # Three disks of verification/table5_1 (19.68 and 32.25 Hz modes).
 TABLE5_1 = (
@@ -129,6 +133,24 @@ CASES = [
     dict(name="element joins a node to itself",
          deck=RUN + NODES + "&element id = 's1', type = 'shaft', left = 'a', right = 'a', stiffness = 1.0e5 /\n",
          exit=2, stderr=["deck.nml:4:", "'s1'", "'a'", "to itself"]),
+    # n-port elements (D-63): a gear pair's carrier (housing) node
+    dict(name="gear carrier is a missing node",
+         deck=RUN + NODES + HOUSING + GEAR.format(carrier="zz"),
+         exit=2, stderr=["deck.nml:5:", "'g'", "carrier = 'zz'", "not defined"]),
+    dict(name="gear carrier is the driver's node",
+         deck=RUN + NODES + HOUSING + GEAR.format(carrier="a"),
+         exit=2, stderr=["deck.nml:5:", "'g'", "carrier = 'a'", "already its left node", "distinct"]),
+    dict(name="gear carrier is the driven gear's node",
+         deck=RUN + NODES + HOUSING + GEAR.format(carrier="b"),
+         exit=2, stderr=["deck.nml:5:", "'g'", "carrier = 'b'", "already its right node"]),
+    dict(name="carrier on an element that has none (a shaft)",
+         deck=RUN + NODES + HOUSING + "&element id = 's1', type = 'shaft', left = 'a', right = 'b', "
+         "carrier = 'h', stiffness = 1.0e5 /\n",
+         exit=2, stderr=["deck.nml:5:", "unknown key 'carrier'", "shaft"]),
+    dict(name="static preload with a gear on a carrier (not yet)",
+         deck="&run t_end = 0.01, dt = 1.0e-4, initial_state = 'preload' /\n" + NODES + HOUSING
+         + GEAR.format(carrier="h") + "&load node = 'b', value = 1.0 /\n",
+         exit=2, stderr=["deck.nml:5:", "'g'", "preload", "more than two ports", "carrier"]),
     dict(name="chain default runs out of nodes",
          deck=GOOD + "&element id = 's2', type = 'shaft', stiffness = 1.0e5 /\n",
          exit=2, stderr=["deck.nml:5:", "'s2'", "not defined", "right"]),
