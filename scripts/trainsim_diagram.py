@@ -42,6 +42,9 @@ def components(nodes, elements):
     for e in elements:
         adj[e["left"]].append(e["right"])
         adj[e["right"]].append(e["left"])
+        for node in e.get("ports", {}).values():   # an n-port element's further ports (a carrier)
+            adj[e["left"]].append(node)
+            adj[node].append(e["left"])
     part, parts = {}, []
     for n in nodes:
         if n["id"] in part:
@@ -70,6 +73,9 @@ def layout(nodes, elements):
     for e in elements:
         adj[e["left"]].append((e["right"], e["id"]))
         adj[e["right"]].append((e["left"], e["id"]))
+        for key, node in e.get("ports", {}).items():   # a carrier: placed beside the element
+            adj[e["left"]].append((node, f"{e['id']}:{key}"))
+            adj[node].append((e["left"], f"{e['id']}:{key}"))
     pos, tree_edges, spans = {}, set(), []
     row0 = 0
     for members in parts:
@@ -226,6 +232,11 @@ def draw(desc, out):
             ax.text(xm, ym + side * 0.12, f"{lines[0]} ({lines[1]})" + ("\n" + "\n".join(extra) if extra else ""),
                     ha="center", va="top" if side < 0 else "bottom", fontsize=6.2, zorder=3, color=colour, bbox=box,
                     gid=f"element-label:{e['id']}")
+        for key, node in e.get("ports", {}).items():   # a further port (a carrier): dashed, to its node
+            (xc, yc), _ = edge_points(pos[node], (xm, ym))
+            ax.plot([xm, xc], [ym, yc], ls="--", lw=1.0, color="0.35", zorder=1, gid=f"port:{e['id']}:{key}")
+            ax.text(0.5 * (xm + xc) + 0.06, 0.5 * (ym + yc), key, fontsize=6, color="0.35", ha="left",
+                    va="center", zorder=3)
         if clr:   # the clearance symbol: a gap between two bars on the connector
             ax.plot([xm - 0.09, xm - 0.09], [ym - 0.16, ym + 0.16], color="C3", lw=2.2, zorder=4)
             ax.plot([xm + 0.09, xm + 0.09], [ym - 0.16, ym + 0.16], color="C3", lw=2.2, zorder=4)

@@ -6,6 +6,7 @@ module trainsim_describe
    use trainsim_kinds, only: wp
    use trainsim_deck, only: deck_t
    use trainsim_model, only: model_t
+   use trainsim_element, only: element_t
    use trainsim_param_list, only: param_list_t
    use trainsim_strings, only: str, to_lower, string_t
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
@@ -19,7 +20,8 @@ contains
    !> Write the description of `model` (built from `deck`) to `unit` as one JSON object:
    !> {"title", "deck_file", "units": {name, length, force, torque, inertia},
    !>  "nodes": [{index, id, type, fixed, prescribed_speed, params: {name: value}, choices: {name: word}}],
-   !>  "elements": [{index, id, type, left, right, displacement_unit, guards, params, choices}],
+   !>  "elements": [{index, id, type, left, right, [ports: {key: node},] displacement_unit, guards, params,
+   !>                choices}] (ports: an n-port element's further ports by deck key, e.g. carrier; D-63),
    !>  "loads": [{node, quantity, kind, line, keys: {key: text}}]}.
    !> Node and element indices are 1-based, as in the history file.
    subroutine write_description(deck, model, unit)
@@ -51,7 +53,7 @@ contains
             if (du == 'length') du = model%units%length
             write (unit, '(a)') '  {"index": '//str(i)//', "id": '//jstr(e%id)//', "type": '//jstr(e%type_name)// &
                ', "left": '//jstr(model%nodes(e%left)%n%id)//', "right": '//jstr(model%nodes(e%right)%n%id)// &
-               ', "displacement_unit": '//jstr(du)//', "guards": '//str(e%n_guards())// &
+               more_ports(model, e)//', "displacement_unit": '//jstr(du)//', "guards": '//str(e%n_guards())// &
                ', "params": '//jparams(e%params())//', "choices": '//jchoices(e%params())//'}'//trim(sep)
          end associate
       end do
@@ -91,6 +93,22 @@ contains
    end subroutine write_description
 
    !> The raw tokens of a deck value, joined by ', ' (a long table: its first 6 and a count).
+   !> ', "ports": {"carrier": "housing"}' for an element with ports beyond left and
+   !> right (D-63), '' for a two-port element.
+   function more_ports(model, e) result(s)
+      type(model_t), intent(in) :: model
+      class(element_t), intent(in) :: e
+      character(len=:), allocatable :: s
+      integer :: k
+      s = ''
+      if (e%n_ports() == 2) return
+      do k = 3, e%n_ports()
+         if (k > 3) s = s//', '
+         s = s//jstr(e%port_keys(k - 2)%s)//': '//jstr(model%nodes(e%port(k))%n%id)
+      end do
+      s = ', "ports": {'//s//'}'
+   end function more_ports
+
    function tokens(values) result(s)
       type(string_t), intent(in) :: values(:)
       character(len=:), allocatable :: s
