@@ -512,6 +512,7 @@ contains
       h = t - self%t_prev
       if (.not. h > 0.0_wp) return
       do i = 1, size(model%elements)
+         if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
          associate (e => model%elements(i)%e)
             l = e%left; r = e%right
             r0 = rate(self%om_prev(l), self%om_prev(r))
