@@ -9,7 +9,7 @@
 program test_ports
    use trainsim_kinds, only: wp
    use trainsim_model, only: model_t
-   use trainsim_element, only: element_t, lin_closed
+   use trainsim_element, only: lin_closed
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check, check_true
    use trainsim_test_support, only: load_model_text, nl
    implicit none
@@ -46,6 +46,15 @@ contains
       th(1) = th(3) + (0.0102_wp + r2*(th(2) + th(3)))/r1
       w = [3.0_wp, 1.7_wp, -0.4_wp]
    end subroutine closed_state
+
+   !> The spur pair on its carrier, in its mode at closed_state's angles and speeds.
+   subroutine closed_pair(m, th, w)
+      type(model_t), intent(out) :: m
+      real(wp), intent(out) :: th(3), w(3)
+      call load_model_text(nodes//"&element id = 'g', "//spur//", carrier = 'h' /", m)
+      call closed_state(th, w)
+      call m%elements(1)%e%port_init_mode(th, w)
+   end subroutine closed_pair
 
    subroutine test_two_port_defaults_are_the_element_itself()
       type(model_t) :: m
@@ -103,10 +112,8 @@ contains
       real(wp) :: th(3), w(3), t(3), d, f
       integer :: c, p
       call test_begin('carrier_takes_f_times_r1_plus_r2')
-      call load_model_text(nodes//"&element id = 'g', "//spur//", carrier = 'h' /", m)
+      call closed_pair(m, th, w)
       associate (e => m%elements(1)%e)
-         call closed_state(th, w)
-         call e%port_init_mode(th, w)
          call e%port_torques(th, w, t)
          call e%port_status(th, w, d, f, c, p)
          call check('displacement in the carrier frame', d, r1*(th(1) - th(3)) - r2*(th(2) + th(3)), &
@@ -125,10 +132,8 @@ contains
       type(model_t) :: m
       real(wp) :: th(3), w(3), t(3), t2(3), sh(3)
       call test_begin('turning_the_gearbox_changes_nothing')
-      call load_model_text(nodes//"&element id = 'g', "//spur//", carrier = 'h' /", m)
+      call closed_pair(m, th, w)
       associate (e => m%elements(1)%e)
-         call closed_state(th, w)
-         call e%port_init_mode(th, w)
          call e%port_torques(th, w, t)
          sh = [1.0_wp, -1.0_wp, 1.0_wp]
          call e%port_torques(th + 0.03125_wp*sh, w + 2.0_wp*sh, t2)
@@ -145,10 +150,8 @@ contains
       real(wp) :: th(3), w(3), jt(3, 6), x(6), xp(6), tp(3), tm(3), h, scale
       integer :: j
       call test_begin('port_jacobian_matches_differences')
-      call load_model_text(nodes//"&element id = 'g', "//spur//", carrier = 'h' /", m)
+      call closed_pair(m, th, w)
       associate (e => m%elements(1)%e)
-         call closed_state(th, w)
-         call e%port_init_mode(th, w)
          call e%port_jacobian(th, w, jt)
          scale = maxval(abs(jt))
          x = [th(1), w(1), th(2), w(2), th(3), w(3)]
@@ -171,10 +174,8 @@ contains
       type(model_t) :: m
       real(wp) :: th(3), w(3), k3(3, 3), c3(3, 3), k2(2, 2), c2(2, 2), v(3)
       call test_begin('port_linearise_is_the_frame_map')
-      call load_model_text(nodes//"&element id = 'g', "//spur//", carrier = 'h' /", m)
+      call closed_pair(m, th, w)
       associate (e => m%elements(1)%e)
-         call closed_state(th, w)
-         call e%port_init_mode(th, w)
          call e%port_linearise(lin_closed, [1.0_wp, 0.5_wp, 0.2_wp], k3, c3)
          call e%linearise(lin_closed, 1.0_wp, 0.5_wp, k2, c2)
          call check_true('symmetric', all(abs(k3 - transpose(k3)) <= 1.0e-12_wp*maxval(abs(k3))))

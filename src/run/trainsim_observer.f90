@@ -512,7 +512,9 @@ contains
       h = t - self%t_prev
       if (.not. h > 0.0_wp) return
       do i = 1, size(model%elements)
-         if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
+         if (model%nport) then
+            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
+         end if
          associate (e => model%elements(i)%e)
             l = e%left; r = e%right
             r0 = rate(self%om_prev(l), self%om_prev(r))
@@ -835,7 +837,9 @@ contains
       if (.not. h > 0.0_wp) return
       do i = 1, size(model%elements)
          if (self%s%contact(i) == 0 .or. self%s%contact(i) /= self%contact_prev(i)) cycle
-         if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
+         if (model%nport) then
+            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
+         end if
          l = model%elements(i)%e%left
          r = model%elements(i)%e%right
          ! 1: |force| maximum, 2: displacement extreme on the contact side,
