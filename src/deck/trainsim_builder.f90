@@ -10,7 +10,7 @@ module trainsim_builder
    use trainsim_signal, only: signal_t, signal_from_group
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
-   use trainsim_element, only: element_t
+   use trainsim_element, only: element_t, max_ports
    use trainsim_integrator_registry, only: integrator_names
    use trainsim_id_table, only: id_table_t
    use trainsim_plausibility, only: check_plausibility
@@ -412,6 +412,7 @@ contains
       character(len=:), allocatable :: pid
       integer :: k, j
       if (.not. allocated(e%port_keys)) allocate (e%port_keys(0))
+      if (size(e%port_keys) > max_ports - 2) error stop 'read_ports: an element type declares more than max_ports ports'
       if (allocated(e%more_ports)) deallocate (e%more_ports)
       allocate (e%more_ports(size(e%port_keys)))
       e%more_ports = 0

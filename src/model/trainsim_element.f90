@@ -409,6 +409,7 @@ contains
       end associate
       bound = huge(1.0_wp)
    end function el_displacement_bound
+
    !> A two-port element that may sit on a carrier (a gear pair's housing,
    !> D-63) calls this in `configure`: with the deck key `carrier` the carrier
    !> becomes its port 3 (the builder resolves the node) and the port
@@ -419,11 +420,8 @@ contains
       type(deck_group_t), intent(inout) :: grp
       real(wp), intent(in) :: sense
       self%carrier_sense = sense
-      if (grp%has('carrier')) then
-         self%port_keys = [string_t('carrier')]
-      else
-         allocate (self%port_keys(0))
-      end if
+      self%port_keys = [string_t ::]
+      if (grp%has('carrier')) self%port_keys = [string_t('carrier')]
    end subroutine accept_carrier
 
    !> Number of ports: 2 (left, right) and the further ones.
