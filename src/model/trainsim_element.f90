@@ -542,12 +542,13 @@ contains
    !> node of the model (theta, omega): the recorder's one call for any element.
    pure subroutine el_status_at(self, theta, omega, disp, force, contact, pairs)
       class(element_t), intent(in) :: self
-      real(wp), intent(in) :: theta(:), omega(:)
+      real(wp), intent(in) :: theta(*), omega(*)   !< (assumed size: no descriptors, D-41)
       real(wp), intent(out) :: disp, force
       integer, intent(out) :: contact, pairs
       real(wp) :: th(max_ports), w(max_ports)
       integer :: k, np
-      np = self%n_ports()
+      np = 2
+      if (allocated(self%more_ports)) np = 2 + size(self%more_ports)
       if (np == 2) then
          call self%status(theta(self%left), omega(self%left), theta(self%right), omega(self%right), disp, force, &
                           contact, pairs)

@@ -262,7 +262,9 @@ contains
          if (.not. any(fired(o + 1:o + n))) cycle
          l = self%fe(i)%l
          r = self%fe(i)%r
-         if (self%elements(i)%e%n_ports() > 2) then          ! an n-port element (D-63; every node's
+         k = 2
+         if (self%nport) k = self%elements(i)%e%n_ports()
+         if (k > 2) then                                     ! an n-port element (D-63; every node's
             call port_update_at(self%elements(i)%e, t, self%theta, self%omega, fired(o + 1:o + n), local, m)
          else                                                ! kinematics known: no local steps with one)
             call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &

@@ -739,7 +739,7 @@ contains
             tr = f*e%r2
          else if (e%form >= lf_open) then                                  ! a clearance's hot form (D-35)
             call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
-         else if (self%elements(i)%e%n_ports() > 2) then                   ! an n-port element (D-63)
+         else if (self%nport) then                                         ! (over its ports: D-63)
             call port_torques_at(self%elements(i)%e, self%theta, self%omega, ends, tp, f)
             tl = tp(1)
             tr = tp(2)

@@ -269,9 +269,11 @@ contains
       associate (e => self%elements(i)%e, q => self%fe(i))
          call e%hot_form(h)
          if (q%linear .or. e%needs_loads .or. e%supplies_power) h%kind = hf_none
-         if (e%n_ports() > 2) then                         ! the hot forms have two ports (D-63)
-            h%kind = hf_none
-            h%guards = hg_none
+         if (self%nport) then
+            if (e%n_ports() > 2) then                      ! the hot forms have two ports (D-63)
+               h%kind = hf_none
+               h%guards = hg_none
+            end if
          end if
          ng = q%ng
          if (.not. ((h%guards == hg_faces .and. ng == 2) .or. (h%guards == hg_faces_zone .and. ng == 4))) &

@@ -259,7 +259,7 @@ contains
       class(observer_t), intent(inout) :: self
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
-      integer :: i
+      integer :: i, l, r
       logical :: ws
       ws = model%ws_step_end .and. model%ws_t == t
       self%s_whole = .true.
@@ -289,8 +289,16 @@ contains
                cycle
             end if
          end if
-         call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
-                                            self%s%contact(i), self%s%pairs(i))
+         if (model%nport) then                              ! (over its ports: D-63)
+            call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
+                                               self%s%contact(i), self%s%pairs(i))
+            cycle
+         end if
+         associate (e => model%elements(i)%e)
+            l = e%left; r = e%right
+            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
+                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
+         end associate
       end do
       if (size(self%s%inputs) > 0) call input_series_values(model, self%drivers, t, self%s%inputs)
       if (self%track) call fill_energy(self, model, y)
@@ -750,7 +758,7 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, y(:)
       integer, intent(in) :: nodes(:), els(:)
-      integer :: k, i
+      integer :: k, i, l, r
       call model%kinematics_part(t, y, nodes)
       if (model%any_needs_loads) call model%apply_loads(t)
       self%s%t = -huge(1.0_wp)
@@ -762,8 +770,16 @@ contains
       do k = 1, size(els)
          i = els(k)
          call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
-         call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
-                                            self%s%contact(i), self%s%pairs(i))
+         if (model%nport) then                              ! (over its ports: D-63)
+            call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
+                                               self%s%contact(i), self%s%pairs(i))
+            cycle
+         end if
+         associate (e => model%elements(i)%e)
+            l = e%left; r = e%right
+            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
+                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
+         end associate
       end do
    end subroutine obs_fill_part
 
