@@ -20,7 +20,7 @@ module trainsim_model
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
    use trainsim_event, only: event_t
-   use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t
+   use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t
    implicit none
    private
 
@@ -160,13 +160,9 @@ module trainsim_model
       !> Every node a plain inertia or held at a constant speed, every load
       !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
       logical, private :: simple = .false.
-      !> Element i joins nodes i and i + 1, for every i (a serial chain; the
-      !> stage kernel then sums the node torques in registers).
-      logical, private :: chain = .false.
-      !> Per node i: the element torques acting on it, node_inc(node_first(i) :
-      !> node_first(i+1) - 1), as indices into el_torque (2 (e - 1) + side), in
-      !> the order the generic RHS adds them (elements in order, left side first).
-      integer, allocatable, private :: node_first(:), node_inc(:)
+      !> The families of a simple model, which its stage and step-end kernels
+      !> evaluate (trainsim_model_kernels), built with the tables above.
+      type(families_t), private :: fam
       !> Elements whose elastic energy `rhs_simple` cannot compute (fe%cold), and
       !> that kernel's per-element elastic energies (summed after the kinetic).
       integer, private :: n_cold = 0

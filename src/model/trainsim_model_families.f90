@@ -1,18 +1,18 @@
 !> The model's families on the hot path: the row types of its tables (a node
 !> that is a plain inertia or held, an element that is a linear spring or a
-!> clearance in its hot form, D-35, a guard row, a load) and the hot form's
-!> arithmetic (torques, guards, elastic energy, contact force), written once
-!> for every kernel that evaluates it.
+!> clearance in its hot form, D-35, a guard row, a load) and the families as
+!> structure of arrays that the kernels (trainsim_model_kernels) evaluate.
 module trainsim_model_families
    use trainsim_kinds, only: wp
-   use trainsim_element, only: hot_form_t, hf_open, hf_yang_sun, hg_none
+   use trainsim_element, only: hg_none
    implicit none
    private
 
    public :: fast_node_t, fast_element_t, guard_row_t, fast_load_t
    public :: nk_other, nk_plain, nk_held
    public :: lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, lf_cl_linear
-   public :: hot_potential, hot_force, hot_torques, hot_guards
+   public :: families_t, table_t, spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr, &
+             load_ni, load_nr
 
    !> Kinds of node on the hot path.
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
@@ -77,91 +77,53 @@ module trainsim_model_families
       real(wp) :: v = 0.0_wp
    end type fast_load_t
 
-contains
+   !> A table of the families: n rows, row q at iw(i0 + ni (q - 1) + 1 : i0 + ni q)
+   !> and rw(r0 + nr (q - 1) + 1 : r0 + nr q) of the families' two arrays (ni and
+   !> nr are the table's column counts, below).
+   type :: table_t
+      integer :: n = 0, i0 = 0, r0 = 0
+   end type table_t
 
-   !> Elastic energy of a hot form (D-36): cl_potential's arithmetic (c k p^2/2
-   !> closed, 0 open), the operations `rhs_simple` does.
-   pure real(wp) function hot_potential(h, thl, thr) result(e)
-      type(hot_form_t), intent(in) :: h
-      real(wp), intent(in) :: thl, thr
-      real(wp) :: d, p
-      e = 0.0_wp
-      if (h%kind == hf_open) return
-      d = h%r1*thl - h%r2*thr
-      p = h%s*d - h%b
-      e = h%c*(0.5_wp*h%k*p**2)
-   end function hot_potential
+   !> Columns of the tables. The linear-spring family (a shaft, a damper, an
+   !> ideal gear pair: eqs. (H.1), (H.15)), in two tables (springs: c = 0,
+   !> dampers: c /= 0): (element, left node, right node), (k, c, r1, r2).
+   integer, parameter :: spring_ni = 3, spring_nr = 4
+   !> The clearance family (every element whose torques are its hot form, D-35;
+   !> a row refreshed in place when its element changes mode): (element, left
+   !> node, right node, closed, yang_sun law, no_tension; flags 0 or 1),
+   !> (s, c, k, dmp, b, r1, r2). An open row carries k = dmp = b = 0 (its force
+   !> is zero, and no stale parameter reaches the arithmetic).
+   integer, parameter :: contact_ni = 6, contact_nr = 7
+   !> Plain inertias: (node, state offset, x, y), (J, d, the sum of its constant
+   !> loads), in three tables of the same width one after another (`free` is
+   !> all three, for their kinematics): an undamped node with one element torque
+   !> on it (x: its index into the element torques), with two (x, y), any other
+   !> (its incidences iw(x : y)). Nodes held at a constant speed: (node,
+   !> first, last incidence in iw), (theta0, w, load sum). Constant loads on
+   !> free nodes: (node), (value). Damped plain inertias in node order (their
+   !> dissipated power): (state offset), (d).
+   integer, parameter :: free_ni = 4, free_nr = 3, held_ni = 3, held_nr = 3, load_ni = 1, load_nr = 1
 
-   !> Signed contact force of a hot form (D-36): fs of `hot_torques`.
-   pure real(wp) function hot_force(h, thl, wl, thr, wr) result(fs)
-      type(hot_form_t), intent(in) :: h
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp) :: d, dd, p, pdot, f
-      fs = 0.0_wp
-      if (h%kind == hf_open) return
-      d = h%r1*thl - h%r2*thr
-      dd = h%r1*wl - h%r2*wr
-      p = h%s*d - h%b
-      pdot = h%s*dd
-      if (h%kind == hf_yang_sun) then
-         f = h%c*(h%k*p + h%dmp*p*pdot)
-      else
-         f = h%c*(h%k*p) + h%dmp*pdot
-      end if
-      if (h%no_tension) f = max(f, 0.0_wp)
-      fs = h%s*f
-   end function hot_force
-
-   !> Torques (and the power dissipated) of a hot form (D-35): ce_torques and
-   !> ce_torques_dissipation's arithmetic, the same operations in the same order.
-   pure subroutine hot_torques(h, thl, wl, thr, wr, tl, tr, pw)
-      type(hot_form_t), intent(in) :: h
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp), intent(out) :: tl, tr, pw
-      real(wp) :: d, dd, p, pdot, f, fs
-      if (h%kind == hf_open) then
-         fs = 0.0_wp
-         tl = -(fs*h%r1)
-         tr = fs*h%r2
-         pw = 0.0_wp
-         return
-      end if
-      d = h%r1*thl - h%r2*thr
-      dd = h%r1*wl - h%r2*wr
-      p = h%s*d - h%b
-      pdot = h%s*dd
-      if (h%kind == hf_yang_sun) then
-         f = h%c*(h%k*p + h%dmp*p*pdot)                                  ! eqs. (3.18)-(3.19)
-      else
-         f = h%c*(h%k*p) + h%dmp*pdot
-      end if
-      if (h%no_tension) f = max(f, 0.0_wp)
-      fs = h%s*f
-      tl = -(fs*h%r1)
-      tr = fs*h%r2
-      pw = (h%s*fs - h%c*(h%k*p))*pdot
-   end subroutine hot_torques
-
-   !> Guards of a hot form (D-35): cl_guards' faces, and a zone window.
-   pure subroutine hot_guards(h, thl, thr, g)
-      type(hot_form_t), intent(in) :: h
-      real(wp), intent(in) :: thl, thr
-      real(wp), intent(out) :: g(4)
-      real(wp) :: d
-      d = h%r1*thl - h%r2*thr
-      select case (h%mode)
-      case (1)
-         g(1) = d - h%b; g(2) = 1.0_wp
-      case (-1)
-         g(1) = 1.0_wp; g(2) = -d - h%b
-      case default
-         g(1) = h%b - d; g(2) = d + h%b
-      end select
-      if (h%lo_open) then
-         g(3) = 1.0_wp
-      else
-         g(3) = thl - h%th_lo
-      end if
-      g(4) = h%th_hi - thl
-   end subroutine hot_guards
+   !> The families of a simple model (every node a plain inertia or held at a
+   !> constant speed, every load constant), which the stage and step-end kernels
+   !> (trainsim_model_kernels) evaluate family by family, each in one loop
+   !> without a branch on an element form or a node kind. An element in no
+   !> family is asked through its procedures (`general`). Structure of arrays:
+   !> every table lives in the two arrays iw and rw (a kernel gets their
+   !> addresses once, whatever the number of tables).
+   type :: families_t
+      integer :: nn = 0, ne = 0, ns = 0
+      integer, allocatable :: iw(:)
+      real(wp), allocatable :: rw(:)
+      type(table_t) :: springs, dampers, contacts, general, free, free1, free2, free_n, damped, held, loads
+      !> per node i: its inertia (kinetic energy) at rw(jn + i)
+      integer :: jn = 0
+      !> per element: its row in the clearance family (0: none)
+      integer, allocatable :: contact_row(:)
+      !> More than one table adds dissipated power (springs with damping,
+      !> contacts, general): each row then leaves its power in pw and the powers
+      !> are summed in element order, as the element loop of the general path does.
+      logical :: mixed = .false.
+      real(wp), allocatable :: th(:), w(:), pw(:)   !< scratch: node angles, speeds; element powers
+   end type families_t
 end module trainsim_model_families

@@ -5,7 +5,7 @@
 submodule (trainsim_model) trainsim_model_guards
    use trainsim_element, only: hg_none, max_ports
    use trainsim_event, only: max_update_events
-   use trainsim_model_families, only: hot_guards
+   use trainsim_model_kernels, only: hot_guards
    use trainsim_ports, only: port_update_at
    implicit none
 
@@ -36,6 +36,48 @@ contains
       do j = 1, self%n_guards
          if (g(j) < 0.0_wp) below = .true.
       end do
+   contains
+
+      !> The guards of the elements els(1:n), each with a guard row (rows(els(k))%form
+      !> > 0), at the state y into g, and whether one of them is below zero (tested
+      !> on the values as they are written: no second pass over g; NaN is not below
+      !> zero, as in `g(j) < 0`): hot_guards written out, the angles straight from
+      !> y (plain arrays: no descriptor, no stride).
+      logical function guard_rows(n, els, rows, y, g) result(below)
+         integer, intent(in) :: n, els(n)
+         type(guard_row_t), intent(in) :: rows(*)
+         real(wp), intent(in) :: y(*)
+         real(wp), intent(inout) :: g(*)
+         integer :: k, o
+         real(wp) :: d, g1, g2, g3, g4
+         below = .false.
+         do k = 1, n
+            associate (q => rows(els(k)))
+               o = q%o
+               d = q%r1*y(q%yl) - q%r2*y(q%yr)
+               select case (q%mode)
+               case (1)
+                  g1 = d - q%b; g2 = 1.0_wp
+               case (-1)
+                  g1 = 1.0_wp; g2 = -d - q%b
+               case default
+                  g1 = q%b - d; g2 = d + q%b
+               end select
+               g(o + 1) = g1; g(o + 2) = g2
+               if (g1 < 0.0_wp .or. g2 < 0.0_wp) below = .true.
+               if (q%form == 2) then
+                  if (q%lo_open) then
+                     g3 = 1.0_wp
+                  else
+                     g3 = y(q%yl) - q%th_lo
+                  end if
+                  g4 = q%th_hi - y(q%yl)
+                  g(o + 3) = g3; g(o + 4) = g4
+                  if (g3 < 0.0_wp .or. g4 < 0.0_wp) below = .true.
+               end if
+            end associate
+         end do
+      end function guard_rows
    end procedure model_guards_below
 
    module procedure model_guards_general
@@ -53,47 +95,6 @@ contains
          end if
       end do
    end procedure model_guards_general
-
-   !> The guards of the elements els(1:n), each with a guard row (rows(els(k))%form
-   !> > 0), at the state y into g, and whether one of them is below zero (tested
-   !> on the values as they are written: no second pass over g; NaN is not below
-   !> zero, as in `g(j) < 0`): hot_guards written out, the angles straight from
-   !> y (plain arrays: no descriptor, no stride).
-   logical function guard_rows(n, els, rows, y, g) result(below)
-      integer, intent(in) :: n, els(n)
-      type(guard_row_t), intent(in) :: rows(*)
-      real(wp), intent(in) :: y(*)
-      real(wp), intent(inout) :: g(*)
-      integer :: k, o
-      real(wp) :: d, g1, g2, g3, g4
-      below = .false.
-      do k = 1, n
-         associate (q => rows(els(k)))
-            o = q%o
-            d = q%r1*y(q%yl) - q%r2*y(q%yr)
-            select case (q%mode)
-            case (1)
-               g1 = d - q%b; g2 = 1.0_wp
-            case (-1)
-               g1 = 1.0_wp; g2 = -d - q%b
-            case default
-               g1 = q%b - d; g2 = d + q%b
-            end select
-            g(o + 1) = g1; g(o + 2) = g2
-            if (g1 < 0.0_wp .or. g2 < 0.0_wp) below = .true.
-            if (q%form == 2) then
-               if (q%lo_open) then
-                  g3 = 1.0_wp
-               else
-                  g3 = y(q%yl) - q%th_lo
-               end if
-               g4 = q%th_hi - y(q%yl)
-               g(o + 3) = g3; g(o + 4) = g4
-               if (g3 < 0.0_wp .or. g4 < 0.0_wp) below = .true.
-            end if
-         end associate
-      end do
-   end function guard_rows
 
    !> The guards of element i at (t, y) into g(o + 1 : o + ng) (`model_guards` for
    !> an element without a guard row, `element_guards`): the kinematics of its two
