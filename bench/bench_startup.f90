@@ -16,7 +16,10 @@
 !> dense=.true.)`, both states) of backlash chains of 8 .. 64 nodes against the
 !> O(n) bound, for the threshold dense_state_limit.
 !>
-!> Run from the build tree (Release): ./bench/bench_startup [dense]
+!> `bench_startup bound` times `rk4_dt_bound` alone (the model set up
+!> outside the timed region) on the chains, per node.
+!>
+!> Run from the build tree (Release): ./bench/bench_startup [dense|bound]
 program bench_startup
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit, compiler_version
    use trainsim_kinds, only: wp
@@ -25,7 +28,7 @@ program bench_startup
    use trainsim_overrides, only: override_t
    use trainsim_prepare, only: prepare_model
    use trainsim_model, only: model_t
-   use trainsim_modes, only: rk4_dt_limit, dense_state_limit
+   use trainsim_modes, only: rk4_dt_limit, dense_state_limit, rk4_dt_bound, with_loads
    use trainsim_element, only: lin_start, lin_stiffest
    use trainsim_simulate, only: simulate, check_fixed_step
    use trainsim_observer, only: run_result_t
@@ -50,6 +53,8 @@ program bench_startup
    write (output_unit, '(a,i0,a)') '  method           : CPU time (cpu_time), best of ', n_rep, ' per phase'
    if (arg == 'dense') then
       call dense_section()
+   else if (arg == 'bound') then
+      call bound_section()
    else
       call startup_section()
    end if
@@ -113,6 +118,36 @@ contains
             minval(dt_b), minval(dt_b)/minval(dt_d)
       end do
    end subroutine dense_section
+
+   !> The O(n) bound alone, stiffest state, on the chains (best of 10 calls).
+   subroutine bound_section()
+      integer, parameter :: sizes(4) = [200, 1000, 5000, 20000]
+      type(model_t) :: m
+      real(wp), allocatable :: y(:)
+      real(wp) :: c0, c1, best, dt, bound, prev
+      integer :: i, r
+      write (output_unit, '(/,a)') 'rk4_dt_bound alone (stiffest state, backlash chains), best of 10 calls'
+      write (output_unit, '(a8,a14,a14,a10)') 'nodes', 'seconds', 'us per node', 'ratio'
+      prev = -1.0_wp
+      do i = 1, size(sizes)
+         call load(chain_deck(sizes(i), .true.), m)
+         call m%initial_state(y)
+         call m%init_modes(m%run%t_start, y)
+         best = huge(1.0_wp)
+         do r = 1, 10
+            call cpu_time(c0)
+            call rk4_dt_bound(m, with_loads(m, lin_stiffest), y, dt, bound)
+            call cpu_time(c1)
+            best = min(best, c1 - c0)
+         end do
+         if (prev > 0.0_wp) then
+            write (output_unit, '(i8,es14.3,f14.3,f10.2)') sizes(i), best, 1.0e6_wp*best/sizes(i), best/prev
+         else
+            write (output_unit, '(i8,es14.3,f14.3)') sizes(i), best, 1.0e6_wp*best/sizes(i)
+         end if
+         prev = best
+      end do
+   end subroutine bound_section
 
    !> Best-of-n_rep CPU time of each start-up phase of a chain of n nodes.
    subroutine startup_of(n, backlash, best)
