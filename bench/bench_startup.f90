@@ -24,6 +24,7 @@ program bench_startup
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit, compiler_version
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
+   use trainsim_strings, only: str
    use trainsim_deck, only: deck_t, parse_deck
    use trainsim_overrides, only: override_t
    use trainsim_prepare, only: prepare_model
@@ -74,13 +75,13 @@ contains
       prev = -1.0_wp
       do i = 1, 3
          call startup_of(sizes(i), .false., t)
-         call print_row(itoa(sizes(i))//', shafts', t, prev)
+         call print_row(str(sizes(i))//', shafts', t, prev)
          prev = sum(t)
       end do
       prev = -1.0_wp
       do i = 1, 3
          call startup_of(sizes(i), .true., t)
-         call print_row(itoa(sizes(i))//', backlash', t, prev)
+         call print_row(str(sizes(i))//', backlash', t, prev)
          prev = sum(t)
       end do
    end subroutine startup_section
@@ -256,12 +257,4 @@ contains
       write (error_unit, '(a)') 'bench_startup: '//err%message
       error stop 1
    end subroutine check
-
-   function itoa(i) result(s)
-      integer, intent(in) :: i
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(i0)') i
-      s = trim(buf)
-   end function itoa
 end program bench_startup

@@ -18,6 +18,7 @@
 program test_dt_bound
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
+   use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_element, only: lin_state_t, lin_start, lin_stiffest
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit, rk4_dt_bound, dense_state_limit, with_loads
@@ -73,14 +74,14 @@ contains
          call m%initial_state(y)
          call m%init_modes(m%run%t_start, y)
          call rk4_dt_bound(m, with_loads(m, lin_start), y, dt, bound, omega_k=om_k)
-         call check('chain of '//itoa(sizes(i))//': bound >= closed-form omega_max', om_k >= om_exact*(1.0_wp - 1.0e-12_wp))
-         call check('chain of '//itoa(sizes(i))//': bound <= Gershgorin 2 sqrt(k/J)', om_k <= 200.0_wp*(1.0_wp + 1.0e-12_wp))
+         call check('chain of '//str(sizes(i))//': bound >= closed-form omega_max', om_k >= om_exact*(1.0_wp - 1.0e-12_wp))
+         call check('chain of '//str(sizes(i))//': bound <= Gershgorin 2 sqrt(k/J)', om_k <= 200.0_wp*(1.0_wp + 1.0e-12_wp))
          ! undamped: the step is RK4's imaginary-axis radius (less the 0.37 % slope
          ! margin) over the bound (8 power steps from Gershgorin: 0.57 % above
          ! omega_max at 10 nodes, where the top of the spectrum is least crowded)
-         call check('chain of '//itoa(sizes(i))//': dt within 2 % of 2 sqrt 2 / omega_max', &
+         call check('chain of '//str(sizes(i))//': dt within 2 % of 2 sqrt 2 / omega_max', &
                     dt <= sqrt(8.0_wp)/om_exact .and. dt >= 0.98_wp*sqrt(8.0_wp)/om_exact)
-         if (sizes(i) <= 150) call compare(m, lin_start, 'shaft chain of '//itoa(sizes(i)))
+         if (sizes(i) <= 150) call compare(m, lin_start, 'shaft chain of '//str(sizes(i)))
       end do
    end subroutine test_uniform_chain_bound_against_closed_form
 
@@ -93,8 +94,8 @@ contains
       call test_begin('backlash_chain_bound_against_dense')
       do i = 1, size(sizes)
          call load_model_text(chain_deck(sizes(i), .true., 5.0e-3_wp, 5.0e-3_wp), m)
-         call compare(m, lin_start, 'backlash chain of '//itoa(sizes(i))//' as it starts')
-         call compare(m, lin_stiffest, 'backlash chain of '//itoa(sizes(i))//' stiffest')
+         call compare(m, lin_start, 'backlash chain of '//str(sizes(i))//' as it starts')
+         call compare(m, lin_stiffest, 'backlash chain of '//str(sizes(i))//' stiffest')
       end do
    end subroutine test_backlash_chain_bound_against_dense
 
@@ -170,25 +171,17 @@ contains
       if (present(extra)) text = text//extra
       text = text//' /'
       do i = 1, n
-         text = text//nl//"&node id = 'n"//itoa(i)//"', type = 'inertia', inertia = 1.0 /"
+         text = text//nl//"&node id = 'n"//str(i)//"', type = 'inertia', inertia = 1.0 /"
       end do
       do i = 1, n - 1
          if (backlash .and. mod(i, 10) == 0) then
-            text = text//nl//"&element id = 'e"//itoa(i)//"', type = 'spur_gear', stiffness = 1.0e4, "// &
+            text = text//nl//"&element id = 'e"//str(i)//"', type = 'spur_gear', stiffness = 1.0e4, "// &
                    'rb_driver = 1.0, rb_driven = 1.0, teeth = 32, contact_ratio = 1.6, approach_angle = 0.1, '// &
                    'half_backlash = 1.0e-3 /'
          else
-            text = text//nl//"&element id = 'e"//itoa(i)//"', type = 'shaft', stiffness = 1.0e4 /"
+            text = text//nl//"&element id = 'e"//str(i)//"', type = 'shaft', stiffness = 1.0e4 /"
          end if
       end do
       text = text//nl//"&initial node = 'n1', speed = 1.0 /"
    end function chain_deck
-
-   function itoa(i) result(s)
-      integer, intent(in) :: i
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(i0)') i
-      s = trim(buf)
-   end function itoa
 end program test_dt_bound

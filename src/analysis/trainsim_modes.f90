@@ -318,7 +318,7 @@ contains
 
    !> O(n) bounds for the train in `state` (loads as `with_loads`): |lambda| <=
    !> `bound` for every eigenvalue, and RK4 is stable for any h <= dt_max
-   !> (`rk4_dt_bound`: Gershgorin). A check that passes with them needs no
+   !> (`rk4_dt_bound`, D-63). A check that passes with them needs no
    !> eigenvalues (check_fixed_step, the explicit SUNDIALS check).
    subroutine rk4_dt_quick(model, state_in, dt_max, bound)
       type(model_t), intent(inout) :: model
