@@ -6,8 +6,8 @@
 !>   the stiffest state, and within a factor 1.25 of it (measured: equal to 6
 !>   digits on the bundled decks, within 0.6 % on the chains);
 !> - its step is <= the dense limit (dgeev, `rk4_dt_limit(dense=.true.)`: the
-!>   advice is safe) and >= 0.55 of it (measured 0.588 .. 0.999: the damped
-!>   stiffest states are the loosest, Gregory-Harris-Munro's 0.588);
+!>   advice is safe) and >= 0.65 of it (measured 0.954 .. 0.9995 without a
+!>   motor; 0.72 .. 0.87 with one, whose current takes the direction-free radius);
 !> - on a uniform shaft chain, against the closed form
 !>   omega_max = 2 sqrt(k/J) sin((n - 1) pi / (2 n)), the bound is within
 !>   Gershgorin's 2 sqrt(k/J);
@@ -30,7 +30,7 @@ program test_dt_bound
    implicit none
 
    !> The bound's documented tightness (D-63 (startup)).
-   real(wp), parameter :: omega_factor = 1.25_wp, dt_factor = 0.55_wp
+   real(wp), parameter :: omega_factor = 1.25_wp, dt_factor = 0.65_wp
    character(len=48), parameter :: decks(9) = [character(len=48) :: &
                                   'inputs/branched_train.nml', 'inputs/dc_motor_geared_load.nml', &
                                   'inputs/gregory_harris_munro.nml', 'inputs/helical_pair.nml', &

@@ -33,6 +33,8 @@ module trainsim_dt_bound
    real(wp), parameter :: radius_slope = 2.5_wp
    !> Power-iteration steps: each gives an upper bound; the best is kept.
    integer, parameter :: n_power = 8
+   !> Quarter octaves of beta below mu_C in the real-eigenvalue bound (down to mu_C/2^6).
+   integer, parameter :: n_beta = 24
    !> Floor of a weight after normalisation (a weight must stay positive).
    real(wp), parameter :: weight_floor = 1.0e-12_wp
 
@@ -125,7 +127,7 @@ contains
       real(wp), intent(in) :: y(:)
       real(wp), intent(out) :: dt_max, bound
       real(wp), intent(out), optional :: omega_k, freq_hz
-      real(wp), allocatable :: inv_j(:), p(:), own(:), tq(:), bk(:, :, :), bc(:, :, :), x(:), zk(:), zc(:), d(:)
+      real(wp), allocatable :: inv_j(:), p(:), own(:), tq(:), bk(:, :, :), bc(:, :, :), x(:), zk(:), zc(:), d(:), xk(:)
       integer, allocatable :: ends(:, :)
       logical, allocatable :: states(:)
       real(wp) :: mu_k, mu_c, s_star, rr(0:n_ray), dpsi, psi, ext, r_lo, h, f_lim
@@ -151,6 +153,7 @@ contains
          end if
          call normalise(zk, x)
       end do
+      xk = x
       ! damping (element C scaled like K, plus each node's own speed row)
       d = own_speed()
       x = merge(1.0_wp, 0.0_wp, states)
@@ -189,7 +192,7 @@ contains
                f_lim = ext*cos(psi)
             end if
          end do
-         ext = mu_c                         ! real eigenvalues lie in [-mu_C, 0]
+         ext = real_extent()                ! real eigenvalues lie in [-ext, 0]
          if (ext > 0.0_wp) then
             if (rr(n_ray)/ext < dt_max) then
                dt_max = rr(n_ray)/ext
@@ -200,6 +203,25 @@ contains
       if (present(freq_hz)) freq_hz = f_lim/two_pi
 
    contains
+
+      !> A real eigenvalue -r has r^2 - c r + k = 0 (k = r (c - r), c <= mu_C).
+      !> With g >= the largest eigenvalue of beta C - B, beta c - k <= g, so r > beta
+      !> needs r^2 - mu_C r + mu_C beta - g <= 0: r is below that root, or beta.
+      !> A stiff element that is also damped (a mesh with impact damping) thus
+      !> keeps its overdamped range short. The least over beta = mu_C 2^(-j/4).
+      real(wp) function real_extent() result(r)
+         real(wp) :: beta, disc, r_beta
+         integer :: j
+         r = mu_c
+         if (.not. mu_c > 0.0_wp) return
+         do j = 1, n_beta
+            beta = mu_c*2.0_wp**(-0.25_wp*j)
+            disc = mu_c*mu_c - 4.0_wp*(mu_c*beta - signed_gershgorin(bk, bc, d, ends, xk, states, beta))
+            r_beta = beta
+            if (disc >= 0.0_wp) r_beta = max(beta, 0.5_wp*(mu_c + sqrt(disc)))
+            r = min(r, r_beta)
+         end do
+      end function real_extent
 
       !> Each node's |d(speed rate)/d(speed)|: the diagonal of the damping.
       function own_speed() result(ds)
@@ -305,7 +327,7 @@ contains
       end do
    end subroutine node_blocks
 
-   !> Every element's |K| and |C| scaled by p on both sides (p_a |K_ab| p_b),
+   !> Every element's K and C scaled by p on both sides (p_a K_ab p_b),
    !> and its end nodes. `general` is set by a K or C that is not symmetric, or
    !> a K that is not positive semi-definite (the Rayleigh quotient k >= 0).
    subroutine element_blocks(model, state, inv_j, p, bk, bc, ends, general)
@@ -326,8 +348,8 @@ contains
          if (.not. (symmetric(ke) .and. symmetric(ce) .and. semidefinite(ke))) general = .true.
          do b = 1, 2
             do a = 1, 2
-               bk(a, b, j) = p(ends(a, j))*abs(ke(a, b))*p(ends(b, j))
-               bc(a, b, j) = p(ends(a, j))*abs(ce(a, b))*p(ends(b, j))
+               bk(a, b, j) = p(ends(a, j))*ke(a, b)*p(ends(b, j))
+               bc(a, b, j) = p(ends(a, j))*ce(a, b)*p(ends(b, j))
             end do
          end do
       end do
@@ -343,7 +365,38 @@ contains
       end function semidefinite
    end subroutine element_blocks
 
-   !> z = |B| w summed element by element (B held as 2 x 2 blocks on `ends`).
+   !> An upper bound of the largest eigenvalue of beta C - B (C with the nodes'
+   !> own speed damping d on its diagonal): Gershgorin's discs of W^-1 (beta C - B) W,
+   !> W = diag(w) > 0, centred on the signed diagonal.
+   pure real(wp) function signed_gershgorin(bk, bc, d, ends, w, states, beta) result(g)
+      real(wp), intent(in) :: bk(:, :, :), bc(:, :, :), d(:), w(:), beta
+      integer, intent(in) :: ends(:, :)
+      logical, intent(in) :: states(:)
+      real(wp), allocatable :: diag(:), radius(:)
+      integer :: j, a, b
+      diag = beta*d
+      allocate (radius(size(w)))
+      radius = 0.0_wp
+      do j = 1, size(ends, 2)
+         a = ends(1, j)
+         b = ends(2, j)
+         if (a == b) then
+            diag(a) = diag(a) + sum(beta*bc(:, :, j) - bk(:, :, j))
+            cycle
+         end if
+         diag(a) = diag(a) + beta*bc(1, 1, j) - bk(1, 1, j)
+         diag(b) = diag(b) + beta*bc(2, 2, j) - bk(2, 2, j)
+         radius(a) = radius(a) + abs(beta*bc(1, 2, j) - bk(1, 2, j))*w(b)
+         radius(b) = radius(b) + abs(beta*bc(2, 1, j) - bk(2, 1, j))*w(a)
+      end do
+      g = -huge(1.0_wp)
+      do j = 1, size(w)
+         if (states(j)) g = max(g, diag(j) + radius(j)/w(j))
+      end do
+   end function signed_gershgorin
+
+   !> z = |B| w summed element by element (B held as 2 x 2 blocks on `ends`;
+   !> the absolute value of each block's entries).
    pure subroutine abs_product(b, ends, w, z)
       real(wp), intent(in) :: b(:, :, :), w(:)
       integer, intent(in) :: ends(:, :)
@@ -351,8 +404,8 @@ contains
       integer :: j
       z = 0.0_wp
       do j = 1, size(ends, 2)
-         z(ends(1, j)) = z(ends(1, j)) + b(1, 1, j)*w(ends(1, j)) + b(1, 2, j)*w(ends(2, j))
-         z(ends(2, j)) = z(ends(2, j)) + b(2, 1, j)*w(ends(1, j)) + b(2, 2, j)*w(ends(2, j))
+         z(ends(1, j)) = z(ends(1, j)) + abs(b(1, 1, j))*w(ends(1, j)) + abs(b(1, 2, j))*w(ends(2, j))
+         z(ends(2, j)) = z(ends(2, j)) + abs(b(2, 1, j))*w(ends(1, j)) + abs(b(2, 2, j))*w(ends(2, j))
       end do
    end subroutine abs_product
 end module trainsim_dt_bound
