@@ -130,9 +130,9 @@ contains
       real(wp), allocatable :: inv_j(:), p(:), own(:), tq(:), bk(:, :, :), bc(:, :, :), x(:), zk(:), zc(:), d(:), xk(:)
       integer, allocatable :: ends(:, :)
       logical, allocatable :: states(:)
-      real(wp) :: mu_k, mu_c, s_star, rr(0:n_ray), dpsi, psi, ext, r_lo, h, f_lim
+      real(wp) :: mu_k, mu_c, s_star, f_lim
       logical :: general
-      integer :: it, k
+      integer :: it
 
       call node_blocks(model, y, p, own, tq, states, general)
       call inverse_inertias(model, inv_j)
@@ -167,8 +167,6 @@ contains
       end do
       if (present(omega_k)) omega_k = sqrt(mu_k)
 
-      rr = rk4_radii()
-      dpsi = 0.25_wp*two_pi/n_ray
       dt_max = huge(1.0_wp)
       f_lim = 0.0_wp
       if (general) then
@@ -179,26 +177,7 @@ contains
       else
          ! complex lambda: |lambda| = sqrt(k) <= sqrt(mu_K); real: |lambda| <= c <= mu_C
          bound = max(sqrt(mu_k), mu_c)
-         do k = 0, n_ray - 1
-            ! the region's extent along the rays of [psi_k, psi_k+1] is largest at psi_k
-            psi = dpsi*k
-            ext = sqrt(mu_k)
-            if (k > 0) ext = min(ext, 0.5_wp*mu_c/sin(psi))
-            if (.not. ext > 0.0_wp) cycle
-            r_lo = min(rr(k), rr(k + 1)) - radius_slope*0.5_wp*dpsi
-            h = r_lo/ext
-            if (h < dt_max) then
-               dt_max = h
-               f_lim = ext*cos(psi)
-            end if
-         end do
-         ext = real_extent()                ! real eigenvalues lie in [-ext, 0]
-         if (ext > 0.0_wp) then
-            if (rr(n_ray)/ext < dt_max) then
-               dt_max = rr(n_ray)/ext
-               f_lim = 0.0_wp
-            end if
-         end if
+         call region_step(mu_k, mu_c, real_extent(), dt_max, f_lim)
       end if
       if (present(freq_hz)) freq_hz = f_lim/two_pi
 
@@ -276,6 +255,39 @@ contains
          where (states) w = max(z/big, weight_floor)
       end subroutine normalise
    end subroutine rk4_dt_bound
+
+   !> RK4's largest step for eigenvalues in {|lambda| <= sqrt(mu_k), |Re lambda|
+   !> <= mu_c/2} and on [-r_real, 0]: the least, over the tabulated rays, of the
+   !> radius over the region's extent; f_lim the imaginary part of the limiting point.
+   subroutine region_step(mu_k, mu_c, r_real, dt_max, f_lim)
+      real(wp), intent(in) :: mu_k, mu_c, r_real
+      real(wp), intent(out) :: dt_max, f_lim
+      real(wp) :: rr(0:n_ray), dpsi, psi, ext, r_lo, h
+      integer :: k
+      rr = rk4_radii()
+      dpsi = 0.25_wp*two_pi/n_ray
+      dt_max = huge(1.0_wp)
+      f_lim = 0.0_wp
+      do k = 0, n_ray - 1
+         ! the region's extent along the rays of [psi_k, psi_k+1] is largest at psi_k
+         psi = dpsi*k
+         ext = sqrt(mu_k)
+         if (k > 0) ext = min(ext, 0.5_wp*mu_c/sin(psi))
+         if (.not. ext > 0.0_wp) cycle
+         r_lo = min(rr(k), rr(k + 1)) - radius_slope*0.5_wp*dpsi
+         h = r_lo/ext
+         if (h < dt_max) then
+            dt_max = h
+            f_lim = ext*cos(psi)
+         end if
+      end do
+      if (r_real > 0.0_wp) then
+         if (rr(n_ray)/r_real < dt_max) then
+            dt_max = rr(n_ray)/r_real
+            f_lim = 0.0_wp
+         end if
+      end if
+   end subroutine region_step
 
    !> Each node's own block, by differences of `derivatives` (only its own
    !> states are written and read back): p = sqrt(d(speed rate)/d(torque)),
@@ -374,8 +386,8 @@ contains
       logical, intent(in) :: states(:)
       real(wp), allocatable :: diag(:), radius(:)
       integer :: j, a, b
+      allocate (diag(size(w)), radius(size(w)))
       diag = beta*d
-      allocate (radius(size(w)))
       radius = 0.0_wp
       do j = 1, size(ends, 2)
          a = ends(1, j)
