@@ -1,4 +1,4 @@
-!> Start-up benchmark (issue #22 item 5, D-63 (startup)): the time from a deck's
+!> Start-up benchmark (issue #22 item 5, D-64 (startup)): the time from a deck's
 !> text to the end of the first step, in process, phase by phase as `trainsim
 !> run --no-output` does it (app/main.f90 `load` and `do_run`):
 !>   parse      parse_deck of the deck's text;
@@ -7,7 +7,7 @@
 !>   advice     rk4_dt_limit as the run starts and in the stiffest state;
 !>   first step simulate with t_end = dt (one step, null sink: its own set-up).
 !> Cases: a 200-node chain with a backlash gear as every 10th element (400
-!> states: dense advice before D-63) and shaft chains of 1 000, 5 000 and
+!> states: dense advice before D-64) and shaft chains of 1 000, 5 000 and
 !> 20 000 nodes (and backlash chains of the same sizes); CPU time, best of
 !> n_rep. The ratio column is time over the previous row's time (the node
 !> count grows 5x, 4x): linear start-up shows ratios equal to the growth.
