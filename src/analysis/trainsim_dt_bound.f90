@@ -3,18 +3,20 @@
 !> `dense_state_limit` states, and the quick check before any eigenvalue
 !> problem (D-64 (startup)).
 !>
-!> The bound is the weighted infinity norm of the first-order system, the
-!> weights from a few steps of power iteration on the absolute values of the
-!> symmetrically scaled stiffness M^-1/2 K M^-1/2 (Collatz-Wielandt: for any
-!> positive x, rho(|B|) <= max_i (|B| x)_i / x_i, so every iterate gives an
-!> upper bound, and the best is kept). On a train without loops |B| is a
-!> signature similarity of B, so the bound converges to the highest circular
-!> frequency itself. When the node blocks and the elements' K and C are
-!> symmetric (no motor), the damped eigenvalues also satisfy
-!> lambda^2 + c lambda + k = 0 with k <= mu_K and c <= mu_C (Rayleigh
-!> quotients), which places them in {|lambda| <= sqrt(mu_K), |Re lambda| <=
-!> mu_C/2} plus [-mu_C, 0]: the step is then RK4's radius ray by ray over that
-!> region, 2 sqrt 2 / sqrt(mu_K) for an undamped train.
+!> Power iteration on the absolute values of the symmetrically scaled
+!> stiffness B = M^-1/2 K M^-1/2 bounds its spectrum from above at every step
+!> (Collatz-Wielandt: for any positive x, rho(|B|) <= max_i (|B| x)_i / x_i;
+!> the best iterate is kept): mu_K >= omega_max^2, and on a train without
+!> loops |B| is a signature similarity of B, so mu_K tends to omega_max^2
+!> itself; likewise mu_C for the damping. When the node blocks and the
+!> elements' K and C are symmetric (no motor), an eigenvalue satisfies
+!> lambda^2 + c lambda + k = 0 with 0 <= k <= mu_K, |c| <= mu_C (Rayleigh
+!> quotients): the complex ones lie in {|lambda| <= sqrt(mu_K), |Re lambda|
+!> <= mu_C/2}, the real ones on [-r, 0], r <= mu_C shortened by a signed
+!> Gershgorin bound (`real_extent`), and the step is RK4's radius ray by ray
+!> over that region (2 sqrt 2 / sqrt(mu_K) undamped). Otherwise the weighted
+!> infinity norm of the whole first-order system bounds |lambda|, against
+!> RK4's least radius over the left half-plane.
 module trainsim_dt_bound
    use trainsim_kinds, only: wp, two_pi
    use trainsim_model, only: model_t
