@@ -43,6 +43,7 @@ module trainsim
                             ev_contact_front, ev_contact_rear, ev_separation, ev_zone
    use trainsim_hdf5, only: hdf5_sink_t
    use trainsim_capture, only: tee_sink_t
+   use trainsim_continuation, only: chain_state_t, save_end_state
    implicit none
    private
 
@@ -51,7 +52,7 @@ module trainsim
    public :: err_input, err_io, err_numeric, err_internal
    public :: event_t, element_metrics_t, run_stats_t, run_result_t, model_t
    public :: ev_name, ev_contact_front, ev_contact_rear, ev_separation, ev_zone
-   public :: metric_names, sweep_spec_t
+   public :: metric_names, sweep_spec_t, chain_state_t
 
    !> Names accepted by `simulation_t%metric` (fields of element_metrics_t, in its order).
    character(len=*), parameter :: metric_list(*) = [character(len=21) :: &
@@ -70,6 +71,7 @@ module trainsim
       logical :: has_run = .false.    ! res is the run of the current model
       type(override_t), allocatable :: sets(:)   ! set() calls, applied in order at build
       type(deck_group_t), allocatable :: sweeps(:)   ! the deck's &sweep groups (not built)
+      type(chain_state_t) :: last_end                ! node angles and speeds at the end of the last run
    contains
       procedure :: read_file => sim_read_file
       procedure :: read_text => sim_read_text
@@ -93,6 +95,7 @@ module trainsim
       procedure :: events => sim_events
       procedure :: event_element_id => sim_event_element_id
       procedure :: stats => sim_stats
+      procedure :: end_state => sim_end_state
    end type simulation_t
 
 contains
@@ -270,6 +273,7 @@ contains
          call simulate(m, none, self%res, err)
       end if
       self%has_run = .not. allocated(err)
+      if (self%has_run) call save_end_state(m, self%res%t_final, self%res%y_final, 0, self%last_end)
    end subroutine sim_run
 
    ! ------------------------------------------------------------------ results
@@ -429,4 +433,14 @@ contains
       if (.not. ran(self, 'stats', err)) return
       stats = self%res%stats
    end subroutine sim_stats
+
+   !> The node angles and speeds at the end of the last run (`theta`, `omega`) and the
+   !> run's initial speeds (`omega0`), as a sweep records them (trainsim_continuation).
+   subroutine sim_end_state(self, st, err)
+      class(simulation_t), intent(in) :: self
+      type(chain_state_t), intent(out) :: st
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. ran(self, 'end_state', err)) return
+      st = self%last_end
+   end subroutine sim_end_state
 end module trainsim

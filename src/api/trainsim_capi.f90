@@ -12,7 +12,7 @@ module trainsim_capi
    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_size_t, c_ptr, c_char, c_null_char, c_null_ptr, &
                                           c_associated, c_f_pointer, c_loc
    use trainsim, only: simulation_t, error_t, wp, string_t, event_t, run_result_t, model_t, version_full, &
-                       ev_name, sweep_spec_t
+                       ev_name, sweep_spec_t, chain_state_t
    use trainsim_capture, only: capture_sink_t
    use trainsim_capi_tables, only: metric_table, event_columns, event_row
    implicit none
@@ -258,6 +258,7 @@ contains
       type(error_t), allocatable :: err
       type(model_t) :: model
       type(run_result_t) :: res
+      type(chain_state_t) :: st
       code = code_argument
       if (.not. take(p, h)) return
       h%has_run = .false.
@@ -275,8 +276,9 @@ contains
          call h%sim%run(err, keep_events=iand(flags, 2_c_int) /= 0, sink=h%cap)
       end if
       if (.not. allocated(err)) call h%sim%result(res, err)
+      if (.not. allocated(err)) call h%sim%end_state(st, err)
       if (.not. allocated(err)) then
-         call metric_table(model, res, h%cap%wmin, h%cap%wmax, h%metric_names, h%metric_units, h%metric_values)
+         call metric_table(model, res, st, h%cap%wmin, h%cap%wmax, h%metric_names, h%metric_units, h%metric_values)
          call h%sim%events(h%events, err)
       end if
       h%has_run = .not. allocated(err)

@@ -13,7 +13,7 @@ module trainsim_capi_tables
    use trainsim_observer, only: run_result_t
    use trainsim_event, only: event_t
    use trainsim_sweep_file, only: element_metric_names, node_metric_names
-   use trainsim_continuation, only: chain_state_t, save_end_state
+   use trainsim_continuation, only: chain_state_t
    implicit none
    private
 
@@ -26,15 +26,15 @@ module trainsim_capi_tables
 
 contains
 
-   !> Names, units and values of every metric of the run `res` of `model` (as built; its
-   !> kinematics are used for the end state). `wmin`, `wmax`: the node speed range.
-   subroutine metric_table(model, res, wmin, wmax, names, units, values)
-      type(model_t), intent(inout) :: model
+   !> Names, units and values of every metric of the run `res` of `model` (as built),
+   !> which ended in the state `st`. `wmin`, `wmax`: the node speed range.
+   subroutine metric_table(model, res, st, wmin, wmax, names, units, values)
+      type(model_t), intent(in) :: model
       type(run_result_t), intent(in) :: res
+      type(chain_state_t), intent(in) :: st
       real(wp), intent(in) :: wmin(:), wmax(:)
       type(string_t), allocatable, intent(out) :: names(:), units(:)
       real(wp), allocatable, intent(out) :: values(:)
-      type(chain_state_t) :: st
       character(len=:), allocatable :: d, f, tq
       integer :: k, n, ne, nn
       ne = size(model%elements); nn = size(model%nodes)
@@ -58,7 +58,6 @@ contains
             call add(id, 14, e%p2p_mean, d); call add(id, 15, real(e%p2p_swings, wp), '1')
          end associate
       end do
-      call save_end_state(model, res%t_final, res%y_final, 0, st)
       do k = 1, nn
          associate (id => model%nodes(k)%n%id)
             call put(id//'.'//trim(node_metric_names(1)), wmin(k), 'rad/s')
