@@ -14,6 +14,8 @@ module trainsim_capi
    use trainsim, only: simulation_t, error_t, wp, string_t, event_t, run_result_t, model_t, version_full, &
                        ev_name, sweep_spec_t, chain_state_t
    use trainsim_capture, only: capture_sink_t
+   use trainsim_error, only: fatal_error, err_input
+   use trainsim_strings, only: str
    use trainsim_capi_tables, only: metric_table, event_columns, event_row
    implicit none
    private
@@ -334,8 +336,8 @@ contains
       code = listing(h, what, names, rows)
       if (code /= 0) return
       if (i >= size(names, kind=c_size_t)) then
-         code = misuse(h, 'trainsim_name: index '//itoa(int(i))//' out of range (0 to '// &
-                       itoa(size(names) - 1)//')')
+         code = misuse(h, 'trainsim_name: index '//str(int(i))//' out of range (0 to '// &
+                       str(size(names) - 1)//')')
          return
       end if
       call put_string(names(i + 1)%s, buf, bufsize)
@@ -379,11 +381,8 @@ contains
             end do
          end if
       case (w_sweep_parameters, w_sweep_runs)
-         call h%sim%sweep_spec(spec, err)
-         if (allocated(err)) then
-            code = finish(h, err)
-            return
-         end if
+         code = sweep_of(h, spec)
+         if (code /= 0) return
          names = spec%names
          rows = spec%n_runs
       case (w_event_columns)
@@ -408,7 +407,7 @@ contains
          case (w_events); rows = size(h%events)
          end select
       case default
-         code = misuse(h, 'unknown list '//itoa(int(what))//' (see TRAINSIM_METRICS ... in trainsim.h)')
+         code = misuse(h, 'unknown list '//str(int(what))//' (see TRAINSIM_METRICS ... in trainsim.h)')
       end select
    end function listing
 
@@ -496,23 +495,34 @@ contains
       real(c_double), intent(out) :: values(n)
       type(capi_sim_t), pointer :: h
       type(sweep_spec_t) :: spec
-      type(error_t), allocatable :: err
       integer :: m
       code = code_argument
       if (.not. take(p, h)) return
-      call h%sim%sweep_spec(spec, err)
-      if (allocated(err)) then
-         code = finish(h, err)
-         return
-      end if
+      code = sweep_of(h, spec)
+      if (code /= 0) return
       m = size(spec%values)
       if (int(m, c_size_t) > n) then
-         code = misuse(h, 'trainsim_sweep_values: the buffer holds '//itoa(int(n))//' values, '//itoa(m)//' needed')
+         code = misuse(h, 'trainsim_sweep_values: the buffer holds '//str(int(n))//' values, '//str(m)//' needed')
          return
       end if
       values(1:m) = reshape(spec%values, [m])
       code = 0
    end function trainsim_sweep_values
+
+   !> The runs of the deck's &sweep groups; a continuation sweep is refused (its runs
+   !> start from each other's end states: `trainsim sweep` makes them).
+   integer(c_int) function sweep_of(h, spec) result(code)
+      type(capi_sim_t), intent(inout) :: h
+      type(sweep_spec_t), intent(out) :: spec
+      type(error_t), allocatable :: err
+      call h%sim%sweep_spec(spec, err)
+      if (.not. allocated(err) .and. allocated(spec%prev)) then
+         if (any(spec%prev > 0)) call fatal_error(err, 'error: the deck''s &sweep groups make a continuation '// &
+                                                  'sweep (each run starts from the end of the one before): '// &
+                                                  'run it with trainsim sweep', err_input)
+      end if
+      code = finish(h, err)
+   end function sweep_of
 
    !> A run was made and `need` values fit in `n` (else `code` says why).
    logical function ran(h, need, n, code)
@@ -524,7 +534,7 @@ contains
       if (.not. h%has_run) then
          code = misuse(h, 'no run since the deck was read or changed (call trainsim_run first)')
       else if (int(need, c_size_t) > n) then
-         code = misuse(h, 'the buffer holds '//itoa(int(n))//' values, '//itoa(need)//' needed (trainsim_count)')
+         code = misuse(h, 'the buffer holds '//str(int(n))//' values, '//str(need)//' needed (trainsim_count)')
       else
          code = 0
          ran = .true.
@@ -563,12 +573,4 @@ contains
       end do
       chars(n + 1) = c_null_char
    end subroutine put_string
-
-   pure function itoa(i) result(s)
-      integer, intent(in) :: i
-      character(len=:), allocatable :: s
-      character(len=16) :: buf
-      write (buf, '(i0)') i
-      s = trim(buf)
-   end function itoa
 end module trainsim_capi
