@@ -41,7 +41,9 @@ def _load():
             tried.append(path + " (absent)")
             continue
         try:
-            return ctypes.CDLL(path), path
+            # PyDLL: calls hold the GIL, so Python threads never enter the library at
+            # once (its module variables and HDF5 are not thread-safe)
+            return ctypes.PyDLL(path), path
         except OSError as exc:
             tried.append(f"{path} ({exc})")
     raise ImportError(

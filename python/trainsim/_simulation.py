@@ -40,11 +40,13 @@ class Simulation:
     # -- parameters -------------------------------------------------------------------
     def set(self, path, value):
         """Set the deck key `path` (GROUP.KEY, as `trainsim run --set`): a number is set
-        exactly; a str is deck text ("'cvode-bdf'" for a string, "0, 0.1" for a list);
+        exactly (an int as an integer); a str is deck text ("'cvode-bdf'" for a string, "0, 0.1" for a list);
         a list or tuple of numbers is a deck list."""
         if isinstance(value, (bool, np.bool_)):
             raise TypeError(f"set {path}: a bool is not a deck value")
-        if isinstance(value, (int, float, np.integer, np.floating)):
+        if isinstance(value, (int, np.integer)):
+            code = lib.trainsim_set(self._h, L.encode(path), str(int(value)).encode())
+        elif isinstance(value, (float, np.floating)):
             code = lib.trainsim_set_real(self._h, L.encode(path), float(value))
         else:
             if isinstance(value, (list, tuple, np.ndarray)):

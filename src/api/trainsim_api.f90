@@ -148,13 +148,13 @@ contains
    !> node or element id, `run`, or `GROUP#K` (`load#2`); KEY a deck key or a derived
    !> parameter (`mesh_frequency`, `settle_cycles`, `measure_cycles`). The path is
    !> checked against the deck here; the value when the model is built (run does that).
-   !> Later sets of one path win.
+   !> Later sets of one path win: a set of a path given before replaces it.
    subroutine sim_set_text(self, path, value, err)
       class(simulation_t), intent(inout) :: self
       character(len=*), intent(in) :: path, value
       type(error_t), allocatable, intent(out) :: err
       type(override_t) :: ov
-      integer :: ig
+      integer :: ig, i
 
       if (.not. self%has_deck) then
          call fatal_error(err, "set '"//path//"': no deck has been read", err_input)
@@ -162,7 +162,14 @@ contains
       end if
       call make_override(path, value, "set '"//path//"'", ov, err); if (allocated(err)) return
       call check_override(self%deck, ov, ig, err); if (allocated(err)) return
-      self%sets = [self%sets, ov]
+      ! a set of a path set before replaces it (a sweep of many values keeps one set)
+      do i = 1, size(self%sets)
+         if (to_lower(self%sets(i)%target) == to_lower(ov%target) .and. self%sets(i)%key == ov%key) then
+            self%sets = [self%sets(:i - 1), self%sets(i + 1:), ov]
+            exit
+         end if
+      end do
+      if (i > size(self%sets)) self%sets = [self%sets, ov]
       self%built = .false.
       self%has_run = .false.
    end subroutine sim_set_text
