@@ -101,3 +101,19 @@ def test_notebook_example_runs(tmp_path):
                          cwd=SRC, env=env, check=True, capture_output=True, text=True)
     assert "27 runs" in out.stdout
     assert (tmp_path / "fig.png").stat().st_size > 0
+
+
+def test_pandas_and_xarray_views():
+    """The views exist only where pandas / xarray are importable (skipped otherwise)."""
+    pd = pytest.importorskip("pandas")
+    sim = trainsim.Simulation.from_deck(GHM)
+    sim.set("run.t_end", 0.002)
+    s = sim.run()
+    df = s.to_pandas()
+    assert isinstance(df, pd.DataFrame) and df.shape == (len(s), len(s.names) - 1)
+    assert np.array_equal(df["nodes/omega/n2"].to_numpy(), s["nodes/omega/n2"])
+    assert sim.metrics.to_pandas().loc["mesh.p2p_mean", "value"] == sim.metrics["mesh.p2p_mean"]
+    xr = pytest.importorskip("xarray")
+    ds = s.to_xarray()
+    assert isinstance(ds, xr.Dataset)
+    assert np.array_equal(ds["nodes_omega"].sel(nodes_omega_id="n2").values, s["nodes/omega/n2"])
