@@ -117,3 +117,12 @@ def test_pandas_and_xarray_views():
     ds = s.to_xarray()
     assert isinstance(ds, xr.Dataset)
     assert np.array_equal(ds["nodes_omega"].sel(nodes_omega_id="n2").values, s["nodes/omega/n2"])
+
+
+def test_mpi_sweep_reads_back_the_same_table(cli_sweep, tmp_path):
+    """mpi_sweep: `mpirun -np 2 trainsim sweep` read back equals the serial file."""
+    import shutil
+    if shutil.which("mpirun") is None:
+        pytest.skip("no mpirun")
+    t = trainsim.mpi_sweep(FIG511, tmp_path / "mpi.h5", ranks=2, trainsim=EXE)
+    compare_sweeps(t, cli_sweep)
