@@ -31,9 +31,8 @@ module trainsim
    use trainsim_error, only: error_t, fatal_error, err_input, err_io, err_numeric, err_internal
    use trainsim_strings, only: string_t, to_lower, str
    use trainsim_version, only: version_string, version_full, git_revision
-   use trainsim_deck, only: deck_t, read_deck, parse_deck
+   use trainsim_deck, only: deck_t, deck_group_t, read_deck, parse_deck
    use trainsim_overrides, only: override_t, make_override, check_override, split_sweep_groups
-   use trainsim_deck, only: deck_group_t
    use trainsim_sweep_spec, only: sweep_spec_t, read_sweep_spec
    use trainsim_prepare, only: prepare_model
    use trainsim_model, only: model_t
@@ -102,7 +101,9 @@ contains
 
    ! ------------------------------------------------------------------ reading
 
-   !> Read and parse the deck file `path` (nothing is built yet).
+   !> Read and parse the deck file `path` (nothing is built yet). A deck's &sweep groups
+   !> are kept apart, as `trainsim run` ignores them: the deck's own values are built and
+   !> run; `sweep_spec` gives the sweep's runs (also for `read_text`).
    subroutine sim_read_file(self, path, err)
       class(simulation_t), intent(inout) :: self
       character(len=*), intent(in) :: path
@@ -113,8 +114,6 @@ contains
       if (self%has_deck) call split_sweep_groups(self%deck, self%sweeps)
    end subroutine sim_read_file
 
-   !> A deck's &sweep groups are kept apart (as `trainsim run` ignores them): the
-   !> deck's own values are built and run; `sweep_spec` gives the sweep's runs.
    !> Parse a deck given as text (lines separated by new_line('a')); `name` stands for
    !> the file name in messages (default '<text>').
    subroutine sim_read_text(self, text, err, name)
