@@ -38,7 +38,7 @@ contains
                           self%fam%th, self%fam%w)
       end if
    contains
-      ! the stage kernel, energy off and on (internal: inlined here, D-64 (kernels))
+      ! the stage kernel, energy off and on (internal: inlined here, D-70 (kernels))
 #define KERNEL stage_plain
 #define ENERGY 0
 #define STEP_END 0
