@@ -45,7 +45,7 @@ def main():
     breaches = []
     for d in DIRS:
         for f in sorted((root / d).rglob("*")):
-            if f.suffix not in (".f90", ".F90"):
+            if f.suffix not in (".f90", ".F90", ".inc"):
                 continue
             rel = str(f.relative_to(root))
             lines = f.read_text(errors="replace").splitlines()

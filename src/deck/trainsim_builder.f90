@@ -402,7 +402,7 @@ contains
    end subroutine read_elements
 
    !> The further ports an n-port element named in `configure` (its port_keys,
-   !> D-63, e.g. a gear pair's `carrier`): each key's node, which must be
+   !> D-71, e.g. a gear pair's `carrier`): each key's node, which must be
    !> defined and none of the element's other ports.
    subroutine read_ports(g, e, node_ids, err)
       type(deck_group_t), intent(inout) :: g

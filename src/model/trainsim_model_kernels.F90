@@ -2,7 +2,7 @@
 !> a part of the train and the tables' probes: a linear spring and a clearance
 !> in its hot form with its contact law (D-35). Each is written once, in
 !> trainsim_model_spring_law.inc and trainsim_model_contact_law.inc, which the
-!> stage kernel (trainsim_model_stage.inc) includes too (D-64 (kernels)).
+!> stage kernel (trainsim_model_stage.inc) includes too (D-70 (kernels)).
 module trainsim_model_kernels
    use trainsim_kinds, only: wp
    use trainsim_element, only: hot_form_t, hf_open, hf_yang_sun

@@ -5,7 +5,7 @@
 !> Each `module procedure` here is declared, with its arguments and their docs, in
 !> trainsim_model.
 submodule (trainsim_model) trainsim_model_rhs
-   use trainsim_model_families, only: nk_other, nk_plain, nk_held, lf_general, lf_open
+   use trainsim_model_families, only: nk_other, nk_plain, nk_held, lf_open
    use trainsim_model_families, only: spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr
    use trainsim_model_kernels, only: spring, hot_torques
    use trainsim_ports, only: port_torques_at, general_torques
@@ -40,7 +40,7 @@ contains
                           self%fam%th, self%fam%w)
       end if
    contains
-      ! the stage kernel, energy off and on (internal: inlined here, D-64 (kernels))
+      ! the stage kernel, energy off and on (internal: inlined here, D-70 (kernels))
 #define KERNEL stage_plain
 #define ENERGY 0
 #define STEP_END 0
@@ -69,7 +69,7 @@ contains
       real(wp), intent(out) :: dydt(:)
       logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       integer :: i, l, r, s, o
-      real(wp) :: tl, tr, f, d, dv, pdiss, pin
+      real(wp) :: tl, tr, f, pdiss, pin
       logical :: track
       if (self%simple) then
          call rhs_simple_ws(self, t, y, dydt, step_end)
@@ -115,16 +115,12 @@ contains
          associate (e => self%fe(i))
             l = e%l
             r = e%r
-            if (e%linear) then
-               call spring(.true., e%k, e%c, e%r1, e%r2, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
-                           d, dv, f, tl, tr)
-               if (track .and. e%c /= 0.0_wp) pdiss = pdiss + e%c*dv**2
-            else if (e%form >= lf_open) then                               ! a clearance's hot form (D-35)
-               call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
+            if (e%linear .or. e%form >= lf_open) then                      ! a family's row
+               call family_row(self, i, tl, tr, f)
                if (track) pdiss = pdiss + f
             else if (self%nport) then
                call general_torques(self%elements(i)%e, self%theta, self%omega, self%torque, track, tl, tr, &
-                                    pdiss, pin)                     ! (its further ports' torques added: D-63)
+                                    pdiss, pin)                     ! (its further ports' torques added: D-71)
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
                if (track) then
@@ -223,30 +219,46 @@ contains
 #undef STEP_END
    end procedure rhs_simple_ws
 
-   module procedure model_element_torques
-      real(wp) :: f, d, dv, tp(max_ports)
-      integer :: l, r, ends(max_ports)
-      associate (e => self%fe(i))
-         l = e%l
-         r = e%r
+   !> Element i's torques (and the power it dissipates) at the kinematics in the
+   !> workspace through its family's row (trainsim_model_kernels): a linear
+   !> spring, a clearance in its hot form (D-35). The general path, one element
+   !> and a part of the train evaluate an element of a family here, with the
+   !> stage kernel's arithmetic.
+   subroutine family_row(self, i, tl, tr, pw)
+      type(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(out) :: tl, tr, pw
+      real(wp) :: d, dv, f
+      associate (e => self%fe(i), thl => self%theta(self%fe(i)%l), wl => self%omega(self%fe(i)%l), &
+                 thr => self%theta(self%fe(i)%r), wr => self%omega(self%fe(i)%r))
          if (e%linear) then
-            call spring(.true., e%k, e%c, e%r1, e%r2, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &
-                        d, dv, f, tl, tr)
-         else if (e%form >= lf_open) then                                  ! a clearance's hot form (D-35)
-            call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
-         else if (self%nport) then                                         ! (over its ports: D-63)
-            call port_torques_at(self%elements(i)%e, self%theta, self%omega, ends, tp, f)
-            tl = tp(1)
-            tr = tp(2)
+            call spring(e%c /= 0.0_wp, e%k, e%c, e%r1, e%r2, thl, wl, thr, wr, d, dv, f, tl, tr)
+            pw = e%c*dv**2                                                 ! (0 without damping)
          else
-            call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+            call hot_torques(self%fh(i), thl, wl, thr, wr, tl, tr, pw)
          end if
       end associate
+   end subroutine family_row
+
+   module procedure model_element_torques
+      real(wp) :: pw, tp(max_ports)
+      integer :: ends(max_ports)
+      if (self%fe(i)%linear .or. self%fe(i)%form >= lf_open) then
+         call family_row(self, i, tl, tr, pw)
+      else if (self%nport) then                                            ! (over its ports: D-71)
+         call port_torques_at(self%elements(i)%e, self%theta, self%omega, ends, tp, pw)
+         tl = tp(1)
+         tr = tp(2)
+      else
+         associate (l => self%fe(i)%l, r => self%fe(i)%r)
+            call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+         end associate
+      end if
    end procedure model_element_torques
 
    module procedure model_rhs_part
       integer :: k, i, l, r, o
-      real(wp) :: tl, tr, f, d, dv
+      real(wp) :: tl, tr, f
       self%ws_step_end = .false.
       do k = 1, size(kin)
          i = kin(k)
@@ -277,11 +289,8 @@ contains
          associate (e => self%fe(i))
             l = e%l
             r = e%r
-            if (e%linear) then                                             ! (the kernels' forms: the same values)
-               call spring(e%form == lf_general, e%k, e%c, e%r1, e%r2, self%theta(l), self%omega(l), self%theta(r), &
-                           self%omega(r), d, dv, f, tl, tr)
-            else if (e%form >= lf_open) then                               ! a clearance's hot form (D-35)
-               call hot_torques(self%fh(i), self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr, f)
+            if (e%linear .or. e%form >= lf_open) then                      ! a family's row
+               call family_row(self, i, tl, tr, f)
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
             end if

@@ -289,7 +289,7 @@ contains
                cycle
             end if
          end if
-         if (model%nport) then                              ! (over its ports: D-63)
+         if (model%nport) then                              ! (over its ports: D-71)
             call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
                                                self%s%contact(i), self%s%pairs(i))
             cycle
@@ -521,7 +521,7 @@ contains
       if (.not. h > 0.0_wp) return
       do i = 1, size(model%elements)
          if (model%nport) then
-            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
+            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-71)
          end if
          associate (e => model%elements(i)%e)
             l = e%left; r = e%right
@@ -770,7 +770,7 @@ contains
       do k = 1, size(els)
          i = els(k)
          call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
-         if (model%nport) then                              ! (over its ports: D-63)
+         if (model%nport) then                              ! (over its ports: D-71)
             call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
                                                self%s%contact(i), self%s%pairs(i))
             cycle
@@ -854,7 +854,7 @@ contains
       do i = 1, size(model%elements)
          if (self%s%contact(i) == 0 .or. self%s%contact(i) /= self%contact_prev(i)) cycle
          if (model%nport) then
-            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-63)
+            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-71)
          end if
          l = model%elements(i)%e%left
          r = model%elements(i)%e%right
