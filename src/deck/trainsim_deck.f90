@@ -14,7 +14,7 @@ module trainsim_deck
    implicit none
    private
 
-   public :: deck_t, deck_group_t, deck_entry_t, read_deck, parse_deck, parse_real
+   public :: deck_t, deck_group_t, deck_entry_t, read_deck, parse_deck, parse_real, canonical_deck
 
    !> A whole parsed deck.
    type :: deck_t
@@ -504,6 +504,35 @@ contains
          end if
       end do
    end subroutine deck_check_group_names
+
+   !> The deck as parsed: "&group key=v1,v2 ... /" a line, strings quoted (what the
+   !> fingerprint of a sweep file digests: comments and layout do not count).
+   function canonical_deck(deck) result(t)
+      type(deck_t), intent(in) :: deck
+      character(len=:), allocatable :: t
+      integer :: g, e, v
+      t = ''
+      if (.not. allocated(deck%groups)) return
+      do g = 1, size(deck%groups)
+         associate (grp => deck%groups(g))
+            t = t//'&'//grp%name
+            if (allocated(grp%entries)) then
+               do e = 1, size(grp%entries)
+                  t = t//' '//grp%entries(e)%key//'='
+                  do v = 1, size(grp%entries(e)%values)
+                     if (v > 1) t = t//','
+                     if (grp%entries(e)%quoted(v)) then
+                        t = t//"'"//grp%entries(e)%values(v)%s//"'"
+                     else
+                        t = t//grp%entries(e)%values(v)%s
+                     end if
+                  end do
+               end do
+            end if
+            t = t//' /'//new_line('a')
+         end associate
+      end do
+   end function canonical_deck
 
    subroutine grow_groups(groups)
       type(deck_group_t), allocatable, intent(inout) :: groups(:)
