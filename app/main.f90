@@ -21,7 +21,7 @@ program trainsim_main
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
    use trainsim_preload, only: preload_info_t
-   use trainsim_sweep, only: sweep_options_t, sweep_summary_t, run_sweep
+   use trainsim_sweep, only: sweep_options_t, sweep_summary_t, run_sweep, finish_sweep
    use trainsim_gear_calc, only: gear_input_t, gear_result_t, gear_calc, gear_report, &
                                  key_input_t, key_result_t, key_calc, key_report, key_max_points
    use trainsim_units, only: units_t, make_units
@@ -422,6 +422,7 @@ contains
       integer, intent(in) :: code
       flush (output_unit)
       flush (error_unit)
+      call finish_sweep()     ! after the outcome is out (a stopping mpirun never completes it)
       if (hdf5_library_stuck()) call c_exit_now(int(code, c_int))
       if (code == 0) stop
       stop code, quiet=.true.
@@ -515,7 +516,7 @@ contains
       write (output_unit, '(a)') 'linearised with '//what
       if (model%run%preload) call print_preload(model, preload, output_unit)
       call print_modes(model, modes, output_unit)
-      call rk4_dt_limit(model, state, dt_max, om, err, freq_hz=f, damping_ratio=z)
+      call rk4_dt_limit(model, state, dt_max, om, err, freq_hz=f, damping_ratio=z, dense=.true.)   ! the full analysis (D-64)
       if (allocated(err)) call fail(err)
       if (dt_max < huge(1.0_wp)) then
          write (output_unit, '(a)') 'RK4 stability limit (damped linear system'// &

@@ -483,7 +483,7 @@ contains
    ! module, not in a submodule: gfortran gives every procedure of a submodule an
    ! external symbol, and `mr_step_on`, `mr_bnd_on` there cost 16e6 instructions
    ! more (+0.5 %) on the 1000-node backlash chain (bench_rk4_throughput
-   ! --profile chain-backlash, D-63).
+   ! --profile chain-backlash, D-69).
 
    !> The RK4 step of L of size s from (t_loc, y) into ys (L's states; B's at
    !> t_loc + s from the unsplit step), k1 (L's, at t_loc) given; its energy
