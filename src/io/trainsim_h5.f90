@@ -193,11 +193,8 @@ contains
       integer(hid_t), intent(out) :: grp
       type(error_t), allocatable, intent(out) :: err
       integer :: hdferr
-      call h5gcreate_f(loc, name, grp, hdferr)
-      if (hdferr < 0) then
-         grp = -1
-         call fatal_error(err, "cannot create group '"//name//"'", err_io)
-      end if
+      call new_group(loc, name, grp, hdferr)
+      if (hdferr < 0) call fatal_error(err, "cannot create group '"//name//"'", err_io)
    end subroutine make_group
 
    !> Create group `name` of `loc`; h < 0 on failure.
@@ -518,44 +515,42 @@ contains
       call finish_attr(attr, hdferr, name, err)
    end subroutine put_index_attr
 
-   subroutine put_real_attr(loc, name, value, err)
-      integer(hid_t), intent(in) :: loc
+   !> Scalar attribute of type `dtype`, its value at `buf`.
+   subroutine put_scalar_attr(loc, name, dtype, buf, err)
+      integer(hid_t), intent(in) :: loc, dtype
       character(len=*), intent(in) :: name
-      real(wp), intent(in) :: value
+      type(c_ptr), intent(in) :: buf
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: attr
       integer :: hdferr
-      call make_attr(loc, name, H5T_NATIVE_DOUBLE, -1, attr, err)
+      call make_attr(loc, name, dtype, -1, attr, err)
       if (allocated(err)) return
-      call h5awrite_f(attr, H5T_NATIVE_DOUBLE, value, [1_hsize_t], hdferr)
+      call h5awrite_f(attr, dtype, buf, hdferr)
       call finish_attr(attr, hdferr, name, err)
+   end subroutine put_scalar_attr
+
+   subroutine put_real_attr(loc, name, value, err)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      real(wp), target, intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      call put_scalar_attr(loc, name, H5T_NATIVE_DOUBLE, c_loc(value), err)
    end subroutine put_real_attr
 
    subroutine put_int_attr(loc, name, value, err)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
-      integer, intent(in) :: value
+      integer, target, intent(in) :: value
       type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: attr
-      integer :: hdferr
-      call make_attr(loc, name, H5T_NATIVE_INTEGER, -1, attr, err)
-      if (allocated(err)) return
-      call h5awrite_f(attr, H5T_NATIVE_INTEGER, value, [1_hsize_t], hdferr)
-      call finish_attr(attr, hdferr, name, err)
+      call put_scalar_attr(loc, name, H5T_NATIVE_INTEGER, c_loc(value), err)
    end subroutine put_int_attr
 
    subroutine put_i8_attr(loc, name, value, err)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
-      integer(i8), intent(in) :: value
+      integer(i8), target, intent(in) :: value
       type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: attr, itype
-      integer :: hdferr
-      itype = h5kind_to_type(i8, H5_INTEGER_KIND)
-      call make_attr(loc, name, itype, -1, attr, err)
-      if (allocated(err)) return
-      call h5awrite_f(attr, itype, value, [1_hsize_t], hdferr)
-      call finish_attr(attr, hdferr, name, err)
+      call put_scalar_attr(loc, name, h5kind_to_type(i8, H5_INTEGER_KIND), c_loc(value), err)
    end subroutine put_i8_attr
 
    logical function attr_exists(loc, name)

@@ -1,9 +1,7 @@
-!> The generic HDF5 layer, part 2: datasets. Extendable series (rows appended in
-!> blocks, a row rewritten in place, a dimension scale), fixed columns with their
-!> units, and slot datasets (one slot per run, allocated at once with a fill value,
-!> written and read one slot at a time). With trainsim_h5 the only modules that call
-!> HDF5. Errors as in trainsim_h5: `error_t` values, or an HDF5 status (< 0 failed)
-!> for the slot calls, which the sweep file accumulates.
+!> The generic HDF5 layer, part 2: datasets that grow or are written whole. Extendable
+!> series (rows appended in blocks, a row rewritten in place, a dimension scale) and
+!> fixed columns with their units. With trainsim_h5 and trainsim_h5_slots the only
+!> modules that call HDF5. Errors are `error_t` values (code err_io, naming the dataset).
 !>
 !> Fortran (n, rows) arrays appear in h5py as (rows, n).
 module trainsim_h5_dsets
@@ -26,8 +24,6 @@ module trainsim_h5_dsets
    public :: make_series, append_r1, append_r2, append_i1, append_i2, append_s1, write_r_at, read_i1
    public :: make_time_scale
    public :: put_column_s, put_column_r, put_column_i, put_entry_units
-   public :: new_slots, open_dset, put_slot_r, put_slot_i, put_slot_text, get_slot_r, get_slot_text, &
-      put_matrix, get_matrix
 
 contains
 
@@ -140,73 +136,65 @@ contains
       if (hdferr < 0) call fatal_error(err, 'H5Dset_extent failed for '//what, err_io)
    end subroutine extend_empty
 
-   subroutine append_r1(dset, buf, row0, what, err)
-      integer(hid_t), intent(in) :: dset
-      real(wp), contiguous, intent(in) :: buf(:)
+   !> Append nb rows of nvar values (rank 1: nvar unused) of type `dtype` at `buf`.
+   subroutine append_rows(dset, rank, nvar, nb, dtype, buf, row0, what, err)
+      integer(hid_t), intent(in) :: dset, dtype
+      integer, intent(in) :: rank, nvar, nb
+      type(c_ptr), intent(in) :: buf
       integer(hsize_t), intent(in) :: row0
       character(len=*), intent(in) :: what
       type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: fspace, mspace
       integer :: hdferr
-      call begin_append(dset, 1, 0, row0, size(buf), fspace, mspace, what, err)
+      call begin_append(dset, rank, nvar, row0, nb, fspace, mspace, what, err)
       if (allocated(err)) return
-      call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, buf, [int(size(buf), hsize_t)], hdferr, &
-                      mem_space_id=mspace, file_space_id=fspace)
+      call h5dwrite_f(dset, dtype, buf, hdferr, mem_space_id=mspace, file_space_id=fspace)
       call end_append(fspace, mspace, hdferr, what, err)
+   end subroutine append_rows
+
+   subroutine append_r1(dset, buf, row0, what, err)
+      integer(hid_t), intent(in) :: dset
+      real(wp), contiguous, target, intent(in) :: buf(:)
+      integer(hsize_t), intent(in) :: row0
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      call append_rows(dset, 1, 0, size(buf), H5T_NATIVE_DOUBLE, c_loc(buf), row0, what, err)
    end subroutine append_r1
 
    subroutine append_r2(dset, buf, row0, what, err)
       integer(hid_t), intent(in) :: dset
-      real(wp), contiguous, intent(in) :: buf(:, :)
+      real(wp), contiguous, target, intent(in) :: buf(:, :)
       integer(hsize_t), intent(in) :: row0
       character(len=*), intent(in) :: what
       type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: fspace, mspace
-      integer :: hdferr
       if (size(buf, 1) == 0) then   ! nothing to store, but keep the row count right
          call extend_empty(dset, row0 + int(size(buf, 2), hsize_t), what, err)
          return
       end if
-      call begin_append(dset, 2, size(buf, 1), row0, size(buf, 2), fspace, mspace, what, err)
-      if (allocated(err)) return
-      call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, buf, int(shape(buf), hsize_t), hdferr, &
-                      mem_space_id=mspace, file_space_id=fspace)
-      call end_append(fspace, mspace, hdferr, what, err)
+      call append_rows(dset, 2, size(buf, 1), size(buf, 2), H5T_NATIVE_DOUBLE, c_loc(buf), row0, what, err)
    end subroutine append_r2
-
-   subroutine append_i2(dset, buf, row0, what, err)
-      integer(hid_t), intent(in) :: dset
-      integer, contiguous, intent(in) :: buf(:, :)
-      integer(hsize_t), intent(in) :: row0
-      character(len=*), intent(in) :: what
-      type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: fspace, mspace
-      integer :: hdferr
-      if (size(buf, 1) == 0) then   ! nothing to store, but keep the row count right
-         call extend_empty(dset, row0 + int(size(buf, 2), hsize_t), what, err)
-         return
-      end if
-      call begin_append(dset, 2, size(buf, 1), row0, size(buf, 2), fspace, mspace, what, err)
-      if (allocated(err)) return
-      call h5dwrite_f(dset, H5T_NATIVE_INTEGER, buf, int(shape(buf), hsize_t), hdferr, &
-                      mem_space_id=mspace, file_space_id=fspace)
-      call end_append(fspace, mspace, hdferr, what, err)
-   end subroutine append_i2
 
    subroutine append_i1(dset, buf, row0, what, err)
       integer(hid_t), intent(in) :: dset
-      integer, contiguous, intent(in) :: buf(:)
+      integer, contiguous, target, intent(in) :: buf(:)
       integer(hsize_t), intent(in) :: row0
       character(len=*), intent(in) :: what
       type(error_t), allocatable, intent(out) :: err
-      integer(hid_t) :: fspace, mspace
-      integer :: hdferr
-      call begin_append(dset, 1, 0, row0, size(buf), fspace, mspace, what, err)
-      if (allocated(err)) return
-      call h5dwrite_f(dset, H5T_NATIVE_INTEGER, buf, [int(size(buf), hsize_t)], hdferr, &
-                      mem_space_id=mspace, file_space_id=fspace)
-      call end_append(fspace, mspace, hdferr, what, err)
+      call append_rows(dset, 1, 0, size(buf), H5T_NATIVE_INTEGER, c_loc(buf), row0, what, err)
    end subroutine append_i1
+
+   subroutine append_i2(dset, buf, row0, what, err)
+      integer(hid_t), intent(in) :: dset
+      integer, contiguous, target, intent(in) :: buf(:, :)
+      integer(hsize_t), intent(in) :: row0
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      if (size(buf, 1) == 0) then   ! nothing to store, but keep the row count right
+         call extend_empty(dset, row0 + int(size(buf, 2), hsize_t), what, err)
+         return
+      end if
+      call append_rows(dset, 2, size(buf, 1), size(buf, 2), H5T_NATIVE_INTEGER, c_loc(buf), row0, what, err)
+   end subroutine append_i2
 
    !> Append variable-length UTF-8 strings.
    subroutine append_s1(dset, texts, row0, what, err)
@@ -350,40 +338,53 @@ contains
       call close_type(stype)
    end subroutine put_column_s
 
-   !> 1-D column with its `units` (the common unit of `entry_units`, or `mixed`) and,
-   !> when the entries differ, one unit per entry in `entry_units`.
-   subroutine put_column_r(loc, name, values, err, entry_units)
-      integer(hid_t), intent(in) :: loc
+   !> 1-D column of n values of type `dtype` at `buf`, with its `units` (the common unit
+   !> of `entry_units`, or `mixed`) and, when the entries differ, one unit per entry in
+   !> `entry_units`.
+   subroutine put_column(loc, name, dtype, n, buf, entry_units, err)
+      integer(hid_t), intent(in) :: loc, dtype
       character(len=*), intent(in) :: name
-      real(wp), contiguous, intent(in) :: values(:)
-      type(error_t), allocatable, intent(out) :: err
+      integer, intent(in) :: n
+      type(c_ptr), intent(in) :: buf
       type(string_t), intent(in) :: entry_units(:)
+      type(error_t), allocatable, intent(out) :: err
       integer(hid_t) :: dset
       integer :: hdferr
-      call make_column(loc, name, H5T_NATIVE_DOUBLE, size(values), dset, err)
+      call make_column(loc, name, dtype, n, dset, err)
       if (allocated(err)) return
       hdferr = 0
-      if (size(values) > 0) call h5dwrite_f(dset, H5T_NATIVE_DOUBLE, values, [int(size(values), hsize_t)], hdferr)
+      if (n > 0) call h5dwrite_f(dset, dtype, buf, hdferr)
       if (hdferr >= 0) call put_entry_units(dset, entry_units, err)
       if (allocated(err)) hdferr = -1
       call finish_column(dset, hdferr, name, err)
+   end subroutine put_column
+
+   subroutine put_column_r(loc, name, values, err, entry_units)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: name
+      real(wp), contiguous, target, intent(in) :: values(:)
+      type(error_t), allocatable, intent(out) :: err
+      type(string_t), intent(in) :: entry_units(:)
+      real(wp), target :: none(1)
+      if (size(values) == 0) then
+         call put_column(loc, name, H5T_NATIVE_DOUBLE, 0, c_loc(none), entry_units, err)
+      else
+         call put_column(loc, name, H5T_NATIVE_DOUBLE, size(values), c_loc(values), entry_units, err)
+      end if
    end subroutine put_column_r
 
    subroutine put_column_i(loc, name, values, err, entry_units)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
-      integer, contiguous, intent(in) :: values(:)
+      integer, contiguous, target, intent(in) :: values(:)
       type(error_t), allocatable, intent(out) :: err
       type(string_t), intent(in) :: entry_units(:)
-      integer(hid_t) :: dset
-      integer :: hdferr
-      call make_column(loc, name, H5T_NATIVE_INTEGER, size(values), dset, err)
-      if (allocated(err)) return
-      hdferr = 0
-      if (size(values) > 0) call h5dwrite_f(dset, H5T_NATIVE_INTEGER, values, [int(size(values), hsize_t)], hdferr)
-      if (hdferr >= 0) call put_entry_units(dset, entry_units, err)
-      if (allocated(err)) hdferr = -1
-      call finish_column(dset, hdferr, name, err)
+      integer, target :: none(1)
+      if (size(values) == 0) then
+         call put_column(loc, name, H5T_NATIVE_INTEGER, 0, c_loc(none), entry_units, err)
+      else
+         call put_column(loc, name, H5T_NATIVE_INTEGER, size(values), c_loc(values), entry_units, err)
+      end if
    end subroutine put_column_i
 
    !> `units` = the entries' common unit ('mixed: see entry_units' when they differ,
@@ -407,192 +408,4 @@ contains
          if (.not. allocated(err)) call put_list_attr(dset, 'entry_units', units, err)
       end if
    end subroutine put_entry_units
-
-   ! -------------------------------------------------------------------- slots
-   !> A dataset of `kind` with one slot per run (the last dimension): contiguous,
-   !> allocated now, filled with NaN (reals) or `ifill` (integers); no time stamps
-   !> (metadata stays fixed). Created only if hs == 0; hs = min(hs, its status).
-   subroutine new_slots(loc, name, dims, kind, d, hs, ifill)
-      integer(hid_t), intent(in) :: loc
-      character(len=*), intent(in) :: name
-      integer, intent(in) :: dims(:), kind
-      integer(hid_t), intent(out) :: d
-      integer, intent(inout) :: hs
-      integer, intent(in), optional :: ifill
-      integer(hid_t) :: sp, pl, t
-      integer :: h
-      real(wp) :: nan
-      type(error_t), allocatable :: err
-      d = -1
-      call native_type(kind, t, err)
-      if (allocated(err)) then
-         hs = -1
-         return
-      end if
-      call h5screate_simple_f(size(dims), int(dims, hsize_t), sp, h)
-      call h5pcreate_f(H5P_DATASET_CREATE_F, pl, h)
-      call h5pset_alloc_time_f(pl, H5D_ALLOC_TIME_EARLY_F, h)
-      call h5pset_obj_track_times_f(pl, .false., h)
-      if (kind == h5_real) then
-         nan = transfer(int(z'7FF8000000000000', kind=8), nan)
-         call h5pset_fill_value_f(pl, H5T_NATIVE_DOUBLE, nan, h)
-      else if (kind == h5_int .and. present(ifill)) then
-         call h5pset_fill_value_f(pl, H5T_NATIVE_INTEGER, ifill, h)
-      end if
-      if (hs == 0) then
-         call h5dcreate_f(loc, name, t, sp, d, h, dcpl_id=pl)
-         hs = min(hs, h)
-         if (h < 0) d = -1
-         call garbage_collect()   ! its fill buffer (sized by the runs) back to the system
-      end if
-      call h5pclose_f(pl, h)
-      call h5sclose_f(sp, h)
-      if (kind == h5_text) call close_type(t)
-   end subroutine new_slots
-
-   !> Open dataset `name` of `loc`; h < 0 on failure.
-   subroutine open_dset(loc, name, d, h)
-      integer(hid_t), intent(in) :: loc
-      character(len=*), intent(in) :: name
-      integer(hid_t), intent(out) :: d
-      integer, intent(out) :: h
-      call h5dopen_f(loc, name, d, h)
-      if (h < 0) d = -1
-   end subroutine open_dset
-
-   !> File and memory spaces for the slot of run irun (n values).
-   subroutine select_slot(d, irun, n, fs, ms)
-      integer(hid_t), intent(in) :: d
-      integer, intent(in) :: irun, n
-      integer(hid_t), intent(out) :: fs, ms
-      integer(hsize_t) :: dims(2), maxd(2)
-      integer :: h, rank
-      call h5dget_space_f(d, fs, h)
-      call h5sget_simple_extent_dims_f(fs, dims, maxd, rank)
-      if (rank == 1) then
-         call h5sselect_hyperslab_f(fs, H5S_SELECT_SET_F, [int(irun - 1, hsize_t)], [1_hsize_t], h)
-      else
-         call h5sselect_hyperslab_f(fs, H5S_SELECT_SET_F, [0_hsize_t, int(irun - 1, hsize_t)], &
-                                    [int(n, hsize_t), 1_hsize_t], h)
-      end if
-      call h5screate_simple_f(1, [int(n, hsize_t)], ms, h)
-   end subroutine select_slot
-
-   subroutine close_spaces(fs, ms)
-      integer(hid_t), intent(in) :: fs, ms
-      integer :: h
-      call h5sclose_f(ms, h)
-      call h5sclose_f(fs, h)
-   end subroutine close_spaces
-
-   !> Write the values of one run (a column (:, irun), or element irun of a 1-D dataset).
-   subroutine put_slot_r(d, irun, v, h)
-      integer(hid_t), intent(in) :: d
-      integer, intent(in) :: irun
-      real(wp), intent(in) :: v(:)
-      integer, intent(out) :: h
-      integer(hid_t) :: fs, ms
-      call select_slot(d, irun, size(v), fs, ms)
-      call h5dwrite_f(d, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], h, mem_space_id=ms, file_space_id=fs)
-      call close_spaces(fs, ms)
-   end subroutine put_slot_r
-
-   subroutine put_slot_i(d, irun, v, h)
-      integer(hid_t), intent(in) :: d
-      integer, intent(in) :: irun
-      integer, intent(in) :: v(:)
-      integer, intent(out) :: h
-      integer(hid_t) :: fs, ms
-      call select_slot(d, irun, size(v), fs, ms)
-      call h5dwrite_f(d, H5T_NATIVE_INTEGER, v, [int(size(v), hsize_t)], h, mem_space_id=ms, file_space_id=fs)
-      call close_spaces(fs, ms)
-   end subroutine put_slot_i
-
-   !> Read the values of one run.
-   subroutine get_slot_r(d, irun, v, h)
-      integer(hid_t), intent(in) :: d
-      integer, intent(in) :: irun
-      real(wp), intent(out) :: v(:)
-      integer, intent(out) :: h
-      integer(hid_t) :: fs, ms
-      call select_slot(d, irun, size(v), fs, ms)
-      call h5dread_f(d, H5T_NATIVE_DOUBLE, v, [int(size(v), hsize_t)], h, mem_space_id=ms, file_space_id=fs)
-      call close_spaces(fs, ms)
-   end subroutine get_slot_r
-
-   !> The text of run irun in a 1-D text dataset (variable length; `stype` a string type).
-   subroutine put_slot_text(d, stype, irun, text, h)
-      integer(hid_t), intent(in) :: d, stype
-      integer, intent(in) :: irun
-      character(len=*), intent(in) :: text
-      integer, intent(out) :: h
-      integer(hid_t) :: fs, ms
-      type(string_t) :: one(1)
-      character(kind=c_char), allocatable, target :: pool(:)
-      type(c_ptr), allocatable, target :: ptrs(:)
-      one(1)%s = text
-      call vlen_pointers(one, pool, ptrs)
-      call select_slot(d, irun, 1, fs, ms)
-      call h5dwrite_f(d, stype, c_loc(ptrs), h, mem_space_id=ms, file_space_id=fs)
-      call close_spaces(fs, ms)
-   end subroutine put_slot_text
-
-   !> The text of run irun ('' for the fill value); ok = .false. if it cannot be read.
-   subroutine get_slot_text(d, stype, irun, text, ok)
-      integer(hid_t), intent(in) :: d, stype
-      integer, intent(in) :: irun
-      character(len=:), allocatable, intent(out) :: text
-      logical, intent(out) :: ok
-      integer(hid_t) :: fs, ms
-      integer :: h
-      type(c_ptr), target :: p(1)
-      type(c_ptr) :: buf
-      text = ''
-      p(1) = c_null_ptr
-      buf = c_loc(p)
-      call select_slot(d, irun, 1, fs, ms)
-      call h5dread_f(d, stype, buf, h, mem_space_id=ms, file_space_id=fs)
-      ok = h >= 0
-      if (ok) text = c_text(p(1))
-      call close_spaces(fs, ms)
-   end subroutine get_slot_text
-
-   !> A 2-D float64 dataset written whole; hs < 0 on failure.
-   subroutine put_matrix(loc, name, v, hs)
-      integer(hid_t), intent(in) :: loc
-      character(len=*), intent(in) :: name
-      real(wp), intent(in) :: v(:, :)
-      integer, intent(out) :: hs
-      integer(hid_t) :: sp, d
-      integer :: h
-      call h5screate_simple_f(2, int(shape(v), hsize_t), sp, h)
-      call h5dcreate_f(loc, name, H5T_NATIVE_DOUBLE, sp, d, hs)
-      if (hs == 0) then
-         call h5dwrite_f(d, H5T_NATIVE_DOUBLE, v, int(shape(v), hsize_t), hs)
-         call h5dclose_f(d, h)
-      end if
-      call h5sclose_f(sp, h)
-   end subroutine put_matrix
-
-   !> Read a 2-D float64 dataset of v's shape (ok = .false. if absent or of another shape).
-   subroutine get_matrix(loc, name, v, ok)
-      integer(hid_t), intent(in) :: loc
-      character(len=*), intent(in) :: name
-      real(wp), intent(inout) :: v(:, :)
-      logical, intent(out) :: ok
-      integer(hid_t) :: d, sp
-      integer(hsize_t) :: dims(2), maxd(2)
-      integer :: h, rank
-      call h5dopen_f(loc, name, d, h)
-      ok = h >= 0
-      if (.not. ok) return
-      call h5dget_space_f(d, sp, h)
-      call h5sget_simple_extent_dims_f(sp, dims, maxd, rank)
-      ok = rank == 2 .and. all(dims == int(shape(v), hsize_t))
-      if (ok) then
-         call h5dread_f(d, H5T_NATIVE_DOUBLE, v, dims, h)
-         ok = h >= 0
-      end if
-      call h5sclose_f(sp, h); call h5dclose_f(d, h)
-   end subroutine get_matrix
 end module trainsim_h5_dsets

@@ -37,8 +37,9 @@ module trainsim_sweep_file
    use trainsim_h5, only: hid_t, h5_real, h5_int, h5_text, h5_init, create_file_excl, open_file_rdwr, flush_file, &
       close_file, new_group, open_group, end_group, close_dset, close_type, link_exists, link_move, link_delete, &
       garbage_collect, make_string_type, put_str_attr, get_str_attr, attr_exists
-   use trainsim_h5_dsets, only: put_column_s, new_slots, open_dset, read_i1, put_slot_r, put_slot_i, put_slot_text, &
-      get_slot_r, get_slot_text, put_matrix, get_matrix
+   use trainsim_h5_dsets, only: put_column_s, read_i1
+   use trainsim_h5_slots, only: new_slots, open_dset, put_slot_r, put_slot_i, put_slot_text, get_slot_r, &
+      get_slot_text, put_matrix, get_matrix
    use trainsim_hdf5_groups, only: write_deck_files
    use trainsim_sweep_layout, only: sweep_layout_t, sweep_record_t, element_metric_names, element_metric_is_int, &
       node_metric_names, run_value_names, n_run_values, status_pending, status_ok, status_failed, record_size, &
