@@ -16,6 +16,7 @@ module trainsim_cli
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
    use trainsim_preload, only: preload_info_t
+   use trainsim_sweep, only: finish_sweep
    implicit none
    private
 
@@ -78,6 +79,7 @@ contains
       integer, intent(in) :: code
       flush (output_unit)
       flush (error_unit)
+      call finish_sweep()     ! after the outcome is out (a stopping mpirun never completes it)
       if (hdf5_library_stuck()) call c_exit_now(int(code, c_int))
       if (code == 0) stop
       stop code, quiet=.true.

@@ -37,7 +37,7 @@ module trainsim_sweep
    implicit none
    private
 
-   public :: sweep_options_t, sweep_summary_t, run_sweep, default_sweep_path
+   public :: sweep_options_t, sweep_summary_t, run_sweep, finish_sweep, default_sweep_path
 
    !> What `trainsim sweep` was asked to do.
    type :: sweep_options_t
@@ -137,7 +137,10 @@ contains
       p = p//'_sweep.h5'
    end function default_sweep_path
 
-   !> Run the sweep of `opt%deck_path`. Every rank calls it; MPI is started and stopped here.
+   !> Run the sweep of `opt%deck_path`. Every rank calls it; MPI is started here and
+   !> stopped by `finish_sweep`, which the caller calls after it has said what happened:
+   !> an mpirun that is stopping the job (Ctrl-C in a terminal) never completes
+   !> MPI_Finalize, and kills the ranks one second after its SIGTERM (D-63).
    !> `err` is set on every rank for an input error, on rank 0 for a file error.
    subroutine run_sweep(opt, summary, err)
       type(sweep_options_t), intent(in) :: opt
@@ -153,8 +156,13 @@ contains
       summary%root = comm_rank() == 0
       call sweep_body(opt, summary, err)
       call comm_bcast_int(summary%exit_code)
-      call comm_finalize()
    end subroutine run_sweep
+
+   !> Stop MPI if `run_sweep` started it (else nothing): after the sweep's outcome is
+   !> printed, before the program exits.
+   subroutine finish_sweep()
+      call comm_finalize()
+   end subroutine finish_sweep
 
    subroutine sweep_body(opt, summary, err)
       type(sweep_options_t), intent(in) :: opt

@@ -20,7 +20,8 @@ cases:
   signals      SIGINT / SIGTERM part-way: exit 130 / 143, a message with the runs recorded
                and "the same command resumes"; the same command completes the sweep equal
                to an uninterrupted one; on 2 MPI ranks (when mpirun is there) SIGTERM to
-               the ranks: mpirun exits 143, and the resumed file is equal too
+               the ranks: mpirun exits 143, and the resumed file is equal too; Ctrl-C to
+               mpirun (SIGINT to its process group): rank 0's message, the runs it names
   export       trainsim export on a sweep file: exit 2, "a sweep file", names trainsim plot
   diskfull     (root, a tmpfs; else exit 77 = skipped) a sweep onto a full disk: exit 2 "No
                space left on device", no FILE.part left; the disk filling while runs are
@@ -367,6 +368,35 @@ def case_signals(exe, tmp):
     r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "s.nml", "-o", "mpi.h5"], tmp)
     check("... the same command completes it, equal to an uninterrupted sweep",
           r.returncode == 0 and same(ref, content(os.path.join(tmp, "mpi.h5")))[0], r.stdout + r.stderr)
+    # Ctrl-C in a terminal: SIGINT to mpirun's process group only (the ranks have groups
+    # of their own); mpirun sends the ranks SIGCONT, SIGTERM a second later, SIGKILL a
+    # second after that, and exits 1 whatever they do. Runs long enough (about 0.5 s
+    # each) that the sweep is still going when the SIGTERM comes.
+    write(os.path.join(tmp, "long.nml"), deck.replace("values = 300", "values = 6000"))
+    p = subprocess.Popen([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "long.nml",
+                          "-o", "ctrlc.h5", "--progress", "0"], cwd=tmp, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True, start_new_session=True)
+    lines = []
+    for line in p.stderr:
+        lines.append(line)
+        if re.match(r"sweep: [1-4]/12 runs done", line):
+            os.killpg(p.pid, signal.SIGINT)
+            break
+    err = "".join(lines) + p.stderr.read()
+    p.wait(timeout=TIMEOUT)
+    m = re.search(r"sweep interrupted by SIGTERM: (\d+) of 12 run\(s\) recorded in ctrlc.h5 .*the same "
+                  r"command resumes the sweep", err)
+    with h5py.File(os.path.join(tmp, "ctrlc.h5"), "r") as f:
+        k = int(np.count_nonzero(f["runs/status"][:]))
+    check("Ctrl-C to mpirun: rank 0 says how many runs are recorded (mpirun's own status: 1), and the file "
+          "holds them", p.returncode == 1 and m is not None and int(m.group(1)) == k and k < 12,
+          f"rc {p.returncode}, {k} runs in the file: {err[-600:]}")
+    r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "long.nml", "-o", "ctrlc.h5"],
+            tmp)
+    with h5py.File(os.path.join(tmp, "ctrlc.h5"), "r") as f:
+        ok = bool(np.all(f["runs/status"][:] == 1))
+    check("... the same command completes it", r.returncode == 0 and f"sweep: {12 - k} run(s) made" in r.stdout
+          and ok, r.stdout + r.stderr)
     return 0
 
 
