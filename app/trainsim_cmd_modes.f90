@@ -41,7 +41,7 @@ contains
       write (output_unit, '(a)') 'linearised with '//what
       if (model%run%preload) call print_preload(model, preload, output_unit)
       call print_modes(model, modes, output_unit)
-      call rk4_dt_limit(model, state, dt_max, om, err, freq_hz=f, damping_ratio=z)
+      call rk4_dt_limit(model, state, dt_max, om, err, freq_hz=f, damping_ratio=z, dense=.true.)   ! the full analysis (D-64)
       if (allocated(err)) call fail(err)
       if (dt_max < huge(1.0_wp)) then
          write (output_unit, '(a)') 'RK4 stability limit (damped linear system'// &

@@ -17,6 +17,7 @@ module trainsim_modes
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_element, only: lin_state_t, lin_start, lin_closed, lin_contact_closed
+   use trainsim_dt_bound, only: rk4_ray_radius, rk4_dt_bound, inverse_inertias
    implicit none
    private
 
@@ -42,9 +43,10 @@ module trainsim_modes
    !> Golden-section steps refining the worst impact-damping fraction (0.618^12:
    !> the fraction to 0.3 % of its bracket; the limit is flat at its minimum).
    integer, parameter :: n_golden = 12
-   !> Above this many states the dense eigenvalue problem (O(n^3)) is replaced
-   !> by an O(n) Gershgorin bound on |lambda| (`rk4_dt_bound`).
-   integer, parameter, public :: dense_state_limit = 400
+   !> Above this many states the step advice is the O(n) bound of
+   !> `rk4_dt_bound` instead of the dense eigenvalue problems (O(n^3) each, up
+   !> to 24 of them: D-64 (startup)); `rk4_dt_limit(..., dense=.true.)` asks for them.
+   integer, parameter, public :: dense_state_limit = 64
 
    interface
       subroutine dgeev(jobvl, jobvr, n, a, lda, wr, wi, vl, ldvl, vr, ldvr, work, lwork, info)
@@ -157,141 +159,6 @@ contains
       modes%omega_max = two_pi*maxval(modes%freq_hz)
    end subroutine compute_modes
 
-   !> Inverse inertia of every node (0 for fixed and prescribed-speed nodes).
-   subroutine inverse_inertias(model, inv_j)
-      type(model_t), intent(in) :: model
-      real(wp), allocatable, intent(out) :: inv_j(:)
-      integer :: i
-      allocate (inv_j(size(model%nodes)))
-      inv_j = 0.0_wp
-      do i = 1, size(model%nodes)
-         if (model%is_held(i) .or. model%nodes(i)%n%is_fixed()) cycle
-         if (model%nodes(i)%n%inertia() > 0.0_wp) inv_j(i) = 1.0_wp/model%nodes(i)%n%inertia()
-      end do
-   end subroutine inverse_inertias
-
-   !> |R(z)|^2 - 1 for RK4's amplification factor R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24.
-   pure real(wp) function rk4_growth(z) result(g)
-      complex(wp), intent(in) :: z
-      g = abs(1.0_wp + z*(1.0_wp + z*(0.5_wp + z*(1.0_wp/6.0_wp + z/24.0_wp))))**2 - 1.0_wp
-   end function rk4_growth
-
-   !> Radius of RK4's stability region along the ray z = r d, |d| = 1, Re d <= 0:
-   !> the first r > 0 where |R(r d)| = 1 (2 sqrt 2 on the imaginary axis, 2.785
-   !> on the negative real axis). Stepped to a bracket, then bisected.
-   pure real(wp) function rk4_ray_radius(d) result(r)
-      complex(wp), intent(in) :: d
-      real(wp) :: lo, hi, mid
-      integer :: i
-      lo = 0.0_wp
-      hi = 0.0_wp
-      do i = 1, 400
-         hi = 0.01_wp*i
-         if (rk4_growth(hi*d) > 0.0_wp) exit
-         lo = hi
-      end do
-      do i = 1, 60
-         mid = 0.5_wp*(lo + hi)
-         if (rk4_growth(mid*d) > 0.0_wp) then
-            hi = mid
-         else
-            lo = mid
-         end if
-      end do
-      r = lo
-   end function rk4_ray_radius
-
-   !> Smallest radius of RK4's stability region over the closed left half-plane
-   !> (about 2.6, in a direction between the imaginary and the real axis).
-   !> Computed once (about 16 million instructions) and kept: the refusal
-   !> check and the explicit SUNDIALS check ask for it at every run's start.
-   real(wp) function rk4_min_radius() result(r)
-      integer :: i
-      real(wp) :: phi
-      real(wp), save :: kept = -1.0_wp
-      if (kept > 0.0_wp) then
-         r = kept
-         return
-      end if
-      r = huge(1.0_wp)
-      do i = 0, 180
-         phi = 0.5_wp*two_pi*(0.25_wp + real(i, wp)/360.0_wp)   ! pi/2 .. 3 pi/2
-         r = min(r, rk4_ray_radius(cmplx(min(cos(phi), 0.0_wp), sin(phi), wp)))
-      end do
-      kept = r   ! the same value from any thread: a race here is benign
-   end function rk4_min_radius
-
-   !> O(n) step bound for large trains: Gershgorin's theorem on the linearised
-   !> first-order system, scaled by D = diag(s on the angle rows, 1 elsewhere)
-   !> (a similarity, so the eigenvalues do not change). Angle rows sum to s,
-   !> speed rows to G_K/s + (damping and the node's own terms), other node
-   !> states to their own partials; with s = sqrt(G_K), |lambda| <= bound. The
-   !> step is RK4's smallest radius over the left half-plane / bound: safe, and
-   !> for a chain within a few per cent of the dense limit.
-   subroutine rk4_dt_bound(model, state, y, dt_max, bound)
-      type(model_t), intent(inout) :: model
-      type(lin_state_t), intent(in) :: state
-      real(wp), intent(in) :: y(:)
-      real(wp), intent(out) :: dt_max, bound
-      real(wp), allocatable :: inv_j(:), row_k(:), row_c(:), dtq(:), own(:), f0(:), f1(:), yp(:)
-      real(wp) :: ke(2, 2), ce(2, 2), t0, h, g_k, rest
-      integer :: i, k, r, o, ns, p, na, ends(2)
-      t0 = model%run%t_start
-      call inverse_inertias(model, inv_j)
-      allocate (row_k(size(model%nodes)), row_c(size(model%nodes)), dtq(size(model%nodes)))
-      allocate (own(size(y)), f0(size(y)), f1(size(y)), yp(size(y)))
-      row_k = 0.0_wp; row_c = 0.0_wp; dtq = 0.0_wp; own = 0.0_wp
-      ! the nodes' own blocks and d(speed rate)/d(torque), by differences of `derivatives`
-      do i = 1, size(model%nodes)
-         if (model%is_held(i)) cycle
-         associate (nd => model%nodes(i)%n)
-            ns = nd%nstates()
-            if (ns < 2) cycle
-            o = nd%offset
-            f0 = 0.0_wp; f1 = 0.0_wp
-            call nd%derivatives(t0, y, 0.0_wp, f0)
-            call nd%derivatives(t0, y, 1.0_wp, f1)
-            dtq(i) = abs(f1(o + 2) - f0(o + 2))
-            do k = 2, ns                       ! the angle column feeds nothing of the node's own
-               yp = y
-               h = 1.0e-6_wp*max(1.0_wp, abs(y(o + k)))
-               yp(o + k) = y(o + k) + h
-               f1 = 0.0_wp
-               call nd%derivatives(t0, yp, 0.0_wp, f1)
-               do r = 2, ns
-                  own(o + r) = own(o + r) + abs(f1(o + r) - f0(o + r))/h
-               end do
-            end do
-         end associate
-      end do
-      do i = 1, size(model%elements)
-         associate (e => model%elements(i)%e)
-            call e%linearise(state, inv_j(e%left), inv_j(e%right), ke, ce)
-            ends = [e%left, e%right]
-         end associate
-         do p = 1, 2
-            na = ends(p)
-            row_k(na) = row_k(na) + dtq(na)*(abs(ke(p, 1)) + abs(ke(p, 2)))
-            row_c(na) = row_c(na) + dtq(na)*(abs(ce(p, 1)) + abs(ce(p, 2)))
-         end do
-      end do
-      g_k = 0.0_wp
-      if (size(row_k) > 0) g_k = maxval(row_k)
-      rest = 0.0_wp
-      do i = 1, size(model%nodes)
-         if (model%is_held(i) .or. model%nodes(i)%n%nstates() < 2) cycle
-         o = model%nodes(i)%n%offset
-         rest = max(rest, row_c(i) + own(o + 2))
-         do r = 3, model%nodes(i)%n%nstates()
-            ! other states (a motor current): their own row sum must be below the bound too
-            rest = max(rest, own(o + r) - sqrt(g_k))
-         end do
-      end do
-      bound = sqrt(g_k) + rest
-      dt_max = huge(1.0_wp)
-      if (bound > 0.0_wp) dt_max = rk4_min_radius()/bound
-   end subroutine rk4_dt_bound
-
    !> The largest step h for which every h lambda of the linearised train in
    !> `state` lies in RK4's stability region (D-25). With every clearance closed
    !> the impact damping is swept from none to the law's largest and the
@@ -299,25 +166,33 @@ contains
    !> under the loads (`with_loads`, D-55). `omega_crit` is |lambda| of the limiting
    !> eigenvalue (rad/s); `freq_hz` its damped frequency |Im lambda|/2 pi and
    !> `damping_ratio` -Re lambda/|lambda|. dt_max = huge when nothing limits it.
-   subroutine rk4_dt_limit(model, state_in, dt_max, omega_crit, err, freq_hz, damping_ratio)
+   !> Above dense_state_limit states, unless `dense`, the limit is the O(n)
+   !> bound (`rk4_dt_bound`, safe: never above the dense limit): omega_crit is
+   !> then the bound on |lambda|, freq_hz that of the limiting point of its
+   !> region and damping_ratio 0 (no eigenvalue is known, D-64 (startup)).
+   subroutine rk4_dt_limit(model, state_in, dt_max, omega_crit, err, freq_hz, damping_ratio, dense)
       type(model_t), intent(inout) :: model
       type(lin_state_t), intent(in) :: state_in
       real(wp), intent(out) :: dt_max, omega_crit
       type(error_t), allocatable, intent(out) :: err
       real(wp), intent(out), optional :: freq_hz, damping_ratio
+      logical, intent(in), optional :: dense
       real(wp), allocatable :: y(:), inv_j(:)
-      real(wp) :: h(0:n_scale), a, b, c, d, fc, fd
+      real(wp) :: h(0:n_scale), a, b, c, d, fc, fd, f_bound
       complex(wp) :: lam(0:n_scale), lc, ld
       type(lin_state_t) :: st, state
       integer :: j, jmin, it
+      logical :: use_dense
       real(wp), parameter :: gr = 0.6180339887498949_wp   ! golden section
 
       state = with_loads(model, state_in)
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
-      if (model%n_states > dense_state_limit) then
-         call rk4_dt_bound(model, state, y, dt_max, omega_crit)
-         if (present(freq_hz)) freq_hz = omega_crit/two_pi
+      use_dense = model%n_states <= dense_state_limit
+      if (present(dense)) use_dense = use_dense .or. dense
+      if (.not. use_dense) then
+         call rk4_dt_bound(model, state, y, dt_max, omega_crit, freq_hz=f_bound)
+         if (present(freq_hz)) freq_hz = f_bound
          if (present(damping_ratio)) damping_ratio = 0.0_wp
          return
       end if
@@ -443,7 +318,7 @@ contains
 
    !> O(n) bounds for the train in `state` (loads as `with_loads`): |lambda| <=
    !> `bound` for every eigenvalue, and RK4 is stable for any h <= dt_max
-   !> (`rk4_dt_bound`: Gershgorin). A check that passes with them needs no
+   !> (`rk4_dt_bound`, D-64). A check that passes with them needs no
    !> eigenvalues (check_fixed_step, the explicit SUNDIALS check).
    subroutine rk4_dt_quick(model, state_in, dt_max, bound)
       type(model_t), intent(inout) :: model
@@ -527,7 +402,8 @@ contains
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
       call inverse_inertias(model, inv_j)
-      allocate (f0(size(y)), f1(size(y)), yp(size(y)))
+      allocate (f0(size(y)), f1(size(y)))
+      yp = y
       h_part = huge(1.0_wp)
       text = 'no single node or element'
       do i = 1, size(model%nodes)
@@ -535,12 +411,13 @@ contains
          associate (nd => model%nodes(i)%n)
             if (nd%nstates() < 2) cycle
             o = nd%offset
-            f0 = 0.0_wp; f1 = 0.0_wp
+            ! a node writes its own states only: clear and perturb those (O(n) in all)
+            f0(o + 1:o + nd%nstates()) = 0.0_wp; f1(o + 1:o + nd%nstates()) = 0.0_wp
             call nd%derivatives(model%run%t_start, y, 0.0_wp, f0)
-            yp = y
             h = 1.0e-6_wp*max(1.0_wp, abs(y(o + 2)))
             yp(o + 2) = y(o + 2) + h
             call nd%derivatives(model%run%t_start, yp, 0.0_wp, f1)
+            yp(o + 2) = y(o + 2)
             dl = -(f1(o + 2) - f0(o + 2))/h          ! decay rate of the node's speed alone, 1/s
             if (.not. dl > 0.0_wp) cycle
             hl = rk4_ray_radius((-1.0_wp, 0.0_wp))/dl

@@ -31,15 +31,18 @@ module trainsim
    use trainsim_error, only: error_t, fatal_error, err_input, err_io, err_numeric, err_internal
    use trainsim_strings, only: string_t, to_lower, str
    use trainsim_version, only: version_string, version_full, git_revision
-   use trainsim_deck, only: deck_t, read_deck, parse_deck
-   use trainsim_overrides, only: override_t, make_override, check_override
+   use trainsim_deck, only: deck_t, deck_group_t, read_deck, parse_deck
+   use trainsim_overrides, only: override_t, make_override, check_override, split_sweep_groups
+   use trainsim_sweep_spec, only: sweep_spec_t, read_sweep_spec
    use trainsim_prepare, only: prepare_model
    use trainsim_model, only: model_t
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
-   use trainsim_sink, only: null_sink_t, event_t, element_metrics_t, run_stats_t, ev_name, &
+   use trainsim_sink, only: sink_t, null_sink_t, event_t, element_metrics_t, run_stats_t, ev_name, &
                             ev_contact_front, ev_contact_rear, ev_separation, ev_zone
    use trainsim_hdf5, only: hdf5_sink_t
+   use trainsim_capture, only: tee_sink_t
+   use trainsim_continuation, only: chain_state_t, save_end_state
    implicit none
    private
 
@@ -48,7 +51,7 @@ module trainsim
    public :: err_input, err_io, err_numeric, err_internal
    public :: event_t, element_metrics_t, run_stats_t, run_result_t, model_t
    public :: ev_name, ev_contact_front, ev_contact_rear, ev_separation, ev_zone
-   public :: metric_names
+   public :: metric_names, sweep_spec_t, chain_state_t
 
    !> Names accepted by `simulation_t%metric` (fields of element_metrics_t, in its order).
    character(len=*), parameter :: metric_list(*) = [character(len=21) :: &
@@ -66,6 +69,8 @@ module trainsim
       logical :: built = .false.      ! model is up to date with deck
       logical :: has_run = .false.    ! res is the run of the current model
       type(override_t), allocatable :: sets(:)   ! set() calls, applied in order at build
+      type(deck_group_t), allocatable :: sweeps(:)   ! the deck's &sweep groups (not built)
+      type(chain_state_t) :: last_end                ! node angles and speeds at the end of the last run
    contains
       procedure :: read_file => sim_read_file
       procedure :: read_text => sim_read_text
@@ -76,6 +81,8 @@ module trainsim
       !> `set('run.integrator', "'cvode-bdf'", err)` (a character value is deck text).
       generic :: set => set_text, set_real, set_int
       procedure :: set_string => sim_set_string
+      procedure :: clear_sets => sim_clear_sets
+      procedure :: sweep_spec => sim_sweep_spec
       procedure :: build => sim_build
       procedure :: run => sim_run
       procedure :: get_model => sim_get_model
@@ -87,13 +94,16 @@ module trainsim
       procedure :: events => sim_events
       procedure :: event_element_id => sim_event_element_id
       procedure :: stats => sim_stats
+      procedure :: end_state => sim_end_state
    end type simulation_t
 
 contains
 
    ! ------------------------------------------------------------------ reading
 
-   !> Read and parse the deck file `path` (nothing is built yet).
+   !> Read and parse the deck file `path` (nothing is built yet). A deck's &sweep groups
+   !> are kept apart, as `trainsim run` ignores them: the deck's own values are built and
+   !> run; `sweep_spec` gives the sweep's runs (also for `read_text`).
    subroutine sim_read_file(self, path, err)
       class(simulation_t), intent(inout) :: self
       character(len=*), intent(in) :: path
@@ -101,6 +111,7 @@ contains
       call forget(self)
       call read_deck(path, self%deck, err)
       self%has_deck = .not. allocated(err)
+      if (self%has_deck) call split_sweep_groups(self%deck, self%sweeps)
    end subroutine sim_read_file
 
    !> Parse a deck given as text (lines separated by new_line('a')); `name` stands for
@@ -117,6 +128,7 @@ contains
          call parse_deck(text, '<text>', self%deck, err)
       end if
       self%has_deck = .not. allocated(err)
+      if (self%has_deck) call split_sweep_groups(self%deck, self%sweeps)
    end subroutine sim_read_text
 
    subroutine forget(self)
@@ -135,13 +147,13 @@ contains
    !> node or element id, `run`, or `GROUP#K` (`load#2`); KEY a deck key or a derived
    !> parameter (`mesh_frequency`, `settle_cycles`, `measure_cycles`). The path is
    !> checked against the deck here; the value when the model is built (run does that).
-   !> Later sets of one path win.
+   !> Later sets of one path win: a set of a path given before replaces it.
    subroutine sim_set_text(self, path, value, err)
       class(simulation_t), intent(inout) :: self
       character(len=*), intent(in) :: path, value
       type(error_t), allocatable, intent(out) :: err
       type(override_t) :: ov
-      integer :: ig
+      integer :: ig, i
 
       if (.not. self%has_deck) then
          call fatal_error(err, "set '"//path//"': no deck has been read", err_input)
@@ -149,7 +161,14 @@ contains
       end if
       call make_override(path, value, "set '"//path//"'", ov, err); if (allocated(err)) return
       call check_override(self%deck, ov, ig, err); if (allocated(err)) return
-      self%sets = [self%sets, ov]
+      ! a set of a path set before replaces it (a sweep of many values keeps one set)
+      do i = 1, size(self%sets)
+         if (to_lower(self%sets(i)%target) == to_lower(ov%target) .and. self%sets(i)%key == ov%key) then
+            self%sets = [self%sets(:i - 1), self%sets(i + 1:), ov]
+            exit
+         end if
+      end do
+      if (i > size(self%sets)) self%sets = [self%sets, ov]
       self%built = .false.
       self%has_run = .false.
    end subroutine sim_set_text
@@ -186,6 +205,29 @@ contains
       end if
    end subroutine sim_set_string
 
+   !> Forget every `set` (the deck's own values again).
+   subroutine sim_clear_sets(self)
+      class(simulation_t), intent(inout) :: self
+      self%sets = [override_t ::]
+      self%built = .false.
+      self%has_run = .false.
+   end subroutine sim_clear_sets
+
+   !> The runs of the deck's &sweep groups (one run and no parameter without any), as
+   !> `trainsim sweep` makes them: `spec%names(j)`, `spec%values(j, irun)`.
+   subroutine sim_sweep_spec(self, spec, err)
+      class(simulation_t), intent(in) :: self
+      type(sweep_spec_t), intent(out) :: spec
+      type(error_t), allocatable, intent(out) :: err
+      type(deck_group_t), allocatable :: groups(:)
+      if (.not. self%has_deck) then
+         call fatal_error(err, 'sweep_spec: no deck has been read', err_input)
+         return
+      end if
+      groups = self%sweeps
+      call read_sweep_spec(groups, spec, err)
+   end subroutine sim_sweep_spec
+
    ! ------------------------------------------------------------------ build and run
 
    !> Build the model from the deck (every node and element checks its own values).
@@ -206,14 +248,17 @@ contains
    !> `&run output` is not used here: pass it as `output` if you want it.
    !> The event table is kept for `events` unless `keep_events = .false.`: then
    !> memory does not grow with the run (the table is in `output` only, if given).
-   subroutine sim_run(self, err, output, keep_events)
+   !> `sink`, if given, is handed the run too (beside `output`'s file, if any).
+   subroutine sim_run(self, err, output, keep_events, sink)
       class(simulation_t), intent(inout) :: self
       type(error_t), allocatable, intent(out) :: err
       character(len=*), intent(in), optional :: output
       logical, intent(in), optional :: keep_events
+      class(sink_t), intent(inout), target, optional :: sink
       type(model_t) :: m
-      type(hdf5_sink_t) :: h5
+      type(hdf5_sink_t), target :: h5
       type(null_sink_t) :: none
+      type(tee_sink_t) :: tee
       self%has_run = .false.
       if (.not. self%built) then
          call self%build(err); if (allocated(err)) return
@@ -221,13 +266,20 @@ contains
       m = self%model                  ! a run changes modes and workspace: run a copy
       m%run%keep_events = .true.
       if (present(keep_events)) m%run%keep_events = keep_events
-      if (present(output)) then
-         h5%path = output
+      if (present(output)) h5%path = output
+      if (present(output) .and. present(sink)) then
+         tee%a => h5
+         tee%b => sink
+         call simulate(m, tee, self%res, err)
+      else if (present(sink)) then
+         call simulate(m, sink, self%res, err)
+      else if (present(output)) then
          call simulate(m, h5, self%res, err)
       else
          call simulate(m, none, self%res, err)
       end if
       self%has_run = .not. allocated(err)
+      if (self%has_run) call save_end_state(m, self%res%t_final, self%res%y_final, 0, self%last_end)
    end subroutine sim_run
 
    ! ------------------------------------------------------------------ results
@@ -387,4 +439,14 @@ contains
       if (.not. ran(self, 'stats', err)) return
       stats = self%res%stats
    end subroutine sim_stats
+
+   !> The node angles and speeds at the end of the last run (`theta`, `omega`) and the
+   !> run's initial speeds (`omega0`), as a sweep records them (trainsim_continuation).
+   subroutine sim_end_state(self, st, err)
+      class(simulation_t), intent(in) :: self
+      type(chain_state_t), intent(out) :: st
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. ran(self, 'end_state', err)) return
+      st = self%last_end
+   end subroutine sim_end_state
 end module trainsim

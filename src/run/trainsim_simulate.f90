@@ -976,6 +976,7 @@ contains
       real(wp) :: dt_safe, omega, f_hz, zeta, h, rescale
       character(len=:), allocatable :: part, name, limit_name
       integer :: i, k
+      type(model_t) :: quick   ! one copy for the four O(n) bounds (each re-initialises it)
       allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == model%run%integrator) exit
@@ -995,6 +996,7 @@ contains
       ! the contacts closed at t_start have their own D (states(3)), and what a
       ! run does reach is caught at the output times (check_physical)
       states(4)%load_torque = -1.0_wp
+      quick = model
       do k = 1, 4
          h = model%run%dt
          if (name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed) h = h/10.0_wp   ! App. F: dt/10 in contact
@@ -1036,10 +1038,8 @@ contains
       subroutine quick_limit(state, dt_lim)
          type(lin_state_t), intent(in) :: state
          real(wp), intent(out) :: dt_lim
-         type(model_t) :: tmp
          real(wp) :: bound
-         tmp = model
-         call rk4_dt_quick(tmp, state, dt_lim, bound)
+         call rk4_dt_quick(quick, state, dt_lim, bound)
       end subroutine quick_limit
       subroutine limit_of(state, dt_lim, f, z)
          type(lin_state_t), intent(in) :: state

@@ -70,6 +70,10 @@ if(STEP STREQUAL "install")
   install_dirs()
   foreach(f ${CMAKE_INSTALL_BINDIR}/trainsim
             ${CMAKE_INSTALL_LIBDIR}/libtrainsim.a
+            ${CMAKE_INSTALL_LIBDIR}/libtrainsim_c.so
+            ${CMAKE_INSTALL_INCLUDEDIR}/trainsim.h
+            ${CMAKE_INSTALL_LIBDIR}/python3/dist-packages/trainsim/__init__.py
+            ${CMAKE_INSTALL_LIBDIR}/python3/dist-packages/trainsim/_install.py
             ${CMAKE_INSTALL_INCLUDEDIR}/trainsim/trainsim.mod
             ${CMAKE_INSTALL_INCLUDEDIR}/trainsim/trainsim_model.mod
             ${CMAKE_INSTALL_LIBDIR}/cmake/trainsim/trainsimConfig.cmake
@@ -102,6 +106,14 @@ if(STEP STREQUAL "install")
     message(FATAL_ERROR "installed trainsim export --summary json printed: ${run_output}")
   endif()
 
+  # ... and the installed Python package loads the installed C library (not the build's).
+  run("installed Python package" ${CMAKE_COMMAND} -E env --unset=TRAINSIM_LIBRARY
+      PYTHONPATH=${prefix}/${CMAKE_INSTALL_LIBDIR}/python3/dist-packages
+      /usr/bin/python3 -c "import trainsim\nprint(trainsim.library_path)\nprint(trainsim.sweep('${prefix}/${CMAKE_INSTALL_DATADIR}/trainsim/inputs/sweep_ghm_mesh_frequency.nml')['mesh.p2p_mean'][0])")
+  if(NOT run_output MATCHES "^${prefix}/${CMAKE_INSTALL_LIBDIR}/libtrainsim_c")
+    message(FATAL_ERROR "the installed Python package loaded another library: ${run_output}")
+  endif()
+
 elseif(STEP STREQUAL "find_package")
   install_dirs()
   set(b ${WORK_DIR}/example-find-package)
@@ -110,6 +122,8 @@ elseif(STEP STREQUAL "find_package")
       -DCMAKE_BUILD_TYPE=${CMAKE_BUILD_TYPE} ${compilers} -DCMAKE_PREFIX_PATH=${prefix})
   run("build the example" ${CMAKE_COMMAND} --build ${b} --parallel 2)
   run_example(${b}/change_backlash ${prefix}/${CMAKE_INSTALL_DATADIR}/trainsim/inputs/gregory_harris_munro.nml)
+  run("the C interface example" ${b}/c_api ${prefix}/${CMAKE_INSTALL_DATADIR}/trainsim/inputs/gregory_harris_munro.nml)
+  message(STATUS "${run_output}")
 
 elseif(STEP STREQUAL "add_subdirectory")
   set(b ${WORK_DIR}/example-add-subdirectory)

@@ -1,0 +1,146 @@
+/* The C interface from C (include/trainsim.h): a deck read from a file and from text,
+ * a parameter set by its deck path, a run, a metric by name and the series; errors as
+ * codes with trainsim's messages (file and line); misuse returns a code, never aborts.
+ *
+ * Checks with a reason outside the code: the GHM rig's prescribed speed of n1 is
+ * 2 pi f / 32 after mesh.mesh_frequency = 485 (docs/sweeps.md: 95.22953 rad/s); the
+ * series' node n1 speed column holds it at every sample (a held node); the series time
+ * column is the uniform grid t_start + k dt_out (output-format.md); the metric
+ * run.steps equals (t_end - t_start) / dt for RK4 at a fixed step. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "trainsim.h"
+
+static int failures = 0;
+
+#define CHECK(cond, ...)                                   \
+    do {                                                   \
+        if (!(cond)) {                                     \
+            ++failures;                                    \
+            fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__); \
+            fprintf(stderr, __VA_ARGS__);                  \
+            fputc('\n', stderr);                           \
+        }                                                  \
+    } while (0)
+
+static void print_error(trainsim_sim *sim) {
+    char msg[2048];
+    trainsim_error_message(sim, msg, sizeof msg);
+    fprintf(stderr, "  trainsim: %s\n", msg);
+}
+
+static long index_of(trainsim_sim *sim, int what, const char *name) {
+    size_t n = 0;
+    char buf[256];
+    trainsim_count(sim, what, &n);
+    for (size_t i = 0; i < n; ++i) {
+        trainsim_name(sim, what, i, buf, sizeof buf, NULL);
+        if (strcmp(buf, name) == 0) return (long)i;
+    }
+    return -1;
+}
+
+static void test_deck_set_run_metric_series(const char *deck) {
+    trainsim_sim *sim = trainsim_new();
+    int rc = trainsim_read_file(sim, deck);
+    CHECK(rc == TRAINSIM_OK, "read %s: code %d", deck, rc);
+    if (rc) { print_error(sim); trainsim_free(sim); return; }
+    /* shorter run: 0.005 s at dt 8e-6; a later set of one path wins */
+    CHECK(trainsim_set(sim, "run.t_end", "0.001") == 0, "set run.t_end");
+    CHECK(trainsim_set(sim, "run.t_end", "0.005") == 0, "set run.t_end again");
+    CHECK(trainsim_set_real(sim, "mesh.mesh_frequency", 485.0) == 0, "set mesh.mesh_frequency");
+    rc = trainsim_run(sim, TRAINSIM_RUN_SERIES | TRAINSIM_RUN_EVENTS, NULL);
+    CHECK(rc == 0, "run: code %d", rc);
+    if (rc) { print_error(sim); trainsim_free(sim); return; }
+
+    double steps = 0, p2p = -1;
+    CHECK(trainsim_metric(sim, "run.steps", &steps) == 0, "metric run.steps");
+    CHECK(steps == 625.0, "run.steps = %g, (0.005 - 0) / 8e-6 = 625 expected", steps);
+    CHECK(trainsim_metric(sim, "mesh.p2p_range", &p2p) == 0 && p2p > 0, "mesh.p2p_range = %g > 0", p2p);
+
+    size_t nm = 0;
+    trainsim_count(sim, TRAINSIM_METRICS, &nm);
+    double *all = malloc(nm * sizeof *all);
+    CHECK(trainsim_metrics(sim, all, nm) == 0, "all metrics");
+    long k = index_of(sim, TRAINSIM_METRICS, "mesh.p2p_range");
+    CHECK(k >= 0 && all[k] == p2p, "the metrics table holds mesh.p2p_range = %g", p2p);
+    CHECK(trainsim_metrics(sim, all, nm - 1) == TRAINSIM_ERR_ARGUMENT, "a buffer one short is refused");
+    free(all);
+
+    size_t ncol = 0, nrow = 0;
+    CHECK(trainsim_count(sim, TRAINSIM_SERIES, &ncol) == 0 && ncol > 0, "series columns");
+    CHECK(trainsim_count(sim, TRAINSIM_SAMPLES, &nrow) == 0, "series rows");
+    CHECK(nrow == 626, "%zu samples, 626 expected (t = 0, 8e-6, ..., 0.005)", nrow);
+    double *series = malloc(ncol * nrow * sizeof *series);
+    CHECK(trainsim_series(sim, series, ncol * nrow) == 0, "series values");
+    long it = index_of(sim, TRAINSIM_SERIES, "time");
+    long iw = index_of(sim, TRAINSIM_SERIES, "nodes/omega/n1");
+    CHECK(it == 0 && iw > 0, "columns time (%ld) and nodes/omega/n1 (%ld)", it, iw);
+    char unit[32];
+    trainsim_name(sim, TRAINSIM_SERIES_UNITS, (size_t)iw, unit, sizeof unit, NULL);
+    CHECK(strcmp(unit, "rad/s") == 0, "unit of nodes/omega/n1 is '%s'", unit);
+    const double w = 2.0 * M_PI * 485.0 / 32.0;
+    double worst_t = 0, worst_w = 0;
+    for (size_t r = 0; r < nrow; ++r) {
+        worst_t = fmax(worst_t, fabs(series[r * ncol + it] - 8e-6 * (double)r));
+        worst_w = fmax(worst_w, fabs(series[r * ncol + iw] - w));
+    }
+    CHECK(worst_t <= 1e-15, "time column off the grid k * 8e-6 by %g", worst_t);
+    CHECK(worst_w <= 1e-12 * w, "held n1 speed off 2 pi 485 / 32 by %g rad/s", worst_w);
+    free(series);
+    trainsim_free(sim);
+}
+
+static void test_bad_deck_names_file_and_line(void) {
+    trainsim_sim *sim = trainsim_new();
+    const char *text = "&run t_end = 0.1, dt = 1e-5 /\n"
+                       "&node id = 'a', type = 'inertia', inertia = -1.0 /\n";
+    int rc = trainsim_read_text(sim, text, "bad.nml");
+    if (rc == 0) rc = trainsim_run(sim, 0, NULL);
+    CHECK(rc == TRAINSIM_ERR_INPUT, "bad inertia: code %d, %d expected", rc, TRAINSIM_ERR_INPUT);
+    char msg[1024];
+    size_t n = trainsim_error_message(sim, msg, sizeof msg);
+    CHECK(n > 0 && strstr(msg, "bad.nml:2") != NULL && strstr(msg, "inertia") != NULL,
+          "message names file, line and key: '%s'", msg);
+    /* a message longer than the buffer is cut, NUL-terminated, its length returned */
+    char small[8];
+    size_t full = trainsim_error_message(sim, small, sizeof small);
+    CHECK(full == n && strlen(small) == 7, "truncated copy: %zu of %zu", strlen(small), full);
+
+    rc = trainsim_read_file(sim, "no/such/deck.nml");
+    CHECK(rc == TRAINSIM_ERR_IO || rc == TRAINSIM_ERR_INPUT, "missing deck: code %d", rc);
+    trainsim_error_message(sim, msg, sizeof msg);
+    CHECK(strstr(msg, "no/such/deck.nml") != NULL, "message names the file: '%s'", msg);
+
+    rc = trainsim_read_text(sim, "&run t_end = 0.1, dt = 1e-5 /\n&node id = 'a', type = 'inertia', inertia = 1 /\n", NULL);
+    CHECK(rc == 0, "good deck after a bad one");
+    rc = trainsim_set(sim, "nosuch.key", "1");
+    CHECK(rc == TRAINSIM_ERR_INPUT, "unknown group: code %d", rc);
+    double v;
+    CHECK(trainsim_metric(sim, "run.steps", &v) == TRAINSIM_ERR_ARGUMENT, "a metric before a run");
+    trainsim_free(sim);
+
+    /* misuse: no abort */
+    CHECK(trainsim_run(NULL, 0, NULL) == TRAINSIM_ERR_ARGUMENT, "NULL handle");
+    trainsim_error_message(NULL, msg, sizeof msg);
+    CHECK(strstr(msg, "NULL") != NULL, "NULL handle message: '%s'", msg);
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2) {
+        fprintf(stderr, "usage: test_capi DECK (inputs/gregory_harris_munro.nml)\n");
+        return 2;
+    }
+    printf("libtrainsim_c %s\n", trainsim_library_version());
+    test_deck_set_run_metric_series(argv[1]);
+    test_bad_deck_names_file_and_line();
+    if (failures) {
+        fprintf(stderr, "%d check(s) failed\n", failures);
+        return 1;
+    }
+    printf("test_capi: all checks passed\n");
+    return 0;
+}

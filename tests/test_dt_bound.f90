@@ -1,0 +1,187 @@
+!> The O(n) RK4 step bound (`rk4_dt_bound`, D-64 (startup)) against the dense
+!> analysis it replaces above dense_state_limit states:
+!> - its stiffness bound sqrt(mu_K) is >= the highest undamped circular
+!>   frequency of LAPACK's dsygv (`compute_modes`) on every bundled deck, the
+!>   runaway reproducer and chains of 10 .. 300 nodes, as the run starts and in
+!>   the stiffest state, and within a factor 1.25 of it (measured: equal to 6
+!>   digits on the bundled decks, within 0.6 % on the chains);
+!> - its step is <= the dense limit (dgeev, `rk4_dt_limit(dense=.true.)`: the
+!>   advice is safe) and >= 0.65 of it (measured 0.954 .. 0.9995 without a
+!>   motor; 0.72 .. 0.87 with one, whose current takes the direction-free radius);
+!> - on a uniform shaft chain, against the closed form
+!>   omega_max = 2 sqrt(k/J) sin((n - 1) pi / (2 n)), the bound is within
+!>   Gershgorin's 2 sqrt(k/J);
+!> - a chain above the threshold runs at the advised step without growth
+!>   (RK4 inside its region: |R(h lambda)| <= 1 for every mode, so the energy
+!>   of an undamped linear train cannot grow), and the same chain at 1.1 x
+!>   the dense limit blows up (|R| = 1.9 per step on its top mode): the test can fail.
+program test_dt_bound
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t
+   use trainsim_strings, only: str
+   use trainsim_model, only: model_t
+   use trainsim_element, only: lin_state_t, lin_start, lin_stiffest
+   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit, rk4_dt_bound, dense_state_limit, with_loads
+   use trainsim_simulate, only: simulate
+   use trainsim_observer, only: run_result_t
+   use trainsim_sink, only: null_sink_t
+   use trainsim_testing, only: suite_begin, suite_end, test_begin, check
+   use trainsim_test_support, only: load_model, load_model_text, nl
+   implicit none
+
+   !> The bound's documented tightness (D-64 (startup)).
+   real(wp), parameter :: omega_factor = 1.25_wp, dt_factor = 0.65_wp
+   character(len=48), parameter :: decks(9) = [character(len=48) :: &
+                                  'inputs/branched_train.nml', 'inputs/dc_motor_geared_load.nml', &
+                                  'inputs/gregory_harris_munro.nml', 'inputs/helical_pair.nml', &
+                                  'inputs/loads_table_ramp.nml', 'inputs/start_stop_two_clearances.nml', &
+                                  'inputs/two_clearance.nml', 'tests/decks/runaway_at_safe_dt.nml', &
+                                  'tests/decks/si_helical_pair.nml']
+
+   call suite_begin('O(n) RK4 step bound against the dense analysis')
+   call test_bound_is_above_dense_on_bundled_decks()
+   call test_uniform_chain_bound_against_closed_form()
+   call test_backlash_chain_bound_against_dense()
+   call test_chain_runs_at_the_advised_step()
+   call suite_end()
+
+contains
+
+   !> Every bundled deck, as it starts and in its stiffest state.
+   subroutine test_bound_is_above_dense_on_bundled_decks()
+      type(model_t) :: m
+      integer :: i
+      call test_begin('bound_is_above_dense_on_bundled_decks')
+      do i = 1, size(decks)
+         call load_model(trim(decks(i)), m)
+         call compare(m, lin_start, trim(decks(i))//' as it starts')
+         call compare(m, lin_stiffest, trim(decks(i))//' stiffest')
+      end do
+   end subroutine test_bound_is_above_dense_on_bundled_decks
+
+   !> n unit inertias on shafts k = 1e4, free at both ends: omega_j =
+   !> 2 sqrt(k/J) sin(j pi / (2 n)), j = 0 .. n - 1.
+   subroutine test_uniform_chain_bound_against_closed_form()
+      integer, parameter :: sizes(4) = [10, 50, 150, 300]
+      type(model_t) :: m
+      real(wp) :: om_exact, dt, bound, om_k
+      real(wp), allocatable :: y(:)
+      integer :: i
+      call test_begin('uniform_chain_bound_against_closed_form')
+      do i = 1, size(sizes)
+         call load_model_text(chain_deck(sizes(i), .false., 5.0e-3_wp, 5.0e-3_wp), m)
+         om_exact = 200.0_wp*sin(real(sizes(i) - 1, wp)*acos(-1.0_wp)/(2.0_wp*sizes(i)))
+         call m%initial_state(y)
+         call m%init_modes(m%run%t_start, y)
+         call rk4_dt_bound(m, with_loads(m, lin_start), y, dt, bound, omega_k=om_k)
+         call check('chain of '//str(sizes(i))//': bound >= closed-form omega_max', om_k >= om_exact*(1.0_wp - 1.0e-12_wp))
+         call check('chain of '//str(sizes(i))//': bound <= Gershgorin 2 sqrt(k/J)', om_k <= 200.0_wp*(1.0_wp + 1.0e-12_wp))
+         ! undamped: the step is RK4's imaginary-axis radius (less the 0.37 % slope
+         ! margin) over the bound (8 power steps from Gershgorin: 0.57 % above
+         ! omega_max at 10 nodes, where the top of the spectrum is least crowded)
+         call check('chain of '//str(sizes(i))//': dt within 2 % of 2 sqrt 2 / omega_max', &
+                    dt <= sqrt(8.0_wp)/om_exact .and. dt >= 0.98_wp*sqrt(8.0_wp)/om_exact)
+         if (sizes(i) <= 150) call compare(m, lin_start, 'shaft chain of '//str(sizes(i)))
+      end do
+   end subroutine test_uniform_chain_bound_against_closed_form
+
+   !> Backlash chains (every 10th element a spur gear) in their stiffest state:
+   !> two-pair mesh stiffness and the impact damping swept by the dense analysis.
+   subroutine test_backlash_chain_bound_against_dense()
+      integer, parameter :: sizes(2) = [20, 60]
+      type(model_t) :: m
+      integer :: i
+      call test_begin('backlash_chain_bound_against_dense')
+      do i = 1, size(sizes)
+         call load_model_text(chain_deck(sizes(i), .true., 5.0e-3_wp, 5.0e-3_wp), m)
+         call compare(m, lin_start, 'backlash chain of '//str(sizes(i))//' as it starts')
+         call compare(m, lin_stiffest, 'backlash chain of '//str(sizes(i))//' stiffest')
+      end do
+   end subroutine test_backlash_chain_bound_against_dense
+
+   !> A 100-node shaft chain (200 states: the bound gives the advice) at the
+   !> advised step for 4000 steps, and at 1.1 x the dense limit.
+   subroutine test_chain_runs_at_the_advised_step()
+      type(model_t) :: m
+      type(run_result_t) :: res
+      type(null_sink_t) :: none
+      type(error_t), allocatable :: err
+      real(wp) :: dt_advice, dt_dense, om, e_end
+      call test_begin('chain_runs_at_the_advised_step')
+      call load_model_text(chain_deck(100, .false., 1.0_wp, 1.0e-3_wp), m)
+      call check('200 states: above dense_state_limit', m%n_states > dense_state_limit)
+      call rk4_dt_limit(m, lin_stiffest, dt_advice, om, err)
+      call check('advice: no error', .not. allocated(err))
+      call rk4_dt_limit(m, lin_stiffest, dt_dense, om, err, dense=.true.)
+      call check('dense: no error', .not. allocated(err))
+      call check('advice <= dense limit', dt_advice <= dt_dense)
+      ! energy_check = 0: at its stability limit RK4 is stable but damps the top
+      ! modes (|R| < 1), which the ledger counts as an error (0.39 of the scale here)
+      call load_model_text(chain_deck(100, .false., 4000.0_wp*dt_advice, dt_advice, ', energy_check = 0'), m)
+      call simulate(m, none, res, err)
+      if (allocated(err)) write (*, '(4x,a)') err%message
+      call check('at the advice: no blow-up', .not. allocated(err))
+      ! E0 = J w^2 / 2 = 0.5 J; RK4 inside its region cannot add energy to an undamped linear train
+      e_end = m%stored_energy(res%t_final, res%y_final)
+      write (*, '(4x,a,es12.5,a)') 'stored energy after 4000 steps at the advice: ', e_end, ' J (0.5 at the start)'
+      call check('at the advice: the stored energy does not grow', e_end <= 0.5_wp*(1.0_wp + 1.0e-9_wp))
+      call load_model_text(chain_deck(100, .false., 4000.0_wp*1.1_wp*dt_dense, 1.1_wp*dt_dense, &
+                           ', energy_check = 0'), m)
+      call simulate(m, none, res, err)
+      if (.not. allocated(err)) e_end = m%stored_energy(res%t_final, res%y_final)
+      call check('at 1.1 x the dense limit: the run blows up', allocated(err) .or. e_end > 1.0_wp)
+   end subroutine test_chain_runs_at_the_advised_step
+
+   !> The bound against dsygv (undamped frequencies) and dgeev (the damped limit) in `state`.
+   subroutine compare(m, state, what)
+      type(model_t), intent(inout) :: m
+      type(lin_state_t), intent(in) :: state
+      character(len=*), intent(in) :: what
+      type(modes_t) :: md
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: y(:)
+      real(wp) :: dt_b, bound, om_k, dt_d, om
+      call compute_modes(m, md, err, state=state)
+      call check(what//': dsygv', .not. allocated(err))
+      call rk4_dt_limit(m, state, dt_d, om, err, dense=.true.)
+      call check(what//': dgeev', .not. allocated(err))
+      call m%initial_state(y)
+      call m%init_modes(m%run%t_start, y)
+      call rk4_dt_bound(m, with_loads(m, state), y, dt_b, bound, omega_k=om_k)
+      write (*, '(4x,a,a,es12.5,a,es12.5,a,es12.5,a,es12.5)') what, ': omega bound/dsygv ', om_k, ' / ', &
+         md%omega_max, ', dt bound/dgeev ', dt_b, ' / ', dt_d
+      call check(what//': omega bound >= omega_max', om_k >= md%omega_max*(1.0_wp - 1.0e-9_wp))
+      call check(what//': omega bound within the factor', om_k <= omega_factor*md%omega_max .or. md%omega_max == 0.0_wp)
+      call check(what//': dt bound <= dense limit (safe)', dt_b <= dt_d*(1.0_wp + 1.0e-12_wp))
+      call check(what//': dt bound >= the factor of the dense limit', dt_b >= dt_factor*dt_d)
+   end subroutine compare
+
+   !> The chain of bench/bench_startup.f90: unit inertias, shafts k = 1e4, with
+   !> `backlash` a spur gear (half backlash 1e-3) as every 10th element; node 1 at 1 rad/s.
+   function chain_deck(n, backlash, t_end, dt, extra) result(text)
+      integer, intent(in) :: n
+      logical, intent(in) :: backlash
+      real(wp), intent(in) :: t_end, dt
+      character(len=*), intent(in), optional :: extra   !< more &run keys
+      character(len=:), allocatable :: text
+      character(len=64) :: run
+      integer :: i
+      write (run, '(a,es23.16,a,es23.16)') 't_end = ', t_end, ', dt = ', dt
+      text = "&run "//trim(run)//", integrator = 'rk4', output_interval = 0"
+      if (present(extra)) text = text//extra
+      text = text//' /'
+      do i = 1, n
+         text = text//nl//"&node id = 'n"//str(i)//"', type = 'inertia', inertia = 1.0 /"
+      end do
+      do i = 1, n - 1
+         if (backlash .and. mod(i, 10) == 0) then
+            text = text//nl//"&element id = 'e"//str(i)//"', type = 'spur_gear', stiffness = 1.0e4, "// &
+                   'rb_driver = 1.0, rb_driven = 1.0, teeth = 32, contact_ratio = 1.6, approach_angle = 0.1, '// &
+                   'half_backlash = 1.0e-3 /'
+         else
+            text = text//nl//"&element id = 'e"//str(i)//"', type = 'shaft', stiffness = 1.0e4 /"
+         end if
+      end do
+      text = text//nl//"&initial node = 'n1', speed = 1.0 /"
+   end function chain_deck
+end program test_dt_bound
