@@ -22,6 +22,7 @@ module trainsim_el_damper
       procedure :: torques => damper_torques
       procedure :: torque_jacobian => damper_jacobian
       procedure :: dissipation_power => damper_dissipation
+      procedure :: linear_spring => damper_linear_spring
       procedure :: params => damper_params
    end type damper_t
 
@@ -75,6 +76,16 @@ contains
       end associate
       p = self%c*(wl - wr)**2
    end function damper_dissipation
+
+   !> A linear spring-damper with k = 0 and unit lever arms: the model evaluates
+   !> it in the linear-spring family (docs/plugins.md, section 5).
+   pure subroutine damper_linear_spring(self, linear, k, c, r1, r2)
+      class(damper_t), intent(in) :: self
+      logical, intent(out) :: linear
+      real(wp), intent(out) :: k, c, r1, r2
+      k = 0.0_wp; c = self%c; r1 = 1.0_wp; r2 = 1.0_wp
+      linear = .true.
+   end subroutine damper_linear_spring
 
    function damper_params(self) result(p)
       class(damper_t), intent(in) :: self

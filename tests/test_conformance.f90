@@ -249,12 +249,92 @@ contains
       call test_begin(row%name//': assembled model Jacobian = central differences of the right-hand side')
       call check_model_jacobian(m, x)
 
+      call test_begin(row%name//': the model (its family kernel, or the general path) = the type-bound procedures: '// &
+                      'torques, guards, energies ('//str(size(x, 2))//' states, energy off and on)')
+      call check_family_kernel(m, x)
+
       call test_begin(row%name//': energy ledger closes over an RK4 run; parameters round-trip through HDF5')
       call check_energy_and_file(m, 'element', x, u, v, b_c, m%elements(1)%e%n_guards() > 0)
 
       call test_begin(row%name//': a bad value of each example key is rejected, naming the key')
       call check_bad_values('element', row%name, row%example, row%positive, row%nonnegative)
    end subroutine element_conformance
+
+   !> The model's evaluation of its one element (the family kernel of its
+   !> stage and step end when the element is in a family, else the general
+   !> path) against the element's own type-bound procedures, at each state (its
+   !> mode set there, as a run does) with energy tracking off and on: the
+   !> element torques and the nodes' dy/dt (J = 0.5 and 2.0, no damping), the
+   !> dissipated and input power, the stored energy (kinetic + the element's
+   !> `potential_energy`), the guards. Tolerance 1e-12 relative: the tables take
+   !> a plug-in's linear-spring claim when its procedures agree to that
+   !> (`linear_element_agrees`); a hot form agrees bit for bit (D-35).
+   subroutine check_family_kernel(m0, x)
+      type(model_t), intent(in) :: m0
+      real(wp), intent(in) :: x(:, :)
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), dydt(:), dend(:), g(:), gref(:)
+      real(wp) :: tl, tr, pw, pin, est, pot, worst
+      integer :: c, ng, pass
+      logical :: track
+      worst = 0.0_wp
+      do pass = 1, 2
+         track = pass == 2
+         m = m0
+         m%run%track_energy = track
+         call m%finalize()
+         do c = 1, size(x, 2)
+            allocate (y(m%n_y), dydt(m%n_y), dend(m%n_y))
+            y = 0.0_wp
+            y(1:4) = x(:, c)
+            call m%init_modes(0.0_wp, y)
+            associate (e => m%elements(1)%e)
+               call e%torques_dissipation(x(1, c), x(2, c), x(3, c), x(4, c), tl, tr, pw)
+               pin = 0.0_wp
+               if (e%supplies_power) pin = e%input_power(x(1, c), x(2, c), x(3, c), x(4, c))
+               call m%rhs_stage(0.0_wp, y, dydt)
+               call worse(m%el_torque(1, 1), tl)
+               call worse(m%el_torque(2, 1), tr)
+               call worse(dydt(2), tl/0.5_wp)
+               call worse(dydt(4), tr/2.0_wp)
+               if (track) then
+                  call worse(dydt(5), pw)
+                  call worse(dydt(6), pin)
+               end if
+               call m%rhs_step_end(0.0_wp, y, dend)
+               call check('state '//str(c)//merge(', energy on ', ', energy off', track)//': step end dy/dt = stage dy/dt', &
+                          all(dend == dydt))
+               call worse(m%el_torque(1, 1), tl)
+               call worse(m%el_torque(2, 1), tr)
+               call m%workspace_energy(y, est, pot)
+               call worse(pot, e%potential_energy(x(1, c), x(3, c)))
+               call worse(est, 0.25_wp*x(2, c)**2 + x(4, c)**2 + e%potential_energy(x(1, c), x(3, c)))
+               ng = e%n_guards()
+               if (ng > 0) then
+                  allocate (g(m%n_guards), gref(ng))
+                  call m%guards(0.0_wp, y, g)
+                  call e%guards(x(1, c), x(2, c), x(3, c), x(4, c), gref)
+                  call worse_all(g(1:ng), gref)
+                  deallocate (g, gref)
+               end if
+            end associate
+            deallocate (y, dydt, dend)
+         end do
+      end do
+      call check('max relative mismatch (1e-12)', worst, 0.0_wp, abs_tol=1.0e-12_wp)
+   contains
+      subroutine worse(a, b)
+         real(wp), intent(in) :: a, b
+         if (a /= b) worst = max(worst, abs(a - b)/max(abs(a), abs(b), tiny(1.0_wp)))
+      end subroutine worse
+      subroutine worse_all(a, b)
+         real(wp), intent(in) :: a(:), b(:)
+         integer :: k
+         do k = 1, size(a)
+            call worse(a(k), b(k))
+         end do
+      end subroutine worse_all
+   end subroutine check_family_kernel
 
    !> Gradient direction u (moving the nodes by s u changes the displacement by s)
    !> and null direction v (unit; moving along it does not deform the element).

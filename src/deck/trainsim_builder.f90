@@ -73,9 +73,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: n, i
       character(len=:), allocatable :: units_name, jac_kind
-      type(string_t), allocatable :: valid(:)
-      logical :: ok
-      real(wp) :: tmp, span
+      real(wp) :: tmp
 
       n = deck%count_groups('run')
       if (n /= 1) then
@@ -142,86 +140,103 @@ contains
             return
          end select
 
-         ! Every real is finite here (the deck reader rejects nan, inf and overflow).
-         ! Limits divide by a constant, never by a deck value, so no check can overflow.
-         span = 0.0_wp
-         if (abs(r%t_start) <= max_abs_time .and. abs(r%t_end) <= max_abs_time) span = r%t_end - r%t_start
-         if (.not. r%dt > 0.0_wp) then
-            call fatal_error(err, g%where('dt')//': error: time step dt must be > 0, got '//str(r%dt), err_input)
-         else if (abs(r%t_start) > max_abs_time) then
-            call fatal_error(err, g%where('t_start')//': error: t_start = '//str(r%t_start)//' is beyond the '// &
-                             'time limit of +-'//str(max_abs_time)//' s', err_input)
-         else if (abs(r%t_end) > max_abs_time) then
-            call fatal_error(err, g%where('t_end')//': error: t_end = '//str(r%t_end)//' is beyond the '// &
-                             'time limit of +-'//str(max_abs_time)//' s', err_input)
-         else if (.not. r%t_end > r%t_start) then
-            call fatal_error(err, g%where('t_end')//': error: t_end must be later than t_start ('//str(r%t_start)// &
-                             '), got '//str(r%t_end), err_input)
-         else if (span/max_steps > r%dt) then
-            call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s would take more than '// &
-                             '1e12 steps over the run of '//str(span)//' s', err_input)
-         else if (r%dt > span) then
-            call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)// &
-                             ' is longer than the run (t_end - t_start = '//str(span)//')', err_input)
-         else if (r%dt < min_dt_spacings*spacing(max(abs(r%t_start), abs(r%t_end)))) then
-            call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s is too fine for '// &
-                             'the times of the run: near t = '//str(max(abs(r%t_start), abs(r%t_end)))// &
-                             ' s double precision resolves only '//str(spacing(max(abs(r%t_start), abs(r%t_end))))// &
-                             ' s (dt must exceed 1000 times that; shift t_start towards 0)', err_input)
-         else if (.not. r%output_interval >= 0.0_wp) then
-            call fatal_error(err, g%where('output_interval')//': error: output_interval must be >= 0, got '// &
-                             str(r%output_interval), err_input)
-         else if (r%output_interval > 0.0_wp .and. span/max_samples > r%output_interval) then
-            call fatal_error(err, g%where('output_interval')//': error: output_interval = '// &
-                             str(r%output_interval)//' s would write more than 1e9 samples over the run of '// &
-                             str(span)//' s (the output limit); raise it', err_input)
-         else if (r%output_interval == 0.0_wp .and. span/max_samples > r%dt) then
-            call fatal_error(err, g%where('output_interval')//': error: output_interval = 0 stores a sample '// &
-                             'every dt = '//str(r%dt)//' s: more than 1e9 samples over the run of '//str(span)// &
-                             ' s (the output limit); give an output_interval of at least '// &
-                             str(span/max_samples)//' s', err_input)
-         else if (.not. (r%rtol > 0.0_wp .and. r%rtol < 1.0_wp)) then
-            call fatal_error(err, g%where('rtol')//': error: rtol must be in (0, 1), got '//str(r%rtol), err_input)
-         else if (r%max_step > 0.0_wp .and. span/max_steps > r%max_step) then
-            call fatal_error(err, g%where('max_step')//': error: max_step = '//str(r%max_step)//' s would need '// &
-                             'more than 1e12 steps over the run of '//str(span)//' s: raise it (0 chooses it from '// &
-                             'the highest frequency)', err_input)
-         end if
-         if (allocated(err)) return
-         call g%require_positive('atol_angle', r%atol_angle, err)
-         call g%require_positive('atol_speed', r%atol_speed, err)
-         call g%require_positive('atol_current', r%atol_current, err)
-         call g%require_nonnegative('max_step', r%max_step, err)
-         call g%require_nonnegative('event_tol', r%event_tol, err)
-         call g%require_nonnegative('settle_time', r%settle_time, err)
-         call g%require_nonnegative('settle_period', r%settle_period, err)
-         call g%require_nonnegative('settle_max_time', r%settle_max_time, err)
-         if (allocated(err)) return
-         if (.not. (r%settle_tol >= 0.0_wp .and. r%settle_tol < 1.0_wp)) then
-            call fatal_error(err, g%where('settle_tol')//': error: settle_tol must be in [0, 1) (0: no settling '// &
-                             'check), got '//str(r%settle_tol), err_input)
-            return
-         end if
-         call check_run_times(r, jac_kind, err)
-         if (allocated(err)) then
-            err%message = g%where(jac_kind)//': error: '//err%message
-            return
-         end if
-         ! an interval longer than the run means its first and last sample only: say so
-         ! with the run's length, which keeps every sample count derived from it small
-         r%output_interval = min(r%output_interval, span)
-         valid = integrator_names()
-         ok = .false.
-         do n = 1, size(valid)
-            if (valid(n)%s == r%integrator) ok = .true.
-         end do
-         if (.not. ok) then
-            call fatal_error(err, g%where('integrator')//": error: unknown integrator '"//r%integrator// &
-                             "'; valid integrators are: "//join(valid, ', '), err_input)
-            return
-         end if
+         call check_run(g, r, err)
       end associate
    end subroutine read_run
+
+   !> The values of &run read by read_run against each other and the limits of &run: the
+   !> times, the step, the output interval, the tolerances, the settling keys, the
+   !> integrator's name; output_interval is capped at the run's length.
+   subroutine check_run(g, r, err)
+      use trainsim_model, only: run_settings_t
+      type(deck_group_t), intent(inout) :: g
+      type(run_settings_t), intent(inout) :: r
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: blame
+      type(string_t), allocatable :: valid(:)
+      logical :: ok
+      real(wp) :: span
+      integer :: n
+
+      ! Every real is finite here (the deck reader rejects nan, inf and overflow).
+      ! Limits divide by a constant, never by a deck value, so no check can overflow.
+      span = 0.0_wp
+      if (abs(r%t_start) <= max_abs_time .and. abs(r%t_end) <= max_abs_time) span = r%t_end - r%t_start
+      if (.not. r%dt > 0.0_wp) then
+         call fatal_error(err, g%where('dt')//': error: time step dt must be > 0, got '//str(r%dt), err_input)
+      else if (abs(r%t_start) > max_abs_time) then
+         call fatal_error(err, g%where('t_start')//': error: t_start = '//str(r%t_start)//' is beyond the '// &
+                          'time limit of +-'//str(max_abs_time)//' s', err_input)
+      else if (abs(r%t_end) > max_abs_time) then
+         call fatal_error(err, g%where('t_end')//': error: t_end = '//str(r%t_end)//' is beyond the '// &
+                          'time limit of +-'//str(max_abs_time)//' s', err_input)
+      else if (.not. r%t_end > r%t_start) then
+         call fatal_error(err, g%where('t_end')//': error: t_end must be later than t_start ('//str(r%t_start)// &
+                          '), got '//str(r%t_end), err_input)
+      else if (span/max_steps > r%dt) then
+         call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s would take more than '// &
+                          '1e12 steps over the run of '//str(span)//' s', err_input)
+      else if (r%dt > span) then
+         call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)// &
+                          ' is longer than the run (t_end - t_start = '//str(span)//')', err_input)
+      else if (r%dt < min_dt_spacings*spacing(max(abs(r%t_start), abs(r%t_end)))) then
+         call fatal_error(err, g%where('dt')//': error: time step dt = '//str(r%dt)//' s is too fine for '// &
+                          'the times of the run: near t = '//str(max(abs(r%t_start), abs(r%t_end)))// &
+                          ' s double precision resolves only '//str(spacing(max(abs(r%t_start), abs(r%t_end))))// &
+                          ' s (dt must exceed 1000 times that; shift t_start towards 0)', err_input)
+      else if (.not. r%output_interval >= 0.0_wp) then
+         call fatal_error(err, g%where('output_interval')//': error: output_interval must be >= 0, got '// &
+                          str(r%output_interval), err_input)
+      else if (r%output_interval > 0.0_wp .and. span/max_samples > r%output_interval) then
+         call fatal_error(err, g%where('output_interval')//': error: output_interval = '// &
+                          str(r%output_interval)//' s would write more than 1e9 samples over the run of '// &
+                          str(span)//' s (the output limit); raise it', err_input)
+      else if (r%output_interval == 0.0_wp .and. span/max_samples > r%dt) then
+         call fatal_error(err, g%where('output_interval')//': error: output_interval = 0 stores a sample '// &
+                          'every dt = '//str(r%dt)//' s: more than 1e9 samples over the run of '//str(span)// &
+                          ' s (the output limit); give an output_interval of at least '// &
+                          str(span/max_samples)//' s', err_input)
+      else if (.not. (r%rtol > 0.0_wp .and. r%rtol < 1.0_wp)) then
+         call fatal_error(err, g%where('rtol')//': error: rtol must be in (0, 1), got '//str(r%rtol), err_input)
+      else if (r%max_step > 0.0_wp .and. span/max_steps > r%max_step) then
+         call fatal_error(err, g%where('max_step')//': error: max_step = '//str(r%max_step)//' s would need '// &
+                          'more than 1e12 steps over the run of '//str(span)//' s: raise it (0 chooses it from '// &
+                          'the highest frequency)', err_input)
+      end if
+      if (allocated(err)) return
+      call g%require_positive('atol_angle', r%atol_angle, err)
+      call g%require_positive('atol_speed', r%atol_speed, err)
+      call g%require_positive('atol_current', r%atol_current, err)
+      call g%require_nonnegative('max_step', r%max_step, err)
+      call g%require_nonnegative('event_tol', r%event_tol, err)
+      call g%require_nonnegative('settle_time', r%settle_time, err)
+      call g%require_nonnegative('settle_period', r%settle_period, err)
+      call g%require_nonnegative('settle_max_time', r%settle_max_time, err)
+      if (allocated(err)) return
+      if (.not. (r%settle_tol >= 0.0_wp .and. r%settle_tol < 1.0_wp)) then
+         call fatal_error(err, g%where('settle_tol')//': error: settle_tol must be in [0, 1) (0: no settling '// &
+                          'check), got '//str(r%settle_tol), err_input)
+         return
+      end if
+      call check_run_times(r, blame, err)
+      if (allocated(err)) then
+         err%message = g%where(blame)//': error: '//err%message
+         return
+      end if
+      ! an interval longer than the run means its first and last sample only: say so
+      ! with the run's length, which keeps every sample count derived from it small
+      r%output_interval = min(r%output_interval, span)
+      valid = integrator_names()
+      ok = .false.
+      do n = 1, size(valid)
+         if (valid(n)%s == r%integrator) ok = .true.
+      end do
+      if (.not. ok) then
+         call fatal_error(err, g%where('integrator')//": error: unknown integrator '"//r%integrator// &
+                          "'; valid integrators are: "//join(valid, ', '), err_input)
+         return
+      end if
+   end subroutine check_run
 
    !> The end of the run's metrics window and of the settling budget against the limits
    !> of &run, once t_end and settle_time are known (read_run, and again after the derived

@@ -1,7 +1,8 @@
 !> What the SUNDIALS integrators share: the SUNDIALS context and vectors, the
 !> callbacks (right-hand side, Jacobian, guards as root functions, error
-!> messages), the set-up sequence, the advance/restart cycle and the failure
-!> diagnosis. The backends (trainsim_int_cvode, trainsim_int_arkode) extend
+!> messages; in trainsim_sundials_callbacks), the set-up sequence, the
+!> advance/restart cycle and the failure diagnosis (submodule
+!> trainsim_sundials_failure). The backends (trainsim_int_cvode, trainsim_int_arkode) extend
 !> `sundials_integrator_t` and differ only in the SUNDIALS calls they make:
 !> each deferred `sun_*` procedure below is one call of the package.
 !>
@@ -21,43 +22,26 @@ module trainsim_sundials
    use, intrinsic :: iso_c_binding, only: c_int, c_long, c_double, c_ptr, c_char, c_null_ptr, c_null_char, &
                                           c_loc, c_funloc, c_f_pointer, c_associated
    use fsundials_context_mod, only: FSUNContext_Create, FSUNContext_Free
-   use fsundials_nvector_mod, only: N_Vector, FN_VGetArrayPointer, FN_VDestroy
-   use fsundials_matrix_mod, only: SUNMatrix
+   use fsundials_nvector_mod, only: N_Vector, FN_VDestroy
    use fnvector_serial_mod, only: FN_VMake_Serial
-   use fsunmatrix_dense_mod, only: FSUNDenseMatrix_Data
    use trainsim_kinds, only: wp, i8, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric, err_internal
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
-   use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit, limiting_part, rk4_dt_quick
+   use trainsim_modes, only: rk4_dt_limit, limiting_part, rk4_dt_quick
    use trainsim_element, only: lin_stiffest, lin_state_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
+   use trainsim_sundials_callbacks, only: cv_user_t, cv_rhs, cv_jac, cv_roots, cv_error_handler, cv_ewt, &
+                                          cvode_max_step, cvode_abstol, cvode_weights, angle_resolution
    implicit none
    private
 
    public :: sundials_integrator_t, cv_user_t
    public :: cv_rhs, cv_jac, cv_roots, cv_error_handler, cv_ewt
-   public :: cvode_max_step, cvode_abstol
+   public :: cvode_max_step, cvode_abstol, angle_resolution
    public :: st_success, st_tstop, st_root, st_too_much_work, st_too_much_acc, st_err_failure, &
              st_conv_failure, st_lin_failure, st_rhs_failure, st_root_failure, st_too_close, st_bad_input, st_other
 
-   !> The node angle that rtol is relative to (D-50), in rad: a node angle's
-   !> tolerance is rtol*angle_resolution + atol_angle, whatever the angle
-   !> itself (how far a node has turned is no measure of what matters: the
-   !> deformations across the elements, and a gear's position in its mesh
-   !> cycle, are). 1e-5 rad is 1 um at a 0.1 m radius, the order of a mesh
-   !> deflection's resolution; the smallest static deflections and clearances
-   !> of the bundled trains are 1e-4 to 1e-3 rad.
-   real(wp), parameter, public :: angle_resolution = 1.0e-5_wp
-   !> Part of |angle| added to an angle's tolerance: 10 units of rounding, so
-   !> that a tight rtol never asks an angle of several rad for more digits than
-   !> double precision holds (SUNDIALS's "too much accuracy" test is 1 unit).
-   real(wp), parameter :: angle_rounding = 10.0_wp*epsilon(1.0_wp)
-   !> Fraction of the period of the highest linearised mode (clearances closed)
-   !> used as the default maximum step.
-   real(wp), parameter :: max_step_fraction = 0.1_wp
-   !> Floor of the absolute tolerance of the energy-accounting states, per unit of 1 + E0.
-   real(wp), parameter :: energy_atol_factor = 1.0e-6_wp
    !> Internal steps allowed per call (per output interval), at least.
    integer(i8), parameter :: mxstep_min = 1000000_i8
    !> Most steps a run may be forced into by the automatic max_step (or, for an
@@ -76,21 +60,6 @@ module trainsim_sundials
    integer, parameter :: st_too_much_work = -1, st_too_much_acc = -2, st_err_failure = -3, &
                          st_conv_failure = -4, st_lin_failure = -5, st_rhs_failure = -6, &
                          st_root_failure = -7, st_too_close = -8, st_bad_input = -9, st_other = -99
-
-   !> What the callbacks see (user data): the caller's model and a few
-   !> diagnostics written without allocation.
-   type :: cv_user_t
-      type(model_t), pointer :: model => null()
-      integer :: ng = 0
-      integer :: bad_state = 0            !< first state whose derivative was NaN
-      real(wp) :: bad_t = 0.0_wp          !< time of that evaluation
-      integer :: msg_len = 0
-      character(len=512) :: msg = ''      !< last message SUNDIALS reported
-      !> the error weights (cv_ewt, D-50): 1/(rel_i |y_i| + fixed_i); rel_i is
-      !> rtol, or angle_rounding for a node angle (its tolerance does not grow
-      !> with how far it turned, but for the angle's own rounding)
-      real(wp), allocatable :: rel(:), fixed(:)
-   end type cv_user_t
 
    type, abstract, extends(integrator_t) :: sundials_integrator_t
       !> the integrator's name, the package ('CVODE', 'ARKODE') and the prefix
@@ -206,136 +175,24 @@ module trainsim_sundials
       end function status_i
    end interface
 
+
+   interface
+      !> The failure diagnosis (submodule trainsim_sundials_failure).
+      module subroutine sun_failed(self, model, flag, st, t, err)
+         class(sundials_integrator_t), intent(inout), target :: self
+         type(model_t), intent(in) :: model
+         integer(c_int), intent(in) :: flag
+         integer, intent(in) :: st
+         real(wp), intent(in) :: t
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine sun_failed
+   end interface
+
 contains
 
    ! --------------------------------------------------------------- callbacks
 
-   !> dy/dt for CVODE and ERKStep (same signature): model%rhs on the SUNDIALS
-   !> vectors. 1 (recoverable) on NaN.
-   integer(c_int) function cv_rhs(tn, sunvec_y, sunvec_f, user_data) result(ierr) bind(C)
-      real(c_double), value :: tn
-      type(N_Vector) :: sunvec_y, sunvec_f
-      type(c_ptr), value :: user_data
-      type(cv_user_t), pointer :: ud
-      real(c_double), pointer :: yv(:), fv(:)
-      integer :: i
-      call c_f_pointer(user_data, ud)
-      yv => FN_VGetArrayPointer(sunvec_y)
-      fv => FN_VGetArrayPointer(sunvec_f)
-      call ud%model%rhs(tn, yv, fv)
-      ierr = 0
-      do i = 1, size(fv)
-         if (fv(i) /= fv(i)) then
-            if (ud%bad_state == 0) then
-               ud%bad_state = i
-               ud%bad_t = tn
-            end if
-            ierr = 1
-            return
-         end if
-      end do
-   end function cv_rhs
-
-   !> Dense Jacobian for CVODE BDF's Newton iteration: model%jacobian written
-   !> straight into the SUNDIALS matrix (column-major, no copy, no allocation).
-   integer(c_int) function cv_jac(tn, sunvec_y, sunvec_f, sunmat_j, user_data, tmp1, tmp2, tmp3) &
-      result(ierr) bind(C)
-      real(c_double), value :: tn
-      type(N_Vector) :: sunvec_y, sunvec_f, tmp1, tmp2, tmp3
-      type(SUNMatrix) :: sunmat_j
-      type(c_ptr), value :: user_data
-      type(cv_user_t), pointer :: ud
-      real(c_double), pointer :: yv(:), jflat(:), jac(:, :)
-      integer :: n
-      call c_f_pointer(user_data, ud)
-      yv => FN_VGetArrayPointer(sunvec_y)
-      jflat => FSUNDenseMatrix_Data(sunmat_j)
-      n = size(yv)
-      call c_f_pointer(c_loc(jflat(1)), jac, [n, n])
-      call ud%model%jacobian(tn, yv, jac)
-      ierr = 0
-      associate (u1 => sunvec_f, u2 => tmp1, u3 => tmp2, u4 => tmp3)   ! unused by this Jacobian
-      end associate
-   end function cv_jac
-
-   !> The guards as root functions (CVODE and ERKStep alike).
-   integer(c_int) function cv_roots(tn, sunvec_y, gout, user_data) result(ierr) bind(C)
-      real(c_double), value :: tn
-      type(N_Vector) :: sunvec_y
-      real(c_double) :: gout(*)
-      type(c_ptr), value :: user_data
-      type(cv_user_t), pointer :: ud
-      real(c_double), pointer :: yv(:)
-      call c_f_pointer(user_data, ud)
-      yv => FN_VGetArrayPointer(sunvec_y)
-      call ud%model%guards(tn, yv, gout(1:ud%ng))
-      ierr = 0
-   end function cv_roots
-
-   !> The error weights for CVODE's and ERKStep's error test and iterations
-   !> (CVodeWFtolerances, ERKStepWFtolerances; D-50): w_i = 1/(rtol |y_i| + atol_i)
-   !> for speeds, currents and energies as with SVtolerances, w_i = 1/(rtol
-   !> angle_resolution + atol_i) for node angles (cvode_weights). No allocation.
-   integer(c_int) function cv_ewt(sunvec_y, sunvec_ewt, user_data) result(ierr) bind(C)
-      type(N_Vector) :: sunvec_y, sunvec_ewt
-      type(c_ptr), value :: user_data
-      type(cv_user_t), pointer :: ud
-      real(c_double), pointer :: yv(:), w(:)
-      integer :: i
-      call c_f_pointer(user_data, ud)
-      yv => FN_VGetArrayPointer(sunvec_y)
-      w => FN_VGetArrayPointer(sunvec_ewt)
-      do i = 1, size(w)
-         w(i) = 1.0_wp/(ud%rel(i)*abs(yv(i)) + ud%fixed(i))
-      end do
-      ierr = 0
-   end function cv_ewt
-
-   !> CVODE's and ARKODE's error and warning messages: kept (the last one) for
-   !> our own message instead of being printed to stderr.
-   subroutine cv_error_handler(error_code, module, function, msg, user_data) bind(C)
-      integer(c_int), value :: error_code
-      type(c_ptr), value :: module, function, msg, user_data
-      type(cv_user_t), pointer :: ud
-      character(kind=c_char), pointer :: text(:)
-      integer :: i
-      if (error_code > 0) return    ! warnings (e.g. t + h = t) are not kept
-      associate (u1 => module, u2 => function)
-      end associate
-      if (.not. (c_associated(user_data) .and. c_associated(msg))) return
-      call c_f_pointer(user_data, ud)
-      call c_f_pointer(msg, text, [len(ud%msg)])
-      ud%msg_len = 0
-      do i = 1, len(ud%msg)
-         if (text(i) == c_null_char) exit
-         ud%msg(i:i) = text(i)
-         ud%msg_len = i
-      end do
-   end subroutine cv_error_handler
-
    ! ------------------------------------------------------------ set-up helpers
-
-   !> Maximum step CVODE may take: run%max_step if > 0, else a tenth of the
-   !> period of the highest linearised mode with every clearance closed
-   !> (0: no bound, when the train has no elastic mode).
-   subroutine cvode_max_step(model, hmax, omega_max)
-      type(model_t), intent(in) :: model
-      real(wp), intent(out) :: hmax, omega_max
-      type(model_t) :: tmp
-      type(modes_t) :: modes
-      type(error_t), allocatable :: err
-      omega_max = 0.0_wp
-      tmp = model
-      call compute_modes(tmp, modes, err, closed=.true.)
-      if (.not. allocated(err)) omega_max = modes%omega_max
-      if (model%run%max_step > 0.0_wp) then
-         hmax = model%run%max_step
-      else if (omega_max > 0.0_wp) then
-         hmax = max_step_fraction*two_pi/omega_max
-      else
-         hmax = 0.0_wp
-      end if
-   end subroutine cvode_max_step
 
    !> An explicit method's step is held below explicit_limit/|lambda| for the
    !> largest |lambda| of the damped train in its stiffest state (every
@@ -376,47 +233,6 @@ contains
                        str(implied_step_budget)//" steps: this train is stiff; use integrator = 'cvode-bdf' "// &
                        '(implicit: its step has no stability limit)', err_numeric)
    end subroutine explicit_stiffness_check
-
-   !> Absolute tolerance of each state: node angles atol_angle, speeds
-   !> atol_speed, a motor's current (third state) atol_current; the two
-   !> energy-accounting states max(rtol, 1e-6)*(1 + |E0|) (loose: they are
-   !> diagnostics, and must not set the step at tight rtol). E0 is the stored
-   !> energy at t_start (set by model%init_modes).
-   subroutine cvode_abstol(model, atol)
-      type(model_t), intent(in) :: model
-      real(wp), intent(out) :: atol(:)
-      integer :: i, o, ns
-      atol = model%run%atol_speed
-      do i = 1, size(model%nodes)
-         if (model%speed_of(i) /= 0) cycle
-         ns = model%nodes(i)%n%nstates()
-         o = model%nodes(i)%n%offset
-         if (ns >= 1) atol(o + 1) = model%run%atol_angle
-         if (ns >= 2) atol(o + 2) = model%run%atol_speed
-         if (ns >= 3) atol(o + 3:o + ns) = model%run%atol_current
-      end do
-      if (model%run%track_energy) atol(model%n_states + 1:model%n_states + 2) = &
-         max(model%run%rtol, energy_atol_factor)*(1.0_wp + abs(model%energy0))
-   end subroutine cvode_abstol
-
-   !> The error weights' parts (cv_ewt, D-50): rel = angle_rounding and fixed =
-   !> rtol angle_resolution + atol_angle for each node angle, rel = rtol and
-   !> fixed = atol (cvode_abstol) for the other states.
-   pure subroutine cvode_weights(model, atol, rel, fixed)
-      type(model_t), intent(in) :: model
-      real(wp), intent(in) :: atol(:)
-      real(wp), intent(out) :: rel(:), fixed(:)
-      integer :: i, o
-      rel = model%run%rtol
-      fixed = atol
-      do i = 1, size(model%nodes)
-         if (model%speed_of(i) /= 0) cycle
-         if (model%nodes(i)%n%nstates() < 1) cycle
-         o = model%nodes(i)%n%offset
-         rel(o + 1) = angle_rounding
-         fixed(o + 1) = model%run%rtol*angle_resolution + atol(o + 1)
-      end do
-   end subroutine cvode_weights
 
    ! ------------------------------------------------------ the shared cycle
 
@@ -710,113 +526,4 @@ contains
       advice = 'lower max_step, loosen rtol/atol, or '//rk4_hint
    end subroutine sun_describe_conv_failure
 
-   !> The integrator returned flag < 0 (status st): an error naming the time,
-   !> the state with the largest weighted local error, what SUNDIALS said,
-   !> and what to try.
-   subroutine sun_failed(self, model, flag, st, t, err)
-      class(sundials_integrator_t), intent(inout), target :: self
-      type(model_t), intent(in) :: model
-      integer(c_int), intent(in) :: flag
-      integer, intent(in) :: st
-      real(wp), intent(in) :: t
-      type(error_t), allocatable, intent(out) :: err
-      real(c_double), allocatable, target :: ele(:), ewt(:)
-      type(N_Vector), pointer :: nv_ele, nv_ewt
-      real(c_double) :: tcur(1), hlast(1)
-      integer :: worst
-      real(wp) :: wmax
-      character(len=:), allocatable :: what, advice, loc_text, detail, rk4_hint, h_text
-      type(model_t) :: tmp
-      type(error_t), allocatable :: lim_err
-      real(wp) :: dt_safe, omega
-      call self%flush_counters()
-      tcur = t; hlast = 0.0_wp
-      call self%sun_where(tcur, hlast)
-      ! the state that limits the step: largest |local error| * weight
-      allocate (ele(self%n), ewt(self%n))
-      ele = 0.0_wp; ewt = 0.0_wp
-      nv_ele => FN_VMake_Serial(int(self%n, c_long), ele, self%ctx)
-      nv_ewt => FN_VMake_Serial(int(self%n, c_long), ewt, self%ctx)
-      worst = 0
-      if (associated(nv_ele) .and. associated(nv_ewt)) then
-         call self%sun_local_errors(nv_ele, nv_ewt)
-         wmax = maxval(abs(ele*ewt))
-         if (st == st_too_much_acc) then
-            ! what limits the accuracy is |y| against its tolerance, not a local error
-            worst = maxloc(abs(self%yv)*ewt, 1)
-            loc_text = 'the tightest tolerance relative to its value is on '//model%state_label(worst)
-         else if (wmax > 0.0_wp .and. wmax == wmax) then
-            worst = maxloc(abs(ele*ewt), 1)
-            loc_text = 'the largest weighted local error estimate is in '//model%state_label(worst)// &
-                       ' (|error|/tolerance = '//str(wmax)//')'
-         else
-            ! no error estimate yet: name the state whose tolerance is tightest for its size
-            worst = maxloc(abs(self%yv)*ewt, 1)
-            loc_text = 'no step was completed; the tightest tolerance relative to its value is on '// &
-                       model%state_label(worst)
-         end if
-      else
-         loc_text = 'the local error estimates are not available'
-      end if
-      if (associated(nv_ele)) call FN_VDestroy(nv_ele)
-      if (associated(nv_ewt)) call FN_VDestroy(nv_ewt)
-      if (self%ud%bad_state > 0 .and. st == st_rhs_failure) then
-         loc_text = 'the right-hand side first gave NaN at t = '//str(self%ud%bad_t)//' s in the derivative of '// &
-                    model%state_label(self%ud%bad_state)
-      end if
-      rk4_hint = "try integrator = 'rk4' with a small dt"
-      tmp = model
-      call rk4_dt_limit(tmp, lin_stiffest, dt_safe, omega, lim_err)
-      if (.not. allocated(lim_err) .and. omega > 0.0_wp) then
-         rk4_hint = "try integrator = 'rk4' with dt below "//str(dt_safe, 4)// &
-                    ' s (the RK4 stability limit of the stiffest state the run can reach)'
-      end if
-      h_text = ''
-      if (hlast(1) > 0.0_wp) h_text = ' (last step size '//str(hlast(1))//' s)'
-      select case (st)
-      case (st_too_much_work)
-         what = 'more than '//str(real(self%mxstep, wp))//' internal steps were taken without reaching the next output time '// &
-                str(self%t_goal)//' s'
-         advice = 'the step size collapsed (a stiff contact, chattering, or a discontinuity no guard '// &
-                  'announces): '
-         advice = advice//self%advice_too_much_work()
-         advice = advice//'loosen rtol/atol'
-         if (model%run%max_step > 0.0_wp) advice = advice//', raise max_step (now '//str(model%run%max_step)//' s)'
-         advice = advice//", shorten output_interval, or "//rk4_hint
-      case (st_too_much_acc)
-         what = 'the tolerances ask for more accuracy than double precision can give (rtol = '// &
-                str(model%run%rtol)//')'
-         advice = 'loosen the tolerances: rtol >= 1e-13 and absolute tolerances that are not tiny against '// &
-                  'the states'' values'
-      case (st_err_failure)
-         what = 'the local error test failed repeatedly or with the smallest step'
-         advice = 'the model probably has a discontinuity inside a mode, or the tolerances are too tight: '// &
-                  'loosen rtol/atol, lower max_step, or '//rk4_hint
-         advice = advice//self%advice_error_failure()
-      case (st_conv_failure)
-         call self%describe_conv_failure(rk4_hint, what, advice)
-      case (st_lin_failure)
-         what = 'the dense linear solver failed (singular iteration matrix)'
-         advice = "lower max_step, or use integrator = 'cvode-adams' or 'rk4'"
-      case (st_rhs_failure)
-         what = 'the right-hand side could not be evaluated (NaN derivatives)'
-         advice = 'check the deck for non-physical parameters; tighten the tolerances or lower max_step'
-      case (st_root_failure)
-         what = 'the guard (root) functions failed'
-         advice = 'check the clearance elements of the deck'
-      case (st_too_close)
-         what = 'the next output time is too close to the current time'
-         advice = 'use a larger output_interval (or dt when output_interval = 0)'
-      case (st_bad_input)
-         what = self%solver//' rejected its input'
-         advice = 'check rtol, the absolute tolerances and max_step of the &run group'
-      case default
-         what = self%solver//' returned flag '//str(int(flag))
-         advice = 'loosen rtol/atol, lower max_step, or '//rk4_hint
-      end select
-      detail = ''
-      if (self%ud%msg_len > 0) detail = ' ['//self%solver//': '//self%ud%msg(1:self%ud%msg_len)//']'
-      call fatal_error(err, "integrator '"//model%run%integrator//"' failed at t = "//str(tcur(1))// &
-                       ' s'//h_text//': '//what//'; '//loc_text//'. Advice: '//advice//'.'//detail, err_numeric)
-   end subroutine sun_failed
 end module trainsim_sundials

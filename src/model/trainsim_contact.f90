@@ -29,6 +29,7 @@ module trainsim_contact
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: check_magnitude
    use trainsim_event, only: event_t, ev_contact_front, ev_contact_rear, ev_separation
+   use trainsim_key_fit, only: fit_none, fit_tight, fit_loose, fit_average, key_lineal_stiffness
    implicit none
    private
 
@@ -42,9 +43,7 @@ module trainsim_contact
    !> thesis's cases and above gear-rattle impact speeds (D-25).
    real(wp), parameter :: v_plausible_ips = 100.0_wp
    integer, parameter :: rest_goldsmith = 1, rest_smith = 2, rest_constant = 3
-   public :: fit_none, fit_tight, fit_loose, fit_average, key_lineal_stiffness
-   !> Load-dependent keyed-joint stiffness fits, eqs. (4.35)-(4.37)
-   integer, parameter :: fit_none = 0, fit_tight = 1, fit_loose = 2, fit_average = 3
+   public :: fit_none, fit_tight, fit_loose, fit_average, key_lineal_stiffness   ! (trainsim_key_fit's)
 
    !> A contact law with the state of the contact in progress (D, e, V_i).
    type :: contact_law_t
@@ -313,39 +312,6 @@ contains
          end if
       end select
    end function law_force
-
-   !> Lineal key stiffness (lbf/in per inch of key) at key force P (lbf), eqs.
-   !> (4.35) tight, (4.36) loose, (4.37) average fit; P is held inside the
-   !> fitted range [100, 60000] lbf. Returns dk/dP too.
-   pure subroutine key_lineal_stiffness(fit, p_lbf, k, dk)
-      integer, intent(in) :: fit
-      real(wp), intent(in) :: p_lbf
-      real(wp), intent(out) :: k, dk
-      real(wp) :: p, a, b, c, den
-      p = min(max(p_lbf, 100.0_wp), 60000.0_wp)
-      select case (fit)
-      case (fit_tight)
-         if (p >= 9000.0_wp) then
-            k = 0.46_wp*p + 272400.0_wp; dk = 0.46_wp
-            if (p_lbf /= p) dk = 0.0_wp
-            return
-         end if
-         a = 98800.0_wp; b = 0.0846_wp; c = 17.1_wp
-      case (fit_loose)
-         a = 85800.0_wp; b = 0.0774_wp; c = 4.62_wp
-      case default
-         if (p >= 22500.0_wp) then
-            k = 0.46_wp*p + 272400.0_wp; dk = 0.46_wp
-            if (p_lbf /= p) dk = 0.0_wp
-            return
-         end if
-         a = 99500.0_wp; b = 0.073_wp; c = 4.05_wp
-      end select
-      den = 1.0_wp + b*log(1.0_wp/p)
-      k = a/den - c*p
-      dk = a*b/(p*den**2) - c
-      if (p_lbf /= p) dk = 0.0_wp
-   end subroutine key_lineal_stiffness
 
    !> Elastic key force F for penetration p with the load-dependent fit:
    !> F = k(F) L p solved by Newton (fixed 6 iterations, allocation-free).

@@ -13,14 +13,12 @@
 module trainsim_observer
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
-   use trainsim_strings, only: string_t
    use trainsim_model, only: model_t
    use trainsim_element, only: element_slot_t
-   use trainsim_signal, only: signal_t
-   use trainsim_input_series, only: input_series_count, input_series_labels, input_drivers, input_series_values
-   use trainsim_sink, only: sink_t, sample_t, event_t, run_meta_t, run_stats_t, element_metrics_t, &
+   use trainsim_input_series, only: input_series_count, input_drivers, input_series_values
+   use trainsim_sink, only: sink_t, sample_t, event_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation
-   use trainsim_version, only: version_full
+   use trainsim_run_meta, only: make_meta
    use trainsim_metrics, only: p2p_detector_t, push_samples, push_block, push_value, turn_extreme
    implicit none
    private
@@ -113,143 +111,51 @@ module trainsim_observer
       procedure, private :: emit => obs_emit
    end type observer_t
 
+
+   ! The run's start and end and its events (submodule trainsim_observer_events,
+   ! src/run/trainsim_observer_events.f90)
+   interface
+      module subroutine obs_start(self, model, t, y, sink, err)
+         class(observer_t), intent(inout) :: self
+         type(model_t), intent(inout) :: model
+         real(wp), intent(in) :: t, y(:)
+         class(sink_t), intent(inout), target :: sink   !< kept by the observer until finish (events)
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine obs_start
+      module subroutine obs_step_part(self, model, t, y, nodes, els)
+         class(observer_t), intent(inout) :: self
+         type(model_t), intent(inout) :: model
+         real(wp), intent(in) :: t, y(:)
+         integer, intent(in) :: nodes(:), els(:)
+      end subroutine obs_step_part
+      module subroutine obs_fill_part(self, model, t, y, nodes, els)
+         class(observer_t), intent(inout) :: self
+         type(model_t), intent(inout) :: model
+         real(wp), intent(in) :: t, y(:)
+         integer, intent(in) :: nodes(:), els(:)
+      end subroutine obs_fill_part
+      module subroutine obs_record_events(self, model, t, y, evs, nev, err, nodes, els)
+         class(observer_t), intent(inout) :: self
+         type(model_t), intent(inout) :: model
+         real(wp), intent(in) :: t, y(:)
+         type(event_t), intent(in) :: evs(:)
+         integer, intent(in) :: nev
+         type(error_t), allocatable, intent(out) :: err
+         integer, intent(in), optional :: nodes(:), els(:)
+      end subroutine obs_record_events
+      module subroutine obs_finish(self, model, t, y, stats, sink, result, err, interrupted)
+         class(observer_t), intent(inout) :: self
+         type(model_t), intent(inout) :: model
+         real(wp), intent(in) :: t, y(:)
+         type(run_stats_t), intent(in) :: stats
+         class(sink_t), intent(inout) :: sink
+         type(run_result_t), intent(out) :: result
+         type(error_t), allocatable, intent(out) :: err
+         logical, intent(in), optional :: interrupted
+      end subroutine obs_finish
+   end interface
+
 contains
-
-   !> The run's description for the output file.
-   function make_meta(model) result(meta)
-      type(model_t), intent(in) :: model
-      type(run_meta_t) :: meta
-      integer :: i, k, n, ne, nn
-      type(string_t), allocatable :: names(:)
-      nn = size(model%nodes); ne = size(model%elements)
-      meta%title = model%title
-      meta%deck_file = model%deck_file
-      meta%deck_text = model%deck_text
-      meta%overrides = ''
-      if (allocated(model%overrides)) meta%overrides = model%overrides
-      meta%units = model%units%name
-      meta%version = version_full()
-      meta%integrator = model%run%integrator
-      allocate (meta%state_names(model%n_y))
-      k = 0
-      do i = 1, nn
-         if (model%speed_of(i) /= 0) cycle
-         n = model%nodes(i)%n%nstates()
-         if (n == 0) cycle
-         allocate (names(n))
-         call model%nodes(i)%n%state_names(names)
-         meta%state_names(k + 1:k + n) = names
-         deallocate (names)
-         k = k + n
-      end do
-      if (model%run%track_energy) then
-         meta%state_names(k + 1)%s = 'energy.dissipated'
-         meta%state_names(k + 2)%s = 'energy.input'
-      end if
-      allocate (meta%node_ids(nn), meta%node_types(nn), meta%node_params(nn))
-      do i = 1, nn
-         meta%node_ids(i)%s = model%nodes(i)%n%id
-         meta%node_types(i)%s = model%nodes(i)%n%type_name
-         if (model%speed_of(i) /= 0) meta%node_types(i)%s = meta%node_types(i)%s//' (prescribed speed)'
-         meta%node_params(i) = model%nodes(i)%n%params()
-      end do
-      allocate (meta%element_ids(ne), meta%element_types(ne), meta%element_params(ne), meta%element_disp_units(ne))
-      allocate (meta%element_left(ne), meta%element_right(ne))
-      do i = 1, ne
-         associate (e => model%elements(i)%e)
-            meta%element_ids(i)%s = e%id
-            meta%element_types(i)%s = e%type_name
-            meta%element_left(i) = e%left
-            meta%element_right(i) = e%right
-            meta%element_params(i) = e%params()
-            meta%element_disp_units(i)%s = e%displacement_unit()
-            if (meta%element_disp_units(i)%s == 'length') meta%element_disp_units(i)%s = model%units%length
-         end associate
-      end do
-      call input_series_labels(model, meta%input_series_names, meta%input_series_units)
-      allocate (meta%input_keys(0), meta%input_files(0), meta%input_texts(0))
-      do i = 1, size(model%loads)
-         call add_input_file(model%loads(i)%torque)
-      end do
-      do i = 1, size(model%speeds)
-         call add_input_file(model%speeds(i))
-      end do
-   contains
-      !> The table file behind `sig`, once per file opened.
-      subroutine add_input_file(sig)
-         type(signal_t), intent(in) :: sig
-         integer :: j
-         if (.not. allocated(sig%source_file)) return
-         do j = 1, size(meta%input_files)
-            if (meta%input_files(j)%s == sig%source_file) return
-         end do
-         call append(meta%input_keys, sig%source_key)
-         call append(meta%input_files, sig%source_file)
-         call append(meta%input_texts, sig%source_text)
-      end subroutine add_input_file
-      subroutine append(list, text)
-         type(string_t), allocatable, intent(inout) :: list(:)
-         character(len=*), intent(in) :: text
-         type(string_t), allocatable :: tmp(:)
-         allocate (tmp(size(list) + 1))
-         tmp(1:size(list)) = list
-         tmp(size(tmp))%s = text
-         call move_alloc(tmp, list)
-      end subroutine append
-   end function make_meta
-
-   !> Begin a run at (t, y): open the sink and record the first sample.
-   subroutine obs_start(self, model, t, y, sink, err)
-      class(observer_t), intent(inout) :: self
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, y(:)
-      class(sink_t), intent(inout), target :: sink   !< kept by the observer until finish (events)
-      type(error_t), allocatable, intent(out) :: err
-      integer :: nn, ne, nmax
-      nn = size(model%nodes); ne = size(model%elements)
-      allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
-      allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
-      allocate (self%s%contact(ne), self%s%pairs(ne))
-      self%drivers = input_drivers(model)
-      allocate (self%s%inputs(input_series_count(model)))
-      allocate (self%res%el(ne), self%res%events(ne), self%open_row(ne))
-      self%open_row = 0
-      self%out => sink
-      self%n_events = 0
-      self%keep_events = model%run%keep_events
-      if (self%keep_events) allocate (self%kept(256))
-      self%track = model%run%track_energy
-      self%t_metrics = model%run%t_start + model%run%settle_time
-      ! settling until periodic: the metrics start when the run has settled (simulate)
-      if (model%run%settle_tol > 0.0_wp) self%t_metrics = huge(1.0_wp)
-      self%t_prev = t
-      ! the peak-to-peak metrics are computed online (memory independent of the
-      ! run length); the whole series of samples is kept in memory only when the
-      ! caller asks (keep_series)
-      allocate (self%turns(ne))
-      self%turns%hyst = p2p_hysteresis
-      allocate (self%turn_d1(ne), self%turn_d2(ne))
-      self%turn_init = .false.
-      self%turn_gap = 0.25_wp*model%run%dt
-      self%keep = model%run%keep_series
-      self%take_samples = sink%stores_samples()
-      self%speeds_only = self%take_samples .and. sink%speeds_only()
-      self%want_whole = (self%take_samples .and. .not. self%speeds_only) .or. self%keep
-      nmax = 0
-      if (self%keep) nmax = 1024
-      allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
-      allocate (self%res%series_theta(nn, nmax), self%res%series_omega(nn, nmax))
-      allocate (self%th_prev(nn), self%om_prev(nn), self%force_prev(ne), self%disp_prev(ne), self%torque_prev(ne), &
-                self%contact_prev(ne))
-      self%contact_prev = 0
-      allocate (self%t_counted(ne))
-      self%t_counted = -huge(1.0_wp)
-      call sink%open(make_meta(model), err)
-      if (allocated(err)) return
-      call self%step(model, t, y)
-      call self%sample(model, t, t, y, sink, err)
-      self%started = .not. allocated(err)
-   end subroutine obs_start
 
    !> Evaluate the recorded quantities at (t, y) into the sample buffer. When
    !> the integrator has just evaluated the RHS at (t, y) (RK4's end-of-step
@@ -728,49 +634,6 @@ contains
       end do
    end subroutine fold_cols
 
-   !> At a local event instant (integrator_t%local_instant, D-32): only the
-   !> elements els, whose nodes (among `nodes`) are integration points at t,
-   !> are evaluated and folded into the metrics. Every other element's state
-   !> at t is an interpolation inside a step that ends later: its extremes are
-   !> taken at that step's end, as on any step; the energy at the step's end.
-   !> (Fixed-step integrators only: no peak refinement inside steps.)
-   subroutine obs_step_part(self, model, t, y, nodes, els)
-      class(observer_t), intent(inout) :: self
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, y(:)
-      integer, intent(in) :: nodes(:), els(:)
-      call self%fill_part(model, t, y, nodes, els)
-      call self%update_part(t, els)
-   end subroutine obs_step_part
-
-   !> `fill` for the nodes `nodes` and the elements els only (their nodes among
-   !> `nodes`). The sample buffer is then not a whole sample: its time is set so
-   !> that `sample` fills it again.
-   subroutine obs_fill_part(self, model, t, y, nodes, els)
-      class(observer_t), intent(inout) :: self
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, y(:)
-      integer, intent(in) :: nodes(:), els(:)
-      integer :: k, i, l, r
-      call model%kinematics_part(t, y, nodes)
-      if (model%any_needs_loads) call model%apply_loads(t)
-      self%s%t = -huge(1.0_wp)
-      self%s_whole = .false.
-      do k = 1, size(nodes)
-         self%s%theta(nodes(k)) = model%theta(nodes(k))
-         self%s%omega(nodes(k)) = model%omega(nodes(k))
-      end do
-      do k = 1, size(els)
-         i = els(k)
-         call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
-         associate (e => model%elements(i)%e)
-            l = e%left; r = e%right
-            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
-                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
-         end associate
-      end do
-   end subroutine obs_fill_part
-
    !> `update_metrics` for the elements els only, at a local event instant:
    !> t_prev stays (the other elements' last point), each element's time out
    !> of contact is counted to t (t_counted).
@@ -986,170 +849,4 @@ contains
       call self%emit(sink, err)
    end subroutine obs_sample
 
-   !> Record events that happened at (t, y) (the state after the mode update):
-   !> each row goes to the sink now; a contact's row is kept (slot i of
-   !> self%res%events for element i) until the contact ends, then handed over
-   !> again with its peak force and duration.
-   subroutine obs_record_events(self, model, t, y, evs, nev, err, nodes, els)
-      class(observer_t), intent(inout) :: self
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, y(:)
-      type(event_t), intent(in) :: evs(:)
-      integer, intent(in) :: nev
-      type(error_t), allocatable, intent(out) :: err
-      !> at a local event instant (see step_part): its nodes and elements (the
-      !> events' elements among them); only those are evaluated
-      integer, intent(in), optional :: nodes(:), els(:)
-      type(event_t) :: row
-      integer :: k, i
-      if (nev == 0) return
-      if (present(els)) then
-         call self%fill_part(model, t, y, nodes, els)
-      else
-         call self%fill(model, t, y)
-      end if
-      do k = 1, nev
-         i = evs(k)%element
-         self%n_events = self%n_events + 1
-         row = evs(k)
-         associate (e => model%elements(i)%e)
-            row%theta_left = self%s%theta(e%left)
-            row%omega_left = self%s%omega(e%left)
-            row%theta_right = self%s%theta(e%right)
-            row%omega_right = self%s%omega(e%right)
-            row%displacement = self%s%displacement(i)
-            row%force = self%s%force(i)
-         end associate
-         associate (m => self%res%el(i))
-            select case (evs(k)%kind)
-            case (ev_contact_front, ev_contact_rear)
-               if (m%open_event > 0) then   ! a new contact ends the one in progress
-                  self%res%events(i)%duration = t - self%res%events(i)%t
-                  call close_row(i)
-                  if (allocated(err)) return
-               end if
-               row%peak_force = abs(self%s%force(i))
-               self%res%events(i) = row
-               self%open_row(i) = self%n_events
-               m%open_event = i
-               if (t >= self%t_metrics) then
-                  m%impacts = m%impacts + 1
-                  m%max_approach_velocity = max(m%max_approach_velocity, abs(evs(k)%approach_velocity))
-               end if
-            case (ev_separation)
-               if (m%open_event > 0) then
-                  associate (o => self%res%events(i))
-                     o%duration = t - o%t
-                     o%peak_force = max(o%peak_force, abs(self%s%force(i)))
-                     if (o%t >= self%t_metrics) m%max_peak_force = max(m%max_peak_force, o%peak_force)
-                     row%peak_force = o%peak_force
-                     row%duration = o%duration
-                  end associate
-                  call close_row(i)
-                  if (allocated(err)) return
-               end if
-               m%open_event = 0
-               if (t >= self%t_metrics) m%separations = m%separations + 1
-            case default
-               if (t >= self%t_metrics) m%zone_changes = m%zone_changes + 1
-            end select
-         end associate
-         call self%out%write_event(self%n_events, row, err)
-         if (allocated(err)) return
-         if (self%keep_events) call keep_row(self%n_events, row)
-      end do
-      ! the state just after the mode change belongs to the metrics too: a mesh
-      ! force jumps at a zone change, and its peak may be right there. (No
-      ! sample is written: samples stay on the output grid, and the event
-      ! table holds the state at each event.)
-      if (present(els)) then
-         call self%update_part(t, els)
-         return
-      end if
-      call self%update_metrics(model, t)
-      if (self%refine_peaks) call self%keep_step_end()
-   contains
-      !> Element j's contact ended: its row, final, to the sink (and the kept table).
-      subroutine close_row(j)
-         integer, intent(in) :: j
-         call self%out%update_event(self%open_row(j), self%res%events(j), err)
-         if (self%keep_events) self%kept(self%open_row(j)) = self%res%events(j)
-         self%open_row(j) = 0
-      end subroutine close_row
-      subroutine keep_row(n, r)
-         integer, intent(in) :: n
-         type(event_t), intent(in) :: r
-         type(event_t), allocatable :: tmp(:)
-         if (n > size(self%kept)) then
-            allocate (tmp(2*size(self%kept)))
-            tmp(1:n - 1) = self%kept(1:n - 1)
-            call move_alloc(tmp, self%kept)
-         end if
-         self%kept(n) = r
-      end subroutine keep_row
-   end subroutine obs_record_events
-
-   !> End of a successful run: the rows of contacts still open to the sink,
-   !> close the sink and fill the result. With `interrupted`, the end of a run
-   !> stopped at t by a signal: the history ends at the last output time
-   !> already written (the state at t is not added), and the statistics say
-   !> the run did not complete.
-   subroutine obs_finish(self, model, t, y, stats, sink, result, err, interrupted)
-      class(observer_t), intent(inout) :: self
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, y(:)
-      type(run_stats_t), intent(in) :: stats
-      class(sink_t), intent(inout) :: sink
-      type(run_result_t), intent(out) :: result
-      type(error_t), allocatable, intent(out) :: err
-      logical, intent(in), optional :: interrupted
-      type(event_t) :: no_rows(0)
-      integer :: i
-      logical :: stopped
-      stopped = .false.
-      if (present(interrupted)) stopped = interrupted
-      ! contacts still open at the end count towards the peak force; their rows
-      ! get the peak force so far (duration stays -1)
-      do i = 1, size(model%elements)
-         if (self%res%el(i)%open_event > 0) then
-            associate (o => self%res%events(i))
-               if (o%t >= self%t_metrics) self%res%el(i)%max_peak_force = max(self%res%el(i)%max_peak_force, o%peak_force)
-            end associate
-            call sink%update_event(self%open_row(i), self%res%events(i), err)
-            if (allocated(err)) return
-            if (self%keep_events) self%kept(self%open_row(i)) = self%res%events(i)
-         end if
-      end do
-      if (self%s%t < t .and. .not. stopped) then   ! make sure the final state is in the file
-         call self%fill(model, t, y)
-         call self%emit(sink, err)
-         if (allocated(err)) return
-      end if
-      self%res%stats = stats
-      self%res%stats%events = int(self%n_events, i8)
-      self%res%stats%t_final = t
-      self%res%stats%completed = .not. stopped
-      self%res%t_sampled = self%t_sampled
-      deallocate (self%res%events)
-      if (self%keep_events) then
-         self%res%events = self%kept(1:self%n_events)
-         deallocate (self%kept)
-      else
-         allocate (self%res%events(0))
-      end if
-      do i = 1, size(model%elements)
-         call self%turns(i)%figures(self%res%el(i)%p2p_range, self%res%el(i)%p2p_mean, self%res%el(i)%p2p_swings)
-         self%res%el(i)%p2p_exact = self%turns(i)%exact
-      end do
-      self%out => null()
-      call sink%close(no_rows, self%res%stats, self%res%el, err)
-      if (allocated(err)) return
-      result = self%res
-      result%y_final = y
-      result%t_final = t
-      result%series_t = result%series_t(1:self%n_series)
-      result%series_disp = result%series_disp(:, 1:self%n_series)
-      result%series_theta = result%series_theta(:, 1:self%n_series)
-      result%series_omega = result%series_omega(:, 1:self%n_series)
-   end subroutine obs_finish
 end module trainsim_observer

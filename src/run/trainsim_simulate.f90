@@ -14,78 +14,30 @@
 !>   the event budget (an event flood ends the run instead of hanging it).
 module trainsim_simulate
    use trainsim_kinds, only: wp, i8
-   use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric, err_interrupted, err_input
+   use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric, err_interrupted
    use trainsim_interrupt, only: signal_caught
    use trainsim_strings, only: str
-   use trainsim_model, only: model_t, settle_budget
+   use trainsim_model, only: model_t
    use trainsim_event, only: event_t, ev_name
    use trainsim_sink, only: sink_t
    use trainsim_run_stats, only: run_stats_t
    use trainsim_observer, only: observer_t, run_result_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
-   use trainsim_integrator_registry, only: make_integrator, integrator_registry, integrator_entry_t
-   use trainsim_modes, only: rk4_dt_limit, limiting_part, load_torque_bound, rk4_dt_quick
-   use trainsim_element, only: lin_state_t, lin_stiffest, lin_start, lin_contact_closed
+   use trainsim_integrator_registry, only: make_integrator
    use trainsim_progress, only: progress_t
+   use trainsim_settle, only: settle_t, settle_setup, settle_sample, settle_kmax
+   use trainsim_run_checks, only: check_fixed_step, check_state, check_physical, check_ledger, displacement_bounds, &
+                                  blowup_limit, guard_owner, is_fixed_step, remedy, window_text
    implicit none
    private
 
    public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes, settle_kmax, check_fixed_step
 
-   !> A state beyond this is a blow-up. Far above any physical angle, speed,
-   !> current or energy; its square times any sane coefficient stays finite, so
-   !> the check fires before a floating-point overflow can.
-   real(wp), parameter :: blowup_limit = 1.0e50_wp
    !> More events than this inside one dt is a flood: a contact that chatters
    !> faster than the step can resolve (a run past its stability limit).
    integer, parameter :: max_events_per_dt = 200
    !> Passes of the mode update at one instant before it counts as not settling.
    integer, parameter :: max_settle_passes = 16
-   !> A fixed step more than this many times RK4's stability limit of the
-   !> starting state multiplies any excitation of the limiting mode by 1e12 or
-   !> more per step: the run cannot mean anything, and a step of it can overflow
-   !> before the blow-up check sees it. Below this factor the check is in time
-   !> (a run 10x above the limit, as Table 5.2's, runs with a warning).
-   real(wp), parameter :: max_dt_over_limit = 1.0e3_wp
-   !> A limiting eigenvalue with at least this damping ratio (|Re| >= |Im|) is
-   !> damping-dominated: a fixed step above its limit is refused (D-55).
-   real(wp), parameter :: damped_ratio = 0.7071_wp
-
-   !> Settling until periodic (D-44): the longest attractor period looked for, in
-   !> settle periods.
-   integer, parameter :: settle_kmax = 8
-   !> The tolerance of the verdict at settle_time of a run with no settle_tol (D-44).
-   real(wp), parameter :: settle_check_tol = 1.0e-3_wp
-
-   !> Settling until periodic (&run settle_tol, D-44): the state is sampled at
-   !> t_start + j T (T = settle_period), once per period, outside the step loop. The
-   !> state is every element's displacement (its deformation: relative angle, or
-   !> transmission error) and every node's speed; sample j is compared with samples
-   !> j - k, k = 1 .. settle_kmax, component by component, relative to the largest
-   !> magnitude the component has had at the samples so far (one scale for all
-   !> speeds, which share a unit; one per element, whose units differ):
-   !>     r_k(j) = max_c |x_c(j) - x_c(j - k)| / s_c.
-   !> Settled (periodic) at the first j with t_j >= t_start + settle_time and
-   !> r_1(j) <= tol; an attractor of k > 1 periods when r_k <= tol at two successive
-   !> samples while r_1 > sqrt(tol) (far from repeating after one period: a transient
-   !> decaying towards a 1-periodic state has r_k ~ r_1 and reaches tol with k = 1
-   !> within a period or two). Not settled when t_start + settle_max_time passes first.
-   !> The metrics then start at t_j and the run ends a measured window later (the
-   !> deck's t_end - t_start - settle_time, a whole number of the k periods).
-   type :: settle_t
-      logical :: on = .false., done = .false.
-      !> no settle_tol but a settle_time and a period: only a verdict at settle_time
-      !> (to check_tol), the run and its metrics unchanged
-      logical :: check_only = .false.
-      real(wp) :: period = 0.0_wp, tol = 0.0_wp, t_min = 0.0_wp, t_budget = 0.0_wp, measure = 0.0_wp
-      real(wp) :: t0 = 0.0_wp, t_next = 0.0_wp, t_settled = 0.0_wp
-      integer :: j = -1                 !< index of the last sample (sample 0: t_start)
-      integer :: k = 0                  !< periods of the attractor found (0: none)
-      integer :: status = 0             !< run_stats_t%settle_status
-      real(wp), allocatable :: x(:, :)  !< (component, 0:settle_kmax) ring of samples
-      real(wp), allocatable :: scale(:) !< per component: largest magnitude so far
-      integer :: hits(settle_kmax) = 0  !< per k: successive samples with r_k <= tol
-   end type settle_t
 
    !> The loop's own bookkeeping (allocated once per run).
    type :: drive_t
@@ -197,110 +149,6 @@ contains
       if (allocated(err)) call sink%abort()
    end subroutine simulate
 
-   !> Settling until periodic (settle_t): set up from &run, and model%run%t_end moved
-   !> to the latest end the settling budget allows (simulate puts it back).
-   subroutine settle_setup(model, st, err)
-      type(model_t), intent(inout) :: model
-      type(settle_t), intent(inout) :: st
-      type(error_t), allocatable, intent(out) :: err
-      integer :: n
-      if (.not. model%run%settle_tol > 0.0_wp) then
-         ! a fixed settle_time: say whether the response has settled by then
-         if (.not. (model%run%settle_time > 0.0_wp .and. model%run%settle_period > 0.0_wp)) return
-         st%check_only = .true.
-      else if (.not. model%run%settle_period > 0.0_wp) then
-         call fatal_error(err, '&run settle_tol = '//str(model%run%settle_tol)//' needs a settle_period: give '// &
-                          '&run settle_period (s), or a gear pair with teeth whose mesh period sets it', err_input)
-         return
-      end if
-      st%on = .true.
-      st%period = model%run%settle_period
-      st%tol = model%run%settle_tol
-      st%t0 = model%run%t_start
-      st%t_min = model%run%t_start + model%run%settle_time
-      st%t_budget = model%run%t_start + settle_budget(model%run)
-      if (st%check_only) then
-         st%tol = settle_check_tol
-         st%t_budget = st%t_min
-      end if
-      st%measure = model%run%t_end - st%t_min
-      st%t_next = st%t0
-      n = size(model%elements) + size(model%nodes)
-      allocate (st%x(n, 0:settle_kmax), st%scale(n))
-      st%x = 0.0_wp
-      st%scale = 0.0_wp
-      if (st%check_only) return
-      model%run%t_end = st%t_budget + st%measure + real(settle_kmax + 1, wp)*st%period
-   end subroutine settle_setup
-
-   !> Sample the state at (t, y), a settle instant t0 + j T, and decide whether the
-   !> response has settled (settle_t); when it has (or the budget is spent), the
-   !> observer's metrics start at t and `t_end` becomes the end of the measured window.
-   subroutine settle_sample(model, obs, sink, st, t, y, t_end)
-      type(model_t), intent(inout) :: model
-      type(observer_t), intent(inout) :: obs
-      class(sink_t), intent(inout) :: sink
-      type(settle_t), intent(inout) :: st
-      real(wp), intent(in) :: t, y(:)
-      real(wp), intent(inout) :: t_end
-      integer :: ne, e, l, r, c, p, slot, k, kk
-      real(wp) :: f, w, r1, measure
-      ne = size(model%elements)
-      st%j = st%j + 1
-      slot = modulo(st%j, settle_kmax + 1)
-      call model%kinematics(t, y)
-      do e = 1, ne
-         associate (el => model%elements(e)%e)
-            l = el%left; r = el%right
-            call el%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), st%x(e, slot), f, c, p)
-         end associate
-      end do
-      st%x(ne + 1:, slot) = model%omega
-      st%scale(1:ne) = max(st%scale(1:ne), abs(st%x(1:ne, slot)))
-      w = max(maxval(st%scale(ne + 1:)), maxval(abs(model%omega)))
-      st%scale(ne + 1:) = w
-      st%t_next = st%t0 + real(st%j + 1, wp)*st%period
-      r1 = huge(1.0_wp)
-      do k = 1, min(settle_kmax, st%j)
-         f = maxval(abs(st%x(:, slot) - st%x(:, modulo(st%j - k, settle_kmax + 1)))/max(st%scale, tiny(1.0_wp)))
-         if (k == 1) r1 = f
-         if (f <= st%tol) then
-            st%hits(k) = st%hits(k) + 1
-         else
-            st%hits(k) = 0
-         end if
-      end do
-      if (t < st%t_min - 1.0e-9_wp*st%period) return
-      kk = 0
-      if (st%hits(1) >= 1) then
-         kk = 1
-      else if (r1 > sqrt(st%tol)) then
-         do k = 2, min(settle_kmax, st%j)
-            if (st%hits(k) >= 2) then
-               kk = k
-               exit
-            end if
-         end do
-      end if
-      if (kk > 0) then
-         st%status = 1
-         st%k = kk
-      else if (t >= st%t_budget - 1.0e-9_wp*st%period) then
-         st%status = 2
-      else
-         return
-      end if
-      st%done = .true.
-      st%t_settled = t
-      if (st%check_only) return
-      measure = st%measure
-      if (kk > 1) measure = real(kk, wp)*st%period*max(1.0_wp, aint(measure/(real(kk, wp)*st%period) + 1.0_wp - &
-                                                                      1.0e-9_wp))
-      t_end = t + measure
-      obs%t_metrics = t
-      call sink%metrics_from(t)
-   end subroutine settle_sample
-
    !> The driver loop: from (t, y) at t_start to t_end.
    subroutine drive(model, integ, obs, sink, t, y, st, err, progress)
       type(model_t), intent(inout), target :: model
@@ -389,7 +237,7 @@ contains
                   end if
                end do
                k = k + model%blk%n
-               call check_physical(model, obs, d, t, err)
+               call check_physical(model, obs, d%disp_bound, d%t_ledger, t, err)
                if (allocated(err)) return
                if (present(progress)) call progress%poll(t, obs%n_events)
                cycle
@@ -406,13 +254,13 @@ contains
          end if
          call obs%sample(model, t_out, t, y, sink, err)
          if (allocated(err)) return
-         call check_physical(model, obs, d, t, err)
+         call check_physical(model, obs, d%disp_bound, d%t_ledger, t, err)
          if (allocated(err)) return
          if (present(progress)) call progress%poll(t, obs%n_events)
          k = k + 1
       end do
       t = t_end
-      call check_ledger(model, obs, d, t, err)
+      call check_ledger(model, obs, d%t_ledger, t, err)
    contains
       !> The settling moved t_end (earlier than the budget's end): the output times
       !> up to the new t_end, the last one moved to it.
@@ -670,116 +518,6 @@ contains
                        '(a runaway state). '//remedy(model), err_numeric)
    end subroutine settle_events
 
-   !> Each element's displacement bound (element%displacement_bound) from the
-   !> loads (trainsim_modes' load_torque_bound) and its nodes' inertias.
-   subroutine displacement_bounds(model, bound)
-      type(model_t), intent(in) :: model
-      real(wp), allocatable, intent(out) :: bound(:)
-      real(wp) :: tq
-      integer :: i
-      allocate (bound(size(model%elements)))
-      tq = load_torque_bound(model)
-      do i = 1, size(model%elements)
-         associate (e => model%elements(i)%e)
-            bound(i) = e%displacement_bound(tq, inv_inertia(e%left), inv_inertia(e%right))
-         end associate
-      end do
-   contains
-      real(wp) function inv_inertia(j) result(r)
-         integer, intent(in) :: j
-         r = 0.0_wp
-         if (model%is_held(j) .or. model%nodes(j)%n%is_fixed()) return
-         if (model%nodes(j)%n%inertia() > 0.0_wp) r = 1.0_wp/model%nodes(j)%n%inertia()
-      end function inv_inertia
-   end subroutine displacement_bounds
-
-   !> The checks that a run is still physical, at each output time from the
-   !> observer's running metrics (D-55): no element's displacement beyond its
-   !> bound (a mesh with its teeth through one another) ends the run at once;
-   !> the first time the energy residual passes run%energy_check of the
-   !> scale so far is kept for `check_ledger`. A run that fails them ends with
-   !> exit 1 naming the element, the time, the check and a remedy for the
-   !> integrator in use, instead of a wrong answer with exit 0.
-   subroutine check_physical(model, obs, d, t, err)
-      type(model_t), intent(inout) :: model
-      type(observer_t), intent(in) :: obs
-      type(drive_t), intent(inout) :: d
-      real(wp), intent(in) :: t
-      type(error_t), allocatable, intent(out) :: err
-      integer :: i
-      real(wp) :: worst
-      do i = 1, size(d%disp_bound)
-         worst = max(abs(obs%res%el(i)%disp_min), abs(obs%res%el(i)%disp_max))
-         if (.not. worst > d%disp_bound(i)) cycle
-         if (obs%res%el(i)%disp_min > obs%res%el(i)%disp_max) cycle   ! nothing folded yet (settle_time)
-         call fatal_error(err, "integrator '"//model%run%integrator//"': the displacement of element '"// &
-                          model%elements(i)%e%id//"' reached "//str(sign(worst, obs%res%el(i)%disp_max + &
-                          obs%res%el(i)%disp_min), 4)//' by t = '//str(t)//' s, beyond the '//str(d%disp_bound(i), 4)// &
-                          ' a physical run can reach (the clearance plus ten times the largest of the clearance, '// &
-                          'the static deflection under the loads and an impact at 100 in/s): the solution is wrong '// &
-                          '(the displacement-bound check). '//physical_advice(model), err_numeric)
-         return
-      end do
-      if (d%t_ledger < 0.0_wp .and. model%run%track_energy .and. model%run%energy_check > 0.0_wp) then
-         if (obs%res%energy_residual_max > model%run%energy_check*obs%res%energy_scale) d%t_ledger = t
-      end if
-   end subroutine check_physical
-
-   !> The energy ledger at the end of the run (D-55): a residual above
-   !> run%energy_check (default 0.1) of the run's energy scale is a wrong
-   !> solution, not an integration error: a correct run keeps it near 1e-6,
-   !> RK4 at 0.95 x its stability limit below 1e-3 (check_dt_advice); a
-   !> blown-up one has it equal to the scale. Judged at the end, where the scale
-   !> is the run's: early on, one coarse step at an impact can be comparable to
-   !> a scale that is still small (loads_table_ramp at 0.95 x its limit: 0.67
-   !> at t = 0.022 s, 4e-4 at the end).
-   subroutine check_ledger(model, obs, d, t, err)
-      type(model_t), intent(inout) :: model
-      type(observer_t), intent(in) :: obs
-      type(drive_t), intent(in) :: d
-      real(wp), intent(in) :: t
-      type(error_t), allocatable, intent(out) :: err
-      real(wp) :: h_part, t_first
-      type(model_t) :: tmp
-      character(len=:), allocatable :: part
-      if (.not. model%run%track_energy .or. .not. model%run%energy_check > 0.0_wp) return
-      if (.not. obs%res%energy_residual_max > model%run%energy_check*obs%res%energy_scale) return
-      t_first = t
-      if (d%t_ledger >= 0.0_wp) t_first = d%t_ledger
-      tmp = model
-      call limiting_part(tmp, lin_stiffest, part, h_part)
-      call fatal_error(err, "integrator '"//model%run%integrator//"': the energy ledger does not balance: at t = "// &
-                       str(t)//' s the largest residual is '//str(obs%res%energy_residual_max, 4)// &
-                       ' against an energy scale of '//str(obs%res%energy_scale, 4)//' (more than energy_check = '// &
-                       str(model%run%energy_check)//' of it, first at t = '//str(t_first)//' s; the energy-ledger '// &
-                       'check): the solution is wrong. The stiffest part of the train is '//part// &
-                       ', with a step limit of its own of '//str(h_part, 4)//' s. '//physical_advice(model), &
-                       err_numeric)
-   end subroutine check_ledger
-
-   !> What to try when a run is no longer physical: for a fixed step, a smaller
-   !> dt than RK4's stability limit of the stiffest state (a step near the limit
-   !> of a strongly damped mode is stable but does not resolve it) or an
-   !> implicit method; for an adaptive one, its tolerances.
-   function physical_advice(model) result(text)
-      type(model_t), intent(inout) :: model
-      character(len=:), allocatable :: text
-      type(model_t) :: tmp
-      type(error_t), allocatable :: lim_err
-      real(wp) :: dt_safe, omega
-      if (.not. is_fixed_step(model%run%integrator)) then
-         text = remedy(model)
-         if (index(model%run%integrator, 'arkode') == 1) text = text//"; or use integrator = 'cvode-bdf' if the train is stiff"
-         return
-      end if
-      tmp = model
-      call rk4_dt_limit(tmp, lin_stiffest, dt_safe, omega, lim_err)
-      text = "Take a smaller dt, or use integrator = 'cvode-bdf'"
-      if (.not. allocated(lim_err) .and. dt_safe < huge(1.0_wp)) text = 'Take dt well below '//str(dt_safe, 4)// &
-         ' s, the RK4 stability limit of the stiffest state the run can reach (a step near the limit of a strongly '// &
-         "damped mode is stable but does not resolve it), or use integrator = 'cvode-bdf'"
-   end function physical_advice
-
    !> The last of the nev events just recorded in d%ev, for `count_events`.
    subroutine keep_last_event(d, nev)
       type(drive_t), intent(inout) :: d
@@ -833,278 +571,4 @@ contains
       end do
    end function within_limit
 
-   !> NaN or runaway state after a step -> an error naming the time, the node
-   !> and quantity, and the likely cause.
-   !> With `states`, only those entries of y (a local event instant).
-   subroutine check_state(model, integ, t, y, err, states)
-      type(model_t), intent(inout) :: model
-      class(integrator_t), intent(in) :: integ
-      real(wp), intent(in) :: t, y(:)
-      type(error_t), allocatable, intent(out) :: err
-      integer, intent(in), optional :: states(:)
-      integer :: i, k
-      if (present(states)) then
-         do k = 1, size(states)
-            if (.not. abs(y(states(k))) <= blowup_limit) then   ! also true for NaN
-               call blew_up(states(k))
-               return
-            end if
-         end do
-         return
-      end if
-      do i = 1, size(y)
-         if (.not. abs(y(i)) <= blowup_limit) then   ! also true for NaN
-            call blew_up(i)
-            return
-         end if
-      end do
-   contains
-      subroutine blew_up(j)
-         integer, intent(in) :: j
-         call fatal_error(err, "integrator '"//model%run%integrator//"': the solution blew up at t = "//str(t)// &
-                          ' s ('//model%state_label(j)//' is '//trim(merge('NaN    ', 'runaway', y(j) /= y(j)))// &
-                          '). '//blowup_advice(model, integ), err_numeric)
-      end subroutine blew_up
-   end subroutine check_state
-
-   !> What to try after a blow-up: the step if it is above the stability
-   !> limit (fixed-step methods), else the tolerances, else the inputs.
-   function blowup_advice(model, integ) result(text)
-      type(model_t), intent(inout) :: model
-      class(integrator_t), intent(in) :: integ
-      character(len=:), allocatable :: text
-      associate (unused => integ)
-      end associate
-      text = remedy(model)
-   end function blowup_advice
-
-   !> What to try after a numerical failure, for the integrator in use: the
-   !> step dt against RK4's stability limit (fixed-step methods), or the
-   !> tolerances and max_step (adaptive ones, which do not use dt but as the
-   !> output grid when output_interval is 0).
-   function remedy(model) result(text)
-      type(model_t), intent(inout) :: model
-      character(len=:), allocatable :: text
-      character(len=:), allocatable :: h
-      if (is_fixed_step(model%run%integrator)) then
-         text = stability_advice(model)
-         return
-      end if
-      h = 'a smaller max_step'
-      if (model%run%max_step > 0.0_wp) h = 'a smaller max_step (now '//str(model%run%max_step)//' s)'
-      text = "Integrator '"//model%run%integrator//"' chooses its own steps: tighten rtol (now "//str(model%run%rtol)// &
-             ') and the absolute tolerances, or set '//h//'; if that does not help, check the loads, stiffnesses '// &
-             'and inertias of the deck for values out of proportion'
-   end function remedy
-
-   !> The event budget's window in words: dt for a fixed-step method, else the
-   !> same span of time named as the deck's dt (an adaptive method does not step by it).
-   function window_text(model) result(text)
-      type(model_t), intent(in) :: model
-      character(len=:), allocatable :: text
-      if (is_fixed_step(model%run%integrator)) then
-         text = 'dt = '//str(model%run%dt)//' s'
-      else
-         text = str(model%run%dt)//' s, the deck''s dt'
-      end if
-   end function window_text
-
-   !> dt against the RK4 stability limit of the stiffest state the run can
-   !> reach (every clearance closed, gears at their largest stiffness factor,
-   !> the largest impact damping): blame the step if it is above, the inputs if not.
-   function stability_advice(model) result(text)
-      type(model_t), intent(inout) :: model
-      character(len=:), allocatable :: text
-      type(model_t) :: tmp
-      type(error_t), allocatable :: err
-      real(wp) :: dt_safe, omega, f_hz
-      tmp = model
-      call rk4_dt_limit(tmp, lin_stiffest, dt_safe, omega, err, freq_hz=f_hz)
-      if (allocated(err)) then
-         text = 'Check the deck for absurd loads or stiffnesses, and try a smaller dt'
-         return
-      end if
-      if (.not. omega > 0.0_wp) then
-         text = 'The train has no elastic mode: check the loads and inertias of the deck for absurd values'
-         return
-      end if
-      if (model%run%dt > dt_safe) then
-         text = 'The time step dt = '//str(model%run%dt)//' s is above the RK4 stability limit '//str(dt_safe, 4)// &
-                ' s of the stiffest state the run can reach (every clearance closed, gears in their two-pair zone; '// &
-                'its mode at '//str(f_hz, 5)//' Hz): take dt below that'
-      else
-         text = 'The time step dt = '//str(model%run%dt)//' s is within the RK4 stability limit '//str(dt_safe, 4)// &
-                ' s of the stiffest state the run can reach: the inputs are more likely to blame; '// &
-                'check the loads, stiffnesses, inertias and initial speeds of the deck for values out of proportion'
-      end if
-   end function stability_advice
-
-   !> Whether the registry row of `name` is a fixed-step method.
-   logical function is_fixed_step(name) result(fixed)
-      character(len=*), intent(in) :: name
-      type(integrator_entry_t), allocatable :: rows(:)
-      integer :: i
-      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
-      fixed = .false.
-      do i = 1, size(rows)
-         if (rows(i)%name == name) fixed = rows(i)%fixed_step
-      end do
-   end function is_fixed_step
-
-   !> A fixed-step method is refused before the first step (exit 2) when
-   !> - dt is absurdly far above the stability limit of the train as it starts,
-   !>   or with every clearance closed and the gears at their stiffest
-   !>   (max_dt_over_limit; impact damping left out: it moves RK4's radius only
-   !>   between 2.6 and 2.95, nothing against a factor of 1000); or
-   !> - dt is above the limit of either state (the stiffest with every contact
-   !>   law's damping at its largest, a gentle closure under the loads included,
-   !>   D-55) and the limiting eigenvalue is damping-dominated (damping ratio >=
-   !>   1/sqrt 2): a step beyond the real-axis radius multiplies every state
-   !>   change by |R(h lambda)| > 1, so no such mode stays unexcited (unlike an
-   !>   undamped mode that the inputs may never touch, D-4).
-   !> The message names the node or element that limits the step alone
-   !> (`limiting_part`), its deck group, and the dt that would do.
-   !> rk4-thesis steps dt/10 in contact; Euler's region reaches 2 on the real axis.
-   subroutine check_fixed_step(model, err)
-      type(model_t), intent(inout) :: model
-      type(error_t), allocatable, intent(out) :: err
-      type(integrator_entry_t), allocatable :: rows(:)
-      type(lin_state_t) :: states(4)
-      character(len=40), parameter :: state_text(4) = [character(len=40) :: 'the train as it starts', &
-                                                       'the closed contacts', 'the train as it starts', &
-                                                       'the stiffest state the run can reach']
-      real(wp) :: dt_safe, omega, f_hz, zeta, h, rescale
-      character(len=:), allocatable :: part, name, limit_name
-      integer :: i, k
-      type(model_t) :: quick   ! one copy for the four O(n) bounds (each re-initialises it)
-      allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
-      do i = 1, size(rows)
-         if (rows(i)%name == model%run%integrator) exit
-      end do
-      if (i > size(rows)) return
-      if (.not. rows(i)%fixed_step) return
-      name = model%run%integrator
-      limit_name = "the stability limit of integrator '"//name//"',"
-      if (name(1:3) == 'rk4') limit_name = 'the RK4 stability limit'
-      rescale = 1.0_wp
-      if (name == 'euler') rescale = 2.0_wp/2.785_wp   ! real-axis radius of Euler's region against RK4's
-      states = [lin_start, lin_stiffest, lin_start, lin_stiffest]
-      states(2)%impact_scale = 0.0_wp
-      ! contacts that may close later: the impact damping of D-25, not a gentle
-      ! closure at the floor velocity under load, which a run need not reach
-      ! (Chapter III case II with Smith's law closes at 21 in/s and runs right);
-      ! the contacts closed at t_start have their own D (states(3)), and what a
-      ! run does reach is caught at the output times (check_physical)
-      states(4)%load_torque = -1.0_wp
-      quick = model
-      do k = 1, 4
-         h = model%run%dt
-         if (name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed) h = h/10.0_wp   ! App. F: dt/10 in contact
-         ! the O(n) bound first: within it, every eigenvalue is stable (no eigenvalue problem)
-         call quick_limit(states(k), dt_safe)
-         if (k <= 2) then
-            if (.not. h/max_dt_over_limit > dt_safe*rescale) cycle
-         else
-            if (.not. h > dt_safe*rescale) cycle
-         end if
-         call limit_of(states(k), dt_safe, f_hz, zeta)
-         dt_safe = dt_safe*rescale
-         if (k <= 2) then
-            if (.not. h/max_dt_over_limit > dt_safe) cycle
-         else
-            if (.not. (h > dt_safe .and. zeta >= damped_ratio)) cycle
-         end if
-         call part_of(states(k), part)
-         if (k <= 2) then
-            call fatal_error(err, 'dt = '//str(model%run%dt)//' s is more than '//str(max_dt_over_limit)// &
-                             ' times '//limit_name//' '//str(dt_safe, 4)//' s of '// &
-                             trim(state_text(k))//' ('//mode_text(f_hz, zeta, omega)//'), set by '//part// &
-                             ': any excitation of that mode would grow by 1e12 or more per step. Take dt below '// &
-                             str(dt_safe, 4)//' s, or check the deck for a stiffness, damping, radius or inertia '// &
-                             'out of proportion (a unit slip?)', err_input)
-         else
-            call fatal_error(err, 'dt = '//str(model%run%dt)//' s is above '//limit_name//' '// &
-                             str(dt_safe, 4)//' s of '//trim(state_text(k))//' ('// &
-                             mode_text(f_hz, zeta, omega)//'), set by '//part//'. That mode is damped, so '// &
-                             'every step beyond the limit amplifies it (no wrong answer is given with exit 0 '// &
-                             'instead, D-55): take dt below '//str(dt_safe, 4)//' s'// &
-                             thesis_note(name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed)// &
-                             ", or use integrator = 'cvode-bdf' (implicit: its step has no stability limit)"// &
-                             gentle_hint(part), err_input)
-         end if
-         return
-      end do
-   contains
-      subroutine quick_limit(state, dt_lim)
-         type(lin_state_t), intent(in) :: state
-         real(wp), intent(out) :: dt_lim
-         real(wp) :: bound
-         call rk4_dt_quick(quick, state, dt_lim, bound)
-      end subroutine quick_limit
-      subroutine limit_of(state, dt_lim, f, z)
-         type(lin_state_t), intent(in) :: state
-         real(wp), intent(out) :: dt_lim, f, z
-         type(model_t) :: tmp
-         type(error_t), allocatable :: lim_err
-         tmp = model
-         f = 0.0_wp; z = 0.0_wp
-         call rk4_dt_limit(tmp, state, dt_lim, omega, lim_err, freq_hz=f, damping_ratio=z)
-         if (allocated(lim_err)) dt_lim = huge(1.0_wp)
-      end subroutine limit_of
-      subroutine part_of(state, text)
-         type(lin_state_t), intent(in) :: state
-         character(len=:), allocatable, intent(out) :: text
-         type(model_t) :: tmp
-         real(wp) :: h_part
-         tmp = model
-         call limiting_part(tmp, state, text, h_part)
-      end subroutine part_of
-   end subroutine check_fixed_step
-
-   !> rk4-thesis in contact: its step there is dt/10.
-   function thesis_note(in_contact) result(text)
-      logical, intent(in) :: in_contact
-      character(len=:), allocatable :: text
-      text = ''
-      if (in_contact) text = ' x 10 (rk4-thesis steps dt/10 in contact)'
-   end function thesis_note
-
-   !> "the mode at 5690.8 Hz, damping ratio 0.17" or "an overdamped mode, |lambda| = 9.1E6 1/s".
-   function mode_text(f_hz, zeta, omega) result(text)
-      real(wp), intent(in) :: f_hz, zeta, omega
-      character(len=:), allocatable :: text
-      character(len=8) :: z
-      if (f_hz > 0.0_wp .and. zeta < 1.0_wp) then
-         write (z, '(f4.2)') max(zeta, 0.0_wp)
-         text = 'the mode at '//str(f_hz, 5)//' Hz, damping ratio '//trim(z)
-      else
-         text = 'an overdamped mode, |lambda| = '//str(omega, 4)//' 1/s'
-      end if
-   end function mode_text
-
-   !> The remedy for a yang_sun contact whose damping at the floor velocity sets the limit.
-   function gentle_hint(part) result(text)
-      character(len=*), intent(in) :: part
-      character(len=:), allocatable :: text
-      text = ''
-      if (index(part, 'contact law') > 0) text = '; if it is a yang_sun contact: one that closes slower than '// &
-         'min_approach_velocity gets the damping of that floor (D = 6(1-e)k/[((2e-1)^2+3) V], eq. (3.12)), '// &
-         'which grows with the load it then carries: a larger min_approach_velocity (or '// &
-         'initial_contact_velocity) lowers it'
-   end function gentle_hint
-
-   !> "element 'mesh'" for guard index j of the model.
-   function guard_owner(model, j) result(text)
-      type(model_t), intent(in) :: model
-      integer, intent(in) :: j
-      character(len=:), allocatable :: text
-      integer :: i
-      text = 'guard '//str(j)
-      do i = size(model%elements), 1, -1
-         if (model%guard_offset(i) < j) then
-            text = "element '"//model%elements(i)%e%id//"'"
-            return
-         end if
-      end do
-   end function guard_owner
 end module trainsim_simulate

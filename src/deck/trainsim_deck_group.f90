@@ -1,0 +1,498 @@
+!> One `&name ... /` group of a deck and its typed getters. A getter converts the raw
+!> tokens of a key, checks them and records the key as valid, so that `check_unused`
+!> can report a misspelt key with the closest valid one (D-62); every message names the
+!> file, the line, the group and the key.
+module trainsim_deck_group
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_deck_lexer, only: parse_real, parse_int
+   implicit none
+   private
+
+   public :: deck_group_t, deck_entry_t
+
+   !> One `key = value[, value ...]` item of a group.
+   type :: deck_entry_t
+      character(len=:), allocatable :: key          !< lower case
+      type(string_t), allocatable :: values(:)      !< raw tokens; strings unquoted
+      logical, allocatable :: quoted(:)             !< .true. where the token was a quoted string
+      integer :: line = 0                           !< line of the key
+      logical :: used = .false.                     !< set by the getters
+   end type deck_entry_t
+
+   !> One `&name ... /` group of a deck.
+   type :: deck_group_t
+      character(len=:), allocatable :: name         !< lower case, without '&'
+      character(len=:), allocatable :: file         !< deck file name (for messages)
+      integer :: line = 0                           !< line of '&name'
+      integer :: ordinal = 0                        !< 1 for the first group of this name, 2 for the second...
+      type(deck_entry_t), allocatable :: entries(:) !< in file order
+      !> Keys asked for through has/get_*/count_values, in order of first query.
+      type(string_t), allocatable, private :: queried(:)
+   contains
+      procedure :: has => group_has
+      procedure :: holds => group_holds
+      procedure :: expect => group_expect
+      procedure :: get_real => group_get_real
+      procedure :: get_int => group_get_int
+      procedure :: get_logical => group_get_logical
+      procedure :: get_string => group_get_string
+      procedure :: get_real_array => group_get_real_array
+      procedure :: count_values => group_count_values
+      procedure :: where => group_where
+      procedure :: label => group_label
+      procedure :: check_unused => group_check_unused
+      procedure :: require_positive => group_require_positive
+      procedure :: require_nonnegative => group_require_nonnegative
+   end type deck_group_t
+
+contains
+
+   !> True if the group has an entry `key` (case-insensitive). Records `key` as a valid key.
+   logical function group_has(self, key) result(yes)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      call record_query(self, key)
+      yes = find(self, key) > 0
+   end function group_has
+
+   !> True if the group has an entry `key`, WITHOUT recording `key` as a valid key (for a
+   !> key of another form of the group, to explain it: D-62).
+   logical function group_holds(self, key) result(yes)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      yes = find(self, key) > 0
+   end function group_holds
+
+   !> Record `keys` as valid before reading them: keys a step apart (rb_driver, rb_driven)
+   !> are then never taken for a misspelling of one another when one is missing (D-62).
+   subroutine group_expect(self, keys)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: keys(:)
+      integer :: j
+      do j = 1, size(keys)
+         call record_query(self, trim(keys(j)))
+      end do
+   end subroutine group_expect
+
+   !> Number of values given for `key` (0 if absent). Records `key` as a valid key.
+   integer function group_count_values(self, key) result(n)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      integer :: k
+      call record_query(self, key)
+      k = find(self, key)
+      n = 0
+      if (k > 0) n = size(self%entries(k)%values)
+   end function group_count_values
+
+   !> Location for messages: "file:LINE: &name #ordinal", plus ", key 'k'" (and the key's line)
+   !> if `key` is present in the group; otherwise the group's line.
+   function group_where(self, key) result(s)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in), optional :: key
+      character(len=:), allocatable :: s
+      integer :: k
+      k = 0
+      if (present(key)) k = find(self, key)
+      if (k > 0) then
+         s = self%file//':'//str(self%entries(k)%line)//': &'//self%name//' #'//str(self%ordinal)// &
+             ", key '"//self%entries(k)%key//"'"
+      else
+         s = self%file//':'//str(self%line)//': &'//self%name//' #'//str(self%ordinal)
+      end if
+   end function group_where
+
+   !> "&element #2 (id 'g1')" if the group has an 'id' entry, else "&element #2".
+   function group_label(self) result(s)
+      class(deck_group_t), intent(in) :: self
+      character(len=:), allocatable :: s
+      integer :: k
+      s = '&'//self%name//' #'//str(self%ordinal)
+      k = find(self, 'id')
+      if (k > 0) then
+         if (size(self%entries(k)%values) > 0) s = s//" (id '"//self%entries(k)%values(1)%s//"')"
+      end if
+   end function group_label
+
+   !> Error naming the first entry not read by a getter, listing the keys that were queried.
+   !> `context` (e.g. "element type 'shaft'") says what the keys were checked against.
+   !> Error naming the key and its value unless value > 0 (NaN fails too).
+   subroutine group_require_positive(self, key, value, err)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(inout) :: err
+      if (allocated(err)) return
+      if (.not. value > 0.0_wp) call fatal_error(err, self%where(key)//': error: '//key//' must be > 0, got '// &
+                                                 str(value), err_input)
+   end subroutine group_require_positive
+
+   !> Error naming the key and its value unless value >= 0 (NaN fails too).
+   subroutine group_require_nonnegative(self, key, value, err)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(inout) :: err
+      if (allocated(err)) return
+      if (.not. value >= 0.0_wp) call fatal_error(err, self%where(key)//': error: '//key//' must be >= 0, got '// &
+                                                  str(value), err_input)
+   end subroutine group_require_nonnegative
+
+   subroutine group_check_unused(self, err, context)
+      class(deck_group_t), intent(in) :: self
+      type(error_t), allocatable, intent(out) :: err
+      character(len=*), intent(in), optional :: context
+      character(len=:), allocatable :: msg
+      integer :: k, best
+      if (.not. allocated(self%entries)) return
+      do k = 1, size(self%entries)
+         if (self%entries(k)%used) cycle
+         msg = "unknown key '"//self%entries(k)%key//"'"
+         if (present(context)) then
+            if (len_trim(context) > 0) msg = msg//' for '//trim(context)
+         end if
+         if (allocated(self%queried)) then
+            best = closest_key(self%entries(k)%key, self%queried)
+            if (best > 0) msg = msg//"; did you mean '"//self%queried(best)%s//"'?"
+         end if
+         if (allocated(self%queried)) then
+            if (size(self%queried) > 0) then
+               msg = msg//'; valid keys are: '//join(self%queried, ', ')
+            else
+               msg = msg//'; this group takes no keys'
+            end if
+         else
+            msg = msg//'; this group takes no keys'
+         end if
+         call fail(self, err, self%entries(k)%line, msg)
+         return
+      end do
+   end subroutine group_check_unused
+
+   !> Real value of `key`. If absent: `default` if given, else an error. Exactly one unquoted
+   !> value is required; d/D exponents are accepted, nan/inf and trailing text are not.
+   subroutine group_get_real(self, key, val, err, default)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      real(wp), intent(out) :: val
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), intent(in), optional :: default
+      integer :: k
+      integer :: stat
+      val = 0.0_wp
+      call scalar_entry(self, key, 'a real number', present(default), k, err)
+      if (allocated(err)) return
+      if (k == 0) then
+         if (present(default)) val = default
+         return
+      end if
+      associate (e => self%entries(k))
+         call check_unquoted(self, e, 1, 'a real number', err)
+         if (allocated(err)) return
+         call parse_real(e%values(1)%s, val, stat)
+         if (stat /= 0) call bad_value(self, e, 1, 'a real number', err, stat == 2)
+      end associate
+   end subroutine group_get_real
+
+   !> Integer value of `key` (same rules as get_real; `1.5` and `1.0` are rejected).
+   subroutine group_get_int(self, key, val, err, default)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      integer, intent(out) :: val
+      type(error_t), allocatable, intent(out) :: err
+      integer, intent(in), optional :: default
+      integer :: k, stat
+      val = 0
+      call scalar_entry(self, key, 'an integer', present(default), k, err)
+      if (allocated(err)) return
+      if (k == 0) then
+         if (present(default)) val = default
+         return
+      end if
+      associate (e => self%entries(k))
+         call check_unquoted(self, e, 1, 'an integer', err)
+         if (allocated(err)) return
+         call parse_int(e%values(1)%s, val, stat)
+         if (stat /= 0) call bad_value(self, e, 1, 'an integer', err, stat == 2)
+      end associate
+   end subroutine group_get_int
+
+   !> Logical value of `key`: .true./.false./T/F/.t./.f./true/false, any case, unquoted.
+   subroutine group_get_logical(self, key, val, err, default)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      logical, intent(out) :: val
+      type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: default
+      integer :: k
+      logical :: ok
+      val = .false.
+      call scalar_entry(self, key, 'a logical', present(default), k, err)
+      if (allocated(err)) return
+      if (k == 0) then
+         if (present(default)) val = default
+         return
+      end if
+      associate (e => self%entries(k))
+         call check_unquoted(self, e, 1, 'a logical (.true. or .false.)', err)
+         if (allocated(err)) return
+         ok = .true.
+         select case (to_lower(e%values(1)%s))
+         case ('.true.', '.t.', 't', 'true')
+            val = .true.
+         case ('.false.', '.f.', 'f', 'false')
+            val = .false.
+         case default
+            ok = .false.
+         end select
+         if (.not. ok) call bad_value(self, e, 1, 'a logical (.true. or .false.)', err)
+      end associate
+   end subroutine group_get_logical
+
+   !> String value of `key`, quoted or bare, as written (no case change).
+   subroutine group_get_string(self, key, val, err, default)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      character(len=:), allocatable, intent(out) :: val
+      type(error_t), allocatable, intent(out) :: err
+      character(len=*), intent(in), optional :: default
+      integer :: k
+      val = ''
+      call scalar_entry(self, key, 'a string', present(default), k, err)
+      if (allocated(err)) return
+      if (k == 0) then
+         if (present(default)) val = default
+         return
+      end if
+      val = self%entries(k)%values(1)%s
+   end subroutine group_get_string
+
+   !> All values of `key` as reals. An absent key gives a size-0 array and no error.
+   subroutine group_get_real_array(self, key, vals, err)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      real(wp), allocatable, intent(out) :: vals(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: k, j, stat
+      call record_query(self, key)
+      k = find(self, key)
+      if (k == 0) then
+         allocate (vals(0))
+         return
+      end if
+      associate (e => self%entries(k))
+         e%used = .true.
+         allocate (vals(size(e%values)))
+         vals = 0.0_wp
+         do j = 1, size(e%values)
+            call check_unquoted(self, e, j, 'a real number', err)
+            if (allocated(err)) return
+            call parse_real(e%values(j)%s, vals(j), stat)
+            if (stat /= 0) then
+               call bad_value(self, e, j, 'a real number', err, stat == 2)
+               return
+            end if
+         end do
+      end associate
+   end subroutine group_get_real_array
+
+   !> Common part of the scalar getters: record the query, find the entry (k = 0 if absent),
+   !> mark it used, and check that it has exactly one value.
+   subroutine scalar_entry(self, key, what, has_default, k, err)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key, what
+      logical, intent(in) :: has_default
+      integer, intent(out) :: k
+      type(error_t), allocatable, intent(out) :: err
+      integer :: j
+      call record_query(self, key)
+      k = find(self, key)
+      if (k == 0) then
+         if (.not. has_default) then
+            ! a misspelt key is reported on its own line, before the key it stands for (D-62)
+            j = near_miss(self, key)
+            if (j > 0) then
+               call fail(self, err, self%entries(j)%line, "unknown key '"//self%entries(j)%key// &
+                         "'; did you mean '"//to_lower(key)//"'? (the required key '"//to_lower(key)// &
+                         "' ("//what//') is missing)')
+            else
+               call fail(self, err, self%line, "missing required key '"//to_lower(key)//"' ("//what//')')
+            end if
+         end if
+         return
+      end if
+      self%entries(k)%used = .true.
+      if (size(self%entries(k)%values) /= 1) then
+         call fail(self, err, self%entries(k)%line, "key '"//self%entries(k)%key// &
+                   "': expected one value, got "//str(size(self%entries(k)%values)))
+      end if
+   end subroutine scalar_entry
+
+   subroutine check_unquoted(self, e, j, what, err)
+      class(deck_group_t), intent(in) :: self
+      type(deck_entry_t), intent(in) :: e
+      integer, intent(in) :: j
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      if (e%quoted(j)) then
+         call fail(self, err, e%line, "key '"//e%key//"'"//value_no(e, j)//': expected '//what// &
+                   ", got the quoted string '"//e%values(j)%s//"' (remove the quotes)")
+      end if
+   end subroutine check_unquoted
+
+   subroutine bad_value(self, e, j, what, err, out_of_range)
+      class(deck_group_t), intent(in) :: self
+      type(deck_entry_t), intent(in) :: e
+      integer, intent(in) :: j
+      character(len=*), intent(in) :: what
+      type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: out_of_range
+      character(len=:), allocatable :: note
+      note = ''
+      if (present(out_of_range)) then
+         if (out_of_range) note = ' (out of range)'
+      end if
+      call fail(self, err, e%line, "key '"//e%key//"'"//value_no(e, j)//': expected '//what// &
+                ", got '"//e%values(j)%s//"'"//note)
+   end subroutine bad_value
+
+   !> ", value J" when the entry has several values, else ''.
+   function value_no(e, j) result(s)
+      type(deck_entry_t), intent(in) :: e
+      integer, intent(in) :: j
+      character(len=:), allocatable :: s
+      s = ''
+      if (size(e%values) > 1) s = ' (value '//str(j)//')'
+   end function value_no
+
+   !> "file:LINE: error: LABEL: text"
+   subroutine fail(self, err, line, text)
+      class(deck_group_t), intent(in) :: self
+      type(error_t), allocatable, intent(out) :: err
+      integer, intent(in) :: line
+      character(len=*), intent(in) :: text
+      call fatal_error(err, self%file//':'//str(line)//': error: '//self%label()//': '//text, err_input)
+   end subroutine fail
+
+   !> Index of entry `key` (case-insensitive), 0 if absent.
+   integer function find(self, key) result(k)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      integer :: j
+      k = 0
+      if (.not. allocated(self%entries)) return
+      do j = 1, size(self%entries)
+         if (self%entries(j)%key == to_lower(key)) then
+            k = j
+            return
+         end if
+      end do
+   end function find
+
+   !> Index of the entry not yet read whose key is a likely misspelling of `key` (0: none):
+   !> the closest by edit distance within the threshold of `is_near`, not itself a queried key.
+   integer function near_miss(self, key) result(best)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      integer :: j, d, dbest
+      logical :: asked
+      best = 0
+      dbest = huge(1)
+      if (.not. allocated(self%entries)) return
+      do j = 1, size(self%entries)
+         if (self%entries(j)%used) cycle
+         asked = .false.
+         if (allocated(self%queried)) asked = any_is(self%queried, self%entries(j)%key)
+         if (asked) cycle
+         d = edit_distance(self%entries(j)%key, to_lower(key))
+         if (is_near(d, to_lower(key)) .and. d < dbest) then
+            best = j
+            dbest = d
+         end if
+      end do
+   end function near_miss
+
+   !> Index in `keys` of the closest key to `word` within the threshold of `is_near` (0: none).
+   integer function closest_key(word, keys) result(best)
+      character(len=*), intent(in) :: word
+      type(string_t), intent(in) :: keys(:)
+      integer :: j, d, dbest
+      best = 0
+      dbest = huge(1)
+      do j = 1, size(keys)
+         d = edit_distance(word, keys(j)%s)
+         if (is_near(d, keys(j)%s) .and. d < dbest) then
+            best = j
+            dbest = d
+         end if
+      end do
+   end function closest_key
+
+   !> A distance `d` to `key` counts as a misspelling: 1 <= d <= 2 and d <= len(key)/3
+   !> (so 'dt' does not suggest 't_end', but 'teeth_drivn' suggests 'teeth_driven').
+   logical function is_near(d, key) result(yes)
+      integer, intent(in) :: d
+      character(len=*), intent(in) :: key
+      yes = d >= 1 .and. d <= min(2, max(1, len(key)/3))
+   end function is_near
+
+   logical function any_is(list, word) result(yes)
+      type(string_t), intent(in) :: list(:)
+      character(len=*), intent(in) :: word
+      integer :: j
+      yes = .false.
+      do j = 1, size(list)
+         if (list(j)%s == word) then
+            yes = .true.
+            return
+         end if
+      end do
+   end function any_is
+
+   !> Optimal-string-alignment distance (Damerau-Levenshtein without repeated edits of a
+   !> substring): insertions, deletions, substitutions and swaps of neighbours cost 1.
+   integer function edit_distance(a, b) result(dist)
+      character(len=*), intent(in) :: a, b
+      integer, allocatable :: d(:, :)
+      integer :: i, j, m, n, cost
+      m = len(a)
+      n = len(b)
+      allocate (d(0:m, 0:n))
+      do i = 0, m
+         d(i, 0) = i
+      end do
+      do j = 0, n
+         d(0, j) = j
+      end do
+      do j = 1, n
+         do i = 1, m
+            cost = merge(0, 1, a(i:i) == b(j:j))
+            d(i, j) = min(d(i - 1, j) + 1, d(i, j - 1) + 1, d(i - 1, j - 1) + cost)
+            if (i > 1 .and. j > 1) then
+               if (a(i:i) == b(j - 1:j - 1) .and. a(i - 1:i - 1) == b(j:j)) d(i, j) = min(d(i, j), d(i - 2, j - 2) + 1)
+            end if
+         end do
+      end do
+      dist = d(m, n)
+   end function edit_distance
+
+   !> Add `key` (lower case) to the group's list of queried keys, once.
+   subroutine record_query(self, key)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      type(string_t), allocatable :: tmp(:)
+      integer :: j, n
+      if (.not. allocated(self%queried)) allocate (self%queried(0))
+      n = size(self%queried)
+      do j = 1, n
+         if (self%queried(j)%s == to_lower(key)) return
+      end do
+      allocate (tmp(n + 1))
+      tmp(1:n) = self%queried
+      tmp(n + 1)%s = to_lower(key)
+      call move_alloc(tmp, self%queried)
+   end subroutine record_query
+
+end module trainsim_deck_group

@@ -1,0 +1,387 @@
+!> The words of a deck: its text split into tokens (group names, keys, '=', ',', values,
+!> quoted strings; comments and white space dropped), with file:line messages for text
+!> that is not a deck, and the strict syntax of its numbers (`parse_real`, `parse_int`).
+module trainsim_deck_lexer
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: string_t, to_lower, str, invalid_text_byte
+   implicit none
+   private
+
+   public :: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string
+   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key
+
+   ! Token kinds produced by the lexer.
+   integer, parameter :: tk_group = 1   ! '&name' (text = lower-case name)
+   integer, parameter :: tk_end = 2     ! '/' or '&end'
+   integer, parameter :: tk_eq = 3      ! '='
+   integer, parameter :: tk_comma = 4   ! ','
+   integer, parameter :: tk_word = 5    ! bare token
+   integer, parameter :: tk_string = 6  ! quoted string (text = contents, unquoted)
+
+   !> The tokens of a deck text, in order: kind (tk_*), line and text of each.
+   type :: token_list_t
+      integer :: n = 0
+      integer, allocatable :: kind(:), line(:)
+      type(string_t), allocatable :: text(:)
+   end type token_list_t
+
+contains
+
+   !> Deck text must be UTF-8 without NUL bytes: anything else is not a text file (or is
+   !> in another encoding) and would end up in the output file's strings.
+   subroutine check_text(text, file, err)
+      character(len=*), intent(in) :: text
+      character(len=*), intent(in) :: file
+      type(error_t), allocatable, intent(out) :: err
+      integer :: pos, line, col0
+      character(len=2) :: hex
+
+      pos = invalid_text_byte(text)
+      if (pos == 0) return
+      line = 1 + count_newlines(text(1:pos - 1))
+      col0 = index(text(1:pos - 1), new_line('a'), back=.true.)
+      if (iachar(text(pos:pos)) == 0) then
+         call fatal_error(err, file//':'//str(line)//': error: NUL byte at column '//str(pos - col0)// &
+                          ' (a deck is a text file; is this a binary file?)', err_input)
+      else
+         write (hex, '(z2.2)') iachar(text(pos:pos))
+         call fatal_error(err, file//':'//str(line)//': error: invalid UTF-8 at column '//str(pos - col0)// &
+                          ' (byte 0x'//hex//'); decks must be UTF-8 (or ASCII) text', err_input)
+      end if
+   contains
+      pure integer function count_newlines(t) result(c)
+         character(len=*), intent(in) :: t
+         integer :: k
+         c = 0
+         do k = 1, len(t)
+            if (t(k:k) == new_line('a')) c = c + 1
+         end do
+      end function count_newlines
+   end subroutine check_text
+
+   !> Split `text` into tokens, dropping comments and white space.
+   subroutine tokenize(text, file, toks, err)
+      character(len=*), intent(in) :: text
+      character(len=*), intent(in) :: file
+      type(token_list_t), intent(out) :: toks
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: buf
+      character(len=1) :: c, q
+      integer :: i, j, k, n, line, nb
+      logical :: doubled
+
+      allocate (toks%kind(64), toks%line(64), toks%text(64))
+      n = len(text)
+      line = 1
+      i = 1
+      do while (i <= n)
+         c = text(i:i)
+         if (c == new_line('a')) then
+            line = line + 1
+            i = i + 1
+         else if (is_blank(c)) then
+            i = i + 1
+         else if (c == '!') then
+            do while (i <= n)
+               if (text(i:i) == new_line('a')) exit
+               i = i + 1
+            end do
+         else if (c == '=') then
+            call push(toks, tk_eq, '=', line)
+            i = i + 1
+         else if (c == ',') then
+            call push(toks, tk_comma, ',', line)
+            i = i + 1
+         else if (c == '/') then
+            call push(toks, tk_end, '/', line)
+            i = i + 1
+         else if (c == '&') then
+            j = i + 1
+            do while (j <= n)
+               if (.not. is_name_char(text(j:j))) exit
+               j = j + 1
+            end do
+            if (j == i + 1) then
+               call fatal_error(err, file//':'//str(line)//": error: expected a group name right after '&'", &
+                                err_input)
+               return
+            end if
+            if (.not. is_letter(text(i + 1:i + 1))) then
+               call fatal_error(err, file//':'//str(line)//": error: invalid group name '&"// &
+                                text(i + 1:j - 1)//"' (it must start with a letter)", err_input)
+               return
+            end if
+            if (to_lower(text(i + 1:j - 1)) == 'end') then
+               call push(toks, tk_end, '&end', line)
+            else
+               call push(toks, tk_group, to_lower(text(i + 1:j - 1)), line)
+            end if
+            i = j
+         else if (c == "'" .or. c == '"') then
+            ! Find the closing quote; a doubled quote stands for one.
+            q = c
+            doubled = .false.
+            j = i + 1
+            do
+               if (j > n) exit
+               if (text(j:j) == new_line('a')) exit
+               if (text(j:j) == q) then
+                  if (j < n) then
+                     if (text(j + 1:j + 1) == q) then
+                        doubled = .true.
+                        j = j + 2
+                        cycle
+                     end if
+                  end if
+                  exit
+               end if
+               j = j + 1
+            end do
+            if (j > n) then
+               call unterminated(text(i:j - 1))
+               return
+            else if (text(j:j) /= q) then
+               call unterminated(text(i:j - 1))
+               return
+            end if
+            if (doubled) then
+               allocate (character(len=j - i - 1) :: buf)
+               nb = 0
+               k = i + 1
+               do while (k < j)
+                  nb = nb + 1
+                  buf(nb:nb) = text(k:k)
+                  if (text(k:k) == q) k = k + 1
+                  k = k + 1
+               end do
+               call push(toks, tk_string, buf(1:nb), line)
+               deallocate (buf)
+            else
+               call push(toks, tk_string, text(i + 1:j - 1), line)
+            end if
+            i = j + 1
+         else
+            j = i
+            do while (j <= n)
+               if (ends_word(text(j:j))) exit
+               j = j + 1
+            end do
+            call push(toks, tk_word, text(i:j - 1), line)
+            i = j
+         end if
+      end do
+
+   contains
+
+      subroutine unterminated(fragment)
+         character(len=*), intent(in) :: fragment
+         call fatal_error(err, file//':'//str(line)//': error: unterminated string '//fragment// &
+                          ' (strings must close on the line where they start)', err_input)
+      end subroutine unterminated
+
+   end subroutine tokenize
+
+   !> Token text as written (strings re-quoted), for messages.
+   function display(toks, i) result(s)
+      type(token_list_t), intent(in) :: toks
+      integer, intent(in) :: i
+      character(len=:), allocatable :: s
+      if (toks%kind(i) == tk_string) then
+         s = '"'//toks%text(i)%s//'"'
+      else if (toks%kind(i) == tk_group) then
+         s = '&'//toks%text(i)%s
+      else
+         s = toks%text(i)%s
+      end if
+   end function display
+
+   subroutine push(toks, kind, text, line)
+      type(token_list_t), intent(inout) :: toks
+      integer, intent(in) :: kind, line
+      character(len=*), intent(in) :: text
+      integer, allocatable :: ti(:)
+      type(string_t), allocatable :: ts(:)
+      integer :: n
+      n = toks%n
+      if (n == size(toks%kind)) then
+         allocate (ti(2*n))
+         ti(1:n) = toks%kind
+         call move_alloc(ti, toks%kind)
+         allocate (ti(2*n))
+         ti(1:n) = toks%line
+         call move_alloc(ti, toks%line)
+         allocate (ts(2*n))
+         ts(1:n) = toks%text
+         call move_alloc(ts, toks%text)
+      end if
+      n = n + 1
+      toks%kind(n) = kind
+      toks%line(n) = line
+      toks%text(n)%s = text
+      toks%n = n
+   end subroutine push
+
+   !> Strict real syntax: [sign] digits [. digits] [(e|d) [sign] digits], at least one mantissa
+   !> digit. Values beyond the range of real(wp) are rejected before conversion, so no FP trap
+   !> can fire. stat: 0 ok, 1 bad syntax, 2 out of range.
+   subroutine parse_real(s, val, stat)
+      character(len=*), intent(in) :: s
+      real(wp), intent(out) :: val
+      integer, intent(out) :: stat
+      character(len=len(s)) :: buf
+      integer :: i, n, nint_dig, nfrac_dig, first_pow, expo, expsign, nexp_dig, ios
+      logical :: seen_dot, nonzero
+
+      val = 0.0_wp
+      stat = 1
+      n = len(s)
+      if (n == 0) return
+      buf = s
+      i = 1
+      if (s(1:1) == '+' .or. s(1:1) == '-') i = 2
+      nint_dig = 0
+      nfrac_dig = 0
+      seen_dot = .false.
+      nonzero = .false.
+      first_pow = 0
+      ! Mantissa. For the first non-zero digit remember its index; its power of ten follows.
+      do while (i <= n)
+         if (is_digit(s(i:i))) then
+            if (seen_dot) then
+               nfrac_dig = nfrac_dig + 1
+            else
+               nint_dig = nint_dig + 1
+            end if
+            if (s(i:i) /= '0' .and. .not. nonzero) then
+               nonzero = .true.
+               if (seen_dot) then
+                  first_pow = -nfrac_dig
+               else
+                  first_pow = nint_dig     ! index in the integer part; fixed up below
+               end if
+            end if
+         else if (s(i:i) == '.' .and. .not. seen_dot) then
+            seen_dot = .true.
+         else
+            exit
+         end if
+         i = i + 1
+      end do
+      if (nint_dig + nfrac_dig == 0) return
+      if (nonzero .and. first_pow > 0) first_pow = nint_dig - first_pow
+      expo = 0
+      if (i <= n) then
+         if (index('eEdD', s(i:i)) == 0) return
+         buf(i:i) = 'e'
+         i = i + 1
+         expsign = 1
+         if (i <= n) then
+            if (s(i:i) == '+' .or. s(i:i) == '-') then
+               if (s(i:i) == '-') expsign = -1
+               i = i + 1
+            end if
+         end if
+         nexp_dig = 0
+         do while (i <= n)
+            if (.not. is_digit(s(i:i))) return
+            if (expo < 100000) expo = 10*expo + (iachar(s(i:i)) - iachar('0'))
+            nexp_dig = nexp_dig + 1
+            i = i + 1
+         end do
+         if (nexp_dig == 0) return
+         expo = expsign*expo
+      end if
+      if (nonzero) then
+         stat = 2
+         if (first_pow + expo > range(val) .or. first_pow + expo < -range(val) - 1) return
+      end if
+      read (buf, *, iostat=ios) val
+      if (ios /= 0) then
+         val = 0.0_wp
+         stat = 1
+         return
+      end if
+      if (.not. ieee_is_finite(val)) then   ! cannot happen after the checks above; never pass it on
+         val = 0.0_wp
+         stat = 2
+         return
+      end if
+      stat = 0
+   end subroutine parse_real
+
+   !> Strict integer syntax: [sign] digits, within the range of default integer.
+   !> stat: 0 ok, 1 bad syntax, 2 out of range.
+   subroutine parse_int(s, val, stat)
+      character(len=*), intent(in) :: s
+      integer, intent(out) :: val
+      integer, intent(out) :: stat
+      integer :: i, i0, ios
+      val = 0
+      stat = 1
+      if (len(s) == 0) return
+      i0 = 1
+      if (s(1:1) == '+' .or. s(1:1) == '-') i0 = 2
+      if (i0 > len(s)) return
+      do i = i0, len(s)
+         if (.not. is_digit(s(i:i))) return
+      end do
+      stat = 2
+      read (s, *, iostat=ios) val
+      if (ios /= 0) then
+         val = 0
+         return
+      end if
+      stat = 0
+   end subroutine parse_int
+
+   !> Repeat count such as `3*0.0` or `3*`.
+   pure logical function is_repeat(s)
+      character(len=*), intent(in) :: s
+      integer :: p
+      p = index(s, '*')
+      is_repeat = .false.
+      if (p <= 1) return
+      is_repeat = verify(s(1:p - 1), '0123456789') == 0
+   end function is_repeat
+
+   !> Key names: a letter followed by letters, digits and '_'.
+   pure logical function is_key(s)
+      character(len=*), intent(in) :: s
+      integer :: i
+      is_key = .false.
+      if (len(s) == 0) return
+      if (.not. is_letter(s(1:1))) return
+      do i = 2, len(s)
+         if (.not. is_name_char(s(i:i))) return
+      end do
+      is_key = .true.
+   end function is_key
+
+   pure logical function is_blank(c)
+      character(len=1), intent(in) :: c
+      is_blank = c == ' ' .or. c == achar(9) .or. c == achar(13)
+   end function is_blank
+
+   pure logical function ends_word(c)
+      character(len=1), intent(in) :: c
+      ends_word = is_blank(c) .or. c == new_line('a') .or. index(",=/!'""", c) > 0
+   end function ends_word
+
+   pure logical function is_letter(c)
+      character(len=1), intent(in) :: c
+      is_letter = (c >= 'a' .and. c <= 'z') .or. (c >= 'A' .and. c <= 'Z')
+   end function is_letter
+
+   pure logical function is_digit(c)
+      character(len=1), intent(in) :: c
+      is_digit = c >= '0' .and. c <= '9'
+   end function is_digit
+
+   pure logical function is_name_char(c)
+      character(len=1), intent(in) :: c
+      is_name_char = is_letter(c) .or. is_digit(c) .or. c == '_'
+   end function is_name_char
+
+end module trainsim_deck_lexer

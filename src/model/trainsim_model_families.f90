@@ -1,0 +1,129 @@
+!> The model's families on the hot path: the row types of its tables (a node
+!> that is a plain inertia or held, an element that is a linear spring or a
+!> clearance in its hot form, D-35, a guard row, a load) and the families as
+!> structure of arrays that the kernels (trainsim_model_kernels) evaluate.
+module trainsim_model_families
+   use trainsim_kinds, only: wp
+   use trainsim_element, only: hg_none
+   implicit none
+   private
+
+   public :: fast_node_t, fast_element_t, guard_row_t, fast_load_t
+   public :: nk_other, nk_plain, nk_held
+   public :: lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, lf_cl_linear
+   public :: families_t, table_t, spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr, &
+             load_ni, load_nr
+
+   !> Kinds of node on the hot path.
+   integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
+
+   !> A node on the hot path: its kind, state offset and, for a plain inertia,
+   !> J and d; for a held node its inertia J and, with a constant speed, that speed.
+   type :: fast_node_t
+      integer :: kind = nk_other
+      integer :: off = 0
+      logical :: const_speed = .false.
+      real(wp) :: j = 1.0_wp, d = 0.0_wp, w = 0.0_wp, theta0 = 0.0_wp
+      real(wp) :: load0 = 0.0_wp   !< sum of its loads if all are constant (else 0: summed at t)
+   end type fast_node_t
+
+   !> An element on the hot path: its nodes and, for a linear spring, k, c, r1, r2.
+   type :: fast_element_t
+      integer :: l = 0, r = 0, ng = 0
+      logical :: linear = .false.
+      real(wp) :: k = 0.0_wp, c = 0.0_wp, r1 = 1.0_wp, r2 = 1.0_wp
+      !> The form of a linear spring in `rhs_simple` (lf_*), and the state index
+      !> of the angle of its left and right node if a plain inertia, else 0
+      !> (`rhs_simple` and `guards` read those straight from y).
+      integer :: form = 0, yl = 0, yr = 0
+      !> The form of the element's hot form (D-35, the record in the model's fh)
+      !> for its guards (hg_*); its torque form is `form` (lf_open, lf_yang_sun,
+      !> lf_cl_linear).
+      integer :: gform = hg_none
+      !> The hot form's elastic energy (`hot_potential`) and its status (the
+      !> displacement and signed force `rhs_simple` leaves in el_disp, el_force,
+      !> the contact its mode) agree bit for bit with the element's own
+      !> `potential_energy` and `status` at `refresh_hot`'s probe states (D-36).
+      logical :: hot_pe = .false., hot_status = .false.
+      !> The element's elastic energy is neither a linear spring's nor its hot
+      !> form's (counted in n_cold: `rhs_simple` then leaves no energy).
+      logical :: cold = .true.
+   end type fast_element_t
+
+   !> An element with guards, as `model_guards` reads it: where its guards are
+   !> its hot form's (D-35) and both its nodes are plain inertias (form 1:
+   !> faces, 2: faces and the zone window; 0: asked as before), the record's
+   !> guard fields and the state indices of its nodes' angles, in one place
+   !> (refreshed with the hot form, `refresh_hot`).
+   type :: guard_row_t
+      integer :: form = 0, o = 0, yl = 0, yr = 0, mode = 0
+      logical :: lo_open = .false.
+      real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp, b = 0.0_wp, th_lo = 0.0_wp, th_hi = 0.0_wp
+   end type guard_row_t
+
+   !> Forms of a linear spring in `rhs_simple`: the terms that are exactly zero
+   !> or exactly a factor 1 are left out (the same values, fewer operations on
+   !> the RHS's critical path): general, undamped (c = 0), undamped with unit
+   !> lever arms (a shaft: c = 0, r1 = r2 = 1).
+   integer, parameter :: lf_general = 1, lf_undamped = 2, lf_unit = 3
+   !> Forms of a clearance element in its current mode (its hot form, D-35):
+   !> open, closed with the yang_sun law, closed with the linear law.
+   integer, parameter :: lf_open = 4, lf_yang_sun = 5, lf_cl_linear = 6
+
+   !> A load on the hot path: its node and, when constant, its value.
+   type :: fast_load_t
+      integer :: node = 0
+      logical :: const = .false.
+      real(wp) :: v = 0.0_wp
+   end type fast_load_t
+
+   !> A table of the families: n rows, row q at iw(i0 + ni (q - 1) + 1 : i0 + ni q)
+   !> and rw(r0 + nr (q - 1) + 1 : r0 + nr q) of the families' two arrays (ni and
+   !> nr are the table's column counts, below).
+   type :: table_t
+      integer :: n = 0, i0 = 0, r0 = 0
+   end type table_t
+
+   !> Columns of the tables. The linear-spring family (a shaft, a damper, an
+   !> ideal gear pair: eqs. (H.1), (H.15)), in two tables (springs: c = 0,
+   !> dampers: c /= 0): (element, left node, right node), (k, c, r1, r2).
+   integer, parameter :: spring_ni = 3, spring_nr = 4
+   !> The clearance family (every element whose torques are its hot form, D-35;
+   !> a row refreshed in place when its element changes mode): (element, left
+   !> node, right node, closed, yang_sun law, no_tension; flags 0 or 1),
+   !> (s, c, k, dmp, b, r1, r2). An open row carries k = dmp = b = 0 (its force
+   !> is zero, and no stale parameter reaches the arithmetic).
+   integer, parameter :: contact_ni = 6, contact_nr = 7
+   !> Plain inertias: (node, state offset, x, y), (J, d, the sum of its constant
+   !> loads), in three tables of the same width one after another (`free` is
+   !> all three, for their kinematics): an undamped node with one element torque
+   !> on it (x: its index into the element torques), with two (x, y), any other
+   !> (its incidences iw(x : y)). Nodes held at a constant speed: (node,
+   !> first, last incidence in iw), (theta0, w, load sum). Constant loads on
+   !> free nodes: (node), (value). Damped plain inertias in node order (their
+   !> dissipated power): (state offset), (d).
+   integer, parameter :: free_ni = 4, free_nr = 3, held_ni = 3, held_nr = 3, load_ni = 1, load_nr = 1
+
+   !> The families of a simple model (every node a plain inertia or held at a
+   !> constant speed, every load constant), which the stage and step-end kernels
+   !> (trainsim_model_kernels) evaluate family by family, each in one loop
+   !> without a branch on an element form or a node kind. An element in no
+   !> family is asked through its procedures (`general`). Structure of arrays:
+   !> every table lives in the two arrays iw and rw (a kernel gets their
+   !> addresses once, whatever the number of tables).
+   type :: families_t
+      integer :: nn = 0, ne = 0, ns = 0
+      integer, allocatable :: iw(:)
+      real(wp), allocatable :: rw(:)
+      type(table_t) :: springs, dampers, contacts, general, free, free1, free2, free_n, damped, held, loads
+      !> per node i: its inertia (kinetic energy) at rw(jn + i)
+      integer :: jn = 0
+      !> per element: its row in the clearance family (0: none)
+      integer, allocatable :: contact_row(:)
+      !> More than one table adds dissipated power (springs with damping,
+      !> contacts, general): each row then leaves its power in pw and the powers
+      !> are summed in element order, as the element loop of the general path does.
+      logical :: mixed = .false.
+      real(wp), allocatable :: th(:), w(:), pw(:)   !< scratch: node angles, speeds; element powers
+   end type families_t
+end module trainsim_model_families

@@ -1,0 +1,115 @@
+!> The arithmetic of a family row as procedures, for the model's general path,
+!> a part of the train and the tables' probes: a linear spring and a clearance
+!> in its hot form with its contact law (D-35). Each is written once, in
+!> trainsim_model_spring_law.inc and trainsim_model_contact_law.inc, which the
+!> stage kernel (trainsim_model_stage.inc) includes too (D-70 (kernels)).
+module trainsim_model_kernels
+   use trainsim_kinds, only: wp
+   use trainsim_element, only: hot_form_t, hf_open, hf_yang_sun
+   implicit none
+   private
+
+   public :: spring, contact, hot_torques, hot_force, hot_potential, hot_guards
+
+contains
+
+   !> A linear spring (eqs. (H.1), (H.15)): trainsim_model_spring_law.inc, damped
+   !> (f = k d + c dv) or not (c = 0: f = k d; dv is then 0).
+   pure subroutine spring(damped, k, c, r1, r2, thl, wl, thr, wr, d, dv, f, tl, tr)
+      logical, intent(in) :: damped
+      real(wp), intent(in) :: k, c, r1, r2, thl, wl, thr, wr
+      real(wp), intent(out) :: d, dv, f, tl, tr
+      if (damped) then
+#define DAMPED 1
+#include "trainsim_model_spring_law.inc"
+#undef DAMPED
+      else
+         dv = 0.0_wp
+#define DAMPED 0
+#include "trainsim_model_spring_law.inc"
+#undef DAMPED
+      end if
+   end subroutine spring
+
+   !> A clearance in its hot form (D-35): the contact law of trainsim_contact
+   !> (its `cl_contact_force`) in the model, trainsim_model_contact_law.inc.
+   pure subroutine contact(closed, yang_sun, no_tension, s, c, k, dmp, b, r1, r2, thl, wl, thr, wr, d, p, pdot, fs, &
+                           tl, tr)
+      logical, intent(in) :: closed, yang_sun, no_tension
+      real(wp), intent(in) :: s, c, k, dmp, b, r1, r2, thl, wl, thr, wr
+      real(wp), intent(out) :: d, p, pdot, fs, tl, tr
+      real(wp) :: f
+#include "trainsim_model_contact_law.inc"
+   end subroutine contact
+
+   !> `contact` of a hot form h (an open one with k = dmp = b = 0, as its row).
+   pure subroutine hot_contact(h, thl, wl, thr, wr, d, p, pdot, fs, tl, tr)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: d, p, pdot, fs, tl, tr
+      if (h%kind == hf_open) then
+         call contact(.false., .false., .false., h%s, h%c, 0.0_wp, 0.0_wp, 0.0_wp, h%r1, h%r2, thl, wl, thr, wr, &
+                      d, p, pdot, fs, tl, tr)
+      else
+         call contact(.true., h%kind == hf_yang_sun, h%no_tension, h%s, h%c, h%k, h%dmp, h%b, h%r1, h%r2, &
+                      thl, wl, thr, wr, d, p, pdot, fs, tl, tr)
+      end if
+   end subroutine hot_contact
+
+   !> Torques and the power dissipated of a hot form (D-35): ce_torques and
+   !> ce_torques_dissipation's arithmetic, through `contact`.
+   pure subroutine hot_torques(h, thl, wl, thr, wr, tl, tr, pw)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, pw
+      real(wp) :: d, p, pdot, fs
+      call hot_contact(h, thl, wl, thr, wr, d, p, pdot, fs, tl, tr)
+      pw = 0.0_wp
+      if (h%kind /= hf_open) pw = (h%s*fs - h%c*(h%k*p))*pdot
+   end subroutine hot_torques
+
+   !> Signed contact force of a hot form (D-36): fs of `contact`.
+   pure real(wp) function hot_force(h, thl, wl, thr, wr) result(fs)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: d, p, pdot, tl, tr
+      call hot_contact(h, thl, wl, thr, wr, d, p, pdot, fs, tl, tr)
+   end function hot_force
+
+   !> Elastic energy of a hot form (D-36): cl_potential's arithmetic (c k p^2/2
+   !> closed, 0 open), as the kernels compute it.
+   pure real(wp) function hot_potential(h, thl, thr) result(e)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, thr
+      real(wp) :: d, p
+      e = 0.0_wp
+      if (h%kind == hf_open) return
+      d = h%r1*thl - h%r2*thr
+      p = h%s*d - h%b
+      e = h%c*(0.5_wp*h%k*p**2)
+   end function hot_potential
+
+   !> Guards of a hot form (D-35): cl_guards' faces, and a zone window.
+   pure subroutine hot_guards(h, thl, thr, g)
+      type(hot_form_t), intent(in) :: h
+      real(wp), intent(in) :: thl, thr
+      real(wp), intent(out) :: g(4)
+      real(wp) :: d
+      d = h%r1*thl - h%r2*thr
+      select case (h%mode)
+      case (1)
+         g(1) = d - h%b; g(2) = 1.0_wp
+      case (-1)
+         g(1) = 1.0_wp; g(2) = -d - h%b
+      case default
+         g(1) = h%b - d; g(2) = d + h%b
+      end select
+      if (h%lo_open) then
+         g(3) = 1.0_wp
+      else
+         g(3) = thl - h%th_lo
+      end if
+      g(4) = h%th_hi - thl
+   end subroutine hot_guards
+
+end module trainsim_model_kernels

@@ -1,0 +1,95 @@
+!> The model's linearisation: the Jacobian of the right-hand side and the
+!> rigid motion of the train with its clearances closed.
+!> Each `module procedure` here is declared, with its arguments and their docs, in
+!> trainsim_model.
+submodule (trainsim_model) trainsim_model_linear
+   use trainsim_element, only: lin_closed
+   implicit none
+
+contains
+
+   module procedure model_jacobian
+      real(wp) :: dtq(3, size(self%nodes)), jt(2, 4)
+      integer :: i, a, b, k, na, nb, row, ia, ib
+      integer :: ends(2)
+      jac = 0.0_wp
+      dtq = 0.0_wp
+      call self%kinematics(t, y)
+      call self%apply_loads(t)
+      do i = 1, size(self%nodes)
+         if (self%speed_of(i) /= 0) cycle
+         associate (nd => self%nodes(i)%n)
+            if (nd%nstates() > 0) call nd%jacobian(t, y, jac, dtq(1:nd%nstates(), i))
+         end associate
+      end do
+      do i = 1, size(self%elements)
+         associate (e => self%elements(i)%e)
+            ends = [e%left, e%right]
+            call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
+                                   self%omega(e%right), jt)
+            do a = 1, 2
+               na = ends(a)
+               if (self%speed_of(na) /= 0) cycle
+               do k = 1, self%nodes(na)%n%nstates()
+                  if (dtq(k, na) == 0.0_wp) cycle
+                  row = self%nodes(na)%n%offset + k
+                  do b = 1, 2
+                     nb = ends(b)
+                     if (self%speed_of(nb) /= 0 .or. self%nodes(nb)%n%nstates() < 2) cycle
+                     ia = self%nodes(nb)%n%offset + 1
+                     ib = self%nodes(nb)%n%offset + 2
+                     jac(row, ia) = jac(row, ia) + dtq(k, na)*jt(a, 2*b - 1)
+                     jac(row, ib) = jac(row, ib) + dtq(k, na)*jt(a, 2*b)
+                  end do
+               end do
+            end do
+         end associate
+      end do
+   end procedure model_jacobian
+
+   module procedure closed_speed_ratio
+      real(wp) :: k(2, 2), c(2, 2)
+      call model%elements(ie)%e%linearise(lin_closed, 1.0_wp, 1.0_wp, k, c)
+      rho = 0.0_wp
+      if (abs(k(2, 2)) > 0.0_wp) then
+         rho = -k(1, 2)/k(2, 2)
+      else if (abs(c(2, 2)) > 0.0_wp) then
+         rho = -c(1, 2)/c(2, 2)
+      end if
+   end procedure closed_speed_ratio
+
+   module procedure rigid_speeds
+      integer :: pass, j, l, r
+      real(wp) :: rho
+      logical :: changed
+      allocate (w(size(model%nodes)), known(size(model%nodes)))
+      w = 0.0_wp
+      known = .false.
+      w(ref) = w_ref
+      known(ref) = .true.
+      loop_el = 0
+      do pass = 1, size(model%elements) + 1
+         changed = .false.
+         do j = 1, size(model%elements)
+            l = model%elements(j)%e%left
+            r = model%elements(j)%e%right
+            if (model%nodes(l)%n%is_fixed() .or. model%nodes(r)%n%is_fixed()) cycle
+            if (.not. (known(l) .or. known(r))) cycle
+            rho = closed_speed_ratio(model, j)
+            if (rho == 0.0_wp) cycle
+            if (known(l) .and. known(r)) then
+               if (loop_el == 0 .and. abs(w(r) - rho*w(l)) > 1.0e-9_wp*max(abs(w(r)), abs(w(l)))) loop_el = j
+            else if (known(l)) then
+               w(r) = rho*w(l)
+               known(r) = .true.
+               changed = .true.
+            else
+               w(l) = w(r)/rho
+               known(l) = .true.
+               changed = .true.
+            end if
+         end do
+         if (.not. changed) exit
+      end do
+   end procedure rigid_speeds
+end submodule trainsim_model_linear

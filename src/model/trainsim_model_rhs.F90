@@ -1,0 +1,339 @@
+!> The model's right-hand side: the general path (every node and element in
+!> order, the linear springs and clearances with the kernels' row arithmetic,
+!> any other through its procedures), a simple model's stage and step end (the
+!> family kernels of trainsim_model_kernels), a part of the train, the loads.
+!> Each `module procedure` here is declared, with its arguments and their docs, in
+!> trainsim_model.
+submodule (trainsim_model) trainsim_model_rhs
+   use trainsim_model_families, only: nk_other, nk_plain, nk_held, lf_open
+   use trainsim_model_families, only: spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr
+   use trainsim_model_kernels, only: spring, hot_torques
+   implicit none
+
+contains
+
+   module procedure model_rhs
+      call rhs_fast(self, t, y, dydt, .false.)
+   end procedure model_rhs
+
+   module procedure model_rhs_step_end
+      if (self%simple) then
+         ! straight to the kernel (every step of a block, D-38): no second layer
+         ! of descriptors
+         call rhs_simple_ws(self, t, y, dydt, .true.)
+      else
+         call rhs_fast(self, t, y, dydt, .true.)
+      end if
+   end procedure model_rhs_step_end
+
+   module procedure model_rhs_stage
+      self%ws_step_end = .false.
+      if (.not. self%simple) then
+         call rhs_fast(self, t, y, dydt, .false.)
+      else if (self%run%track_energy) then
+         call stage_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
+                           self%fam%th, self%fam%w, self%fam%pw)
+      else
+         call stage_plain(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
+                          self%fam%th, self%fam%w)
+      end if
+   contains
+      ! the stage kernel, energy off and on (internal: inlined here, D-70 (kernels))
+#define KERNEL stage_plain
+#define ENERGY 0
+#define STEP_END 0
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#define KERNEL stage_energy
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+   end procedure model_rhs_stage
+
+   module procedure model_block_ok
+      ok = self%simple .and. self%blk%cap >= 4
+      if (.not. ok) return
+      if (self%run%track_energy) ok = self%n_cold == 0
+      if (ok) ok = all(self%ws_status)
+   end procedure model_block_ok
+
+   !> `model_rhs` without the dispatch.
+   subroutine rhs_fast(self, t, y, dydt, step_end)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(out) :: dydt(:)
+      logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
+      integer :: i, l, r, s, o
+      real(wp) :: tl, tr, f, pdiss, pin
+      logical :: track
+      if (self%simple) then
+         call rhs_simple_ws(self, t, y, dydt, step_end)
+         return
+      end if
+      track = self%run%track_energy
+      self%ws_step_end = .false.
+      self%ws_t = t
+      self%ws_energy = .false.
+      pdiss = 0.0_wp
+      pin = 0.0_wp
+      ! kinematics and constant loads in one pass (the branch of kinematics_all, written
+      ! out here on purpose: as a called procedure it costs 20 % of the RHS, measured)
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            if (nd%kind == nk_plain) then
+               o = nd%off
+               self%theta(i) = y(o + 1)
+               self%omega(i) = y(o + 2)
+            else if (nd%kind == nk_held .and. nd%const_speed) then
+               self%theta(i) = nd%theta0 + nd%w*t
+               self%omega(i) = nd%w
+            else
+               call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+            end if
+            self%torque(i) = nd%load0
+         end associate
+      end do
+      if (size(self%dyn_loads) > 0 .or. self%any_needs_loads) call loads_varying(self, t)
+      if (track) then
+         ! power of the external loads on free nodes (before the elements add to self%torque)
+         do i = 1, size(self%fl)
+            l = self%fl(i)%node
+            if (self%fn(l)%kind == nk_held) cycle
+            if (self%fl(i)%const) then
+               pin = pin + self%fl(i)%v*self%omega(l)
+            else
+               pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+            end if
+         end do
+      end if
+      do i = 1, size(self%fe)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear .or. e%form >= lf_open) then                      ! a family's row
+               call family_row(self, i, tl, tr, f)
+               if (track) pdiss = pdiss + f
+            else
+               call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+               if (track) then
+                  pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                       self%omega(r))
+                  if (self%elements(i)%e%supplies_power) then
+                     pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                                self%omega(r))
+                  end if
+               end if
+            end if
+         end associate
+         self%el_torque(1, i) = tl
+         self%el_torque(2, i) = tr
+         self%torque(l) = self%torque(l) + tl
+         self%torque(r) = self%torque(r) + tr
+      end do
+      do i = 1, size(self%fn)
+         associate (nd => self%fn(i))
+            select case (nd%kind)
+            case (nk_plain)
+               o = nd%off
+               dydt(o + 1) = y(o + 2)                                      ! eq. (G.1)
+               dydt(o + 2) = (self%torque(i) - nd%d*y(o + 2))/nd%j          ! eq. (G.2)
+               if (track .and. nd%d /= 0.0_wp) pdiss = pdiss + nd%d*self%omega(i)**2
+            case (nk_held)
+               if (track) then
+                  ! torque the drive must supply: J*alpha minus what acts on the node
+                  if (nd%const_speed) then
+                     pin = pin - self%torque(i)*self%omega(i)   ! alpha = 0
+                  else
+                     s = self%speed_of(i)
+                     pin = pin + (self%nodes(i)%n%inertia()*self%speeds(s)%derivative(t) - self%torque(i))*self%omega(i)
+                  end if
+               end if
+            case default
+               call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+               if (track) then
+                  pdiss = pdiss + self%nodes(i)%n%dissipation_power(y)
+                  pin = pin + self%nodes(i)%n%input_power(t, y)
+               end if
+            end select
+         end associate
+      end do
+      if (.not. track) return
+      dydt(self%n_states + 1) = pdiss
+      dydt(self%n_states + 2) = pin
+   end subroutine rhs_fast
+
+   module procedure rhs_simple_ws
+      integer :: c
+      logical :: track
+      track = self%run%track_energy
+      self%ws_step_end = .false.
+      self%ws_t = t
+      self%ws_energy = step_end .and. track .and. self%n_cold == 0
+      c = max(self%blk%col, 1)
+      associate (b => self%blk)
+         if (track) then
+            call step_end_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, &
+                                 self%el_torque, self%theta, self%omega, self%fam%pw, &
+                                 self%torque, self%el_disp, self%el_force, self%el_pe, b%disp(:, c), b%force(:, c), &
+                                 b%torque(:, c), b%omega(:, c), b%col > 0, self%ws_energy, self%ws_stored, &
+                                 self%ws_elastic)
+         else
+            call step_end_plain(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, &
+                                self%el_torque, self%theta, self%omega, &
+                                self%torque, self%el_disp, self%el_force, self%el_pe, b%disp(:, c), b%force(:, c), &
+                                b%torque(:, c), b%omega(:, c), b%col > 0, self%ws_energy, self%ws_stored, &
+                                self%ws_elastic)
+         end if
+         if (step_end .and. b%col > 0) then
+            ! the step's end in the block's column (D-38)
+            b%t(c) = t
+            if (track) then
+               b%work(1, c) = y(self%n_states + 1)
+               b%work(2, c) = y(self%n_states + 2)
+               b%stored(c) = self%ws_stored
+               b%elastic(c) = self%ws_elastic
+            end if
+         end if
+      end associate
+   contains
+      ! the step-end kernel, energy off and on (internal: inlined here)
+#define KERNEL step_end_plain
+#define ENERGY 0
+#define STEP_END 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#define KERNEL step_end_energy
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+   end procedure rhs_simple_ws
+
+   !> Element i's torques (and the power it dissipates) at the kinematics in the
+   !> workspace through its family's row (trainsim_model_kernels): a linear
+   !> spring, a clearance in its hot form (D-35). The general path, one element
+   !> and a part of the train evaluate an element of a family here, with the
+   !> stage kernel's arithmetic.
+   subroutine family_row(self, i, tl, tr, pw)
+      type(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(out) :: tl, tr, pw
+      real(wp) :: d, dv, f
+      associate (e => self%fe(i), thl => self%theta(self%fe(i)%l), wl => self%omega(self%fe(i)%l), &
+                 thr => self%theta(self%fe(i)%r), wr => self%omega(self%fe(i)%r))
+         if (e%linear) then
+            call spring(e%c /= 0.0_wp, e%k, e%c, e%r1, e%r2, thl, wl, thr, wr, d, dv, f, tl, tr)
+            pw = e%c*dv**2                                                 ! (0 without damping)
+         else
+            call hot_torques(self%fh(i), thl, wl, thr, wr, tl, tr, pw)
+         end if
+      end associate
+   end subroutine family_row
+
+   module procedure model_element_torques
+      real(wp) :: pw
+      if (self%fe(i)%linear .or. self%fe(i)%form >= lf_open) then
+         call family_row(self, i, tl, tr, pw)
+      else
+         associate (l => self%fe(i)%l, r => self%fe(i)%r)
+            call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+         end associate
+      end if
+   end procedure model_element_torques
+
+   module procedure model_rhs_part
+      integer :: k, i, l, r, o
+      real(wp) :: tl, tr, f
+      self%ws_step_end = .false.
+      do k = 1, size(kin)
+         i = kin(k)
+         if (self%fn(i)%kind == nk_plain) then   ! (node_kinematics written out: as in rhs_fast)
+            o = self%fn(i)%off
+            self%theta(i) = y(o + 1)
+            self%omega(i) = y(o + 2)
+         else
+            call node_kinematics(self, i, t, y, self%theta(i), self%omega(i))
+         end if
+         self%torque(i) = self%fn(i)%load0
+      end do
+      do k = 1, size(self%dyn_loads)
+         i = self%dyn_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      if (self%any_needs_loads) then
+         do k = 1, size(els)
+            i = els(k)
+            if (.not. self%elements(i)%e%needs_loads) cycle
+            self%elements(i)%e%ext_left = self%torque(self%fe(i)%l)
+            self%elements(i)%e%ext_right = self%torque(self%fe(i)%r)
+         end do
+      end if
+      do k = 1, size(els)
+         i = els(k)
+         associate (e => self%fe(i))
+            l = e%l
+            r = e%r
+            if (e%linear .or. e%form >= lf_open) then                      ! a family's row
+               call family_row(self, i, tl, tr, f)
+            else
+               call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
+            end if
+         end associate
+         self%torque(l) = self%torque(l) + tl
+         self%torque(r) = self%torque(r) + tr
+      end do
+      do k = 1, size(der)
+         i = der(k)
+         associate (nd => self%fn(i))
+            select case (nd%kind)
+            case (nk_plain)
+               o = nd%off
+               dydt(o + 1) = y(o + 2)
+               dydt(o + 2) = (self%torque(i) - nd%d*y(o + 2))/nd%j
+            case (nk_other)
+               call self%nodes(i)%n%derivatives(t, y, self%torque(i), dydt)
+            end select
+         end associate
+      end do
+   end procedure model_rhs_part
+
+   module procedure model_apply_loads
+      call loads_at(self, t)
+   end procedure model_apply_loads
+
+   !> `model_apply_loads` without the dispatch.
+   subroutine loads_at(self, t)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer :: i
+      do i = 1, size(self%fn)
+         self%torque(i) = self%fn(i)%load0
+      end do
+      call loads_varying(self, t)
+   end subroutine loads_at
+
+   !> The loads that vary with t, and the loads published to the elements that
+   !> read them (after the constant sums are in self%torque).
+   subroutine loads_varying(self, t)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      integer :: i, k, l
+      do k = 1, size(self%dyn_loads)
+         i = self%dyn_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      if (.not. self%any_needs_loads) return
+      do i = 1, size(self%elements)
+         if (.not. self%elements(i)%e%needs_loads) cycle
+         self%elements(i)%e%ext_left = self%torque(self%elements(i)%e%left)
+         self%elements(i)%e%ext_right = self%torque(self%elements(i)%e%right)
+      end do
+   end subroutine loads_varying
+end submodule trainsim_model_rhs

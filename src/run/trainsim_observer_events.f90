@@ -1,0 +1,272 @@
+!> The observer (trainsim_observer) at the run's start, its events and its end: the
+!> sink opened and the first sample (`start`), the event table's rows streamed to the
+!> sink as events happen (`record_events`), the state at a local event instant of
+!> RK4 (`step_part`), and the metrics, statistics and last rows at the end (`finish`).
+submodule(trainsim_observer) trainsim_observer_events
+   implicit none
+
+contains
+
+   !> Begin a run at (t, y): open the sink and record the first sample.
+   module subroutine obs_start(self, model, t, y, sink, err)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      class(sink_t), intent(inout), target :: sink   !< kept by the observer until finish (events)
+      type(error_t), allocatable, intent(out) :: err
+      integer :: nn, ne, nmax
+      nn = size(model%nodes); ne = size(model%elements)
+      allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
+      allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
+      allocate (self%s%contact(ne), self%s%pairs(ne))
+      self%drivers = input_drivers(model)
+      allocate (self%s%inputs(input_series_count(model)))
+      allocate (self%res%el(ne), self%res%events(ne), self%open_row(ne))
+      self%open_row = 0
+      self%out => sink
+      self%n_events = 0
+      self%keep_events = model%run%keep_events
+      if (self%keep_events) allocate (self%kept(256))
+      self%track = model%run%track_energy
+      self%t_metrics = model%run%t_start + model%run%settle_time
+      ! settling until periodic: the metrics start when the run has settled (simulate)
+      if (model%run%settle_tol > 0.0_wp) self%t_metrics = huge(1.0_wp)
+      self%t_prev = t
+      ! the peak-to-peak metrics are computed online (memory independent of the
+      ! run length); the whole series of samples is kept in memory only when the
+      ! caller asks (keep_series)
+      allocate (self%turns(ne))
+      self%turns%hyst = p2p_hysteresis
+      allocate (self%turn_d1(ne), self%turn_d2(ne))
+      self%turn_init = .false.
+      self%turn_gap = 0.25_wp*model%run%dt
+      self%keep = model%run%keep_series
+      self%take_samples = sink%stores_samples()
+      self%speeds_only = self%take_samples .and. sink%speeds_only()
+      self%want_whole = (self%take_samples .and. .not. self%speeds_only) .or. self%keep
+      nmax = 0
+      if (self%keep) nmax = 1024
+      allocate (self%res%series_t(nmax), self%res%series_disp(ne, nmax))
+      allocate (self%res%series_theta(nn, nmax), self%res%series_omega(nn, nmax))
+      allocate (self%th_prev(nn), self%om_prev(nn), self%force_prev(ne), self%disp_prev(ne), self%torque_prev(ne), &
+                self%contact_prev(ne))
+      self%contact_prev = 0
+      allocate (self%t_counted(ne))
+      self%t_counted = -huge(1.0_wp)
+      call sink%open(make_meta(model), err)
+      if (allocated(err)) return
+      call self%step(model, t, y)
+      call self%sample(model, t, t, y, sink, err)
+      self%started = .not. allocated(err)
+   end subroutine obs_start
+
+   !> At a local event instant (integrator_t%local_instant, D-32): only the
+   !> elements els, whose nodes (among `nodes`) are integration points at t,
+   !> are evaluated and folded into the metrics. Every other element's state
+   !> at t is an interpolation inside a step that ends later: its extremes are
+   !> taken at that step's end, as on any step; the energy at the step's end.
+   !> (Fixed-step integrators only: no peak refinement inside steps.)
+   module subroutine obs_step_part(self, model, t, y, nodes, els)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      integer, intent(in) :: nodes(:), els(:)
+      call self%fill_part(model, t, y, nodes, els)
+      call self%update_part(t, els)
+   end subroutine obs_step_part
+
+   !> `fill` for the nodes `nodes` and the elements els only (their nodes among
+   !> `nodes`). The sample buffer is then not a whole sample: its time is set so
+   !> that `sample` fills it again.
+   module subroutine obs_fill_part(self, model, t, y, nodes, els)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      integer, intent(in) :: nodes(:), els(:)
+      integer :: k, i, l, r
+      call model%kinematics_part(t, y, nodes)
+      if (model%any_needs_loads) call model%apply_loads(t)
+      self%s%t = -huge(1.0_wp)
+      self%s_whole = .false.
+      do k = 1, size(nodes)
+         self%s%theta(nodes(k)) = model%theta(nodes(k))
+         self%s%omega(nodes(k)) = model%omega(nodes(k))
+      end do
+      do k = 1, size(els)
+         i = els(k)
+         call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
+         associate (e => model%elements(i)%e)
+            l = e%left; r = e%right
+            call e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), &
+                          self%s%displacement(i), self%s%force(i), self%s%contact(i), self%s%pairs(i))
+         end associate
+      end do
+   end subroutine obs_fill_part
+
+   !> Record events that happened at (t, y) (the state after the mode update):
+   !> each row goes to the sink now; a contact's row is kept (slot i of
+   !> self%res%events for element i) until the contact ends, then handed over
+   !> again with its peak force and duration.
+   module subroutine obs_record_events(self, model, t, y, evs, nev, err, nodes, els)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      type(event_t), intent(in) :: evs(:)
+      integer, intent(in) :: nev
+      type(error_t), allocatable, intent(out) :: err
+      !> at a local event instant (see step_part): its nodes and elements (the
+      !> events' elements among them); only those are evaluated
+      integer, intent(in), optional :: nodes(:), els(:)
+      type(event_t) :: row
+      integer :: k, i
+      if (nev == 0) return
+      if (present(els)) then
+         call self%fill_part(model, t, y, nodes, els)
+      else
+         call self%fill(model, t, y)
+      end if
+      do k = 1, nev
+         i = evs(k)%element
+         self%n_events = self%n_events + 1
+         row = evs(k)
+         associate (e => model%elements(i)%e)
+            row%theta_left = self%s%theta(e%left)
+            row%omega_left = self%s%omega(e%left)
+            row%theta_right = self%s%theta(e%right)
+            row%omega_right = self%s%omega(e%right)
+            row%displacement = self%s%displacement(i)
+            row%force = self%s%force(i)
+         end associate
+         associate (m => self%res%el(i))
+            select case (evs(k)%kind)
+            case (ev_contact_front, ev_contact_rear)
+               if (m%open_event > 0) then   ! a new contact ends the one in progress
+                  self%res%events(i)%duration = t - self%res%events(i)%t
+                  call close_row(i)
+                  if (allocated(err)) return
+               end if
+               row%peak_force = abs(self%s%force(i))
+               self%res%events(i) = row
+               self%open_row(i) = self%n_events
+               m%open_event = i
+               if (t >= self%t_metrics) then
+                  m%impacts = m%impacts + 1
+                  m%max_approach_velocity = max(m%max_approach_velocity, abs(evs(k)%approach_velocity))
+               end if
+            case (ev_separation)
+               if (m%open_event > 0) then
+                  associate (o => self%res%events(i))
+                     o%duration = t - o%t
+                     o%peak_force = max(o%peak_force, abs(self%s%force(i)))
+                     if (o%t >= self%t_metrics) m%max_peak_force = max(m%max_peak_force, o%peak_force)
+                     row%peak_force = o%peak_force
+                     row%duration = o%duration
+                  end associate
+                  call close_row(i)
+                  if (allocated(err)) return
+               end if
+               m%open_event = 0
+               if (t >= self%t_metrics) m%separations = m%separations + 1
+            case default
+               if (t >= self%t_metrics) m%zone_changes = m%zone_changes + 1
+            end select
+         end associate
+         call self%out%write_event(self%n_events, row, err)
+         if (allocated(err)) return
+         if (self%keep_events) call keep_row(self%n_events, row)
+      end do
+      ! the state just after the mode change belongs to the metrics too: a mesh
+      ! force jumps at a zone change, and its peak may be right there. (No
+      ! sample is written: samples stay on the output grid, and the event
+      ! table holds the state at each event.)
+      if (present(els)) then
+         call self%update_part(t, els)
+         return
+      end if
+      call self%update_metrics(model, t)
+      if (self%refine_peaks) call self%keep_step_end()
+   contains
+      !> Element j's contact ended: its row, final, to the sink (and the kept table).
+      subroutine close_row(j)
+         integer, intent(in) :: j
+         call self%out%update_event(self%open_row(j), self%res%events(j), err)
+         if (self%keep_events) self%kept(self%open_row(j)) = self%res%events(j)
+         self%open_row(j) = 0
+      end subroutine close_row
+      subroutine keep_row(n, r)
+         integer, intent(in) :: n
+         type(event_t), intent(in) :: r
+         type(event_t), allocatable :: tmp(:)
+         if (n > size(self%kept)) then
+            allocate (tmp(2*size(self%kept)))
+            tmp(1:n - 1) = self%kept(1:n - 1)
+            call move_alloc(tmp, self%kept)
+         end if
+         self%kept(n) = r
+      end subroutine keep_row
+   end subroutine obs_record_events
+
+   !> End of a successful run: the rows of contacts still open to the sink,
+   !> close the sink and fill the result. With `interrupted`, the end of a run
+   !> stopped at t by a signal: the history ends at the last output time
+   !> already written (the state at t is not added), and the statistics say
+   !> the run did not complete.
+   module subroutine obs_finish(self, model, t, y, stats, sink, result, err, interrupted)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, y(:)
+      type(run_stats_t), intent(in) :: stats
+      class(sink_t), intent(inout) :: sink
+      type(run_result_t), intent(out) :: result
+      type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: interrupted
+      type(event_t) :: no_rows(0)
+      integer :: i
+      logical :: stopped
+      stopped = .false.
+      if (present(interrupted)) stopped = interrupted
+      ! contacts still open at the end count towards the peak force; their rows
+      ! get the peak force so far (duration stays -1)
+      do i = 1, size(model%elements)
+         if (self%res%el(i)%open_event > 0) then
+            associate (o => self%res%events(i))
+               if (o%t >= self%t_metrics) self%res%el(i)%max_peak_force = max(self%res%el(i)%max_peak_force, o%peak_force)
+            end associate
+            call sink%update_event(self%open_row(i), self%res%events(i), err)
+            if (allocated(err)) return
+            if (self%keep_events) self%kept(self%open_row(i)) = self%res%events(i)
+         end if
+      end do
+      if (self%s%t < t .and. .not. stopped) then   ! make sure the final state is in the file
+         call self%fill(model, t, y)
+         call self%emit(sink, err)
+         if (allocated(err)) return
+      end if
+      self%res%stats = stats
+      self%res%stats%events = int(self%n_events, i8)
+      self%res%stats%t_final = t
+      self%res%stats%completed = .not. stopped
+      self%res%t_sampled = self%t_sampled
+      deallocate (self%res%events)
+      if (self%keep_events) then
+         self%res%events = self%kept(1:self%n_events)
+         deallocate (self%kept)
+      else
+         allocate (self%res%events(0))
+      end if
+      do i = 1, size(model%elements)
+         call self%turns(i)%figures(self%res%el(i)%p2p_range, self%res%el(i)%p2p_mean, self%res%el(i)%p2p_swings)
+         self%res%el(i)%p2p_exact = self%turns(i)%exact
+      end do
+      self%out => null()
+      call sink%close(no_rows, self%res%stats, self%res%el, err)
+      if (allocated(err)) return
+      result = self%res
+      result%y_final = y
+      result%t_final = t
+      result%series_t = result%series_t(1:self%n_series)
+      result%series_disp = result%series_disp(:, 1:self%n_series)
+      result%series_theta = result%series_theta(:, 1:self%n_series)
+      result%series_omega = result%series_omega(:, 1:self%n_series)
+   end subroutine obs_finish
+end submodule trainsim_observer_events
