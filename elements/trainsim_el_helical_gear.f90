@@ -63,7 +63,7 @@ contains
       type(units_t), intent(in) :: units
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: zeta_deg, e_default
-      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-72)
+      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-73)
       if (grp%holds('backlash')) then   ! the spur geometry form's key (D-62)
          call fatal_error(err, grp%where('backlash')//": error: a helical_gear takes 'half_backlash', half the "// &
                           "TOTAL backlash along the line of action ('backlash' is the spur_gear geometry form's key): "// &

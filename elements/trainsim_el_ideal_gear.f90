@@ -45,7 +45,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       associate (unused => units)
       end associate
-      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-72)
+      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-73)
       call grp%get_real('stiffness', self%k, err); if (allocated(err)) return
       call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
       call grp%get_real('rb_driver', self%r1, err); if (allocated(err)) return

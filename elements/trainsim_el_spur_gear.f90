@@ -122,7 +122,7 @@ contains
       character(len=:), allocatable :: zf
       real(wp) :: pd, modl, kw, bl, r1p, r2p, k, kdef
       logical :: geometry, has_pitch, has_module
-      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-72)
+      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-73)
 
       ! both asked (has records the query), so neither key is reported as unknown
       has_pitch = grp%has('diametral_pitch')

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The Table 5.5 rig's gear pair on an elastically mounted housing (D-72).
+"""The Table 5.5 rig's gear pair on an elastically mounted housing (D-73).
 
 Usage (as CTest runs it, cwd = repo root):
 

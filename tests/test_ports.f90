@@ -1,4 +1,4 @@
-!> n-port elements (D-72): the `port_*` defaults of a two-port element give its
+!> n-port elements (D-73): the `port_*` defaults of a two-port element give its
 !> own answers bit for bit, and a gear pair on a carrier (port 3) is its own
 !> physics in the carrier's frame: the torques are minus the gradient of its
 !> elastic energy over all three ports (virtual work), the carrier takes

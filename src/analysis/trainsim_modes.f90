@@ -119,7 +119,7 @@ contains
       end do
       do j = 1, size(model%elements)
          call linearise_ports(model%elements(j)%e, st, inv_j, ends, np, ke, ce)
-         do a = 1, np                                      ! over the element's ports (D-72)
+         do a = 1, np                                      ! over the element's ports (D-73)
             do b = 1, np
                i = dof(ends(a))
                info = dof(ends(b))
@@ -147,7 +147,7 @@ contains
       modes%omega_max = two_pi*maxval(modes%freq_hz)
    end subroutine compute_modes
 
-   !> Element e linearised over its np ports (D-72): their nodes ends(1:np), ke and
+   !> Element e linearised over its np ports (D-73): their nodes ends(1:np), ke and
    !> ce (1:np, 1:np); `linearise` for two, `port_linearise` beyond (inv_j: all nodes').
    pure subroutine linearise_ports(e, state, inv_j, ends, np, ke, ce)
       class(element_t), intent(in) :: e
@@ -195,7 +195,7 @@ contains
       state = with_loads(model, state_in)
       call model%initial_state(y)
       call model%init_modes(model%run%t_start, y)
-      use_dense = model%n_states <= dense_state_limit .or. model%nport   ! (the O(n) bound has two-port blocks: D-72)
+      use_dense = model%n_states <= dense_state_limit .or. model%nport   ! (the O(n) bound has two-port blocks: D-73)
       if (present(dense)) use_dense = use_dense .or. dense
       if (.not. use_dense) then
          call rk4_dt_bound(model, state, y, dt_max, omega_crit, freq_hz=f_bound)
@@ -331,7 +331,7 @@ contains
       type(lin_state_t), intent(in) :: state_in
       real(wp), intent(out) :: dt_max, bound
       real(wp), allocatable :: y(:)
-      if (model%nport) then   ! the O(n) bound has two-port blocks (D-72): no quick pass, the dense limit decides
+      if (model%nport) then   ! the O(n) bound has two-port blocks (D-73): no quick pass, the dense limit decides
          dt_max = 0.0_wp
          bound = huge(1.0_wp)
          return
@@ -444,7 +444,7 @@ contains
             call linearise_ports(e, state, inv_j, ends, np, ke, ce)
             a = ke(1, 1)*inv_j(ends(1)) + ke(2, 2)*inv_j(ends(2))     ! k/m of the relative motion
             b = ce(1, 1)*inv_j(ends(1)) + ce(2, 2)*inv_j(ends(2))     ! c/m
-            do p = 3, np                                              ! further ports (D-72)
+            do p = 3, np                                              ! further ports (D-73)
                a = a + ke(p, p)*inv_j(ends(p))
                b = b + ce(p, p)*inv_j(ends(p))
             end do

@@ -77,7 +77,7 @@ contains
          if (model%elements(i)%e%n_ports() == 2) cycle
          call fatal_error(err, model%elements(i)%e%origin//": error: the static preload (initial_state = 'preload', "// &
                           "modes --preload) does not yet take an element with more than two ports: element '"// &
-                          model%elements(i)%e%id//"' has a "//model%elements(i)%e%port_keys(1)%s//' (D-72)', err_input)
+                          model%elements(i)%e%id//"' has a "//model%elements(i)%e%port_keys(1)%s//' (D-73)', err_input)
          return
       end do
       call reference_node(model, info)

@@ -417,7 +417,7 @@ contains
    end subroutine read_elements
 
    !> The further ports an n-port element named in `configure` (its port_keys,
-   !> D-72, e.g. a gear pair's `carrier`): each key's node, which must be
+   !> D-73, e.g. a gear pair's `carrier`): each key's node, which must be
    !> defined and none of the element's other ports.
    subroutine read_ports(g, e, node_ids, err)
       type(deck_group_t), intent(inout) :: g

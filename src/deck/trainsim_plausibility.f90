@@ -502,7 +502,7 @@ contains
       allocate (parent(size(model%nodes)), piece(size(model%nodes)))
       parent = [(i, i=1, size(model%nodes))]
       do i = 1, size(model%elements)
-         do k = 2, model%elements(i)%e%n_ports()        ! every port joins port 1's piece (D-72)
+         do k = 2, model%elements(i)%e%n_ports()        ! every port joins port 1's piece (D-73)
             a = root(model%elements(i)%e%left)
             b = root(model%elements(i)%e%port(k))
             if (a /= b) parent(max(a, b)) = min(a, b)

@@ -263,7 +263,7 @@ contains
       self%el_states(1:3:2, :) = 1   ! empty ranges (1:0) for held nodes
       self%el_states(2:4:2, :) = 0
       do e = 1, size(model%elements)
-         if (model%elements(e)%e%n_ports() > 2) then   ! an n-port element (D-72): its guards may read every state
+         if (model%elements(e)%e%n_ports() > 2) then   ! an n-port element (D-73): its guards may read every state
             self%el_states(1:2, e) = [1, model%n_states]
             cycle
          end if

@@ -50,7 +50,7 @@ contains
             call grow(p%d3, p%e3, p%k3)
             p%d2 = p%k3
             call grow(p%d2, p%e2, p%k2)
-            p%used = 2*size(p%k2) < nn .and. .not. model%nport   ! (parts by left and right only: D-72)
+            p%used = 2*size(p%k2) < nn .and. .not. model%nport   ! (parts by left and right only: D-73)
             p%sk2 = states_of(p%k2)
             p%sk3 = states_of(p%k3)
             p%sk4 = states_of(p%k4)

@@ -21,7 +21,7 @@ contains
    !> {"title", "deck_file", "units": {name, length, force, torque, inertia},
    !>  "nodes": [{index, id, type, fixed, prescribed_speed, params: {name: value}, choices: {name: word}}],
    !>  "elements": [{index, id, type, left, right, [ports: {key: node},] displacement_unit, guards, params,
-   !>                choices}] (ports: an n-port element's further ports by deck key, e.g. carrier; D-72),
+   !>                choices}] (ports: an n-port element's further ports by deck key, e.g. carrier; D-73),
    !>  "loads": [{node, quantity, kind, line, keys: {key: text}}]}.
    !> Node and element indices are 1-based, as in the history file.
    subroutine write_description(deck, model, unit)
@@ -94,7 +94,7 @@ contains
 
    !> The raw tokens of a deck value, joined by ', ' (a long table: its first 6 and a count).
    !> ', "ports": {"carrier": "housing"}' for an element with ports beyond left and
-   !> right (D-72), '' for a two-port element.
+   !> right (D-73), '' for a two-port element.
    function more_ports(model, e) result(s)
       type(model_t), intent(in) :: model
       class(element_t), intent(in) :: e

@@ -8,7 +8,7 @@
 !> node (tl) and ON its right node (tr), positive in the direction of positive
 !> rotation. TRAIN's RTRQ of element i is -tl, its LTRQ seen by node i+1 is tr.
 !>
-!> Ports (D-72): left, right are ports 1, 2; an n-port element has more
+!> Ports (D-73): left, right are ports 1, 2; an n-port element has more
 !> (`more_ports`, deck keys `port_keys`) and answers the `port_*` procedures on
 !> arrays over its ports. Their defaults serve two ports and two ports on a
 !> carrier (port 3, `accept_carrier`): the element's physics in its frame.
@@ -108,7 +108,7 @@ module trainsim_element
       !> The deck keys that name the further ports, set by `configure` (the
       !> builder reads each as a node id into more_ports).
       type(string_t), allocatable :: port_keys(:)
-      !> On a carrier (port 3, D-72): the sense s of the right port's angle in
+      !> On a carrier (port 3, D-73): the sense s of the right port's angle in
       !> the carrier's frame, thr' = thr - s thc (the left port's is +1,
       !> thl' = thl - thc): -1 for an external gear pair, whose driven gear
       !> turns against the driver (TRAIN counts each gear's angle in its own
@@ -411,7 +411,7 @@ contains
    end function el_displacement_bound
 
    !> A two-port element that may sit on a carrier (a gear pair's housing,
-   !> D-72) calls this in `configure`: with the deck key `carrier` the carrier
+   !> D-73) calls this in `configure`: with the deck key `carrier` the carrier
    !> becomes its port 3 (the builder resolves the node) and the port
    !> defaults evaluate the element in the carrier's frame; `sense` is the
    !> right port's sense relative to the carrier (carrier_sense).
@@ -460,7 +460,7 @@ contains
    !> Torques t(k) on every port k at the ports' angles th and speeds w.
    !> Default: `torques` in the frame (el_frame); on a carrier, the carrier
    !> takes the reaction of both, t3 = -(t1 + s t2) (the housing's torque
-   !> balance, D-72; by virtual work on thl', thr').
+   !> balance, D-73; by virtual work on thl', thr').
    pure subroutine el_port_torques(self, th, w, t)
       class(element_t), intent(in) :: self
       real(wp), intent(in) :: th(:), w(:)

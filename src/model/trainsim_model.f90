@@ -102,7 +102,7 @@ module trainsim_model
       integer, allocatable :: guard_offset(:)    !< per element
       real(wp) :: energy0 = 0.0_wp               !< stored energy at t_start
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
-      !> some element has more than two ports (D-72): the general path only (no
+      !> some element has more than two ports (D-73): the general path only (no
       !> simple kernels, hot forms or linear-spring form for it, no RK4 local steps)
       logical :: nport = .false.
       ! workspace (sized once in `finalize`)

@@ -18,7 +18,7 @@ contains
          if (self%fe(i)%linear) then
             e = e + 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
          else if (self%nport) then
-            e = e + potential_at(self%elements(i)%e, self%theta)      ! (over its ports: D-72)
+            e = e + potential_at(self%elements(i)%e, self%theta)      ! (over its ports: D-73)
          else
             e = e + self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
          end if
@@ -103,7 +103,7 @@ contains
          if (self%fe(i)%linear) then
             pe = 0.5_wp*self%fe(i)%k*(self%fe(i)%r1*self%theta(l) - self%fe(i)%r2*self%theta(r))**2
          else if (self%nport) then
-            pe = potential_at(self%elements(i)%e, self%theta)         ! (over its ports: D-72)
+            pe = potential_at(self%elements(i)%e, self%theta)         ! (over its ports: D-73)
          else
             pe = self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
          end if

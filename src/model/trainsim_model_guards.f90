@@ -110,7 +110,7 @@ contains
       n = self%fe(i)%ng
       if (self%nport) then
          np = self%elements(i)%e%n_ports()
-         if (np > 2) then                                   ! an n-port element (D-72): every port from y
+         if (np > 2) then                                   ! an n-port element (D-73): every port from y
             do k = 1, np
                call node_kinematics(self, self%elements(i)%e%port(k), t, y, th(k), w(k))
             end do
@@ -265,7 +265,7 @@ contains
          r = self%fe(i)%r
          k = 2
          if (self%nport) k = self%elements(i)%e%n_ports()
-         if (k > 2) then                                     ! an n-port element (D-72; every node's
+         if (k > 2) then                                     ! an n-port element (D-73; every node's
             call port_update_at(self%elements(i)%e, t, self%theta, self%omega, fired(o + 1:o + n), local, m)
          else                                                ! kinematics known: no local steps with one)
             call self%elements(i)%e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), &

@@ -30,7 +30,7 @@ contains
                ends(1:2) = [e%left, e%right]
                call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
                                       self%omega(e%right), jt(1:2, 1:4))
-            else                                                  ! an n-port element (D-72)
+            else                                                  ! an n-port element (D-73)
                call port_kinematics(e, self%theta, self%omega, ends, th, w)
                call e%port_jacobian(th(1:np), w(1:np), jt(1:np, 1:2*np))
             end if

@@ -120,7 +120,7 @@ contains
                if (track) pdiss = pdiss + f
             else if (self%nport) then
                call general_torques(self%elements(i)%e, self%theta, self%omega, self%torque, track, tl, tr, &
-                                    pdiss, pin)                     ! (its further ports' torques added: D-72)
+                                    pdiss, pin)                     ! (its further ports' torques added: D-73)
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
                if (track) then
@@ -245,7 +245,7 @@ contains
       integer :: ends(max_ports)
       if (self%fe(i)%linear .or. self%fe(i)%form >= lf_open) then
          call family_row(self, i, tl, tr, pw)
-      else if (self%nport) then                                            ! (over its ports: D-72)
+      else if (self%nport) then                                            ! (over its ports: D-73)
          call port_torques_at(self%elements(i)%e, self%theta, self%omega, ends, tp, pw)
          tl = tp(1)
          tr = tp(2)

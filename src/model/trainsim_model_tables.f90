@@ -388,7 +388,7 @@ contains
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left
          r = self%elements(i)%e%right
-         if (self%elements(i)%e%n_ports() > 2) then         ! an n-port element (D-72)
+         if (self%elements(i)%e%n_ports() > 2) then         ! an n-port element (D-73)
             call port_init_at(self%elements(i)%e, self%theta, self%omega)
          else
             call self%elements(i)%e%init_mode(self%theta(l), self%omega(l), self%theta(r), self%omega(r))
@@ -421,7 +421,7 @@ contains
          call e%hot_form(h)
          if (q%linear .or. e%needs_loads .or. e%supplies_power) h%kind = hf_none
          if (self%nport) then
-            if (e%n_ports() > 2) then                      ! the hot forms have two ports (D-72)
+            if (e%n_ports() > 2) then                      ! the hot forms have two ports (D-73)
                h%kind = hf_none
                h%guards = hg_none
             end if

@@ -1,4 +1,4 @@
-!> The model's side of n-port elements (D-72): an element's ports' angles and
+!> The model's side of n-port elements (D-73): an element's ports' angles and
 !> speeds gathered from the node arrays, and its `port_*` procedures asked with
 !> them (trainsim_model's general path, energy, events and Jacobian). Two-port
 !> elements keep their own procedures there; nothing here allocates.
@@ -43,7 +43,7 @@ contains
       call e%port_torques_dissipation(th(1:np), w(1:np), t(1:np), p)
    end subroutine port_torques_at
 
-   !> Element e in the general RHS of a model with n-port elements (D-72), at
+   !> Element e in the general RHS of a model with n-port elements (D-73), at
    !> every node's kinematics (theta, omega): its torques on ports 1, 2 in tl, tr
    !> (the caller adds them as a two-port element's), those on its further ports
    !> added to torque(node) here; with `track` its dissipated and input power

@@ -195,7 +195,7 @@ contains
                cycle
             end if
          end if
-         if (model%nport) then                              ! (over its ports: D-72)
+         if (model%nport) then                              ! (over its ports: D-73)
             call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
                                                self%s%contact(i), self%s%pairs(i))
             cycle
@@ -427,7 +427,7 @@ contains
       if (.not. h > 0.0_wp) return
       do i = 1, size(model%elements)
          if (model%nport) then
-            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-72)
+            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-73)
          end if
          associate (e => model%elements(i)%e)
             l = e%left; r = e%right
@@ -712,7 +712,7 @@ contains
       do i = 1, size(model%elements)
          if (self%s%contact(i) == 0 .or. self%s%contact(i) /= self%contact_prev(i)) cycle
          if (model%nport) then
-            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-72)
+            if (model%elements(i)%e%n_ports() > 2) cycle   ! (the interpolants of two ports only, D-73)
          end if
          l = model%elements(i)%e%left
          r = model%elements(i)%e%right

@@ -95,7 +95,7 @@ contains
       do k = 1, size(els)
          i = els(k)
          call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
-         if (model%nport) then                              ! (over its ports: D-72)
+         if (model%nport) then                              ! (over its ports: D-73)
             call model%elements(i)%e%status_at(model%theta, model%omega, self%s%displacement(i), self%s%force(i), &
                                                self%s%contact(i), self%s%pairs(i))
             cycle

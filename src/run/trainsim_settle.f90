@@ -104,7 +104,7 @@ contains
       slot = modulo(st%j, settle_kmax + 1)
       call model%kinematics(t, y)
       do e = 1, ne
-         call model%elements(e)%e%status_at(model%theta, model%omega, st%x(e, slot), f, c, p)   ! (ports: D-72)
+         call model%elements(e)%e%status_at(model%theta, model%omega, st%x(e, slot), f, c, p)   ! (ports: D-73)
       end do
       st%x(ne + 1:, slot) = model%omega
       st%scale(1:ne) = max(st%scale(1:ne), abs(st%x(1:ne, slot)))

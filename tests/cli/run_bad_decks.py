@@ -133,7 +133,7 @@ CASES = [
     dict(name="element joins a node to itself",
          deck=RUN + NODES + "&element id = 's1', type = 'shaft', left = 'a', right = 'a', stiffness = 1.0e5 /\n",
          exit=2, stderr=["deck.nml:4:", "'s1'", "'a'", "to itself"]),
-    # n-port elements (D-72): a gear pair's carrier (housing) node
+    # n-port elements (D-73): a gear pair's carrier (housing) node
     dict(name="gear carrier is a missing node",
          deck=RUN + NODES + HOUSING + GEAR.format(carrier="zz"),
          exit=2, stderr=["deck.nml:5:", "'g'", "carrier = 'zz'", "not defined"]),
