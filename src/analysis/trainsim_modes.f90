@@ -187,7 +187,7 @@ contains
 
       state = with_loads(model, state_in)
       call model%initial_state(y)
-      call model%init_modes(model%run%t_start, y)
+      call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-73)
       use_dense = model%n_states <= dense_state_limit
       if (present(dense)) use_dense = use_dense .or. dense
       if (.not. use_dense) then
@@ -326,7 +326,7 @@ contains
       real(wp), intent(out) :: dt_max, bound
       real(wp), allocatable :: y(:)
       call model%initial_state(y)
-      call model%init_modes(model%run%t_start, y)
+      call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-73)
       call rk4_dt_bound(model, with_loads(model, state_in), y, dt_max, bound)
    end subroutine rk4_dt_quick
 
@@ -400,7 +400,7 @@ contains
       integer :: i, o
       state = with_loads(model, state_in)
       call model%initial_state(y)
-      call model%init_modes(model%run%t_start, y)
+      call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-73)
       call inverse_inertias(model, inv_j)
       allocate (f0(size(y)), f1(size(y)))
       yp = y
