@@ -2,7 +2,7 @@
 program test_deck
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, err_input, err_io
-   use trainsim_strings, only: string_t
+   use trainsim_strings, only: string_t, str
    use trainsim_deck, only: deck_t, deck_group_t, read_deck, parse_deck
    use trainsim_testing, only: suite_begin, test_begin, check, suite_end
    implicit none
@@ -33,6 +33,7 @@ program test_deck
    call test_getter_two_values_and_quoted()
    call test_getter_int_logical_string()
    call test_getter_real_array()
+   call test_str_int_as_i0()
    call suite_end()
 
 contains
@@ -598,5 +599,18 @@ contains
          call check('quoted element rejected', allocated(err))
       end associate
    end subroutine test_getter_real_array
+
+   !> str(i) writes what Fortran's own `(i0)` edit descriptor writes (it builds the
+   !> digits itself, D-74): zero, signs, every length of digits, both extremes.
+   subroutine test_str_int_as_i0()
+      integer :: vals(12), k
+      character(len=32) :: ref
+      call test_begin('str(integer) equals the (i0) edit descriptor')
+      vals = [0, 1, -1, 9, 10, -10, 99999, 123456789, -2147483647, huge(1), -huge(1) - 1, 1000000000]
+      do k = 1, size(vals)
+         write (ref, '(i0)') vals(k)
+         call check('str('//trim(ref)//') = '//str(vals(k)), str(vals(k)) == trim(ref))
+      end do
+   end subroutine test_str_int_as_i0
 
 end program test_deck

@@ -194,7 +194,7 @@ contains
 
       state = with_loads(model, state_in)
       call model%initial_state(y)
-      call model%init_modes(model%run%t_start, y)
+      call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-74)
       use_dense = model%n_states <= dense_state_limit .or. model%nport   ! (the O(n) bound has two-port blocks: D-73)
       if (present(dense)) use_dense = use_dense .or. dense
       if (.not. use_dense) then
@@ -337,7 +337,7 @@ contains
          return
       end if
       call model%initial_state(y)
-      call model%init_modes(model%run%t_start, y)
+      call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-74)
       call rk4_dt_bound(model, with_loads(model, state_in), y, dt_max, bound)
    end subroutine rk4_dt_quick
 
@@ -411,7 +411,7 @@ contains
       integer :: i, o, p, np, ends(max_ports)
       state = with_loads(model, state_in)
       call model%initial_state(y)
-      call model%init_modes(model%run%t_start, y)
+      call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-74)
       call inverse_inertias(model, inv_j)
       allocate (f0(size(y)), f1(size(y)))
       yp = y

@@ -190,13 +190,13 @@ contains
       call tokenize(deck%text, file, toks, err)
       if (allocated(err)) return
 
-      allocate (groups(8), names(0), counts(0))
+      ! as many groups as '&name' tokens: no growth, no copy of a group (D-74)
+      allocate (groups(max(count(toks%kind(1:toks%n) == tk_group), 1)), names(0), counts(0))
       ngroups = 0
       i = 1
       do while (i <= toks%n)
          select case (toks%kind(i))
          case (tk_group)
-            if (ngroups == size(groups)) call grow_groups(groups)
             ngroups = ngroups + 1
             do k = 1, size(names)
                if (names(k)%s == toks%text(i)%s) exit
@@ -316,7 +316,11 @@ contains
          call parse_values(toks, i, file, g, entries, nent, err)
          if (allocated(err)) return
       end do
-      g%entries = entries(1:nent)
+      deallocate (g%entries)
+      allocate (g%entries(nent))
+      do k = 1, nent
+         call move_entry(entries(k), g%entries(k))
+      end do
    end subroutine parse_group
 
    !> The values of entry `nent` (its key and '=' read), from token `i` to the next key, the
@@ -534,20 +538,26 @@ contains
       end do
    end function canonical_deck
 
-   subroutine grow_groups(groups)
-      type(deck_group_t), allocatable, intent(inout) :: groups(:)
-      type(deck_group_t), allocatable :: tmp(:)
-      allocate (tmp(2*size(groups)))
-      tmp(1:size(groups)) = groups
-      call move_alloc(tmp, groups)
-   end subroutine grow_groups
-
    subroutine grow_entries(entries)
       type(deck_entry_t), allocatable, intent(inout) :: entries(:)
       type(deck_entry_t), allocatable :: tmp(:)
+      integer :: k
       allocate (tmp(2*size(entries)))
-      tmp(1:size(entries)) = entries
+      do k = 1, size(entries)
+         call move_entry(entries(k), tmp(k))
+      end do
       call move_alloc(tmp, entries)
    end subroutine grow_entries
+
+   !> `to` takes `from`'s contents without copying its strings (one allocation
+   !> fewer per string, D-74); `from` is left empty.
+   subroutine move_entry(from, to)
+      type(deck_entry_t), intent(inout) :: from, to
+      call move_alloc(from%key, to%key)
+      call move_alloc(from%values, to%values)
+      call move_alloc(from%quoted, to%quoted)
+      to%line = from%line
+      to%used = from%used
+   end subroutine move_entry
 
 end module trainsim_deck

@@ -380,11 +380,13 @@ contains
    integer function find(self, key) result(k)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in) :: key
+      character(len=len(key)) :: low
       integer :: j
       k = 0
       if (.not. allocated(self%entries)) return
+      low = to_lower(key)
       do j = 1, size(self%entries)
-         if (self%entries(j)%key == to_lower(key)) then
+         if (self%entries(j)%key == low) then
             k = j
             return
          end if
@@ -483,15 +485,19 @@ contains
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
       type(string_t), allocatable :: tmp(:)
+      character(len=len(key)) :: low
       integer :: j, n
       if (.not. allocated(self%queried)) allocate (self%queried(0))
+      low = to_lower(key)
       n = size(self%queried)
       do j = 1, n
-         if (self%queried(j)%s == to_lower(key)) return
+         if (self%queried(j)%s == low) return
       end do
       allocate (tmp(n + 1))
-      tmp(1:n) = self%queried
-      tmp(n + 1)%s = to_lower(key)
+      do j = 1, n   ! the strings moved, not copied (D-74)
+         call move_alloc(self%queried(j)%s, tmp(j)%s)
+      end do
+      tmp(n + 1)%s = low
       call move_alloc(tmp, self%queried)
    end subroutine record_query
 

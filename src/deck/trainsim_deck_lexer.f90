@@ -203,7 +203,7 @@ contains
       character(len=*), intent(in) :: text
       integer, allocatable :: ti(:)
       type(string_t), allocatable :: ts(:)
-      integer :: n
+      integer :: n, k
       n = toks%n
       if (n == size(toks%kind)) then
          allocate (ti(2*n))
@@ -213,7 +213,9 @@ contains
          ti(1:n) = toks%line
          call move_alloc(ti, toks%line)
          allocate (ts(2*n))
-         ts(1:n) = toks%text
+         do k = 1, n   ! the strings moved, not copied
+            call move_alloc(toks%text(k)%s, ts(k)%s)
+         end do
          call move_alloc(ts, toks%text)
       end if
       n = n + 1

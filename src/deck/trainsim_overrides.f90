@@ -303,6 +303,10 @@ contains
       do i = 1, size(deck%groups)
          is_sweep(i) = deck%groups(i)%name == 'sweep'
       end do
+      if (.not. any(is_sweep)) then   ! no copy of the deck's groups (D-74)
+         allocate (sweeps(0))
+         return
+      end if
       sweeps = pack(deck%groups, is_sweep)
       deck%groups = pack(deck%groups, .not. is_sweep)
    end subroutine split_sweep_groups

@@ -463,10 +463,15 @@ module trainsim_model
          real(wp), intent(out) :: th, om
       end subroutine node_kinematics
 
-      !> Set every element's discrete mode from the state at t_start.
-      module subroutine model_init_modes(self, t, y)
+      !> Set every element's discrete mode from the state at t_start. With
+      !> `tables = .false.` (an analysis of the state: the dt advice and
+      !> checks, D-74) the fast-path tables are not rebuilt first: the
+      !> elements' own procedures are current, the hot path may not be until
+      !> a run's own init_modes (every run starts with one).
+      module subroutine model_init_modes(self, t, y, tables)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
+         logical, intent(in), optional :: tables
       end subroutine model_init_modes
 
       !> Element j's static-preload mode (`preload_mode` of the element: face +1,

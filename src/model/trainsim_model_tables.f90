@@ -383,7 +383,10 @@ contains
 
    module procedure model_init_modes
       integer :: i, l, r
-      call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
+      logical :: rebuild
+      rebuild = .true.
+      if (present(tables)) rebuild = tables
+      if (rebuild) call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
       call self%kinematics(t, y)
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left

@@ -165,9 +165,9 @@ contains
    subroutine make_element(type_name, el)
       character(len=*), intent(in) :: type_name
       class(element_t), allocatable, intent(out) :: el
-      type(element_row_t), allocatable :: rows(:)
+      type(element_row_t), allocatable, save :: rows(:)   ! one copy, not one per element (D-74)
       integer :: i
-      call element_table(rows)
+      if (.not. allocated(rows)) call element_table(rows)
       do i = 1, size(rows)
          if (matches(type_name, rows(i)%name, rows(i)%aliases)) then
             call rows(i)%make(el)
@@ -182,9 +182,9 @@ contains
    subroutine make_node(type_name, nd)
       character(len=*), intent(in) :: type_name
       class(node_t), allocatable, intent(out) :: nd
-      type(node_row_t), allocatable :: rows(:)
+      type(node_row_t), allocatable, save :: rows(:)   ! one copy, not one per node (D-74)
       integer :: i
-      call node_table(rows)
+      if (.not. allocated(rows)) call node_table(rows)
       do i = 1, size(rows)
          if (matches(type_name, rows(i)%name, rows(i)%aliases)) then
             call rows(i)%make(nd)
