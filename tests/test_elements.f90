@@ -615,7 +615,7 @@ contains
       call mg%rhs(0.1_wp, y, dg)
       call check('inner-stage RHS: the same derivatives to the bit as the full RHS', all(ds == dg))
       call check('inner-stage RHS: the workspace is not marked as a step end', .not. ms%ws_step_end)
-      ! RK4's inner stage at y0 + c k (D-72 (perf)): the kernel reads the stage's
+      ! RK4's inner stage at y0 + c k (D-73 (perf)): the kernel reads the stage's
       ! state without forming it, the generic model forms it; both give the
       ! derivatives at that state to the bit
       yk = [(0.5_wp*cos(0.7_wp*i), i=1, size(y))]
@@ -888,7 +888,7 @@ contains
             call m%rhs_stage(0.1_wp*p, y, ds)
             call m%rhs(0.1_wp*p, y, df)
             same = same .and. all(ds == df)
-            ! RK4's inner stage at y0 + c k with y0 + c k = y (D-72 (perf)): to the bit
+            ! RK4's inner stage at y0 + c k with y0 + c k = y (D-73 (perf)): to the bit
             yk = [(0.3_wp*sin(0.9_wp*i + p), i=1, size(y))]
             y0 = y - 0.25_wp*yk
             yt = y0 + 0.25_wp*yk

@@ -295,7 +295,7 @@ contains
       if (left_limit) t4 = t + h - 1.0e-9_wp*h
       hh = 0.5_wp*h
       ! inner stages at y + c k: no one reads the model's workspace after them
-      ! (`rhs_stage_at`; a simple model does not form the stage's state, D-72 (perf))
+      ! (`rhs_stage_at`; a simple model does not form the stage's state, D-73 (perf))
       call model%rhs_stage_at(t + 0.5_wp*h, y, hh, self%k1, self%ytmp, self%k2)
       call model%rhs_stage_at(t + 0.5_wp*h, y, hh, self%k2, self%ytmp, self%k3)
       call model%rhs_stage_at(t4, y, h, self%k3, self%ytmp, self%k4)

@@ -312,7 +312,7 @@ module trainsim_model
       !> dy/dt at (t, y + c k) as `model_rhs_stage` at that state, the same values
       !> bit for bit, for RK4's inner stages: a simple model's kernel reads
       !> y(j) + c k(j) where it reads the state (its nodes' angles and speeds),
-      !> without forming the state (ytmp untouched; D-72 (perf)); any other model
+      !> without forming the state (ytmp untouched; D-73 (perf)); any other model
       !> forms it in ytmp and runs `model_rhs`.
       module subroutine model_rhs_stage_at(self, t, y, c, k, ytmp, dydt)
          class(model_t), intent(inout) :: self

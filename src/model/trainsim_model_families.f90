@@ -93,7 +93,7 @@ module trainsim_model_families
    !> node, no_tension 0 or 1), (s, c, k, dmp, b, r1, r2), its rows by law in
    !> three tables one after another (`contacts` is all three): open, closed
    !> with the yang_sun law, closed with the linear law; a row that changes law
-   !> moves to its table by swaps at the tables' borders (D-72 (perf)). An open
+   !> moves to its table by swaps at the tables' borders (D-73 (perf)). An open
    !> row carries k = dmp = b = 0 (its force is zero, and no stale parameter
    !> reaches the arithmetic).
    integer, parameter :: contact_ni = 4, contact_nr = 7

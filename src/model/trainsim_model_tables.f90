@@ -287,7 +287,7 @@ contains
    !> Element i's row of the clearance family from its hot form (D-35), in the
    !> table of its law (open, closed yang_sun, closed linear: one after another
    !> in `contacts`). A row whose law changed moves there by swaps at the
-   !> tables' borders, one border at a time (D-72 (perf)).
+   !> tables' borders, one border at a time (D-73 (perf)).
    subroutine set_contact_row(self, i)
       type(model_t), intent(inout) :: self
       integer, intent(in) :: i
