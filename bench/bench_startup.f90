@@ -1,4 +1,4 @@
-!> Start-up benchmark (issue #22 item 5, D-64 (startup)): the time from a deck's
+!> Start-up benchmark (issue #22 item 5, D-64): the time from a deck's
 !> text to the end of the first step, in process, phase by phase as `trainsim
 !> run --no-output` does it (app/main.f90 `load` and `do_run`):
 !>   parse      parse_deck of the deck's text;

@@ -1,4 +1,4 @@
-!> The O(n) RK4 step bound (`rk4_dt_bound`, D-64 (startup)) against the dense
+!> The O(n) RK4 step bound (`rk4_dt_bound`, D-64) against the dense
 !> analysis it replaces above dense_state_limit states:
 !> - its stiffness bound sqrt(mu_K) is >= the highest undamped circular
 !>   frequency of LAPACK's dsygv (`compute_modes`) on every bundled deck, the
@@ -29,7 +29,7 @@ program test_dt_bound
    use trainsim_test_support, only: load_model, load_model_text, nl
    implicit none
 
-   !> The bound's documented tightness (D-64 (startup)).
+   !> The bound's documented tightness (D-64).
    real(wp), parameter :: omega_factor = 1.25_wp, dt_factor = 0.65_wp
    character(len=48), parameter :: decks(9) = [character(len=48) :: &
                                   'inputs/branched_train.nml', 'inputs/dc_motor_geared_load.nml', &

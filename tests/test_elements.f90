@@ -535,7 +535,7 @@ contains
    subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(track)
       logical, intent(in) :: track
       type(model_t) :: ms, mg
-      real(wp), allocatable :: y(:), ds(:), dg(:)
+      real(wp), allocatable :: y(:), ds(:), dg(:), yk(:), yt(:), ya(:)
       real(wp) :: tl, tr, disp, force, stored, elastic
       integer :: i, contact, pairs
       logical :: torques_ok, status_ok
@@ -615,6 +615,19 @@ contains
       call mg%rhs(0.1_wp, y, dg)
       call check('inner-stage RHS: the same derivatives to the bit as the full RHS', all(ds == dg))
       call check('inner-stage RHS: the workspace is not marked as a step end', .not. ms%ws_step_end)
+      ! RK4's inner stage at y0 + c k (D-75): the kernel reads the stage's
+      ! state without forming it, the generic model forms it; both give the
+      ! derivatives at that state to the bit
+      yk = [(0.5_wp*cos(0.7_wp*i), i=1, size(y))]
+      yt = y + 0.37_wp*yk
+      call ms%rhs_stage(0.1_wp, yt, ds)
+      dg = -huge(1.0_wp)
+      ya = yt + huge(1.0_wp)
+      call ms%rhs_stage_at(0.1_wp, y, 0.37_wp, yk, ya, dg)
+      call check('inner stage at y + c k, kernel: to the bit the stage at that state', all(ds == dg))
+      dg = -huge(1.0_wp)
+      call mg%rhs_stage_at(0.1_wp, y, 0.37_wp, yk, ya, dg)
+      call check('inner stage at y + c k, generic (forms it in ytmp): to the bit', all(ds == dg) .and. all(ya == yt))
    end subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace
 
    !> Every clearance element type of the registry, with every contact law it
@@ -811,10 +824,10 @@ contains
       character(len=:), allocatable :: deck
       character(len=60) :: what(n_case)
       type(model_t) :: m
-      real(wp), allocatable :: y(:), ds(:), df(:)
+      real(wp), allocatable :: y(:), ds(:), df(:), y0(:), yk(:), yt(:), dk(:), ya(:)
       type(powered_shaft_t) :: ps
       integer :: ic, p, i
-      logical :: same, nonzero
+      logical :: same, nonzero, same_at
       call test_begin('stage_energy_rates_are_the_full_rhs_own')
       what = [character(len=60) :: 'chain, no dissipation (the rig''s way)', 'chain, a damped node only', &
               'chain, a damped shaft only', 'chain, damped nodes and shaft, a clearance', &
@@ -861,8 +874,9 @@ contains
             allocate (m%elements(2)%e, source=ps)
          end if
          call m%initial_state(y)
-         allocate (ds(size(y)), df(size(y)))
+         allocate (ds(size(y)), df(size(y)), dk(size(y)), ya(size(y)))
          same = .true.
+         same_at = .true.
          nonzero = .true.
          do p = 1, 25
             do i = 1, m%n_states
@@ -874,14 +888,23 @@ contains
             call m%rhs_stage(0.1_wp*p, y, ds)
             call m%rhs(0.1_wp*p, y, df)
             same = same .and. all(ds == df)
+            ! RK4's inner stage at y0 + c k with y0 + c k = y (D-75): to the bit
+            yk = [(0.3_wp*sin(0.9_wp*i + p), i=1, size(y))]
+            y0 = y - 0.25_wp*yk
+            yt = y0 + 0.25_wp*yk
+            call m%rhs_stage(0.1_wp*p, yt, df)
+            dk = -huge(1.0_wp)
+            call m%rhs_stage_at(0.1_wp*p, y0, 0.25_wp, yk, ya, dk)
+            same_at = same_at .and. all(dk == df)
             ! the rates are not trivially zero (an input from the loads or a held node)
             nonzero = nonzero .and. ds(m%n_states + 2) /= 0.0_wp
          end do
          call check(trim(what(ic))//': dy/dt and the energy rates to the bit the full RHS''s', same)
+         call check(trim(what(ic))//': the inner stage at y0 + c k to the bit the stage at that state', same_at)
          call check(trim(what(ic))//': the input power is not zero', nonzero)
          if (ic == 1) call check(trim(what(ic))//': nothing dissipates', ds(m%n_states + 1) == 0.0_wp)
          if (ic /= 1) call check(trim(what(ic))//': something dissipates', ds(m%n_states + 1) > 0.0_wp)
-         deallocate (ds, df)
+         deallocate (ds, df, dk, ya)
       end do
    end subroutine test_stage_energy_rates_are_the_full_rhs_own
 

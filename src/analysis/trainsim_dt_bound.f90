@@ -1,7 +1,7 @@
 !> RK4's stability region along rays from the origin, and an O(n) bound on the
 !> eigenvalues of the linearised train: the RK4 step advice of a train above
 !> `dense_state_limit` states, and the quick check before any eigenvalue
-!> problem (D-64 (startup)).
+!> problem (D-64).
 !>
 !> Power iteration on the absolute values of the symmetrically scaled
 !> stiffness B = M^-1/2 K M^-1/2 bounds its spectrum from above at every step
@@ -115,7 +115,7 @@ contains
       r = minval(rr) - radius_slope*0.125_wp*two_pi/n_ray
    end function rk4_min_radius
 
-   !> O(n) step bound of the train linearised in `state` at y (D-64 (startup)):
+   !> O(n) step bound of the train linearised in `state` at y (D-64):
    !> RK4 is stable for every h <= dt_max, and |lambda| <= bound for every
    !> eigenvalue of the first-order system over the physical states. `omega_k`
    !> (>= the highest undamped circular frequency) is sqrt of the stiffness

@@ -45,7 +45,7 @@ module trainsim_modes
    integer, parameter :: n_golden = 12
    !> Above this many states the step advice is the O(n) bound of
    !> `rk4_dt_bound` instead of the dense eigenvalue problems (O(n^3) each, up
-   !> to 24 of them: D-64 (startup)); `rk4_dt_limit(..., dense=.true.)` asks for them.
+   !> to 24 of them: D-64); `rk4_dt_limit(..., dense=.true.)` asks for them.
    integer, parameter, public :: dense_state_limit = 64
 
    interface
@@ -176,7 +176,7 @@ contains
    !> Above dense_state_limit states, unless `dense`, the limit is the O(n)
    !> bound (`rk4_dt_bound`, safe: never above the dense limit): omega_crit is
    !> then the bound on |lambda|, freq_hz that of the limiting point of its
-   !> region and damping_ratio 0 (no eigenvalue is known, D-64 (startup)).
+   !> region and damping_ratio 0 (no eigenvalue is known, D-64).
    subroutine rk4_dt_limit(model, state_in, dt_max, omega_crit, err, freq_hz, damping_ratio, dense)
       type(model_t), intent(inout) :: model
       type(lin_state_t), intent(in) :: state_in

@@ -80,7 +80,7 @@ contains
 
       !> Sorted, without repeats. An insertion sort of the few indices, not a
       !> sweep over every node or element (that made the set-up O(N) per
-      !> element with guards, O(N^2) in all: D-74 (startup2)).
+      !> element with guards, O(N^2) in all: D-74).
       pure function unique(a) result(u)
          integer, intent(in) :: a(:)
          integer, allocatable :: u(:)

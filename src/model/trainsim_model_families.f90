@@ -89,11 +89,14 @@ module trainsim_model_families
    !> dampers: c /= 0): (element, left node, right node), (k, c, r1, r2).
    integer, parameter :: spring_ni = 3, spring_nr = 4
    !> The clearance family (every element whose torques are its hot form, D-35;
-   !> a row refreshed in place when its element changes mode): (element, left
-   !> node, right node, closed, yang_sun law, no_tension; flags 0 or 1),
-   !> (s, c, k, dmp, b, r1, r2). An open row carries k = dmp = b = 0 (its force
-   !> is zero, and no stale parameter reaches the arithmetic).
-   integer, parameter :: contact_ni = 6, contact_nr = 7
+   !> a row refreshed when its element changes mode): (element, left node, right
+   !> node, no_tension 0 or 1), (s, c, k, dmp, b, r1, r2), its rows by law in
+   !> three tables one after another (`contacts` is all three): open, closed
+   !> with the yang_sun law, closed with the linear law; a row that changes law
+   !> moves to its table by swaps at the tables' borders (D-75). An open
+   !> row carries k = dmp = b = 0 (its force is zero, and no stale parameter
+   !> reaches the arithmetic).
+   integer, parameter :: contact_ni = 4, contact_nr = 7
    !> Plain inertias: (node, state offset, x, y), (J, d, the sum of its constant
    !> loads), in three tables of the same width one after another (`free` is
    !> all three, for their kinematics): an undamped node with one element torque
@@ -115,13 +118,16 @@ module trainsim_model_families
       integer :: nn = 0, ne = 0, ns = 0
       integer, allocatable :: iw(:)
       real(wp), allocatable :: rw(:)
-      type(table_t) :: springs, dampers, contacts, general, free, free1, free2, free_n, damped, held, loads
+      type(table_t) :: springs, dampers, contacts, c_open, c_ys, c_lin, general, free, free1, free2, free_n, &
+                       damped, held, loads
       !> per node i: its inertia (kinetic energy) at rw(jn + i)
       integer :: jn = 0
-      !> per element: its row in the clearance family (0: none)
+      !> per element: its row in the clearance family (0: none; its law's
+      !> table: c_open, c_ys or c_lin by where the row lies)
       integer, allocatable :: contact_row(:)
       !> More than one table adds dissipated power (springs with damping,
-      !> contacts, general): each row then leaves its power in pw and the powers
+      !> contacts, general), or more than one clearance (their rows move between
+      !> the law's tables): each row then leaves its power in pw and the powers
       !> are summed in element order, as the element loop of the general path does.
       logical :: mixed = .false.
       real(wp), allocatable :: th(:), w(:), pw(:)   !< scratch: node angles, speeds; element powers

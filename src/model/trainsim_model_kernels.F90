@@ -2,7 +2,7 @@
 !> a part of the train and the tables' probes: a linear spring and a clearance
 !> in its hot form with its contact law (D-35). Each is written once, in
 !> trainsim_model_spring_law.inc and trainsim_model_contact_law.inc, which the
-!> stage kernel (trainsim_model_stage.inc) includes too (D-70 (kernels)).
+!> stage kernel (trainsim_model_stage.inc) includes too (D-70).
 module trainsim_model_kernels
    use trainsim_kinds, only: wp
    use trainsim_element, only: hot_form_t, hf_open, hf_yang_sun
@@ -32,14 +32,28 @@ contains
    end subroutine spring
 
    !> A clearance in its hot form (D-35): the contact law of trainsim_contact
-   !> (its `cl_contact_force`) in the model, trainsim_model_contact_law.inc.
-   pure subroutine contact(closed, yang_sun, no_tension, s, c, k, dmp, b, r1, r2, thl, wl, thr, wr, d, p, pdot, fs, &
-                           tl, tr)
-      logical, intent(in) :: closed, yang_sun, no_tension
+   !> (its `cl_contact_force`) in the model, trainsim_model_contact_law.inc, by
+   !> its kind (hf_open, hf_yang_sun, hf_linear).
+   pure subroutine contact(kind, no_tension, s, c, k, dmp, b, r1, r2, thl, wl, thr, wr, d, p, pdot, fs, tl, tr)
+      integer, intent(in) :: kind
+      logical, intent(in) :: no_tension
       real(wp), intent(in) :: s, c, k, dmp, b, r1, r2, thl, wl, thr, wr
       real(wp), intent(out) :: d, p, pdot, fs, tl, tr
       real(wp) :: f
+      select case (kind)
+      case (hf_open)
+#define LAW 0
 #include "trainsim_model_contact_law.inc"
+#undef LAW
+      case (hf_yang_sun)
+#define LAW 1
+#include "trainsim_model_contact_law.inc"
+#undef LAW
+      case default
+#define LAW 2
+#include "trainsim_model_contact_law.inc"
+#undef LAW
+      end select
    end subroutine contact
 
    !> `contact` of a hot form h (an open one with k = dmp = b = 0, as its row).
@@ -48,10 +62,10 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: d, p, pdot, fs, tl, tr
       if (h%kind == hf_open) then
-         call contact(.false., .false., .false., h%s, h%c, 0.0_wp, 0.0_wp, 0.0_wp, h%r1, h%r2, thl, wl, thr, wr, &
+         call contact(hf_open, .false., h%s, h%c, 0.0_wp, 0.0_wp, 0.0_wp, h%r1, h%r2, thl, wl, thr, wr, &
                       d, p, pdot, fs, tl, tr)
       else
-         call contact(.true., h%kind == hf_yang_sun, h%no_tension, h%s, h%c, h%k, h%dmp, h%b, h%r1, h%r2, &
+         call contact(h%kind, h%no_tension, h%s, h%c, h%k, h%dmp, h%b, h%r1, h%r2, &
                       thl, wl, thr, wr, d, p, pdot, fs, tl, tr)
       end if
    end subroutine hot_contact

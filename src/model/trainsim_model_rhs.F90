@@ -40,7 +40,7 @@ contains
                           self%fam%th, self%fam%w)
       end if
    contains
-      ! the stage kernel, energy off and on (internal: inlined here, D-70 (kernels))
+      ! the stage kernel, energy off and on (internal: inlined here, D-70)
 #define KERNEL stage_plain
 #define ENERGY 0
 #define STEP_END 0
@@ -54,6 +54,39 @@ contains
 #undef ENERGY
 #undef STEP_END
    end procedure model_rhs_stage
+
+   module procedure model_rhs_stage_at
+      integer :: j
+      self%ws_step_end = .false.
+      if (.not. self%simple) then
+         do j = 1, self%n_y
+            ytmp(j) = y(j) + c*k(j)
+         end do
+         call rhs_fast(self, t, ytmp, dydt, .false.)
+      else if (self%run%track_energy) then
+         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
+                              self%fam%th, self%fam%w, c, k, self%fam%pw)
+      else
+         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
+                             self%fam%th, self%fam%w, c, k)
+      end if
+   contains
+      ! the stage kernel at y + c k, energy off and on (internal: inlined here)
+#define FROM 1
+#define KERNEL stage_plain_at
+#define ENERGY 0
+#define STEP_END 0
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#define KERNEL stage_energy_at
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+#undef FROM
+   end procedure model_rhs_stage_at
 
    module procedure model_block_ok
       ok = self%simple .and. self%blk%cap >= 4

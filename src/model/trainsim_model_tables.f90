@@ -189,6 +189,9 @@ contains
          call place(f%springs, size(sp), spring_ni, spring_nr)
          call place(f%dampers, size(sd), spring_ni, spring_nr)
          call place(f%contacts, size(ct), contact_ni, contact_nr)
+         f%c_open = table_t(size(ct), f%contacts%i0, f%contacts%r0)   ! (until set_contact_row moves them)
+         f%c_ys = table_t(0, f%contacts%i0 + contact_ni*size(ct), f%contacts%r0 + contact_nr*size(ct))
+         f%c_lin = f%c_ys
          call place(f%general, size(gen), 1, 0)
          call place(f%free, size(free), free_ni, free_nr)
          f%free1 = table_t(count(one), f%free%i0, f%free%r0)
@@ -207,6 +210,9 @@ contains
          call spring_rows(f%springs, sp)
          call spring_rows(f%dampers, sd)
          f%contact_row = unpack([(q, q=1, size(ct))], contact, 0)
+         f%iw(f%contacts%i0 + 1:f%contacts%i0 + contact_ni*size(ct)) = 0
+         f%rw(f%contacts%r0 + 1:f%contacts%r0 + contact_nr*size(ct)) = 0.0_wp
+         f%iw(f%contacts%i0 + 1:f%contacts%i0 + contact_ni*size(ct):contact_ni) = ct
          do q = 1, size(ct)
             call set_contact_row(self, ct(q))
          end do
@@ -217,7 +223,7 @@ contains
          end do
          f%iw(f%damped%i0 + 1:f%damped%i0 + size(dmp)) = self%fn(dmp)%off
          f%rw(f%damped%r0 + 1:f%damped%r0 + size(dmp)) = self%fn(dmp)%d
-         f%mixed = count([size(sd) > 0, size(ct) > 0, size(gen) > 0]) > 1
+         f%mixed = count([size(sd) > 0, size(ct) > 0, size(gen) > 0]) > 1 .or. size(ct) > 1
          ! the incidences: per node, its element torques in element order (left side first)
          first(1) = inc0 + 1
          do i = 1, nn
@@ -280,22 +286,72 @@ contains
       end subroutine place
    end subroutine build_families
 
-   !> Element i's row of the clearance family from its hot form (D-35), in place.
+   !> Element i's row of the clearance family from its hot form (D-35), in the
+   !> table of its law (open, closed yang_sun, closed linear: one after another
+   !> in `contacts`). A row whose law changed moves there by swaps at the
+   !> tables' borders, one border at a time (D-75).
    subroutine set_contact_row(self, i)
       type(model_t), intent(inout) :: self
       integer, intent(in) :: i
-      integer :: a, b
+      integer :: a, b, law, cur, p, n(3)
       logical :: closed
       associate (f => self%fam, h => self%fh(i))
-         a = f%contacts%i0 + contact_ni*(f%contact_row(i) - 1)
-         b = f%contacts%r0 + contact_nr*(f%contact_row(i) - 1)
          closed = h%kind /= hf_open
-         f%iw(a + 1:a + contact_ni) = [i, self%fe(i)%l, self%fe(i)%r, merge(1, 0, closed), &
-                                       merge(1, 0, h%kind == hf_yang_sun), merge(1, 0, h%no_tension .and. closed)]
+         law = 1
+         if (h%kind == hf_yang_sun) law = 2
+         if (h%kind == hf_linear) law = 3
+         n = [f%c_open%n, f%c_ys%n, f%c_lin%n]
+         p = f%contact_row(i)
+         cur = 1
+         if (p > n(1)) cur = 2
+         if (p > n(1) + n(2)) cur = 3
+         do while (cur < law)          ! to the next table: swap with the last row of this one
+            call swap_rows(p, sum(n(1:cur)))
+            n(cur) = n(cur) - 1
+            n(cur + 1) = n(cur + 1) + 1
+            cur = cur + 1
+         end do
+         do while (cur > law)          ! to the one before: swap with the first row of this one
+            call swap_rows(p, sum(n(1:cur - 1)) + 1)
+            n(cur) = n(cur) - 1
+            n(cur - 1) = n(cur - 1) + 1
+            cur = cur - 1
+         end do
+         f%c_open%n = n(1)
+         f%c_ys = table_t(n(2), f%contacts%i0 + contact_ni*n(1), f%contacts%r0 + contact_nr*n(1))
+         f%c_lin = table_t(n(3), f%c_ys%i0 + contact_ni*n(2), f%c_ys%r0 + contact_nr*n(2))
+         a = f%contacts%i0 + contact_ni*(p - 1)
+         b = f%contacts%r0 + contact_nr*(p - 1)
+         f%iw(a + 1:a + contact_ni) = [i, self%fe(i)%l, self%fe(i)%r, merge(1, 0, h%no_tension .and. closed)]
          ! an open row: no force, and no stale parameter in the arithmetic (k = dmp = b = 0)
          f%rw(b + 1:b + contact_nr) = [h%s, h%c, merge(h%k, 0.0_wp, closed), merge(h%dmp, 0.0_wp, closed), &
                                        merge(h%b, 0.0_wp, closed), h%r1, h%r2]
       end associate
+   contains
+
+      !> Rows p and p2 of the clearance family exchanged (p follows its row).
+      subroutine swap_rows(p, p2)
+         integer, intent(inout) :: p
+         integer, intent(in) :: p2
+         integer :: a1, a2, b1, b2, iv(contact_ni)
+         real(wp) :: rv(contact_nr)
+         if (p == p2) return
+         associate (f => self%fam)
+            a1 = f%contacts%i0 + contact_ni*(p - 1)
+            a2 = f%contacts%i0 + contact_ni*(p2 - 1)
+            b1 = f%contacts%r0 + contact_nr*(p - 1)
+            b2 = f%contacts%r0 + contact_nr*(p2 - 1)
+            iv = f%iw(a1 + 1:a1 + contact_ni)
+            f%iw(a1 + 1:a1 + contact_ni) = f%iw(a2 + 1:a2 + contact_ni)
+            f%iw(a2 + 1:a2 + contact_ni) = iv
+            rv = f%rw(b1 + 1:b1 + contact_nr)
+            f%rw(b1 + 1:b1 + contact_nr) = f%rw(b2 + 1:b2 + contact_nr)
+            f%rw(b2 + 1:b2 + contact_nr) = rv
+            f%contact_row(f%iw(a1 + 1)) = p
+            f%contact_row(f%iw(a2 + 1)) = p2
+            p = p2
+         end associate
+      end subroutine swap_rows
    end subroutine set_contact_row
 
 
