@@ -85,12 +85,9 @@ contains
          call fatal_error(err, grp%where('rb_driver')//': error: base radius must be > 0, got '//str(self%cl%r1), err_input)
       else if (.not. self%cl%r2 > 0.0_wp) then
          call fatal_error(err, grp%where('rb_driven')//': error: base radius must be > 0, got '//str(self%cl%r2), err_input)
-      else if (.not. (self%teeth >= 1.0_wp .and. self%teeth <= max_teeth)) then
-         call fatal_error(err, grp%where('teeth')//': error: teeth must be in [1, '//str(max_teeth)//'], got '// &
-                          str(self%teeth), err_input)
-      else if (self%teeth /= aint(self%teeth)) then   ! the tooth phase repeats once a tooth: a whole number
-         call fatal_error(err, grp%where('teeth')//': error: teeth = '//str(self%teeth)// &
-                          ' is not a whole number of teeth', err_input)
+      else if (.not. (self%teeth >= 1.0_wp .and. self%teeth <= max_teeth .and. self%teeth == aint(self%teeth))) then
+         call fatal_error(err, grp%where('teeth')//': error: teeth must be in [1, '//str(max_teeth)// &
+                          '] and a whole number of teeth, got '//str(self%teeth), err_input)
       else if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
          call fatal_error(err, grp%where('profile_contact_ratio')//': error: must be in [1, 2], got '//str(self%mp), &
                           err_input)

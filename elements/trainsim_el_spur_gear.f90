@@ -258,13 +258,8 @@ contains
          character(len=*), intent(in) :: key
          real(wp), intent(in) :: n
          if (allocated(err)) return
-         if (.not. (n >= 1.0_wp .and. n <= max_teeth)) then
-            call fatal_error(err, grp%where(key)//': error: '//key//' must be in [1, '//str(max_teeth)//'], got '// &
-                             str(n), err_input)
-         else if (n /= aint(n)) then   ! the tooth phase repeats once a tooth: a whole number
-            call fatal_error(err, grp%where(key)//': error: '//key//' = '//str(n)//' is not a whole number of teeth', &
-                             err_input)
-         end if
+         if (.not. (n >= 1.0_wp .and. n <= max_teeth .and. n == aint(n))) call fatal_error(err, grp%where(key)// &
+            ': error: '//key//' must be in [1, '//str(max_teeth)//'] and a whole number of teeth, got '//str(n), err_input)
       end subroutine check_teeth
    end subroutine spur_configure
 

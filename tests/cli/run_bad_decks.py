@@ -354,14 +354,14 @@ CASES = [
     dict(name="a fractional tooth count (constants form): refused with its line",
          deck=RUN + NODES + "&element id = 'g', type = 'spur_gear', stiffness = 2.3e5, rb_driver = 1.9, rb_driven = 1.9,\n"
          "         teeth = 32.5, contact_ratio = 1.6, approach_angle = 0.18, half_backlash = 0.001 /\n",
-         exit=2, stderr=["deck.nml:", "teeth = 32.5", "not a whole number of teeth"]),
+         exit=2, stderr=["deck.nml:", "'teeth'", "a whole number of teeth, got 32.5"]),
     dict(name="a fractional tooth count (geometry form)",
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56.5", k2="backlash = 0.004"),
-         exit=2, stderr=["deck.nml:", "teeth_driven = 56.5", "not a whole number of teeth"]),
+         exit=2, stderr=["deck.nml:", "'teeth_driven'", "a whole number of teeth, got 56.5"]),
     dict(name="a fractional tooth count (helical gear)",
          deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28.5,\n"
          "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         half_backlash = 0.002 /\n",
-         exit=2, stderr=["deck.nml:4:", "teeth = 28.5", "not a whole number of teeth"]),
+         exit=2, stderr=["deck.nml:4:", "'teeth'", "a whole number of teeth, got 28.5"]),
     dict(name="missing teeth_driver beside teeth_driven: a missing key, not a misspelling",
          deck=GEOM.format(units="", k1="teeth_driven = 56", k2="backlash = 0.004"),
          exit=2, stderr=["deck.nml:4:", "missing required key 'teeth_driver'"], not_stderr=["did you mean"]),
