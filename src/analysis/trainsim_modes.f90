@@ -156,11 +156,14 @@ contains
       integer, intent(out) :: ends(max_ports), np
       real(wp), intent(out) :: ke(max_ports, max_ports), ce(max_ports, max_ports)
       integer :: p
+      real(wp) :: k2(2, 2), c2(2, 2)   ! linearise's explicit 2 x 2 (a section of ke would be a temporary)
       np = e%n_ports()
       ends = 0; ke = 0.0_wp; ce = 0.0_wp
       ends(1:np) = [(e%port(p), p=1, np)]
       if (np == 2) then
-         call e%linearise(state, inv_j(e%left), inv_j(e%right), ke(1:2, 1:2), ce(1:2, 1:2))
+         call e%linearise(state, inv_j(e%left), inv_j(e%right), k2, c2)
+         ke(1:2, 1:2) = k2
+         ce(1:2, 1:2) = c2
       else
          call e%port_linearise(state, inv_j(ends(1:np)), ke(1:np, 1:np), ce(1:np, 1:np))
       end if
