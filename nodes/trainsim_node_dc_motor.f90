@@ -3,6 +3,9 @@
 !>   J x2' = -d x2 + alpha x3 + T          (T: net torque from elements and loads)
 !>   L x3' = -R x3 - alpha' x2 + e(t)      (armature current x3, voltage e)
 !> Electrical quantities in V, A, ohm, H; alpha in torque/A, alpha' in V*s/rad.
+!> With a controller (a &controller group, trainsim_controller) e is the
+!> controller's voltage and the motor has two more states: the controller's
+!> integral z (x4) and derivative filter f (x5).
 module trainsim_node_dc_motor
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -13,6 +16,7 @@ module trainsim_node_dc_motor
    use trainsim_signal, only: signal_t, constant_signal
    use trainsim_param_list, only: param_list_t, make_param_list
    use trainsim_node, only: node_t
+   use trainsim_controller, only: controller_t, ctl_nstates
    implicit none
    private
 
@@ -29,6 +33,8 @@ module trainsim_node_dc_motor
       real(wp) :: power_per_watt = 1.0_wp
       type(signal_t) :: voltage
       logical :: has_voltage = .false.
+      logical :: controlled = .false.
+      type(controller_t) :: ctl
    contains
       procedure :: configure => motor_configure
       procedure :: nstates => motor_nstates
@@ -46,6 +52,7 @@ module trainsim_node_dc_motor
       procedure :: params => motor_params
       procedure :: jacobian => motor_jacobian
       procedure :: breakpoints => motor_breakpoints
+      procedure :: applied_voltage => motor_applied_voltage
    end type dc_motor_node_t
 
 contains
@@ -82,16 +89,25 @@ contains
       associate (unused => self)
       end associate
       n = 3
+      if (self%controlled) n = 3 + ctl_nstates
    end function motor_nstates
 
    pure subroutine motor_derivatives(self, t, y, torque, dydt)
       class(dc_motor_node_t), intent(in) :: self
       real(wp), intent(in) :: t, y(:), torque
       real(wp), intent(inout) :: dydt(:)
+      real(wp) :: e, u, v
+      integer :: bound
+      if (self%controlled) then
+         call self%ctl%law(t, y, self%offset, self%r, self%alpha_e, e, u, v, bound)
+         call self%ctl%rates(t, y, self%offset, e, u, v, bound, dydt)
+      else
+         v = self%voltage%value(t)
+      end if
       associate (w => y(self%offset + 2), i => y(self%offset + 3))
          dydt(self%offset + 1) = w                                                        ! eq. (G.3)
          dydt(self%offset + 2) = (-self%d*w + self%alpha*i + torque)/self%j                ! eq. (G.4)
-         dydt(self%offset + 3) = (-self%r*i - self%alpha_e*w + self%voltage%value(t))/self%l ! eq. (G.5)
+         dydt(self%offset + 3) = (-self%r*i - self%alpha_e*w + v)/self%l                   ! eq. (G.5)
       end associate
    end subroutine motor_derivatives
 
@@ -106,6 +122,10 @@ contains
       y(self%offset + 1) = self%theta0
       y(self%offset + 2) = self%omega0
       y(self%offset + 3) = self%current0
+      if (self%controlled) then
+         y(self%offset + 4) = 0.0_wp
+         y(self%offset + 5) = self%ctl%m0
+      end if
    end subroutine motor_initial_state
 
    subroutine motor_set_initial_extra(self, grp, err)
@@ -134,17 +154,31 @@ contains
       class(dc_motor_node_t), intent(in) :: self
       real(wp), intent(in) :: t, y(:)
       associate (w => y(self%offset + 2), i => y(self%offset + 3))
-         p = self%voltage%value(t)*i*self%power_per_watt + (self%alpha - self%alpha_e*self%power_per_watt)*i*w
+         p = self%applied_voltage(t, y)*i*self%power_per_watt + (self%alpha - self%alpha_e*self%power_per_watt)*i*w
       end associate
    end function motor_input_power
 
-   !> The armature voltage e(t) is the motor's driving input (the history's /inputs).
+   !> The armature voltage: the controller's, else the voltage load's e(t).
+   pure real(wp) function motor_applied_voltage(self, t, y) result(v)
+      class(dc_motor_node_t), intent(in) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp) :: e, u
+      integer :: bound
+      if (self%controlled) then
+         call self%ctl%law(t, y, self%offset, self%r, self%alpha_e, e, u, v, bound)
+      else
+         v = self%voltage%value(t)
+      end if
+   end function motor_applied_voltage
+
+   !> The armature voltage e(t) is the motor's driving input (the history's /inputs);
+   !> a controller's voltage depends on the state: no time function to record.
    pure subroutine motor_driving_input(self, quantity, unit)
       class(dc_motor_node_t), intent(in) :: self
       character(len=:), allocatable, intent(out) :: quantity, unit
       quantity = ''
       unit = ''
-      if (.not. self%has_voltage) return
+      if (.not. self%has_voltage .or. self%controlled) return
       quantity = 'voltage'
       unit = 'V'
    end subroutine motor_driving_input
@@ -174,6 +208,10 @@ contains
       names(1)%s = self%id//'.angle'
       names(2)%s = self%id//'.speed'
       names(3)%s = self%id//'.current'
+      if (self%controlled) then
+         names(4)%s = self%id//'.controller_integral'
+         names(5)%s = self%id//'.controller_filter'
+      end if
    end subroutine motor_state_names
 
    pure subroutine motor_jacobian(self, t, y, jac, dtorque)
@@ -182,22 +220,26 @@ contains
       real(wp), intent(inout) :: jac(:, :)
       real(wp), intent(out) :: dtorque(:)
       integer :: o
-      associate (u1 => t, u2 => y)
-      end associate
       o = self%offset
       jac(o + 1, o + 2) = jac(o + 1, o + 2) + 1.0_wp
       jac(o + 2, o + 2) = jac(o + 2, o + 2) - self%d/self%j
       jac(o + 2, o + 3) = jac(o + 2, o + 3) + self%alpha/self%j
       jac(o + 3, o + 2) = jac(o + 3, o + 2) - self%alpha_e/self%l
       jac(o + 3, o + 3) = jac(o + 3, o + 3) - self%r/self%l
-      dtorque = [0.0_wp, 1.0_wp/self%j, 0.0_wp]
+      dtorque = 0.0_wp
+      dtorque(2) = 1.0_wp/self%j
+      if (self%controlled) call self%ctl%jacobian(t, y, o, self%r, self%alpha_e, self%l, jac)
    end subroutine motor_jacobian
 
    !> Knots of the armature voltage.
    pure subroutine motor_breakpoints(self, bp)
       class(dc_motor_node_t), intent(in) :: self
       real(wp), allocatable, intent(out) :: bp(:)
-      call self%voltage%breakpoints(bp)
+      if (self%controlled) then
+         call self%ctl%setpoint%breakpoints(bp)
+      else
+         call self%voltage%breakpoints(bp)
+      end if
    end subroutine motor_breakpoints
 
    function motor_params(self) result(p)

@@ -261,7 +261,7 @@ contains
          complex(wp), intent(out) :: lam_crit
          type(error_t), allocatable, intent(out) :: err
          real(wp), allocatable :: amat(:, :), wr(:), wi(:), work(:)
-         real(wp) :: dtq(3, size(model%nodes)), ke(max_ports, max_ports), ce(max_ports, max_ports), &
+         real(wp) :: dtq(5, size(model%nodes)), ke(max_ports, max_ports), ce(max_ports, max_ports), &
                      jt(max_ports, 2*max_ports), vl(1, 1), vr(1, 1), big, hl, re
          integer :: n, i, k, p, q, na, nb, row, ends(max_ports), info, np
          complex(wp) :: l

@@ -14,6 +14,7 @@ module trainsim_builder
    use trainsim_integrator_registry, only: integrator_names
    use trainsim_id_table, only: id_table_t
    use trainsim_plausibility, only: check_plausibility
+   use trainsim_controller_deck, only: read_controllers, link_controllers
    implicit none
    private
 
@@ -39,13 +40,13 @@ contains
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
       type(id_table_t) :: node_ids   ! node id -> node index, for look-ups in O(1)
-      type(string_t) :: groups(5)
+      type(string_t) :: groups(6)
       integer :: i
 
       ! (not an array constructor of string_t(...): gfortran 12 leaks their strings,
       ! 50 bytes a run of a sweep)
       groups(1)%s = 'run'; groups(2)%s = 'node'; groups(3)%s = 'element'; groups(4)%s = 'load'
-      groups(5)%s = 'initial'
+      groups(5)%s = 'initial'; groups(6)%s = 'controller'
       call deck%check_group_names(groups, err, also='sweep (read by trainsim sweep)')
       if (allocated(err)) return
       model%deck_file = deck%file
@@ -54,8 +55,10 @@ contains
       call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
       call read_elements(deck, model, node_ids, err); if (allocated(err)) return
       call read_loads(deck, model, node_ids, err); if (allocated(err)) return
+      call read_controllers(deck, model, node_ids, err); if (allocated(err)) return
       call model%finalize()
       call read_initial(deck, model, node_ids, err); if (allocated(err)) return
+      call link_controllers(model)
       do i = 1, size(deck%groups)
          associate (g => deck%groups(i))
             if (g%name == 'run') call g%check_unused(err, 'the &run group')

@@ -175,7 +175,7 @@ contains
             if (model%is_held(i) .or. ns == 0) then
                write (unit, '(4x,a'//str(wn)//',a)') nd%id, '  (held)'
             else
-               write (unit, '(4x,a'//str(wn)//',3es18.9)') nd%id, res%y_final(nd%offset + 1:nd%offset + ns)
+               write (unit, '(4x,a'//str(wn)//',3es18.9)') nd%id, res%y_final(nd%offset + 1:nd%offset + min(ns, 3))
             end if
          end associate
       end do

@@ -6,13 +6,14 @@ module trainsim_event
    implicit none
    private
 
-   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name, max_update_events
+   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_target_reached, ev_name, max_update_events
 
    !> Event kinds (column `kind` of the event table).
    integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
    integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
    integer, parameter :: ev_separation = 3    !< contact ends
    integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
+   integer, parameter :: ev_target_reached = 11 !< a positioning sequence reached its target (trainsim_controller)
 
    !> Most events one element may report from one mode update (`update_mode`
    !> writes ev(1:nev) with nev <= this): a face contact or separation per
@@ -46,6 +47,7 @@ contains
       case (ev_contact_rear); name = 'contact_rear'
       case (ev_separation); name = 'separation'
       case (ev_zone); name = 'zone'
+      case (ev_target_reached); name = 'target_reached'
       case default; name = 'unknown'
       end select
    end function ev_name

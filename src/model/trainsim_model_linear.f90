@@ -10,7 +10,7 @@ submodule (trainsim_model) trainsim_model_linear
 contains
 
    module procedure model_jacobian
-      real(wp) :: dtq(3, size(self%nodes)), jt(max_ports, 2*max_ports), th(max_ports), w(max_ports)
+      real(wp) :: dtq(5, size(self%nodes)), jt(max_ports, 2*max_ports), th(max_ports), w(max_ports)
       integer :: i, a, b, k, na, nb, row, ia, ib, np
       integer :: ends(max_ports)
       jac = 0.0_wp
