@@ -44,6 +44,9 @@ NODES = (
 )
 SHAFT = "&element id = 's1', type = 'shaft', stiffness = 1.0e5 /\n"
 GOOD = RUN + NODES + SHAFT
+# A DC motor on lines 2-3 (for the &controller cases).
+MOTOR = ("&node id = 'm', type = 'dc_motor', inertia = 0.1, torque_constant = 0.5,\n"
+         "      inductance = 0.01, resistance = 1.0, back_emf_constant = 0.5 /\n")
 # A housing node (line 4) and a gear pair on it (line 5, its carrier given by the case).
 HOUSING = "&node id = 'h', type = 'inertia', inertia = 2.0 /\n"
 GEAR = ("&element id = 'g', type = 'ideal_gear', left = 'a', right = 'b', carrier = '{carrier}', "
@@ -373,7 +376,7 @@ CASES = [
          exit=2, stderr=["deck.nml:1:", "unknown key 'colour'", "valid keys are"], not_stderr=["did you mean"]),
     dict(name="unknown group lists every group the reader takes, sweep too",
          deck=RUN + NODES + SHAFT + "&sweeps parameter = 's1.stiffness', values = 1e5 /\n",
-         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, sweep"]),
+         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, controller, sweep"]),
     dict(name="half_backlash in the spur_gear geometry form is explained (in-lbf-s)",
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="half_backlash = 0.002"),
          exit=2, stderr=["deck.nml:6:", "half_backlash belongs to TRAIN's constants form", "geometry form",
@@ -510,6 +513,41 @@ CASES = [
     dict(name="modes with a bad value", deck=RUN + NODES.replace("5.0", "-5.0") + SHAFT,
          args=["modes", "deck.nml"],
          exit=2, stderr=["deck.nml:2:", "inertia", "must be > 0"]),
+] + [
+    # &controller (issue 23 item 4): a motor (line 2), a disk (line 4), a shaft (line 5),
+    # the controller on line 6
+    dict(name=name, deck=RUN + MOTOR + "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT
+         + "&controller " + keys + " /\n", exit=2, stderr=stderr)
+    for name, keys, stderr in [
+        ("controller on a node that does not exist", "motor = 'm', sensor = 'table', kp = 1.0, value = 1.0",
+         ["deck.nml:6:", "&controller", "sensor", "'table'", "not defined"]),
+        ("controller on a motor that does not exist", "motor = 'x', kp = 1.0, value = 1.0",
+         ["deck.nml:6:", "motor", "'x'", "not defined"]),
+        ("controller on an inertia node", "motor = 'b', kp = 1.0, value = 1.0",
+         ["deck.nml:6:", "motor", "'b'", "dc_motor"]),
+        ("controller with a negative gain", "motor = 'm', kp = 1.0, ki = -2.0, value = 1.0",
+         ["deck.nml:6:", "ki", "must be >= 0", "-2"]),
+        ("controller with reversed supply limits", "motor = 'm', kp = 1.0, v_min = 24.0, v_max = -24.0, value = 1.0",
+         ["deck.nml:6:", "v_max", "reversed", "-24"]),
+        ("controller derivative without a filter", "motor = 'm', kp = 1.0, kd = 0.5, value = 1.0",
+         ["deck.nml:6:", "filter_time", "kd"]),
+        ("controller with an unknown anti-windup", "motor = 'm', kp = 1.0, anti_windup = 'clamp', value = 1.0",
+         ["deck.nml:6:", "anti_windup", "'clamp'", "conditional"]),
+        ("controller with a negative current limit", "motor = 'm', kp = 1.0, current_limit = -5.0, value = 1.0",
+         ["deck.nml:6:", "current_limit", "must be >= 0"]),
+        ("sequence on a speed", "motor = 'm', kp = 1.0, sequence = .true., kind = 'table', times = 0.0, "
+         "values = 1.0, tolerance = 0.01, speed_tolerance = 0.1", ["deck.nml:6:", "sequence", "measure = 'angle'"]),
+        ("sequence without tolerance", "motor = 'm', measure = 'angle', kp = 1.0, sequence = .true., "
+         "kind = 'table', times = 0.0, values = 1.0, speed_tolerance = 0.1", ["deck.nml:6:", "tolerance"]),
+        ("controller with an unknown key", "motor = 'm', kp = 1.0, value = 1.0, gain = 3.0",
+         ["deck.nml:6:", "gain", "&controller"]),
+    ]
+] + [
+    dict(name="controller and a voltage load on one motor",
+         deck=RUN + MOTOR + "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT
+         + "&load node = 'm', quantity = 'voltage', value = 24.0 /\n"
+         + "&controller motor = 'm', kp = 1.0, value = 1.0 /\n",
+         exit=2, stderr=["deck.nml:7:", "motor", "'m'", "voltage load"]),
 ]
 
 
