@@ -169,6 +169,7 @@ contains
       type(deck_group_t), intent(inout) :: g
       type(controller_t), intent(inout) :: ctl
       type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: word
       if (ctl%kind /= ctl_angle) then
          call fatal_error(err, g%where('sequence')//": error: a positioning sequence needs measure = 'angle'", &
                           err_input)
@@ -186,7 +187,15 @@ contains
       call g%get_real('speed_tolerance', ctl%seq%speed_tol, err); if (allocated(err)) return
       call g%require_positive('tolerance', ctl%seq%tol, err)
       call g%require_positive('speed_tolerance', ctl%seq%speed_tol, err)
-      call check_magnitude(g, 'tolerance', ctl%seq%tol, err)
+      call check_magnitude(g, 'tolerance', ctl%seq%tol, err); if (allocated(err)) return
+      call g%get_string('hold', word, err, default='off'); if (allocated(err)) return
+      select case (to_lower(word))
+      case ('off'); ctl%servo_hold = .false.
+      case ('servo'); ctl%servo_hold = .true.
+      case default
+         call fatal_error(err, g%where('hold')//": error: unknown hold '"//word//"'; valid: off (default: 0 V, "// &
+                          'integral frozen), servo (the loop stays closed on the target)', err_input)
+      end select
    end subroutine read_sequence
 
    !> Append the sequence's positioner element: left port the sensor, right port

@@ -16,8 +16,9 @@
 !> Anti-windup: 'conditional' (z' = 0 while v /= u and e drives u further past
 !> the bound), 'back_calculation' (z' = e + (v - u)/(ki t_t)) or 'none'.
 !> A sequence (the setpoint's table read as steps, target k from time t_k) holds
-!> the motor at 0 V (armature shorted) with z frozen from the moment the sensor is
-!> within `tolerance` of target k and slower than `speed_tolerance` (the positioner
+!> the motor at 0 V (armature shorted) with z frozen (or, with `hold = 'servo'`,
+!> keeps the loop closed on target k) from the moment the sensor is within
+!> `tolerance` of target k and slower than `speed_tolerance` (the positioner
 !> element's guard locates it) until t_{k+1}; its brake command is that hold.
 module trainsim_controller
    use trainsim_kinds, only: wp
@@ -50,6 +51,7 @@ module trainsim_controller
       integer :: anti_windup = aw_conditional
       real(wp) :: tracking_time = 0.0_wp
       real(wp) :: m0 = 0.0_wp                !< the measurement at the start (f's initial value)
+      logical :: servo_hold = .false.        !< hold by the loop (true) or at 0 V (false, the default)
       type(signal_t) :: setpoint
       type(sequence_t), pointer :: seq => null()
    contains
@@ -104,7 +106,7 @@ contains
       if (v > hi) then
          v = hi; bound = 1
       end if
-      if (self%held(t)) then
+      if (self%held(t) .and. .not. self%servo_hold) then
          v = 0.0_wp; bound = 2
       end if
    end subroutine ctl_law

@@ -539,6 +539,9 @@ CASES = [
          "values = 1.0, tolerance = 0.01, speed_tolerance = 0.1", ["deck.nml:6:", "sequence", "measure = 'angle'"]),
         ("sequence without tolerance", "motor = 'm', measure = 'angle', kp = 1.0, sequence = .true., "
          "kind = 'table', times = 0.0, values = 1.0, speed_tolerance = 0.1", ["deck.nml:6:", "tolerance"]),
+        ("sequence with an unknown hold", "motor = 'm', measure = 'angle', kp = 1.0, sequence = .true., "
+         "kind = 'table', times = 0.0, values = 1.0, tolerance = 0.01, speed_tolerance = 0.1, hold = 'brake'",
+         ["deck.nml:6:", "hold", "'brake'", "servo"]),
         ("controller with an unknown key", "motor = 'm', kp = 1.0, value = 1.0, gain = 3.0",
          ["deck.nml:6:", "gain", "&controller"]),
     ]
