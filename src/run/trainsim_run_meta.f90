@@ -8,6 +8,7 @@ module trainsim_run_meta
    use trainsim_input_series, only: input_series_labels
    use trainsim_sink, only: run_meta_t
    use trainsim_version, only: version_full
+   use trainsim_node_dc_motor, only: dc_motor_node_t
    implicit none
    private
 
@@ -73,6 +74,12 @@ contains
       end do
       do i = 1, size(model%speeds)
          call add_input_file(model%speeds(i))
+      end do
+      do i = 1, size(model%nodes)                  ! a controller's setpoint table (D-76)
+         select type (m => model%nodes(i)%n)
+         type is (dc_motor_node_t)
+            if (m%controlled) call add_input_file(m%ctl%setpoint)
+         end select
       end do
    contains
       !> The table file behind `sig`, once per file opened.
