@@ -52,7 +52,8 @@ def main():
     wind_t = np.interp(t, wind[:, 0], wind[:, 1])
 
     fig, ax = plt.subplots(4, 2, figsize=(13, 10), sharex='col')
-    k = np.searchsorted(t, [targets[60, 0] - 0.1, targets[63, 0]])
+    k0 = max(1, len(t_ev)//2 - 1)                               # three moves from the middle of the run
+    k = np.searchsorted(t, [targets[k0, 0] - 0.1, targets[min(k0 + 3, len(targets) - 1), 0]])
     for c, sl in enumerate([slice(None), slice(k[0], k[1])]):
         a = ax[0, c]
         a.plot(t[sl], np.degrees(target[sl]), 'k--', lw=1, label='target')
@@ -80,7 +81,8 @@ def main():
         a2.set_ylabel('wind on the table (N m)')
         a.legend(loc='upper left', fontsize=8)
         a.set_xlabel('time (s; the day compressed 300x)')
-    ax[0, 0].set_title(f'a day: {len(t_ev)} targets reached of {int(np.sum(targets[:, 0] <= t[-1]))} due')
+    ax[0, 0].set_title(f'{t[-1]:.1f} s of the day (compressed 300x): {len(t_ev)} moves completed, '
+                       f'{int(np.sum(targets[:, 0] <= t[-1]))} targets due')
     ax[0, 1].set_title('three moves')
     fig.tight_layout()
     fig.savefig(out, dpi=90)
