@@ -57,7 +57,7 @@ enum {
     TRAINSIM_SAMPLES = 9,          /* count only: rows of the series */
     TRAINSIM_EVENTS = 10,          /* count only: rows of the event table */
     TRAINSIM_SWEEP_RUNS = 11,      /* count only: runs of the deck's &sweep groups */
-    TRAINSIM_EVENT_KINDS = 12      /* names of event kinds 1..4 (the "kind" column) */
+    TRAINSIM_EVENT_KINDS = 12      /* names of event kinds 1.. (the "kind" column) */
 };
 
 typedef struct trainsim_sim trainsim_sim;

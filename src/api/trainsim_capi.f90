@@ -17,6 +17,7 @@ module trainsim_capi
    use trainsim_error, only: fatal_error, err_input
    use trainsim_strings, only: str
    use trainsim_capi_tables, only: metric_table, event_columns, event_row
+   use trainsim_event, only: ev_max_kind
    implicit none
    private
 
@@ -389,8 +390,8 @@ contains
          names = event_columns()
       case (w_event_kinds)
          deallocate (names)
-         allocate (names(4))
-         do k = 1, 4
+         allocate (names(ev_max_kind))
+         do k = 1, ev_max_kind
             names(k)%s = ev_name(k)
          end do
       case (w_metrics, w_metric_units, w_series, w_series_units, w_samples, w_events)

@@ -6,14 +6,15 @@ module trainsim_event
    implicit none
    private
 
-   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_target_reached, ev_name, max_update_events
+   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_target_reached, ev_max_kind, ev_name, max_update_events
 
    !> Event kinds (column `kind` of the event table).
    integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
    integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
    integer, parameter :: ev_separation = 3    !< contact ends
    integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
-   integer, parameter :: ev_target_reached = 11 !< a positioning sequence reached its target (trainsim_controller)
+   integer, parameter :: ev_target_reached = 5 !< a positioning sequence reached its target (trainsim_controller)
+   integer, parameter :: ev_max_kind = 5       !< the kinds are 1..ev_max_kind (the C API lists their names)
 
    !> Most events one element may report from one mode update (`update_mode`
    !> writes ev(1:nev) with nev <= this): a face contact or separation per
