@@ -125,8 +125,12 @@ with tempfile.TemporaryDirectory() as tmp:
         el_ids = [g.get("id", f"e{k + 1}") for k, g in enumerate(els)]
         check(f"{name}: described nodes {[n['id'] for n in desc['nodes']]} are the deck's",
               [n["id"] for n in desc["nodes"]] == node_ids)
+        # a &controller with a sequence adds its positioner element (D-76), after the deck's
+        ctls = [g for n, g in groups if n == "controller"]
+        pos_ids = [g.get("id", f"c{k + 1}") for k, g in enumerate(ctls)
+                   if str(g.get("sequence", "")).strip(".").lower() in ("true", "t")]
         check(f"{name}: described elements {[e['id'] for e in desc['elements']]} are the deck's",
-              [e["id"] for e in desc["elements"]] == el_ids)
+              [e["id"] for e in desc["elements"]] == el_ids + pos_ids)
         ends = all(e.get(side) in (None, d[side]) for e, d in zip(els, desc["elements"]) for side in ("left", "right"))
         check(f"{name}: each element joins the nodes the deck names", ends)
         loads = [g for n, g in groups if n == "load"]
