@@ -10,7 +10,7 @@ submodule (trainsim_model) trainsim_model_linear
 contains
 
    module procedure model_jacobian
-      real(wp) :: dtq(5, size(self%nodes)), jt(max_ports, 2*max_ports), th(max_ports), w(max_ports)
+      real(wp) :: dtq(5, size(self%nodes)), jt(max_ports, 2*max_ports), th(max_ports), w(max_ports), jt2(2, 4)
       integer :: i, a, b, k, na, nb, row, ia, ib, np
       integer :: ends(max_ports)
       jac = 0.0_wp
@@ -29,7 +29,8 @@ contains
             if (np == 2) then
                ends(1:2) = [e%left, e%right]
                call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
-                                      self%omega(e%right), jt(1:2, 1:4))
+                                      self%omega(e%right), jt2)
+               jt(1:2, 1:4) = jt2            ! (jt(1:2, 1:4) itself is not contiguous: a temporary)
             else                                                  ! an n-port element (D-73)
                call port_kinematics(e, self%theta, self%omega, ends, th, w)
                call e%port_jacobian(th(1:np), w(1:np), jt(1:np, 1:2*np))
