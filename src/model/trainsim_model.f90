@@ -145,7 +145,7 @@ module trainsim_model
       procedure :: rhs => model_rhs
       procedure :: rhs_step_end => model_rhs_step_end
       procedure :: rhs_stage => model_rhs_stage
-      procedure :: rhs_stage_at => model_rhs_stage_at
+      procedure :: rk4_stages => model_rk4_stages
       procedure :: block_ok => model_block_ok
       procedure :: rhs_part => model_rhs_part
       procedure :: part_power => model_part_power
@@ -282,19 +282,20 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine model_rhs_stage
 
-      !> dy/dt at (t, y + c k) as `model_rhs_stage` at that state, the same values
-      !> bit for bit, for RK4's inner stages: a simple model's kernel reads
-      !> y(j) + c k(j) where it reads the state (its nodes' angles and speeds),
-      !> without forming the state (ytmp untouched; D-75); any other model
-      !> forms it in ytmp and runs `model_rhs`.
-      module subroutine model_rhs_stage_at(self, t, y, c, k, ytmp, dydt)
+      !> RK4's inner stages and its combination (D-76), given k1 = f(t, y): k2 =
+      !> f(t + h/2, y + h/2 k1), k3 = f(t + h/2, y + h/2 k2), k4 = f(t4, y + h k3),
+      !> each as `model_rhs_stage` at that state, the same values bit for bit, and
+      !> ynew = y + h/6 (k1 + 2 (k2 + k3) + k4). A simple model's kernel reads y(j) +
+      !> c k(j) where it reads the state, without forming it (ytmp untouched,
+      !> D-75); any other model forms it in ytmp and runs `model_rhs`.
+      module subroutine model_rk4_stages(self, t, h, t4, y, k1, k2, k3, k4, ytmp, ynew)
          class(model_t), intent(inout) :: self
-         real(wp), intent(in) :: t, c
+         real(wp), intent(in) :: t, h, t4
          !> (explicit size: their addresses only, D-41)
-         real(wp), intent(in) :: y(self%n_y), k(self%n_y)
-         real(wp), intent(inout) :: ytmp(self%n_y)
-         real(wp), intent(out) :: dydt(self%n_y)
-      end subroutine model_rhs_stage_at
+         real(wp), intent(in) :: y(self%n_y), k1(self%n_y)
+         real(wp), intent(inout) :: k2(self%n_y), k3(self%n_y), k4(self%n_y), ytmp(self%n_y)
+         real(wp), intent(out) :: ynew(self%n_y)
+      end subroutine model_rk4_stages
 
       !> Whether an integrator may take a block of steps (D-38) in the current
       !> modes: a simple model whose `rhs_step_end` leaves in the block's columns
