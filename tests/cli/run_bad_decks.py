@@ -339,6 +339,10 @@ CASES = [
          "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT
          + "&load node = 'a', quantity = 'acceleration', value = 10.0 /\n",
          exit=2, stderr=["deck.nml:5:", "'a'", "cannot have a prescribed acceleration"]),
+    dict(name="unknown bore_friction of a keyed joint",
+         deck=RUN + NODES + "&element id = 'k', type = 'keyed_joint', diameter = 2.0, half_clearance = 0.01, "
+         "stiffness = 1.0e6, friction = 0.3, bore_friction = 'bore' /\n",
+         exit=2, stderr=["deck.nml:4:", "bore_friction", "'bore'", "hub_load", "key_force"]),
     dict(name="two voltage sources on one motor",
          deck=RUN + "&node id = 'm', type = 'dc_motor', inertia = 0.1, torque_constant = 8.85,\n"
          "      inductance = 0.01, resistance = 1.0, back_emf_constant = 1.0 /\n"
