@@ -7,9 +7,9 @@ module trainsim_builder
    use trainsim_units, only: make_units
    use trainsim_deck, only: deck_t, deck_group_t
    use trainsim_limits, only: check_magnitude, check_params
-   use trainsim_signal, only: signal_t, signal_from_group, constant_signal
-   use trainsim_speed_law, only: speed_law_from_group, law_table
-   use trainsim_motion, only: motion_t, motion_of, given_angle, given_speed, given_accel
+   use trainsim_signal, only: signal_t, signal_from_group
+   use trainsim_speed_law, only: load_from_group
+   use trainsim_motion, only: motion_t, motion_from_group
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
    use trainsim_element, only: element_t, max_ports
@@ -499,15 +499,7 @@ contains
             select case (quantity)
             case ('torque')
                nloads = nloads + 1
-               loads(nloads)%node = inode
-               if (g%has('speed_law')) then
-                  call speed_law_from_group(g, loads(nloads)%law, err); if (allocated(err)) return
-               end if
-               if (loads(nloads)%law%kind == law_table .and. .not. (g%has('kind') .or. g%has('value'))) then
-                  loads(nloads)%torque = constant_signal(1.0_wp)   ! the table's torques as they stand
-               else
-                  call signal_from_group(g, loads(nloads)%torque, err); if (allocated(err)) return
-               end if
+               call load_from_group(g, inode, loads(nloads), err); if (allocated(err)) return
             case ('speed', 'angle', 'acceleration')
                call signal_from_group(g, sig, err); if (allocated(err)) return
                if (.not. model%nodes(inode)%n%can_prescribe_speed()) then
@@ -522,21 +514,9 @@ contains
                   return
                end if
                nspeeds = nspeeds + 1
-               select case (quantity)
-               case ('speed')
-                  speeds(nspeeds) = motion_of(sig, given_speed)
-               case ('angle')
-                  if (sig%label /= 'constant' .and. sig%label /= 'sine') then
-                     call fatal_error(err, g%where('kind')//": error: a prescribed angle of kind '"//sig%label// &
-                                      "' would jump in speed at its knots; valid kinds for quantity = 'angle' "// &
-                                      "are: constant, sine (a table of speeds: quantity = 'speed')", err_input)
-                     return
-                  end if
-                  speeds(nspeeds) = motion_of(sig, given_angle)
-                  model%nodes(inode)%n%theta0 = sig%value(0.0_wp)   ! (the &initial angle overrides it)
-               case default
-                  speeds(nspeeds) = motion_of(sig, given_accel)
-               end select
+               call motion_from_group(g, quantity, sig, speeds(nspeeds), err); if (allocated(err)) return
+               ! a prescribed angle starts at its value at 0 (the &initial angle overrides it)
+               if (quantity == 'angle') model%nodes(inode)%n%theta0 = sig%value(0.0_wp)
                model%speed_of(inode) = nspeeds
             case ('voltage')
                call signal_from_group(g, sig, err); if (allocated(err)) return

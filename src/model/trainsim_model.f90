@@ -16,9 +16,8 @@ module trainsim_model
    use trainsim_kinds, only: wp
    use trainsim_strings, only: string_t
    use trainsim_units, only: units_t
-   use trainsim_signal, only: signal_t
    use trainsim_motion, only: motion_t
-   use trainsim_speed_law, only: speed_law_t, law_none
+   use trainsim_speed_law, only: load_t, law_none
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
    use trainsim_event, only: event_t
@@ -29,16 +28,6 @@ module trainsim_model
 
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
-   !> An external torque on a node: torque(t), or torque(t) g(omega) with a
-   !> speed law (trainsim_speed_law, D-77).
-   type :: load_t
-      integer :: node = 0
-      type(signal_t) :: torque
-      type(speed_law_t) :: law
-   contains
-      procedure :: at => load_at
-      procedure :: slope => load_slope
-   end type load_t
 
    !> The end-of-step quantities the observer folds, for up to `cap` plain
    !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
@@ -582,24 +571,4 @@ module trainsim_model
       end function settle_budget
 
    end interface
-
-contains
-
-   !> The load's torque at t on a node turning at w.
-   pure real(wp) function load_at(self, t, w) result(v)
-      class(load_t), intent(in) :: self
-      real(wp), intent(in) :: t, w
-      if (self%law%kind == law_none) then
-         v = self%torque%value(t)
-      else
-         v = self%torque%value(t)*self%law%factor(w)
-      end if
-   end function load_at
-
-   !> d(load torque)/d w at t and w (its Jacobian entry).
-   pure real(wp) function load_slope(self, t, w) result(d)
-      class(load_t), intent(in) :: self
-      real(wp), intent(in) :: t, w
-      d = self%torque%value(t)*self%law%slope(w)
-   end function load_slope
 end module trainsim_model

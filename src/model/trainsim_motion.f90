@@ -5,11 +5,13 @@
 !> the builder makes it default to the function's value at t = 0).
 module trainsim_motion
    use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_deck, only: deck_group_t
    use trainsim_signal, only: signal_t
    implicit none
    private
 
-   public :: motion_t, motion_of
+   public :: motion_t, motion_of, motion_from_group
    !> What the time function gives: the angle, the speed or the acceleration.
    integer, parameter, public :: given_angle = 0, given_speed = 1, given_accel = 2
 
@@ -43,6 +45,31 @@ contains
       case default; m%label = f%label
       end select
    end function motion_of
+
+   !> The motion of a &load group's `quantity` ('speed', 'angle', 'acceleration')
+   !> with time function f. A prescribed angle takes the kinds constant and sine
+   !> only (D-76): a piecewise-linear angle's speed would jump at its knots.
+   subroutine motion_from_group(grp, quantity, f, m, err)
+      type(deck_group_t), intent(in) :: grp
+      character(len=*), intent(in) :: quantity
+      type(signal_t), intent(in) :: f
+      type(motion_t), intent(out) :: m
+      type(error_t), allocatable, intent(out) :: err
+      select case (quantity)
+      case ('angle')
+         if (f%label /= 'constant' .and. f%label /= 'sine') then
+            call fatal_error(err, grp%where('kind')//": error: a prescribed angle of kind '"//f%label// &
+                             "' would jump in speed at its knots; valid kinds for quantity = 'angle' "// &
+                             "are: constant, sine (a table of speeds: quantity = 'speed')", err_input)
+            return
+         end if
+         m = motion_of(f, given_angle)
+      case ('acceleration')
+         m = motion_of(f, given_accel)
+      case default
+         m = motion_of(f, given_speed)
+      end select
+   end subroutine motion_from_group
 
    !> `motion = signal`: a prescribed speed.
    subroutine motion_from_signal(self, f)

@@ -16,11 +16,11 @@ module trainsim_speed_law
    use trainsim_strings, only: to_lower, str
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: check_magnitude
-   use trainsim_signal, only: signal_t, table_from_group
+   use trainsim_signal, only: signal_t, table_from_group, signal_from_group, constant_signal
    implicit none
    private
 
-   public :: speed_law_t, speed_law_from_group, law_none, law_table
+   public :: speed_law_t, speed_law_from_group, law_none, law_table, load_t, load_from_group
 
    integer, parameter :: law_none = 0, law_linear = 1, law_linear_abs = 2, law_quadratic = 3, &
                          law_quadratic_abs = 4, law_sign = 5, law_table = 6
@@ -35,7 +35,57 @@ module trainsim_speed_law
       procedure :: slope => law_slope
    end type speed_law_t
 
+   !> An external torque on a node: torque(t), or torque(t) g(omega) with a speed law.
+   type :: load_t
+      integer :: node = 0
+      type(signal_t) :: torque
+      type(speed_law_t) :: law
+   contains
+      procedure :: at => load_at
+      procedure :: slope => load_slope
+   end type load_t
+
 contains
+
+   !> The load's torque at t on a node turning at w.
+   pure real(wp) function load_at(self, t, w) result(v)
+      class(load_t), intent(in) :: self
+      real(wp), intent(in) :: t, w
+      if (self%law%kind == law_none) then
+         v = self%torque%value(t)
+      else
+         v = self%torque%value(t)*self%law%factor(w)
+      end if
+   end function load_at
+
+   !> d(load torque)/d w at t and w (its Jacobian entry).
+   pure real(wp) function load_slope(self, t, w) result(d)
+      class(load_t), intent(in) :: self
+      real(wp), intent(in) :: t, w
+      d = self%torque%value(t)*self%law%slope(w)
+   end function load_slope
+
+   !> A torque load on node `inode` from a &load group: its time function and,
+   !> with `speed_law`, its law. A table law without `kind` and `value` takes the
+   !> table's torques as they stand (s = 1).
+   subroutine load_from_group(grp, inode, load, err)
+      type(deck_group_t), intent(inout) :: grp
+      integer, intent(in) :: inode
+      type(load_t), intent(out) :: load
+      type(error_t), allocatable, intent(out) :: err
+      logical :: scaled
+      load%node = inode
+      if (grp%has('speed_law')) then
+         call speed_law_from_group(grp, load%law, err); if (allocated(err)) return
+      end if
+      scaled = grp%holds('kind')
+      if (.not. scaled) scaled = grp%holds('value')
+      if (load%law%kind == law_table .and. .not. scaled) then
+         load%torque = constant_signal(1.0_wp)
+      else
+         call signal_from_group(grp, load%torque, err)
+      end if
+   end subroutine load_from_group
 
    !> Read `speed_law` and its keys from a &load group (quantity 'torque').
    subroutine speed_law_from_group(grp, law, err)
