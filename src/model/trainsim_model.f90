@@ -16,7 +16,8 @@ module trainsim_model
    use trainsim_kinds, only: wp
    use trainsim_strings, only: string_t
    use trainsim_units, only: units_t
-   use trainsim_signal, only: signal_t
+   use trainsim_motion, only: motion_t
+   use trainsim_speed_law, only: load_t, law_none
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
    use trainsim_event, only: event_t
@@ -27,11 +28,6 @@ module trainsim_model
 
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
-   !> An external torque on a node.
-   type :: load_t
-      integer :: node = 0
-      type(signal_t) :: torque
-   end type load_t
 
    !> The end-of-step quantities the observer folds, for up to `cap` plain
    !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
@@ -64,7 +60,7 @@ module trainsim_model
       type(node_slot_t), allocatable :: nodes(:)
       type(element_slot_t), allocatable :: elements(:)
       type(load_t), allocatable :: loads(:)
-      type(signal_t), allocatable :: speeds(:)   !< prescribed-speed profiles
+      type(motion_t), allocatable :: speeds(:)   !< prescribed motions (speed, angle or acceleration)
       integer, allocatable :: speed_of(:)        !< per node: index into speeds, 0 if free
       integer :: n_states = 0                    !< physical states
       integer :: n_y = 0                         !< + 2 energy-accounting states if tracked
@@ -127,6 +123,8 @@ module trainsim_model
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
+      integer, allocatable, private :: spd_loads(:)        !< loads with a speed law (summed at t and omega)
+      logical, private :: loads_vary = .false.             !< dyn_loads or spd_loads not empty
       !> Every node a plain inertia or held at a constant speed, every load
       !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
       logical, private :: simple = .false.
@@ -574,5 +572,4 @@ module trainsim_model
       end function settle_budget
 
    end interface
-
 end module trainsim_model

@@ -154,7 +154,7 @@ contains
             self%torque(i) = nd%load0
          end associate
       end do
-      if (size(self%dyn_loads) > 0 .or. self%any_needs_loads) call loads_varying(self, t)
+      if (self%loads_vary .or. self%any_needs_loads) call loads_varying(self, t)
       if (track) then
          ! power of the external loads on free nodes (before the elements add to self%torque)
          do i = 1, size(self%fl)
@@ -163,7 +163,7 @@ contains
             if (self%fl(i)%const) then
                pin = pin + self%fl(i)%v*self%omega(l)
             else
-               pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+               pin = pin + self%loads(i)%at(t, self%omega(l))*self%omega(l)
             end if
          end do
       end if
@@ -332,6 +332,11 @@ contains
          l = self%fl(i)%node
          self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
       end do
+      do k = 1, size(self%spd_loads)   ! (a node in `der` is in `kin`: its omega is current)
+         i = self%spd_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%at(t, self%omega(l))
+      end do
       if (self%any_needs_loads) then
          do k = 1, size(els)
             i = els(k)
@@ -384,8 +389,9 @@ contains
       call loads_varying(self, t)
    end subroutine loads_at
 
-   !> The loads that vary with t, and the loads published to the elements that
-   !> read them (after the constant sums are in self%torque).
+   !> The loads that vary with t or with their node's speed (at the speeds in
+   !> the workspace), and the loads published to the elements that read them
+   !> (after the constant sums are in self%torque).
    subroutine loads_varying(self, t)
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t
@@ -394,6 +400,11 @@ contains
          i = self%dyn_loads(k)
          l = self%fl(i)%node
          self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      do k = 1, size(self%spd_loads)
+         i = self%spd_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%at(t, self%omega(l))
       end do
       if (.not. self%any_needs_loads) return
       do i = 1, size(self%elements)
