@@ -29,6 +29,7 @@ submodule (trainsim_model) trainsim_model_constraints
 contains
 
    module procedure constraints_setup
+      if (.not. allocated(self%cn)) allocate (self%cn)
       call cn_setup(self%cn, self%elements, size(self%nodes), self%n_y)
    end procedure constraints_setup
 

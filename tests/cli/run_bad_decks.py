@@ -397,6 +397,22 @@ CASES = [
          .replace("face_width = 0.7", "face_width = 0.0"),
          exit=2, stderr=["deck.nml:5:", "face_width must be > 0"], stderr_re=[r"got \S+ in$"]),
 ] + [
+    # friction elements (D-76): the element on line 4, the offending key on line 5
+    dict(name=f"{etype}: {key} = {value} is refused",
+         deck=RUN + NODES + f"&element id = 'f1', type = '{etype}', left = 'a', right = 'b',\n"
+         f"         {extra}{key} = {value} /\n",
+         exit=2, stderr=["deck.nml:5:", f"key '{key}'", f"got {shown}", what])
+    for etype, key, value, shown, extra, what in [
+        ("bearing_friction", "torque_sliding", "-1.0", "-1", "", "must be >= 0"),
+        ("brake", "viscous", "-0.5", "-0.5", "torque_sliding = 2.0, ", "must be >= 0"),
+        ("clutch", "torque_static", "3.0", "3", "torque_sliding = 5.0, ", "the sliding torque 5"),
+        ("clutch", "engagement", "1.5", "1.5", "torque_sliding = 5.0, ", "must be in [0, 1]"),
+        ("brake", "engagement_values", "0.0, -0.2", "-0.2", "torque_sliding = 5.0, engagement_times = 0.0, 1.0, ",
+         "must be in [0, 1]"),
+        ("bearing_friction", "friction_torques", "1.0, -2.0", "-2", "friction_speeds = 0.0, 1.0, ", "must be >= 0"),
+        ("one_way_clutch", "capacity", "0.0", "0", "", "must be > 0"),
+    ]
+] + [
     # list-directed READ took these (a '/' or ',,' kept the line before's value, '2*30' a
     # repeat count, extra columns and text were ignored): each is now its line's error
     dict(name=f"table_file line 3 = {bad!r}",
