@@ -138,8 +138,9 @@ module trainsim_model
       !> that kernel's per-element elastic energies (summed after the kinetic).
       integer, private :: n_cold = 0
       real(wp), allocatable, private :: el_pe(:)
-      !> The elements' kinematic constraints (D-76): a model with one is never simple
-      type(constraint_set_t), allocatable :: cn   ! (allocatable: a plain one cost the simple kernels 11 instr/step)
+      !> Kinematic constraints (D-76; allocatable: a plain one cost the simple kernels 11 instr/step)
+      type(constraint_set_t), allocatable :: cn
+      integer :: n_cand = 0   !< size(cn%cand): elements that may constrain (then never simple)
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -490,14 +491,14 @@ module trainsim_model
          integer, intent(in) :: i
       end subroutine refresh_hot
 
-      !> Kinematic constraints (D-76; documented in trainsim_model_constraints).
-      module subroutine constraints_setup(self)
+      module subroutine constraints_setup(self)   ! kinematic constraints (D-76; docs: trainsim_model_constraints)
          type(model_t), intent(inout) :: self
       end subroutine constraints_setup
-      module subroutine constraints_rhs(self, t, y, dydt)
+      module subroutine constraints_rhs(self, t, y, dydt, t_now)
          type(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
          real(wp), intent(inout), optional :: dydt(:)
+         logical, intent(in), optional :: t_now
       end subroutine constraints_rhs
       module subroutine constraints_settle(self, t, y, events, nev, dstored, project)
          type(model_t), intent(inout) :: self
