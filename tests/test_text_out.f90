@@ -56,6 +56,7 @@ contains
            ieee_value(1.0_wp, ieee_quiet_nan), ieee_value(1.0_wp, ieee_positive_inf), &
            ieee_value(1.0_wp, ieee_negative_inf), 1.0e99_wp, 9.99999995e99_wp, 9.9999999e99_wp, 1.0e100_wp, &
            1.0e-99_wp, 9.99999996e-100_wp, 1.0e-100_wp, 0.5_wp, 1.25_wp, 2.5_wp, 0.125_wp, 1.0e4_wp, 1.0_wp, -1.0_wp, &
+           12345678.5_wp, 12345677.5_wp, -98765.5_wp, 98764.5_wp, 1234567895.0_wp, 1234567885.0_wp, 0.375_wp, &
            99.995_wp, 99.994999_wp, 100.0_wp, 0.005_wp, -0.004_wp, 1.0e6_wp, -1.0e5_wp, 12345.678_wp, 0.001_wp]
       do k = -30, 30   ! rounding up across a power of ten at every digit count used
          x = [x, 10.0_wp**k, 10.0_wp**k*(1.0_wp - 4.0e-11_wp), 10.0_wp**k*(1.0_wp - 6.0e-8_wp), &

@@ -7,6 +7,7 @@
 module trainsim_text_out
    use, intrinsic :: iso_c_binding, only: c_double, c_int, c_char
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use, intrinsic :: iso_fortran_env, only: int64
    use trainsim_kinds, only: wp
    use trainsim_strings, only: str
    implicit none
@@ -109,6 +110,7 @@ contains
       character(kind=c_char) :: c(48)
       character(len=48) :: t
       integer :: m, j
+      if (es_exact(self, x, w, d)) return
       m = 0
       if (ieee_is_finite(x) .and. d <= 30) m = c_fmt_e(real(x, c_double), d, c, 48)
       ! the form C and Fortran share: [-]d.ddddE+dd (two exponent digits)
@@ -126,6 +128,66 @@ contains
       end do
       call self%a(t(1:m), w)
    end subroutine put_es
+
+   !> ESw.d of a normal (or zero) x with a two-digit exponent and at most 17 digits,
+   !> in 128-bit integers: x = m 2^e2 exactly, the d+1 digits q = x/10^s rounded to
+   !> nearest, ties to even (as snprintf, which gfortran's ES calls, rounds).
+   !> False (nothing written) where this does not apply; put_es then asks snprintf.
+   logical function es_exact(self, x, w, d) result(done)
+      class(text_out_t), intent(inout) :: self
+      real(wp), intent(in) :: x
+      integer, intent(in) :: w, d
+      integer, parameter :: i16 = selected_int_kind(38)
+      integer(i16) :: num, den, q, r, p10
+      integer(int64) :: m
+      integer :: e2, ex, sc, pass, j, k, n
+      character(len=32) :: t
+      done = .false.
+      if (d > 16 .or. d + 7 > w) return
+      if (x == 0.0_wp) then
+         q = 0
+         ex = 0
+      else
+         if (.not. ieee_is_finite(x) .or. abs(x) < tiny(x)) return
+         m = int(scale(fraction(abs(x)), digits(x)), int64)   ! 2^52 <= m < 2^53
+         e2 = exponent(x) - digits(x)
+         ex = floor(log10(abs(x)))
+         do pass = 1, 3
+            sc = ex - d                                      ! q ~ |x| / 10^sc, d+1 digits
+            if (max(e2, 0) + 4*max(-sc, 0) > 70 .or. max(-e2, 0) + 4*max(sc, 0) > 120) return
+            num = int(m, i16)*2_i16**max(e2, 0)*10_i16**max(-sc, 0)
+            den = 2_i16**max(-e2, 0)*10_i16**max(sc, 0)
+            q = num/den
+            r = num - q*den
+            if (2*r > den .or. (2*r == den .and. mod(q, 2_i16) == 1)) q = q + 1
+            p10 = 10_i16**d
+            if (q >= 10*p10) then
+               ex = ex + 1
+            else if (q < p10) then
+               ex = ex - 1
+            else
+               exit
+            end if
+         end do
+         if (pass > 3 .or. abs(ex) > 99) return
+      end if
+      n = d + 6
+      if (sign(1.0_wp, x) < 0.0_wp) n = n + 1
+      k = n - 4                                              ! the last mantissa digit
+      do j = k, k - d + 1, -1
+         t(j:j) = achar(48 + int(mod(q, 10_i16)))
+         q = q/10
+      end do
+      t(k - d:k - d) = '.'
+      t(k - d - 1:k - d - 1) = achar(48 + int(q))
+      if (n == d + 7) t(1:1) = '-'
+      t(k + 1:k + 1) = 'E'
+      t(k + 2:k + 2) = merge('-', '+', ex < 0)
+      t(k + 3:k + 3) = achar(48 + abs(ex)/10)
+      t(k + 4:k + 4) = achar(48 + mod(abs(ex), 10))
+      call self%a(t(1:n), w)
+      done = .true.
+   end function es_exact
 
    !> A real as Fw.d writes it.
    subroutine put_f(self, x, w, d)
