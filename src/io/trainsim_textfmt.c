@@ -15,3 +15,23 @@ int trainsim_fmt_f(double x, int d, char *buf, int cap)
 {
     return snprintf(buf, (size_t)cap, "%.*f", d, x);
 }
+
+/* The value of a number the deck lexer has already checked ([sign] digits [. digits]
+ * [e [sign] digits], n characters, not NUL-terminated): glibc's strtod, correctly
+ * rounded, the conversion gfortran's list-directed read ends in. *ok = 0 if the text
+ * is too long for this buffer (the caller then reads it with Fortran). */
+#include <stdlib.h>
+#include <string.h>
+
+double trainsim_strtod(const char *s, int n, int *ok)
+{
+    char buf[128];
+    if (n <= 0 || n >= (int)sizeof buf) {
+        *ok = 0;
+        return 0.0;
+    }
+    memcpy(buf, s, (size_t)n);
+    buf[n] = '\0';
+    *ok = 1;
+    return strtod(buf, NULL);
+}
