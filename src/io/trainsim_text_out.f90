@@ -108,8 +108,7 @@ contains
       real(wp), intent(in) :: x
       integer, intent(in) :: w, d
       character(kind=c_char) :: c(48)
-      character(len=48) :: t
-      integer :: m, j
+      integer :: m
       if (es_exact(self, x, w, d)) return
       m = 0
       if (ieee_is_finite(x) .and. d <= 30) m = c_fmt_e(real(x, c_double), d, c, 48)
@@ -119,14 +118,7 @@ contains
       else
          m = 0
       end if
-      if (m == 0) then
-         call fallback(self, x, '(es'//str(w)//'.'//str(d)//')', w)
-         return
-      end if
-      do j = 1, m
-         t(j:j) = c(j)
-      end do
-      call self%a(t(1:m), w)
+      call put_c_or_fortran(self, c, m, x, 'es', w, d)
    end subroutine put_es
 
    !> ESw.d of a normal (or zero) x with a two-digit exponent and at most 17 digits,
@@ -195,32 +187,37 @@ contains
       real(wp), intent(in) :: x
       integer, intent(in) :: w, d
       character(kind=c_char) :: c(48)
-      character(len=48) :: t
-      integer :: m, j
+      integer :: m
       m = 0
       if (ieee_is_finite(x)) then
          if (abs(x) < 1.0e15_wp .and. d <= 20) m = c_fmt_f(real(x, c_double), d, c, 48)
       end if
-      if (m < 1 .or. m > w) then
-         call fallback(self, x, '(f'//str(w)//'.'//str(d)//')', w)
+      if (m > w) m = 0
+      call put_c_or_fortran(self, c, m, x, 'f', w, d)
+   end subroutine put_f
+
+   !> The m characters of c right-justified in w columns, or (m = 0) Fortran's own
+   !> write of x with edit descriptor `letter`w.d (es or f).
+   subroutine put_c_or_fortran(self, c, m, x, letter, w, d)
+      class(text_out_t), intent(inout) :: self
+      character(kind=c_char), intent(in) :: c(:)
+      integer, intent(in) :: m, w, d
+      real(wp), intent(in) :: x
+      character(len=*), intent(in) :: letter
+      character(len=64) :: t
+      character(len=16) :: fmt
+      integer :: j
+      if (m <= 0) then
+         write (fmt, '(2a,i0,a,i0,a)') '(', letter, w, '.', d, ')'
+         write (t, fmt) x
+         call self%a(t(1:w), w)
          return
       end if
       do j = 1, m
          t(j:j) = c(j)
       end do
       call self%a(t(1:m), w)
-   end subroutine put_f
-
-   !> Fortran's own write of x with format fmt (w columns).
-   subroutine fallback(self, x, fmt, w)
-      class(text_out_t), intent(inout) :: self
-      real(wp), intent(in) :: x
-      character(len=*), intent(in) :: fmt
-      integer, intent(in) :: w
-      character(len=64) :: t
-      write (t, fmt) x
-      call self%a(t(1:w), w)
-   end subroutine fallback
+   end subroutine put_c_or_fortran
 
    !> Ends the line; the buffer goes out once it holds a block.
    subroutine end_line(self)
