@@ -2,7 +2,7 @@
 !> printed tables of `trainsim run` must not change: D-76): every form it is used
 !> with, over the values where C's and Fortran's forms part (zero of both signs,
 !> subnormals, huge, non-finite, three-digit exponents, ties, rounding across a
-!> power of ten) and 200 000 reals of random bits.
+!> power of ten) and 200 000 reals of random bits (NaNs among them quiet).
 program test_text_out
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan, ieee_positive_inf, ieee_negative_inf
    use, intrinsic :: iso_fortran_env, only: int64
@@ -67,6 +67,8 @@ contains
       do i = 1, size(r)   ! xorshift bits: every exponent and sign, NaNs and infinities among them
          s = ieor(s, ishft(s, 13)); s = ieor(s, ishft(s, -7)); s = ieor(s, ishft(s, 17))
          r(i) = transfer(s, 1.0_wp)
+         ! no signalling NaN (no computation makes one; the Debug build's trap fires on any use)
+         if (iand(ishft(s, -52), 2047_int64) == 2047_int64) r(i) = ieee_value(1.0_wp, ieee_quiet_nan)
       end do
       allocate (p(50000))
       do i = 1, size(p)   ! 1e-300..1e300 (no overflow: the Debug build traps it)

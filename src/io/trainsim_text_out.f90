@@ -136,11 +136,12 @@ contains
       character(len=32) :: t
       done = .false.
       if (d > 16 .or. d + 7 > w) return
+      if (.not. ieee_is_finite(x)) return   ! (alone: a NaN in a comparison traps in Debug)
       if (x == 0.0_wp) then
          q = 0
          ex = 0
       else
-         if (.not. ieee_is_finite(x) .or. abs(x) < tiny(x)) return
+         if (abs(x) < tiny(x)) return
          m = int(scale(fraction(abs(x)), digits(x)), int64)   ! 2^52 <= m < 2^53
          e2 = exponent(x) - digits(x)
          ex = floor(log10(abs(x)))
