@@ -78,13 +78,14 @@ contains
    !> (result%stats%t_final: the time reached; result%t_sampled: the last
    !> output time written); `err` is still the interrupt. With `progress`, the
    !> driver reports to it once per output time or block of steps.
-   subroutine simulate(model, sink, result, err, keep_interrupted, progress)
+   subroutine simulate(model, sink, result, err, keep_interrupted, progress, step_checked)
       type(model_t), intent(inout), target :: model
       class(sink_t), intent(inout), target :: sink   ! the observer streams the event rows to it
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
       logical, intent(in), optional :: keep_interrupted
       type(progress_t), intent(inout), optional :: progress
+      logical, intent(in), optional :: step_checked   !< the caller ran check_fixed_step on this model (D-79)
       type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
@@ -95,6 +96,7 @@ contains
 
       type(settle_t) :: settle
       real(wp) :: t_end_deck
+      logical :: checked
 
       call system_clock(c0, rate)
       call make_integrator(model%run%integrator, integ)
@@ -103,8 +105,12 @@ contains
          return
       end if
       integ%region_instants = .true.   ! advance_to works on the region alone at local event instants
-      call check_fixed_step(model, err)
-      if (allocated(err)) return
+      checked = .false.
+      if (present(step_checked)) checked = step_checked
+      if (.not. checked) then
+         call check_fixed_step(model, err)
+         if (allocated(err)) return
+      end if
       t = model%run%t_start
       call model%initial_state(y)
       call model%init_modes(t, y)
