@@ -1,0 +1,127 @@
+!> The C interface to a run advanced by its caller (include/trainsim.h,
+!> "Sessions"; trainsim_session): start a session from a simulation's model,
+!> advance it to any later time, read the node angles and speeds, save points
+!> and go back to them. The base of the FMU (issue 24). Each `trainsim_sim`
+!> holds at most one session; starting again replaces it.
+module trainsim_capi_session
+   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_size_t, c_ptr
+   use trainsim, only: error_t, wp, model_t, session_state_t
+   use trainsim_capi, only: capi_sim_t, take, finish, misuse, built_model, code_argument
+   implicit none
+   private
+
+contains
+
+   !> `int trainsim_session_start(trainsim_sim *)`: a session of the handle's model
+   !> (built now if it is not) at t_start.
+   integer(c_int) function trainsim_session_start(p) result(code) bind(C, name='trainsim_session_start')
+      type(c_ptr), value :: p
+      type(capi_sim_t), pointer :: h
+      type(model_t) :: model
+      type(error_t), allocatable :: err
+      code = code_argument
+      if (.not. take(p, h)) return
+      call built_model(h, model, err)
+      if (.not. allocated(err)) then
+         if (.not. allocated(h%session)) allocate (h%session)
+         if (allocated(h%saved)) deallocate (h%saved)
+         allocate (h%saved(0))
+         call h%session%start(model, err)
+      end if
+      code = finish(h, err)
+   end function trainsim_session_start
+
+   !> `int trainsim_session_advance(trainsim_sim *, double t)`: advance the session
+   !> to t (between the time reached and t_end).
+   integer(c_int) function trainsim_session_advance(p, t) result(code) bind(C, name='trainsim_session_advance')
+      type(c_ptr), value :: p
+      real(c_double), value :: t
+      type(capi_sim_t), pointer :: h
+      type(error_t), allocatable :: err
+      code = code_argument
+      if (.not. live(p, h, code)) return
+      call h%session%advance(real(t, wp), err)
+      code = finish(h, err)
+   end function trainsim_session_advance
+
+   !> `int trainsim_session_state(trainsim_sim *, double *t, double *theta, double
+   !> *omega, size_t n)`: the time reached and every node's angle and speed (n: the
+   !> node count, trainsim_count(TRAINSIM_NODES)).
+   integer(c_int) function trainsim_session_state(p, t, theta, omega, n) result(code) &
+      bind(C, name='trainsim_session_state')
+      type(c_ptr), value :: p
+      real(c_double), intent(out) :: t
+      integer(c_size_t), value :: n
+      real(c_double), intent(out) :: theta(n), omega(n)
+      type(capi_sim_t), pointer :: h
+      code = code_argument
+      if (.not. live(p, h, code)) return
+      if (n /= size(h%session%model%nodes, kind=c_size_t)) then
+         code = misuse(h, 'trainsim_session_state: n is not the node count')
+         return
+      end if
+      call h%session%model%kinematics(h%session%t, h%session%y)
+      t = real(h%session%t, c_double)
+      theta = real(h%session%model%theta, c_double)
+      omega = real(h%session%model%omega, c_double)
+      code = 0
+   end function trainsim_session_state
+
+   !> `int trainsim_session_save(trainsim_sim *, int *point)`: save the session's
+   !> point (time, state, modes); `point` numbers it for `trainsim_session_restore`.
+   integer(c_int) function trainsim_session_save(p, point) result(code) bind(C, name='trainsim_session_save')
+      type(c_ptr), value :: p
+      integer(c_int), intent(out) :: point
+      type(capi_sim_t), pointer :: h
+      type(session_state_t) :: st
+      type(error_t), allocatable :: err
+      point = -1
+      code = code_argument
+      if (.not. live(p, h, code)) return
+      call h%session%save(st, err)
+      if (.not. allocated(err)) then
+         h%saved = [h%saved, st]
+         point = int(size(h%saved) - 1, c_int)
+      end if
+      code = finish(h, err)
+   end function trainsim_session_save
+
+   !> `int trainsim_session_restore(trainsim_sim *, int point)`: go back (or
+   !> forward) to a saved point; the run continues from there bit for bit as it
+   !> did the first time.
+   integer(c_int) function trainsim_session_restore(p, point) result(code) bind(C, name='trainsim_session_restore')
+      type(c_ptr), value :: p
+      integer(c_int), value :: point
+      type(capi_sim_t), pointer :: h
+      type(error_t), allocatable :: err
+      code = code_argument
+      if (.not. live(p, h, code)) return
+      if (point < 0 .or. point >= size(h%saved)) then
+         code = misuse(h, 'trainsim_session_restore: no saved point '//itoa(int(point)))
+         return
+      end if
+      call h%session%restore(h%saved(point + 1), err)
+      code = finish(h, err)
+   end function trainsim_session_restore
+
+   !> The handle behind p with a started session (else code: a misuse).
+   logical function live(p, h, code)
+      type(c_ptr), intent(in) :: p
+      type(capi_sim_t), pointer, intent(out) :: h
+      integer(c_int), intent(inout) :: code
+      live = take(p, h)
+      if (.not. live) return
+      live = allocated(h%session)
+      if (live) live = h%session%started
+      if (.not. live) code = misuse(h, 'no session: call trainsim_session_start first')
+   end function live
+
+   function itoa(i) result(s)
+      integer, intent(in) :: i
+      character(len=:), allocatable :: s
+      character(len=12) :: b
+      write (b, '(i0)') i
+      s = trim(b)
+   end function itoa
+
+end module trainsim_capi_session
