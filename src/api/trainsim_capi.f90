@@ -21,7 +21,7 @@ module trainsim_capi
    private
 
    !> for the session calls (trainsim_capi_session)
-   public :: capi_sim_t, take, finish, misuse, built_model, code_argument
+   public :: capi_sim_t, take, finish, misuse, built_model, code_argument, f_string
 
    integer(c_int), parameter :: code_argument = 6   !< TRAINSIM_ERR_ARGUMENT
    integer, parameter :: alive = 20240611           !< capi_sim_t%magic of a live handle

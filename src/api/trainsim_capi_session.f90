@@ -4,21 +4,25 @@
 !> and go back to them. The base of the FMU (issue 24). Each `trainsim_sim`
 !> holds at most one session; starting again replaces it.
 module trainsim_capi_session
-   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_size_t, c_ptr
-   use trainsim, only: error_t, wp, model_t, session_state_t
-   use trainsim_capi, only: capi_sim_t, take, finish, misuse, built_model, code_argument
+   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_size_t, c_ptr, c_associated
+   use trainsim, only: error_t, wp, model_t, session_state_t, string_t
+   use trainsim_capi, only: capi_sim_t, take, finish, misuse, built_model, code_argument, f_string
    implicit none
    private
 
 contains
 
-   !> `int trainsim_session_start(trainsim_sim *)`: a session of the handle's model
-   !> (built now if it is not) at t_start.
-   integer(c_int) function trainsim_session_start(p) result(code) bind(C, name='trainsim_session_start')
-      type(c_ptr), value :: p
+   !> `int trainsim_session_start(trainsim_sim *, const char *inputs)`: a session of
+   !> the handle's model (built now if it is not) at t_start; inputs: the ids of the
+   !> nodes that take an input torque, separated by commas (NULL or "": none).
+   integer(c_int) function trainsim_session_start(p, inputs) result(code) bind(C, name='trainsim_session_start')
+      type(c_ptr), value :: p, inputs
       type(capi_sim_t), pointer :: h
       type(model_t) :: model
       type(error_t), allocatable :: err
+      type(string_t), allocatable :: ids(:)
+      character(len=:), allocatable :: list
+      integer :: a, b
       code = code_argument
       if (.not. take(p, h)) return
       call built_model(h, model, err)
@@ -26,7 +30,17 @@ contains
          if (.not. allocated(h%session)) allocate (h%session)
          if (allocated(h%saved)) deallocate (h%saved)
          allocate (h%saved(0))
-         call h%session%start(model, err)
+         allocate (ids(0))
+         list = ''
+         if (c_associated(inputs)) list = f_string(inputs)
+         a = 1
+         do while (a <= len(list))
+            b = index(list(a:), ',')
+            if (b == 0) b = len(list) - a + 2
+            if (len_trim(adjustl(list(a:a + b - 2))) > 0) ids = [ids, string_t(trim(adjustl(list(a:a + b - 2))))]
+            a = a + b
+         end do
+         call h%session%start(model, err, ids)
       end if
       code = finish(h, err)
    end function trainsim_session_start
@@ -43,6 +57,24 @@ contains
       call h%session%advance(real(t, wp), err)
       code = finish(h, err)
    end function trainsim_session_advance
+
+   !> `int trainsim_session_set_torque(trainsim_sim *, const char *node, double value)`:
+   !> the input torque on `node` (one of the session's inputs) from now on.
+   integer(c_int) function trainsim_session_set_torque(p, node, value) result(code) &
+      bind(C, name='trainsim_session_set_torque')
+      type(c_ptr), value :: p, node
+      real(c_double), value :: value
+      type(capi_sim_t), pointer :: h
+      type(error_t), allocatable :: err
+      code = code_argument
+      if (.not. live(p, h, code)) return
+      if (.not. c_associated(node)) then
+         code = misuse(h, 'trainsim_session_set_torque: the node id is NULL')
+         return
+      end if
+      call h%session%set_torque(f_string(node), real(value, wp), err)
+      code = finish(h, err)
+   end function trainsim_session_set_torque
 
    !> `int trainsim_session_state(trainsim_sim *, double *t, double *theta, double
    !> *omega, size_t n)`: the time reached and every node's angle and speed (n: the

@@ -26,8 +26,9 @@
 module trainsim_session
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_input, err_internal
-   use trainsim_strings, only: str
-   use trainsim_model, only: model_t
+   use trainsim_strings, only: str, string_t
+   use trainsim_model, only: model_t, load_t
+   use trainsim_signal, only: constant_signal
    use trainsim_observer, only: observer_t, run_result_t
    use trainsim_sink, only: null_sink_t
    use trainsim_run_stats, only: run_stats_t
@@ -47,6 +48,7 @@ module trainsim_session
       real(wp), private :: t = 0.0_wp
       real(wp), allocatable, private :: y(:)
       type(drive_t), private :: d
+      integer, allocatable, private :: input_load(:)
       logical, private :: saved = .false.
       !> a fixed-step integrator's grid (t0 + k dt, the next k)
       real(wp), private :: grid_t0 = 0.0_wp
@@ -66,27 +68,39 @@ module trainsim_session
       type(drive_t), private :: d
       type(run_stats_t), private :: stats   !< counters of integrators already finished
       real(wp), private :: t_end = 0.0_wp, dout = 0.0_wp
+      !> per node: its input torque's index in model%loads (0: none yet)
+      integer, allocatable, private :: input_load(:)
    contains
       procedure :: start => session_start
       procedure :: advance => session_advance
       procedure :: save => session_save
       procedure :: restore => session_restore
+      procedure :: set_torque => session_set_torque
       procedure :: finish => session_finish
    end type session_t
 
 contains
 
    !> Start a session of `model` (a copy is taken) at its t_start; the run
-   !> may be advanced up to its t_end.
-   subroutine session_start(self, model, err)
+   !> may be advanced up to its t_end. Each node of `inputs` gets an external
+   !> torque of 0 beside the deck's loads (the sums are unchanged: x + 0 = x).
+   subroutine session_start(self, model, err, inputs)
       class(session_t), intent(inout), target :: self
       type(model_t), intent(in) :: model
       type(error_t), allocatable, intent(out) :: err
+      !> ids of the nodes that take an input torque (`set_torque`), 0 at the start
+      type(string_t), intent(in), optional :: inputs(:)
       type(observer_t) :: fresh_obs
       type(run_stats_t) :: fresh_stats
       type(drive_t) :: fresh_d
       if (self%started) call self%finish()
+      if (allocated(self%input_load)) deallocate (self%input_load)
       self%model = model
+      allocate (self%input_load(size(self%model%nodes)), source=0)
+      if (present(inputs)) then
+         call add_inputs(self, inputs, err)
+         if (allocated(err)) return
+      end if
       self%stats = fresh_stats
       call check_fixed_step(self%model, err)
       if (allocated(err)) return
@@ -140,6 +154,7 @@ contains
       state%t = self%t
       state%y = self%y
       state%d = self%d
+      state%input_load = self%input_load
       state%saved = .true.
       call grid_of(self%integ, state%grid_t0, state%grid_next)
       call fresh_integrator(self, err)
@@ -162,9 +177,73 @@ contains
       self%t = state%t
       self%y = state%y
       self%d = state%d
+      self%input_load = state%input_load
       call fresh_integrator(self, err)
       if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
    end subroutine session_restore
+
+   !> An input of the run from now on: the external torque `value` on node
+   !> `node` (an id among the session's inputs), beside the deck's loads there,
+   !> held constant until the next call (a co-simulation input). The
+   !> change acts as a breakpoint of the inputs: the integrator starts afresh
+   !> at t (a fixed-step one on its grid). Saved and restored with the point.
+   subroutine session_set_torque(self, node, value, err)
+      class(session_t), intent(inout), target :: self
+      character(len=*), intent(in) :: node
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: t0
+      integer(i8) :: next
+      integer :: i, k
+      if (.not. self%started) then
+         call fatal_error(err, 'internal: a session given an input before it was started', err_internal)
+         return
+      end if
+      i = self%model%node_index(node)
+      k = 0
+      if (i > 0) k = self%input_load(i)
+      if (k == 0) then
+         call fatal_error(err, "input torque on node '"//node//"': not an input of this session "// &
+                          '(name it among the inputs when the session starts)', err_input)
+         return
+      end if
+      if (.not. (abs(value) <= huge(1.0_wp))) then
+         call fatal_error(err, "input torque on node '"//node//"': the value is not a finite number", err_input)
+         return
+      end if
+      if (self%model%loads(k)%torque%value0 == value) return
+      self%model%loads(k)%torque = constant_signal(value)
+      call self%model%build_fast_path()
+      call grid_of(self%integ, t0, next)
+      call fresh_integrator(self, err)
+      if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
+   end subroutine session_set_torque
+
+   !> A load of 0 on each node of `ids` (a free node), its index in input_load.
+   subroutine add_inputs(self, ids, err)
+      type(session_t), intent(inout) :: self
+      type(string_t), intent(in) :: ids(:)
+      type(error_t), allocatable, intent(out) :: err
+      type(load_t) :: l
+      integer :: j, i
+      do j = 1, size(ids)
+         i = self%model%node_index(ids(j)%s)
+         if (i == 0) then
+            call fatal_error(err, "input torque on node '"//ids(j)%s//"': the deck has no node of that id", err_input)
+            return
+         end if
+         if (self%model%nodes(i)%n%nstates() == 0 .or. self%model%is_held(i)) then
+            call fatal_error(err, "input torque on node '"//ids(j)%s//"': the node is fixed or its speed is "// &
+                             'prescribed (a torque there moves nothing)', err_input)
+            return
+         end if
+         if (self%input_load(i) > 0) cycle
+         l%node = i
+         l%torque = constant_signal(0.0_wp)
+         self%model%loads = [self%model%loads, l]
+         self%input_load(i) = size(self%model%loads)
+      end do
+   end subroutine add_inputs
 
    !> End the session: the run's metrics, events and statistics up to t into
    !> `result` (if present).

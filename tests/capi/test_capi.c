@@ -114,7 +114,8 @@ static void test_session(const char *deck) {
     trainsim_series(sim, series, ncol * nrow);
     long iw = index_of(sim, TRAINSIM_SERIES, "nodes/omega/n4");
     long ia = index_of(sim, TRAINSIM_SERIES, "nodes/theta/n4");
-    int rc = trainsim_session_start(sim);
+    CHECK(trainsim_session_start(sim, "n4, nx") == TRAINSIM_ERR_INPUT, "an input on a node that does not exist");
+    int rc = trainsim_session_start(sim, "n4");
     CHECK(rc == 0, "session start: code %d", rc);
     if (rc) { print_error(sim); free(series); trainsim_free(sim); return; }
     double t = 0, th[16], om[16], th2[16], om2[16];
@@ -140,6 +141,8 @@ static void test_session(const char *deck) {
     CHECK(fabs(t - series[10 * ncol]) <= 1e-15, "restored to t = %g", t);
     CHECK(trainsim_session_advance(sim, 1e-3) == TRAINSIM_ERR_INPUT, "advancing backwards is refused");
     CHECK(trainsim_session_restore(sim, 7) == TRAINSIM_ERR_ARGUMENT, "restoring a point never saved is refused");
+    CHECK(trainsim_session_set_torque(sim, "n3", 1.0) == TRAINSIM_ERR_INPUT, "a torque on a node not an input");
+    CHECK(trainsim_session_set_torque(sim, "n4", 0.0) == 0, "the input torque on n4 set to 0 (unchanged)");
     CHECK(trainsim_session_advance(sim, series[(nrow - 1) * ncol]) == 0, "advance again to the end");
     trainsim_session_state(sim, &t, th2, om2, nn);
     CHECK(memcmp(th, th2, nn * sizeof *th) == 0 && memcmp(om, om2, nn * sizeof *om) == 0,
