@@ -59,7 +59,7 @@ contains
       do k = 2, n
          call s%advance(r%series_t(k), err)
          if (allocated(err)) exit
-         call s%model%kinematics(s%t, s%y)
+         call s%kinematics()
          if (any(s%model%theta /= r%series_theta(:, k)) .or. any(s%model%omega /= r%series_omega(:, k))) then
             same = .false.
             if (worst == 0) worst = k
@@ -143,7 +143,7 @@ contains
             call s%advance(t, err)
             if (t >= m%run%t_end) exit
          end do
-         call s%model%kinematics(s%t, s%y)
+         call s%kinematics()
          dev = maxval(abs(s%model%omega - r%series_omega(:, n)))
          call check('points '//ftoa(h(j)/m%run%dt)//' dt apart: advanced to t_end without error', .not. allocated(err))
          call check('   final speeds equal the run''s within 1e-8 of the speed scale (dev '//ftoa(dev/scale)//')', &
@@ -188,7 +188,7 @@ contains
          if (allocated(err)) exit
          call s%advance(r%series_t(k), err)
          if (allocated(err)) exit
-         call s%model%kinematics(s%t, s%y)
+         call s%kinematics()
          if (integrator == 'rk4') then
             same = same .and. maxval(abs(s%model%omega - r%series_omega(:, k))) <= 1.0e-12_wp*scale
          else
@@ -213,7 +213,7 @@ contains
       call s%set_torque('n4', -100.0_wp, err)
       call s%advance(0.012_wp, err)
       k = nint(0.012_wp/m%run%output_interval) + 1
-      call s%model%kinematics(s%t, s%y)
+      call s%kinematics()
       if (integrator == 'rk4') then
          call check('restored before a large input: the input is gone (equals the step-load run within 1e-12)', &
                     maxval(abs(s%model%omega - r%series_omega(:, k))) <= 1.0e-12_wp*scale)

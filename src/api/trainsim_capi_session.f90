@@ -92,7 +92,7 @@ contains
          code = misuse(h, 'trainsim_session_state: n is not the node count')
          return
       end if
-      call h%session%model%kinematics(h%session%t, h%session%y)
+      call h%session%kinematics()
       t = real(h%session%t, c_double)
       theta = real(h%session%model%theta, c_double)
       omega = real(h%session%model%omega, c_double)

@@ -45,7 +45,7 @@ module trainsim_session
    !> A saved point of a session (`session_t%save`, `restore`).
    type :: session_state_t
       type(model_t), private :: model
-      real(wp), private :: t = 0.0_wp
+      real(wp), private :: t = 0.0_wp, t_int = 0.0_wp
       real(wp), allocatable, private :: y(:)
       type(drive_t), private :: d
       integer, allocatable, private :: input_load(:)
@@ -58,9 +58,13 @@ module trainsim_session
    type :: session_t
       !> The model being run (its modes change as the run goes).
       type(model_t) :: model
-      !> The time reached and the state there (model%state_label names y's entries).
+      !> The time reached (the last goal) and the state there (model%state_label
+      !> names y's entries). The integrator's own time `t_int` may lie off the goal
+      !> by less than the instant tolerance (1e-9 dt: a fixed-step grid point
+      !> t_start + k dt), as a run's sample at its output time.
       real(wp) :: t = 0.0_wp
       real(wp), allocatable :: y(:)
+      real(wp), private :: t_int = 0.0_wp
       logical :: started = .false.
       class(integrator_t), allocatable, private :: integ
       type(observer_t), private :: obs
@@ -76,6 +80,7 @@ module trainsim_session
       procedure :: save => session_save
       procedure :: restore => session_restore
       procedure :: set_torque => session_set_torque
+      procedure :: kinematics => session_kinematics
       procedure :: finish => session_finish
    end type session_t
 
@@ -105,6 +110,7 @@ contains
       call check_fixed_step(self%model, err)
       if (allocated(err)) return
       self%t = self%model%run%t_start
+      self%t_int = self%t
       self%t_end = self%model%run%t_end
       self%dout = self%model%run%output_interval
       if (.not. self%dout > 0.0_wp) self%dout = self%model%run%dt
@@ -136,8 +142,9 @@ contains
                           err_input)
          return
       end if
-      if (t_goal - self%t <= self%d%tol) return
-      call advance_to(self%model, self%integ, self%obs, self%d, t_goal, self%t_end, self%t, self%y, err)
+      if (t_goal - self%t_int <= self%d%tol) return
+      call advance_to(self%model, self%integ, self%obs, self%d, t_goal, self%t_end, self%t_int, self%y, err)
+      if (.not. allocated(err)) self%t = t_goal
    end subroutine session_advance
 
    !> The session's point (time, state, modes, parameters) into `state`; the
@@ -152,6 +159,7 @@ contains
       end if
       state%model = self%model
       state%t = self%t
+      state%t_int = self%t_int
       state%y = self%y
       state%d = self%d
       state%input_load = self%input_load
@@ -175,6 +183,7 @@ contains
       deallocate (self%integ)
       self%model = state%model
       self%t = state%t
+      self%t_int = state%t_int
       self%y = state%y
       self%d = state%d
       self%input_load = state%input_load
@@ -219,6 +228,13 @@ contains
       if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
    end subroutine session_set_torque
 
+   !> Every node's angle and speed at the session's point into model%theta,
+   !> model%omega (as a run's sample there).
+   subroutine session_kinematics(self)
+      class(session_t), intent(inout) :: self
+      call self%model%kinematics(self%t_int, self%y)
+   end subroutine session_kinematics
+
    !> A load of 0 on each node of `ids` (a free node), its index in input_load.
    subroutine add_inputs(self, ids, err)
       type(session_t), intent(inout) :: self
@@ -259,7 +275,7 @@ contains
       call self%integ%finish()
       deallocate (self%integ)
       self%stats%t_metrics = self%obs%t_metrics
-      call self%obs%finish(self%model, self%t, self%y, self%stats, self%sink, r, e)
+      call self%obs%finish(self%model, self%t_int, self%y, self%stats, self%sink, r, e)
       if (present(result)) result = r
       if (present(err)) then
          if (allocated(e)) call move_alloc(e, err)
@@ -283,7 +299,7 @@ contains
          return
       end if
       self%integ%region_instants = .true.
-      call drive_setup(self%model, self%integ, self%obs, self%d, self%dout, self%t_end, self%t, self%y, err)
+      call drive_setup(self%model, self%integ, self%obs, self%d, self%dout, self%t_end, self%t_int, self%y, err)
    end subroutine fresh_integrator
 
    !> A fixed-step integrator's grid (its start and the index of the next point).
