@@ -1,0 +1,139 @@
+#!/usr/bin/python3
+"""Pack a train as an FMI 2.0 co-simulation FMU (run by `trainsim fmu`; docs/fmu.md).
+
+Reads the variables `trainsim fmu` listed (JSON), writes modelDescription.xml, and zips it
+with the deck and its table files (resources/) and the binary that runs it
+(binaries/linux64/: trainsim_fmi2.so and libtrainsim_c, from build/fmu or the installed
+<prefix>/lib/.../trainsim/fmu). Value references as src/fmu/trainsim_fmi2.c reads them:
+node k (0-based) angle 1 + 2k, speed 2 + 2k; input j 1000000 + j; parameter p 2000000 + p.
+"""
+import argparse
+import glob
+import hashlib
+import json
+import os
+import sys
+import zipfile
+from xml.sax.saxutils import quoteattr
+
+VR_INPUT, VR_PARAM = 1000000, 2000000
+
+
+def fail(message):
+    print(f"trainsim: fmu: error: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
+def binaries(exe_dir):
+    """The directory holding trainsim_fmi2.so beside the executable (build tree or install)."""
+    candidates = [os.path.join(exe_dir, "fmu")]
+    candidates += [os.path.join(exe_dir, "..", "lib", "trainsim", "fmu")]
+    candidates += glob.glob(os.path.join(exe_dir, "..", "lib", "*", "trainsim", "fmu"))
+    env = os.environ.get("TRAINSIM_FMU_BINARIES")
+    if env:
+        candidates.insert(0, env)
+    for c in candidates:
+        if os.path.isfile(os.path.join(c, "trainsim_fmi2.so")):
+            return c
+    fail("cannot find trainsim_fmi2.so (looked in $TRAINSIM_FMU_BINARIES, " + ", ".join(candidates[-3:]) +
+         "); build trainsim with its C interface (TRAINSIM_BUILD_C_API)")
+
+
+def model_description(v, guid):
+    torque = v["torque_unit"]
+    rows, outputs = [], []
+
+    def var(name, vr, causality, variability, description, unit, initial=None, start=None):
+        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
+        if initial:
+            attrs += f' initial="{initial}"'
+        attrs += f" description={quoteattr(description)}"
+        real = f'<Real unit={quoteattr(unit)}' + (f' start="{start!r}"' if start is not None else "") + "/>"
+        rows.append(f"    <ScalarVariable {attrs}>\n      {real}\n    </ScalarVariable>")
+        return len(rows)
+
+    for k, node in enumerate(v["nodes"]):
+        outputs.append(var(f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad",
+                           initial="calculated"))
+        outputs.append(var(f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s",
+                           initial="calculated"))
+    for j, node in enumerate(v["inputs"]):
+        var(f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}", torque,
+            start=0.0)
+    for p, par in enumerate(v["parameters"]):
+        var(par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1",
+            initial="exact", start=float(par["value"]))
+    units = {torque, "rad", "rad/s", "1"}
+    unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in sorted(units))
+    unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in outputs)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="2.0" modelName={quoteattr(v["title"] or "trainsim")} guid="{guid}"
+  description={quoteattr("trainsim drive train: " + os.path.basename(v["deck_file"]))}
+  generationTool={quoteattr("trainsim " + v["version"])} variableNamingConvention="flat"
+  numberOfEventIndicators="0">
+  <CoSimulation modelIdentifier="trainsim_fmi2" canHandleVariableCommunicationStepSize="true"
+    canGetAndSetFMUstate="true" canSerializeFMUstate="false" canNotUseMemoryManagementFunctions="true"
+    canInterpolateInputs="false" providesDirectionalDerivative="false"/>
+  <UnitDefinitions>
+{unit_defs}
+  </UnitDefinitions>
+  <ModelVariables>
+{chr(10).join(rows)}
+  </ModelVariables>
+  <ModelStructure>
+    <Outputs>
+{unknowns}
+    </Outputs>
+    <InitialUnknowns>
+{unknowns}
+    </InitialUnknowns>
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("variables", help="the JSON that trainsim fmu wrote")
+    ap.add_argument("-o", "--output", required=True)
+    ap.add_argument("--exe-dir", default=".")
+    a = ap.parse_args()
+    with open(a.variables) as f:
+        v = json.load(f)
+    deck_dir = os.path.dirname(os.path.abspath(v["deck_file"]))
+    with open(v["deck_file"], "rb") as f:
+        deck = f.read()
+    tables = []
+    for t in v["table_files"]:
+        rel = os.path.normpath(t)
+        if os.path.isabs(t) or rel.startswith(".."):
+            fail(f"table_file '{t}': an FMU carries the files beside its deck only (a path below the deck's "
+                 "folder); copy the table there")
+        tables.append(rel)
+    bindir = binaries(a.exe_dir)
+    digest = hashlib.sha256(deck + json.dumps(v, sort_keys=True).encode()).hexdigest()
+    guid = "{%s-%s-%s-%s-%s}" % (digest[:8], digest[8:12], digest[12:16], digest[16:20], digest[20:32])
+    tmp = a.output + ".part"
+    try:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", model_description(v, guid))
+            z.writestr("resources/deck.nml", deck)
+            z.writestr("resources/inputs.txt", "".join(n + "\n" for n in v["inputs"]))
+            z.writestr("resources/parameters.txt",
+                       "".join(f"{p['path']}\t{float(p['value'])!r}\n" for p in v["parameters"]))
+            for rel in tables:
+                z.write(os.path.join(deck_dir, rel), "resources/" + rel)
+            for lib in sorted(os.listdir(bindir)):
+                if lib.endswith(".so") or ".so." in lib:
+                    z.write(os.path.join(bindir, lib), "binaries/linux64/" + lib)
+        os.replace(tmp, a.output)
+    except OSError as exc:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        fail(f"cannot write '{a.output}': {exc.strerror}")
+    print(f"trainsim: fmu: {a.output}: {len(v['nodes'])} nodes (angle, speed outputs), {len(v['inputs'])} "
+          f"input torque(s), {len(v['parameters'])} parameters")
+
+
+if __name__ == "__main__":
+    main()
