@@ -6,7 +6,7 @@
 program test_session
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, err_input
-   use trainsim_strings, only: string_t
+   use trainsim_strings, only: string_t, str
    use trainsim_model, only: model_t
    use trainsim_observer, only: run_result_t
    use trainsim_session, only: session_t, session_state_t
@@ -65,10 +65,10 @@ contains
             if (worst == 0) worst = k
          end if
       end do
-      call check('advanced through the '//itoa(n - 1)//' output times without error', .not. allocated(err))
+      call check('advanced through the '//str(n - 1)//' output times without error', .not. allocated(err))
       call check('the state at every output time equals the run''s sample, bit for bit (first differing: '// &
-                 itoa(worst)//')', same)
-      call check('the run had contact events to locate ('//itoa(size(r%events))//')', size(r%events) > 10)
+                 str(worst)//')', same)
+      call check('the run had contact events to locate ('//str(size(r%events))//')', size(r%events) > 10)
       call s%finish()
    end subroutine test_session_equals_run
 
@@ -260,14 +260,6 @@ contains
       call check("t_end itself is reached", .not. allocated(err) .and. abs(s%t - 2.0e-2_wp) < 1.0e-12_wp)
       call s%finish()
    end subroutine test_refusals
-
-   function itoa(i) result(s)
-      integer, intent(in) :: i
-      character(len=:), allocatable :: s
-      character(len=16) :: b
-      write (b, '(i0)') i
-      s = trim(b)
-   end function itoa
 
    function ftoa(x) result(s)
       real(wp), intent(in) :: x

@@ -6,6 +6,7 @@
 module trainsim_capi_session
    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_size_t, c_ptr, c_associated
    use trainsim, only: error_t, wp, model_t, session_state_t, string_t
+   use trainsim_strings, only: str
    use trainsim_capi, only: capi_sim_t, take, finish, misuse, built_model, code_argument, f_string
    implicit none
    private
@@ -129,7 +130,7 @@ contains
       code = code_argument
       if (.not. live(p, h, code)) return
       if (point < 0 .or. point >= size(h%saved)) then
-         code = misuse(h, 'trainsim_session_restore: no saved point '//itoa(int(point)))
+         code = misuse(h, 'trainsim_session_restore: no saved point '//str(int(point)))
          return
       end if
       call h%session%restore(h%saved(point + 1), err)
@@ -147,13 +148,5 @@ contains
       if (live) live = h%session%started
       if (.not. live) code = misuse(h, 'no session: call trainsim_session_start first')
    end function live
-
-   function itoa(i) result(s)
-      integer, intent(in) :: i
-      character(len=:), allocatable :: s
-      character(len=12) :: b
-      write (b, '(i0)') i
-      s = trim(b)
-   end function itoa
 
 end module trainsim_capi_session
