@@ -1,5 +1,5 @@
-!> trainsim fmu DECK -o TRAIN.fmu [--input NODE ...]: the train of DECK as an
-!> FMI 2.0 co-simulation FMU (docs/fmu.md). The deck is read and built here (bad input
+!> trainsim fmu DECK -o TRAIN.fmu [--input NODE ...] [--fmi 3|2]: the train of DECK as
+!> an FMI 3.0 (or 2.0) co-simulation FMU (docs/fmu.md). The deck is read and built here (bad input
 !> is refused as for `trainsim run`), its variables listed in a JSON file, and
 !> scripts/trainsim_fmu.py writes modelDescription.xml and packs the deck, its table
 !> files and the binary (build/fmu or <prefix>/lib/.../trainsim/fmu) into the FMU.
@@ -30,7 +30,7 @@ module trainsim_cmd_fmu
 contains
 
    subroutine do_fmu()
-      character(len=:), allocatable :: deck_file, out, path, script, python, line
+      character(len=:), allocatable :: deck_file, out, path, script, python, line, fmi
       type(string_t), allocatable :: inputs(:)
       type(deck_t) :: deck
       type(deck_group_t), allocatable :: sweeps(:)
@@ -39,6 +39,7 @@ contains
       integer :: k, u, ios, stat, cstat, i
       deck_file = ''
       out = ''
+      fmi = '3'
       allocate (sets(0), inputs(0))
       k = 2
       do while (k <= nargs)
@@ -48,6 +49,13 @@ contains
             call quit(0)
          case ('-o', '--output'); out = text_value(k); k = k + 1
          case ('--input'); inputs = [inputs, string_t(text_value(k))]; k = k + 1
+         case ('--fmi')
+            fmi = text_value(k)
+            k = k + 1
+            if (fmi /= '2' .and. fmi /= '3') then
+               write (error_unit, '(a)') "trainsim: fmu: error: --fmi '"//fmi//"': the FMI version is 3 or 2"
+               call quit(2)
+            end if
          case default
             if (index(arg(k), '-') == 1 .or. len(deck_file) > 0) then
                write (error_unit, '(a)') "trainsim: fmu: error: unexpected argument '"//arg(k)//"' (try trainsim fmu --help)"
@@ -92,7 +100,7 @@ contains
       close (u)
       python = env_text('TRAINSIM_PYTHON')
       if (len(python) == 0) python = '/usr/bin/python3'
-      line = quoted(python)//' '//quoted(script)//' '//quoted(path)//' -o '//quoted(out)//' --exe-dir '//quoted(exe_dir())
+      line = quoted(python)//' '//quoted(script)//' '//quoted(path)//' -o '//quoted(out)//' --exe-dir '//quoted(exe_dir())//' --fmi '//fmi
       flush (output_unit)
       call execute_command_line(line, exitstat=stat, cmdstat=cstat)
       open (newunit=u, file=path, status='old', iostat=ios)
