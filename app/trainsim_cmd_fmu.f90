@@ -149,6 +149,19 @@ contains
          write (u, '(a)', advance='no') merge(', ', '  ', i > 1)//js(model%nodes(i)%n%id)
       end do
       write (u, '(a)') '],'
+      write (u, '(a)', advance='no') ' "elements": ['
+      do i = 1, size(model%elements)
+         associate (e => model%elements(i)%e)
+            if (e%displacement_unit() == 'rad') then
+               write (u, '(a)', advance='no') merge(', ', '  ', i > 1)//'{"id": '//js(e%id)//', "disp_unit": "rad", '// &
+                  '"force_unit": '//js(model%units%torque)//'}'
+            else
+               write (u, '(a)', advance='no') merge(', ', '  ', i > 1)//'{"id": '//js(e%id)//', "disp_unit": '// &
+                  js(model%units%length)//', "force_unit": '//js(model%units%force)//'}'
+            end if
+         end associate
+      end do
+      write (u, '(a)') '],'
       write (u, '(a)', advance='no') ' "inputs": ['
       do i = 1, size(inputs)
          write (u, '(a)', advance='no') merge(', ', '  ', i > 1)//js(inputs(i)%s)

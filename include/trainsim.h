@@ -110,6 +110,8 @@ int trainsim_session_set_torque(trainsim_sim *sim, const char *node, double valu
 int trainsim_session_advance(trainsim_sim *sim, double t);  /* t: up to run.t_end */
 int trainsim_session_state(trainsim_sim *sim, double *t, double *theta, double *omega,
                            size_t n);                       /* n: TRAINSIM_NODES count */
+int trainsim_session_elements(trainsim_sim *sim, double *disp, double *force, double *contact,
+                              size_t n);                    /* n: TRAINSIM_ELEMENTS count */
 int trainsim_session_save(trainsim_sim *sim, int *point);
 int trainsim_session_restore(trainsim_sim *sim, int point);
 

@@ -6,7 +6,8 @@ with the deck and its table files (resources/) and the binary that runs it
 (binaries/x86_64-linux/ for FMI 3.0, binaries/linux64/ for 2.0: trainsim_fmu.so and
 libtrainsim_c, from build/fmu or the installed <prefix>/lib/.../trainsim/fmu). Value
 references as src/fmu/fmu_core.h reads them: 0 time (FMI 3.0); node k (0-based) angle
-1 + 2k, speed 2 + 2k; input j 1000000 + j; parameter p 2000000 + p.
+1 + 2k, speed 2 + 2k; input j 1000000 + j; parameter p 2000000 + p; element e (0-based)
+displacement 3000000 + 3e, force 3000001 + 3e, contact 3000002 + 3e.
 """
 import argparse
 import glob
@@ -17,7 +18,7 @@ import sys
 import zipfile
 from xml.sax.saxutils import quoteattr
 
-VR_INPUT, VR_PARAM = 1000000, 2000000
+VR_INPUT, VR_PARAM, VR_ELEMENT = 1000000, 2000000, 3000000
 
 
 def fail(message):
@@ -63,12 +64,21 @@ def model_description_3(v, guid):
                            initial="calculated"))
         outputs.append(var(f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s",
                            initial="calculated"))
+    for e, el in enumerate(v["elements"]):
+        i = el["id"]
+        outputs.append(var(f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}",
+                           el["disp_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous",
+                           f"force (or torque) of {i}", el["force_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
+                           f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", initial="calculated"))
     for j, node in enumerate(v["inputs"]):
         var(f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}", torque, start=0.0)
     for p, par in enumerate(v["parameters"]):
         var(par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1", initial="exact",
             start=float(par["value"]))
-    units = {torque, "rad", "rad/s", "1", "s"}
+    units = {torque, "rad", "rad/s", "1", "s"} | {e["disp_unit"] for e in v["elements"]} | \
+        {e["force_unit"] for e in v["elements"]}
     unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in sorted(units))
     structure = "\n".join(f'    <Output valueReference="{r}"/>' for r in outputs)
     structure += "\n" + "\n".join(f'    <InitialUnknown valueReference="{r}"/>' for r in outputs)
@@ -111,13 +121,22 @@ def model_description_2(v, guid):
                            initial="calculated"))
         outputs.append(var(f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s",
                            initial="calculated"))
+    for e, el in enumerate(v["elements"]):
+        i = el["id"]
+        outputs.append(var(f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}",
+                           el["disp_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous",
+                           f"force (or torque) of {i}", el["force_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
+                           f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", initial="calculated"))
     for j, node in enumerate(v["inputs"]):
         var(f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}", torque,
             start=0.0)
     for p, par in enumerate(v["parameters"]):
         var(par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1",
             initial="exact", start=float(par["value"]))
-    units = {torque, "rad", "rad/s", "1"}
+    units = {torque, "rad", "rad/s", "1"} | {e["disp_unit"] for e in v["elements"]} | \
+        {e["force_unit"] for e in v["elements"]}
     unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in sorted(units))
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in outputs)
     return f"""<?xml version="1.0" encoding="UTF-8"?>
@@ -187,8 +206,9 @@ def main():
         if os.path.exists(tmp):
             os.remove(tmp)
         fail(f"cannot write '{a.output}': {exc.strerror}")
-    print(f"trainsim: fmu: {a.output} (FMI {a.fmi}.0): {len(v['nodes'])} nodes (angle, speed outputs), {len(v['inputs'])} "
-          f"input torque(s), {len(v['parameters'])} parameters")
+    print(f"trainsim: fmu: {a.output} (FMI {a.fmi}.0): {len(v['nodes'])} nodes (angle, speed outputs), "
+          f"{len(v['elements'])} elements (displacement, force, contact outputs), {len(v['inputs'])} input torque(s), "
+          f"{len(v['parameters'])} parameters")
 
 
 if __name__ == "__main__":

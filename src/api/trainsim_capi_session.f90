@@ -100,6 +100,31 @@ contains
       code = 0
    end function trainsim_session_state
 
+   !> `int trainsim_session_elements(trainsim_sim *, double *disp, double *force, double
+   !> *contact, size_t n)`: every element's displacement, force (or torque) and contact
+   !> state at the session's point, as a run records them (n: TRAINSIM_ELEMENTS count).
+   integer(c_int) function trainsim_session_elements(p, disp, force, contact, n) result(code) &
+      bind(C, name='trainsim_session_elements')
+      type(c_ptr), value :: p
+      integer(c_size_t), value :: n
+      real(c_double), intent(out) :: disp(n), force(n), contact(n)
+      type(capi_sim_t), pointer :: h
+      real(wp), allocatable :: d(:), f(:)
+      integer, allocatable :: c(:)
+      code = code_argument
+      if (.not. live(p, h, code)) return
+      if (n /= size(h%session%model%elements, kind=c_size_t)) then
+         code = misuse(h, 'trainsim_session_elements: n is not the element count')
+         return
+      end if
+      allocate (d(n), f(n), c(n))
+      call h%session%element_status(d, f, c)
+      disp = real(d, c_double)
+      force = real(f, c_double)
+      contact = real(c, c_double)
+      code = 0
+   end function trainsim_session_elements
+
    !> `int trainsim_session_save(trainsim_sim *, int *point)`: save the session's
    !> point (time, state, modes); `point` numbers it for `trainsim_session_restore`.
    integer(c_int) function trainsim_session_save(p, point) result(code) bind(C, name='trainsim_session_save')

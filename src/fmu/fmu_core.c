@@ -15,7 +15,7 @@
 
 #include "fmu_core.h"
 
-enum { VR_INPUT = 1000000, VR_PARAM = 2000000 };
+enum { VR_INPUT = 1000000, VR_PARAM = 2000000, VR_ELEMENT = 3000000 };
 
 void fmu_say(fmu_core *c, int status, const char *fmt, ...) {
     char msg[4096];
@@ -75,10 +75,13 @@ static void release(fmu_core *c) {
     free(c->param_value);
     free(c->theta);
     free(c->omega);
+    free(c->disp);
+    free(c->force);
+    free(c->contact);
     for (size_t i = 0; i < c->n_saved; ++i) free(c->saved[i].inputs);
     free(c->saved);
     c->inputs = c->params = NULL;
-    c->input_value = c->param_value = c->theta = c->omega = NULL;
+    c->input_value = c->param_value = c->theta = c->omega = c->disp = c->force = c->contact = NULL;
     c->saved = NULL;
     c->n_inputs = c->n_params = c->n_saved = c->n_nodes = 0;
 }
@@ -90,7 +93,8 @@ static int load(fmu_core *c) {
     c->sim = trainsim_new();
     if (!c->sim) return 0;
     snprintf(path, sizeof path, "%s/deck.nml", c->dir);
-    if (trainsim_read_file(c->sim, path) || trainsim_count(c->sim, TRAINSIM_NODES, &c->n_nodes)) {
+    if (trainsim_read_file(c->sim, path) || trainsim_count(c->sim, TRAINSIM_NODES, &c->n_nodes) ||
+        trainsim_count(c->sim, TRAINSIM_ELEMENTS, &c->n_elements)) {
         failed(c, "reading the FMU's deck");
         return 0;
     }
@@ -100,7 +104,11 @@ static int load(fmu_core *c) {
     c->param_value = calloc(c->n_params + 1, sizeof *c->param_value);
     c->theta = calloc(c->n_nodes + 1, sizeof *c->theta);
     c->omega = calloc(c->n_nodes + 1, sizeof *c->omega);
-    if (!c->input_value || !c->param_value || !c->theta || !c->omega) return 0;
+    c->disp = calloc(c->n_elements + 1, sizeof *c->disp);
+    c->force = calloc(c->n_elements + 1, sizeof *c->force);
+    c->contact = calloc(c->n_elements + 1, sizeof *c->contact);
+    if (!c->input_value || !c->param_value || !c->theta || !c->omega || !c->disp || !c->force || !c->contact)
+        return 0;
     for (i = 0; i < c->n_params; ++i) { /* "PATH<TAB>VALUE": the path kept, the value parsed */
         char *tab = strchr(c->params[i], '\t');
         if (tab) {
@@ -176,10 +184,19 @@ int fmu_setup(fmu_core *c, double t0, int stop_defined, double t1) {
 
 int fmu_get(fmu_core *c, const unsigned int vr[], size_t n, double value[]) {
     double t;
-    int have_state = 0;
+    int have_state = 0, have_elements = 0;
     for (size_t i = 0; i < n; ++i) {
         unsigned int r = vr[i];
-        if (r == 0) {
+        if (r >= VR_ELEMENT && r - VR_ELEMENT < 3 * c->n_elements) {
+            if (!have_elements) {
+                if (fmu_start(c) != FMU_OK) return FMU_ERROR;
+                if (trainsim_session_elements(c->sim, c->disp, c->force, c->contact, c->n_elements))
+                    return failed(c, "the elements' status");
+                have_elements = 1;
+            }
+            unsigned int e = (r - VR_ELEMENT) / 3, k = (r - VR_ELEMENT) % 3;
+            value[i] = k == 0 ? c->disp[e] : k == 1 ? c->force[e] : c->contact[e];
+        } else if (r == 0) {
             value[i] = c->time;
         } else if (r >= VR_PARAM && r - VR_PARAM < c->n_params) {
             value[i] = c->param_value[r - VR_PARAM];

@@ -2,7 +2,8 @@
  * variables from the FMU's resources, parameters, inputs, the session that doStep
  * advances, saved points. Value references (the packer's rule, scripts/trainsim_fmu.py):
  *   0 time (FMI 3.0's independent variable); node k (0-based): angle 1 + 2k, speed 2 + 2k;
- *   input j: 1000000 + j; parameter p: 2000000 + p. */
+ *   input j: 1000000 + j; parameter p: 2000000 + p; element e (0-based): displacement
+ *   3000000 + 3e, force (or torque) 3000001 + 3e, contact state 3000002 + 3e. */
 #ifndef TRAINSIM_FMU_CORE_H
 #define TRAINSIM_FMU_CORE_H
 
@@ -25,9 +26,9 @@ typedef struct {
     fmu_log log;
     void *log_ctx;
     char dir[4096];
-    size_t n_nodes, n_inputs, n_params, n_saved;
+    size_t n_nodes, n_elements, n_inputs, n_params, n_saved;
     char **inputs, **params;
-    double *input_value, *param_value, *theta, *omega;
+    double *input_value, *param_value, *theta, *omega, *disp, *force, *contact;
     fmu_point *saved;
     double time;
     int started, terminated;

@@ -81,6 +81,7 @@ module trainsim_session
       procedure :: restore => session_restore
       procedure :: set_torque => session_set_torque
       procedure :: kinematics => session_kinematics
+      procedure :: element_status => session_element_status
       procedure :: finish => session_finish
    end type session_t
 
@@ -234,6 +235,21 @@ contains
       class(session_t), intent(inout) :: self
       call self%model%kinematics(self%t_int, self%y)
    end subroutine session_kinematics
+
+   !> Every element's status at the session's point, as a run records it
+   !> (/elements/disp, force, contact): its displacement, its force (or torque)
+   !> and its contact state (0 open, +1 / -1 a face in contact, 1 a smooth
+   !> element).
+   subroutine session_element_status(self, disp, force, contact)
+      class(session_t), intent(inout) :: self
+      real(wp), intent(out) :: disp(:), force(:)
+      integer, intent(out) :: contact(:)
+      integer :: i, pairs
+      call self%model%kinematics(self%t_int, self%y)
+      do i = 1, size(self%model%elements)
+         call self%model%elements(i)%e%status_at(self%model%theta, self%model%omega, disp(i), force(i), contact(i), pairs)
+      end do
+   end subroutine session_element_status
 
    !> A load of 0 on each node of `ids` (a free node), its index in input_load.
    subroutine add_inputs(self, ids, err)
