@@ -48,7 +48,7 @@ contains
             call command_usage('fmu', output_unit)
             call quit(0)
          case ('-o', '--output'); out = text_value(k); k = k + 1
-         case ('--input'); inputs = [inputs, string_t(text_value(k))]; k = k + 1
+         case ('--input'); call append(inputs, text_value(k)); k = k + 1
          case ('--fmi')
             fmi = text_value(k)
             k = k + 1
@@ -81,6 +81,7 @@ contains
       end if
       call read_deck(deck_file, deck, err)
       if (allocated(err)) call fail(err)
+      call deck_inputs(deck, inputs)
       call split_sweep_groups(deck, sweeps)   ! an FMU of a sweep deck is of its own values
       call prepare_model(deck, sets, model, err)
       if (allocated(err)) call fail(err)
@@ -112,6 +113,59 @@ contains
       call quit(stat)
    end subroutine do_fmu
 
+   !> The input nodes the deck names in its &fmu group (`inputs = 'n4', 'n2'`), after
+   !> those of --input; any other key of &fmu, or a second &fmu, is refused (exit 2).
+   subroutine deck_inputs(deck, inputs)
+      type(deck_t), intent(in) :: deck
+      type(string_t), allocatable, intent(inout) :: inputs(:)
+      integer :: i, j, k, n
+      n = 0
+      do i = 1, size(deck%groups)
+         associate (g => deck%groups(i))
+            if (g%name /= 'fmu') cycle
+            n = n + 1
+            if (n > 1) then
+               write (error_unit, '(a)') g%file//':'//str(g%line)//": error: &fmu: a deck has one &fmu group"
+               call quit(2)
+            end if
+            do j = 1, size(g%entries)
+               if (g%entries(j)%key /= 'inputs') then
+                  write (error_unit, '(a)') g%file//':'//str(g%entries(j)%line)//": error: &fmu: unknown key '"// &
+                     g%entries(j)%key//"'; the keys of &fmu are: inputs"
+                  call quit(2)
+               end if
+               do k = 1, size(g%entries(j)%values)
+                  if (.not. listed(inputs, g%entries(j)%values(k)%s)) call append(inputs, g%entries(j)%values(k)%s)
+               end do
+            end do
+         end associate
+      end do
+   end subroutine deck_inputs
+
+   !> list with s appended (a new element, the old ones moved).
+   subroutine append(list, s)
+      type(string_t), allocatable, intent(inout) :: list(:)
+      character(len=*), intent(in) :: s
+      type(string_t), allocatable :: more(:)
+      integer :: i
+      allocate (more(size(list) + 1))
+      do i = 1, size(list)
+         call move_alloc(list(i)%s, more(i)%s)
+      end do
+      more(size(more))%s = s
+      call move_alloc(more, list)
+   end subroutine append
+
+   logical function listed(list, s)
+      type(string_t), intent(in) :: list(:)
+      character(len=*), intent(in) :: s
+      integer :: i
+      listed = .false.
+      do i = 1, size(list)
+         if (list(i)%s == s) listed = .true.
+      end do
+   end function listed
+
    !> An input torque needs a node that moves under a torque: not fixed, no prescribed speed.
    subroutine check_input(model, id)
       type(model_t), intent(in) :: model
@@ -119,11 +173,12 @@ contains
       integer :: i
       i = model%node_index(id)
       if (i == 0) then
-         write (error_unit, '(a)') "trainsim: fmu: error: --input '"//id//"': the deck has no node of that id"
+         write (error_unit, '(a)') "trainsim: fmu: error: input '"//id//"' (--input or &fmu inputs): the deck has "// &
+            'no node of that id'
          call quit(2)
       end if
       if (model%nodes(i)%n%nstates() == 0 .or. model%is_held(i)) then
-         write (error_unit, '(a)') "trainsim: fmu: error: --input '"//id//"': node '"//id//"' is fixed or its "// &
+         write (error_unit, '(a)') "trainsim: fmu: error: input '"//id//"': node '"//id//"' is fixed or its "// &
             'speed is prescribed (an input torque there moves nothing)'
          call quit(2)
       end if

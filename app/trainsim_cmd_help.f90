@@ -144,7 +144,8 @@ contains
             'files) and a Linux x86-64 binary go inside. The deck is read and built as `run` does', &
             '(a bad deck: exit 2, the same message). Packed by scripts/trainsim_fmu.py.', '', &
             '  -o, --output FILE  the FMU (.fmu)', &
-            '  --input NODE       an input torque on NODE (a node that is neither fixed nor held)', &
+            '  --input NODE       an input torque on NODE (a node that is neither fixed nor held),', &
+            '                     beside those the deck names in &fmu inputs = ''NODE'', ...', &
             '  --fmi 3|2          the FMI version (default 3)', &
             '  -h, --help         this text', '', &
             'exit status: 0 success, 2 bad input or file'

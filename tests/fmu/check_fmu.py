@@ -41,7 +41,7 @@ def deck(work, name, integrator, extra=""):
 
 
 def fmu_of(path, work, *args):
-    out = os.path.join(work, os.path.basename(path).replace(".nml", "_" + "_".join(args[-1:]) + ".fmu"))
+    out = os.path.join(work, os.path.basename(path).replace(".nml", "_" + "_".join(args[-1:] or ["3"]) + ".fmu"))
     r = subprocess.run([EXE, "fmu", path, "-o", out, *args], capture_output=True, text=True)
     print(r.stdout, r.stderr, end="")
     return out if r.returncode == 0 else None
@@ -176,6 +176,17 @@ def main():
                        text=True)
     check("--input on a node with a prescribed speed: exit 2 saying so", r.returncode == 2 and "prescribed" in r.stderr)
     check("no FMU left behind by a refusal", not os.path.exists(os.path.join(work, "bad.fmu")))
+    # inputs named in the deck; `trainsim run` of that deck ignores &fmu
+    path = deck(work, "ghm_deck_inputs.nml", "rk4", "&fmu inputs = 'n4', 'n3' /\n")
+    fmu = fmu_of(path, work)
+    names = [v.name for v in read_model_description(fmu).modelVariables] if fmu else []
+    check("&fmu inputs = 'n4', 'n3': the FMU has inputs n4.tau and n3.tau", {"n4.tau", "n3.tau"} <= set(names))
+    r = subprocess.run([EXE, "run", path, "--no-output"], capture_output=True, text=True)
+    check("trainsim run of a deck with &fmu runs as without it", r.returncode == 0)
+    bad = deck(work, "ghm_bad_fmu.nml", "rk4", "&fmu input = 'n4' /\n")
+    r = subprocess.run([EXE, "fmu", bad, "-o", os.path.join(work, "bad.fmu")], capture_output=True, text=True)
+    check("&fmu with a misspelt key: exit 2 naming the file, line and key",
+          r.returncode == 2 and "ghm_bad_fmu.nml:" in r.stderr and "'input'" in r.stderr)
     print(f"{len(failures)} check(s) failed" if failures else "all checks passed")
     return 1 if failures else 0
 
