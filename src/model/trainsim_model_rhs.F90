@@ -124,7 +124,7 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
       logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
-      integer :: i, l, r, s, o
+      integer :: i, l, r, s, o, nc
       real(wp) :: tl, tr, f, pdiss, pin
       logical :: track
       if (self%simple) then
@@ -135,6 +135,8 @@ contains
       self%ws_step_end = .false.
       self%ws_t = t
       self%ws_energy = .false.
+      nc = self%n_cand                                 ! elements that may constrain (D-76)
+      if (nc > 0) call constraints_rhs(self, t, y, t_now=.true.)
       pdiss = 0.0_wp
       pin = 0.0_wp
       ! kinematics and constant loads in one pass (the branch of kinematics_all, written
@@ -194,6 +196,7 @@ contains
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
+      if (nc > 0) call constraints_rhs(self, t, y)                     ! constraint torques (D-76)
       do i = 1, size(self%fn)
          associate (nd => self%fn(i))
             select case (nd%kind)
@@ -221,6 +224,7 @@ contains
             end select
          end associate
       end do
+      if (nc > 0) call constraints_rhs(self, t, y, dydt)               ! exact per rigid cluster
       if (.not. track) return
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin

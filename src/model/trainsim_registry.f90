@@ -22,6 +22,10 @@ module trainsim_registry
    use trainsim_el_clearance_coupling, only: new_clearance_coupling
    use trainsim_el_helical_gear, only: new_helical_gear
    use trainsim_el_damper, only: new_damper
+   use trainsim_el_bearing_friction, only: new_bearing_friction
+   use trainsim_el_brake, only: new_brake
+   use trainsim_el_clutch, only: new_clutch
+   use trainsim_el_one_way_clutch, only: new_one_way_clutch
    implicit none
    private
 
@@ -111,7 +115,19 @@ contains
                          'clearance = 0.02, stiffness = 1.0e4, contact_damping = 3.0, radius = 1.5', &
                          'stiffness radius', 'clearance contact_damping', new_clearance_coupling), &
              element_row('damper', '', 'torsional viscous damper (dashpot), T = c (w_l - w_r)', &
-                         'damping = 40.0', 'damping', '', new_damper) &
+                         'damping = 40.0', 'damping', '', new_damper), &
+             element_row('bearing_friction', '', 'Coulomb/Stribeck/viscous friction that sticks (right: a fixed node)', &
+                         'torque_sliding = 2.0, torque_static = 3.0, stribeck_speed = 0.1, viscous = 0.01', '', &
+                         'torque_sliding stribeck_speed viscous', new_bearing_friction), &
+             element_row('brake', '', 'friction brake to ground or between two nodes, engagement e(t) in [0, 1]', &
+                         'torque_sliding = 50.0, torque_static = 60.0, stribeck_speed = 0.5, viscous = 0.2, '// &
+                         'engagement = 1.0', '', 'torque_sliding stribeck_speed viscous engagement', new_brake), &
+             element_row('clutch', '', 'friction clutch between two nodes, engagement e(t) in [0, 1]', &
+                         'torque_sliding = 80.0, torque_static = 100.0, stribeck_speed = 1.0, viscous = 0.5, '// &
+                         'engagement = 1.0', '', 'torque_sliding stribeck_speed viscous engagement', new_clutch), &
+             element_row('one_way_clutch', 'freewheel', 'freewheel: locked against w_left < w_right, free otherwise', &
+                         'capacity = 500.0, torque_sliding = 0.5, viscous = 0.02', 'capacity', &
+                         'torque_sliding viscous', new_one_way_clutch) &
              ]
       rows = table
    end subroutine element_table

@@ -414,7 +414,7 @@ CASES = [
          exit=2, stderr=["deck.nml:1:", "unknown key 'colour'", "valid keys are"], not_stderr=["did you mean"]),
     dict(name="unknown group lists every group the reader takes, sweep too",
          deck=RUN + NODES + SHAFT + "&sweeps parameter = 's1.stiffness', values = 1e5 /\n",
-         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, controller, sweep"]),
+         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, controller, fmu, sweep"]),
     dict(name="half_backlash in the spur_gear geometry form is explained (in-lbf-s)",
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="half_backlash = 0.002"),
          exit=2, stderr=["deck.nml:6:", "half_backlash belongs to TRAIN's constants form", "geometry form",
@@ -437,6 +437,22 @@ CASES = [
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="backlash = 0.004")
          .replace("face_width = 0.7", "face_width = 0.0"),
          exit=2, stderr=["deck.nml:5:", "face_width must be > 0"], stderr_re=[r"got \S+ in$"]),
+] + [
+    # friction elements (D-76): the element on line 4, the offending key on line 5
+    dict(name=f"{etype}: {key} = {value} is refused",
+         deck=RUN + NODES + f"&element id = 'f1', type = '{etype}', left = 'a', right = 'b',\n"
+         f"         {extra}{key} = {value} /\n",
+         exit=2, stderr=["deck.nml:5:", f"key '{key}'", f"got {shown}", what])
+    for etype, key, value, shown, extra, what in [
+        ("bearing_friction", "torque_sliding", "-1.0", "-1", "", "must be >= 0"),
+        ("brake", "viscous", "-0.5", "-0.5", "torque_sliding = 2.0, ", "must be >= 0"),
+        ("clutch", "torque_static", "3.0", "3", "torque_sliding = 5.0, ", "the sliding torque 5"),
+        ("clutch", "engagement", "1.5", "1.5", "torque_sliding = 5.0, ", "must be in [0, 1]"),
+        ("brake", "engagement_values", "0.0, -0.2", "-0.2", "torque_sliding = 5.0, engagement_times = 0.0, 1.0, ",
+         "must be in [0, 1]"),
+        ("bearing_friction", "friction_torques", "1.0, -2.0", "-2", "friction_speeds = 0.0, 1.0, ", "must be >= 0"),
+        ("one_way_clutch", "capacity", "0.0", "0", "", "must be > 0"),
+    ]
 ] + [
     # list-directed READ took these (a '/' or ',,' kept the line before's value, '2*30' a
     # repeat count, extra columns and text were ignored): each is now its line's error
