@@ -196,9 +196,9 @@ contains
       do i = 1, size(model%nodes)   ! '(4x,aWN,a)' and '(4x,aWN,3es18.9)'
          associate (nd => model%nodes(i)%n)
             ns = nd%nstates()
-            if (ns > 3) then   ! (format reversion: a record of three a line)
-               call out%flush()
-               write (unit, '(4x,a'//str(wn)//',3es18.9)') nd%id, res%y_final(nd%offset + 1:nd%offset + ns)
+            if (ns > 3) then   ! a controlled motor: angle, speed, current (format reversion would
+               call out%flush()  ! read its 4th state with the id's `a`: garbage bytes on stdout)
+               write (unit, '(4x,a'//str(wn)//',3es18.9)') nd%id, res%y_final(nd%offset + 1:nd%offset + 3)
                cycle
             end if
             call out%x(4)
