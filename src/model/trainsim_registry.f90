@@ -22,6 +22,8 @@ module trainsim_registry
    use trainsim_el_clearance_coupling, only: new_clearance_coupling
    use trainsim_el_helical_gear, only: new_helical_gear
    use trainsim_el_damper, only: new_damper
+   use trainsim_el_lossy_gear, only: new_lossy_gear
+   use trainsim_el_worm_gear, only: new_worm_gear
    implicit none
    private
 
@@ -111,7 +113,17 @@ contains
                          'clearance = 0.02, stiffness = 1.0e4, contact_damping = 3.0, radius = 1.5', &
                          'stiffness radius', 'clearance contact_damping', new_clearance_coupling), &
              element_row('damper', '', 'torsional viscous damper (dashpot), T = c (w_l - w_r)', &
-                         'damping = 40.0', 'damping', '', new_damper) &
+                         'damping = 40.0', 'damping', '', new_damper), &
+             element_row('lossy_gear', '', 'gear pair with mesh efficiency by power flow, backlash, stiffness', &
+                         'rb_driver = 1.0, rb_driven = 2.0, stiffness = 1.0e6, efficiency_forward = 0.95, '// &
+                         'efficiency_backward = 0.9, backlash = 0.004, contact_damping = 10.0', &
+                         'rb_driver rb_driven stiffness efficiency_forward efficiency_backward', &
+                         'backlash contact_damping', new_lossy_gear), &
+             element_row('worm_gear', '', 'worm pair: efficiencies from lead angle and friction, self-locking', &
+                         'ratio = 40.0, wheel_radius = 3.0, lead_angle = 5.7, friction_coefficient = 0.05, '// &
+                         'stiffness = 1.0e6, backlash = 0.004, contact_damping = 10.0', &
+                         'ratio wheel_radius stiffness lead_angle', 'friction_coefficient backlash contact_damping', &
+                         new_worm_gear) &
              ]
       rows = table
    end subroutine element_table
