@@ -7,7 +7,14 @@
 !>   forward  (left drives,  fs wr > 0): tl = tl0,         tr = eta_f tr0
 !>   backward (right drives, fs wl < 0): tl = eta_b tl0,   tr = tr0
 !>   neutral  (otherwise: no force, or speeds of opposite sign): tl = tl0, tr = tr0
-!> so the mesh loss, (1 - eta_f) fs r2 wr forward and -(1 - eta_b) fs r1 wl
+!>   held left  (wl = 0, row (1, 0), D-76): tl = tl0 + lam, tr = tr0, while the
+!>            left's mesh torque lies between backward's and neutral's:
+!>            0 <= lam fs <= (1 - eta_b) fs^2 r1
+!>   held right (wr = 0, row (0, 1)): tl = tl0, tr = tr0 + lam, while the right's
+!>            lies between forward's and neutral's: 0 <= -lam fs <= (1 - eta_f) fs^2 r2
+!> (a side stops where neither adjacent mode can continue: the losses exceed
+!> the torque that would drive it on; the self-locking worm, eta_b <= 0, is
+!> held back-driven whatever the wheel's torque) so the mesh loss, (1 - eta_f) fs r2 wr forward and -(1 - eta_b) fs r1 wl
 !> backward, is never negative. The worm gear (trainsim_el_worm_gear) is this
 !> element with its efficiencies from the lead angle and friction coefficient.
 module trainsim_el_lossy_gear
@@ -16,7 +23,7 @@ module trainsim_el_lossy_gear
    use trainsim_strings, only: str
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_event, only: event_t
+   use trainsim_event, only: event_t, ev_stick, ev_slip_forward, ev_slip_backward
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_ratio
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hf_none, hg_none
@@ -24,14 +31,19 @@ module trainsim_el_lossy_gear
    private
 
    public :: lossy_gear_t, new_lossy_gear, flow_forward, flow_backward, flow_neutral, choose_flow, &
-             read_mesh, get_efficiency
+             read_mesh, get_efficiency, flow_hold_left, flow_hold_right
 
    !> Power-flow modes.
-   integer, parameter :: flow_neutral = 0, flow_forward = 1, flow_backward = -1
+   integer, parameter :: flow_neutral = 0, flow_forward = 1, flow_backward = -1, flow_hold_left = 2, &
+                         flow_hold_right = 3
 
    type, extends(clearance_element_t) :: lossy_gear_t
       real(wp) :: eta_f = 1.0_wp, eta_b = 1.0_wp   !< forward (left drives), backward (right drives)
       integer :: flow = flow_neutral
+      !> sign of the mesh force as the flow mode began (0: no force then); the
+      !> guards follow the force and each speed apart, so a speed reaching zero
+      !> (a side stops: held) is told from the force reaching zero (re-chosen)
+      real(wp) :: sig = 0.0_wp
    contains
       procedure :: configure => lossy_configure
       procedure :: torques => lossy_torques
@@ -46,6 +58,8 @@ module trainsim_el_lossy_gear
       procedure :: params => lossy_params
       procedure :: status => lossy_status
       procedure :: mesh_loss
+      procedure :: self_locking
+      procedure :: set_flow
    end type lossy_gear_t
 
 contains
@@ -95,6 +109,7 @@ contains
          return
       end if
       self%cl%b = 0.5_wp*backlash
+      self%con%on = .true.   ! a side held where the losses exceed the driving torque (D-76)
       call self%cl%law%configure(grp, units, 1.0_wp, 'linear', err)
    end subroutine read_mesh
 
@@ -207,24 +222,41 @@ contains
       class(lossy_gear_t), intent(in) :: self
       associate (unused => self)
       end associate
-      n = 4
+      n = 5
    end function lossy_n_guards
 
-   !> Guards 1-2 the faces; 3-4 the power flow: forward fs wr, backward -fs wl,
-   !> neutral -fs wr and fs wl (1 where unused, and both 1 while the faces are open).
+   !> Guards 1-2 the faces; 3-5 the power flow, with sg the force's sign as the
+   !> mode began: forward sg fs, sg wr (self-locking also sg wl); backward sg fs,
+   !> -sg wl; neutral -sg wr, sg wl, sg fs (no force as it began: -fs wr, fs wl);
+   !> held left lam fs, (1 - eta_b) fs^2 r1 - lam fs; held right -lam fs,
+   !> (1 - eta_f) fs^2 r2 + lam fs (1 where unused; all 1 while the faces are open).
    pure subroutine lossy_guards(self, thl, wl, thr, wr, g)
       class(lossy_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
-      real(wp) :: fs
+      real(wp) :: fs, sg
       call self%cl%guards(thl, thr, g(1:2))
-      g(3:4) = 1.0_wp
+      g(3:5) = 1.0_wp
       if (self%cl%mode == 0) return   ! open: no force, no flow (the flow is chosen as a face closes)
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      sg = self%sig
       select case (self%flow)
-      case (flow_forward); g(3) = fs*wr; g(4) = 1.0_wp
-      case (flow_backward); g(3) = -fs*wl; g(4) = 1.0_wp
-      case default; g(3) = -fs*wr; g(4) = fs*wl
+      case (flow_forward)
+         g(3) = sg*fs; g(4) = sg*wr
+         if (self%self_locking()) g(5) = sg*wl   ! the worm stops: it is held
+      case (flow_backward); g(3) = sg*fs; g(4) = -sg*wl
+      case (flow_hold_left)                      ! the holding torque within the friction
+         g(3) = self%con%lam(1)*fs
+         g(4) = (1.0_wp - self%eta_b)*fs*fs*self%cl%r1 - self%con%lam(1)*fs
+      case (flow_hold_right)
+         g(3) = -self%con%lam(1)*fs
+         g(4) = (1.0_wp - self%eta_f)*fs*fs*self%cl%r2 + self%con%lam(1)*fs
+      case default
+         if (sg /= 0.0_wp) then
+            g(3) = -sg*wr; g(4) = sg*wl; g(5) = sg*fs
+         else
+            g(3) = -fs*wr; g(4) = fs*wl
+         end if
       end select
    end subroutine lossy_guards
 
@@ -234,7 +266,9 @@ contains
       real(wp) :: fs
       call self%cl%init(thl, wl, thr, wr)
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
-      self%flow = choose_flow(fs*wr, fs*wl, flow_neutral)
+      call self%set_flow(choose_flow(fs*wr, fs*wl, flow_neutral), fs)
+      self%con%lam = 0.0_wp
+      if (self%self_locking() .and. self%cl%mode /= 0 .and. wl == 0.0_wp) call self%set_flow(flow_hold_left, fs)
    end subroutine lossy_init_mode
 
    !> A face or the power flow changed: the clearance first, then the flow from
@@ -247,13 +281,86 @@ contains
       type(event_t), intent(inout) :: ev(:)
       integer, intent(out) :: nev
       real(wp) :: fs
+      integer :: before, flow
+      real(wp) :: lam
       associate (u1 => t)
       end associate
       nev = 0
+      before = self%flow
       call self%cl%update(wl, wr, fired(1:2), ev, nev)
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
-      self%flow = choose_flow(fs*wr, fs*wl, self%flow)
+      flow = next_flow(self, before, fired, fs, wl, wr)
+      lam = self%con%lam(1)
+      call self%set_flow(flow, fs)
+      if (flow == before .or. nev >= size(ev)) return
+      if (.not. (held(flow) .or. held(before))) return
+      nev = nev + 1                                    ! sticking and its end are events
+      ev(nev) = event_t()
+      ev(nev)%theta_left = thl; ev(nev)%omega_left = wl; ev(nev)%theta_right = thr; ev(nev)%omega_right = wr
+      ev(nev)%displacement = self%cl%delta(thl, thr)
+      ev(nev)%force = lam                              ! the holding torque (0 as it sticks)
+      if (held(flow)) then
+         ev(nev)%kind = ev_stick
+      else if (flow == flow_forward) then
+         ev(nev)%kind = ev_slip_forward
+      else
+         ev(nev)%kind = ev_slip_backward
+      end if
    end subroutine lossy_update_mode
+
+   !> The flow after guards `fired` (3-4; faces 1-2 already applied) at force fs.
+   pure integer function next_flow(self, before, fired, fs, wl, wr) result(flow)
+      class(lossy_gear_t), intent(in) :: self
+      integer, intent(in) :: before
+      logical, intent(in) :: fired(:)
+      real(wp), intent(in) :: fs, wl, wr
+      flow = before
+      if (self%cl%mode == 0) then
+         flow = flow_neutral                           ! open: no force, nothing held
+      else if (before == flow_hold_left .and. (fired(3) .or. fired(4))) then
+         flow = merge(flow_forward, flow_backward, fired(3))   ! the left driven on / back
+      else if (before == flow_hold_right .and. (fired(3) .or. fired(4))) then
+         flow = merge(flow_neutral, flow_forward, fired(3))    ! pulled back past lossless / driven on
+      else if (held(before)) then
+         continue
+      else if ((before == flow_forward .and. fired(4)) .or. (before == flow_neutral .and. fired(3) .and. &
+                                                              self%sig /= 0.0_wp)) then
+         flow = flow_hold_right                        ! the right stops under load
+      else if ((before == flow_backward .and. fired(4)) .or. (before == flow_forward .and. fired(5)) .or. &
+               (before == flow_neutral .and. fired(4) .and. self%sig /= 0.0_wp)) then
+         flow = flow_hold_left                         ! the left stops under load
+      else
+         flow = choose_flow(fs*wr, fs*wl, before)      ! the force changed sign, a face, or no force before
+      end if
+      ! self-locking, the worm turning back while the wheel still turns on: the
+      ! mesh brakes the worm (forward's guard fs wl would be negative at once)
+      if (self%self_locking() .and. flow == flow_forward .and. fs*wl < 0.0_wp) flow = flow_backward
+   end function next_flow
+
+   pure logical function held(flow)
+      integer, intent(in) :: flow
+      held = flow == flow_hold_left .or. flow == flow_hold_right
+   end function held
+
+   !> A self-locking pair (eta_b <= 0): back-driven, the mesh holds the driver.
+   pure logical function self_locking(self)
+      class(lossy_gear_t), intent(in) :: self
+      self_locking = self%eta_b <= 0.0_wp
+   end function self_locking
+
+   !> The flow mode and, with it, the constraint row in force (D-76): held
+   !> left (1, 0), held right (0, 1), else none.
+   subroutine set_flow(self, flow, fs)
+      class(lossy_gear_t), intent(inout) :: self
+      integer, intent(in) :: flow
+      real(wp), intent(in) :: fs   !< the mesh force now
+      self%flow = flow
+      self%sig = 0.0_wp
+      if (fs /= 0.0_wp) self%sig = sign(1.0_wp, fs)
+      self%con%n = merge(1, 0, held(flow))
+      self%con%g(1, 1:2) = merge([1.0_wp, 0.0_wp], [0.0_wp, 1.0_wp], flow /= flow_hold_right)
+      if (.not. held(flow)) self%con%lam = 0.0_wp
+   end subroutine set_flow
 
    !> Declined (torques and guards through the element): the efficiency scales
    !> one side and the flow guards read the force.

@@ -255,7 +255,8 @@ contains
       call check_family_kernel(m, x)
 
       call test_begin(row%name//': energy ledger closes over an RK4 run; parameters round-trip through HDF5')
-      call check_energy_and_file(m, 'element', x, u, v, b_c, m%elements(1)%e%n_guards() > 0)
+      call check_energy_and_file(m, 'element', x, u, v, b_c, m%elements(1)%e%n_guards() > 0 .and. &
+                                 .not. m%elements(1)%e%con%on)
 
       call test_begin(row%name//': a bad value of each example key is rejected, naming the key')
       call check_bad_values('element', row%name, row%example, row%positive, row%nonnegative)
@@ -364,8 +365,13 @@ contains
       real(wp) :: lo, hi, mid, o(2)
       integer :: k
       b_c = 0.0_wp
-      if (e%n_guards() == 0) then
+      if (e%n_guards() == 0 .or. e%con%on) then
          x = reshape([0.013_wp, 3.0_wp, -0.002_wp, -1.0_wp, -0.4_wp, -0.5_wp, 0.25_wp, 2.0_wp], [4, 2])
+         if (e%con%on) then
+            ! an element that may stick (D-76): the states where it slips (its own torques
+            ! are then all it puts on the nodes; stuck, the model adds the constraint torque)
+            x = x(:, pack([1, 2], [(slips(x(:, k)), k=1, 2)]))
+         end if
          return
       end if
       o = 0.02_wp*v   ! off the origin, where mesh-zone boundaries of gears may sit
@@ -400,6 +406,11 @@ contains
          call e%init_mode(o(1) + s*u(1), 0.0_wp, o(2) + s*u(2), 0.0_wp)
          contact_at = e%in_contact()
       end function contact_at
+      logical function slips(xs)
+         real(wp), intent(in) :: xs(4)
+         call e%init_mode(xs(1), xs(2), xs(3), xs(4))
+         slips = e%con%n == 0
+      end function slips
    end subroutine choose_states
 
    subroutine check_torque_jacobian(e, x)

@@ -91,7 +91,8 @@ contains
       integer :: nn
       ok = .false.
       nn = size(model%nodes)
-      if (.not. self%multirate .or. model%nport .or. nn < mr_min_nodes .or. mr_small*(2*mr_depth + 4) > nn) return
+      if (.not. self%multirate .or. model%nport .or. size(model%cn%cand) > 0 .or. nn < mr_min_nodes .or. &
+          mr_small*(2*mr_depth + 4) > nn) return   ! (not with constraints: they couple the whole train, D-76)
       call mr_clear(self)
       if (.not. mr_grow(self, nn)) return
       if (.not. mr_border(self, nn)) return

@@ -20,6 +20,7 @@ module trainsim_element
    use trainsim_param_list, only: param_list_t
    use trainsim_event, only: event_t
    use trainsim_strings, only: string_t
+   use trainsim_constraint_rows, only: constraint_rows_t
    implicit none
    private
 
@@ -114,6 +115,7 @@ module trainsim_element
       !> turns against the driver (TRAIN counts each gear's angle in its own
       !> sense of rotation), +1 for an internal (ring) gear.
       real(wp) :: carrier_sense = -1.0_wp
+      type(constraint_rows_t) :: con   !< kinematic constraints in its mode (D-76, trainsim_constraint_rows)
    contains
       procedure(configure_i), deferred :: configure
       procedure(torques_i), deferred :: torques
@@ -547,8 +549,7 @@ contains
       integer, intent(out) :: contact, pairs
       real(wp) :: th(max_ports), w(max_ports)
       integer :: k, np
-      np = 2
-      if (allocated(self%more_ports)) np = 2 + size(self%more_ports)
+      np = self%n_ports()
       if (np == 2) then
          call self%status(theta(self%left), omega(self%left), theta(self%right), omega(self%right), disp, force, &
                           contact, pairs)

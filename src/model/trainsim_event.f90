@@ -6,13 +6,17 @@ module trainsim_event
    implicit none
    private
 
-   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_name, max_update_events
+   public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_stick, ev_slip_forward, ev_slip_backward, &
+             ev_name, max_update_events
 
    !> Event kinds (column `kind` of the event table).
    integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
    integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
    integer, parameter :: ev_separation = 3    !< contact ends
    integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
+   !> Friction modes (D-76): stuck (force: the constraint torque), slipping with
+   !> the relative speed positive or negative (force: the torque at the switch).
+   integer, parameter :: ev_stick = 5, ev_slip_forward = 6, ev_slip_backward = 7
 
    !> Most events one element may report from one mode update (`update_mode`
    !> writes ev(1:nev) with nev <= this): a face contact or separation per
@@ -46,6 +50,9 @@ contains
       case (ev_contact_rear); name = 'contact_rear'
       case (ev_separation); name = 'separation'
       case (ev_zone); name = 'zone'
+      case (ev_stick); name = 'stick'
+      case (ev_slip_forward); name = 'slip_forward'
+      case (ev_slip_backward); name = 'slip_backward'
       case default; name = 'unknown'
       end select
    end function ev_name

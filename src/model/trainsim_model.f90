@@ -22,6 +22,7 @@ module trainsim_model
    use trainsim_event, only: event_t
    use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t
    use trainsim_run_settings, only: run_settings_t
+   use trainsim_constraints, only: constraint_set_t
    implicit none
    private
 
@@ -137,6 +138,8 @@ module trainsim_model
       !> that kernel's per-element elastic energies (summed after the kinetic).
       integer, private :: n_cold = 0
       real(wp), allocatable, private :: el_pe(:)
+      !> The elements' kinematic constraints (D-76): a model with one is never simple
+      type(constraint_set_t) :: cn
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -486,6 +489,25 @@ module trainsim_model
          type(model_t), intent(inout) :: self
          integer, intent(in) :: i
       end subroutine refresh_hot
+
+      !> Kinematic constraints (D-76; documented in trainsim_model_constraints).
+      module subroutine constraints_setup(self)
+         type(model_t), intent(inout) :: self
+      end subroutine constraints_setup
+      module subroutine constraints_rhs(self, t, y, dydt)
+         type(model_t), intent(inout) :: self
+         real(wp), intent(in) :: t, y(:)
+         real(wp), intent(inout), optional :: dydt(:)
+      end subroutine constraints_rhs
+      module subroutine constraints_settle(self, t, y, events, nev, dstored, project)
+         type(model_t), intent(inout) :: self
+         real(wp), intent(in) :: t
+         real(wp), intent(inout) :: y(:)
+         type(event_t), allocatable, intent(inout) :: events(:)
+         integer, intent(inout) :: nev
+         real(wp), intent(out) :: dstored
+         logical, intent(in) :: project
+      end subroutine constraints_settle
 
       !> Update the modes of the elements whose guards fired; the events that
       !> result are appended to events(nev+1:) (with the time and the element

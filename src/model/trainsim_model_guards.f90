@@ -82,6 +82,7 @@ contains
 
    module procedure model_guards_general
       integer :: k, i, j
+      if (self%cn%m > 0) call constraints_at(self, t, y)   ! lam and t_now at (t, y) (D-76)
       do k = 1, size(self%guard_els)
          i = self%guard_els(k)
          if (self%gr(i)%form == 0) then
@@ -140,6 +141,7 @@ contains
    end subroutine guards_other
 
    module procedure model_element_guards
+      if (self%elements(i)%e%con%on) call constraints_at(self, t, y)   ! (D-76)
       call guards_other(self, i, t, y, g, 0)
    end procedure model_element_guards
 
@@ -239,8 +241,12 @@ contains
       integer :: i, l, r, o, n, k, m, q, nq
       type(event_t) :: local(max_update_events)
       type(event_t), allocatable :: grown(:)
-      real(wp) :: e_before
+      real(wp) :: e_before, de
       e_before = 0.0_wp   ! read below only if track_energy; set so -Wmaybe-uninitialized need not prove that
+      ! the stuck clusters' speeds exactly as the constraints say (an integrator's
+      ! interpolation to the event leaves roundoff in them; D-76), before modes change
+      call constraints_settle(self, t, y, events, nev, de, .true.)
+      if (self%run%track_energy) y(self%n_states + 1) = y(self%n_states + 1) - de
       if (present(els)) then
          self%ws_step_end = .false.
          do q = 1, size(els)
@@ -284,7 +290,11 @@ contains
             events(nev)%element = i
          end do
       end do
+      call constraints_settle(self, t, y, events, nev, de, .false.)   ! stick events: speeds, limits (D-76)
       if (.not. self%run%track_energy) return
+      ! the kinetic energy a stick event removes is dissipated in the element that stuck
+      y(self%n_states + 1) = y(self%n_states + 1) - de
+      e_before = e_before + de
       if (present(els)) then
          y(self%n_states + 2) = y(self%n_states + 2) + (els_energy() - e_before)
       else
@@ -302,6 +312,17 @@ contains
          end do
       end function els_energy
    end procedure model_apply_events
+
+   !> A full RHS at (t, y) before a constraining element's guards (D-76): its
+   !> lam and t_now are then those of (t, y).
+   subroutine constraints_at(self, t, y)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), allocatable :: dydt(:)
+      call move_alloc(self%cn%scratch, dydt)              ! (no allocation: the buffer lent)
+      call self%rhs(t, y, dydt)
+      call move_alloc(dydt, self%cn%scratch)
+   end subroutine constraints_at
 
    module procedure model_any_contact
       integer :: i

@@ -52,6 +52,12 @@ contains
             end do
          end associate
       end do
+      ! a node in a rigid cluster (D-76) accelerates with its cluster, exactly: its
+      ! row left without partials keeps Newton's updates of joined speeds equal
+      do k = 1, self%cn%nc
+         if (self%cn%inv_j(k) == 0.0_wp .or. self%cn%m == 0) cycle
+         jac(self%nodes(self%cn%node(k))%n%offset + 2, :) = 0.0_wp
+      end do
    end procedure model_jacobian
 
    module procedure closed_speed_ratio

@@ -112,6 +112,9 @@ contains
       self%ws_step_end = .false.
       self%ws_t = t
       self%ws_energy = .false.
+      do i = 1, size(self%cn%cand)                     ! (elements with constraints read t: D-76)
+         self%elements(self%cn%cand(i))%e%con%t_now = t
+      end do
       pdiss = 0.0_wp
       pin = 0.0_wp
       ! kinematics and constant loads in one pass (the branch of kinematics_all, written
@@ -171,6 +174,7 @@ contains
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
+      if (self%cn%m > 0) call constraints_rhs(self, t, y)              ! constraint torques (D-76)
       do i = 1, size(self%fn)
          associate (nd => self%fn(i))
             select case (nd%kind)
@@ -198,6 +202,7 @@ contains
             end select
          end associate
       end do
+      if (self%cn%m > 0) call constraints_rhs(self, t, y, dydt)        ! exact per rigid cluster
       if (.not. track) return
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin

@@ -31,7 +31,7 @@ contains
       call load_table(self)
       self%simple = all(self%fn(:)%kind == nk_plain .or. (self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)) &
                     .and. all(self%fl(:)%const) .and. .not. self%any_needs_loads .and. size(self%dyn_loads) == 0 &
-                    .and. .not. self%nport
+                    .and. .not. self%nport .and. .not. any([(self%elements(i)%e%con%on, i=1, ne)])
       ! elements whose recorded status the observer may take from the workspace
       if (allocated(self%status_in_ws)) deallocate (self%status_in_ws)
       allocate (self%status_in_ws(ne))
@@ -50,6 +50,7 @@ contains
       call build_families(self)
       self%ws_step_end = .false.
       self%ws_energy = .false.
+      call constraints_setup(self)
    end procedure model_build_fast_path
 
    !> The node table: held nodes, and plain inertias whose own procedures agree
@@ -440,6 +441,10 @@ contains
    module procedure model_init_modes
       integer :: i, l, r
       logical :: rebuild
+      real(wp) :: dstored
+      real(wp), allocatable :: yc(:)
+      type(event_t), allocatable :: evs(:)
+      integer :: nev
       rebuild = .true.
       if (present(tables)) rebuild = tables
       if (rebuild) call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
@@ -454,6 +459,12 @@ contains
          end if
          call refresh_hot(self, i)
       end do
+      if (size(self%cn%cand) > 0) then   ! the constraints of the initial modes, limits checked (D-76)
+         yc = y
+         allocate (evs(4))
+         nev = 0
+         call constraints_settle(self, t, yc, evs, nev, dstored, .false.)
+      end if
       self%energy0 = self%stored_energy(t, y)
    end procedure model_init_modes
 

@@ -1,0 +1,27 @@
+!> What an element declares about kinematic constraints, and what the model
+!> hands back (D-76, docs/plugins.md "Constraints"): a component `con` of every
+!> element. An element that may join its ports rigidly in some mode (a stuck
+!> clutch, a held brake, a rigid gear) sets `on` in `configure` and keeps `n`
+!> and the rows g(1:n, 1:n_ports) current with its mode (sum_p g(k, p) w_p = 0,
+!> and the same on accelerations). The model sets `t_now` (the time of the
+!> evaluation) before the element's `torques` and `guards`, and after every RHS
+!> leaves the torque of row k in lam(k): port p gets g(k, p) lam(k).
+module trainsim_constraint_rows
+   use trainsim_kinds, only: wp
+   implicit none
+   private
+
+   public :: constraint_rows_t, max_constraints, max_con_ports
+
+   !> Most rows one element declares at once; most ports a row spans (max_ports).
+   integer, parameter :: max_constraints = 2, max_con_ports = 4
+
+   !> An element's constraints (see above).
+   type :: constraint_rows_t
+      logical :: on = .false.                                  !< the element may constrain (any mode)
+      integer :: n = 0                                         !< rows active in the current mode
+      real(wp) :: g(max_constraints, max_con_ports) = 0.0_wp   !< g(k, p): row k over the ports
+      real(wp) :: t_now = 0.0_wp                               !< time of the model's evaluation
+      real(wp) :: lam(max_constraints) = 0.0_wp                !< row k's constraint torque
+   end type constraint_rows_t
+end module trainsim_constraint_rows
