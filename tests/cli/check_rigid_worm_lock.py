@@ -9,6 +9,8 @@
   1e9): the largest error of the left speed over the run falls at least 5x per 100x of
   stiffness (the step load rings the undamped mesh mode at a speed amplitude ~ alpha /
   omega_n: 10x per 100x of k).
+- `trainsim modes` merges a rigid gear's nodes: a shaft k behind it has the one elastic
+  mode sqrt(k (1/(J2 + J1 (r2/r1)^2) + 1/J3)) / 2 pi (to 1e-6) and one rigid-body mode.
 - `rigid_join`: two inertias one rigid body, T t / (J1 + J2) on both, bit for bit alike.
 - A self-locking `worm_gear` (lead 3 deg, mu 0.1: eta_b < 0) back-driven by a constant
   torque on the wheel, the worm free: the worm does not turn (its angle stays 0 to
@@ -25,6 +27,7 @@ usage: check_rigid_worm_lock.py TRAINSIM_EXE
 """
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -101,6 +104,20 @@ with tempfile.TemporaryDirectory() as tmp:
     r = run(['run', os.path.join(tmp, 'ideal_gear_k1e+09.nml'), '--no-output', '--set', 'run.dt=1.0e-3'])
     check(f'the k = 1e9 ideal_gear at the rigid run\'s dt = 1e-3 is refused or fails (exit {r.returncode})',
           r.returncode != 0)
+
+    # trainsim modes merges the rigid gear's nodes: one mode of the shaft on the merged inertia
+    deck = os.path.join(tmp, 'modes.nml')
+    with open(deck, 'w') as f:
+        f.write("&run title = 'modes', units = 'si', t_end = 0.1, dt = 1.0e-3 /\n")
+        for nid, j in (('a', ja), ('b', jb), ('c', 0.02)):
+            f.write(f"&node id = '{nid}', type = 'inertia', inertia = {j} /\n")
+        f.write(f"&element id = 'g', type = 'rigid_gear', left = 'a', right = 'b', rb_driver = {r1}, rb_driven = {r2} /\n")
+        f.write("&element id = 's', type = 'shaft', left = 'b', right = 'c', stiffness = 100.0 /\n")
+    r = run(['modes', deck])
+    hz = [float(x) for x in re.findall(r'mode\s+\d+:\s+([0-9.]+) Hz', r.stdout)]
+    want = math.sqrt(100.0 * (1.0 / (jb + ja * (r2 / r1)**2) + 1.0 / 0.02)) / (2 * math.pi)
+    check(f'modes: the rigid gear merges its nodes: one elastic mode {hz} = {want:.6f} Hz (1e-6), one rigid-body',
+          r.returncode == 0 and len(hz) == 1 and abs(hz[0] / want - 1) <= 1e-6 and r.stdout.count('rigid-body') == 1)
 
     res = simulate(tmp, 'rigid_join', "type = 'rigid_join'", ja, jb, [('a', torque)], t_end, 1.0e-3)
     if res is not None:
