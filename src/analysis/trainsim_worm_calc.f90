@@ -191,7 +191,8 @@ contains
       write (unit, '(a)') '   lead_angle = '//str(res%lead_angle*deg)//', pressure_angle = '// &
          str(inp%pressure_angle_deg)//', friction_coefficient = '//str(inp%friction)//','
       if (inp%stiffness /= unset) then
-         write (unit, '(a)') '   stiffness = '//str(inp%stiffness)//" /"
+         write (unit, '(a)') '   stiffness = '//str(inp%stiffness)//', contact_damping = 0.0 /   ! the linear law; '// &
+            'its damping (force*s/length) as known'
       else
          write (unit, '(a)') '   stiffness = K /   ! K: the mesh stiffness along the wheel''s pitch circle ('// &
             inp%units%force//'/'//l//'), not from the geometry'
