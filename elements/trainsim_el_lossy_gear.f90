@@ -222,29 +222,32 @@ contains
       class(lossy_gear_t), intent(in) :: self
       associate (unused => self)
       end associate
-      n = 5
+      n = 4   ! (the model's buffers take at most 4 guards an element)
    end function lossy_n_guards
 
-   !> Guards 1-2 the faces; 3-5 the power flow, with sg the force's sign as the
-   !> mode began: forward sg fs, sg wr (self-locking also sg wl); backward sg fs,
-   !> -sg wl; neutral -sg wr, sg wl, sg fs (no force as it began: -fs wr, fs wl);
-   !> held left lam fs, (1 - eta_b) fs^2 r1 - lam fs; held right -lam fs,
-   !> (1 - eta_f) fs^2 r2 + lam fs (1 where unused; all 1 while the faces are open).
+   !> Guards 1-2 the faces; 3-4 the power flow, with sg the force's sign as the
+   !> mode began: forward sg wr, sg fs (self-locking: min(sg fs, sg wl)); backward
+   !> -sg wl, sg fs; neutral -sg wr, min(sg wl, sg fs) (no force as it began:
+   !> -fs wr, fs wl); held left lam fs, (1 - eta_b) fs^2 r1 - lam fs; held right
+   !> -lam fs, (1 - eta_f) fs^2 r2 + lam fs (all 1 while the faces are open).
+   !> Guard 3 of forward, backward and neutral is a side stopping (it is held);
+   !> guard 4 the force passing zero (the flow re-chosen), or the self-locking
+   !> worm or neutral's left side stopping, told apart at the event (next_flow).
    pure subroutine lossy_guards(self, thl, wl, thr, wr, g)
       class(lossy_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
       real(wp) :: fs, sg
       call self%cl%guards(thl, thr, g(1:2))
-      g(3:5) = 1.0_wp
+      g(3:4) = 1.0_wp
       if (self%cl%mode == 0) return   ! open: no force, no flow (the flow is chosen as a face closes)
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
       sg = self%sig
       select case (self%flow)
       case (flow_forward)
-         g(3) = sg*fs; g(4) = sg*wr
-         if (self%self_locking()) g(5) = sg*wl   ! the worm stops: it is held
-      case (flow_backward); g(3) = sg*fs; g(4) = -sg*wl
+         g(3) = sg*wr; g(4) = sg*fs
+         if (self%self_locking()) g(4) = min(sg*fs, sg*wl)   ! the worm stops: it is held
+      case (flow_backward); g(3) = -sg*wl; g(4) = sg*fs
       case (flow_hold_left)                      ! the holding torque within the friction
          g(3) = self%con%lam(1)*fs
          g(4) = (1.0_wp - self%eta_b)*fs*fs*self%cl%r1 - self%con%lam(1)*fs
@@ -253,7 +256,7 @@ contains
          g(4) = (1.0_wp - self%eta_f)*fs*fs*self%cl%r2 + self%con%lam(1)*fs
       case default
          if (sg /= 0.0_wp) then
-            g(3) = -sg*wr; g(4) = sg*wl; g(5) = sg*fs
+            g(3) = -sg*wr; g(4) = min(sg*wl, sg*fs)
          else
             g(3) = -fs*wr; g(4) = fs*wl
          end if
@@ -314,6 +317,11 @@ contains
       integer, intent(in) :: before
       logical, intent(in) :: fired(:)
       real(wp), intent(in) :: fs, wl, wr
+      logical :: left_stopped
+      ! guard 4 of a self-locking forward, or of neutral, is min(sg fs, sg wl): the
+      ! smaller at the event is the one that reached zero
+      left_stopped = self%sig /= 0.0_wp .and. self%sig*wl <= self%sig*fs .and. &
+                     (before == flow_neutral .or. (before == flow_forward .and. self%self_locking()))
       flow = before
       if (self%cl%mode == 0) then
          flow = flow_neutral                           ! open: no force, nothing held
@@ -323,11 +331,10 @@ contains
          flow = merge(flow_neutral, flow_forward, fired(3))    ! pulled back past lossless / driven on
       else if (held(before)) then
          continue
-      else if ((before == flow_forward .and. fired(4)) .or. (before == flow_neutral .and. fired(3) .and. &
+      else if ((before == flow_forward .and. fired(3)) .or. (before == flow_neutral .and. fired(3) .and. &
                                                               self%sig /= 0.0_wp)) then
          flow = flow_hold_right                        ! the right stops under load
-      else if ((before == flow_backward .and. fired(4)) .or. (before == flow_forward .and. fired(5)) .or. &
-               (before == flow_neutral .and. fired(4) .and. self%sig /= 0.0_wp)) then
+      else if ((before == flow_backward .and. fired(3)) .or. (fired(4) .and. left_stopped)) then
          flow = flow_hold_left                         ! the left stops under load
       else
          flow = choose_flow(fs*wr, fs*wl, before)      ! the force changed sign, a face, or no force before
