@@ -58,7 +58,7 @@ contains
             m%nodes(i)%n%omega0 = speed
          end do
          do i = 1, size(m%speeds)
-            m%speeds(i)%value0 = speed
+            m%speeds(i)%f%value0 = speed
          end do
       end if
    end subroutine load

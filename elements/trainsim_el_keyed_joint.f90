@@ -18,6 +18,13 @@
 !> w_shaft - w_hub as a regularised Coulomb law T_max tanh(slip/friction_velocity).
 !> The hub is the right node; T_h is the sum of the external loads on it. With
 !> no load on the hub (Table 5.4) there is no friction.
+!>
+!> bore_friction = 'key_force' (D-78) takes the bore's normal force from the force the
+!> key actually transmits instead: the key's contact force F_c (its clearance law,
+!> eqs. 4.47-4.48) acts on the hub at the bore radius d/2, and the bore reacts it with
+!> a normal force of the same size (a hub whose own load is a couple), so the friction
+!> torque is at most mu (d/2) |F_c| = mu |T_key| and opposes the slip as above, in and
+!> out of contact (out of contact F_c = 0: no friction).
 module trainsim_el_keyed_joint
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -40,6 +47,7 @@ module trainsim_el_keyed_joint
       real(wp) :: key_length = 0.0_wp
       real(wp) :: friction_velocity = 1.0e-3_wp   !< slip speed of the tanh regularisation, rad/s
       real(wp) :: fric_factor = 0.0_wp            !< T_max / |T_h| = mu (d/2) / (R |sin a + mu cos a|)
+      logical :: key_force = .false.              !< bore_friction = 'key_force': T_max = mu |T_key| (D-78)
    contains
       procedure :: configure => key_configure
       procedure :: params => key_params
@@ -64,7 +72,7 @@ contains
       type(deck_group_t), intent(inout) :: grp
       type(units_t), intent(in) :: units
       type(error_t), allocatable, intent(out) :: err
-      character(len=:), allocatable :: fit
+      character(len=:), allocatable :: fit, bore
       real(wp) :: kl, dk
       call grp%get_real('diameter', self%diameter, err); if (allocated(err)) return
       call grp%get_real('half_clearance', self%cl%b, err); if (allocated(err)) return
@@ -99,6 +107,16 @@ contains
       call grp%get_real('friction_angle', self%friction_angle, err, default=huge(1.0_wp)); if (allocated(err)) return
       call grp%get_real('friction_velocity', self%friction_velocity, err, default=1.0e-3_wp); if (allocated(err)) return
       call grp%require_positive('friction_velocity', self%friction_velocity, err); if (allocated(err)) return
+      call grp%get_string('bore_friction', bore, err, default='hub_load'); if (allocated(err)) return
+      select case (to_lower(bore))
+      case ('hub_load'); self%key_force = .false.
+      case ('key_force'); self%key_force = .true.
+      case default
+         call fatal_error(err, grp%where('bore_friction')//": error: unknown bore_friction '"//bore// &
+                          "'; valid: hub_load (eqs. 4.38-4.44, the default), key_force (the key's contact force)", &
+                          err_input)
+         return
+      end select
       if (.not. self%diameter > 0.0_wp) then
          call fatal_error(err, grp%where('diameter')//': error: diameter must be > 0, got '//str(self%diameter), err_input)
       else if (.not. self%cl%b >= 0.0_wp) then
@@ -117,7 +135,7 @@ contains
          self%friction_angle = atan2(1.0_wp - self%mu*tan(self%phi), tan(self%phi) - self%mu)
          if (self%friction_angle > 0.5_wp*acos(-1.0_wp)) self%friction_angle = self%friction_angle - acos(-1.0_wp)
       end if
-      if (self%mu > 0.0_wp) then
+      if (self%mu > 0.0_wp .and. .not. self%key_force) then
          if (.not. self%load_radius > 0.0_wp) then
             call fatal_error(err, grp%where('load_radius')//': error: friction > 0 needs load_radius > 0 (the '// &
                              'radius at which the hub is loaded), got '//str(self%load_radius), err_input)
@@ -131,15 +149,21 @@ contains
    end subroutine key_configure
 
    !> Bore friction torque on the hub (the shaft gets its reaction) and its
-   !> derivative with respect to the slip; zero while the key is in contact.
-   pure subroutine key_friction(self, wl, wr, tf, dtf)
+   !> derivative with respect to the slip (at a fixed normal force). 'hub_load':
+   !> from the hub's external loads, zero while the key is in contact; 'key_force':
+   !> from the key's torque on the hub `tkey` (its contact force times d/2).
+   pure subroutine key_friction(self, wl, wr, tkey, tf, dtf)
       class(keyed_joint_t), intent(in) :: self
-      real(wp), intent(in) :: wl, wr
+      real(wp), intent(in) :: wl, wr, tkey
       real(wp), intent(out) :: tf, dtf
       real(wp) :: tmax, x
       tf = 0.0_wp; dtf = 0.0_wp
-      if (self%cl%mode /= 0 .or. self%fric_factor == 0.0_wp) return
-      tmax = self%fric_factor*abs(self%ext_right)
+      if (self%key_force) then
+         tmax = self%mu*abs(tkey)                             ! mu (d/2) |F_c|
+      else
+         if (self%cl%mode /= 0 .or. self%fric_factor == 0.0_wp) return
+         tmax = self%fric_factor*abs(self%ext_right)          ! eqs. (4.38), (4.40)
+      end if
       x = (wl - wr)/self%friction_velocity
       tf = tmax*tanh(x)
       dtf = tmax/self%friction_velocity*(1.0_wp - tanh(x)**2)
@@ -151,7 +175,7 @@ contains
       real(wp), intent(out) :: tl, tr
       real(wp) :: tf, dtf
       call self%cl%torques(1.0_wp, thl, wl, thr, wr, tl, tr)   ! eqs. (H.3)-(H.11), (4.45)-(4.48)
-      call self%friction(wl, wr, tf, dtf)                      ! eqs. (4.38)-(4.41), out of contact
+      call self%friction(wl, wr, tr, tf, dtf)                  ! eqs. (4.38)-(4.41), or D-78
       tl = tl - tf
       tr = tr + tf
    end subroutine key_torques
@@ -160,9 +184,19 @@ contains
       class(keyed_joint_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: jt(2, 4)
-      real(wp) :: tf, dtf
+      real(wp) :: tf, dtf, tl, tkey, dn(4)
       call self%cl%torque_jacobian(1.0_wp, 0.0_wp, thl, wl, thr, wr, jt)
-      call self%friction(wl, wr, tf, dtf)
+      tkey = 0.0_wp
+      if (self%key_force) call self%cl%torques(1.0_wp, thl, wl, thr, wr, tl, tkey)
+      call self%friction(wl, wr, tkey, tf, dtf)
+      if (self%key_force .and. tkey /= 0.0_wp) then
+         ! the normal force's own partials: d tf = mu sign(tkey) tanh(x) d tkey
+         dn = self%mu*sign(1.0_wp, tkey)*tanh((wl - wr)/self%friction_velocity)*jt(2, :)
+      else
+         dn = 0.0_wp
+      end if
+      jt(1, :) = jt(1, :) - dn
+      jt(2, :) = jt(2, :) + dn
       jt(1, 2) = jt(1, 2) - dtf; jt(1, 4) = jt(1, 4) + dtf
       jt(2, 2) = jt(2, 2) + dtf; jt(2, 4) = jt(2, 4) - dtf
    end subroutine key_torque_jacobian
@@ -170,8 +204,10 @@ contains
    pure real(wp) function key_dissipation(self, thl, wl, thr, wr) result(p)
       class(keyed_joint_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp) :: tf, dtf
-      call self%friction(wl, wr, tf, dtf)
+      real(wp) :: tf, dtf, tl, tkey
+      tkey = 0.0_wp
+      if (self%key_force) call self%cl%torques(1.0_wp, thl, wl, thr, wr, tl, tkey)
+      call self%friction(wl, wr, tkey, tf, dtf)
       p = self%cl%dissipation(1.0_wp, thl, wl, thr, wr) + tf*(wl - wr)
    end function key_dissipation
 
@@ -192,7 +228,7 @@ contains
       class(keyed_joint_t), intent(in) :: self
       type(hot_form_t), intent(out) :: form
       call clearance_hot_form(self, form)
-      if (self%fric_factor /= 0.0_wp) form%kind = hf_none
+      if (self%fric_factor /= 0.0_wp .or. (self%key_force .and. self%mu /= 0.0_wp)) form%kind = hf_none
    end subroutine key_hot_form
 
    function key_params(self) result(p)
@@ -212,6 +248,7 @@ contains
          call add_choice(p, 'stiffness_fit', real(self%cl%law%fit, wp), fit_word(self%cl%law%fit))
          call append_params(p, [character(len=40) :: 'key_length'], [self%key_length])
       end if
+      if (self%key_force) call add_choice(p, 'bore_friction', 1.0_wp, 'key_force')   ! (hub_load: not written)
    end function key_params
 
    !> The deck word of a stiffness fit code.

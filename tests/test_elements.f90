@@ -535,7 +535,7 @@ contains
    subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(track)
       logical, intent(in) :: track
       type(model_t) :: ms, mg
-      real(wp), allocatable :: y(:), ds(:), dg(:), yk(:), yt(:), ya(:)
+      real(wp), allocatable :: y(:), ds(:), dg(:), yk(:), yt(:), ya(:), k2(:), k3(:), k4(:)
       real(wp) :: tl, tr, disp, force, stored, elastic
       integer :: i, contact, pairs
       logical :: torques_ok, status_ok
@@ -615,19 +615,24 @@ contains
       call mg%rhs(0.1_wp, y, dg)
       call check('inner-stage RHS: the same derivatives to the bit as the full RHS', all(ds == dg))
       call check('inner-stage RHS: the workspace is not marked as a step end', .not. ms%ws_step_end)
-      ! RK4's inner stage at y0 + c k (D-75): the kernel reads the stage's
-      ! state without forming it, the generic model forms it; both give the
-      ! derivatives at that state to the bit
+      ! RK4's inner stages at y + c k and the combination in one call (D-75,
+      ! D-76): the kernel reads the stages' states without forming them, the
+      ! generic model forms them; both give the step of `rhs_stage` at the formed
+      ! states to the bit
       yk = [(0.5_wp*cos(0.7_wp*i), i=1, size(y))]
-      yt = y + 0.37_wp*yk
-      call ms%rhs_stage(0.1_wp, yt, ds)
+      call rk4_by_stages(ms, 0.1_wp, 0.37_wp, y, yk, ds)
+      allocate (k2(size(y)), k3(size(y)), k4(size(y)))
       dg = -huge(1.0_wp)
-      ya = yt + huge(1.0_wp)
-      call ms%rhs_stage_at(0.1_wp, y, 0.37_wp, yk, ya, dg)
-      call check('inner stage at y + c k, kernel: to the bit the stage at that state', all(ds == dg))
+      ya = y + huge(1.0_wp)
+      yt = ya
+      call ms%rk4_stages(0.1_wp, 0.37_wp, 0.1_wp + 0.37_wp, y, yk, k2, k3, k4, ya, dg)
+      call check('RK4 step from inner stages at y + c k, kernel: to the bit the stages at the states', &
+                 all(ds == dg) .and. all(ya == yt))
       dg = -huge(1.0_wp)
-      call mg%rhs_stage_at(0.1_wp, y, 0.37_wp, yk, ya, dg)
-      call check('inner stage at y + c k, generic (forms it in ytmp): to the bit', all(ds == dg) .and. all(ya == yt))
+      call rk4_by_stages(mg, 0.1_wp, 0.37_wp, y, yk, ds)
+      call mg%rk4_stages(0.1_wp, 0.37_wp, 0.1_wp + 0.37_wp, y, yk, k2, k3, k4, ya, dg)
+      call check('RK4 step from inner stages at y + c k, generic (forms them in ytmp): to the bit', &
+                 all(ds == dg) .and. all(ya == y + 0.37_wp*k3))
    end subroutine test_rhs_kernel_is_the_generic_rhs_and_fills_workspace
 
    !> Every clearance element type of the registry, with every contact law it
@@ -824,7 +829,7 @@ contains
       character(len=:), allocatable :: deck
       character(len=60) :: what(n_case)
       type(model_t) :: m
-      real(wp), allocatable :: y(:), ds(:), df(:), y0(:), yk(:), yt(:), dk(:), ya(:)
+      real(wp), allocatable :: y(:), ds(:), df(:), yk(:), dk(:), ya(:), k2(:), k3(:), k4(:)
       type(powered_shaft_t) :: ps
       integer :: ic, p, i
       logical :: same, nonzero, same_at
@@ -874,7 +879,7 @@ contains
             allocate (m%elements(2)%e, source=ps)
          end if
          call m%initial_state(y)
-         allocate (ds(size(y)), df(size(y)), dk(size(y)), ya(size(y)))
+         allocate (ds(size(y)), df(size(y)), dk(size(y)), ya(size(y)), k2(size(y)), k3(size(y)), k4(size(y)))
          same = .true.
          same_at = .true.
          nonzero = .true.
@@ -888,23 +893,22 @@ contains
             call m%rhs_stage(0.1_wp*p, y, ds)
             call m%rhs(0.1_wp*p, y, df)
             same = same .and. all(ds == df)
-            ! RK4's inner stage at y0 + c k with y0 + c k = y (D-75): to the bit
+            ! RK4's inner stages at y + c k and its combination (D-75, D-76),
+            ! energy rates included: to the bit the stages at the formed states
             yk = [(0.3_wp*sin(0.9_wp*i + p), i=1, size(y))]
-            y0 = y - 0.25_wp*yk
-            yt = y0 + 0.25_wp*yk
-            call m%rhs_stage(0.1_wp*p, yt, df)
+            call rk4_by_stages(m, 0.1_wp*p, 0.25_wp, y, yk, df)
             dk = -huge(1.0_wp)
-            call m%rhs_stage_at(0.1_wp*p, y0, 0.25_wp, yk, ya, dk)
+            call m%rk4_stages(0.1_wp*p, 0.25_wp, 0.1_wp*p + 0.25_wp, y, yk, k2, k3, k4, ya, dk)
             same_at = same_at .and. all(dk == df)
             ! the rates are not trivially zero (an input from the loads or a held node)
             nonzero = nonzero .and. ds(m%n_states + 2) /= 0.0_wp
          end do
          call check(trim(what(ic))//': dy/dt and the energy rates to the bit the full RHS''s', same)
-         call check(trim(what(ic))//': the inner stage at y0 + c k to the bit the stage at that state', same_at)
+         call check(trim(what(ic))//': the RK4 step from stages at y + c k to the bit the formed stages', same_at)
          call check(trim(what(ic))//': the input power is not zero', nonzero)
          if (ic == 1) call check(trim(what(ic))//': nothing dissipates', ds(m%n_states + 1) == 0.0_wp)
          if (ic /= 1) call check(trim(what(ic))//': something dissipates', ds(m%n_states + 1) > 0.0_wp)
-         deallocate (ds, df, dk, ya)
+         deallocate (ds, df, dk, ya, k2, k3, k4)
       end do
    end subroutine test_stage_energy_rates_are_the_full_rhs_own
 
@@ -979,5 +983,20 @@ contains
       call check('no angle row for guards that read a held node, one for the coupling', rows_ok)
       call check('guards (all, one at a time) are the elements'' own, to the bit', ok)
    end subroutine test_guards_next_to_a_held_node_are_the_elements_own
+
+   !> RK4's step from (t, y) with k1 given, through `rhs_stage` at the formed
+   !> stages' states and the combination in its order: what `rk4_stages` must
+   !> give to the bit (D-76).
+   subroutine rk4_by_stages(m, t, h, y, k1, ynew)
+      type(model_t), intent(inout) :: m
+      real(wp), intent(in) :: t, h, y(:), k1(:)
+      real(wp), intent(out) :: ynew(:)
+      real(wp), allocatable :: k2(:), k3(:), k4(:)
+      allocate (k2(size(y)), k3(size(y)), k4(size(y)))
+      call m%rhs_stage(t + 0.5_wp*h, y + 0.5_wp*h*k1, k2)
+      call m%rhs_stage(t + 0.5_wp*h, y + 0.5_wp*h*k2, k3)
+      call m%rhs_stage(t + h, y + h*k3, k4)
+      ynew = y + h/6.0_wp*(k1 + 2.0_wp*(k2 + k3) + k4)
+   end subroutine rk4_by_stages
 
 end program test_elements

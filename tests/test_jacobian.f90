@@ -11,7 +11,7 @@ program test_jacobian
    use trainsim_model, only: model_t
    use trainsim_observer, only: run_result_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model, load_model_text, run_model, nl
+   use trainsim_test_support, only: load_model, load_model_text, run_model, nl, jacobian_fd_error
    implicit none
 
    character(len=*), parameter :: pair = "&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
@@ -42,34 +42,15 @@ contains
    subroutine jac_case(name, text, path)
       character(len=*), intent(in) :: name, text, path
       type(model_t) :: m
-      real(wp), allocatable :: y(:), ja(:, :), jf(:, :), fp(:), fm(:), yp(:)
-      real(wp) :: h, t, worst, scale
-      integer :: n, j
+      real(wp) :: worst, scale
       call test_begin('analytic Jacobian = central differences: '//name)
       if (len(path) > 0) then
          call load_model(path, m)
       else
          call load_model_text(text, m)
       end if
-      m%run%track_energy = .false.
-      call m%finalize()
-      call m%initial_state(y)
-      t = m%run%t_start
-      call m%init_modes(t, y)
-      n = size(y)
-      allocate (ja(n, n), jf(n, n), fp(n), fm(n), yp(n))
-      call m%jacobian(t, y, ja)
-      do j = 1, n
-         h = 1.0e-6_wp*max(1.0e-3_wp, abs(y(j)))
-         yp = y; yp(j) = y(j) + h
-         call m%rhs(t, yp, fp)
-         yp(j) = y(j) - h
-         call m%rhs(t, yp, fm)
-         jf(:, j) = (fp - fm)/(2.0_wp*h)
-      end do
-      scale = maxval(abs(jf))
-      worst = maxval(abs(ja - jf))
-      call check('max |J_analytic - J_fd| / max |J| (central differences: ~1e-8)', worst/scale, 0.0_wp, &
+      call jacobian_fd_error(m, m%run%t_start, worst, scale)
+      call check('max |J_analytic - J_fd| / max |J| (central differences: ~1e-8)', worst, 0.0_wp, &
                  abs_tol=1.0e-6_wp)
       call check('Jacobian is not trivially zero', scale > 0.0_wp)
    end subroutine jac_case

@@ -68,7 +68,7 @@ contains
       do i = 1, size(fast%nodes)
          fast%nodes(i)%n%omega0 = two_pi*300.0_wp/32.0_wp
       end do
-      fast%speeds(1)%value0 = two_pi*300.0_wp/32.0_wp
+      fast%speeds(1)%f%value0 = two_pi*300.0_wp/32.0_wp
       call run_model(fast, rf)
       call run_model(base, r1)
       call check('the copy ran at its own speed', abs(rf%y_final(2) - r0%y_final(2)) > 1.0_wp)

@@ -12,7 +12,7 @@ module trainsim_test_support
    implicit none
    private
 
-   public :: load_model, load_model_text, run_model, nl, zero_crossings
+   public :: load_model, load_model_text, run_model, nl, zero_crossings, jacobian_fd_error
 
    character(len=1), parameter :: nl = new_line('a')
 
@@ -62,6 +62,35 @@ contains
          error stop 2
       end if
    end subroutine run_model
+   !> The model's analytic Jacobian at its initial state and time t against central
+   !> differences of its right-hand side (steps 1e-6 of each state, at least 1e-9):
+   !> max |J_analytic - J_fd| / max |J_fd| (err), and max |J_fd| (scale, 0 if trivial).
+   subroutine jacobian_fd_error(m, t, err, scale)
+      type(model_t), intent(inout) :: m
+      real(wp), intent(in) :: t
+      real(wp), intent(out) :: err, scale
+      real(wp), allocatable :: y(:), ja(:, :), jf(:, :), fp(:), fm(:), yp(:)
+      real(wp) :: h
+      integer :: n, j
+      m%run%track_energy = .false.
+      call m%finalize()
+      call m%initial_state(y)
+      call m%init_modes(t, y)
+      n = size(y)
+      allocate (ja(n, n), jf(n, n), fp(n), fm(n), yp(n))
+      call m%jacobian(t, y, ja)
+      do j = 1, n
+         h = 1.0e-6_wp*max(1.0e-3_wp, abs(y(j)))
+         yp = y; yp(j) = y(j) + h
+         call m%rhs(t, yp, fp)
+         yp(j) = y(j) - h
+         call m%rhs(t, yp, fm)
+         jf(:, j) = (fp - fm)/(2.0_wp*h)
+      end do
+      scale = maxval(abs(jf))
+      err = maxval(abs(ja - jf))/max(scale, tiny(1.0_wp))
+   end subroutine jacobian_fd_error
+
    !> Times of the zero crossings of x(t) (linear interpolation between samples).
    pure subroutine zero_crossings(t, x, tz, n)
       real(wp), intent(in) :: t(:), x(:)

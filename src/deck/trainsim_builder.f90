@@ -8,6 +8,8 @@ module trainsim_builder
    use trainsim_deck, only: deck_t, deck_group_t
    use trainsim_limits, only: check_magnitude, check_params
    use trainsim_signal, only: signal_t, signal_from_group
+   use trainsim_speed_law, only: load_from_group
+   use trainsim_motion, only: motion_t, motion_from_group
    use trainsim_registry, only: make_node, make_element, node_type_names, element_type_names
    use trainsim_model, only: model_t, load_t
    use trainsim_element, only: element_t, max_ports
@@ -56,6 +58,9 @@ contains
       call read_loads(deck, model, node_ids, err); if (allocated(err)) return
       call model%finalize()
       call read_initial(deck, model, node_ids, err); if (allocated(err)) return
+      do i = 1, size(model%nodes)   ! a prescribed acceleration starts from the &initial speed
+         if (model%speed_of(i) /= 0) model%speeds(model%speed_of(i))%w0 = model%nodes(i)%n%omega0
+      end do
       do i = 1, size(deck%groups)
          associate (g => deck%groups(i))
             if (g%name == 'run') call g%check_unused(err, 'the &run group')
@@ -471,7 +476,7 @@ contains
       character(len=:), allocatable :: nid, quantity
       type(signal_t) :: sig
       type(load_t), allocatable :: loads(:)
-      type(signal_t), allocatable :: speeds(:)
+      type(motion_t), allocatable :: speeds(:)
 
       ! at most one load or speed per &load group: size once, trim at the end
       nloads = deck%count_groups('load')
@@ -491,31 +496,34 @@ contains
             end if
             call g%get_string('quantity', quantity, err, default='torque'); if (allocated(err)) return
             quantity = to_lower(quantity)
-            call signal_from_group(g, sig, err); if (allocated(err)) return
             select case (quantity)
             case ('torque')
                nloads = nloads + 1
-               loads(nloads) = load_t(inode, sig)
-            case ('speed')
+               call load_from_group(g, inode, loads(nloads), err); if (allocated(err)) return
+            case ('speed', 'angle', 'acceleration')
+               call signal_from_group(g, sig, err); if (allocated(err)) return
                if (.not. model%nodes(inode)%n%can_prescribe_speed()) then
                   call fatal_error(err, g%where('quantity')//": error: node '"//nid//"' of type '"// &
-                                   model%nodes(inode)%n%type_name//"' cannot have a prescribed speed "// &
-                                   "(only 'inertia' nodes can)", err_input)
+                                   model%nodes(inode)%n%type_name//"' cannot have a prescribed "//quantity// &
+                                   " (only 'inertia' nodes can)", err_input)
                   return
                end if
                if (model%speed_of(inode) /= 0) then
-                  call fatal_error(err, g%where('node')//": error: node '"//nid//"' already has a prescribed speed", &
-                                   err_input)
+                  call fatal_error(err, g%where('node')//": error: node '"//nid//"' already has a prescribed "// &
+                                   "speed, angle or acceleration", err_input)
                   return
                end if
                nspeeds = nspeeds + 1
-               speeds(nspeeds) = sig
+               call motion_from_group(g, quantity, sig, speeds(nspeeds), err); if (allocated(err)) return
+               ! a prescribed angle starts at its value at 0 (the &initial angle overrides it)
+               if (quantity == 'angle') model%nodes(inode)%n%theta0 = sig%value(0.0_wp)
                model%speed_of(inode) = nspeeds
             case ('voltage')
+               call signal_from_group(g, sig, err); if (allocated(err)) return
                call model%nodes(inode)%n%attach_voltage(sig, g%where('quantity'), err); if (allocated(err)) return
             case default
                call fatal_error(err, g%where('quantity')//": error: unknown load quantity '"//quantity// &
-                                "'; valid quantities are: torque, speed, voltage", err_input)
+                                "'; valid quantities are: torque, speed, angle, acceleration, voltage", err_input)
                return
             end select
          end associate

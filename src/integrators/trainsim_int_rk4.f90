@@ -293,20 +293,13 @@ contains
       real(wp), intent(in) :: y(size(self%k1))
       real(wp), intent(out) :: ynew(size(self%k1))
       logical, intent(in) :: left_limit
-      real(wp) :: t4, hh, h6
-      integer :: i
+      real(wp) :: t4
       t4 = t + h
       if (left_limit) t4 = t + h - 1.0e-9_wp*h
-      hh = 0.5_wp*h
-      ! inner stages at y + c k: no one reads the model's workspace after them
-      ! (`rhs_stage_at`; a simple model does not form the stage's state, D-75)
-      call model%rhs_stage_at(t + 0.5_wp*h, y, hh, self%k1, self%ytmp, self%k2)
-      call model%rhs_stage_at(t + 0.5_wp*h, y, hh, self%k2, self%ytmp, self%k3)
-      call model%rhs_stage_at(t4, y, h, self%k3, self%ytmp, self%k4)
-      h6 = h/6.0_wp
-      do i = 1, size(y)
-         ynew(i) = y(i) + h6*(self%k1(i) + 2.0_wp*(self%k2(i) + self%k3(i)) + self%k4(i))
-      end do
+      ! inner stages at y + c k and the combination in one call of the model: no
+      ! one reads its workspace after them (a simple model does not form the
+      ! stages' states, D-75, and runs its kernels in one procedure, D-76)
+      call model%rk4_stages(t, h, t4, y, self%k1, self%k2, self%k3, self%k4, self%ytmp, ynew)
       self%stats%rhs_evals = self%stats%rhs_evals + 3
    end subroutine rk4_step
 

@@ -285,8 +285,7 @@ contains
    !> acc per slot (exact per cluster where the cluster allows, see above).
    subroutine cn_solve(cn)
       type(constraint_set_t), intent(inout) :: cn
-      integer :: r, p, s, c
-      real(wp) :: num, den
+      integer :: r, p, s
       do r = 1, cn%m
          cn%b(r) = 0.0_wp
          do p = 1, cn%row_np(r)
@@ -306,7 +305,19 @@ contains
       do s = 1, cn%nc
          cn%acc(s) = cn%afree(s) + cn%inv_j(s)*cn%acc(s)
       end do
-      ! exact accelerations per cluster
+      call exact_clusters(cn, .false.)                 ! exact accelerations per cluster
+   end subroutine cn_solve
+
+   !> Per exact cluster c, its reference value v_c from x = afree (per slot: the
+   !> accelerations without constraints, or the speeds): 0 if locked, x of its
+   !> held slot, else sum rho J x / sum rho^2 J (momentum); then rho v_c on
+   !> every free slot of the cluster (ratio 1: the same value, bit for bit),
+   !> into acc, or into w if `speeds`.
+   subroutine exact_clusters(cn, speeds)
+      type(constraint_set_t), intent(inout) :: cn
+      logical, intent(in) :: speeds
+      integer :: c, s
+      real(wp) :: num, den
       do c = 1, cn%nc
          if (cn%cl(c) /= c .or. .not. cn%cl_exact(c)) cycle
          if (cn%cl_locked(c)) then
@@ -324,10 +335,15 @@ contains
             num = num/den
          end if
          do s = 1, cn%nc
-            if (cn%cl(s) == c .and. cn%inv_j(s) /= 0.0_wp) cn%acc(s) = cn%rho(s)*num
+            if (cn%cl(s) /= c .or. cn%inv_j(s) == 0.0_wp) cycle
+            if (speeds) then
+               cn%w(s) = cn%rho(s)*num
+            else
+               cn%acc(s) = cn%rho(s)*num
+            end if
          end do
       end do
-   end subroutine cn_solve
+   end subroutine exact_clusters
 
    !> lam = (G M^-1 G^T)^-1 b over the kept rows (dropped rows: lam = 0).
    subroutine chol_solve(cn)
@@ -363,8 +379,7 @@ contains
    !> cluster by the projection w + M^-1 G^T mu, G M^-1 G^T mu = -G w.
    subroutine cn_project(cn)
       type(constraint_set_t), intent(inout) :: cn
-      integer :: r, p, s, c
-      real(wp) :: num, den
+      integer :: r, p, s
       if (cn%m == 0) return
       cn%afree(1:cn%nc) = cn%w(1:cn%nc)
       do r = 1, cn%m
@@ -380,26 +395,7 @@ contains
             cn%w(s) = cn%w(s) + cn%inv_j(s)*cn%row_g(p, r)*cn%lam(r)
          end do
       end do
-      do c = 1, cn%nc
-         if (cn%cl(c) /= c .or. .not. cn%cl_exact(c)) cycle
-         if (cn%cl_locked(c)) then
-            num = 0.0_wp
-         else if (cn%cl_ref(c) /= 0) then
-            num = cn%afree(cn%cl_ref(c))
-         else
-            num = 0.0_wp
-            den = 0.0_wp
-            do s = 1, cn%nc
-               if (cn%cl(s) /= c) cycle
-               num = num + cn%rho(s)*cn%jn(s)*cn%afree(s)
-               den = den + cn%rho(s)**2*cn%jn(s)
-            end do
-            num = num/den
-         end if
-         do s = 1, cn%nc
-            if (cn%cl(s) == c .and. cn%inv_j(s) /= 0.0_wp) cn%w(s) = cn%rho(s)*num
-         end do
-      end do
+      call exact_clusters(cn, .true.)                  ! (afree holds the speeds before)
       cn%lam(1:cn%m) = 0.0_wp
    end subroutine cn_project
 end module trainsim_constraints

@@ -11,6 +11,7 @@ module trainsim_input_series
    use trainsim_kinds, only: wp
    use trainsim_strings, only: string_t, str
    use trainsim_model, only: model_t
+   use trainsim_motion, only: given_speed
    implicit none
    private
 
@@ -93,7 +94,13 @@ contains
       do i = 1, size(model%nodes)
          if (model%speed_of(i) == 0) cycle
          k = k + 1
-         v(k) = model%speeds(model%speed_of(i))%value(t)
+         associate (m => model%speeds(model%speed_of(i)))
+            if (m%given == given_speed) then   ! (the time function itself: one call, as before D-76)
+               v(k) = m%f%value(t)
+            else
+               v(k) = m%value(t)
+            end if
+         end associate
       end do
       do j = 1, size(drivers)
          k = k + 1

@@ -16,7 +16,8 @@ module trainsim_model
    use trainsim_kinds, only: wp
    use trainsim_strings, only: string_t
    use trainsim_units, only: units_t
-   use trainsim_signal, only: signal_t
+   use trainsim_motion, only: motion_t
+   use trainsim_speed_law, only: load_t, law_none
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
    use trainsim_event, only: event_t
@@ -28,11 +29,6 @@ module trainsim_model
 
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
-   !> An external torque on a node.
-   type :: load_t
-      integer :: node = 0
-      type(signal_t) :: torque
-   end type load_t
 
    !> The end-of-step quantities the observer folds, for up to `cap` plain
    !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
@@ -65,7 +61,7 @@ module trainsim_model
       type(node_slot_t), allocatable :: nodes(:)
       type(element_slot_t), allocatable :: elements(:)
       type(load_t), allocatable :: loads(:)
-      type(signal_t), allocatable :: speeds(:)   !< prescribed-speed profiles
+      type(motion_t), allocatable :: speeds(:)   !< prescribed motions (speed, angle or acceleration)
       integer, allocatable :: speed_of(:)        !< per node: index into speeds, 0 if free
       integer :: n_states = 0                    !< physical states
       integer :: n_y = 0                         !< + 2 energy-accounting states if tracked
@@ -128,6 +124,8 @@ module trainsim_model
       type(fast_load_t), allocatable, private :: fl(:)
       integer, allocatable, private :: guard_els(:)        !< the elements that have guards
       integer, allocatable, private :: dyn_loads(:)        !< loads summed at t (on nodes with a varying load)
+      integer, allocatable, private :: spd_loads(:)        !< loads with a speed law (summed at t and omega)
+      logical, private :: loads_vary = .false.             !< dyn_loads or spd_loads not empty
       !> Every node a plain inertia or held at a constant speed, every load
       !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
       logical, private :: simple = .false.
@@ -138,8 +136,9 @@ module trainsim_model
       !> that kernel's per-element elastic energies (summed after the kinetic).
       integer, private :: n_cold = 0
       real(wp), allocatable, private :: el_pe(:)
-      !> The elements' kinematic constraints (D-76): a model with one is never simple
-      type(constraint_set_t) :: cn
+      !> Kinematic constraints (D-76; allocatable: a plain one cost the simple kernels 11 instr/step)
+      type(constraint_set_t), allocatable :: cn
+      integer :: n_cand = 0   !< size(cn%cand): elements that may constrain (then never simple)
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -148,7 +147,7 @@ module trainsim_model
       procedure :: rhs => model_rhs
       procedure :: rhs_step_end => model_rhs_step_end
       procedure :: rhs_stage => model_rhs_stage
-      procedure :: rhs_stage_at => model_rhs_stage_at
+      procedure :: rk4_stages => model_rk4_stages
       procedure :: block_ok => model_block_ok
       procedure :: rhs_part => model_rhs_part
       procedure :: part_power => model_part_power
@@ -285,19 +284,20 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine model_rhs_stage
 
-      !> dy/dt at (t, y + c k) as `model_rhs_stage` at that state, the same values
-      !> bit for bit, for RK4's inner stages: a simple model's kernel reads
-      !> y(j) + c k(j) where it reads the state (its nodes' angles and speeds),
-      !> without forming the state (ytmp untouched; D-75); any other model
-      !> forms it in ytmp and runs `model_rhs`.
-      module subroutine model_rhs_stage_at(self, t, y, c, k, ytmp, dydt)
+      !> RK4's inner stages and its combination (D-76), given k1 = f(t, y): k2 =
+      !> f(t + h/2, y + h/2 k1), k3 = f(t + h/2, y + h/2 k2), k4 = f(t4, y + h k3),
+      !> each as `model_rhs_stage` at that state, the same values bit for bit, and
+      !> ynew = y + h/6 (k1 + 2 (k2 + k3) + k4). A simple model's kernel reads y(j) +
+      !> c k(j) where it reads the state, without forming it (ytmp untouched,
+      !> D-75); any other model forms it in ytmp and runs `model_rhs`.
+      module subroutine model_rk4_stages(self, t, h, t4, y, k1, k2, k3, k4, ytmp, ynew)
          class(model_t), intent(inout) :: self
-         real(wp), intent(in) :: t, c
+         real(wp), intent(in) :: t, h, t4
          !> (explicit size: their addresses only, D-41)
-         real(wp), intent(in) :: y(self%n_y), k(self%n_y)
-         real(wp), intent(inout) :: ytmp(self%n_y)
-         real(wp), intent(out) :: dydt(self%n_y)
-      end subroutine model_rhs_stage_at
+         real(wp), intent(in) :: y(self%n_y), k1(self%n_y)
+         real(wp), intent(inout) :: k2(self%n_y), k3(self%n_y), k4(self%n_y), ytmp(self%n_y)
+         real(wp), intent(out) :: ynew(self%n_y)
+      end subroutine model_rk4_stages
 
       !> Whether an integrator may take a block of steps (D-38) in the current
       !> modes: a simple model whose `rhs_step_end` leaves in the block's columns
@@ -490,14 +490,14 @@ module trainsim_model
          integer, intent(in) :: i
       end subroutine refresh_hot
 
-      !> Kinematic constraints (D-76; documented in trainsim_model_constraints).
-      module subroutine constraints_setup(self)
+      module subroutine constraints_setup(self)   ! kinematic constraints (D-76; docs: trainsim_model_constraints)
          type(model_t), intent(inout) :: self
       end subroutine constraints_setup
-      module subroutine constraints_rhs(self, t, y, dydt)
+      module subroutine constraints_rhs(self, t, y, dydt, t_now)
          type(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
          real(wp), intent(inout), optional :: dydt(:)
+         logical, intent(in), optional :: t_now
       end subroutine constraints_rhs
       module subroutine constraints_settle(self, t, y, events, nev, dstored, project)
          type(model_t), intent(inout) :: self
@@ -595,5 +595,4 @@ module trainsim_model
       end function settle_budget
 
    end interface
-
 end module trainsim_model

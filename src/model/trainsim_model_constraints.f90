@@ -6,7 +6,8 @@
 !> declared, with its arguments, in trainsim_model; their docs are here:
 !>   constraints_setup: size the buffers for the model's candidate elements
 !>     (`constrains`), at every `build_fast_path`;
-!>   constraints_rhs: in the RHS after the elements' torques, the constraint
+!>   constraints_rhs: in the RHS before the elements' torques (t_now), their
+!>     t_now; after the elements' torques, the constraint
 !>     torques (added to self%torque and el_torque, handed to the elements as
 !>     lam); with dydt, after the nodes' derivatives, the exact accelerations of
 !>     the clustered nodes into dydt;
@@ -29,7 +30,9 @@ submodule (trainsim_model) trainsim_model_constraints
 contains
 
    module procedure constraints_setup
+      if (.not. allocated(self%cn)) allocate (self%cn)
       call cn_setup(self%cn, self%elements, size(self%nodes), self%n_y)
+      self%n_cand = size(self%cn%cand)
    end procedure constraints_setup
 
    !> The active rows from the elements' modes; when they changed (or `force`),
@@ -80,6 +83,12 @@ contains
    module procedure constraints_rhs
       integer :: s, nd, r, p, i, k, o
       real(wp) :: tc
+      if (present(t_now)) then                             ! before the elements' torques
+         do k = 1, size(self%cn%cand)
+            self%elements(self%cn%cand(k))%e%con%t_now = t
+         end do
+         return
+      end if
       if (self%cn%m == 0) return
       if (present(dydt)) then                              ! the exact accelerations
          do s = 1, self%cn%nc

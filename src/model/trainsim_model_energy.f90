@@ -36,7 +36,7 @@ contains
          if (self%fl(i)%const) then
             pin = pin + self%fl(i)%v*self%omega(l)
          else
-            pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+            pin = pin + self%loads(i)%at(t, self%omega(l))*self%omega(l)
          end if
       end do
       do k = 1, size(els)

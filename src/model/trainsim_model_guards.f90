@@ -245,8 +245,11 @@ contains
       e_before = 0.0_wp   ! read below only if track_energy; set so -Wmaybe-uninitialized need not prove that
       ! the stuck clusters' speeds exactly as the constraints say (an integrator's
       ! interpolation to the event leaves roundoff in them; D-76), before modes change
-      call constraints_settle(self, t, y, events, nev, de, .true.)
-      if (self%run%track_energy) y(self%n_states + 1) = y(self%n_states + 1) - de
+      de = 0.0_wp
+      if (size(self%cn%cand) > 0) then
+         call constraints_settle(self, t, y, events, nev, de, .true.)
+         if (self%run%track_energy) y(self%n_states + 1) = y(self%n_states + 1) - de
+      end if
       if (present(els)) then
          self%ws_step_end = .false.
          do q = 1, size(els)
@@ -290,7 +293,7 @@ contains
             events(nev)%element = i
          end do
       end do
-      call constraints_settle(self, t, y, events, nev, de, .false.)   ! stick events: speeds, limits (D-76)
+      if (size(self%cn%cand) > 0) call constraints_settle(self, t, y, events, nev, de, .false.)   ! (D-76)
       if (.not. self%run%track_energy) return
       ! the kinetic energy a stick event removes is dissipated in the element that stuck
       y(self%n_states + 1) = y(self%n_states + 1) - de

@@ -23,6 +23,16 @@ contains
             if (nd%nstates() > 0) call nd%jacobian(t, y, jac, dtq(1:nd%nstates(), i))
          end associate
       end do
+      do i = 1, size(self%loads)   ! a load with a speed law: d torque / d omega (D-77)
+         na = self%loads(i)%node
+         if (self%loads(i)%law%kind == law_none .or. self%speed_of(na) /= 0) cycle
+         if (self%nodes(na)%n%nstates() < 2) cycle
+         ib = self%nodes(na)%n%offset + 2
+         do k = 1, self%nodes(na)%n%nstates()
+            row = self%nodes(na)%n%offset + k
+            jac(row, ib) = jac(row, ib) + dtq(k, na)*self%loads(i)%slope(t, self%omega(na))
+         end do
+      end do
       do i = 1, size(self%elements)
          associate (e => self%elements(i)%e)
             np = e%n_ports()

@@ -55,22 +55,45 @@ contains
 #undef STEP_END
    end procedure model_rhs_stage
 
-   module procedure model_rhs_stage_at
+   module procedure model_rk4_stages
       integer :: j
+      real(wp) :: hh, h6
       self%ws_step_end = .false.
+      hh = 0.5_wp*h
       if (.not. self%simple) then
-         do j = 1, self%n_y
-            ytmp(j) = y(j) + c*k(j)
-         end do
-         call rhs_fast(self, t, ytmp, dydt, .false.)
+         call stage_formed(t + hh, hh, k1, k2)
+         call stage_formed(t + hh, hh, k2, k3)
+         call stage_formed(t4, h, k3, k4)
       else if (self%run%track_energy) then
-         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
-                              self%fam%th, self%fam%w, c, k, self%fam%pw)
+         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
+                              self%fam%th, self%fam%w, hh, k1, self%fam%pw)
+         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
+                              self%fam%th, self%fam%w, hh, k2, self%fam%pw)
+         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
+                              self%fam%th, self%fam%w, h, k3, self%fam%pw)
       else
-         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
-                             self%fam%th, self%fam%w, c, k)
+         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
+                             self%fam%th, self%fam%w, hh, k1)
+         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
+                             self%fam%th, self%fam%w, hh, k2)
+         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
+                             self%fam%th, self%fam%w, h, k3)
       end if
+      h6 = h/6.0_wp
+      do j = 1, self%n_y
+         ynew(j) = y(j) + h6*(k1(j) + 2.0_wp*(k2(j) + k3(j)) + k4(j))
+      end do
    contains
+      ! a model that is not simple: the stage's state formed in ytmp, `rhs_fast` there
+      subroutine stage_formed(ts, c, k, dydt)
+         real(wp), intent(in) :: ts, c, k(self%n_y)
+         real(wp), intent(out) :: dydt(self%n_y)
+         integer :: i
+         do i = 1, self%n_y
+            ytmp(i) = y(i) + c*k(i)
+         end do
+         call rhs_fast(self, ts, ytmp, dydt, .false.)
+      end subroutine stage_formed
       ! the stage kernel at y + c k, energy off and on (internal: inlined here)
 #define FROM 1
 #define KERNEL stage_plain_at
@@ -86,7 +109,7 @@ contains
 #undef ENERGY
 #undef STEP_END
 #undef FROM
-   end procedure model_rhs_stage_at
+   end procedure model_rk4_stages
 
    module procedure model_block_ok
       ok = self%simple .and. self%blk%cap >= 4
@@ -101,7 +124,7 @@ contains
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
       logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
-      integer :: i, l, r, s, o
+      integer :: i, l, r, s, o, nc
       real(wp) :: tl, tr, f, pdiss, pin
       logical :: track
       if (self%simple) then
@@ -112,9 +135,8 @@ contains
       self%ws_step_end = .false.
       self%ws_t = t
       self%ws_energy = .false.
-      do i = 1, size(self%cn%cand)                     ! (elements with constraints read t: D-76)
-         self%elements(self%cn%cand(i))%e%con%t_now = t
-      end do
+      nc = self%n_cand                                 ! elements that may constrain (D-76)
+      if (nc > 0) call constraints_rhs(self, t, y, t_now=.true.)
       pdiss = 0.0_wp
       pin = 0.0_wp
       ! kinematics and constant loads in one pass (the branch of kinematics_all, written
@@ -134,7 +156,7 @@ contains
             self%torque(i) = nd%load0
          end associate
       end do
-      if (size(self%dyn_loads) > 0 .or. self%any_needs_loads) call loads_varying(self, t)
+      if (self%loads_vary .or. self%any_needs_loads) call loads_varying(self, t)
       if (track) then
          ! power of the external loads on free nodes (before the elements add to self%torque)
          do i = 1, size(self%fl)
@@ -143,7 +165,7 @@ contains
             if (self%fl(i)%const) then
                pin = pin + self%fl(i)%v*self%omega(l)
             else
-               pin = pin + self%loads(i)%torque%value(t)*self%omega(l)
+               pin = pin + self%loads(i)%at(t, self%omega(l))*self%omega(l)
             end if
          end do
       end if
@@ -174,7 +196,7 @@ contains
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
-      if (self%cn%m > 0) call constraints_rhs(self, t, y)              ! constraint torques (D-76)
+      if (nc > 0) call constraints_rhs(self, t, y)                     ! constraint torques (D-76)
       do i = 1, size(self%fn)
          associate (nd => self%fn(i))
             select case (nd%kind)
@@ -202,7 +224,7 @@ contains
             end select
          end associate
       end do
-      if (self%cn%m > 0) call constraints_rhs(self, t, y, dydt)        ! exact per rigid cluster
+      if (nc > 0) call constraints_rhs(self, t, y, dydt)               ! exact per rigid cluster
       if (.not. track) return
       dydt(self%n_states + 1) = pdiss
       dydt(self%n_states + 2) = pin
@@ -314,6 +336,11 @@ contains
          l = self%fl(i)%node
          self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
       end do
+      do k = 1, size(self%spd_loads)   ! (a node in `der` is in `kin`: its omega is current)
+         i = self%spd_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%at(t, self%omega(l))
+      end do
       if (self%any_needs_loads) then
          do k = 1, size(els)
             i = els(k)
@@ -366,8 +393,9 @@ contains
       call loads_varying(self, t)
    end subroutine loads_at
 
-   !> The loads that vary with t, and the loads published to the elements that
-   !> read them (after the constant sums are in self%torque).
+   !> The loads that vary with t or with their node's speed (at the speeds in
+   !> the workspace), and the loads published to the elements that read them
+   !> (after the constant sums are in self%torque).
    subroutine loads_varying(self, t)
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t
@@ -376,6 +404,11 @@ contains
          i = self%dyn_loads(k)
          l = self%fl(i)%node
          self%torque(l) = self%torque(l) + self%loads(i)%torque%value(t)
+      end do
+      do k = 1, size(self%spd_loads)
+         i = self%spd_loads(k)
+         l = self%fl(i)%node
+         self%torque(l) = self%torque(l) + self%loads(i)%at(t, self%omega(l))
       end do
       if (.not. self%any_needs_loads) return
       do i = 1, size(self%elements)

@@ -125,7 +125,8 @@ contains
    !> The load table: each load's node and, when constant, its value; a node
    !> whose loads are all constant starts each RHS from their sum (in load
    !> order, as summing them at t would); the loads on a node with a varying
-   !> load are summed at t (dyn_loads).
+   !> load are summed at t (dyn_loads); a load with a speed law (spd_loads) is
+   !> summed at t and its node's speed, after them.
    subroutine load_table(self)
       type(model_t), intent(inout) :: self
       integer :: i, nl
@@ -136,7 +137,7 @@ contains
       varying = .false.
       do i = 1, nl
          self%fl(i)%node = self%loads(i)%node
-         self%fl(i)%const = self%loads(i)%torque%is_constant()
+         self%fl(i)%const = self%loads(i)%torque%is_constant() .and. self%loads(i)%law%kind == law_none
          self%fl(i)%v = self%loads(i)%torque%value(0.0_wp)
          if (.not. self%fl(i)%const) varying(self%fl(i)%node) = .true.
       end do
@@ -145,7 +146,10 @@ contains
             if (.not. varying(self%fl(i)%node)) nd%load0 = nd%load0 + self%fl(i)%v
          end associate
       end do
-      self%dyn_loads = pack([(i, i=1, nl)], [(varying(self%fl(i)%node), i=1, nl)])
+      self%dyn_loads = pack([(i, i=1, nl)], [(varying(self%fl(i)%node) .and. self%loads(i)%law%kind == law_none, &
+                                              i=1, nl)])
+      self%spd_loads = pack([(i, i=1, nl)], [(self%loads(i)%law%kind /= law_none, i=1, nl)])
+      self%loads_vary = size(self%dyn_loads) > 0 .or. size(self%spd_loads) > 0
    end subroutine load_table
 
    !> The families of the model (trainsim_model_families) from the node, element
@@ -441,8 +445,7 @@ contains
    module procedure model_init_modes
       integer :: i, l, r
       logical :: rebuild
-      real(wp) :: dstored
-      real(wp), allocatable :: yc(:)
+      real(wp) :: dstored, yc(size(y))
       type(event_t), allocatable :: evs(:)
       integer :: nev
       rebuild = .true.
@@ -459,10 +462,9 @@ contains
          end if
          call refresh_hot(self, i)
       end do
-      if (size(self%cn%cand) > 0) then   ! the constraints of the initial modes, limits checked (D-76)
-         yc = y
+      if (self%n_cand > 0) then   ! the constraints of the initial modes, limits checked (D-76)
+         yc = y; nev = 0
          allocate (evs(4))
-         nev = 0
          call constraints_settle(self, t, yc, evs, nev, dstored, .false.)
       end if
       self%energy0 = self%stored_energy(t, y)

@@ -2,7 +2,9 @@
 !> constant, step, ramp, sine, piecewise-linear table (inline or from a file)
 !> and the start-stop duty cycle (accelerate, cruise, decelerate, dwell, n times).
 !> Each gives its value, its time integral from t = 0 (the angle of a
-!> prescribed-speed node) and its derivative (the prescribed acceleration).
+!> prescribed-speed node), its second integral (a prescribed acceleration's
+!> angle) and its first and second derivatives (a prescribed speed's or angle's
+!> acceleration).
 module trainsim_signal
    use trainsim_kinds, only: wp, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
@@ -12,7 +14,7 @@ module trainsim_signal
    implicit none
    private
 
-   public :: signal_t, signal_from_group, constant_signal, max_cycles
+   public :: signal_t, signal_from_group, constant_signal, max_cycles, table_from_group
 
    !> Most cycles of a start-stop profile (a year of 30 s cycles); more is a typing error.
    integer, parameter :: max_cycles = 1000000
@@ -26,7 +28,10 @@ module trainsim_signal
       real(wp) :: value0 = 0.0_wp                 !< constant value / sine offset
       real(wp) :: amplitude = 0.0_wp, omega = 0.0_wp, phase = 0.0_wp
       real(wp), allocatable :: times(:), values(:), cum(:)
+      !> a table's second cumulative integral at the knots (zero at the first)
+      real(wp), allocatable :: cum2(:)
       real(wp) :: integral_at_zero = 0.0_wp
+      real(wp) :: integral2_at_zero = 0.0_wp   !< the antiderivative of the integral at t = 0
       !> A table read from a file: the path as the deck wrote it, the path opened,
       !> and the file's text, so the output can embed it beside the deck.
       character(len=:), allocatable :: source_key, source_file, source_text
@@ -34,6 +39,8 @@ module trainsim_signal
       procedure :: value => signal_value
       procedure :: integral => signal_integral
       procedure :: derivative => signal_derivative
+      procedure :: derivative2 => signal_derivative2
+      procedure :: integral2 => signal_integral2
       procedure :: breakpoints => signal_breakpoints
       procedure :: is_constant => signal_is_constant
    end type signal_t
@@ -55,10 +62,9 @@ contains
       type(deck_group_t), intent(inout) :: grp
       type(signal_t), intent(out) :: sig
       type(error_t), allocatable, intent(out) :: err
-      character(len=:), allocatable :: kind, path
+      character(len=:), allocatable :: kind
       real(wp) :: v0, v1, t0, t1, ta, tc, td, tw, vc
       real(wp), allocatable :: tt(:), vv(:)
-      integer, allocatable :: rows(:)   ! line of each point of a table file
       integer :: cycles, i, k
 
       call grp%get_string('kind', kind, err, default='constant')
@@ -110,52 +116,7 @@ contains
          sig%omega = two_pi*v1
          sig%integral_at_zero = -sig%amplitude/sig%omega*cos(sig%phase)
       case ('table')
-         if (grp%has('table_file')) then
-            call grp%get_string('table_file', path, err); if (allocated(err)) return
-            sig%source_key = path
-            path = relative_to_deck(path, grp%file)
-            call read_table_file(path, tt, vv, sig%source_text, err, rows)
-            if (allocated(err)) then
-               err%message = grp%where('table_file')//': error: '//err%message
-               return
-            end if
-            sig%source_file = path
-         else
-            call grp%get_real_array('times', tt, err); if (allocated(err)) return
-            call grp%get_real_array('values', vv, err); if (allocated(err)) return
-            if (size(tt) == 0) then
-               call fatal_error(err, grp%where('times')//": error: kind = 'table' needs 'times' and 'values' "// &
-                                "(or 'table_file')", err_input)
-               return
-            end if
-            if (size(tt) /= size(vv)) then
-               call fatal_error(err, grp%where('values')//': error: table has '//str(size(tt))//' times but '// &
-                                str(size(vv))//' values', err_input)
-               return
-            end if
-         end if
-         do i = 1, size(tt)
-            if (.not. (in_range(tt(i)) .and. in_range(vv(i)))) then
-               call fatal_error(err, grp%where(trim(merge('table_file', 'times     ', grp%has('table_file'))))// &
-                                ': error: table point '//str(i)//' (time '//str(tt(i))//', value '//str(vv(i))// &
-                                ') is out of range: trainsim accepts 0 or a magnitude in [1e-20, 1e20]', err_input)
-               return
-            end if
-         end do
-         do i = 2, size(tt)
-            if (tt(i) < tt(i - 1)) then
-               if (allocated(rows)) then
-                  call fatal_error(err, grp%where('table_file')//': error: '//sig%source_file//':'//str(rows(i))// &
-                                   ': table times must not decrease ('//str(tt(i))//' after '//str(tt(i - 1))// &
-                                   ' on line '//str(rows(i - 1))//')', err_input)
-               else
-                  call fatal_error(err, grp%where('times')//': error: table times must not decrease (entry '// &
-                                   str(i)//': '//str(tt(i))//' after '//str(tt(i - 1))//')', err_input)
-               end if
-               return
-            end if
-         end do
-         call set_table(sig, tt, vv)
+         call table_from_group(grp, 'times', 'values', 'table_file', sig, err); if (allocated(err)) return
       case ('start_stop')
          call grp%get_real('value', vc, err); if (allocated(err)) return
          call grp%expect([character(len=7) :: 't_accel', 't_decel'])   ! a step apart (D-62)
@@ -200,6 +161,68 @@ contains
       sig%label = kind
    end subroutine signal_from_group
 
+   !> A piecewise-linear table from a deck group: the lists `xkey` and `ykey`
+   !> ('times', 'values' for a time function; 'speeds', 'torques' for a load's
+   !> torque against speed) or the two-column file named by `filekey`.
+   subroutine table_from_group(grp, xkey, ykey, filekey, sig, err)
+      type(deck_group_t), intent(inout) :: grp
+      character(len=*), intent(in) :: xkey, ykey, filekey
+      type(signal_t), intent(inout) :: sig
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: path
+      real(wp), allocatable :: tt(:), vv(:)
+      integer, allocatable :: rows(:)   ! line of each point of a table file
+      integer :: i
+      if (grp%has(filekey)) then
+         call grp%get_string(filekey, path, err); if (allocated(err)) return
+         sig%source_key = path
+         path = relative_to_deck(path, grp%file)
+         call read_table_file(path, tt, vv, sig%source_text, err, rows)
+         if (allocated(err)) then
+            err%message = grp%where(filekey)//': error: '//err%message
+            return
+         end if
+         sig%source_file = path
+      else
+         call grp%get_real_array(xkey, tt, err); if (allocated(err)) return
+         call grp%get_real_array(ykey, vv, err); if (allocated(err)) return
+         if (size(tt) == 0) then
+            call fatal_error(err, grp%where(xkey)//": error: kind = 'table' needs '"//xkey//"' and '"//ykey// &
+                             "' (or '"//filekey//"')", err_input)
+            return
+         end if
+         if (size(tt) /= size(vv)) then
+            call fatal_error(err, grp%where(ykey)//': error: table has '//str(size(tt))//' '//xkey//' but '// &
+                             str(size(vv))//' '//ykey, err_input)
+            return
+         end if
+      end if
+      do i = 1, size(tt)
+         if (.not. (in_range(tt(i)) .and. in_range(vv(i)))) then
+            call fatal_error(err, grp%where(trim(merge(filekey//repeat(' ', len(xkey)), xkey//repeat(' ', len(filekey)), &
+                                                       grp%has(filekey))))// &
+                             ': error: table point '//str(i)//' ('//xkey(1:len(xkey) - 1)//' '//str(tt(i))//', '// &
+                             ykey(1:len(ykey) - 1)//' '//str(vv(i))// &
+                             ') is out of range: trainsim accepts 0 or a magnitude in [1e-20, 1e20]', err_input)
+            return
+         end if
+      end do
+      do i = 2, size(tt)
+         if (tt(i) < tt(i - 1)) then
+            if (allocated(rows)) then
+               call fatal_error(err, grp%where(filekey)//': error: '//sig%source_file//':'//str(rows(i))// &
+                                ': table '//xkey//' must not decrease ('//str(tt(i))//' after '//str(tt(i - 1))// &
+                                ' on line '//str(rows(i - 1))//')', err_input)
+            else
+               call fatal_error(err, grp%where(xkey)//': error: table '//xkey//' must not decrease (entry '// &
+                                str(i)//': '//str(tt(i))//' after '//str(tt(i - 1))//')', err_input)
+            end if
+            return
+         end if
+      end do
+      call set_table(sig, tt, vv)
+   end subroutine table_from_group
+
    !> Store a piecewise-linear table and its cumulative integral.
    pure subroutine set_table(sig, tt, vv)
       type(signal_t), intent(inout) :: sig
@@ -208,13 +231,17 @@ contains
       sig%kind = sig_table
       sig%times = tt
       sig%values = vv
-      allocate (sig%cum(size(tt)))
+      allocate (sig%cum(size(tt)), sig%cum2(size(tt)))
       sig%cum(1) = 0.0_wp
+      sig%cum2(1) = 0.0_wp
       do i = 2, size(tt)
          sig%cum(i) = sig%cum(i - 1) + 0.5_wp*(vv(i) + vv(i - 1))*(tt(i) - tt(i - 1))
+         sig%cum2(i) = sig%cum2(i - 1) + sig%cum(i - 1)*(tt(i) - tt(i - 1)) + &
+                       (2.0_wp*vv(i - 1) + vv(i))*(tt(i) - tt(i - 1))**2/6.0_wp
       end do
       sig%integral_at_zero = 0.0_wp
       sig%integral_at_zero = table_antiderivative(sig, 0.0_wp)
+      sig%integral2_at_zero = table_antiderivative2(sig, 0.0_wp)
    end subroutine set_table
 
    !> Index of the last knot with times(i) <= t (0 if before the first).
@@ -278,6 +305,52 @@ contains
          f = self%cum(i) + 0.5_wp*(self%values(i) + v)*(t - self%times(i))
       end if
    end function table_antiderivative
+
+   !> Antiderivative of `table_antiderivative`, zero at the first knot (a piecewise cubic).
+   pure real(wp) function table_antiderivative2(self, t) result(g)
+      type(signal_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      integer :: i, n
+      real(wp) :: h, s
+      n = size(self%times)
+      i = locate(self%times, t)
+      if (i == 0) then
+         g = 0.5_wp*self%values(1)*(t - self%times(1))**2
+      else if (i == n) then
+         h = t - self%times(n)
+         g = self%cum2(n) + self%cum(n)*h + 0.5_wp*self%values(n)*h**2
+      else
+         h = t - self%times(i)
+         s = (self%values(i + 1) - self%values(i))/(self%times(i + 1) - self%times(i))
+         g = self%cum2(i) + self%cum(i)*h + 0.5_wp*self%values(i)*h**2 + s*h**3/6.0_wp
+      end if
+   end function table_antiderivative2
+
+   !> Second integral of the signal from 0 to t: the integral from 0 to t of `integral`.
+   pure real(wp) function signal_integral2(self, t) result(f)
+      class(signal_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      select case (self%kind)
+      case (sig_constant)
+         f = 0.5_wp*self%value0*t**2
+      case (sig_sine)
+         f = 0.5_wp*self%value0*t**2 - self%amplitude/self%omega**2*(sin(self%omega*t + self%phase) - sin(self%phase)) &
+             - self%integral_at_zero*t
+      case default
+         f = table_antiderivative2(self, t) - self%integral2_at_zero - self%integral_at_zero*t
+      end select
+   end function signal_integral2
+
+   !> Second time derivative at t (0 on the pieces of a table).
+   pure real(wp) function signal_derivative2(self, t) result(d)
+      class(signal_t), intent(in) :: self
+      real(wp), intent(in) :: t
+      if (self%kind == sig_sine) then
+         d = -self%amplitude*self%omega**2*sin(self%omega*t + self%phase)
+      else
+         d = 0.0_wp
+      end if
+   end function signal_derivative2
 
    !> Integral of the signal from 0 to t.
    pure real(wp) function signal_integral(self, t) result(f)

@@ -3,6 +3,7 @@
 !> sink as events happen (`record_events`), the state at a local event instant of
 !> RK4 (`step_part`), and the metrics, statistics and last rows at the end (`finish`).
 submodule(trainsim_observer) trainsim_observer_events
+   use trainsim_event, only: ev_zone
    implicit none
 
 contains
@@ -172,9 +173,9 @@ contains
                end if
                m%open_event = 0
                if (t >= self%t_metrics) m%separations = m%separations + 1
-            case default
+            case (ev_zone)
                if (t >= self%t_metrics) m%zone_changes = m%zone_changes + 1
-            end select
+            end select                       ! (stick and slip rows, D-76: in the table only)
          end associate
          call self%out%write_event(self%n_events, row, err)
          if (allocated(err)) return

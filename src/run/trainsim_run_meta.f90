@@ -70,9 +70,10 @@ contains
       allocate (meta%input_keys(0), meta%input_files(0), meta%input_texts(0))
       do i = 1, size(model%loads)
          call add_input_file(model%loads(i)%torque)
+         call add_input_file(model%loads(i)%law%curve)
       end do
       do i = 1, size(model%speeds)
-         call add_input_file(model%speeds(i))
+         call add_input_file(model%speeds(i)%f)
       end do
    contains
       !> The table file behind `sig`, once per file opened.

@@ -123,7 +123,7 @@ CASES = [
          exit=2, stderr=["deck.nml:5:", "unknown time function kind 'square'", "valid kinds are", "table"]),
     dict(name="unknown load quantity",
          deck=load("node = 'b', quantity = 'force', value = 1.0"),
-         exit=2, stderr=["deck.nml:5:", "unknown load quantity 'force'", "torque, speed, voltage"]),
+         exit=2, stderr=["deck.nml:5:", "unknown load quantity 'force'", "torque, speed, angle, acceleration, voltage"]),
 
     # ---- topology
     dict(name="element joins a missing node",
@@ -305,6 +305,44 @@ CASES = [
          deck=load("node = 'a', quantity = 'speed', value = 10.0")
          + "&load node = 'a', quantity = 'speed', value = 20.0 /\n",
          exit=2, stderr=["deck.nml:6:", "'a'", "already has a prescribed speed"]),
+    # speed-dependent loads, prescribed angle and acceleration (issue 23 item 3)
+    dict(name="unknown speed_law",
+         deck=load("node = 'a', speed_law = 'cubic', w_nominal = 10.0, value = -1.0"),
+         exit=2, stderr=["deck.nml:5:", "&load", "speed_law", "'cubic'", "quadratic"]),
+    dict(name="speed_law without w_nominal",
+         deck=load("node = 'a', speed_law = 'quadratic', value = -1.0"),
+         exit=2, stderr=["deck.nml:5:", "w_nominal"]),
+    dict(name="negative w_nominal",
+         deck=load("node = 'a', speed_law = 'linear', w_nominal = -3.0, value = -1.0"),
+         exit=2, stderr=["deck.nml:5:", "w_nominal", "must be > 0", "-3"]),
+    dict(name="zero w_reg of the sign law",
+         deck=load("node = 'a', speed_law = 'sign', w_reg = 0.0, value = -1.0"),
+         exit=2, stderr=["deck.nml:5:", "w_reg", "must be > 0"]),
+    dict(name="speed table with decreasing speeds",
+         deck=load("node = 'a', speed_law = 'table', speeds = 0.0, 10.0, 5.0, torques = 0.0, -1.0, -2.0"),
+         exit=2, stderr=["deck.nml:5:", "speeds", "must not decrease", "entry 3"]),
+    dict(name="speed table of unequal lengths",
+         deck=load("node = 'a', speed_law = 'table', speeds = 0.0, 10.0, torques = 0.0"),
+         exit=2, stderr=["deck.nml:5:", "torques", "2 speeds but 1 torques"]),
+    dict(name="speed_law on a prescribed speed is an unknown key",
+         deck=load("node = 'a', quantity = 'speed', speed_law = 'linear', value = 1.0"),
+         exit=2, stderr=["deck.nml:5:", "speed_law"]),
+    dict(name="prescribed angle from a table is refused",
+         deck=load("node = 'a', quantity = 'angle', kind = 'table', times = 0.0, 1.0, values = 0.0, 1.0"),
+         exit=2, stderr=["deck.nml:5:", "kind", "'table'", "constant, sine"]),
+    dict(name="prescribed angle and speed on one node",
+         deck=load("node = 'a', quantity = 'angle', kind = 'sine', amplitude = 0.1, frequency = 1.0")
+         + "&load node = 'a', quantity = 'speed', value = 20.0 /\n",
+         exit=2, stderr=["deck.nml:6:", "'a'", "already has a prescribed speed, angle or acceleration"]),
+    dict(name="prescribed acceleration on a fixed node",
+         deck=RUN + "&node id = 'a', type = 'fixed' /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT
+         + "&load node = 'a', quantity = 'acceleration', value = 10.0 /\n",
+         exit=2, stderr=["deck.nml:5:", "'a'", "cannot have a prescribed acceleration"]),
+    dict(name="unknown bore_friction of a keyed joint",
+         deck=RUN + NODES + "&element id = 'k', type = 'keyed_joint', diameter = 2.0, half_clearance = 0.01, "
+         "stiffness = 1.0e6, friction = 0.3, bore_friction = 'bore' /\n",
+         exit=2, stderr=["deck.nml:4:", "bore_friction", "'bore'", "hub_load", "key_force"]),
     dict(name="two voltage sources on one motor",
          deck=RUN + "&node id = 'm', type = 'dc_motor', inertia = 0.1, torque_constant = 8.85,\n"
          "      inductance = 0.01, resistance = 1.0, back_emf_constant = 1.0 /\n"
@@ -396,6 +434,22 @@ CASES = [
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="backlash = 0.004")
          .replace("face_width = 0.7", "face_width = 0.0"),
          exit=2, stderr=["deck.nml:5:", "face_width must be > 0"], stderr_re=[r"got \S+ in$"]),
+] + [
+    # friction elements (D-76): the element on line 4, the offending key on line 5
+    dict(name=f"{etype}: {key} = {value} is refused",
+         deck=RUN + NODES + f"&element id = 'f1', type = '{etype}', left = 'a', right = 'b',\n"
+         f"         {extra}{key} = {value} /\n",
+         exit=2, stderr=["deck.nml:5:", f"key '{key}'", f"got {shown}", what])
+    for etype, key, value, shown, extra, what in [
+        ("bearing_friction", "torque_sliding", "-1.0", "-1", "", "must be >= 0"),
+        ("brake", "viscous", "-0.5", "-0.5", "torque_sliding = 2.0, ", "must be >= 0"),
+        ("clutch", "torque_static", "3.0", "3", "torque_sliding = 5.0, ", "the sliding torque 5"),
+        ("clutch", "engagement", "1.5", "1.5", "torque_sliding = 5.0, ", "must be in [0, 1]"),
+        ("brake", "engagement_values", "0.0, -0.2", "-0.2", "torque_sliding = 5.0, engagement_times = 0.0, 1.0, ",
+         "must be in [0, 1]"),
+        ("bearing_friction", "friction_torques", "1.0, -2.0", "-2", "friction_speeds = 0.0, 1.0, ", "must be >= 0"),
+        ("one_way_clutch", "capacity", "0.0", "0", "", "must be > 0"),
+    ]
 ] + [
     # list-directed READ took these (a '/' or ',,' kept the line before's value, '2*30' a
     # repeat count, extra columns and text were ignored): each is now its line's error
