@@ -9,6 +9,7 @@ program trainsim_main
    use trainsim_cmd_deck, only: deck_command
    use trainsim_cmd_calc, only: do_gear, do_key, do_worm
    use trainsim_cmd_scripts, only: do_diagram, do_script
+   use trainsim_cmd_fmu, only: do_fmu
    implicit none
 
    nargs = command_argument_count()
@@ -41,6 +42,8 @@ program trainsim_main
       call do_script()
    case ('diagram')
       call do_diagram()
+   case ('fmu')
+      call do_fmu()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)

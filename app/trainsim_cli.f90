@@ -14,7 +14,7 @@ module trainsim_cli
    use trainsim_model, only: model_t
    use trainsim_hdf5, only: hdf5_library_stuck
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
-   use trainsim_prepare, only: prepare_model
+   use trainsim_prepare, only: prepare_model_in_place
    use trainsim_preload, only: preload_info_t
    use trainsim_sweep, only: finish_sweep
    implicit none
@@ -138,7 +138,7 @@ contains
       call split_sweep_groups(deck, sweeps)
       if (size(sweeps) > 0) write (error_unit, '(a)') 'trainsim: note: '//path//' has '//str(size(sweeps))// &
          ' &sweep group(s); '//cmd//' ignores them and uses the deck''s own values (trainsim sweep runs the sweep)'
-      call prepare_model(deck, sets, model, err, preload)
+      call prepare_model_in_place(deck, sets, model, err, preload)   ! the deck is dropped here
       if (allocated(err)) call fail(err)
       do i = 1, size(model%warnings)
          write (error_unit, '(a)') 'trainsim: '//model%warnings(i)%s

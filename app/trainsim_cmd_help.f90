@@ -49,6 +49,8 @@ contains
          '                                figures of a history or a sweep (scripts/trainsim_plot.py --help)', &
          '  trainsim diagram DECK -o OUT.svg|png|pdf [--json FILE] [--set ...]', &
          '                                the train as a block diagram, from the deck alone', &
+         '  trainsim fmu DECK -o TRAIN.fmu [--input NODE ...] [--fmi 3|2]', &
+         '                                the train as an FMI 3.0/2.0 co-simulation FMU (docs/fmu.md)', &
          '  trainsim --help | --version', &
          '', &
          'exit status: 0 success, 1 the run (or a run of the sweep) failed (numerics), 2 bad input or file,', &
@@ -132,6 +134,21 @@ contains
             '  --json FILE        also write the description the drawing is made from (- for stdout);', &
             '                     without -o only the description is written', &
             '  --set T.KEY=VALUE  as for run', &
+            '  -h, --help         this text', '', &
+            'exit status: 0 success, 2 bad input or file'
+      case ('fmu')
+         write (unit, '(a)') 'usage: trainsim fmu DECK -o TRAIN.fmu [--input NODE ...] [--fmi 3|2]', '', &
+            'The train of DECK as an FMI 3.0 (or 2.0) co-simulation FMU (docs/fmu.md): outputs NODE.phi and', &
+            'NODE.w (every node''s angle and speed), inputs NODE.tau (an external torque on each', &
+            '--input node, beside the deck''s loads), parameters by deck path (every number of the', &
+            'deck''s &node, &element, &load and &run groups). doStep runs the deck''s own integrator', &
+            'with its event location; get/setFMUstate save and restore. The deck (with its table', &
+            'files) and a Linux x86-64 binary go inside. The deck is read and built as `run` does', &
+            '(a bad deck: exit 2, the same message). Packed by scripts/trainsim_fmu.py.', '', &
+            '  -o, --output FILE  the FMU (.fmu)', &
+            '  --input NODE       an input torque on NODE (a node that is neither fixed nor held),', &
+            '                     beside those the deck names in &fmu inputs = ''NODE'', ...', &
+            '  --fmi 3|2          the FMI version (default 3)', &
             '  -h, --help         this text', '', &
             'exit status: 0 success, 2 bad input or file'
       case ('worm')

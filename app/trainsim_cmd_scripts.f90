@@ -17,6 +17,7 @@ module trainsim_cmd_scripts
    private
 
    public :: do_diagram, do_script
+   public :: find_script, exe_dir, env_text, quoted   ! (trainsim_cmd_fmu)
 
    interface
       !> POSIX readlink(2) (ssize_t is a C long on the 64-bit Linux targets).

@@ -97,6 +97,24 @@ int trainsim_series(trainsim_sim *sim, double *values, size_t n);        /* row-
 int trainsim_events(trainsim_sim *sim, double *values, size_t n);        /* row-major events x columns */
 int trainsim_sweep_values(trainsim_sim *sim, double *values, size_t n);  /* row-major runs x parameters */
 
+/* Sessions: a run the caller advances (the base of co-simulation; docs/c-api.md). A handle
+ * holds at most one session, of its model as built now; the same integrator, event
+ * location and mode updates as trainsim_run, and advancing through a run's output times
+ * gives its samples bit for bit. save/restore: a point (time, state, modes) to go back
+ * to; both start the integrator afresh there, so a restored session continues exactly
+ * as it did after the save. Metrics and events are not rolled back. Inputs: the nodes named
+ * at the start take an external torque (0 at first) beside the deck's loads; setting it
+ * acts from the session's time on, as a load step there. */
+int trainsim_session_start(trainsim_sim *sim, const char *inputs); /* "n4,n2": input torques */
+int trainsim_session_set_torque(trainsim_sim *sim, const char *node, double value);
+int trainsim_session_advance(trainsim_sim *sim, double t);  /* t: up to run.t_end */
+int trainsim_session_state(trainsim_sim *sim, double *t, double *theta, double *omega,
+                           size_t n);                       /* n: TRAINSIM_NODES count */
+int trainsim_session_elements(trainsim_sim *sim, double *disp, double *force, double *contact,
+                              size_t n);                    /* n: TRAINSIM_ELEMENTS count */
+int trainsim_session_save(trainsim_sim *sim, int *point);
+int trainsim_session_restore(trainsim_sim *sim, int point);
+
 #ifdef __cplusplus
 }
 #endif

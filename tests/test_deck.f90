@@ -3,7 +3,7 @@ program test_deck
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, err_input, err_io
    use trainsim_strings, only: string_t, str
-   use trainsim_deck, only: deck_t, deck_group_t, read_deck, parse_deck
+   use trainsim_deck, only: deck_t, deck_group_t, read_deck, parse_deck, parse_real
    use trainsim_testing, only: suite_begin, test_begin, check, suite_end
    implicit none
 
@@ -34,6 +34,7 @@ program test_deck
    call test_getter_int_logical_string()
    call test_getter_real_array()
    call test_str_int_as_i0()
+   call test_parse_real_reads_as_fortran()
    call suite_end()
 
 contains
@@ -612,5 +613,70 @@ contains
          call check('str('//trim(ref)//') = '//str(vals(k)), str(vals(k)) == trim(ref))
       end do
    end subroutine test_str_int_as_i0
+
+   !> parse_real converts with C's strtod (D-79): every number the deck syntax
+   !> allows must read bit for bit as Fortran's list-directed read gives it (signs,
+   !> no digits before or after the point, leading zeros, e/E/d/D exponents, 20+
+   !> digits, subnormals, the range's edges, a mantissa longer than strtod's buffer).
+   subroutine test_parse_real_reads_as_fortran()
+      use, intrinsic :: iso_fortran_env, only: int64
+      character(len=*), parameter :: expo_letters = 'eEdD'
+      character(len=:), allocatable :: t
+      character(len=40), parameter :: fixed(14) = [character(len=40) :: '1', '-0', '+.5', '7.', '-0.0e0', &
+         '4.9406564584124654e-324', '2.4703282292062328D-324', '1.7976931348623157e308', '2.2250738585072011e-308', &
+         '0.1', '1e-310', '123456789012345678901234567890', '9.999999999999999999e307', '.000000000000000000001D+5']
+      real(wp) :: v, ref
+      integer(int64) :: st64
+      integer :: k, j, stat, ios, n_bad, n_read
+      call test_begin('parse_real_reads_as_fortran')
+      n_bad = 0
+      n_read = 0
+      st64 = 2463534242_int64
+      do k = 1, 60014
+         if (k <= size(fixed)) then
+            t = trim(fixed(k))
+         else if (k == size(fixed) + 1) then
+            t = '0.'//repeat('3', 150)//'e1'
+         else
+            t = ''
+            if (next_rand(st64, 3) == 1) t = '-'
+            if (next_rand(st64, 5) == 1) t = t//'+'
+            do j = 1, next_rand(st64, 22) - 1
+               t = t//achar(47 + next_rand(st64, 10))
+            end do
+            if (next_rand(st64, 4) > 1) t = t//'.'
+            do j = 1, next_rand(st64, 22) - 1
+               t = t//achar(47 + next_rand(st64, 10))
+            end do
+            if (next_rand(st64, 3) > 1) then
+               j = next_rand(st64, 4)
+               t = t//expo_letters(j:j)
+               j = next_rand(st64, 3)
+               if (j == 1) t = t//'-'
+               if (j == 2) t = t//'+'
+               t = t//str(next_rand(st64, 340) - 1)
+            end if
+         end if
+         call parse_real(t, v, stat)
+         if (stat /= 0) cycle
+         n_read = n_read + 1
+         read (t, *, iostat=ios) ref
+         if (ios /= 0 .or. transfer(v, 0_int64) /= transfer(ref, 0_int64)) then
+            n_bad = n_bad + 1
+            if (n_bad <= 5) write (*, '(4x,3a,2es26.17)') 'differs: "', t, '"', v, ref
+         end if
+      end do
+      call check('numbers read (of 60 014 texts, some refused)', n_read > 20000)
+      call check('numbers that read differently from Fortran''s read', real(n_bad, wp), 0.0_wp, abs_tol=0.0_wp)
+   end subroutine test_parse_real_reads_as_fortran
+
+   !> 1..m from the xorshift sequence st.
+   integer function next_rand(st, m)
+      use, intrinsic :: iso_fortran_env, only: int64
+      integer(int64), intent(inout) :: st
+      integer, intent(in) :: m
+      st = ieor(st, ishft(st, 13)); st = ieor(st, ishft(st, -7)); st = ieor(st, ishft(st, 17))
+      next_rand = 1 + int(modulo(st, int(m, int64)))
+   end function next_rand
 
 end program test_deck

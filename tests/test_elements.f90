@@ -80,7 +80,8 @@ program test_elements
    use trainsim_error, only: error_t
    use trainsim_modes, only: modes_t, compute_modes
    use trainsim_el_helical_gear, only: helical_contact_length
-   use trainsim_contact, only: key_lineal_stiffness, fit_tight, fit_loose
+   use trainsim_contact, only: key_lineal_stiffness, fit_tight, fit_loose, fit_average
+   use trainsim_key_fit, only: key_fit_force
    use trainsim_el_keyed_joint, only: keyed_joint_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_event, only: event_t
@@ -108,6 +109,7 @@ program test_elements
    call test_helical_gear_mesh_mode_from_mean_contact_length()
    call test_key_stiffness_fits_match_fem_points()
    call test_key_fit_force_solves_implicit_stiffness()
+   call test_key_fit_force_is_six_newton_steps()
    call test_varying_stiffness_work_keeps_energy_balance()
    call test_key_bore_friction_capacity_from_hub_load()
    call test_model_rhs_is_the_plug_ins_own_torques_and_derivatives()
@@ -359,6 +361,33 @@ contains
          call check('element is a keyed joint', .false.)
       end select
    end subroutine test_key_fit_force_solves_implicit_stiffness
+
+   !> key_fit_force ends Newton when a step leaves F unchanged: it must give the
+   !> six steps of D-5 bit for bit (both signs, zero, all three fits, 1e-14..1 in^2,
+   !> across the fits' 100 lbf floor, their linear parts and the 60000 lbf cap).
+   subroutine test_key_fit_force_is_six_newton_steps()
+      integer, parameter :: fits(3) = [fit_tight, fit_loose, fit_average]
+      real(wp) :: lp, fl, k, dk, f
+      integer :: i, j, it, n_diff
+      call test_begin('key_fit_force_is_six_newton_steps')
+      n_diff = 0
+      do j = 1, 3
+         do i = -1400, 1400
+            lp = sign(10.0_wp**(-abs(i)/100.0_wp), real(i, wp))
+            if (i == 0) lp = 0.0_wp
+            call key_lineal_stiffness(fits(j), 100.0_wp, k, dk)
+            fl = k*lp
+            do it = 1, 6
+               call key_lineal_stiffness(fits(j), abs(fl), k, dk)
+               fl = fl - (fl - k*lp)/(1.0_wp - dk*lp*sign(1.0_wp, fl))
+            end do
+            call key_lineal_stiffness(fits(j), abs(fl), k, dk)
+            f = key_fit_force(fits(j), lp)
+            if (.not. (f == k*lp .and. sign(1.0_wp, f) == sign(1.0_wp, k*lp))) n_diff = n_diff + 1
+         end do
+      end do
+      call check('key forces that differ from six Newton steps (of 8403)', real(n_diff, wp), 0.0_wp, abs_tol=0.0_wp)
+   end subroutine test_key_fit_force_is_six_newton_steps
 
    subroutine test_varying_stiffness_work_keeps_energy_balance()
       type(model_t) :: m

@@ -78,6 +78,12 @@ _signatures = {
     "trainsim_series": (ctypes.c_int, [_p, _dp, _z]),
     "trainsim_events": (ctypes.c_int, [_p, _dp, _z]),
     "trainsim_sweep_values": (ctypes.c_int, [_p, _dp, _z]),
+    "trainsim_session_start": (ctypes.c_int, [_p, _s]),
+    "trainsim_session_set_torque": (ctypes.c_int, [_p, _s, ctypes.c_double]),
+    "trainsim_session_advance": (ctypes.c_int, [_p, ctypes.c_double]),
+    "trainsim_session_state": (ctypes.c_int, [_p, _dp, _dp, _dp, _z]),
+    "trainsim_session_save": (ctypes.c_int, [_p, ctypes.POINTER(ctypes.c_int)]),
+    "trainsim_session_restore": (ctypes.c_int, [_p, ctypes.c_int]),
 }
 for _name, (_res, _args) in _signatures.items():
     _f = getattr(lib, _name)

@@ -120,6 +120,39 @@ class Simulation:
         n = L.count(self._h, L.SWEEP_RUNS)
         return names, L.values(self._h, lib.trainsim_sweep_values, n * len(names)).reshape(n, len(names))
 
+    # -- a run advanced step by step (docs/c-api.md "Sessions") --------------------------
+    def start_session(self, inputs=()):
+        """Start the run at t_start, to be advanced by advance(); `inputs`: node ids that
+        take an input torque (set_torque), 0 at first."""
+        L.check(lib.trainsim_session_start(self._h, ",".join(inputs).encode("utf-8")), self._h)
+
+    def advance(self, t):
+        """Advance the session to time t (up to run.t_end); returns state()."""
+        L.check(lib.trainsim_session_advance(self._h, float(t)), self._h)
+        return self.state()
+
+    def set_torque(self, node, value):
+        """The input torque on `node` from the session's time on."""
+        L.check(lib.trainsim_session_set_torque(self._h, L.encode(node), float(value)), self._h)
+
+    def state(self):
+        """(t, theta, omega): the session's time and every node's angle and speed."""
+        n = L.count(self._h, L.NODES)
+        theta, omega, t = np.empty(n), np.empty(n), L.ctypes.c_double()
+        L.check(lib.trainsim_session_state(self._h, L.ctypes.byref(t), theta.ctypes.data_as(L._dp),
+                                           omega.ctypes.data_as(L._dp), n), self._h)
+        return t.value, theta, omega
+
+    def save(self):
+        """Save the session's point; returns its number for restore()."""
+        point = L.ctypes.c_int()
+        L.check(lib.trainsim_session_save(self._h, L.ctypes.byref(point)), self._h)
+        return point.value
+
+    def restore(self, point):
+        """Go back to a saved point; the run continues as it did after the save."""
+        L.check(lib.trainsim_session_restore(self._h, int(point)), self._h)
+
     # -- lifetime -----------------------------------------------------------------------
     def close(self):
         if getattr(self, "_h", None):

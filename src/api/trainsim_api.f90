@@ -37,6 +37,7 @@ module trainsim
    use trainsim_prepare, only: prepare_model
    use trainsim_model, only: model_t
    use trainsim_simulate, only: simulate
+   use trainsim_session, only: session_t, session_state_t
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: sink_t, null_sink_t, event_t, element_metrics_t, run_stats_t, ev_name, &
                             ev_contact_front, ev_contact_rear, ev_separation, ev_zone
@@ -52,6 +53,7 @@ module trainsim
    public :: event_t, element_metrics_t, run_stats_t, run_result_t, model_t
    public :: ev_name, ev_contact_front, ev_contact_rear, ev_separation, ev_zone
    public :: metric_names, sweep_spec_t, chain_state_t
+   public :: session_t, session_state_t   !< a run advanced by its caller (trainsim_session)
 
    !> Names accepted by `simulation_t%metric` (fields of element_metrics_t, in its order).
    character(len=*), parameter :: metric_list(*) = [character(len=21) :: &

@@ -12,13 +12,16 @@ module trainsim_capi
    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_size_t, c_ptr, c_char, c_null_char, c_null_ptr, &
                                           c_associated, c_f_pointer, c_loc
    use trainsim, only: simulation_t, error_t, wp, string_t, event_t, run_result_t, model_t, version_full, &
-                       ev_name, sweep_spec_t, chain_state_t
+                       ev_name, sweep_spec_t, chain_state_t, session_t, session_state_t
    use trainsim_capture, only: capture_sink_t
    use trainsim_error, only: fatal_error, err_input
    use trainsim_strings, only: str
    use trainsim_capi_tables, only: metric_table, event_columns, event_row
    implicit none
    private
+
+   !> for the session calls (trainsim_capi_session)
+   public :: capi_sim_t, take, finish, misuse, built_model, code_argument, f_string
 
    integer(c_int), parameter :: code_argument = 6   !< TRAINSIM_ERR_ARGUMENT
    integer, parameter :: alive = 20240611           !< capi_sim_t%magic of a live handle
@@ -39,6 +42,9 @@ module trainsim_capi
       type(string_t), allocatable :: metric_names(:), metric_units(:)
       real(wp), allocatable :: metric_values(:)
       type(event_t), allocatable :: events(:)
+      !> a run advanced by the caller (trainsim_session_*) and the points it saved
+      type(session_t), allocatable :: session
+      type(session_state_t), allocatable :: saved(:)
    end type capi_sim_t
 
    !> The message of a call given no valid handle.

@@ -41,13 +41,13 @@ contains
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
       type(id_table_t) :: node_ids   ! node id -> node index, for look-ups in O(1)
-      type(string_t) :: groups(5)
+      type(string_t) :: groups(6)
       integer :: i
 
       ! (not an array constructor of string_t(...): gfortran 12 leaks their strings,
       ! 50 bytes a run of a sweep)
       groups(1)%s = 'run'; groups(2)%s = 'node'; groups(3)%s = 'element'; groups(4)%s = 'load'
-      groups(5)%s = 'initial'
+      groups(5)%s = 'initial'; groups(6)%s = 'fmu'   ! (&fmu: read by trainsim fmu alone)
       call deck%check_group_names(groups, err, also='sweep (read by trainsim sweep)')
       if (allocated(err)) return
       model%deck_file = deck%file

@@ -3,6 +3,7 @@
 !> that is not a deck, and the strict syntax of its numbers (`parse_real`, `parse_int`).
 module trainsim_deck_lexer
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: string_t, to_lower, str, invalid_text_byte
@@ -26,6 +27,16 @@ module trainsim_deck_lexer
       integer, allocatable :: kind(:), line(:)
       type(string_t), allocatable :: text(:)
    end type token_list_t
+
+   interface
+      !> strtod of the n characters s (trainsim_textfmt.c); ok = 0 if too long for it.
+      real(c_double) function c_strtod(s, n, ok) bind(c, name='trainsim_strtod')
+         import :: c_int, c_double, c_char
+         character(kind=c_char), intent(in) :: s(*)
+         integer(c_int), value :: n
+         integer(c_int), intent(out) :: ok
+      end function c_strtod
+   end interface
 
 contains
 
@@ -234,6 +245,7 @@ contains
       integer, intent(out) :: stat
       character(len=len(s)) :: buf
       integer :: i, n, nint_dig, nfrac_dig, first_pow, expo, expsign, nexp_dig, ios
+      integer(c_int) :: ok
       logical :: seen_dot, nonzero
 
       val = 0.0_wp
@@ -299,7 +311,9 @@ contains
          stat = 2
          if (first_pow + expo > range(val) .or. first_pow + expo < -range(val) - 1) return
       end if
-      read (buf, *, iostat=ios) val
+      val = c_strtod(buf, n, ok)   ! the value list-directed `read (buf, *)` gives (D-79), without its cost
+      ios = 0
+      if (ok == 0) read (buf, *, iostat=ios) val
       if (ios /= 0) then
          val = 0.0_wp
          stat = 1

@@ -7,6 +7,7 @@ module trainsim_report
    use trainsim_sink, only: param_list_t
    use trainsim_element, only: element_t
    use trainsim_strings, only: str
+   use trainsim_text_out, only: text_out_t
    implicit none
    private
 
@@ -21,25 +22,30 @@ contains
       integer, intent(in) :: unit
       integer :: i, j, w
       type(param_list_t) :: p
-      character(len=:), allocatable :: fmt_num, fmt_word
+      type(text_out_t) :: out   ! the lines of '(4x,aW,1x,es15.7)' and '(4x,aW,1x,a15)'
+      out%unit = unit
       do i = 1, size(model%elements)
          p = model%elements(i)%e%params()
          if (size(p%names) == 0) cycle
-         write (unit, '(a)') 'element '//model%elements(i)%e%id//' ('//model%elements(i)%e%type_name//'):'
+         call out%a('element '//model%elements(i)%e%id//' ('//model%elements(i)%e%type_name//'):', 0)
+         call out%end_line()
          w = 24
          do j = 1, size(p%names)
             w = max(w, len(p%names(j)%s))
          end do
-         fmt_num = '(4x,a'//str(w)//',1x,es15.7)'
-         fmt_word = '(4x,a'//str(w)//',1x,a15)'
          do j = 1, size(p%names)
+            call out%x(4)
+            call out%a(p%names(j)%s, w)
+            call out%x(1)
             if (has_word(p, j)) then
-               write (unit, fmt_word) p%names(j)%s, p%words(j)%s
+               call out%a(p%words(j)%s, 15)
             else
-               write (unit, fmt_num) p%names(j)%s, p%values(j)
+               call out%es(p%values(j), 15, 7)
             end if
+            call out%end_line()
          end do
       end do
+      call out%flush()
       if (model%run%preload) then
          w = id_width(model, nodes=.true.)
          write (unit, '(a)') 'initial angles from the static preload (initial_state = ''preload''), rad:'
@@ -107,9 +113,10 @@ contains
       type(model_t), intent(in) :: model
       type(run_result_t), intent(in) :: res
       integer, intent(in) :: unit
-      integer :: i, w, wn, ns
+      integer :: i, j, w, wn, ns
       character(len=:), allocatable :: we, wt
       logical :: motors
+      type(text_out_t) :: out
       w = id_width(model, nodes=.false.)
       we = str(w)
       ns = 12   ! the type column
@@ -143,21 +150,38 @@ contains
          ', approach velocity V_i in '//model%units%length//'/s):'
       write (unit, '(a'//we//',1x,a'//wt//',4a15,a7,a9,a13,a15,a8)') 'element', 'type', 'torque min', 'torque max', &
          'disp min', 'disp max', 'unit', 'impacts', 'max V_i', 'max peak F', 'open %'
-      do i = 1, size(model%elements)
+      out%unit = unit
+      do i = 1, size(model%elements)   ! '(aWE,1x,aWT,4es15.6,a7,i9,es13.4,es15.6,f8.2)'
          associate (e => model%elements(i)%e, m => res%el(i))
-            write (unit, '(a'//we//',1x,a'//wt//',4es15.6,a7,i9,es13.4,es15.6,f8.2)') e%id, e%type_name, &
-               m%torque_min, m%torque_max, m%disp_min, m%disp_max, disp_unit(model, e), m%impacts, &
-               m%max_approach_velocity, m%max_peak_force, &
-               100.0_wp*m%time_out_of_contact/max(res%t_final - res%stats%t_metrics, tiny(1.0_wp))
+            call out%a(e%id, w)
+            call out%x(1)
+            call out%a(e%type_name, ns)
+            call out%es(m%torque_min, 15, 6)
+            call out%es(m%torque_max, 15, 6)
+            call out%es(m%disp_min, 15, 6)
+            call out%es(m%disp_max, 15, 6)
+            call out%a(disp_unit(model, e), 7)
+            call out%i(m%impacts, 9)
+            call out%es(m%max_approach_velocity, 13, 4)
+            call out%es(m%max_peak_force, 15, 6)
+            call out%f(100.0_wp*m%time_out_of_contact/max(res%t_final - res%stats%t_metrics, tiny(1.0_wp)), 8, 2)
+            call out%end_line()
          end associate
       end do
-      write (unit, '(a)') 'peak-to-peak displacement after the settling (range max-min; mean swing between peaks):'
-      do i = 1, size(model%elements)
+      call out%a('peak-to-peak displacement after the settling (range max-min; mean swing between peaks):', 0)
+      call out%end_line()
+      do i = 1, size(model%elements)   ! '(aWE,2es15.6,a,i0,a)'
          associate (e => model%elements(i)%e, m => res%el(i))
-            write (unit, '(a'//we//',2es15.6,a,i0,a)') e%id, m%p2p_range, m%p2p_mean, &
-               ' '//disp_unit(model, e)//'  (', m%p2p_swings, ' swings)'
+            call out%a(e%id, w)
+            call out%es(m%p2p_range, 15, 6)
+            call out%es(m%p2p_mean, 15, 6)
+            call out%a(' '//disp_unit(model, e)//'  (', 0)
+            call out%i(m%p2p_swings, 0)
+            call out%a(' swings)', 0)
+            call out%end_line()
          end associate
       end do
+      call out%flush()
       wn = id_width(model, nodes=.true.)
       write (unit, '(a)') 'final state:'
       motors = .false.
@@ -169,16 +193,27 @@ contains
       else
          write (unit, '(4x,a'//str(wn)//',2a18)') 'node', 'angle (rad)', 'speed (rad/s)'
       end if
-      do i = 1, size(model%nodes)
+      do i = 1, size(model%nodes)   ! '(4x,aWN,a)' and '(4x,aWN,3es18.9)'
          associate (nd => model%nodes(i)%n)
             ns = nd%nstates()
-            if (model%is_held(i) .or. ns == 0) then
-               write (unit, '(4x,a'//str(wn)//',a)') nd%id, '  (held)'
-            else
+            if (ns > 3) then   ! (format reversion: a record of three a line)
+               call out%flush()
                write (unit, '(4x,a'//str(wn)//',3es18.9)') nd%id, res%y_final(nd%offset + 1:nd%offset + ns)
+               cycle
             end if
+            call out%x(4)
+            call out%a(nd%id, wn)
+            if (model%is_held(i) .or. ns == 0) then
+               call out%a('  (held)', 0)
+            else
+               do j = 1, ns
+                  call out%es(res%y_final(nd%offset + j), 18, 9)
+               end do
+            end if
+            call out%end_line()
          end associate
       end do
+      call out%flush()
    end subroutine print_summary
 
    !> Natural frequencies and mode shapes.

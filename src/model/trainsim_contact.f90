@@ -29,7 +29,7 @@ module trainsim_contact
    use trainsim_deck, only: deck_group_t
    use trainsim_limits, only: check_magnitude
    use trainsim_event, only: event_t, ev_contact_front, ev_contact_rear, ev_separation
-   use trainsim_key_fit, only: fit_none, fit_tight, fit_loose, fit_average, key_lineal_stiffness
+   use trainsim_key_fit, only: fit_none, fit_tight, fit_loose, fit_average, key_lineal_stiffness, key_fit_force
    implicit none
    private
 
@@ -67,10 +67,12 @@ module trainsim_contact
       procedure :: begin_contact => law_begin_contact
       procedure :: restitution => law_restitution
       procedure, non_overridable :: force => law_force
+      procedure, non_overridable :: force_of => law_force_of
       procedure, non_overridable :: fit_elastic_force => law_fit_elastic_force
       procedure, non_overridable :: elastic_force => law_elastic_force
       procedure, non_overridable :: elastic_energy => law_elastic_energy
       procedure :: elastic_stiffness => law_elastic_stiffness
+      procedure, non_overridable :: fit_stiffness_at => law_fit_stiffness_at
       procedure :: force_partials => law_force_partials
       procedure :: lowest_restitution => law_lowest_restitution
       procedure :: linear_damping => law_linear_damping
@@ -289,12 +291,14 @@ contains
    pure real(wp) function law_force(self, c, p, pdot) result(f)
       class(contact_law_t), intent(in) :: self
       real(wp), intent(in) :: c, p, pdot
-      real(wp) :: tc, td, fel
-      if (self%fit /= fit_none) then
-         fel = self%fit_elastic_force(p)
-      else
-         fel = self%k*p
-      end if
+      f = self%force_of(c, self%elastic_force(p), p, pdot)
+   end function law_force
+
+   !> Contact force for the elastic force fel = elastic_force(p) already known.
+   pure real(wp) function law_force_of(self, c, fel, p, pdot) result(f)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: c, fel, p, pdot
+      real(wp) :: tc, td
       select case (self%law)
       case (law_yang_sun)
          f = c*(fel + self%d*p*pdot)                      ! eqs. (3.18)-(3.19)
@@ -311,26 +315,14 @@ contains
             f = tc + min(tc, td)
          end if
       end select
-   end function law_force
+   end function law_force_of
 
    !> Elastic key force F for penetration p with the load-dependent fit:
-   !> F = k(F) L p solved by Newton (fixed 6 iterations, allocation-free).
+   !> F = k(F) L p solved by Newton (trainsim_key_fit's key_fit_force, allocation-free).
    pure real(wp) function law_fit_elastic_force(self, p) result(f)
       class(contact_law_t), intent(in) :: self
       real(wp), intent(in) :: p
-      real(wp) :: lp, fl, k, dk, g
-      integer :: it
-      lp = self%key_length_in*p*self%to_inch            ! L p in in^2
-      fl = 0.0_wp
-      call key_lineal_stiffness(self%fit, 100.0_wp, k, dk)
-      fl = k*lp                                          ! start from the low-load stiffness
-      do it = 1, 6
-         call key_lineal_stiffness(self%fit, abs(fl), k, dk)
-         g = fl - k*lp
-         fl = fl - g/(1.0_wp - dk*lp*sign(1.0_wp, fl))
-      end do
-      call key_lineal_stiffness(self%fit, abs(fl), k, dk)
-      f = k*lp/self%to_lbf
+      f = key_fit_force(self%fit, self%key_length_in*p*self%to_inch)/self%to_lbf   ! L p in in^2
    end function law_fit_elastic_force
 
    !> Elastic part of the contact force at penetration p (factor 1).
@@ -348,17 +340,24 @@ contains
    pure real(wp) function law_elastic_stiffness(self, p) result(kp)
       class(contact_law_t), intent(in) :: self
       real(wp), intent(in) :: p
-      real(wp) :: f, k, dk, lp
       if (self%fit == fit_none) then
          kp = self%k
          return
       end if
+      kp = self%fit_stiffness_at(p, self%fit_elastic_force(p))
+   end function law_elastic_stiffness
+
+   !> d(elastic force)/dp at penetration p of a fitted key whose elastic force there,
+   !> fit_elastic_force(p), is f.
+   pure real(wp) function law_fit_stiffness_at(self, p, f) result(kp)
+      class(contact_law_t), intent(in) :: self
+      real(wp), intent(in) :: p, f
+      real(wp) :: k, dk, lp
       ! F = k(F) L p  =>  dF/dp = k L / (1 - k'(F) L p)   (lengths in inch, forces in lbf)
-      f = self%fit_elastic_force(p)
       call key_lineal_stiffness(self%fit, abs(f*self%to_lbf), k, dk)
       lp = self%key_length_in*p*self%to_inch
       kp = k*self%key_length_in/(1.0_wp - dk*lp*sign(1.0_wp, f))*self%to_inch/self%to_lbf
-   end function law_elastic_stiffness
+   end function law_fit_stiffness_at
 
    !> Contact force and its partials with respect to p, pdot and the factor c.
    pure subroutine law_force_partials(self, c, p, pdot, f, dfdp, dfdv, dfdc)
@@ -366,9 +365,13 @@ contains
       real(wp), intent(in) :: c, p, pdot
       real(wp), intent(out) :: f, dfdp, dfdv, dfdc
       real(wp) :: fel, kel, tc, td
-      fel = self%elastic_force(p)
-      kel = self%elastic_stiffness(p)
-      f = self%force(c, p, pdot)
+      fel = self%elastic_force(p)                        ! one key fit for the three
+      if (self%fit == fit_none) then
+         kel = self%k
+      else
+         kel = self%fit_stiffness_at(p, fel)
+      end if
+      f = self%force_of(c, fel, p, pdot)
       select case (self%law)
       case (law_yang_sun)
          dfdp = c*(kel + self%d*pdot); dfdv = c*self%d*p; dfdc = fel + self%d*p*pdot
@@ -579,12 +582,13 @@ contains
    pure real(wp) function cl_dissipation(self, c, thl, wl, thr, wr) result(pw)
       class(clearance_t), intent(in) :: self
       real(wp), intent(in) :: c, thl, wl, thr, wr
-      real(wp) :: p, pdot, f
+      real(wp) :: p, pdot, f, fel
       pw = 0.0_wp
       if (self%mode == 0) return
       p = self%mode*(self%r1*thl - self%r2*thr) - self%b
       pdot = self%mode*(self%r1*wl - self%r2*wr)
-      f = self%mode*self%contact_force(c, thl, wl, thr, wr)
-      pw = (f - c*self%law%elastic_force(p))*pdot
+      fel = self%law%elastic_force(p)                    ! one key fit for both
+      f = self%law%force_of(c, fel, p, pdot)             ! = mode * contact_force (the same operations)
+      pw = (f - c*fel)*pdot
    end function cl_dissipation
 end module trainsim_contact

@@ -32,6 +32,8 @@ module trainsim_simulate
    private
 
    public :: simulate, blowup_limit, max_events_per_dt, max_settle_passes, settle_kmax, check_fixed_step
+   !> for a run advanced by its caller (trainsim_session): the loop's set-up and its advance
+   public :: drive_t, drive_setup, advance_to
 
    !> More events than this inside one dt is a flood: a contact that chatters
    !> faster than the step can resolve (a run past its stability limit).
@@ -78,13 +80,14 @@ contains
    !> (result%stats%t_final: the time reached; result%t_sampled: the last
    !> output time written); `err` is still the interrupt. With `progress`, the
    !> driver reports to it once per output time or block of steps.
-   subroutine simulate(model, sink, result, err, keep_interrupted, progress)
+   subroutine simulate(model, sink, result, err, keep_interrupted, progress, step_checked)
       type(model_t), intent(inout), target :: model
       class(sink_t), intent(inout), target :: sink   ! the observer streams the event rows to it
       type(run_result_t), intent(out) :: result
       type(error_t), allocatable, intent(out) :: err
       logical, intent(in), optional :: keep_interrupted
       type(progress_t), intent(inout), optional :: progress
+      logical, intent(in), optional :: step_checked   !< the caller ran check_fixed_step on this model (D-79)
       type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
@@ -95,6 +98,7 @@ contains
 
       type(settle_t) :: settle
       real(wp) :: t_end_deck
+      logical :: checked
 
       call system_clock(c0, rate)
       call make_integrator(model%run%integrator, integ)
@@ -103,8 +107,12 @@ contains
          return
       end if
       integ%region_instants = .true.   ! advance_to works on the region alone at local event instants
-      call check_fixed_step(model, err)
-      if (allocated(err)) return
+      checked = .false.
+      if (present(step_checked)) checked = step_checked
+      if (.not. checked) then
+         call check_fixed_step(model, err)
+         if (allocated(err)) return
+      end if
       t = model%run%t_start
       call model%initial_state(y)
       call model%init_modes(t, y)
@@ -174,24 +182,7 @@ contains
       n_real = aint(x)
       if (x > n_real) n_real = n_real + 1.0_wp
       n_out = int(min(max(n_real, 1.0_wp), 9.0e18_wp), i8)
-      d%tol = 1.0e-9_wp*model%run%dt
-      d%t_window = t
-      d%may_miss = integ%may_miss_events()
-      ! blocks when no step but the output times' needs a whole sample: the
-      ! samples are not taken whole, or there are steps between output times
-      ! (a block then ends on each output time, where the sample is filled from
-      ! the workspace of its last step)
-      d%blocks = integ%takes_blocks .and. model%run%step_blocks .and. .not. (d%may_miss .or. obs%refine_peaks) .and. &
-                 (.not. obs%want_whole .or. dout /= model%run%dt)
-      d%block_samples = d%blocks .and. dout == model%run%dt .and. .not. obs%want_whole
-      allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
-      call displacement_bounds(model, d%disp_bound)
-      call model%breakpoints(t, t_end, d%bp)
-      call set_next_stop(d, integ, t, t_end)
-      call integ%start(model, t, y, err)
-      if (allocated(err)) return
-      ! a guard already negative at t_start: settle it before the first step
-      call settle_if_fired(model, integ, obs, d, t, y, .false., err)
+      call drive_setup(model, integ, obs, d, dout, t_end, t, y, err)
       if (allocated(err)) return
 
       if (st%on) then   ! sample 0: the start
@@ -279,6 +270,40 @@ contains
          if (kk == n_out) tk = t_end
       end function out_time
    end subroutine drive
+
+   !> The loop's set-up at (t, y): its bookkeeping d, the breakpoints of the
+   !> inputs up to t_end, the integrator started, a guard already below zero at
+   !> t settled. dout: the interval of the output times (blocks of plain steps
+   !> when the observer's samples allow them, D-38).
+   subroutine drive_setup(model, integ, obs, d, dout, t_end, t, y, err)
+      type(model_t), intent(inout), target :: model
+      class(integrator_t), intent(inout), target :: integ
+      type(observer_t), intent(inout) :: obs
+      type(drive_t), intent(inout) :: d
+      real(wp), intent(in) :: dout, t_end, t
+      real(wp), intent(inout) :: y(:)
+      type(error_t), allocatable, intent(out) :: err
+      d%tol = 1.0e-9_wp*model%run%dt
+      d%t_window = t
+      d%may_miss = integ%may_miss_events()
+      ! blocks when no step but the output times' needs a whole sample: the
+      ! samples are not taken whole, or there are steps between output times
+      ! (a block then ends on each output time, where the sample is filled from
+      ! the workspace of its last step)
+      d%blocks = integ%takes_blocks .and. model%run%step_blocks .and. .not. (d%may_miss .or. obs%refine_peaks) .and. &
+                 (.not. obs%want_whole .or. dout /= model%run%dt)
+      d%block_samples = d%blocks .and. dout == model%run%dt .and. .not. obs%want_whole
+      if (allocated(d%g)) deallocate (d%g, d%fired, d%ev)
+      allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
+      call displacement_bounds(model, d%disp_bound)
+      d%ibp = 1
+      call model%breakpoints(t, t_end, d%bp)
+      call set_next_stop(d, integ, t, t_end)
+      call integ%start(model, t, y, err)
+      if (allocated(err)) return
+      ! a guard already negative at t_start: settle it before the first step
+      call settle_if_fired(model, integ, obs, d, t, y, .false., err)
+   end subroutine drive_setup
 
    !> Plain steps toward t_goal in a block (D-38), if the integrator and the
    !> model's modes allow one (folded: it took steps; the observer has folded

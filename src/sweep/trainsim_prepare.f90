@@ -14,7 +14,7 @@ module trainsim_prepare
    implicit none
    private
 
-   public :: prepare_model
+   public :: prepare_model, prepare_model_in_place
 
 contains
 
@@ -29,12 +29,24 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(preload_info_t), intent(out), optional :: preload
       type(deck_t) :: work
+      work = deck
+      call prepare_model_in_place(work, ovs, model, err, preload)
+   end subroutine prepare_model
+
+   !> prepare_model for a caller that has no further use of `deck`: the overrides
+   !> are set in it and the builder marks its keys as read, without the copy
+   !> (a deep copy of every group, 15 000 instructions a node: D-79).
+   subroutine prepare_model_in_place(deck, ovs, model, err, preload)
+      type(deck_t), intent(inout) :: deck
+      type(override_t), intent(in) :: ovs(:)
+      type(model_t), intent(out) :: model
+      type(error_t), allocatable, intent(out) :: err
+      type(preload_info_t), intent(out), optional :: preload
       type(preload_info_t) :: info
       integer :: i
 
-      work = deck
-      call apply_overrides(work, ovs, err)
-      if (.not. allocated(err)) call build_model(work, model, err)
+      call apply_overrides(deck, ovs, err)
+      if (.not. allocated(err)) call build_model(deck, model, err)
       if (.not. allocated(err)) model%overrides = describe_overrides(ovs)
       if (.not. allocated(err)) call apply_derived(model, ovs, err)
       if (.not. allocated(err)) call default_settle_period(model, err)
@@ -46,5 +58,5 @@ contains
             call localize_text(model%warnings(i)%s, deck%file, ovs)
          end do
       end if
-   end subroutine prepare_model
+   end subroutine prepare_model_in_place
 end module trainsim_prepare

@@ -94,6 +94,63 @@ static void test_deck_set_run_metric_series(const char *deck) {
     trainsim_free(sim);
 }
 
+/* A session over the same run: advanced through the run's output times it gives the
+ * run's last sample bit for bit; saved at t1 and restored, it reaches the same state at
+ * t2 bit for bit; the held node keeps 2 pi 485 / 32; misuse and going back are codes. */
+static void test_session(const char *deck) {
+    trainsim_sim *sim = trainsim_new();
+    size_t nn = 0, ncol = 0, nrow = 0;
+    int point = -1;
+    CHECK(trainsim_session_advance(sim, 1e-3) == TRAINSIM_ERR_ARGUMENT, "advance without a session");
+    CHECK(trainsim_read_file(sim, deck) == 0, "read %s", deck);
+    trainsim_set(sim, "run.t_end", "0.005");
+    trainsim_set(sim, "run.output_interval", "2e-4");
+    trainsim_set_real(sim, "mesh.mesh_frequency", 485.0);
+    CHECK(trainsim_run(sim, TRAINSIM_RUN_SERIES, NULL) == 0, "run");
+    trainsim_count(sim, TRAINSIM_SERIES, &ncol);
+    trainsim_count(sim, TRAINSIM_SAMPLES, &nrow);
+    trainsim_count(sim, TRAINSIM_NODES, &nn);
+    double *series = malloc(ncol * nrow * sizeof *series);
+    trainsim_series(sim, series, ncol * nrow);
+    long iw = index_of(sim, TRAINSIM_SERIES, "nodes/omega/n4");
+    long ia = index_of(sim, TRAINSIM_SERIES, "nodes/theta/n4");
+    CHECK(trainsim_session_start(sim, "n4, nx") == TRAINSIM_ERR_INPUT, "an input on a node that does not exist");
+    int rc = trainsim_session_start(sim, "n4");
+    CHECK(rc == 0, "session start: code %d", rc);
+    if (rc) { print_error(sim); free(series); trainsim_free(sim); return; }
+    double t = 0, th[16], om[16], th2[16], om2[16];
+    CHECK(nn == 4, "4 nodes (%zu)", nn);
+    CHECK(trainsim_session_state(sim, &t, th, om, nn - 1) == TRAINSIM_ERR_ARGUMENT, "a short buffer is refused");
+    const double w = 2.0 * M_PI * 485.0 / 32.0;
+    double worst_w = 0;
+    for (size_t r = 1; r < nrow; ++r) {
+        rc = trainsim_session_advance(sim, series[r * ncol]);
+        if (rc) { print_error(sim); break; }
+        trainsim_session_state(sim, &t, th, om, nn);
+        worst_w = fmax(worst_w, fabs(om[0] - w));
+        if (r == 10) CHECK(trainsim_session_save(sim, &point) == 0 && point == 0, "save at sample 10");
+    }
+    CHECK(rc == 0, "advanced through the run's %zu output times", nrow - 1);
+    CHECK(t == series[(nrow - 1) * ncol], "at the last output time (%g)", t);
+    CHECK(ia > 0 && iw > 0 && th[3] == series[(nrow - 1) * ncol + ia] && om[3] == series[(nrow - 1) * ncol + iw],
+          "n4's angle and speed equal the run's last sample bit for bit (angle %.17g vs %.17g)", th[3],
+          series[(nrow - 1) * ncol + ia]);
+    CHECK(worst_w <= 1e-12 * w, "held n1 speed off 2 pi 485 / 32 by %g rad/s", worst_w);
+    CHECK(trainsim_session_restore(sim, point) == 0, "restore the point of sample 10");
+    trainsim_session_state(sim, &t, th2, om2, nn);
+    CHECK(fabs(t - series[10 * ncol]) <= 1e-15, "restored to t = %g", t);
+    CHECK(trainsim_session_advance(sim, 1e-3) == TRAINSIM_ERR_INPUT, "advancing backwards is refused");
+    CHECK(trainsim_session_restore(sim, 7) == TRAINSIM_ERR_ARGUMENT, "restoring a point never saved is refused");
+    CHECK(trainsim_session_set_torque(sim, "n3", 1.0) == TRAINSIM_ERR_INPUT, "a torque on a node not an input");
+    CHECK(trainsim_session_set_torque(sim, "n4", 0.0) == 0, "the input torque on n4 set to 0 (unchanged)");
+    CHECK(trainsim_session_advance(sim, series[(nrow - 1) * ncol]) == 0, "advance again to the end");
+    trainsim_session_state(sim, &t, th2, om2, nn);
+    CHECK(memcmp(th, th2, nn * sizeof *th) == 0 && memcmp(om, om2, nn * sizeof *om) == 0,
+          "the second pass from the saved point ends in the same state, bit for bit");
+    free(series);
+    trainsim_free(sim);
+}
+
 static void test_bad_deck_names_file_and_line(void) {
     trainsim_sim *sim = trainsim_new();
     const char *text = "&run t_end = 0.1, dt = 1e-5 /\n"
@@ -137,6 +194,7 @@ int main(int argc, char **argv) {
     printf("libtrainsim_c %s\n", trainsim_library_version());
     test_deck_set_run_metric_series(argv[1]);
     test_bad_deck_names_file_and_line();
+    test_session(argv[1]);
     if (failures) {
         fprintf(stderr, "%d check(s) failed\n", failures);
         return 1;

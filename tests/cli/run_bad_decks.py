@@ -411,7 +411,7 @@ CASES = [
          exit=2, stderr=["deck.nml:1:", "unknown key 'colour'", "valid keys are"], not_stderr=["did you mean"]),
     dict(name="unknown group lists every group the reader takes, sweep too",
          deck=RUN + NODES + SHAFT + "&sweeps parameter = 's1.stiffness', values = 1e5 /\n",
-         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, sweep"]),
+         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, fmu, sweep"]),
     dict(name="half_backlash in the spur_gear geometry form is explained (in-lbf-s)",
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="half_backlash = 0.002"),
          exit=2, stderr=["deck.nml:6:", "half_backlash belongs to TRAIN's constants form", "geometry form",

@@ -1,0 +1,215 @@
+#!/usr/bin/python3
+"""Pack a train as an FMI 3.0 (or 2.0) co-simulation FMU (run by `trainsim fmu`; docs/fmu.md).
+
+Reads the variables `trainsim fmu` listed (JSON), writes modelDescription.xml, and zips it
+with the deck and its table files (resources/) and the binary that runs it
+(binaries/x86_64-linux/ for FMI 3.0, binaries/linux64/ for 2.0: trainsim_fmu.so and
+libtrainsim_c, from build/fmu or the installed <prefix>/lib/.../trainsim/fmu). Value
+references as src/fmu/fmu_core.h reads them: 0 time (FMI 3.0); node k (0-based) angle
+1 + 2k, speed 2 + 2k; input j 1000000 + j; parameter p 2000000 + p; element e (0-based)
+displacement 3000000 + 3e, force 3000001 + 3e, contact 3000002 + 3e.
+"""
+import argparse
+import glob
+import hashlib
+import json
+import os
+import sys
+import zipfile
+from xml.sax.saxutils import quoteattr
+
+VR_INPUT, VR_PARAM, VR_ELEMENT = 1000000, 2000000, 3000000
+
+
+def fail(message):
+    print(f"trainsim: fmu: error: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
+def binaries(exe_dir):
+    """The directory holding trainsim_fmi2.so beside the executable (build tree or install)."""
+    candidates = [os.path.join(exe_dir, "fmu")]
+    candidates += [os.path.join(exe_dir, "..", "lib", "trainsim", "fmu")]
+    candidates += glob.glob(os.path.join(exe_dir, "..", "lib", "*", "trainsim", "fmu"))
+    env = os.environ.get("TRAINSIM_FMU_BINARIES")
+    if env:
+        candidates.insert(0, env)
+    for c in candidates:
+        if os.path.isfile(os.path.join(c, "trainsim_fmu.so")):
+            return c
+    fail("cannot find trainsim_fmu.so (looked in $TRAINSIM_FMU_BINARIES, " + ", ".join(candidates[-3:]) +
+         "); build trainsim with its C interface (TRAINSIM_BUILD_C_API)")
+
+
+def model_description(v, guid, fmi):
+    return model_description_3(v, guid) if fmi == 3 else model_description_2(v, guid)
+
+
+def model_description_3(v, guid):
+    torque = v["torque_unit"]
+    rows, outputs = ['    <Float64 name="time" valueReference="0" causality="independent" variability="continuous" '
+                     'unit="s" description="time"/>'], []
+
+    def var(name, vr, causality, variability, description, unit, initial=None, start=None):
+        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
+        if initial:
+            attrs += f' initial="{initial}"'
+        if start is not None:
+            attrs += f' start="{start!r}"'
+        rows.append(f"    <Float64 {attrs} unit={quoteattr(unit)} description={quoteattr(description)}/>")
+        return vr
+
+    for k, node in enumerate(v["nodes"]):
+        outputs.append(var(f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad",
+                           initial="calculated"))
+        outputs.append(var(f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s",
+                           initial="calculated"))
+    for e, el in enumerate(v["elements"]):
+        i = el["id"]
+        outputs.append(var(f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}",
+                           el["disp_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous",
+                           f"force (or torque) of {i}", el["force_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
+                           f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", initial="calculated"))
+    for j, node in enumerate(v["inputs"]):
+        var(f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}", torque, start=0.0)
+    for p, par in enumerate(v["parameters"]):
+        var(par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1", initial="exact",
+            start=float(par["value"]))
+    units = {torque, "rad", "rad/s", "1", "s"} | {e["disp_unit"] for e in v["elements"]} | \
+        {e["force_unit"] for e in v["elements"]}
+    unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in sorted(units))
+    structure = "\n".join(f'    <Output valueReference="{r}"/>' for r in outputs)
+    structure += "\n" + "\n".join(f'    <InitialUnknown valueReference="{r}"/>' for r in outputs)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName={quoteattr(v["title"] or "trainsim")} instantiationToken="{guid}"
+  description={quoteattr("trainsim drive train: " + os.path.basename(v["deck_file"]))}
+  generationTool={quoteattr("trainsim " + v["version"])} variableNamingConvention="flat">
+  <CoSimulation modelIdentifier="trainsim_fmu" canHandleVariableCommunicationStepSize="true"
+    canGetAndSetFMUState="true" canSerializeFMUState="false" providesDirectionalDerivatives="false"
+    providesAdjointDerivatives="false" hasEventMode="false" canReturnEarlyAfterIntermediateUpdate="false"
+    providesIntermediateUpdate="false" providesEvaluateDiscreteStates="false"/>
+  <UnitDefinitions>
+{unit_defs}
+  </UnitDefinitions>
+  <ModelVariables>
+{chr(10).join(rows)}
+  </ModelVariables>
+  <ModelStructure>
+{structure}
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def model_description_2(v, guid):
+    torque = v["torque_unit"]
+    rows, outputs = [], []
+
+    def var(name, vr, causality, variability, description, unit, initial=None, start=None):
+        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
+        if initial:
+            attrs += f' initial="{initial}"'
+        attrs += f" description={quoteattr(description)}"
+        real = f'<Real unit={quoteattr(unit)}' + (f' start="{start!r}"' if start is not None else "") + "/>"
+        rows.append(f"    <ScalarVariable {attrs}>\n      {real}\n    </ScalarVariable>")
+        return len(rows)
+
+    for k, node in enumerate(v["nodes"]):
+        outputs.append(var(f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad",
+                           initial="calculated"))
+        outputs.append(var(f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s",
+                           initial="calculated"))
+    for e, el in enumerate(v["elements"]):
+        i = el["id"]
+        outputs.append(var(f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}",
+                           el["disp_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous",
+                           f"force (or torque) of {i}", el["force_unit"], initial="calculated"))
+        outputs.append(var(f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
+                           f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", initial="calculated"))
+    for j, node in enumerate(v["inputs"]):
+        var(f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}", torque,
+            start=0.0)
+    for p, par in enumerate(v["parameters"]):
+        var(par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1",
+            initial="exact", start=float(par["value"]))
+    units = {torque, "rad", "rad/s", "1"} | {e["disp_unit"] for e in v["elements"]} | \
+        {e["force_unit"] for e in v["elements"]}
+    unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in sorted(units))
+    unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in outputs)
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="2.0" modelName={quoteattr(v["title"] or "trainsim")} guid="{guid}"
+  description={quoteattr("trainsim drive train: " + os.path.basename(v["deck_file"]))}
+  generationTool={quoteattr("trainsim " + v["version"])} variableNamingConvention="flat"
+  numberOfEventIndicators="0">
+  <CoSimulation modelIdentifier="trainsim_fmu" canHandleVariableCommunicationStepSize="true"
+    canGetAndSetFMUstate="true" canSerializeFMUstate="false" canNotUseMemoryManagementFunctions="true"
+    canInterpolateInputs="false" providesDirectionalDerivative="false"/>
+  <UnitDefinitions>
+{unit_defs}
+  </UnitDefinitions>
+  <ModelVariables>
+{chr(10).join(rows)}
+  </ModelVariables>
+  <ModelStructure>
+    <Outputs>
+{unknowns}
+    </Outputs>
+    <InitialUnknowns>
+{unknowns}
+    </InitialUnknowns>
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("variables", help="the JSON that trainsim fmu wrote")
+    ap.add_argument("-o", "--output", required=True)
+    ap.add_argument("--exe-dir", default=".")
+    ap.add_argument("--fmi", type=int, choices=(2, 3), default=3)
+    a = ap.parse_args()
+    with open(a.variables) as f:
+        v = json.load(f)
+    deck_dir = os.path.dirname(os.path.abspath(v["deck_file"]))
+    with open(v["deck_file"], "rb") as f:
+        deck = f.read()
+    tables = []
+    for t in v["table_files"]:
+        rel = os.path.normpath(t)
+        if os.path.isabs(t) or rel.startswith(".."):
+            fail(f"table_file '{t}': an FMU carries the files beside its deck only (a path below the deck's "
+                 "folder); copy the table there")
+        tables.append(rel)
+    bindir = binaries(a.exe_dir)
+    digest = hashlib.sha256(deck + json.dumps(v, sort_keys=True).encode()).hexdigest()
+    guid = "{%s-%s-%s-%s-%s}" % (digest[:8], digest[8:12], digest[12:16], digest[16:20], digest[20:32])
+    tmp = a.output + ".part"
+    try:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", model_description(v, guid, a.fmi))
+            z.writestr("resources/deck.nml", deck)
+            z.writestr("resources/inputs.txt", "".join(n + "\n" for n in v["inputs"]))
+            z.writestr("resources/parameters.txt",
+                       "".join(f"{p['path']}\t{float(p['value'])!r}\n" for p in v["parameters"]))
+            for rel in tables:
+                z.write(os.path.join(deck_dir, rel), "resources/" + rel)
+            for lib in sorted(os.listdir(bindir)):
+                if lib.endswith(".so") or ".so." in lib:
+                    platform = "x86_64-linux" if a.fmi == 3 else "linux64"
+                    z.write(os.path.join(bindir, lib), f"binaries/{platform}/" + lib)
+        os.replace(tmp, a.output)
+    except OSError as exc:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        fail(f"cannot write '{a.output}': {exc.strerror}")
+    print(f"trainsim: fmu: {a.output} (FMI {a.fmi}.0): {len(v['nodes'])} nodes (angle, speed outputs), "
+          f"{len(v['elements'])} elements (displacement, force, contact outputs), {len(v['inputs'])} input torque(s), "
+          f"{len(v['parameters'])} parameters")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,243 @@
+!> Lines of a table built field by field and written in blocks: the text of Fortran's
+!> edit descriptors Aw, Iw, I0, ESw.d, Fw.d and nX without a formatted `write` per
+!> field (gfortran's costs about 4 400 instructions a real; a table of 20 000 rows
+!> took a third of a run's start-up: D-79). ESw.d and Fw.d take C's snprintf digits
+!> (correctly rounded, as gfortran's own), and Fortran's write for what that form
+!> does not cover; test_text_out checks every form against Fortran's write.
+module trainsim_text_out
+   use, intrinsic :: iso_c_binding, only: c_double, c_int, c_char
+   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
+   use, intrinsic :: iso_fortran_env, only: int64
+   use trainsim_kinds, only: wp
+   use trainsim_strings, only: str
+   implicit none
+   private
+
+   public :: text_out_t
+
+   integer, parameter :: block_chars = 65536   !< written when the buffer holds this much
+
+   type :: text_out_t
+      integer :: unit = 6
+      character(len=:), allocatable :: buf
+      integer :: n = 0                         !< characters in buf
+   contains
+      procedure :: a => put_a
+      procedure :: i => put_i
+      procedure :: es => put_es
+      procedure :: f => put_f
+      procedure :: x => put_x
+      procedure :: end_line
+      procedure :: flush => flush_lines
+   end type text_out_t
+
+   interface
+      integer(c_int) function c_fmt_e(x, d, buf, cap) bind(c, name='trainsim_fmt_e')
+         import :: c_double, c_int, c_char
+         real(c_double), value :: x
+         integer(c_int), value :: d, cap
+         character(kind=c_char), intent(out) :: buf(*)
+      end function c_fmt_e
+      integer(c_int) function c_fmt_f(x, d, buf, cap) bind(c, name='trainsim_fmt_f')
+         import :: c_double, c_int, c_char
+         real(c_double), value :: x
+         integer(c_int), value :: d, cap
+         character(kind=c_char), intent(out) :: buf(*)
+      end function c_fmt_f
+   end interface
+
+contains
+
+   !> Room for m more characters.
+   subroutine reserve(self, m)
+      class(text_out_t), intent(inout) :: self
+      integer, intent(in) :: m
+      character(len=:), allocatable :: grown
+      if (.not. allocated(self%buf)) allocate (character(len=max(2*block_chars, 2*m)) :: self%buf)
+      if (self%n + m <= len(self%buf)) return
+      allocate (character(len=max(2*len(self%buf), self%n + m)) :: grown)
+      grown(1:self%n) = self%buf(1:self%n)
+      call move_alloc(grown, self%buf)
+   end subroutine reserve
+
+   !> Text s right-justified in w columns as Aw writes it (its first w characters
+   !> if longer); w = 0: s as it is (A).
+   subroutine put_a(self, s, w)
+      class(text_out_t), intent(inout) :: self
+      character(len=*), intent(in) :: s
+      integer, intent(in) :: w
+      integer :: m
+      if (w <= 0) then
+         call reserve(self, len(s))
+         self%buf(self%n + 1:self%n + len(s)) = s
+         self%n = self%n + len(s)
+         return
+      end if
+      call reserve(self, w)
+      m = min(len(s), w)
+      self%buf(self%n + 1:self%n + w - m) = ' '
+      self%buf(self%n + w - m + 1:self%n + w) = s(1:m)
+      self%n = self%n + w
+   end subroutine put_a
+
+   !> n blanks (nX).
+   subroutine put_x(self, n)
+      class(text_out_t), intent(inout) :: self
+      integer, intent(in) :: n
+      call reserve(self, n)
+      self%buf(self%n + 1:self%n + n) = ' '
+      self%n = self%n + n
+   end subroutine put_x
+
+   !> An integer as Iw writes it (w = 0: I0).
+   subroutine put_i(self, k, w)
+      class(text_out_t), intent(inout) :: self
+      integer, intent(in) :: k, w
+      character(len=:), allocatable :: s
+      s = str(k)
+      if (w > 0 .and. len(s) > w) then
+         call self%a(repeat('*', w), w)
+      else
+         call self%a(s, w)
+      end if
+   end subroutine put_i
+
+   !> A real as ESw.d writes it.
+   subroutine put_es(self, x, w, d)
+      class(text_out_t), intent(inout) :: self
+      real(wp), intent(in) :: x
+      integer, intent(in) :: w, d
+      character(kind=c_char) :: c(48)
+      integer :: m
+      if (es_exact(self, x, w, d)) return
+      m = 0
+      if (ieee_is_finite(x) .and. d <= 30) m = c_fmt_e(real(x, c_double), d, c, 48)
+      ! the form C and Fortran share: [-]d.ddddE+dd (two exponent digits)
+      if (m >= d + 6 .and. m <= min(d + 7, w)) then
+         if (c(m - 3) /= 'E') m = 0   ! a three-digit exponent (Fortran drops the E)
+      else
+         m = 0
+      end if
+      call put_c_or_fortran(self, c, m, x, 'es', w, d)
+   end subroutine put_es
+
+   !> ESw.d of a normal (or zero) x with a two-digit exponent and at most 17 digits,
+   !> in 128-bit integers: x = m 2^e2 exactly, the d+1 digits q = x/10^s rounded to
+   !> nearest, ties to even (as snprintf, which gfortran's ES calls, rounds).
+   !> False (nothing written) where this does not apply; put_es then asks snprintf.
+   logical function es_exact(self, x, w, d) result(done)
+      class(text_out_t), intent(inout) :: self
+      real(wp), intent(in) :: x
+      integer, intent(in) :: w, d
+      integer, parameter :: i16 = selected_int_kind(38)
+      integer(i16) :: num, den, q, r, p10
+      integer(int64) :: m
+      integer :: e2, ex, sc, pass, j, k, n
+      character(len=32) :: t
+      done = .false.
+      if (d > 16 .or. d + 7 > w) return
+      if (.not. ieee_is_finite(x)) return   ! (alone: a NaN in a comparison traps in Debug)
+      if (x == 0.0_wp) then
+         q = 0
+         ex = 0
+      else
+         if (abs(x) < tiny(x)) return
+         m = int(scale(fraction(abs(x)), digits(x)), int64)   ! 2^52 <= m < 2^53
+         e2 = exponent(x) - digits(x)
+         ex = floor(log10(abs(x)))
+         do pass = 1, 3
+            sc = ex - d                                      ! q ~ |x| / 10^sc, d+1 digits
+            if (max(e2, 0) + 4*max(-sc, 0) > 70 .or. max(-e2, 0) + 4*max(sc, 0) > 120) return
+            num = int(m, i16)*2_i16**max(e2, 0)*10_i16**max(-sc, 0)
+            den = 2_i16**max(-e2, 0)*10_i16**max(sc, 0)
+            q = num/den
+            r = num - q*den
+            if (2*r > den .or. (2*r == den .and. mod(q, 2_i16) == 1)) q = q + 1
+            p10 = 10_i16**d
+            if (q >= 10*p10) then
+               ex = ex + 1
+            else if (q < p10) then
+               ex = ex - 1
+            else
+               exit
+            end if
+         end do
+         if (pass > 3 .or. abs(ex) > 99) return
+      end if
+      n = d + 6
+      if (sign(1.0_wp, x) < 0.0_wp) n = n + 1
+      k = n - 4                                              ! the last mantissa digit
+      do j = k, k - d + 1, -1
+         t(j:j) = achar(48 + int(mod(q, 10_i16)))
+         q = q/10
+      end do
+      t(k - d:k - d) = '.'
+      t(k - d - 1:k - d - 1) = achar(48 + int(q))
+      if (n == d + 7) t(1:1) = '-'
+      t(k + 1:k + 1) = 'E'
+      t(k + 2:k + 2) = merge('-', '+', ex < 0)
+      t(k + 3:k + 3) = achar(48 + abs(ex)/10)
+      t(k + 4:k + 4) = achar(48 + mod(abs(ex), 10))
+      call self%a(t(1:n), w)
+      done = .true.
+   end function es_exact
+
+   !> A real as Fw.d writes it.
+   subroutine put_f(self, x, w, d)
+      class(text_out_t), intent(inout) :: self
+      real(wp), intent(in) :: x
+      integer, intent(in) :: w, d
+      character(kind=c_char) :: c(48)
+      integer :: m
+      m = 0
+      if (ieee_is_finite(x)) then
+         if (abs(x) < 1.0e15_wp .and. d <= 20) m = c_fmt_f(real(x, c_double), d, c, 48)
+      end if
+      if (m > w) m = 0
+      call put_c_or_fortran(self, c, m, x, 'f', w, d)
+   end subroutine put_f
+
+   !> The m characters of c right-justified in w columns, or (m = 0) Fortran's own
+   !> write of x with edit descriptor `letter`w.d (es or f).
+   subroutine put_c_or_fortran(self, c, m, x, letter, w, d)
+      class(text_out_t), intent(inout) :: self
+      character(kind=c_char), intent(in) :: c(:)
+      integer, intent(in) :: m, w, d
+      real(wp), intent(in) :: x
+      character(len=*), intent(in) :: letter
+      character(len=64) :: t
+      character(len=16) :: fmt
+      integer :: j
+      if (m <= 0) then
+         write (fmt, '(2a,i0,a,i0,a)') '(', letter, w, '.', d, ')'
+         write (t, fmt) x
+         call self%a(t(1:w), w)
+         return
+      end if
+      do j = 1, m
+         t(j:j) = c(j)
+      end do
+      call self%a(t(1:m), w)
+   end subroutine put_c_or_fortran
+
+   !> Ends the line; the buffer goes out once it holds a block.
+   subroutine end_line(self)
+      class(text_out_t), intent(inout) :: self
+      call reserve(self, 1)
+      self%n = self%n + 1
+      self%buf(self%n:self%n) = new_line('a')
+      if (self%n >= block_chars) call self%flush()
+   end subroutine end_line
+
+   !> Writes the lines ended so far (and any started line with them).
+   subroutine flush_lines(self)
+      class(text_out_t), intent(inout) :: self
+      if (self%n == 0) return
+      if (self%buf(self%n:self%n) == new_line('a')) then
+         write (self%unit, '(a)') self%buf(1:self%n - 1)
+      else
+         write (self%unit, '(a)') self%buf(1:self%n)
+      end if
+      self%n = 0
+   end subroutine flush_lines
+end module trainsim_text_out

@@ -1,0 +1,349 @@
+!> A run its caller advances: start at t_start, advance to any later time
+!> (within t_end), read the state, save it and restore it. The base of
+!> co-simulation (a train as an FMU, issue 24): the importer asks for the
+!> state at its communication points and may go back to a saved point.
+!>
+!> The session runs `simulate`'s own loop (trainsim_simulate's drive_setup
+!> and advance_to): the same integrator, breakpoints of the inputs, event
+!> location and mode updates, blow-up and flood checks. Advancing a session
+!> through the output times of a run gives that run's states bit for bit
+!> (tests/test_session.f90).
+!>
+!> Save and restore (D-76): a saved state is a copy of the model (its
+!> parameters and every element's discrete mode), the time, the state vector
+!> and a fixed-step integrator's grid. Both `save` and `restore` start the
+!> integrator afresh at that point (an integrator's history, such as CVODE's
+!> Nordsieck array, is not saved), so a session that saved at t1 and one
+!> restored to t1 continue identically, bit for bit, with every integrator.
+!> With a fixed-step integrator (rk4, rk4-thesis, euler) a save does not
+!> change the run at all (the grid goes on from t_start); with an adaptive
+!> one it restarts the solver there, as a breakpoint of the inputs does (a
+!> change within the tolerance). The metrics and events the observer gathers
+!> are not rolled back by `restore`.
+!>
+!> A session must not be copied once started (the integrator holds the
+!> address of the session's model): declare it with `target` or allocate it.
+module trainsim_session
+   use trainsim_kinds, only: wp, i8
+   use trainsim_error, only: error_t, fatal_error, err_input, err_internal
+   use trainsim_strings, only: str, string_t
+   use trainsim_model, only: model_t, load_t
+   use trainsim_signal, only: constant_signal
+   use trainsim_observer, only: observer_t, run_result_t
+   use trainsim_sink, only: null_sink_t
+   use trainsim_run_stats, only: run_stats_t
+   use trainsim_integrator, only: integrator_t
+   use trainsim_integrator_registry, only: make_integrator
+   use trainsim_fixed_step, only: fixed_step_t
+   use trainsim_run_checks, only: is_fixed_step
+   use trainsim_simulate, only: drive_t, drive_setup, advance_to, check_fixed_step
+   implicit none
+   private
+
+   public :: session_t, session_state_t
+
+   !> A saved point of a session (`session_t%save`, `restore`).
+   type :: session_state_t
+      type(model_t), private :: model
+      real(wp), private :: t = 0.0_wp, t_int = 0.0_wp
+      real(wp), allocatable, private :: y(:)
+      type(drive_t), private :: d
+      integer, allocatable, private :: input_load(:)
+      logical, private :: saved = .false.
+      !> a fixed-step integrator's grid (t0 + k dt, the next k)
+      real(wp), private :: grid_t0 = 0.0_wp
+      integer(i8), private :: grid_next = 0
+   end type session_state_t
+
+   type :: session_t
+      !> The model being run (its modes change as the run goes).
+      type(model_t) :: model
+      !> The time reached (the last goal) and the state there (model%state_label
+      !> names y's entries). The integrator's own time `t_int` may lie off the goal
+      !> by less than the instant tolerance (1e-9 dt: a fixed-step grid point
+      !> t_start + k dt), as a run's sample at its output time.
+      real(wp) :: t = 0.0_wp
+      real(wp), allocatable :: y(:)
+      real(wp), private :: t_int = 0.0_wp
+      logical :: started = .false.
+      class(integrator_t), allocatable, private :: integ
+      type(observer_t), private :: obs
+      type(null_sink_t), private :: sink
+      type(drive_t), private :: d
+      type(run_stats_t), private :: stats   !< counters of integrators already finished
+      real(wp), private :: t_end = 0.0_wp, dout = 0.0_wp
+      !> per node: its input torque's index in model%loads (0: none yet)
+      integer, allocatable, private :: input_load(:)
+   contains
+      procedure :: start => session_start
+      procedure :: advance => session_advance
+      procedure :: save => session_save
+      procedure :: restore => session_restore
+      procedure :: set_torque => session_set_torque
+      procedure :: kinematics => session_kinematics
+      procedure :: element_status => session_element_status
+      procedure :: finish => session_finish
+   end type session_t
+
+contains
+
+   !> Start a session of `model` (a copy is taken) at its t_start; the run
+   !> may be advanced up to its t_end. Each node of `inputs` gets an external
+   !> torque of 0 beside the deck's loads (the sums are unchanged: x + 0 = x).
+   subroutine session_start(self, model, err, inputs)
+      class(session_t), intent(inout), target :: self
+      type(model_t), intent(in) :: model
+      type(error_t), allocatable, intent(out) :: err
+      !> ids of the nodes that take an input torque (`set_torque`), 0 at the start
+      type(string_t), intent(in), optional :: inputs(:)
+      type(observer_t) :: fresh_obs
+      type(run_stats_t) :: fresh_stats
+      type(drive_t) :: fresh_d
+      if (self%started) call self%finish()
+      if (allocated(self%input_load)) deallocate (self%input_load)
+      self%model = model
+      allocate (self%input_load(size(self%model%nodes)), source=0)
+      if (present(inputs)) then
+         call add_inputs(self, inputs, err)
+         if (allocated(err)) return
+      end if
+      self%stats = fresh_stats
+      call check_fixed_step(self%model, err)
+      if (allocated(err)) return
+      self%t = self%model%run%t_start
+      self%t_int = self%t
+      self%t_end = self%model%run%t_end
+      self%dout = self%model%run%output_interval
+      if (.not. self%dout > 0.0_wp) self%dout = self%model%run%dt
+      call self%model%initial_state(self%y)
+      call self%model%init_modes(self%t, self%y)
+      self%obs = fresh_obs
+      self%obs%refine_peaks = .not. is_fixed_step(self%model%run%integrator)
+      call self%obs%start(self%model, self%t, self%y, self%sink, err)
+      if (allocated(err)) return
+      self%d = fresh_d
+      call fresh_integrator(self, err)
+      if (allocated(err)) return
+      self%started = .true.
+   end subroutine session_start
+
+   !> Advance the run to t_goal (t <= t_goal <= t_end); events on the way are
+   !> located and the modes updated as in a run.
+   subroutine session_advance(self, t_goal, err)
+      class(session_t), intent(inout), target :: self
+      real(wp), intent(in) :: t_goal
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. self%started) then
+         call fatal_error(err, 'internal: a session advanced before it was started', err_internal)
+         return
+      end if
+      if (.not. (t_goal >= self%t - self%d%tol .and. t_goal <= self%t_end + self%d%tol)) then
+         call fatal_error(err, 'a session at t = '//str(self%t)//' s cannot advance to t = '//str(t_goal)// &
+                          ' s: the goal must lie between the time reached and t_end = '//str(self%t_end)//' s', &
+                          err_input)
+         return
+      end if
+      if (t_goal - self%t_int <= self%d%tol) return
+      call advance_to(self%model, self%integ, self%obs, self%d, t_goal, self%t_end, self%t_int, self%y, err)
+      if (.not. allocated(err)) self%t = t_goal
+   end subroutine session_advance
+
+   !> The session's point (time, state, modes, parameters) into `state`; the
+   !> integrator starts afresh here (as after `restore`).
+   subroutine session_save(self, state, err)
+      class(session_t), intent(inout), target :: self
+      type(session_state_t), intent(out) :: state
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. self%started) then
+         call fatal_error(err, 'internal: a session saved before it was started', err_internal)
+         return
+      end if
+      state%model = self%model
+      state%t = self%t
+      state%t_int = self%t_int
+      state%y = self%y
+      state%d = self%d
+      state%input_load = self%input_load
+      state%saved = .true.
+      call grid_of(self%integ, state%grid_t0, state%grid_next)
+      call fresh_integrator(self, err)
+      if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
+   end subroutine session_save
+
+   !> Go back (or forward) to a point `save` took of this session's run.
+   subroutine session_restore(self, state, err)
+      class(session_t), intent(inout), target :: self
+      type(session_state_t), intent(in) :: state
+      type(error_t), allocatable, intent(out) :: err
+      if (.not. (self%started .and. state%saved)) then
+         call fatal_error(err, 'internal: a session restored from a state it did not save', err_internal)
+         return
+      end if
+      call self%integ%statistics(self%stats)
+      call self%integ%finish()
+      deallocate (self%integ)
+      self%model = state%model
+      self%t = state%t
+      self%t_int = state%t_int
+      self%y = state%y
+      self%d = state%d
+      self%input_load = state%input_load
+      call fresh_integrator(self, err)
+      if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
+   end subroutine session_restore
+
+   !> An input of the run from now on: the external torque `value` on node
+   !> `node` (an id among the session's inputs), beside the deck's loads there,
+   !> held constant until the next call (a co-simulation input). The
+   !> change acts as a breakpoint of the inputs: the integrator starts afresh
+   !> at t (a fixed-step one on its grid). Saved and restored with the point.
+   subroutine session_set_torque(self, node, value, err)
+      class(session_t), intent(inout), target :: self
+      character(len=*), intent(in) :: node
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: t0
+      integer(i8) :: next
+      integer :: i, k
+      if (.not. self%started) then
+         call fatal_error(err, 'internal: a session given an input before it was started', err_internal)
+         return
+      end if
+      i = self%model%node_index(node)
+      k = 0
+      if (i > 0) k = self%input_load(i)
+      if (k == 0) then
+         call fatal_error(err, "input torque on node '"//node//"': not an input of this session "// &
+                          '(name it among the inputs when the session starts)', err_input)
+         return
+      end if
+      if (.not. (abs(value) <= huge(1.0_wp))) then
+         call fatal_error(err, "input torque on node '"//node//"': the value is not a finite number", err_input)
+         return
+      end if
+      if (self%model%loads(k)%torque%value0 == value) return
+      self%model%loads(k)%torque = constant_signal(value)
+      call self%model%build_fast_path()
+      call grid_of(self%integ, t0, next)
+      call fresh_integrator(self, err)
+      if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
+   end subroutine session_set_torque
+
+   !> Every node's angle and speed at the session's point into model%theta,
+   !> model%omega (as a run's sample there).
+   subroutine session_kinematics(self)
+      class(session_t), intent(inout) :: self
+      call self%model%kinematics(self%t_int, self%y)
+   end subroutine session_kinematics
+
+   !> Every element's status at the session's point, as a run records it
+   !> (/elements/disp, force, contact): its displacement, its force (or torque)
+   !> and its contact state (0 open, +1 / -1 a face in contact, 1 a smooth
+   !> element).
+   subroutine session_element_status(self, disp, force, contact)
+      class(session_t), intent(inout) :: self
+      real(wp), intent(out) :: disp(:), force(:)
+      integer, intent(out) :: contact(:)
+      integer :: i, pairs
+      call self%model%kinematics(self%t_int, self%y)
+      do i = 1, size(self%model%elements)
+         call self%model%elements(i)%e%status_at(self%model%theta, self%model%omega, disp(i), force(i), contact(i), pairs)
+      end do
+   end subroutine session_element_status
+
+   !> A load of 0 on each node of `ids` (a free node), its index in input_load.
+   subroutine add_inputs(self, ids, err)
+      type(session_t), intent(inout) :: self
+      type(string_t), intent(in) :: ids(:)
+      type(error_t), allocatable, intent(out) :: err
+      type(load_t) :: l
+      integer :: j, i
+      do j = 1, size(ids)
+         i = self%model%node_index(ids(j)%s)
+         if (i == 0) then
+            call fatal_error(err, "input torque on node '"//ids(j)%s//"': the deck has no node of that id", err_input)
+            return
+         end if
+         if (self%model%nodes(i)%n%nstates() == 0 .or. self%model%is_held(i)) then
+            call fatal_error(err, "input torque on node '"//ids(j)%s//"': the node is fixed or its speed is "// &
+                             'prescribed (a torque there moves nothing)', err_input)
+            return
+         end if
+         if (self%input_load(i) > 0) cycle
+         l%node = i
+         l%torque = constant_signal(0.0_wp)
+         self%model%loads = [self%model%loads, l]
+         self%input_load(i) = size(self%model%loads)
+      end do
+   end subroutine add_inputs
+
+   !> End the session: the run's metrics, events and statistics up to t into
+   !> `result` (if present).
+   subroutine session_finish(self, result, err)
+      class(session_t), intent(inout), target :: self
+      type(run_result_t), intent(out), optional :: result
+      type(error_t), allocatable, intent(out), optional :: err
+      type(run_result_t) :: r
+      type(error_t), allocatable :: e
+      if (.not. self%started) return
+      self%started = .false.
+      call self%integ%statistics(self%stats)
+      call self%integ%finish()
+      deallocate (self%integ)
+      self%stats%t_metrics = self%obs%t_metrics
+      call self%obs%finish(self%model, self%t_int, self%y, self%stats, self%sink, r, e)
+      if (present(result)) result = r
+      if (present(err)) then
+         if (allocated(e)) call move_alloc(e, err)
+      end if
+   end subroutine session_finish
+
+   !> A new integrator started at (t, y), the loop's bookkeeping set up there
+   !> (the previous integrator's counters kept in self%stats).
+   subroutine fresh_integrator(self, err)
+      type(session_t), intent(inout), target :: self
+      type(error_t), allocatable, intent(out) :: err
+      if (allocated(self%integ)) then
+         call self%integ%statistics(self%stats)
+         call self%integ%finish()
+         deallocate (self%integ)
+      end if
+      call make_integrator(self%model%run%integrator, self%integ)
+      if (.not. allocated(self%integ)) then
+         call fatal_error(err, "internal: integrator '"//self%model%run%integrator//"' is not in the registry", &
+                          err_internal)
+         return
+      end if
+      self%integ%region_instants = .true.
+      call drive_setup(self%model, self%integ, self%obs, self%d, self%dout, self%t_end, self%t_int, self%y, err)
+   end subroutine fresh_integrator
+
+   !> A fixed-step integrator's grid (its start and the index of the next point).
+   subroutine grid_of(integ, t0, next)
+      class(integrator_t), intent(in) :: integ
+      real(wp), intent(out) :: t0
+      integer(i8), intent(out) :: next
+      t0 = 0.0_wp
+      next = 0
+      select type (integ)
+      class is (fixed_step_t)
+         t0 = integ%t0
+         next = integ%istep
+      end select
+   end subroutine grid_of
+
+   !> A fixed-step integrator started afresh goes on on the grid it had (its
+   !> steps end at t0 + k dt as before, not at t + k dt: a save leaves the run
+   !> bit for bit as without it).
+   subroutine keep_grid(integ, t0, next)
+      class(integrator_t), intent(inout) :: integ
+      real(wp), intent(in) :: t0
+      integer(i8), intent(in) :: next
+      select type (integ)
+      class is (fixed_step_t)
+         integ%t0 = t0
+         integ%istep = next
+      end select
+   end subroutine keep_grid
+
+end module trainsim_session
