@@ -1,5 +1,6 @@
-!> The calculators: trainsim gear (spur gear constants, App. E) and trainsim key (the
-!> keyed joint's stiffness curve, Ch. IV), each with a deck fragment.
+!> The calculators: trainsim gear (spur gear constants, App. E), trainsim key (the
+!> keyed joint's stiffness curve, Ch. IV) and trainsim worm (a worm pair's ratio,
+!> lead angle and efficiencies), each with a deck fragment.
 module trainsim_cmd_calc
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
    use trainsim_kinds, only: wp
@@ -7,13 +8,14 @@ module trainsim_cmd_calc
    use trainsim_strings, only: str
    use trainsim_gear_calc, only: gear_input_t, gear_result_t, gear_calc, gear_report, &
                                  key_input_t, key_result_t, key_calc, key_report, key_max_points
+   use trainsim_worm_calc, only: worm_input_t, worm_result_t, worm_calc, worm_report
    use trainsim_units, only: units_t, make_units
    use trainsim_contact, only: fit_tight, fit_loose, fit_average
    use trainsim_cli, only: cmd, nargs, arg, quit, fail, real_value, text_value
    implicit none
    private
 
-   public :: do_gear, do_key
+   public :: do_gear, do_key, do_worm
 
 contains
 
@@ -143,4 +145,42 @@ contains
       call key_report(q, r, output_unit)
       call quit(0)
    end subroutine do_key
+
+   !> trainsim worm: a worm pair's ratio, lead angle, efficiencies, self-locking and a deck fragment.
+   subroutine do_worm()
+      type(worm_input_t) :: w
+      type(worm_result_t) :: r
+      type(error_t), allocatable :: err
+      integer :: k, j
+      call default_units(w%units)
+      k = 2
+      do while (k <= nargs)
+         select case (arg(k))
+         case ('--starts'); w%starts = real_value(k); k = k + 1
+         case ('--teeth'); w%teeth = real_value(k); k = k + 1
+         case ('--diametral-pitch'); w%diametral_pitch = real_value(k); k = k + 1
+         case ('--module'); w%module_mm = real_value(k); k = k + 1
+         case ('--worm-diameter'); w%worm_diameter = real_value(k); k = k + 1
+         case ('--diameter-factor'); w%diameter_factor = real_value(k); k = k + 1
+         case ('--pressure-angle'); w%pressure_angle_deg = real_value(k); k = k + 1
+         case ('--friction'); w%friction = real_value(k); k = k + 1
+         case ('--stiffness'); w%stiffness = real_value(k); k = k + 1
+         case ('--id'); w%id = text_value(k); k = k + 1
+         case ('--units'); call calc_units(k, w%units); k = k + 1
+         case default
+            write (error_unit, '(a)') "trainsim: worm: error: unknown option '"//arg(k)//"'; valid: --starts Z1, "// &
+               '--teeth Z2, --module M | --diametral-pitch P, --worm-diameter D1 | --diameter-factor Q, '// &
+               '--pressure-angle DEG, --friction MU, --stiffness K, --units U, --id ID'
+            call quit(2)
+         end select
+         k = k + 1
+      end do
+      call worm_calc(w, r, err)
+      if (allocated(err)) call fail(err)
+      do j = 1, size(r%warnings)
+         write (error_unit, '(a)') 'trainsim: '//r%warnings(j)%s
+      end do
+      call worm_report(w, r, output_unit)
+      call quit(0)
+   end subroutine do_worm
 end module trainsim_cmd_calc

@@ -41,6 +41,8 @@ contains
          '                                spur gear constants (App. E) and a deck fragment', &
          '  trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', &
          '                                keyed-joint stiffness curve (Ch. IV) and a deck fragment', &
+         '  trainsim worm --starts Z1 --teeth Z2 (--module M | --diametral-pitch P) --friction MU [...]', &
+         '                                worm pair: ratio, lead angle, efficiencies, self-locking', &
          '  trainsim export FILE.h5 QUANTITY ... | --events | --metrics | --summary json | --spectrum', &
          '                                CSV/JSON of a history (scripts/trainsim_export.py --help)', &
          '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR | --overview [ID]  -o OUT', &
@@ -149,6 +151,22 @@ contains
             '  --fmi 3|2          the FMI version (default 3)', &
             '  -h, --help         this text', '', &
             'exit status: 0 success, 2 bad input or file'
+      case ('worm')
+         write (unit, '(a)') 'usage: trainsim worm --starts Z1 --teeth Z2 (--module M | --diametral-pitch P) '// &
+            '(--worm-diameter D1 | --diameter-factor Q) --friction MU [...]', '', &
+            'A cylindrical worm pair from its geometry: ratio z2/z1, lead angle (tan gamma = z1 m / d1),', &
+            'friction angle (tan rho'' = mu / cos alpha_n), forward and backward mesh efficiencies,', &
+            'self-locking (backward efficiency <= 0), and a deck fragment for the worm_gear element.', '', &
+            '  --starts Z1, --teeth Z2    threads of the worm, teeth of the wheel', &
+            '  --module M                 axial module in mm; or --diametral-pitch P in 1/in', &
+            '  --worm-diameter D1         worm pitch diameter (in; m with --units si); or', &
+            '  --diameter-factor Q        D1 = Q * module', &
+            '  --pressure-angle DEG       normal pressure angle, default 20', &
+            '  --friction MU              coefficient of friction in the mesh', &
+            '  --stiffness K              mesh stiffness for the fragment (force/length on the wheel)', &
+            '  --id ID, --units U         the fragment''s element id; in-lbf-s (default) or si', &
+            '  -h, --help                 this text', '', &
+            'exit status: 0 success, 2 bad input'
       case ('key')
          write (unit, '(a)') 'usage: trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', '', &
             'The keyed-joint stiffness curve of Ch. IV (eqs. 4.35-4.37): torque, key force, lineal and', &

@@ -34,6 +34,11 @@ module trainsim_modes
       real(wp), allocatable :: shape(:, :)    !< (dof, mode), largest component +1
       logical, allocatable :: rigid(:)        !< rigid-body (zero-frequency) mode
       real(wp) :: omega_max = 0.0_wp          !< highest circular frequency, rad/s
+      !> modes found: n, less one per independent constraint row in force as the
+      !> run starts (rigid gears and joins, stuck elements: D-76), whose nodes then
+      !> move together (merged coordinates); shape(:, 1:nm), freq_hz(1:nm)
+      integer :: nm = 0
+      integer :: n_rows = 0                   !< constraint rows in force
    end type modes_t
 
    !> Impact-damping fractions sampled between none and the law's largest
@@ -57,6 +62,14 @@ module trainsim_modes
          real(wp), intent(out) :: wr(*), wi(*), vl(ldvl, *), vr(ldvr, *), work(*)
          integer, intent(out) :: info
       end subroutine dgeev
+      subroutine dsyev(jobz, uplo, n, a, lda, w, work, lwork, info)
+         import :: wp
+         character, intent(in) :: jobz, uplo
+         integer, intent(in) :: n, lda, lwork
+         real(wp), intent(inout) :: a(lda, *)
+         real(wp), intent(out) :: w(*), work(*)
+         integer, intent(out) :: info
+      end subroutine dsyev
       subroutine dsygv(itype, jobz, uplo, n, a, lda, b, ldb, w, work, lwork, info)
          import :: wp
          integer, intent(in) :: itype, n, lda, ldb, lwork
@@ -80,9 +93,10 @@ contains
       logical, intent(in), optional :: closed
       type(lin_state_t), intent(in), optional :: state
       integer, allocatable :: dof(:)
-      real(wp), allocatable :: k(:, :), m(:, :), w(:), work(:), y(:), inv_j(:)
+      real(wp), allocatable :: k(:, :), m(:, :), w(:), work(:), y(:), inv_j(:), basis(:, :), kr(:, :), mr(:, :), &
+                               phi(:)
       real(wp) :: ke(max_ports, max_ports), ce(max_ports, max_ports), lam_max, big
-      integer :: i, n, info, a, b, j, imax, np, ends(max_ports)
+      integer :: i, n, info, a, b, j, imax, np, ends(max_ports), nr
       type(lin_state_t) :: st
 
       allocate (dof(size(model%nodes)))
@@ -127,25 +141,84 @@ contains
             end do
          end do
       end do
-      call dsygv(1, 'V', 'U', n, k, n, m, n, w, work, size(work), info)
+      call null_space(model, dof, n, basis, modes%n_rows, err); if (allocated(err)) return
+      nr = size(basis, 2)
+      modes%nm = nr
+      modes%freq_hz = 0.0_wp
+      modes%shape = 0.0_wp
+      modes%rigid = .false.
+      if (nr == 0) then
+         modes%omega_max = 0.0_wp
+         return
+      end if
+      kr = matmul(transpose(basis), matmul(k, basis))   ! the merged coordinates (basis = I without rows)
+      mr = matmul(transpose(basis), matmul(m, basis))
+      call dsygv(1, 'V', 'U', nr, kr, nr, mr, nr, w, work, size(work), info)
       if (info /= 0) then
          call fatal_error(err, 'the eigenvalue solver (LAPACK dsygv) failed with info = '//str(info), err_numeric)
          return
       end if
-      lam_max = max(maxval(abs(w)), tiny(1.0_wp))
-      do i = 1, n
+      lam_max = max(maxval(abs(w(1:nr))), tiny(1.0_wp))
+      do i = 1, nr
          modes%rigid(i) = abs(w(i)) <= 1.0e-9_wp*lam_max
          if (modes%rigid(i)) then
             modes%freq_hz(i) = 0.0_wp
          else
             modes%freq_hz(i) = sqrt(max(w(i), 0.0_wp))/two_pi
          end if
-         imax = maxloc(abs(k(:, i)), 1)
-         big = k(imax, i)
-         modes%shape(:, i) = k(:, i)/big
+         phi = matmul(basis, kr(:, i))
+         imax = maxloc(abs(phi), 1)
+         big = phi(imax)
+         modes%shape(:, i) = phi/big
       end do
-      modes%omega_max = two_pi*maxval(modes%freq_hz)
+      modes%omega_max = two_pi*maxval(modes%freq_hz(1:nr))
    end subroutine compute_modes
+
+   !> An orthonormal basis (n, nr) of the free inertias' motions that keep every
+   !> constraint row in force (D-76: rigid gears and joins, elements stuck as the
+   !> run starts): the null space of G over the degrees of freedom (a held or
+   !> fixed node's column is 0), from the eigenvectors of G^T G (eigenvalue below
+   !> 1e-12 of the largest). No rows: the identity. n_rows: the rows in force.
+   subroutine null_space(model, dof, n, basis, n_rows, err)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: dof(:), n
+      real(wp), allocatable, intent(out) :: basis(:, :)
+      integer, intent(out) :: n_rows
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: gtg(:, :), w(:), work(:), row(:)
+      integer :: j, r, p, d, info, nr
+      allocate (gtg(n, n), row(n), w(n), work(max(1, 3*n)))
+      gtg = 0.0_wp
+      n_rows = 0
+      do j = 1, size(model%elements)
+         associate (e => model%elements(j)%e)
+            do r = 1, e%con%n
+               row = 0.0_wp
+               do p = 1, e%n_ports()
+                  d = dof(e%port(p))
+                  if (d > 0) row(d) = row(d) + e%con%g(r, p)
+               end do
+               n_rows = n_rows + 1
+               gtg = gtg + spread(row, 2, n)*spread(row, 1, n)
+            end do
+         end associate
+      end do
+      if (n_rows == 0) then
+         allocate (basis(n, n))
+         basis = 0.0_wp
+         do j = 1, n
+            basis(j, j) = 1.0_wp
+         end do
+         return
+      end if
+      call dsyev('V', 'U', n, gtg, n, w, work, size(work), info)
+      if (info /= 0) then
+         call fatal_error(err, 'the eigenvalue solver (LAPACK dsyev) failed with info = '//str(info), err_numeric)
+         return
+      end if
+      nr = count(w <= 1.0e-12_wp*max(maxval(abs(w)), tiny(1.0_wp)))   ! ascending: the first nr
+      basis = gtg(:, 1:nr)
+   end subroutine null_space
 
    !> Element e linearised over its np ports (D-73): their nodes ends(1:np), ke and
    !> ce (1:np, 1:np); `linearise` for two, `port_linearise` beyond (inv_j: all nodes').

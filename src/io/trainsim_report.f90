@@ -223,7 +223,9 @@ contains
       integer, intent(in) :: unit
       integer :: i, j
       write (unit, '(a,i0,a)') 'linearised modes (', modes%n, ' free inertias; fixed and prescribed-speed nodes held)'
-      do j = 1, modes%n
+      if (modes%n_rows > 0) write (unit, '(a,i0,a,i0,a)') 'rigid connections and stuck elements: ', modes%n_rows, &
+         ' constraint row(s); their nodes move together (', modes%nm, ' modes)'
+      do j = 1, modes%nm
          if (modes%rigid(j)) then
             write (unit, '(a,i3,a)') 'mode', j, ':  rigid-body mode (0 Hz)'
          else

@@ -159,7 +159,9 @@ contains
       do while (more)
          more = .false.
          do r = 1, cn%m
-            c = minval([(cn%cl(cn%row_slot(p, r)), p=1, cn%row_np(r))])
+            ! (over the row's nonzero ports: a port with g = 0 is not joined, e.g. (0, 1) holds port 2 only)
+            c = minval([(cn%cl(cn%row_slot(p, r)), p=1, cn%row_np(r))], &
+                       mask=[(cn%row_g(p, r) /= 0.0_wp, p=1, cn%row_np(r))])
             do p = 1, cn%row_np(r)
                if (cn%row_g(p, r) == 0.0_wp) cycle
                if (cn%cl(cn%row_slot(p, r)) /= c) then

@@ -26,6 +26,9 @@ module trainsim_registry
    use trainsim_el_brake, only: new_brake
    use trainsim_el_clutch, only: new_clutch
    use trainsim_el_one_way_clutch, only: new_one_way_clutch
+   use trainsim_el_lossy_gear, only: new_lossy_gear
+   use trainsim_el_worm_gear, only: new_worm_gear
+   use trainsim_el_rigid, only: new_rigid_gear, new_rigid_join
    implicit none
    private
 
@@ -127,7 +130,21 @@ contains
                          'engagement = 1.0', '', 'torque_sliding stribeck_speed viscous engagement', new_clutch), &
              element_row('one_way_clutch', 'freewheel', 'freewheel: locked against w_left < w_right, free otherwise', &
                          'capacity = 500.0, torque_sliding = 0.5, viscous = 0.02', 'capacity', &
-                         'torque_sliding viscous', new_one_way_clutch) &
+                         'torque_sliding viscous', new_one_way_clutch), &
+             element_row('lossy_gear', '', 'gear pair with mesh efficiency by power flow, backlash, stiffness', &
+                         'rb_driver = 1.0, rb_driven = 2.0, stiffness = 1.0e6, efficiency_forward = 0.95, '// &
+                         'efficiency_backward = 0.9, backlash = 0.004, contact_damping = 10.0', &
+                         'rb_driver rb_driven stiffness efficiency_forward efficiency_backward', &
+                         'backlash contact_damping', new_lossy_gear), &
+             element_row('worm_gear', '', 'worm pair: efficiencies from lead angle and friction, self-locking', &
+                         'ratio = 40.0, wheel_radius = 3.0, lead_angle = 5.7, friction_coefficient = 0.05, '// &
+                         'stiffness = 1.0e6, backlash = 0.004, contact_damping = 10.0', &
+                         'ratio wheel_radius stiffness lead_angle', 'friction_coefficient backlash contact_damping', &
+                         new_worm_gear), &
+             element_row('rigid_gear', '', 'gear pair without compliance: the constraint r1 w_l = r2 w_r', &
+                         'rb_driver = 1.0, rb_driven = 2.0', 'rb_driver rb_driven', '', new_rigid_gear), &
+             element_row('rigid_join', '', 'two nodes one rigid body: the constraint w_l = w_r', '', '', '', &
+                         new_rigid_join) &
              ]
       rows = table
    end subroutine element_table
