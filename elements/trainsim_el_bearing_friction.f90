@@ -1,4 +1,4 @@
-!> Bearing friction: friction of a node in its bearing against ground (right: a fixed node), stuck or slipping (D-76).
+!> Bearing friction: friction of a node in its bearing against ground (right: a fixed node), stuck or slipping (D-81).
 !> The modes, the friction law and the guards are trainsim_friction_element's
 !> (docs/elements.md "Friction elements").
 module trainsim_el_bearing_friction

@@ -1,4 +1,4 @@
-!> Brake: friction between a node and a fixed node (ground) or a second node, scaled by an engagement e(t) in [0, 1] (D-76): a holding brake engages at standstill.
+!> Brake: friction between a node and a fixed node (ground) or a second node, scaled by an engagement e(t) in [0, 1] (D-81): a holding brake engages at standstill.
 !> The modes, the friction law and the guards are trainsim_friction_element's
 !> (docs/elements.md "Friction elements").
 module trainsim_el_brake

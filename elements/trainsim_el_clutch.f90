@@ -1,4 +1,4 @@
-!> Clutch: friction between two nodes scaled by an engagement e(t) in [0, 1]; the static limit e(t) torque_static is its torque capacity (D-76).
+!> Clutch: friction between two nodes scaled by an engagement e(t) in [0, 1]; the static limit e(t) torque_static is its torque capacity (D-81).
 !> The modes, the friction law and the guards are trainsim_friction_element's
 !> (docs/elements.md "Friction elements").
 module trainsim_el_clutch

@@ -19,7 +19,7 @@
 !> The hub is the right node; T_h is the sum of the external loads on it. With
 !> no load on the hub (Table 5.4) there is no friction.
 !>
-!> bore_friction = 'key_force' (D-78) takes the bore's normal force from the force the
+!> bore_friction = 'key_force' (D-80) takes the bore's normal force from the force the
 !> key actually transmits instead: the key's contact force F_c (its clearance law,
 !> eqs. 4.47-4.48) acts on the hub at the bore radius d/2, and the bore reacts it with
 !> a normal force of the same size (a hub whose own load is a couple), so the friction
@@ -47,7 +47,7 @@ module trainsim_el_keyed_joint
       real(wp) :: key_length = 0.0_wp
       real(wp) :: friction_velocity = 1.0e-3_wp   !< slip speed of the tanh regularisation, rad/s
       real(wp) :: fric_factor = 0.0_wp            !< T_max / |T_h| = mu (d/2) / (R |sin a + mu cos a|)
-      logical :: key_force = .false.              !< bore_friction = 'key_force': T_max = mu |T_key| (D-78)
+      logical :: key_force = .false.              !< bore_friction = 'key_force': T_max = mu |T_key| (D-80)
    contains
       procedure :: configure => key_configure
       procedure :: params => key_params
@@ -175,7 +175,7 @@ contains
       real(wp), intent(out) :: tl, tr
       real(wp) :: tf, dtf
       call self%cl%torques(1.0_wp, thl, wl, thr, wr, tl, tr)   ! eqs. (H.3)-(H.11), (4.45)-(4.48)
-      call self%friction(wl, wr, tr, tf, dtf)                  ! eqs. (4.38)-(4.41), or D-78
+      call self%friction(wl, wr, tr, tf, dtf)                  ! eqs. (4.38)-(4.41), or D-80
       tl = tl - tf
       tr = tr + tf
    end subroutine key_torques

@@ -7,7 +7,7 @@
 !>   forward  (left drives,  fs wr > 0): tl = tl0,         tr = eta_f tr0
 !>   backward (right drives, fs wl < 0): tl = eta_b tl0,   tr = tr0
 !>   neutral  (otherwise: no force, or speeds of opposite sign): tl = tl0, tr = tr0
-!>   held left  (wl = 0, row (1, 0), D-76): tl = tl0 + lam, tr = tr0, while the
+!>   held left  (wl = 0, row (1, 0), D-81): tl = tl0 + lam, tr = tr0, while the
 !>            left's mesh torque lies between backward's and neutral's:
 !>            0 <= lam fs <= (1 - eta_b) fs^2 r1
 !>   held right (wr = 0, row (0, 1)): tl = tl0, tr = tr0 + lam, while the right's
@@ -109,7 +109,7 @@ contains
          return
       end if
       self%cl%b = 0.5_wp*backlash
-      self%con%on = .true.   ! a side held where the losses exceed the driving torque (D-76)
+      self%con%on = .true.   ! a side held where the losses exceed the driving torque (D-81)
       call self%cl%law%configure(grp, units, 1.0_wp, 'linear', err)
    end subroutine read_mesh
 
@@ -355,7 +355,7 @@ contains
       self_locking = self%eta_b <= 0.0_wp
    end function self_locking
 
-   !> The flow mode and, with it, the constraint row in force (D-76): held
+   !> The flow mode and, with it, the constraint row in force (D-81): held
    !> left (1, 0), held right (0, 1), else none.
    subroutine set_flow(self, flow, fs)
       class(lossy_gear_t), intent(inout) :: self

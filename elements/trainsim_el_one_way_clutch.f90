@@ -1,4 +1,4 @@
-!> One-way clutch (freewheel): locked (stuck) against the left node turning slower than the right, free otherwise; capacity bounds the locked torque (D-76).
+!> One-way clutch (freewheel): locked (stuck) against the left node turning slower than the right, free otherwise; capacity bounds the locked torque (D-81).
 !> The modes, the friction law and the guards are trainsim_friction_element's
 !> (docs/elements.md "Friction elements").
 module trainsim_el_one_way_clutch

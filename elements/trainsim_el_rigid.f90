@@ -1,4 +1,4 @@
-!> Rigid connections (issue 23 item 2; D-76's constraints): `rigid_gear`, an
+!> Rigid connections (issue 23 item 2; D-81's constraints): `rigid_gear`, an
 !> ideal gear pair without compliance, r1 wl = r2 wr (row (r1, -r2)), and
 !> `rigid_join`, two nodes one rigid body, wl = wr (row (1, -1)). Each is a
 !> permanent constraint: no torque of its own, no states, no guards; the

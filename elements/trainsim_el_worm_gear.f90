@@ -7,7 +7,7 @@
 !>   eta_f = (cos an - mu tan g)/(cos an + mu cot g)   (worm drives)
 !>   eta_b = (cos an - mu cot g)/(cos an + mu tan g)   (wheel drives)
 !> or both given. eta_b <= 0 is a self-locking pair: back-driven, the mesh
-!> brakes the worm, and a worm stopped under load is held (stuck, D-76).
+!> brakes the worm, and a worm stopped under load is held (stuck, D-81).
 module trainsim_el_worm_gear
    use trainsim_kinds, only: wp, pi
    use trainsim_error, only: error_t, fatal_error, err_input

@@ -368,7 +368,7 @@ contains
       if (e%n_guards() == 0 .or. e%con%on) then
          x = reshape([0.013_wp, 3.0_wp, -0.002_wp, -1.0_wp, -0.4_wp, -0.5_wp, 0.25_wp, 2.0_wp], [4, 2])
          if (e%con%on) then
-            ! an element that may stick (D-76): the states where it slips (its own torques
+            ! an element that may stick (D-81): the states where it slips (its own torques
             ! are then all it puts on the nodes; stuck, the model adds the constraint torque)
             x = x(:, pack([1, 2], [(slips(x(:, k)), k=1, 2)]))
          end if

@@ -614,7 +614,7 @@ contains
       end do
    end subroutine test_str_int_as_i0
 
-   !> parse_real converts with C's strtod (D-79): every number the deck syntax
+   !> parse_real converts with C's strtod (D-82): every number the deck syntax
    !> allows must read bit for bit as Fortran's list-directed read gives it (signs,
    !> no digits before or after the point, leading zeros, e/E/d/D exponents, 20+
    !> digits, subnormals, the range's edges, a mantissa longer than strtod's buffer).

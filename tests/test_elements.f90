@@ -645,7 +645,7 @@ contains
       call check('inner-stage RHS: the same derivatives to the bit as the full RHS', all(ds == dg))
       call check('inner-stage RHS: the workspace is not marked as a step end', .not. ms%ws_step_end)
       ! RK4's inner stages at y + c k and the combination in one call (D-75,
-      ! D-76): the kernel reads the stages' states without forming them, the
+      ! D-77): the kernel reads the stages' states without forming them, the
       ! generic model forms them; both give the step of `rhs_stage` at the formed
       ! states to the bit
       yk = [(0.5_wp*cos(0.7_wp*i), i=1, size(y))]
@@ -922,7 +922,7 @@ contains
             call m%rhs_stage(0.1_wp*p, y, ds)
             call m%rhs(0.1_wp*p, y, df)
             same = same .and. all(ds == df)
-            ! RK4's inner stages at y + c k and its combination (D-75, D-76),
+            ! RK4's inner stages at y + c k and its combination (D-75, D-77),
             ! energy rates included: to the bit the stages at the formed states
             yk = [(0.3_wp*sin(0.9_wp*i + p), i=1, size(y))]
             call rk4_by_stages(m, 0.1_wp*p, 0.25_wp, y, yk, df)
@@ -1015,7 +1015,7 @@ contains
 
    !> RK4's step from (t, y) with k1 given, through `rhs_stage` at the formed
    !> stages' states and the combination in its order: what `rk4_stages` must
-   !> give to the bit (D-76).
+   !> give to the bit (D-77).
    subroutine rk4_by_stages(m, t, h, y, k1, ynew)
       type(model_t), intent(inout) :: m
       real(wp), intent(in) :: t, h, y(:), k1(:)

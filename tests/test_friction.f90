@@ -1,4 +1,4 @@
-!> Friction with sticking (D-76): the analytic cases of issue 23 on the
+!> Friction with sticking (D-81): the analytic cases of issue 23 on the
 !> friction elements and the constraint machinery, under RK4 and SUNDIALS.
 !> Each tolerance says where it comes from.
 program test_friction

@@ -1,5 +1,5 @@
 !> The keyed joint's bore friction from the force the key transmits
-!> (bore_friction = 'key_force', D-78) against a closed form: a hub on a key
+!> (bore_friction = 'key_force', D-80) against a closed form: a hub on a key
 !> without clearance (a linear key of angular stiffness K = k (d/2)^2) swings
 !> with friction mu |T_key| opposing the slip, so toward the centre it moves on
 !> (1 - mu) K and away from it on (1 + mu) K: each half swing's amplitude is
@@ -26,7 +26,7 @@ program test_key_bore_friction
                                           " friction = 0.2, friction_velocity = 1e-4, load_radius = 4.0"
    character(len=*), parameter :: start = " /"//nl//"&initial node = 'hub', angle = -0.01 /"
 
-   call suite_begin('keyed joint bore friction from the key force (issue 23 item 2, D-78)')
+   call suite_begin('keyed joint bore friction from the key force (issue 23 item 2, D-80)')
    call swings('key_force', 0.2_wp)
    call swings('hub_load', 0.0_wp)
    call jacobian_in_contact()

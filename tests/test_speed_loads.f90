@@ -1,5 +1,5 @@
 !> Loads that depend on speed and prescribed angles and accelerations (issue 23
-!> item 3, D-76, D-77) against closed forms: an inertia spun down by each speed
+!> item 3, D-78, D-79) against closed forms: an inertia spun down by each speed
 !> law (linear: exponential; quadratic: 1/(1 + a t); sign: linear to the
 !> regularisation speed, then exponential; a table), the energy ledger closing
 !> on each; the analytic Jacobian of the laws against central differences; a

@@ -1,5 +1,5 @@
 !> trainsim_text_out writes the same text as Fortran's edit descriptors (the
-!> printed tables of `trainsim run` must not change: D-79): every form it is used
+!> printed tables of `trainsim run` must not change: D-82): every form it is used
 !> with, over the values where C's and Fortran's forms part (zero of both signs,
 !> subnormals, huge, non-finite, three-digit exponents, ties, rounding across a
 !> power of ten) and 200 000 reals of random bits (NaNs among them quiet).

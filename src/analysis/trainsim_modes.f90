@@ -35,7 +35,7 @@ module trainsim_modes
       logical, allocatable :: rigid(:)        !< rigid-body (zero-frequency) mode
       real(wp) :: omega_max = 0.0_wp          !< highest circular frequency, rad/s
       !> modes found: n, less one per independent constraint row in force as the
-      !> run starts (rigid gears and joins, stuck elements: D-76), whose nodes then
+      !> run starts (rigid gears and joins, stuck elements: D-81), whose nodes then
       !> move together (merged coordinates); shape(:, 1:nm), freq_hz(1:nm)
       integer :: nm = 0
       integer :: n_rows = 0                   !< constraint rows in force
@@ -175,7 +175,7 @@ contains
    end subroutine compute_modes
 
    !> An orthonormal basis (n, nr) of the free inertias' motions that keep every
-   !> constraint row in force (D-76: rigid gears and joins, elements stuck as the
+   !> constraint row in force (D-81: rigid gears and joins, elements stuck as the
    !> run starts): the null space of G over the degrees of freedom (a held or
    !> fixed node's column is 0), from the eigenvectors of G^T G (eigenvalue below
    !> 1e-12 of the largest). No rows: the identity. n_rows: the rows in force.

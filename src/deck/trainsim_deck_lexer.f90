@@ -311,7 +311,7 @@ contains
          stat = 2
          if (first_pow + expo > range(val) .or. first_pow + expo < -range(val) - 1) return
       end if
-      val = c_strtod(buf, n, ok)   ! the value list-directed `read (buf, *)` gives (D-79), without its cost
+      val = c_strtod(buf, n, ok)   ! the value list-directed `read (buf, *)` gives (D-82), without its cost
       ios = 0
       if (ok == 0) read (buf, *, iostat=ios) val
       if (ios /= 0) then

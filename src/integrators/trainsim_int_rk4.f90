@@ -298,7 +298,7 @@ contains
       if (left_limit) t4 = t + h - 1.0e-9_wp*h
       ! inner stages at y + c k and the combination in one call of the model: no
       ! one reads its workspace after them (a simple model does not form the
-      ! stages' states, D-75, and runs its kernels in one procedure, D-76)
+      ! stages' states, D-75, and runs its kernels in one procedure, D-77)
       call model%rk4_stages(t, h, t4, y, self%k1, self%k2, self%k3, self%k4, self%ytmp, ynew)
       self%stats%rhs_evals = self%stats%rhs_evals + 3
    end subroutine rk4_step

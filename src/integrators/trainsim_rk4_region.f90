@@ -92,7 +92,7 @@ contains
       ok = .false.
       nn = size(model%nodes)
       if (.not. self%multirate .or. model%nport .or. size(model%cn%cand) > 0 .or. nn < mr_min_nodes .or. &
-          mr_small*(2*mr_depth + 4) > nn) return   ! (not with constraints: they couple the whole train, D-76)
+          mr_small*(2*mr_depth + 4) > nn) return   ! (not with constraints: they couple the whole train, D-81)
       call mr_clear(self)
       if (.not. mr_grow(self, nn)) return
       if (.not. mr_border(self, nn)) return

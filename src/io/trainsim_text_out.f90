@@ -1,7 +1,7 @@
 !> Lines of a table built field by field and written in blocks: the text of Fortran's
 !> edit descriptors Aw, Iw, I0, ESw.d, Fw.d and nX without a formatted `write` per
 !> field (gfortran's costs about 4 400 instructions a real; a table of 20 000 rows
-!> took a third of a run's start-up: D-79). ESw.d and Fw.d take C's snprintf digits
+!> took a third of a run's start-up: D-82). ESw.d and Fw.d take C's snprintf digits
 !> (correctly rounded, as gfortran's own), and Fortran's write for what that form
 !> does not cover; test_text_out checks every form against Fortran's write.
 module trainsim_text_out

@@ -1,5 +1,5 @@
 !> What an element declares about kinematic constraints, and what the model
-!> hands back (D-76, docs/plugins.md "Constraints"): a component `con` of every
+!> hands back (D-81, docs/plugins.md "Constraints"): a component `con` of every
 !> element. An element that may join its ports rigidly in some mode (a stuck
 !> clutch, a held brake, a rigid gear) sets `on` in `configure` and keeps `n`
 !> and the rows g(1:n, 1:n_ports) current with its mode (sum_p g(k, p) w_p = 0,

@@ -1,4 +1,4 @@
-!> Kinematic constraints of elements in their current modes (D-76): a stuck
+!> Kinematic constraints of elements in their current modes (D-81): a stuck
 !> clutch joins two nodes into one rigid body, a held brake holds a node to a
 !> fixed node, a rigid gear couples two speeds. The active rows g (sum_p g_p
 !> w_p = 0 over an element's ports) form G; with M the diagonal of the node

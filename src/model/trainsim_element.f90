@@ -115,7 +115,7 @@ module trainsim_element
       !> turns against the driver (TRAIN counts each gear's angle in its own
       !> sense of rotation), +1 for an internal (ring) gear.
       real(wp) :: carrier_sense = -1.0_wp
-      type(constraint_rows_t) :: con   !< kinematic constraints in its mode (D-76, trainsim_constraint_rows)
+      type(constraint_rows_t) :: con   !< kinematic constraints in its mode (D-81, trainsim_constraint_rows)
    contains
       procedure(configure_i), deferred :: configure
       procedure(torques_i), deferred :: torques

@@ -14,7 +14,7 @@ module trainsim_event
    integer, parameter :: ev_contact_rear = 2  !< contact begins on the rear face (impact)
    integer, parameter :: ev_separation = 3    !< contact ends
    integer, parameter :: ev_zone = 4          !< tooth-zone change (one/two pairs in contact)
-   !> Friction modes (D-76): stuck (force: the constraint torque), slipping with
+   !> Friction modes (D-81): stuck (force: the constraint torque), slipping with
    !> the relative speed positive or negative (force: the torque at the switch).
    integer, parameter :: ev_stick = 5, ev_slip_forward = 6, ev_slip_backward = 7
    integer, parameter :: ev_target_reached = 8 !< a positioning sequence reached its target (trainsim_controller)

@@ -1,4 +1,4 @@
-!> The friction elements' common part (D-76; docs/elements.md "Friction"):
+!> The friction elements' common part (D-81; docs/elements.md "Friction"):
 !> Coulomb, Stribeck and viscous friction (or a table against the relative
 !> speed) between the left and right node (a fixed node for ground), with the
 !> modes slipping forward (+1), slipping backward (-1) and stuck (0). Stuck,
@@ -77,7 +77,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: k
       logical :: has_table
-      self%con%on = .true.                         ! stuck: the row wl - wr = 0 (D-76)
+      self%con%on = .true.                         ! stuck: the row wl - wr = 0 (D-81)
       self%con%g(1, 1:2) = [1.0_wp, -1.0_wp]
       has_table = grp%has('friction_speeds')
       if (grp%has('friction_torques')) has_table = .true.

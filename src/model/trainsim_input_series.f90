@@ -95,7 +95,7 @@ contains
          if (model%speed_of(i) == 0) cycle
          k = k + 1
          associate (m => model%speeds(model%speed_of(i)))
-            if (m%given == given_speed) then   ! (the time function itself: one call, as before D-76)
+            if (m%given == given_speed) then   ! (the time function itself: one call, as before D-78)
                v(k) = m%f%value(t)
             else
                v(k) = m%value(t)

@@ -136,7 +136,7 @@ module trainsim_model
       !> that kernel's per-element elastic energies (summed after the kinetic).
       integer, private :: n_cold = 0
       real(wp), allocatable, private :: el_pe(:)
-      !> Kinematic constraints (D-76; allocatable: a plain one cost the simple kernels 11 instr/step)
+      !> Kinematic constraints (D-81; allocatable: a plain one cost the simple kernels 11 instr/step)
       type(constraint_set_t), allocatable :: cn
       integer :: n_cand = 0   !< size(cn%cand): elements that may constrain (then never simple)
    contains
@@ -284,7 +284,7 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine model_rhs_stage
 
-      !> RK4's inner stages and its combination (D-76), given k1 = f(t, y): k2 =
+      !> RK4's inner stages and its combination (D-77), given k1 = f(t, y): k2 =
       !> f(t + h/2, y + h/2 k1), k3 = f(t + h/2, y + h/2 k2), k4 = f(t4, y + h k3),
       !> each as `model_rhs_stage` at that state, the same values bit for bit, and
       !> ynew = y + h/6 (k1 + 2 (k2 + k3) + k4). A simple model's kernel reads y(j) +
@@ -490,7 +490,7 @@ module trainsim_model
          integer, intent(in) :: i
       end subroutine refresh_hot
 
-      module subroutine constraints_setup(self)   ! kinematic constraints (D-76; docs: trainsim_model_constraints)
+      module subroutine constraints_setup(self)   ! kinematic constraints (D-81; docs: trainsim_model_constraints)
          type(model_t), intent(inout) :: self
       end subroutine constraints_setup
       module subroutine constraints_rhs(self, t, y, dydt, t_now)

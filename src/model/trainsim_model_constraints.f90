@@ -1,4 +1,4 @@
-!> The model's side of the elements' kinematic constraints (D-76): which nodes
+!> The model's side of the elements' kinematic constraints (D-81): which nodes
 !> the active rows touch and what the solve of trainsim_constraints needs of
 !> them (inertias; held and fixed nodes take no acceleration), the call sites
 !> in the RHS and the guards, and the stick events (speeds made consistent,

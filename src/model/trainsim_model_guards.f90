@@ -82,7 +82,7 @@ contains
 
    module procedure model_guards_general
       integer :: k, i, j
-      if (self%cn%m > 0) call constraints_at(self, t, y)   ! lam and t_now at (t, y) (D-76)
+      if (self%cn%m > 0) call constraints_at(self, t, y)   ! lam and t_now at (t, y) (D-81)
       do k = 1, size(self%guard_els)
          i = self%guard_els(k)
          if (self%gr(i)%form == 0) then
@@ -141,7 +141,7 @@ contains
    end subroutine guards_other
 
    module procedure model_element_guards
-      if (self%elements(i)%e%con%on) call constraints_at(self, t, y)   ! (D-76)
+      if (self%elements(i)%e%con%on) call constraints_at(self, t, y)   ! (D-81)
       call guards_other(self, i, t, y, g, 0)
    end procedure model_element_guards
 
@@ -244,7 +244,7 @@ contains
       real(wp) :: e_before, de
       e_before = 0.0_wp   ! read below only if track_energy; set so -Wmaybe-uninitialized need not prove that
       ! the stuck clusters' speeds exactly as the constraints say (an integrator's
-      ! interpolation to the event leaves roundoff in them; D-76), before modes change
+      ! interpolation to the event leaves roundoff in them; D-81), before modes change
       de = 0.0_wp
       if (size(self%cn%cand) > 0) then
          call constraints_settle(self, t, y, events, nev, de, .true.)
@@ -293,7 +293,7 @@ contains
             events(nev)%element = i
          end do
       end do
-      if (size(self%cn%cand) > 0) call constraints_settle(self, t, y, events, nev, de, .false.)   ! (D-76)
+      if (size(self%cn%cand) > 0) call constraints_settle(self, t, y, events, nev, de, .false.)   ! (D-81)
       if (.not. self%run%track_energy) return
       ! the kinetic energy a stick event removes is dissipated in the element that stuck
       y(self%n_states + 1) = y(self%n_states + 1) - de
@@ -316,7 +316,7 @@ contains
       end function els_energy
    end procedure model_apply_events
 
-   !> A full RHS at (t, y) before a constraining element's guards (D-76): its
+   !> A full RHS at (t, y) before a constraining element's guards (D-81): its
    !> lam and t_now are then those of (t, y).
    subroutine constraints_at(self, t, y)
       class(model_t), intent(inout) :: self

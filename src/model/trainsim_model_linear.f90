@@ -23,7 +23,7 @@ contains
             if (nd%nstates() > 0) call nd%jacobian(t, y, jac, dtq(1:nd%nstates(), i))
          end associate
       end do
-      do i = 1, size(self%loads)   ! a load with a speed law: d torque / d omega (D-77)
+      do i = 1, size(self%loads)   ! a load with a speed law: d torque / d omega (D-79)
          na = self%loads(i)%node
          if (self%loads(i)%law%kind == law_none .or. self%speed_of(na) /= 0) cycle
          if (self%nodes(na)%n%nstates() < 2) cycle
@@ -63,7 +63,7 @@ contains
             end do
          end associate
       end do
-      ! a node in a rigid cluster (D-76) accelerates with its cluster, exactly: its
+      ! a node in a rigid cluster (D-81) accelerates with its cluster, exactly: its
       ! row left without partials keeps Newton's updates of joined speeds equal
       do k = 1, self%cn%nc
          if (self%cn%inv_j(k) == 0.0_wp .or. self%cn%m == 0) cycle

@@ -135,7 +135,7 @@ contains
       self%ws_step_end = .false.
       self%ws_t = t
       self%ws_energy = .false.
-      nc = self%n_cand                                 ! elements that may constrain (D-76)
+      nc = self%n_cand                                 ! elements that may constrain (D-81)
       if (nc > 0) call constraints_rhs(self, t, y, t_now=.true.)
       pdiss = 0.0_wp
       pin = 0.0_wp
@@ -196,7 +196,7 @@ contains
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
-      if (nc > 0) call constraints_rhs(self, t, y)                     ! constraint torques (D-76)
+      if (nc > 0) call constraints_rhs(self, t, y)                     ! constraint torques (D-81)
       do i = 1, size(self%fn)
          associate (nd => self%fn(i))
             select case (nd%kind)

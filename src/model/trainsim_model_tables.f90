@@ -462,7 +462,7 @@ contains
          end if
          call refresh_hot(self, i)
       end do
-      if (self%n_cand > 0) then   ! the constraints of the initial modes, limits checked (D-76)
+      if (self%n_cand > 0) then   ! the constraints of the initial modes, limits checked (D-81)
          yc = y; nev = 0
          allocate (evs(4))
          call constraints_settle(self, t, yc, evs, nev, dstored, .false.)

@@ -1,6 +1,6 @@
 !> A node's prescribed motion (docs/deck.md, "&load"): its speed, its angle or
 !> its acceleration given as a function of time, the other two from the given
-!> one's derivatives or exact integrals (D-76). The node's angle is
+!> one's derivatives or exact integrals (D-78). The node's angle is
 !> theta0 + `integral`(t): theta0 is its &initial angle (for a prescribed angle
 !> the builder makes it default to the function's value at t = 0).
 module trainsim_motion
@@ -48,7 +48,7 @@ contains
 
    !> The motion of a &load group's `quantity` ('speed', 'angle', 'acceleration')
    !> with time function f. A prescribed angle takes the kinds constant and sine
-   !> only (D-76): a piecewise-linear angle's speed would jump at its knots.
+   !> only (D-78): a piecewise-linear angle's speed would jump at its knots.
    subroutine motion_from_group(grp, quantity, f, m, err)
       type(deck_group_t), intent(in) :: grp
       character(len=*), intent(in) :: quantity

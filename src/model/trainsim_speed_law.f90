@@ -1,5 +1,5 @@
 !> How a torque load depends on its node's speed (docs/deck.md, "Loads that
-!> depend on speed"; D-77): T = s(t) g(omega), s the load's time function and g
+!> depend on speed"; D-79): T = s(t) g(omega), s the load's time function and g
 !> one of the laws below, after the Modelica Standard Library's
 !> Rotational.Sources (tau_nominal = s(t), w_nominal = w_ref):
 !>   linear        g = w/w_ref               (LinearSpeedDependentTorque, TorqueDirection = false)

@@ -175,7 +175,7 @@ contains
                if (t >= self%t_metrics) m%separations = m%separations + 1
             case (ev_zone)
                if (t >= self%t_metrics) m%zone_changes = m%zone_changes + 1
-            end select                       ! (stick and slip rows, D-76: in the table only)
+            end select                       ! (stick and slip rows, D-81: in the table only)
          end associate
          call self%out%write_event(self%n_events, row, err)
          if (allocated(err)) return

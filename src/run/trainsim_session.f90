@@ -9,7 +9,7 @@
 !> through the output times of a run gives that run's states bit for bit
 !> (tests/test_session.f90).
 !>
-!> Save and restore (D-76): a saved state is a copy of the model (its
+!> Save and restore (D-83): a saved state is a copy of the model (its
 !> parameters and every element's discrete mode), the time, the state vector
 !> and a fixed-step integrator's grid. Both `save` and `restore` start the
 !> integrator afresh at that point (an integrator's history, such as CVODE's

@@ -87,7 +87,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       logical, intent(in), optional :: keep_interrupted
       type(progress_t), intent(inout), optional :: progress
-      logical, intent(in), optional :: step_checked   !< the caller ran check_fixed_step on this model (D-79)
+      logical, intent(in), optional :: step_checked   !< the caller ran check_fixed_step on this model (D-82)
       type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats

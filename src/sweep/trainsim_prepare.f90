@@ -35,7 +35,7 @@ contains
 
    !> prepare_model for a caller that has no further use of `deck`: the overrides
    !> are set in it and the builder marks its keys as read, without the copy
-   !> (a deep copy of every group, 15 000 instructions a node: D-79).
+   !> (a deep copy of every group, 15 000 instructions a node: D-82).
    subroutine prepare_model_in_place(deck, ovs, model, err, preload)
       type(deck_t), intent(inout) :: deck
       type(override_t), intent(in) :: ovs(:)

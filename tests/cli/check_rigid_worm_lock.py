@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Rigid connections and the self-locking worm (issue 23 item 2, on D-76's constraints).
+"""Rigid connections and the self-locking worm (issue 23 item 2, on D-81's constraints).
 
 - `rigid_gear` (r1 wl = r2 wr) driven by a constant torque T on the left node: the left
   speed is T t / (J1 + J2 (r1/r2)^2) to 1e-12 relative (RK4 is exact on a constant

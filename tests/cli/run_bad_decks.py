@@ -438,7 +438,7 @@ CASES = [
          .replace("face_width = 0.7", "face_width = 0.0"),
          exit=2, stderr=["deck.nml:5:", "face_width must be > 0"], stderr_re=[r"got \S+ in$"]),
 ] + [
-    # friction elements (D-76): the element on line 4, the offending key on line 5
+    # friction elements (D-81): the element on line 4, the offending key on line 5
     dict(name=f"{etype}: {key} = {value} is refused",
          deck=RUN + NODES + f"&element id = 'f1', type = '{etype}', left = 'a', right = 'b',\n"
          f"         {extra}{key} = {value} /\n",
