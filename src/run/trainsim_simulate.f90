@@ -283,7 +283,8 @@ contains
       real(wp), intent(in) :: dout, t_end, t
       real(wp), intent(inout) :: y(:)
       type(error_t), allocatable, intent(out) :: err
-      d%tol = 1.0e-9_wp*model%run%dt
+      ! one instant: 1e-9 dt, never below 4 ulp of the run's times (a breakpoint one ulp off)
+      d%tol = max(1.0e-9_wp*model%run%dt, 4.0_wp*spacing(max(abs(model%run%t_start), abs(t_end))))
       d%t_window = t
       d%may_miss = integ%may_miss_events()
       ! blocks when no step but the output times' needs a whole sample: the

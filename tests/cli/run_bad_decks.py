@@ -94,6 +94,12 @@ FLOOD = """&run t_end = 2.0e-4, dt = 5.0e-7, integrator = '{integrator}' /
 CASES = [
     # ---- sanity: the base deck is good, so the failures below are the edits' doing
     dict(name="baseline good deck runs", deck=GOOD, exit=0, stderr=[], output=True),
+    # a load step at 100.1 s one ulp before the output time 99.9 + 2 x 0.1 = 100.10000000000001
+    # s, with 1e-9 dt below one ulp of t: was "internal: ... left the state", exit 2
+    dict(name="a breakpoint one ulp before an output time is that instant (long run, small dt)",
+         deck="&run t_start = 99.9, t_end = 100.2, dt = 1.0e-5, output_interval = 0.1 /\n" + NODES + SHAFT +
+              "&load node = 'b', kind = 'step', value0 = 0.0, value1 = 1.0, t_step = 100.1 /\n",
+         exit=0, stderr=[], output=True),
     dict(name="&initial node='all' is accepted", deck=GOOD + "&initial node = 'all', speed = 10.0 /\n",
          exit=0, stderr=[], output=True),
 
