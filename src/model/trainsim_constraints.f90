@@ -53,6 +53,9 @@ module trainsim_constraints
       integer, allocatable :: cl_ref(:)          !< per cluster: its held slot (0: free)
       logical, allocatable :: cl_exact(:), cl_locked(:)
       real(wp), allocatable :: scratch(:)        !< (n_y) a RHS for the guards
+      !> (n_y) a node's own derivatives inside the RHS (not scratch: that one is
+      !> lent to the RHS by constraints_at, and a motor in a cluster needs this)
+      real(wp), allocatable :: node_dydt(:)
    end type constraint_set_t
 
 contains
@@ -72,14 +75,17 @@ contains
       cn%ncl = 0
       if (allocated(cn%row_el)) deallocate (cn%row_el, cn%row_k, cn%row_np, cn%row_slot, cn%row_g, cn%keep, &
                                             cn%chol, cn%lam, cn%b, cn%node, cn%slot, cn%inv_j, cn%jn, cn%afree, &
-                                            cn%acc, cn%rho, cn%w, cn%cl, cn%cl_ref, cn%cl_exact, cn%cl_locked, cn%scratch)
+                                            cn%acc, cn%rho, cn%w, cn%cl, cn%cl_ref, cn%cl_exact, cn%cl_locked, cn%scratch, &
+                                            cn%node_dydt)
       allocate (cn%row_el(nmax), cn%row_k(nmax), cn%row_np(nmax), cn%row_slot(max_ports, nmax), &
                 cn%row_g(max_ports, nmax), cn%keep(nmax), cn%chol(nmax, nmax), cn%lam(nmax), cn%b(nmax))
       allocate (cn%node(ns), cn%slot(n_nodes), cn%inv_j(ns), cn%jn(ns), cn%afree(ns), cn%acc(ns), cn%rho(ns), cn%w(ns), &
-                cn%cl(ns), cn%cl_ref(ns), cn%cl_exact(ns), cn%cl_locked(ns), cn%scratch(max(1, n_y)))
+                cn%cl(ns), cn%cl_ref(ns), cn%cl_exact(ns), cn%cl_locked(ns), cn%scratch(max(1, n_y)), &
+                cn%node_dydt(max(1, n_y)))
       cn%slot = 0
       cn%lam = 0.0_wp
       cn%scratch = 0.0_wp
+      cn%node_dydt = 0.0_wp
    end subroutine cn_setup
 
    !> The rows the candidate elements declare in their current modes; `changed`:

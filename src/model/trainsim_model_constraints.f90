@@ -109,8 +109,8 @@ contains
                self%cn%afree(s) = (self%torque(nd) - f%d*self%omega(nd))/f%j
             else                                             ! a node with states of its own (a motor)
                o = self%nodes(nd)%n%offset
-               call self%nodes(nd)%n%derivatives(t, y, self%torque(nd), self%cn%scratch)
-               self%cn%afree(s) = self%cn%scratch(o + 2)
+               call self%nodes(nd)%n%derivatives(t, y, self%torque(nd), self%cn%node_dydt)
+               self%cn%afree(s) = self%cn%node_dydt(o + 2)
             end if
          end associate
       end do

@@ -96,6 +96,18 @@ CASES = [
     dict(name="baseline good deck runs", deck=GOOD, exit=0, stderr=[], output=True),
     # a load step at 100.1 s one ulp before the output time 99.9 + 2 x 0.1 = 100.10000000000001
     # s, with 1e-9 dt below one ulp of t: was "internal: ... left the state", exit 2
+    # a DC motor held by a brake at standstill: the constraint solve asked the motor's own
+    # derivatives in a buffer lent to the RHS (segmentation fault before the first step).
+    # 1 V / 0.5 ohm = 2 A after 12.5 L/R, k_t 2 A = 1 N m < 2 N m static: held, speed exactly 0.
+    dict(name="a DC motor held by a brake at standstill runs (was SIGSEGV); held at speed 0, 2 A",
+         deck="&run t_end = 0.05, dt = 1.0e-5, units = 'si' /\n"
+              "&node id = 'motor', type = 'dc_motor', inertia = 2.0e-3, damping = 1.0e-4, torque_constant = 0.5,\n"
+              "      back_emf_constant = 0.5, inductance = 2.0e-3, resistance = 0.5 /\n"
+              "&node id = 'ground', type = 'fixed' /\n"
+              "&element id = 'brake', type = 'brake', left = 'motor', right = 'ground', torque_sliding = 1.6,\n"
+              "         torque_static = 2.0 /\n"
+              "&load node = 'motor', quantity = 'voltage', kind = 'constant', value = 1.0 /\n",
+         exit=0, stderr=[], stdout=["motor   0.000000000E+00   0.000000000E+00   1.99"], output=True),
     dict(name="a breakpoint one ulp before an output time is that instant (long run, small dt)",
          deck="&run t_start = 99.9, t_end = 100.2, dt = 1.0e-5, output_interval = 0.1 /\n" + NODES + SHAFT +
               "&load node = 'b', kind = 'step', value0 = 0.0, value1 = 1.0, t_step = 100.1 /\n",
