@@ -16,6 +16,7 @@ module trainsim_controller_deck
    use trainsim_controller, only: controller_t, ctl_speed, ctl_angle, aw_none, aw_conditional, aw_back_calculation
    use trainsim_node_dc_motor, only: dc_motor_node_t
    use trainsim_el_positioner, only: positioner_t
+   use trainsim_el_brake, only: brake_t
    implicit none
    private
 
@@ -41,7 +42,10 @@ contains
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default='c'//str(k)); if (allocated(err)) return
             call read_one(g, model, node_ids, ctl, im, err); if (allocated(err)) return
-            if (associated(ctl%seq)) call add_positioner(g, model, id, ctl, im)
+            if (associated(ctl%seq)) then
+               call command_brake(g, model, ctl, err); if (allocated(err)) return
+               call add_positioner(g, model, id, ctl, im)
+            end if
             select type (m => model%nodes(im)%n)
             type is (dc_motor_node_t)
                m%ctl = ctl
@@ -197,6 +201,32 @@ contains
                           'integral frozen), servo (the loop stays closed on the target)', err_input)
       end select
    end subroutine read_sequence
+
+   !> A sequence's `brake` key: the brake element it commands (engagement 1 while
+   !> the sequence holds, else 0).
+   subroutine command_brake(g, model, ctl, err)
+      type(deck_group_t), intent(inout) :: g
+      type(model_t), intent(inout) :: model
+      type(controller_t), intent(in) :: ctl
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: bid
+      integer :: j
+      if (.not. g%has('brake')) return
+      call g%get_string('brake', bid, err); if (allocated(err)) return
+      do j = 1, size(model%elements)
+         if (model%elements(j)%e%id /= bid) cycle
+         select type (b => model%elements(j)%e)
+         type is (brake_t)
+            b%command => ctl%seq
+            return
+         end select
+         call fatal_error(err, g%where('brake')//": error: element '"//bid//"' is of type '"// &
+                          model%elements(j)%e%type_name//"'; a sequence commands an element of type 'brake'", err_input)
+         return
+      end do
+      call fatal_error(err, g%where('brake')//": error: the sequence's brake '"//bid//"' is not an element of the "// &
+                       'deck', err_input)
+   end subroutine command_brake
 
    !> Append the sequence's positioner element: left port the sensor, right port
    !> the motor (or, when the sensor is the motor, the first other node).

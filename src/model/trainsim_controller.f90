@@ -26,7 +26,7 @@ module trainsim_controller
    implicit none
    private
 
-   public :: controller_t, sequence_t
+   public :: controller_t, sequence_t, sequence_holds
    public :: ctl_speed, ctl_angle, aw_none, aw_conditional, aw_back_calculation, ctl_nstates
 
    integer, parameter :: ctl_angle = 1, ctl_speed = 2   !< which sensor state: y(offset + kind)
@@ -69,7 +69,7 @@ contains
       real(wp), intent(in) :: t
       h = .false.
       if (.not. associated(self%seq)) return
-      h = self%seq%reached >= slot_at(self%seq%t, t)
+      h = sequence_holds(self%seq, t)
    end function ctl_held
 
    !> The controller at (t, y): the error e, the unbounded output u, the voltage v
@@ -171,6 +171,13 @@ contains
          jac(o + 5, o + 5) = jac(o + 5, o + 5) - 1.0_wp/self%tf
       end if
    end subroutine ctl_jacobian
+
+   !> Whether the sequence holds at t (its brake command): the slot of t reached.
+   pure logical function sequence_holds(seq, t) result(h)
+      type(sequence_t), intent(in) :: seq
+      real(wp), intent(in) :: t
+      h = seq%reached >= slot_at(seq%t, t)
+   end function sequence_holds
 
    !> The slot of the sequence at t: the last k with times(k) <= t (0 before the first).
    pure integer function slot_at(times, t) result(i)

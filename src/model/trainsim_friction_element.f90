@@ -19,6 +19,7 @@ module trainsim_friction_element
    use trainsim_units, only: units_t
    use trainsim_param_list, only: param_list_t, make_param_list
    use trainsim_element, only: element_t
+   use trainsim_controller, only: sequence_t, sequence_holds
    use trainsim_event, only: event_t, ev_stick, ev_slip_forward, ev_slip_backward
    implicit none
    private
@@ -34,6 +35,9 @@ module trainsim_friction_element
       !> engagement: constant (eng0) or piecewise linear in time (eng_t, eng_v)
       real(wp) :: eng0 = 1.0_wp
       real(wp), allocatable :: eng_t(:), eng_v(:)
+      !> a brake commanded by a &controller's positioning sequence (D-76, control):
+      !> engagement 1 while the sequence holds, else 0 (set by the builder)
+      type(sequence_t), pointer :: command => null()
       !> a freewheel: the left (driver) never turns faster than the right: locked
       !> (stuck, lam <= 0: it drives the right) or free (right overrunning, mode -1)
       logical :: one_way = .false.
@@ -173,6 +177,10 @@ contains
       class(friction_element_t), intent(in) :: self
       integer :: k, n
       real(wp) :: t, f
+      if (associated(self%command)) then
+         e = merge(1.0_wp, 0.0_wp, sequence_holds(self%command, self%con%t_now))
+         return
+      end if
       if (.not. allocated(self%eng_t)) then
          e = self%eng0
          return

@@ -616,6 +616,12 @@ CASES = [
          ["deck.nml:6:", "hold", "'brake'", "servo"]),
         ("controller with an unknown key", "motor = 'm', kp = 1.0, value = 1.0, gain = 3.0",
          ["deck.nml:6:", "gain", "&controller"]),
+        ("sequence commanding a brake that is not an element", "motor = 'm', measure = 'angle', kp = 1.0, "
+         "sequence = .true., kind = 'table', times = 0.0, values = 1.0, tolerance = 0.01, speed_tolerance = 0.1, "
+         "brake = 'hold'", ["deck.nml:6:", "brake", "'hold'", "not an element"]),
+        ("sequence commanding an element that is not a brake", "motor = 'm', measure = 'angle', kp = 1.0, "
+         "sequence = .true., kind = 'table', times = 0.0, values = 1.0, tolerance = 0.01, speed_tolerance = 0.1, "
+         "brake = 's1'", ["deck.nml:6:", "brake", "'s1'", "shaft", "type 'brake'"]),
     ]
 ] + [
     dict(name="controller and a voltage load on one motor",
