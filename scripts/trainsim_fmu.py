@@ -41,48 +41,58 @@ def binaries(exe_dir):
          "); build trainsim with its C interface (TRAINSIM_BUILD_C_API)")
 
 
+def variables(v):
+    """The FMU's variables, one list for both FMI versions: (name, value reference,
+    causality, variability, description, unit, initial, start)."""
+    out = []
+    for k, node in enumerate(v["nodes"]):
+        out.append((f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad", "calculated", None))
+        out.append((f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s", "calculated",
+                    None))
+    for e, el in enumerate(v["elements"]):
+        i = el["id"]
+        out.append((f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}", el["disp_unit"],
+                    "calculated", None))
+        out.append((f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous", f"force (or torque) of {i}",
+                    el["force_unit"], "calculated", None))
+        out.append((f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
+                    f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", "calculated", None))
+    for j, node in enumerate(v["inputs"]):
+        out.append((f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}",
+                    v["torque_unit"], None, 0.0))
+    for p, par in enumerate(v["parameters"]):
+        out.append((par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1", "exact",
+                    float(par["value"])))
+    return out
+
+
 def model_description(v, guid, fmi):
-    return model_description_3(v, guid) if fmi == 3 else model_description_2(v, guid)
-
-
-def model_description_3(v, guid):
-    torque = v["torque_unit"]
-    rows, outputs = ['    <Float64 name="time" valueReference="0" causality="independent" variability="continuous" '
-                     'unit="s" description="time"/>'], []
-
-    def var(name, vr, causality, variability, description, unit, initial=None, start=None):
+    rows, outputs = [], []
+    units = {"rad", "rad/s", "1", v["torque_unit"]}
+    for name, vr, causality, variability, description, unit, initial, start in variables(v):
+        units.add(unit)
         attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
         if initial:
             attrs += f' initial="{initial}"'
-        if start is not None:
-            attrs += f' start="{start!r}"'
-        rows.append(f"    <Float64 {attrs} unit={quoteattr(unit)} description={quoteattr(description)}/>")
-        return vr
-
-    for k, node in enumerate(v["nodes"]):
-        outputs.append(var(f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad",
-                           initial="calculated"))
-        outputs.append(var(f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s",
-                           initial="calculated"))
-    for e, el in enumerate(v["elements"]):
-        i = el["id"]
-        outputs.append(var(f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}",
-                           el["disp_unit"], initial="calculated"))
-        outputs.append(var(f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous",
-                           f"force (or torque) of {i}", el["force_unit"], initial="calculated"))
-        outputs.append(var(f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
-                           f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", initial="calculated"))
-    for j, node in enumerate(v["inputs"]):
-        var(f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}", torque, start=0.0)
-    for p, par in enumerate(v["parameters"]):
-        var(par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1", initial="exact",
-            start=float(par["value"]))
-    units = {torque, "rad", "rad/s", "1", "s"} | {e["disp_unit"] for e in v["elements"]} | \
-        {e["force_unit"] for e in v["elements"]}
+        if fmi == 3:
+            if start is not None:
+                attrs += f' start="{start!r}"'
+            rows.append(f"    <Float64 {attrs} unit={quoteattr(unit)} description={quoteattr(description)}/>")
+        else:
+            attrs += f" description={quoteattr(description)}"
+            real = f'<Real unit={quoteattr(unit)}' + (f' start="{start!r}"' if start is not None else "") + "/>"
+            rows.append(f"    <ScalarVariable {attrs}>\n      {real}\n    </ScalarVariable>")
+        if causality == "output":
+            outputs.append(vr if fmi == 3 else len(rows))
+    if fmi == 3:
+        units.add("s")
+        rows.insert(0, '    <Float64 name="time" valueReference="0" causality="independent" '
+                       'variability="continuous" unit="s" description="time"/>')
     unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in sorted(units))
-    structure = "\n".join(f'    <Output valueReference="{r}"/>' for r in outputs)
-    structure += "\n" + "\n".join(f'    <InitialUnknown valueReference="{r}"/>' for r in outputs)
-    return f"""<?xml version="1.0" encoding="UTF-8"?>
+    if fmi == 3:
+        structure = "\n".join(f'    <Output valueReference="{r}"/>' for r in outputs)
+        structure += "\n" + "\n".join(f'    <InitialUnknown valueReference="{r}"/>' for r in outputs)
+        return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription fmiVersion="3.0" modelName={quoteattr(v["title"] or "trainsim")} instantiationToken="{guid}"
   description={quoteattr("trainsim drive train: " + os.path.basename(v["deck_file"]))}
   generationTool={quoteattr("trainsim " + v["version"])} variableNamingConvention="flat">
@@ -101,43 +111,6 @@ def model_description_3(v, guid):
   </ModelStructure>
 </fmiModelDescription>
 """
-
-
-def model_description_2(v, guid):
-    torque = v["torque_unit"]
-    rows, outputs = [], []
-
-    def var(name, vr, causality, variability, description, unit, initial=None, start=None):
-        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
-        if initial:
-            attrs += f' initial="{initial}"'
-        attrs += f" description={quoteattr(description)}"
-        real = f'<Real unit={quoteattr(unit)}' + (f' start="{start!r}"' if start is not None else "") + "/>"
-        rows.append(f"    <ScalarVariable {attrs}>\n      {real}\n    </ScalarVariable>")
-        return len(rows)
-
-    for k, node in enumerate(v["nodes"]):
-        outputs.append(var(f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad",
-                           initial="calculated"))
-        outputs.append(var(f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s",
-                           initial="calculated"))
-    for e, el in enumerate(v["elements"]):
-        i = el["id"]
-        outputs.append(var(f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}",
-                           el["disp_unit"], initial="calculated"))
-        outputs.append(var(f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous",
-                           f"force (or torque) of {i}", el["force_unit"], initial="calculated"))
-        outputs.append(var(f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
-                           f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", initial="calculated"))
-    for j, node in enumerate(v["inputs"]):
-        var(f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}", torque,
-            start=0.0)
-    for p, par in enumerate(v["parameters"]):
-        var(par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1",
-            initial="exact", start=float(par["value"]))
-    units = {torque, "rad", "rad/s", "1"} | {e["disp_unit"] for e in v["elements"]} | \
-        {e["force_unit"] for e in v["elements"]}
-    unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in sorted(units))
     unknowns = "\n".join(f'      <Unknown index="{i}"/>' for i in outputs)
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription fmiVersion="2.0" modelName={quoteattr(v["title"] or "trainsim")} guid="{guid}"
