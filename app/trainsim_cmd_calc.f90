@@ -5,7 +5,7 @@ module trainsim_cmd_calc
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
-   use trainsim_strings, only: str
+   use trainsim_strings, only: str, string_t
    use trainsim_gear_calc, only: gear_input_t, gear_result_t, gear_calc, gear_report, &
                                  key_input_t, key_result_t, key_calc, key_report, key_max_points
    use trainsim_worm_calc, only: worm_input_t, worm_result_t, worm_calc, worm_report
@@ -43,7 +43,7 @@ contains
       type(gear_input_t) :: g
       type(gear_result_t) :: r
       type(error_t), allocatable :: err
-      integer :: k, j
+      integer :: k
       call default_units(g%units)
       k = 2
       do while (k <= nargs)
@@ -82,9 +82,7 @@ contains
       end do
       call gear_calc(g, r, err)
       if (allocated(err)) call fail(err)
-      do j = 1, size(r%warnings)
-         write (error_unit, '(a)') 'trainsim: '//r%warnings(j)%s
-      end do
+      call print_warnings(r%warnings)
       call gear_report(g, r, output_unit)
       call quit(0)
    end subroutine do_gear
@@ -94,7 +92,7 @@ contains
       type(key_input_t) :: q
       type(key_result_t) :: r
       type(error_t), allocatable :: err
-      integer :: k, j
+      integer :: k
       real(wp) :: x
       call default_units(q%units)
       k = 2
@@ -139,9 +137,7 @@ contains
       end do
       call key_calc(q, r, err)
       if (allocated(err)) call fail(err)
-      do j = 1, size(r%warnings)
-         write (error_unit, '(a)') 'trainsim: '//r%warnings(j)%s
-      end do
+      call print_warnings(r%warnings)
       call key_report(q, r, output_unit)
       call quit(0)
    end subroutine do_key
@@ -151,7 +147,7 @@ contains
       type(worm_input_t) :: w
       type(worm_result_t) :: r
       type(error_t), allocatable :: err
-      integer :: k, j
+      integer :: k
       call default_units(w%units)
       k = 2
       do while (k <= nargs)
@@ -177,10 +173,17 @@ contains
       end do
       call worm_calc(w, r, err)
       if (allocated(err)) call fail(err)
-      do j = 1, size(r%warnings)
-         write (error_unit, '(a)') 'trainsim: '//r%warnings(j)%s
-      end do
+      call print_warnings(r%warnings)
       call worm_report(w, r, output_unit)
       call quit(0)
    end subroutine do_worm
+
+   !> A calculator's warnings on stderr, one a line.
+   subroutine print_warnings(warnings)
+      type(string_t), intent(in) :: warnings(:)
+      integer :: j
+      do j = 1, size(warnings)
+         write (error_unit, '(a)') 'trainsim: '//warnings(j)%s
+      end do
+   end subroutine print_warnings
 end module trainsim_cmd_calc
