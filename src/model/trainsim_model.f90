@@ -139,6 +139,8 @@ module trainsim_model
       !> Kinematic constraints (D-81; allocatable: a plain one cost the simple kernels 11 instr/step)
       type(constraint_set_t), allocatable :: cn
       integer :: n_cand = 0   !< size(cn%cand): elements that may constrain (then never simple)
+      real(wp), allocatable :: g_el(:)      !< one element's guards: sized to the largest n_guards (finalize)
+      logical, allocatable :: fired_el(:)   !< and which of them fired
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
