@@ -552,8 +552,8 @@ module trainsim_model
          real(wp), intent(out) :: e, pot
       end subroutine model_workspace_energy
 
-      !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed or a
-      !> node's own input (motor voltage) jumps or kinks: integrators end steps there.
+      !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed, a node's
+      !> or an element's own input (motor voltage, engagement) jumps or kinks: steps end there.
       module subroutine model_breakpoints(model, t0, t1, bp)
          class(model_t), intent(in) :: model
          real(wp), intent(in) :: t0, t1

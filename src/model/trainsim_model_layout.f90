@@ -161,6 +161,10 @@ contains
          call model%nodes(i)%n%breakpoints(b)
          bp = [bp, b]
       end do
+      do i = 1, size(model%elements)                 ! (an engagement table's knots: D-87 (hold))
+         call model%elements(i)%e%breakpoints(b)
+         bp = [bp, b]
+      end do
       bp = pack(bp, bp > t0 .and. bp < t1)
       call sort_unique(bp, 1.0e-12_wp*max(abs(t0), abs(t1), 1.0e-300_wp))
    end procedure model_breakpoints
