@@ -59,12 +59,8 @@ contains
    !> are real and distinct: (R/L)^2 > 4 k_t k_e/(J L)).
    function motion(w0, i0, f, s) result(x)
       real(wp), intent(in) :: w0, i0, f, s
-      real(wp) :: x(2), a(2, 2), xp(2), d(2), disc, l1, l2
-      a = reshape([0.0_wp, -ke/ll, kt/jt, -rr/ll], [2, 2])
-      disc = sqrt((rr/ll)**2 - 4.0_wp*kt*ke/(jt*ll))
-      l1 = 0.5_wp*(-rr/ll + disc)
-      l2 = 0.5_wp*(-rr/ll - disc)
-      xp = [-rr*f/(kt*ke), f/kt]                   ! steady state: k_t i = f, R i = -k_e w
+      real(wp) :: x(2), a(2, 2), xp(2), d(2), l1, l2
+      call system(f, a, l1, l2, xp)
       d = [w0, i0] - xp
       x = xp + (exp(l1*s)*(matmul(a, d) - l2*d) - exp(l2*s)*(matmul(a, d) - l1*d))/(l1 - l2)
    end function motion
@@ -99,6 +95,37 @@ contains
       i = r%y_final(3)
    end function current_at
 
+   !> The whole run (to 1.2 s) and its arrival: time (-1 if none), speed, current.
+   subroutine run_to_arrival(ts, tc, r, t_r, w_r, i_r)
+      real(wp), intent(in) :: ts, tc
+      type(run_result_t), intent(out) :: r
+      real(wp), intent(out) :: t_r, w_r, i_r
+      type(model_t) :: m
+      integer :: kr
+      call load_model_text(deck(ts, tc, 1.2_wp), m)
+      call run_model(m, r)
+      kr = first_event(r, ev_target_reached, 0.0_wp)
+      call check_true('the sequence reaches its target', kr > 0)
+      t_r = -1.0_wp; w_r = 0.0_wp; i_r = 0.0_wp
+      if (kr == 0) return
+      t_r = r%events(kr)%t
+      w_r = r%events(kr)%omega_left
+      i_r = current_at(ts, tc, t_r)
+   end subroutine run_to_arrival
+
+   !> A = [0, k_t/J; -k_e/L, -R/L] of the motion (w, i), its eigenvalues and the
+   !> steady state under f.
+   pure subroutine system(f, a, l1, l2, xp)
+      real(wp), intent(in) :: f
+      real(wp), intent(out) :: a(2, 2), l1, l2, xp(2)
+      real(wp) :: disc
+      a = reshape([0.0_wp, -ke/ll, kt/jt, -rr/ll], [2, 2])
+      disc = sqrt((rr/ll)**2 - 4.0_wp*kt*ke/(jt*ll))
+      l1 = 0.5_wp*(-rr/ll + disc)
+      l2 = 0.5_wp*(-rr/ll - disc)
+      xp = [-rr*f/(kt*ke), f/kt]                   ! steady state: k_t i = f, R i = -k_e w
+   end subroutine system
+
    integer function first_event(r, kind, after) result(k)
       type(run_result_t), intent(in) :: r
       integer, intent(in) :: kind
@@ -115,16 +142,11 @@ contains
       type(model_t) :: m
       type(run_result_t) :: r
       real(wp) :: t_r, w_r, i_r, t_s, th_s, disp, force
-      integer :: kr, ks, kl, n, contact, pairs
+      integer :: ks, kl, n, contact, pairs
       logical, allocatable :: dwell(:)
       call test_begin('held_brake_holds_the_load_through_the_dwell')
-      call load_model_text(deck(ts, tc, 1.2_wp), m)
-      call run_model(m, r)
-      kr = first_event(r, ev_target_reached, 0.0_wp)
-      call check_true('the sequence reaches its target', kr > 0)
-      if (kr == 0) return
-      t_r = r%events(kr)%t
-      w_r = r%events(kr)%omega_left
+      call run_to_arrival(ts, tc, r, t_r, w_r, i_r)
+      if (t_r < 0.0_wp) return
       ks = first_event(r, ev_stick, t_r)
       call check_true('the brake sticks after the arrival', ks > 0)
       if (ks == 0) return
@@ -133,7 +155,6 @@ contains
       ! engaged at the arrival, the brake slips forward under Tc + T_L (and the
       ! decaying current) to a stop: the closed form's instant, to RK4's error and
       ! the event location (1e-9 dt) on a 2.7e-4 s phase
-      i_r = current_at(ts, tc, t_r)
       call check('stick instant - arrival = the closed-form stopping time', t_s - t_r, &
                  stop_time(w_r, i_r, tc + t_load), rel_tol=1.0e-6_wp)
       ! the dwell: stuck from t_s to the release, its angle the stick's to 1e-12
@@ -166,19 +187,12 @@ contains
    !> it, and the load drives it backward against Tc: J w' = k_t i - (T_L - Tc).
    subroutine test_weak_brake_slips_under_the_load()
       real(wp), parameter :: ts = 0.04_wp, tc = 0.03_wp
-      type(model_t) :: m
       type(run_result_t) :: r
       real(wp) :: t_r, w_r, i_r, t_s, x_s(2), x(2), th, worst_w, worst_th, s
-      integer :: kr, ks, kb, k, n
+      integer :: ks, kb, k, n
       call test_begin('weak_brake_slips_under_the_load')
-      call load_model_text(deck(ts, tc, 1.2_wp), m)
-      call run_model(m, r)
-      kr = first_event(r, ev_target_reached, 0.0_wp)
-      call check_true('the sequence reaches its target', kr > 0)
-      if (kr == 0) return
-      t_r = r%events(kr)%t
-      w_r = r%events(kr)%omega_left
-      i_r = current_at(ts, tc, t_r)
+      call run_to_arrival(ts, tc, r, t_r, w_r, i_r)
+      if (t_r < 0.0_wp) return
       s = stop_time(w_r, i_r, tc + t_load)
       ks = first_event(r, ev_stick, t_r)
       kb = first_event(r, ev_slip_backward, t_r)
@@ -217,12 +231,8 @@ contains
    !> of `motion`'s speed, w = w_p + c1 exp(l1 s) + c2 exp(l2 s) integrated exactly.
    real(wp) function slip_angle(i0, f, s) result(th)
       real(wp), intent(in) :: i0, f, s
-      real(wp) :: a(2, 2), xp(2), d(2), ad(2), disc, l1, l2, c1, c2
-      a = reshape([0.0_wp, -ke/ll, kt/jt, -rr/ll], [2, 2])
-      disc = sqrt((rr/ll)**2 - 4.0_wp*kt*ke/(jt*ll))
-      l1 = 0.5_wp*(-rr/ll + disc)
-      l2 = 0.5_wp*(-rr/ll - disc)
-      xp = [-rr*f/(kt*ke), f/kt]
+      real(wp) :: a(2, 2), xp(2), d(2), ad(2), l1, l2, c1, c2
+      call system(f, a, l1, l2, xp)
       d = [0.0_wp, i0] - xp
       ad = matmul(a, d)
       c1 = (ad(1) - l2*d(1))/(l1 - l2)
