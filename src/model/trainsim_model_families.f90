@@ -103,9 +103,10 @@ module trainsim_model_families
    !> torques on it (x, y: their indices into the element torques; with one, y
    !> is the zero after the last element's, D-89), any other (its incidences
    !> iw(x : y)). Nodes held at a constant speed: (node, x, y), (theta0, w,
-   !> load sum), in two tables one after another (`held` is both): with at
-   !> most two element torques (x, y as a free node's), any other (the range
-   !> of its incidences in iw). Constant loads on
+   !> load sum), in node order (their drive powers are summed in it), in two
+   !> tables one after another (`held` is both): the first ones with at most
+   !> two element torques (x, y as a free node's), the rest (the range of its
+   !> incidences in iw). Constant loads on
    !> free nodes: (node), (value). Damped plain inertias in node order (their
    !> dissipated power): (state offset), (d).
    integer, parameter :: free_ni = 4, free_nr = 3, held_ni = 3, held_nr = 3, load_ni = 1, load_nr = 1

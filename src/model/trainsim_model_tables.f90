@@ -158,7 +158,7 @@ contains
    !> appears or goes, refresh_hot).
    subroutine build_families(self)
       type(model_t), intent(inout) :: self
-      integer :: i, q, nn, ne, ni, nr, inc0
+      integer :: i, q, nn, ne, ni, nr, inc0, nh2
       integer, allocatable :: sp(:), sd(:), ct(:), gen(:), free(:), held(:), ld(:), dmp(:), first(:), cnt(:)
       logical, allocatable :: two(:), one(:)
       logical, allocatable :: contact(:)
@@ -182,9 +182,11 @@ contains
       free = [pack([(i, i=1, nn)], one), pack([(i, i=1, nn)], two), &
               pack([(i, i=1, nn)], self%fn(:)%kind == nk_plain .and. .not. (one .or. two))]
       dmp = pack([(i, i=1, nn)], self%fn(:)%kind == nk_plain .and. self%fn(:)%d /= 0.0_wp)
-      ! the held nodes with at most two element torques, then the others
-      held = [pack([(i, i=1, nn)], self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed .and. cnt <= 2), &
-              pack([(i, i=1, nn)], self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed .and. cnt > 2)]
+      held = pack([(i, i=1, nn)], self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)
+      ! in node order (their drive powers are summed in it): those with at most two
+      ! element torques first if they come first, else all through their incidences
+      nh2 = count(cnt(held) <= 2)
+      if (.not. all(cnt(held(1:nh2)) <= 2)) nh2 = 0
       ld = pack([(i, i=1, size(self%fl))], [(self%fn(self%fl(i)%node)%kind /= nk_held, i=1, size(self%fl))])
       associate (f => self%fam)
          f%nn = nn
@@ -205,7 +207,7 @@ contains
          f%free_n = table_t(f%free%n - f%free2%n, f%free%i0 + free_ni*f%free2%n, f%free%r0 + free_nr*f%free2%n)
          call place(f%damped, size(dmp), 1, 1)
          call place(f%held, size(held), held_ni, held_nr)
-         f%held2 = table_t(count(cnt(held) <= 2), f%held%i0, f%held%r0)
+         f%held2 = table_t(nh2, f%held%i0, f%held%r0)
          f%held_n = table_t(f%held%n - f%held2%n, f%held%i0 + held_ni*f%held2%n, f%held%r0 + held_nr*f%held2%n)
          call place(f%loads, size(ld), load_ni, load_nr)
          inc0 = ni
