@@ -279,6 +279,8 @@ contains
       call check('every output time equals the run with the speed step within 1e-12 of the speed scale ('// &
                  ftoa(dw/scale)//') and the angle scale ('//ftoa(dth/ascale)//')', &
                  dw <= 1.0e-12_wp*scale .and. dth <= 1.0e-12_wp*ascale)
+      write (*, '(a, es10.3, a, es10.3, a)') '       speed step: ', dw/scale, ' of the speed scale, ', dth/ascale, &
+         ' of the angle scale'
       call check('n1 turns at the input speed', s%model%omega(1) == 100.0_wp)
       call s%finish()
       call s%start(m, err, inputs=[string_t('n4.speed')])
@@ -319,6 +321,7 @@ contains
       call check('set motor.voltage at t = 0.02 s and advanced to t_end without error', .not. allocated(err))
       call check('every output time equals the run with the voltage step within 1e-12 of the speed scale ('// &
                  ftoa(dw/scale)//')', dw <= 1.0e-12_wp*scale)
+      write (*, '(a, es10.3, a)') '       voltage step: ', dw/scale, ' of the speed scale'
       call s%finish()
       call run_model(m, r)
       call check('the step slowed the motor (its speed at the end below the 24 V run''s)', &
