@@ -391,6 +391,8 @@ contains
       if (.not. allocated(err)) call s2%advance(3.99_wp, err)
       call check('two sessions of one model advanced in turn end alike, bit for bit (no shared sequence)', &
                  .not. allocated(err) .and. all(s2%y == y1) .and. all(y1 == y2))
+      call s%restore(p, err)
+      call check('a point saved by an earlier start is refused', allocated(err))
       call s%finish()
       call s2%finish()
    end subroutine test_sequence_restored

@@ -45,6 +45,9 @@ module trainsim_session
 
    public :: session_t, session_state_t
 
+   !> Session starts so far (each start's number tells its saved points apart)
+   integer, save :: n_starts = 0
+
    !> A saved point of a session (`session_t%save`, `restore`).
    type :: session_state_t
       type(model_t), private :: model
@@ -55,6 +58,7 @@ module trainsim_session
       integer, allocatable, private :: input_kinds(:)
       integer, allocatable, private :: reached(:)   !< each positioning sequence's progress
       logical, private :: saved = .false.
+      integer, private :: start_no = 0   !< the start of the session run that saved it
       !> a fixed-step integrator's grid (t0 + k dt, the next k)
       real(wp), private :: grid_t0 = 0.0_wp
       integer(i8), private :: grid_next = 0
@@ -82,6 +86,7 @@ module trainsim_session
       !> per node: its inputs of speed and voltage (bits in_speed, in_voltage set)
       integer, allocatable, private :: input_kinds(:)
       logical, private :: owns_sequences = .false.
+      integer, private :: start_no = 0   !< this start's number (n_starts)
    contains
       procedure :: start => session_start
       procedure :: advance => session_advance
@@ -115,6 +120,8 @@ contains
       if (self%owns_sequences) call release_sequences(self%model)
       if (allocated(self%input_load)) deallocate (self%input_load)
       if (allocated(self%input_kinds)) deallocate (self%input_kinds)
+      n_starts = n_starts + 1
+      self%start_no = n_starts
       self%model = model
       call own_sequences(self%model)
       self%owns_sequences = .true.
@@ -183,18 +190,25 @@ contains
       state%input_kinds = self%input_kinds
       call sequence_progress(self%model, state%reached)
       state%saved = .true.
+      state%start_no = self%start_no
       call grid_of(self%integ, state%grid_t0, state%grid_next)
       call fresh_integrator(self, err)
       if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
    end subroutine session_save
 
-   !> Go back (or forward) to a point `save` took of this session's run.
+   !> Go back (or forward) to a point `save` took of this session's run (since its
+   !> last start; a point of another run is refused: err_input).
    subroutine session_restore(self, state, err)
       class(session_t), intent(inout), target :: self
       type(session_state_t), intent(in) :: state
       type(error_t), allocatable, intent(out) :: err
       if (.not. (self%started .and. state%saved)) then
          call fatal_error(err, 'internal: a session restored from a state it did not save', err_internal)
+         return
+      end if
+      if (state%start_no /= self%start_no) then   ! (its sequences are another run's)
+         call fatal_error(err, 'a session restored from a point saved by another session run (a point '// &
+                          'belongs to the run between one start and the next)', err_input)
          return
       end if
       call self%integ%statistics(self%stats)
