@@ -13,7 +13,7 @@
 !> Both start at the deck's value at t_start, so an input left alone runs the
 !> deck's value of t_start on.
 !>
-!> Sequences (D-86): a &controller's positioning sequence is shared by pointer
+!> Sequences (D-89): a &controller's positioning sequence is shared by pointer
 !> between the motor's controller, its positioner element and a brake it commands
 !> (D-76). A session gives its model sequences of its own (`own_sequences`), so
 !> that the caller's model and other sessions are not advanced by it, and a saved
