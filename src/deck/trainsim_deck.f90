@@ -9,7 +9,8 @@ module trainsim_deck
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
    use trainsim_strings, only: string_t, to_lower, str, join
    use trainsim_deck_lexer, only: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string, &
-                                  check_text, tokenize, display, parse_real, is_repeat, is_key
+                                  check_text, tokenize, display, parse_real, is_repeat, is_key, &
+                                  lower_in_place
    use trainsim_deck_group, only: deck_group_t, deck_entry_t, same_key
    implicit none
    private
@@ -93,6 +94,12 @@ contains
             call read_failed()
             return
          end if
+         if (.not. pending_cr .and. index(blk(1:nb), achar(13)) == 0) then   ! no CR: every byte counts
+            nlen = nlen + nb
+            if (nb > 0) last = blk(nb:nb)
+            pos = pos + nb
+            cycle
+         end if
          do i = 1, nb
             if (blk(i:i) == achar(13)) then
                if (pending_cr) nlen = nlen + 1   ! a CR not followed by LF is kept
@@ -124,6 +131,13 @@ contains
          if (ios /= 0) then
             call read_failed()
             return
+         end if
+         if (.not. pending_cr .and. index(blk(1:nb), achar(13)) == 0) then   ! no CR: the block as it is
+            i = int(min(int(nb, int64), nlen - n))
+            text(n + 1:n + i) = blk(1:i)
+            n = n + i
+            pos = pos + nb
+            cycle
          end if
          do i = 1, nb
             if (blk(i:i) == achar(13)) then
@@ -316,15 +330,6 @@ contains
          if (allocated(err)) return
       end do
    end subroutine parse_group
-
-   pure subroutine lower_in_place(t)
-      character(len=*), intent(inout) :: t
-      integer :: k, c
-      do k = 1, len(t)
-         c = iachar(t(k:k))
-         if (c >= iachar('A') .and. c <= iachar('Z')) t(k:k) = achar(c + 32)
-      end do
-   end subroutine lower_in_place
 
    !> Number of keys (words followed by '=') from token `j` to the group's end: the
    !> entries parse_group can make, exactly as many when the group is well formed.
@@ -532,7 +537,7 @@ contains
       do i = 1, size(self%groups)
          ok = .false.
          do k = 1, size(allowed)
-            if (self%groups(i)%name == to_lower(allowed(k)%s)) then
+            if (same_key(self%groups(i)%name, allowed(k)%s)) then
                ok = .true.
                exit
             end if

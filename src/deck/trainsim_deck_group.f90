@@ -6,7 +6,7 @@ module trainsim_deck_group
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: string_t, to_lower, str, join
-   use trainsim_deck_lexer, only: parse_real, parse_int
+   use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place
    implicit none
    private
 
@@ -528,7 +528,8 @@ contains
          tmp(1:self%queried_len) = self%queried(1:self%queried_len)
          call move_alloc(tmp, self%queried)
       end if
-      self%queried(self%queried_len + 1:n - 1) = to_lower(key)
+      self%queried(self%queried_len + 1:n - 1) = key
+      call lower_in_place(self%queried(self%queried_len + 1:n - 1))   ! to_lower's result is a temporary
       self%queried(n:n) = ','
       self%queried_len = n
    end subroutine record_query

@@ -11,7 +11,7 @@ module trainsim_deck_lexer
    private
 
    public :: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string
-   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key
+   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key, lower_in_place
 
    ! Token kinds produced by the lexer.
    integer, parameter :: tk_group = 1   ! '&name' (text = lower-case name)
@@ -129,7 +129,8 @@ contains
             if (to_lower(text(i + 1:j - 1)) == 'end') then
                call push(toks, tk_end, '&end', line)
             else
-               call push(toks, tk_group, to_lower(text(i + 1:j - 1)), line)
+               call push(toks, tk_group, text(i + 1:j - 1), line)
+               call lower_in_place(toks%text(toks%n)%s)
             end if
             i = j
          else if (c == "'" .or. c == '"') then
@@ -401,6 +402,16 @@ contains
       end do
       is_key = .true.
    end function is_key
+
+   !> t in lower case (ASCII letters), without a temporary.
+   pure subroutine lower_in_place(t)
+      character(len=*), intent(inout) :: t
+      integer :: k, c
+      do k = 1, len(t)
+         c = iachar(t(k:k))
+         if (c >= iachar('A') .and. c <= iachar('Z')) t(k:k) = achar(c + 32)
+      end do
+   end subroutine lower_in_place
 
    pure logical function is_blank(c)
       character(len=1), intent(in) :: c
