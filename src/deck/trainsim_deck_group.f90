@@ -130,31 +130,22 @@ contains
       end subroutine put
    end function group_where
 
-   !> Decimal digits of i (as str(i) writes them) in buf(1:n).
+   !> Decimal digits of i >= 0 (a line or ordinal; as str(i) writes them) in buf(1:n).
    pure subroutine digits(i, buf, n)
       integer, intent(in) :: i
       character(len=12), intent(out) :: buf
       integer, intent(out) :: n
-      character(len=12) :: rev
       integer :: v, m
-      v = abs(i)
-      m = 0
+      v = i
+      m = 12
       do
-         m = m + 1
-         rev(m:m) = achar(iachar('0') + mod(v, 10))
+         buf(m:m) = achar(iachar('0') + mod(v, 10))
          v = v/10
          if (v == 0) exit
-      end do
-      n = 0
-      if (i < 0) then
-         n = 1
-         buf(1:1) = '-'
-      end if
-      do while (m > 0)
-         n = n + 1
-         buf(n:n) = rev(m:m)
          m = m - 1
       end do
+      n = 13 - m
+      buf(1:n) = buf(m:12)
    end subroutine digits
 
    !> "&element #2 (id 'g1')" if the group has an 'id' entry, else "&element #2".
