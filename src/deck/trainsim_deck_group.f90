@@ -130,13 +130,13 @@ contains
       end subroutine put
    end function group_where
 
-   !> Decimal digits of i >= 0 (a line or ordinal; as str(i) writes them) in buf(1:n).
+   !> Decimal digits of i (a line or ordinal; as str(i) writes them, -1 too) in buf(1:n).
    pure subroutine digits(i, buf, n)
       integer, intent(in) :: i
       character(len=12), intent(out) :: buf
       integer, intent(out) :: n
       integer :: v, m
-      v = i
+      v = abs(i)
       m = 12
       do
          buf(m:m) = achar(iachar('0') + mod(v, 10))
@@ -144,6 +144,10 @@ contains
          if (v == 0) exit
          m = m - 1
       end do
+      if (i < 0) then
+         m = m - 1
+         buf(m:m) = '-'
+      end if
       n = 13 - m
       buf(1:n) = buf(m:12)
    end subroutine digits
