@@ -258,7 +258,7 @@ contains
    end subroutine parse_into
 
    !> Parse one group starting at token `i` (a tk_group token); on return `i` is past its end.
-   !> The texts of its tokens are moved into the group (no copy, D-86); the entries and
+   !> The texts of its tokens are moved into the group (no copy, D-90); the entries and
    !> values are counted first and allocated once.
    subroutine parse_group(toks, i, file, ordinal, g, err)
       type(token_list_t), intent(inout) :: toks

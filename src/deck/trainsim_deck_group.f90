@@ -29,7 +29,7 @@ module trainsim_deck_group
       integer :: ordinal = 0                        !< 1 for the first group of this name, 2 for the second...
       type(deck_entry_t), allocatable :: entries(:) !< in file order
       !> Keys asked for through has/get_*/count_values, in order of first query, each
-      !> followed by ',' in one text (one allocation a group, not one a key: D-86).
+      !> followed by ',' in one text (one allocation a group, not one a key: D-90).
       character(len=:), allocatable, private :: queried
       integer, private :: queried_len = 0
    contains
@@ -91,7 +91,7 @@ contains
 
    !> Location for messages: "file:LINE: &name #ordinal", plus ", key 'k'" (and the key's line)
    !> if `key` is present in the group; otherwise the group's line. Built in one allocation
-   !> (it is every node's and element's origin, D-86).
+   !> (it is every node's and element's origin, D-90).
    function group_where(self, key) result(s)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in), optional :: key
@@ -550,7 +550,7 @@ contains
    end function was_queried
 
    !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
-   !> without a lowered copy of `key` (an allocation a look-up, D-86).
+   !> without a lowered copy of `key` (an allocation a look-up, D-90).
    pure logical function same_key(stored, key) result(yes)
       character(len=*), intent(in) :: stored, key
       character(len=1) :: a, b

@@ -23,7 +23,7 @@ module trainsim_deck_lexer
 
    !> The tokens of a deck text, in order: kind (tk_*), line and text of each. Only group
    !> names, words, strings and '&end' carry a text: '=', ',' and '/' are their kind alone
-   !> (no allocation a token, D-86); the parser moves the texts into the deck's entries.
+   !> (no allocation a token, D-90); the parser moves the texts into the deck's entries.
    type :: token_list_t
       integer :: n = 0
       integer, allocatable :: kind(:), line(:)
@@ -420,7 +420,7 @@ contains
 
    pure logical function ends_word(c)
       character(len=1), intent(in) :: c
-      select case (c)   ! not index(): a library call a character of the deck (D-86)
+      select case (c)   ! not index(): a library call a character of the deck (D-90)
       case (' ', achar(9), achar(13), achar(10), ',', '=', '/', '!', "'", '"')
          ends_word = .true.
       case default

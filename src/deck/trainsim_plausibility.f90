@@ -46,7 +46,7 @@ module trainsim_plausibility
       integer, allocatable :: gear_of(:)
       real(wp) :: to_m = 0.0_wp
       type(string_t), allocatable :: warnings(:)
-      !> Each element's and node's params(), asked once (D-86)
+      !> Each element's and node's params(), asked once (D-90)
       type(param_list_t), allocatable :: ep(:), np(:)
    end type ctx_t
 

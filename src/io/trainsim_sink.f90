@@ -196,7 +196,7 @@ contains
 
    !> Whether `open` reads its run_meta_t. Default: yes. A sink that ignores it is
    !> opened with an empty one, so that start-up does not gather the model's names,
-   !> parameters and input files for nothing (D-86).
+   !> parameters and input files for nothing (D-90).
    pure logical function sink_needs_meta(self) result(needs)
       class(sink_t), intent(in) :: self
       associate (unused => self)
