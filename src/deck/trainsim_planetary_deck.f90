@@ -44,6 +44,8 @@ module trainsim_planetary_deck
       character(len=:), allocatable :: pitch_key   !< 'module' or 'diametral_pitch', as given
       real(wp) :: pitch_value = 0.0_wp
       real(wp) :: face = 0.0_wp, ring_phase = 0.0_wp
+      real(wp) :: c2 = 0.0_wp                      !< two_pair_factor of the spur meshes (if has_c2)
+      logical :: has_c2 = .false.
    end type stage_t
 
 contains
@@ -143,6 +145,8 @@ contains
          call per_planet(g, 'sun_backlash', n, st%bs, err); if (allocated(err)) return
          call per_planet(g, 'ring_backlash', n, st%br, err); if (allocated(err)) return
          call g%get_real('sun_ring_phase', st%ring_phase, err, default=0.0_wp); if (allocated(err)) return
+         st%has_c2 = g%has('two_pair_factor')
+         call g%get_real('two_pair_factor', st%c2, err, default=0.0_wp); if (allocated(err)) return
          if (.not. (st%ring_phase >= 0.0_wp .and. st%ring_phase < 1.0_wp)) then
             call fatal_error(err, g%where('sun_ring_phase')//': error: sun_ring_phase (a fraction of a tooth) must '// &
                              'be in [0, 1), got '//str(st%ring_phase), err_input)
@@ -361,6 +365,7 @@ contains
          else
             common = common//', '//st%pitch_key//' = '//str(st%pitch_value)//', pressure_angle = '//str(st%phi)// &
                      ', face_width = '//str(st%face)
+            if (st%has_c2) common = common//', two_pair_factor = '//str(st%c2)   ! (checked by the gear)
             text = text//"&element id = '"//st%id//'_sun_planet'//str(k)//"', type = 'spur_gear', left = '"// &
                    st%node(1)%s//"', right = '"//pn//"'"//common//", driven_sense = 'driver', teeth_driver = "// &
                    str(st%zs)//', teeth_driven = '//str(st%zp)//', backlash = '//str(st%bs(k))// &
