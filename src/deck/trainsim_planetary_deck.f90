@@ -38,6 +38,7 @@ module trainsim_planetary_deck
       character(len=:), allocatable :: new_nodes   !< the &node groups' text
       real(wp) :: jp = 0.0_wp
       logical :: ideal = .false.
+      logical :: rigid = .false.                   !< mesh = 'rigid': rigid_gear meshes (constraint rows)
       real(wp) :: ks = 0.0_wp, kr = 0.0_wp         !< 0: spur's default stiffness
       real(wp), allocatable :: bs(:), br(:)        !< backlash per planet (spur)
       real(wp) :: m = 0.0_wp, phi = 20.0_wp        !< module in deck length units, pressure angle (deg)
@@ -126,11 +127,15 @@ contains
       select case (to_lower(mesh))
       case ('spur'); st%ideal = .false.
       case ('ideal'); st%ideal = .true.
+      case ('rigid'); st%ideal = .true.; st%rigid = .true.
       case default
-         call fatal_error(err, g%where('mesh')//": error: unknown mesh '"//mesh//"'; valid: spur, ideal", err_input)
+         call fatal_error(err, g%where('mesh')//": error: unknown mesh '"//mesh//"'; valid: spur, ideal, rigid", &
+                          err_input)
          return
       end select
-      if (st%ideal) then
+      if (st%rigid) then
+         continue   ! no stiffness: constraint rows (D-81)
+      else if (st%ideal) then
          call g%get_real('sun_mesh_stiffness', st%ks, err); if (allocated(err)) return
          call g%get_real('ring_mesh_stiffness', st%kr, err); if (allocated(err)) return
          call g%require_positive('sun_mesh_stiffness', st%ks, err); if (allocated(err)) return
@@ -338,8 +343,9 @@ contains
       integer, intent(in) :: ig
       real(wp) :: ps(st%n), pr(st%n), c
       integer :: k
-      character(len=:), allocatable :: pn, common
+      character(len=:), allocatable :: pn, common, kind
       character(len=*), parameter :: nl = new_line('a')
+      kind = merge('rigid_gear', 'ideal_gear', st%rigid)
       text = text//st%new_nodes
       do k = 1, 3
          if (index(st%new_nodes, "'"//st%id//'_'//trim(members(k))//"'") > 0) call note(trim(members(k)))
@@ -354,13 +360,13 @@ contains
          pn = st%id//'_planet'//str(k)
          common = ", carrier = '"//st%node(3)%s//"'"
          if (st%ideal) then
-            text = text//"&element id = '"//st%id//'_sun_planet'//str(k)//"', type = 'ideal_gear', left = '"// &
-                   st%node(1)%s//"', right = '"//pn//"'"//common//", driven_sense = 'driver', stiffness = "// &
-                   str(st%ks)//', rb_driver = '//str(c*st%zs)//', rb_driven = '//str(c*st%zp)//' /'//nl
+            text = text//"&element id = '"//st%id//'_sun_planet'//str(k)//"', type = '"//kind//"', left = '"// &
+                   st%node(1)%s//"', right = '"//pn//"'"//common//", driven_sense = 'driver'"//stiff(st%ks)// &
+                   ', rb_driver = '//str(c*st%zs)//', rb_driven = '//str(c*st%zp)//' /'//nl
             call note('sun_mesh')
-            text = text//"&element id = '"//st%id//'_ring_planet'//str(k)//"', type = 'ideal_gear', left = '"// &
-                   pn//"', right = '"//st%node(2)%s//"'"//common//", mesh = 'internal', stiffness = "// &
-                   str(st%kr)//', rb_driver = '//str(c*st%zp)//', rb_driven = '//str(c*st%zr)//' /'//nl
+            text = text//"&element id = '"//st%id//'_ring_planet'//str(k)//"', type = '"//kind//"', left = '"// &
+                   pn//"', right = '"//st%node(2)%s//"'"//common//", mesh = 'internal'"//stiff(st%kr)// &
+                   ', rb_driver = '//str(c*st%zp)//', rb_driven = '//str(c*st%zr)//' /'//nl
             call note('ring_mesh')
          else
             common = common//', '//st%pitch_key//' = '//str(st%pitch_value)//', pressure_angle = '//str(st%phi)// &
@@ -390,6 +396,14 @@ contains
          call move_alloc(tmp, role)
          owner = [owner, ig]
       end subroutine note
+
+      !> An ideal mesh's stiffness (none for a rigid one).
+      function stiff(k) result(t)
+         real(wp), intent(in) :: k
+         character(len=:), allocatable :: t
+         t = ''
+         if (.not. st%rigid) t = ', stiffness = '//str(k)
+      end function stiff
 
       !> A spur mesh's stiffness if given (0: the gear's default), and the group's end.
       function stiffness_text(k) result(t)
