@@ -19,6 +19,7 @@ module trainsim_constraint_rows
    !> An element's constraints (see above).
    type :: constraint_rows_t
       logical :: on = .false.                                  !< the element may constrain (any mode)
+      logical :: rigid = .false.                               !< its rows hold in every mode (rigid gear, join)
       integer :: n = 0                                         !< rows active in the current mode
       real(wp) :: g(max_constraints, max_con_ports) = 0.0_wp   !< g(k, p): row k over the ports
       real(wp) :: t_now = 0.0_wp                               !< time of the model's evaluation

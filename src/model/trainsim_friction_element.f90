@@ -55,6 +55,7 @@ module trainsim_friction_element
       procedure :: params => friction_params
       procedure :: engagement => friction_engagement
       procedure :: limit => friction_limit
+      procedure :: breakpoints => friction_breakpoints
    end type friction_element_t
 
 contains
@@ -201,6 +202,18 @@ contains
       f = (t - self%eng_t(k - 1))/(self%eng_t(k) - self%eng_t(k - 1))
       e = self%eng_v(k - 1) + f*(self%eng_v(k) - self%eng_v(k - 1))
    end function friction_engagement
+
+   !> The engagement table's knots, where e(t) kinks (D-87 (hold)): the driver
+   !> stops there, so RK4 never steps across a kink (its order holds).
+   pure subroutine friction_breakpoints(self, bp)
+      class(friction_element_t), intent(in) :: self
+      real(wp), allocatable, intent(out) :: bp(:)
+      if (allocated(self%eng_t) .and. .not. associated(self%command)) then
+         bp = self%eng_t
+      else
+         allocate (bp(0))
+      end if
+   end subroutine friction_breakpoints
 
    !> The static limit at t_now: e(t) Ts (a freewheel: its capacity).
    pure real(wp) function friction_limit(self) result(lim)
