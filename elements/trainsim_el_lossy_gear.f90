@@ -23,7 +23,7 @@ module trainsim_el_lossy_gear
    use trainsim_strings, only: str
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_event, only: event_t, ev_stick, ev_slip_forward, ev_slip_backward
+   use trainsim_event, only: event_t, ev_stick, ev_slip_forward, ev_slip_backward, ev_flow_forward, ev_flow_backward
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_ratio
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hf_none, hg_none
@@ -281,19 +281,20 @@ contains
       flow = next_flow(self, before, fired, fs, wl)
       lam = self%con%lam(1)
       call self%set_flow(flow, fs)
-      if (flow == before .or. nev >= size(ev)) return
-      if (.not. (held(flow) .or. held(before)) .or. flow == flow_neutral) return   ! (opened: the face's event)
-      nev = nev + 1                                    ! sticking and its end are events
+      if (flow == before .or. nev >= size(ev) .or. flow == flow_neutral) return   ! (opened: the face's event)
+      if (before == flow_neutral .and. .not. held(flow)) return                  ! (closed: the face's event)
+      nev = nev + 1                                    ! sticking, its end and a turn of the flow are events
       ev(nev) = event_t()
       ev(nev)%theta_left = thl; ev(nev)%omega_left = wl; ev(nev)%theta_right = thr; ev(nev)%omega_right = wr
       ev(nev)%displacement = self%cl%delta(thl, thr)
       ev(nev)%force = lam                              ! the holding torque (0 as it sticks)
       if (held(flow)) then
          ev(nev)%kind = ev_stick
-      else if (flow == flow_forward) then
-         ev(nev)%kind = ev_slip_forward
-      else
-         ev(nev)%kind = ev_slip_backward
+      else if (held(before)) then
+         ev(nev)%kind = merge(ev_slip_forward, ev_slip_backward, flow == flow_forward)
+      else                                             ! forward <-> backward: the force passed zero
+         ev(nev)%kind = merge(ev_flow_forward, ev_flow_backward, flow == flow_forward)
+         ev(nev)%force = fs
       end if
    end subroutine lossy_update_mode
 
