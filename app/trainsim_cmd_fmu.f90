@@ -17,6 +17,7 @@ module trainsim_cmd_fmu
    use trainsim_cli, only: nargs, sets, arg, quit, fail, text_value
    use trainsim_cmd_help, only: command_usage
    use trainsim_cmd_scripts, only: find_script, exe_dir, env_text, quoted
+   use trainsim_session_inputs, only: input_of, check_input, input_start_value
    implicit none
    private
 
@@ -24,6 +25,10 @@ module trainsim_cmd_fmu
 
    !> &run keys that are not FMU parameters: the experiment's own times, the output
    !> (an FMU has no history file) and the settling (a run's metrics).
+   !> quoted keys that are not FMU parameters: the train's topology, units, names and files
+   character(len=*), parameter :: not_text_parameters(*) = [character(len=16) :: 'id', 'type', 'node', 'left', &
+      'right', 'carrier', 'units', 'title', 'output', 'initial_state', 'continuation', 'parameter']
+   character(len=*), parameter :: kind_name(3) = [character(len=7) :: 'torque', 'speed', 'voltage']
    character(len=*), parameter :: not_parameters(*) = [character(len=16) :: 't_start', 't_end', &
       'output_interval', 'settle_time', 'settle_tol', 'settle_cycles', 'measure_cycles']
 
@@ -86,7 +91,7 @@ contains
       call prepare_model(deck, sets, model, err)
       if (allocated(err)) call fail(err)
       do i = 1, size(inputs)
-         call check_input(model, inputs(i)%s)
+         call check_fmu_input(model, inputs(i)%s)
       end do
 
       path = env_text('TMPDIR')
@@ -166,23 +171,22 @@ contains
       end do
    end function listed
 
-   !> An input torque needs a node that moves under a torque: not fixed, no prescribed speed.
-   subroutine check_input(model, id)
+   !> An input (NODE or NODE.tau, NODE.speed, NODE.voltage) the session can take
+   !> (trainsim_session_inputs: a torque on a node that moves, a speed where the deck
+   !> prescribes a motion, a voltage on a DC motor without a controller); else exit 2.
+   subroutine check_fmu_input(model, name)
       type(model_t), intent(in) :: model
-      character(len=*), intent(in) :: id
-      integer :: i
-      i = model%node_index(id)
-      if (i == 0) then
-         write (error_unit, '(a)') "trainsim: fmu: error: input '"//id//"' (--input or &fmu inputs): the deck has "// &
-            'no node of that id'
+      character(len=*), intent(in) :: name
+      character(len=:), allocatable :: node
+      type(error_t), allocatable :: err
+      integer :: kind
+      call input_of(name, node, kind)
+      call check_input(model, model%node_index(node), node, kind, err)
+      if (allocated(err)) then
+         write (error_unit, '(a)') "trainsim: fmu: error: --input or &fmu inputs '"//name//"': "//err%message
          call quit(2)
       end if
-      if (model%nodes(i)%n%nstates() == 0 .or. model%is_held(i)) then
-         write (error_unit, '(a)') "trainsim: fmu: error: input '"//id//"': node '"//id//"' is fixed or its "// &
-            'speed is prescribed (an input torque there moves nothing)'
-         call quit(2)
-      end if
-   end subroutine check_input
+   end subroutine check_fmu_input
 
    !> The FMU's variables as JSON for trainsim_fmu.py: the nodes (outputs), the input
    !> nodes, the parameters (every number the deck writes in a &node, &element, &load or
@@ -193,8 +197,8 @@ contains
       type(model_t), intent(in) :: model
       character(len=*), intent(in) :: deck_file
       type(string_t), intent(in) :: inputs(:)
-      integer :: i, j, n_load
-      character(len=:), allocatable :: sep, group, key
+      integer :: i, j, n_load, kind, n
+      character(len=:), allocatable :: sep, group, key, node
       real(wp) :: v
       integer :: st
       write (u, '(a)') '{"version": '//js(version_full())//', "deck_file": '//js(deck_file)//', "title": '// &
@@ -219,7 +223,10 @@ contains
       write (u, '(a)') '],'
       write (u, '(a)', advance='no') ' "inputs": ['
       do i = 1, size(inputs)
-         write (u, '(a)', advance='no') merge(', ', '  ', i > 1)//js(inputs(i)%s)
+         call input_of(inputs(i)%s, node, kind)
+         write (u, '(a, es24.16e3, a)', advance='no') merge(', ', '  ', i > 1)//'{"node": '//js(node)// &
+            ', "kind": '//js(trim(kind_name(kind)))//', "start": ', &
+            input_start_value(model, model%node_index(node), kind, model%run%t_start), '}'
       end do
       write (u, '(a)') '],'
       write (u, '(a)') ' "parameters": ['
@@ -243,11 +250,21 @@ contains
             do j = 1, size(g%entries)
                key = g%entries(j)%key
                if (size(g%entries(j)%values) /= 1) cycle
-               if (g%entries(j)%quoted(1)) cycle
                if (group == 'run' .and. any(not_parameters == key)) cycle
-               call parse_real(g%entries(j)%values(1)%s, v, st)
-               if (st /= 0) cycle
-               write (u, '(a, es24.16e3, a)') sep//'{"path": '//js(group//'.'//key)//', "value": ', v, '}'
+               associate (text => g%entries(j)%values(1)%s)
+                  if (g%entries(j)%quoted(1)) then
+                     if (any(not_text_parameters == key) .or. index(key, '_file') > 0 .or. index(text, "'") > 0) cycle
+                     write (u, '(a)') sep//'{"path": '//js(group//'.'//key)//', "type": "string", "value": '//js(text)//'}'
+                  else if (is_int32(text, n)) then
+                     write (u, '(a)') sep//'{"path": '//js(group//'.'//key)//', "type": "integer", "value": '// &
+                        str(n)//'}'
+                  else
+                     call parse_real(text, v, st)
+                     if (st /= 0) cycle
+                     write (u, '(a, es24.16e3, a)') sep//'{"path": '//js(group//'.'//key)//', "type": "real", "value": ', &
+                        v, '}'
+                  end if
+               end associate
                sep = ', '
             end do
          end associate
@@ -264,6 +281,26 @@ contains
       end do
       write (u, '(a)') ']}'
    end subroutine write_variables
+
+   !> Whether text is an integer literal (an optional sign, digits) within Int32's range.
+   logical function is_int32(text, n)
+      character(len=*), intent(in) :: text
+      integer, intent(out) :: n
+      integer :: a, ios
+      integer(kind=8) :: n8
+      n = 0
+      a = 1
+      if (len(text) > 0) then
+         if (text(1:1) == '+' .or. text(1:1) == '-') a = 2
+      end if
+      is_int32 = len(text) >= a .and. len(text) - a < 10
+      if (is_int32) is_int32 = verify(text(a:), '0123456789') == 0
+      if (.not. is_int32) return
+      n = 0
+      read (text, *, iostat=ios) n8
+      is_int32 = ios == 0 .and. abs(n8) <= 2147483647_8
+      if (is_int32) n = int(n8)
+   end function is_int32
 
    !> A JSON string.
    function js(s) result(q)

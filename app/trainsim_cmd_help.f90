@@ -49,7 +49,7 @@ contains
          '                                figures of a history or a sweep (scripts/trainsim_plot.py --help)', &
          '  trainsim diagram DECK -o OUT.svg|png|pdf [--json FILE] [--set ...]', &
          '                                the train as a block diagram, from the deck alone', &
-         '  trainsim fmu DECK -o TRAIN.fmu [--input NODE ...] [--fmi 3|2]', &
+         '  trainsim fmu DECK -o TRAIN.fmu [--input INPUT ...] [--fmi 3|2]', &
          '                                the train as an FMI 3.0/2.0 co-simulation FMU (docs/fmu.md)', &
          '  trainsim --help | --version', &
          '', &
@@ -137,17 +137,18 @@ contains
             '  -h, --help         this text', '', &
             'exit status: 0 success, 2 bad input or file'
       case ('fmu')
-         write (unit, '(a)') 'usage: trainsim fmu DECK -o TRAIN.fmu [--input NODE ...] [--fmi 3|2]', '', &
+         write (unit, '(a)') 'usage: trainsim fmu DECK -o TRAIN.fmu [--input INPUT ...] [--fmi 3|2]', '', &
             'The train of DECK as an FMI 3.0 (or 2.0) co-simulation FMU (docs/fmu.md): outputs NODE.phi and', &
-            'NODE.w (every node''s angle and speed), inputs NODE.tau (an external torque on each', &
-            '--input node, beside the deck''s loads), parameters by deck path (every number of the', &
-            'deck''s &node, &element, &load and &run groups). doStep runs the deck''s own integrator', &
+            'NODE.w (every node''s angle and speed), inputs (--input), parameters by deck path (every', &
+            'value of the deck''s &node, &element, &load and &run groups: Float64, Int32 or String as the', &
+            'deck writes it). doStep runs the deck''s own integrator', &
             'with its event location; get/setFMUstate save and restore. The deck (with its table', &
             'files) and a Linux x86-64 binary go inside. The deck is read and built as `run` does', &
             '(a bad deck: exit 2, the same message). Packed by scripts/trainsim_fmu.py.', '', &
             '  -o, --output FILE  the FMU (.fmu)', &
-            '  --input NODE       an input torque on NODE (a node that is neither fixed nor held),', &
-            '                     beside those the deck names in &fmu inputs = ''NODE'', ...', &
+            '  --input INPUT      an input: NODE or NODE.tau a torque on NODE (neither fixed nor held),', &
+            '                     NODE.speed the speed of a node the deck drives (replacing its motion),', &
+            '                     NODE.voltage a dc_motor''s voltage; beside those of &fmu inputs = ...', &
             '  --fmi 3|2          the FMI version (default 3)', &
             '  -h, --help         this text', '', &
             'exit status: 0 success, 2 bad input or file'

@@ -133,6 +133,7 @@ contains
    subroutine set_row(self)
       class(rigid_gear_t), intent(inout) :: self
       self%con%on = .true.
+      self%con%rigid = .true.                  ! (merged in the RK4 step advice: D-86 (hold))
       self%con%n = 1
       self%con%g(1, 1:2) = [self%r1, -self%r2]
    end subroutine set_row

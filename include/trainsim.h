@@ -102,11 +102,15 @@ int trainsim_sweep_values(trainsim_sim *sim, double *values, size_t n);  /* row-
  * location and mode updates as trainsim_run, and advancing through a run's output times
  * gives its samples bit for bit. save/restore: a point (time, state, modes) to go back
  * to; both start the integrator afresh there, so a restored session continues exactly
- * as it did after the save. Metrics and events are not rolled back. Inputs: the nodes named
- * at the start take an external torque (0 at first) beside the deck's loads; setting it
- * acts from the session's time on, as a load step there. */
-int trainsim_session_start(trainsim_sim *sim, const char *inputs); /* "n4,n2": input torques */
-int trainsim_session_set_torque(trainsim_sim *sim, const char *node, double value);
+ * as it did after the save. Metrics and events are not rolled back. Inputs, named at the
+ * start ("n4,n1.speed,m.voltage"): NODE (or NODE.tau) an external torque (0 at first)
+ * beside the deck's loads; NODE.speed the node's prescribed speed, NODE.voltage a DC
+ * motor's supply voltage, each replacing the deck's and held at its value at t_start. A
+ * value set acts from the session's time on (held: a step there); a speed keeps the
+ * node's angle continuous. A positioning sequence's progress is saved and restored. */
+int trainsim_session_start(trainsim_sim *sim, const char *inputs); /* "n4,n1.speed,m.voltage" */
+int trainsim_session_set_input(trainsim_sim *sim, const char *name, double value);
+int trainsim_session_set_torque(trainsim_sim *sim, const char *node, double value); /* "NODE.tau" */
 int trainsim_session_advance(trainsim_sim *sim, double t);  /* t: up to run.t_end */
 int trainsim_session_state(trainsim_sim *sim, double *t, double *theta, double *omega,
                            size_t n);                       /* n: TRAINSIM_NODES count */

@@ -6,8 +6,9 @@ with the deck and its table files (resources/) and the binary that runs it
 (binaries/x86_64-linux/ for FMI 3.0, binaries/linux64/ for 2.0: trainsim_fmu.so and
 libtrainsim_c, from build/fmu or the installed <prefix>/lib/.../trainsim/fmu). Value
 references as src/fmu/fmu_core.h reads them: 0 time (FMI 3.0); node k (0-based) angle
-1 + 2k, speed 2 + 2k; input j 1000000 + j; parameter p 2000000 + p; element e (0-based)
-displacement 3000000 + 3e, force 3000001 + 3e, contact 3000002 + 3e.
+1 + 2k, speed 2 + 2k; input j 1000000 + j; parameter p 2000000 + p (Float64, Int32 or
+String: as the deck writes the value); element e (0-based) displacement 3000000 + 3e,
+force 3000001 + 3e, contact 3000002 + 3e.
 """
 import argparse
 import glob
@@ -41,47 +42,78 @@ def binaries(exe_dir):
          "); build trainsim with its C interface (TRAINSIM_BUILD_C_API)")
 
 
+INPUT_UNITS = {"speed": "rad/s", "voltage": "V"}
+INPUT_NAMES = {"torque": "tau", "speed": "speed", "voltage": "voltage"}
+INPUT_WHAT = {"torque": "external torque on node", "speed": "prescribed speed of node",
+              "voltage": "supply voltage of motor"}
+FMI3_TYPE = {"real": "Float64", "integer": "Int32", "string": "String"}
+FMI2_TYPE = {"real": "Real", "integer": "Integer", "string": "String"}
+
+
+def input_name(i):
+    return f"{i['node']}.{INPUT_NAMES[i['kind']]}"
+
+
 def variables(v):
     """The FMU's variables, one list for both FMI versions: (name, value reference,
-    causality, variability, description, unit, initial, start)."""
+    causality, variability, description, unit, initial, start, type)."""
     out = []
     for k, node in enumerate(v["nodes"]):
-        out.append((f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad", "calculated", None))
+        out.append((f"{node}.phi", 1 + 2 * k, "output", "continuous", f"angle of node {node}", "rad", "calculated", None,
+                    "real"))
         out.append((f"{node}.w", 2 + 2 * k, "output", "continuous", f"speed of node {node}", "rad/s", "calculated",
-                    None))
+                    None, "real"))
     for e, el in enumerate(v["elements"]):
         i = el["id"]
         out.append((f"{i}.disp", VR_ELEMENT + 3 * e, "output", "continuous", f"displacement of {i}", el["disp_unit"],
-                    "calculated", None))
+                    "calculated", None, "real"))
         out.append((f"{i}.force", VR_ELEMENT + 3 * e + 1, "output", "continuous", f"force (or torque) of {i}",
-                    el["force_unit"], "calculated", None))
+                    el["force_unit"], "calculated", None, "real"))
         out.append((f"{i}.contact", VR_ELEMENT + 3 * e + 2, "output", "discrete",
-                    f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", "calculated", None))
-    for j, node in enumerate(v["inputs"]):
-        out.append((f"{node}.tau", VR_INPUT + j, "input", "continuous", f"external torque on node {node}",
-                    v["torque_unit"], None, 0.0))
+                    f"contact state of {i}: 0 open, +1/-1 a face in contact", "1", "calculated", None, "real"))
+    for j, i in enumerate(v["inputs"]):
+        out.append((input_name(i), VR_INPUT + j, "input", "continuous", f"{INPUT_WHAT[i['kind']]} {i['node']}",
+                    INPUT_UNITS.get(i["kind"], v["torque_unit"]), None, float(i["start"]), "real"))
     for p, par in enumerate(v["parameters"]):
+        t = par.get("type", "real")
+        start = float(par["value"]) if t == "real" else int(par["value"]) if t == "integer" else str(par["value"])
         out.append((par["path"], VR_PARAM + p, "parameter", "fixed", f"deck value {par['path']}", "1", "exact",
-                    float(par["value"])))
+                    start, t))
     return out
+
+
+def xml_start(start):
+    return quoteattr(repr(start) if isinstance(start, float) else str(start))
+
+
+def variable_row(fmi, name, vr, causality, variability, description, unit, initial, start, typ):
+    """One variable of modelDescription.xml (FMI 3.0: <Float64 .../>, <Int32 .../>, <String><Start/></String>;
+    2.0: <ScalarVariable> around <Real/>, <Integer/>, <String/>)."""
+    attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
+    if initial:
+        attrs += f' initial="{initial}"'
+    if fmi == 3:
+        if typ == "string":
+            return (f"    <String {attrs} description={quoteattr(description)}>\n"
+                    f"      <Start value={xml_start(start)}/>\n    </String>")
+        if start is not None:
+            attrs += f" start={xml_start(start)}"
+        unit_attr = f" unit={quoteattr(unit)}" if typ == "real" else ""
+        return f"    <{FMI3_TYPE[typ]} {attrs}{unit_attr} description={quoteattr(description)}/>"
+    attrs += f" description={quoteattr(description)}"
+    inner = f"<{FMI2_TYPE[typ]}" + (f" unit={quoteattr(unit)}" if typ == "real" else "")
+    inner += (f" start={xml_start(start)}" if start is not None else "") + "/>"
+    return f"    <ScalarVariable {attrs}>\n      {inner}\n    </ScalarVariable>"
 
 
 def model_description(v, guid, fmi):
     rows, outputs = [], []
     units = {"rad", "rad/s", "1", v["torque_unit"]}
-    for name, vr, causality, variability, description, unit, initial, start in variables(v):
-        units.add(unit)
-        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
-        if initial:
-            attrs += f' initial="{initial}"'
-        if fmi == 3:
-            if start is not None:
-                attrs += f' start="{start!r}"'
-            rows.append(f"    <Float64 {attrs} unit={quoteattr(unit)} description={quoteattr(description)}/>")
-        else:
-            attrs += f" description={quoteattr(description)}"
-            real = f'<Real unit={quoteattr(unit)}' + (f' start="{start!r}"' if start is not None else "") + "/>"
-            rows.append(f"    <ScalarVariable {attrs}>\n      {real}\n    </ScalarVariable>")
+    for var in variables(v):
+        causality, unit, typ, vr = var[2], var[5], var[8], var[1]
+        if typ == "real":
+            units.add(unit)
+        rows.append(variable_row(fmi, *var))
         if causality == "output":
             outputs.append(vr if fmi == 3 else len(rows))
     if fmi == 3:
@@ -138,6 +170,14 @@ def model_description(v, guid, fmi):
 """
 
 
+def parameter_line(p):
+    """TYPE<TAB>VALUE of parameters.txt: r a real (repr), i an integer, s a text."""
+    t = p.get("type", "real")
+    if t == "real":
+        return f"r\t{float(p['value'])!r}"
+    return f"i\t{int(p['value'])}" if t == "integer" else f"s\t{p['value']}"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("variables", help="the JSON that trainsim fmu wrote")
@@ -165,9 +205,10 @@ def main():
         with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", model_description(v, guid, a.fmi))
             z.writestr("resources/deck.nml", deck)
-            z.writestr("resources/inputs.txt", "".join(n + "\n" for n in v["inputs"]))
-            z.writestr("resources/parameters.txt",
-                       "".join(f"{p['path']}\t{float(p['value'])!r}\n" for p in v["parameters"]))
+            z.writestr("resources/inputs.txt", "".join(f"{input_name(i)}\t{float(i['start'])!r}\n"
+                                                       for i in v["inputs"]))
+            z.writestr("resources/parameters.txt", "".join(f"{p['path']}\t{parameter_line(p)}\n"
+                                                           for p in v["parameters"]))
             for rel in tables:
                 z.write(os.path.join(deck_dir, rel), "resources/" + rel)
             for lib in sorted(os.listdir(bindir)):
@@ -180,7 +221,7 @@ def main():
             os.remove(tmp)
         fail(f"cannot write '{a.output}': {exc.strerror}")
     print(f"trainsim: fmu: {a.output} (FMI {a.fmi}.0): {len(v['nodes'])} nodes (angle, speed outputs), "
-          f"{len(v['elements'])} elements (displacement, force, contact outputs), {len(v['inputs'])} input torque(s), "
+          f"{len(v['elements'])} elements (displacement, force, contact outputs), {len(v['inputs'])} input(s), "
           f"{len(v['parameters'])} parameters")
 
 

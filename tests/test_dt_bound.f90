@@ -14,7 +14,10 @@
 !> - a chain above the threshold runs at the advised step without growth
 !>   (RK4 inside its region: |R(h lambda)| <= 1 for every mode, so the energy
 !>   of an undamped linear train cannot grow), and the same chain at 1.1 x
-!>   the dense limit blows up (|R| = 1.9 per step on its top mode): the test can fail.
+!>   the dense limit blows up (|R| = 1.9 per step on its top mode): the test can fail;
+!> - nodes joined by a rigid_gear or rigid_join move as one body in the dense
+!>   advice (D-86 (hold)): its step is 2 sqrt 2 / omega of the merged train's
+!>   closed-form frequency, and a run at 0.99 x that limit is stable, at 1.05 x not.
 program test_dt_bound
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -43,6 +46,8 @@ program test_dt_bound
    call test_uniform_chain_bound_against_closed_form()
    call test_backlash_chain_bound_against_dense()
    call test_chain_runs_at_the_advised_step()
+   call test_rigid_connections_merge_in_the_advice()
+   call test_rigid_train_runs_at_the_merged_limit()
    call suite_end()
 
 contains
@@ -184,4 +189,96 @@ contains
       end do
       text = text//nl//"&initial node = 'n1', speed = 1.0 /"
    end function chain_deck
+
+   !> A disk J1 on a rigid_gear (r1 wl = r2 wr) or rigid_join with J2, a shaft k
+   !> from J2 to a disk J3 (or to ground): J1 rides on J2 as J_eq = J2 + J1 (r2/r1)^2,
+   !> omega^2 = k (1/J_eq + 1/J3) (k/J_eq on ground), undamped: RK4's limit is
+   !> 2 sqrt 2/omega (the imaginary-axis radius), and `trainsim modes` (dsygv in
+   !> the merged coordinates) has the same top frequency. Unmerged, J2 alone
+   !> would set it (omega^2 = k (1/J2 + 1/J3): a step 1.8 (gear) / 1.7 (join) x shorter).
+   subroutine test_rigid_connections_merge_in_the_advice()
+      real(wp), parameter :: j1 = 0.3_wp, j2 = 0.2_wp, j3 = 0.5_wp, r1 = 0.02_wp, r2 = 0.05_wp
+      call test_begin('rigid_connections_merge_in_the_advice')
+      call rigid_case("type = 'rigid_gear', rb_driver = 0.02, rb_driven = 0.05", "'c'", j2 + j1*(r2/r1)**2, &
+                      1.0_wp/j3, 'rigid_gear, free disk')
+      call rigid_case("type = 'rigid_gear', rb_driver = 0.02, rb_driven = 0.05", "'ground'", j2 + j1*(r2/r1)**2, &
+                      0.0_wp, 'rigid_gear, shaft to ground')
+      call rigid_case("type = 'rigid_join'", "'c'", j2 + j1, 1.0_wp/j3, 'rigid_join, free disk')
+   end subroutine test_rigid_connections_merge_in_the_advice
+
+   subroutine rigid_case(link, far, j_eq, inv_j3, name)
+      character(len=*), intent(in) :: link, far, name
+      real(wp), intent(in) :: j_eq, inv_j3
+      type(model_t) :: m
+      type(modes_t) :: md
+      type(error_t), allocatable :: err
+      real(wp) :: dt, om, om_exact
+      character(len=40) :: far_type
+      far_type = "type = 'fixed'"
+      if (far == "'c'") far_type = "type = 'inertia', inertia = 0.5"
+      call load_model_text("&run t_end = 0.1, dt = 1.0e-5 /"//nl// &
+                           "&node id = 'a', type = 'inertia', inertia = 0.3 /"//nl// &
+                           "&node id = 'b', type = 'inertia', inertia = 0.2 /"//nl// &
+                           "&node id = "//far//", "//trim(far_type)//" /"//nl// &
+                           "&element left = 'a', right = 'b', "//link//" /"//nl// &
+                           "&element type = 'shaft', left = 'b', right = "//far//", stiffness = 4.0e4 /"//nl// &
+                           "&load node = 'a', value = 1.0 /", m)
+      om_exact = sqrt(4.0e4_wp*(1.0_wp/j_eq + inv_j3))   ! the shaft's k
+      call rk4_dt_limit(m, lin_stiffest, dt, om, err, dense=.true.)
+      call check(name//': no error', .not. allocated(err))
+      if (allocated(err)) return
+      call check(name//': |lambda| = the merged closed form', om, om_exact, rel_tol=1.0e-9_wp)
+      call check(name//': RK4 limit = 2 sqrt 2 / omega', dt, sqrt(8.0_wp)/om_exact, rel_tol=1.0e-9_wp)
+      call compute_modes(m, md, err)
+      if (allocated(err)) return
+      call check(name//': modes agrees (top frequency)', md%omega_max, om_exact, rel_tol=1.0e-9_wp)
+   end subroutine rigid_case
+   !> The merged limit is RK4's own: the rigid gear's train (shaft to ground, one
+   !> mode, undamped) runs 4000 steps at 0.99 x the merged limit (3.1 x the unmerged
+   !> one) without its energy growing, and at 1.05 x it blows up
+   !> (|R| > 1 on its one mode) or is refused.
+   subroutine test_rigid_train_runs_at_the_merged_limit()
+      type(model_t) :: m
+      type(run_result_t) :: res
+      type(null_sink_t) :: none
+      type(error_t), allocatable :: err
+      real(wp) :: dt_lim, om, e0, e_end
+      call test_begin('rigid_train_runs_at_the_merged_limit')
+      call load_model_text(rigid_train(1.0e-5_wp, 1.0e-5_wp), m)
+      call rk4_dt_limit(m, lin_stiffest, dt_lim, om, err)
+      call check('limit: no error', .not. allocated(err))
+      if (allocated(err)) return
+      call load_model_text(rigid_train(4000.0_wp*0.99_wp*dt_lim, 0.99_wp*dt_lim), m)
+      call simulate(m, none, res, err)
+      if (allocated(err)) write (*, '(4x,a)') err%message
+      call check('at 0.99 x the merged limit: runs (not refused, no blow-up)', .not. allocated(err))
+      if (allocated(err)) return
+      e0 = 0.5_wp*4.0e4_wp*0.01_wp**2
+      e_end = m%stored_energy(res%t_final, res%y_final)
+      write (*, '(4x,a,es12.5,a,es12.5,a)') 'stored energy after 4000 steps: ', e_end, ' J (', e0, ' at the start)'
+      call check('at 0.99 x the merged limit: the stored energy does not grow', e_end <= e0*(1.0_wp + 1.0e-9_wp))
+      call load_model_text(rigid_train(4000.0_wp*1.05_wp*dt_lim, 1.05_wp*dt_lim), m)
+      call simulate(m, none, res, err)
+      if (.not. allocated(err)) e_end = m%stored_energy(res%t_final, res%y_final)
+      call check('at 1.05 x the merged limit: refused or blows up', allocated(err) .or. e_end > 10.0_wp*e0)
+   end subroutine test_rigid_train_runs_at_the_merged_limit
+
+   !> J1 = 0.3 on a rigid gear (r2/r1 = 2.5) with J2 = 0.2, a shaft k = 4e4 to
+   !> ground, J2 turned by 0.01 rad at the start (E0 = k 0.01^2/2).
+   function rigid_train(t_end, dt) result(text)
+      real(wp), intent(in) :: t_end, dt
+      character(len=:), allocatable :: text
+      character(len=24) :: a, b
+      write (a, '(es22.15)') t_end
+      write (b, '(es22.15)') dt
+      text = "&run t_end = "//trim(a)//", dt = "//trim(b)//", output_interval = "//trim(a)// &
+             ", energy_check = 0 /"//nl// &
+             "&node id = 'a', type = 'inertia', inertia = 0.3 /"//nl// &
+             "&node id = 'b', type = 'inertia', inertia = 0.2 /"//nl// &
+             "&node id = 'ground', type = 'fixed' /"//nl// &
+             "&element left = 'a', right = 'b', type = 'rigid_gear', rb_driver = 0.02, rb_driven = 0.05 /"//nl// &
+             "&element type = 'shaft', left = 'b', right = 'ground', stiffness = 4.0e4 /"//nl// &
+             "&initial node = 'b', angle = 0.01 /"
+   end function rigid_train
+
 end program test_dt_bound

@@ -2,7 +2,9 @@
 !> states at the communication points equal a run's samples at the same
 !> times, bit for bit, with every integrator; a saved and restored session
 !> continues bit for bit; communication points off the integrator's grid and
-!> across events give the run's trajectory to the integrator's tolerance.
+!> across events give the run's trajectory to the integrator's tolerance;
+!> speed and voltage inputs equal runs with those steps in the deck; a
+!> positioning sequence's progress is saved and restored with a point.
 program test_session
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, err_input
@@ -24,6 +26,9 @@ program test_session
    call test_input_torque('rk4')
    call test_input_torque('cvode-bdf')
    call test_refusals()
+   call test_input_speed()
+   call test_input_voltage()
+   call test_sequence_restored()
    call suite_end()
 
 contains
@@ -228,6 +233,169 @@ contains
       call check('an input torque on a node with a prescribed speed is refused', allocated(err))
       if (allocated(err)) call check('   saying why', index(err%message, 'prescribed') > 0)
    end subroutine test_input_torque
+
+   !> A prescribed speed as an input (n1, the rig's driven inertia): held at the
+   !> deck's 95.2286 rad/s, set to 100 rad/s at t = 0.008 s, equals the run whose
+   !> deck has that speed step (rk4: within 1e-12 of the speed and angle scales, as
+   !> the torque step: the run's step ending on the speed step takes its last stage
+   !> 1e-9 dt early, and its angle is the step's integral w0 ts + w1 (t - ts), the
+   !> session's theta(ts) + w1 (t - ts)). Inputs a node cannot take are refused.
+   subroutine test_input_speed()
+      type(model_t) :: m, mstep
+      type(run_result_t) :: r
+      type(session_t), target :: s
+      type(error_t), allocatable :: err
+      character(len=:), allocatable :: text
+      real(wp) :: scale, ascale, dw, dth
+      integer :: k, n
+      call test_begin('input_speed')
+      call rig('rk4', m)
+      text = deck_text('inputs/gregory_harris_munro.nml')
+      k = index(text, "quantity = 'speed', kind = 'constant', value = 95.2286 /")
+      call check('the rig prescribes n1''s speed (95.2286 rad/s)', k > 0)
+      if (k == 0) return
+      text = text(:k - 1)//"quantity = 'speed', kind = 'step', value0 = 95.2286, value1 = 100.0, t_step = 0.008 /"// &
+             text(k + len("quantity = 'speed', kind = 'constant', value = 95.2286 /"):)
+      call load_model_text(text, mstep)
+      mstep%run%t_end = m%run%t_end
+      mstep%run%output_interval = m%run%output_interval
+      call run_model(mstep, r)
+      n = size(r%series_t)
+      scale = maxval(abs(r%series_omega))
+      ascale = maxval(abs(r%series_theta))
+      call s%start(m, err, inputs=[string_t('n1.speed')])
+      dw = 0.0_wp
+      dth = 0.0_wp
+      do k = 2, n
+         call s%advance(r%series_t(k), err)
+         ! (set at the sample: the run's sample at the step time has the right limit, 100)
+         if (abs(r%series_t(k) - 0.008_wp) < 1.0e-12_wp) call s%set_input('n1.speed', 100.0_wp, err)
+         if (allocated(err)) exit
+         call s%kinematics()
+         dw = max(dw, maxval(abs(s%model%omega - r%series_omega(:, k))))
+         dth = max(dth, maxval(abs(s%model%theta - r%series_theta(:, k))))
+      end do
+      call check('set n1.speed at t = 0.008 s and advanced to t_end without error', .not. allocated(err))
+      call check('every output time equals the run with the speed step within 1e-12 of the speed scale ('// &
+                 ftoa(dw/scale)//') and the angle scale ('//ftoa(dth/ascale)//')', &
+                 dw <= 1.0e-12_wp*scale .and. dth <= 1.0e-12_wp*ascale)
+      write (*, '(a, es10.3, a, es10.3, a)') '       speed step: ', dw/scale, ' of the speed scale, ', dth/ascale, &
+         ' of the angle scale'
+      call check('n1 turns at the input speed', s%model%omega(1) == 100.0_wp)
+      call s%finish()
+      call s%start(m, err, inputs=[string_t('n4.speed')])
+      call check('a speed input where the deck prescribes no motion is refused', allocated(err))
+      if (allocated(err)) call check('   saying why', index(err%message, 'prescribes no motion') > 0 .and. &
+                                     index(err%message, "'n4'") > 0)
+      call s%start(m, err, inputs=[string_t('n1.voltage')])
+      call check('a voltage input on an inertia is refused', allocated(err))
+      if (allocated(err)) call check('   saying why', index(err%message, 'dc_motor') > 0)
+   end subroutine test_input_speed
+
+   !> A DC motor's supply voltage as an input: held at the deck's 24 V, set to
+   !> 12 V at t = 0.02 s, equals the run whose deck has that voltage step (rk4:
+   !> within 1e-12 of the speed scale, the reason as for the torque step).
+   subroutine test_input_voltage()
+      type(model_t) :: m, mstep
+      type(run_result_t) :: r
+      type(session_t), target :: s
+      type(error_t), allocatable :: err
+      real(wp) :: scale, dw
+      integer :: k, n
+      call test_begin('input_voltage')
+      call load_model_text(motor_deck("kind = 'constant', value = 24.0"), m)
+      call load_model_text(motor_deck("kind = 'step', value0 = 24.0, value1 = 12.0, t_step = 0.02"), mstep)
+      call run_model(mstep, r)
+      n = size(r%series_t)
+      scale = maxval(abs(r%series_omega))
+      call s%start(m, err, inputs=[string_t('motor.voltage')])
+      dw = 0.0_wp
+      do k = 2, n
+         if (abs(r%series_t(k - 1) - 0.02_wp) < 1.0e-12_wp) call s%set_input('motor.voltage', 12.0_wp, err)
+         if (allocated(err)) exit
+         call s%advance(r%series_t(k), err)
+         if (allocated(err)) exit
+         call s%kinematics()
+         dw = max(dw, maxval(abs(s%model%omega - r%series_omega(:, k))))
+      end do
+      call check('set motor.voltage at t = 0.02 s and advanced to t_end without error', .not. allocated(err))
+      call check('every output time equals the run with the voltage step within 1e-12 of the speed scale ('// &
+                 ftoa(dw/scale)//')', dw <= 1.0e-12_wp*scale)
+      write (*, '(a, es10.3, a)') '       voltage step: ', dw/scale, ' of the speed scale'
+      call s%finish()
+      call run_model(m, r)
+      call check('the step slowed the motor (its speed at the end below the 24 V run''s)', &
+                 s%model%omega(1) < r%series_omega(1, n) - 1.0e-3_wp*scale)
+   end subroutine test_input_voltage
+
+   !> inputs/dc_motor_geared_load.nml over 40 ms with the voltage `law`.
+   function motor_deck(law) result(text)
+      character(len=*), intent(in) :: law
+      character(len=:), allocatable :: text
+      character(len=*), parameter :: nl = new_line('a')
+      text = "&run t_end = 0.04, dt = 5.0e-6, integrator = 'rk4', output_interval = 1.0e-3 /"//nl// &
+             "&node id = 'motor', type = 'dc_motor', inertia = 2.0e-3, damping = 1.0e-4, torque_constant = 0.5, "// &
+             "back_emf_constant = 0.0565, inductance = 2.0e-3, resistance = 0.5 /"//nl// &
+             "&node id = 'gear', type = 'inertia', inertia = 0.05 /"//nl// &
+             "&node id = 'load', type = 'inertia', inertia = 2.0, damping = 0.5 /"//nl// &
+             "&element id = 'mesh', type = 'spur_gear', left = 'motor', right = 'gear', teeth_driver = 20, "// &
+             "teeth_driven = 60, diametral_pitch = 8.0, pressure_angle = 20.0, face_width = 0.75, backlash = 0.004 /"//nl// &
+             "&element id = 'shaft', type = 'shaft', left = 'gear', right = 'load', stiffness = 2.0e4, damping = 2.0 /"//nl// &
+             "&load node = 'motor', quantity = 'voltage', "//law//" /"//nl
+   end function motor_deck
+
+   !> A positioning sequence (targets 5, 10, 2 rad from 0.2, 2.0, 4.0 s, as
+   !> test_controller's): saved at 1.99 s (target 1 reached), advanced to 3.99 s (target
+   !> 2 reached), restored and advanced again: the same state bit for bit (the
+   !> sequence's progress is part of the point; before, the restored run held at
+   !> target 1 as if target 2 had been reached). Two sessions of one model advanced
+   !> in turn do not share a sequence.
+   subroutine test_sequence_restored()
+      type(model_t) :: m
+      type(session_t), target :: s, s2
+      type(session_state_t) :: p
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: y1(:), y2(:)
+      character(len=*), parameter :: nl = new_line('a')
+      call test_begin('sequence_restored')
+      call load_model_text("&run t_end = 4.0, dt = 1.0e-5, integrator = 'rk4', output_interval = 0.01, "// &
+                           "units = 'si' /"//nl// &
+                           "&node id = 'm', type = 'dc_motor', inertia = 0.01, torque_constant = 0.05, "// &
+                           "back_emf_constant = 0.05, inductance = 1.0e-3, resistance = 1.0 /"//nl// &
+                           "&node id = 'load', type = 'inertia', inertia = 0.01 /"//nl// &
+                           "&element id = 's', type = 'shaft', left = 'm', right = 'load', stiffness = 1.0e3, "// &
+                           "damping = 0.5 /"//nl// &
+                           "&controller id = 'pos', motor = 'm', sensor = 'load', measure = 'angle', kp = 40.0, "// &
+                           "kd = 8.0, filter_time = 1.0e-3, v_min = -24.0, v_max = 24.0, current_limit = 30.0, "// &
+                           "sequence = .true., kind = 'table', times = 0.2, 2.0, 4.0, values = 5.0, 10.0, 2.0, "// &
+                           "tolerance = 1.0e-3, speed_tolerance = 1.0e-2 /", m)
+      call s%start(m, err)
+      if (.not. allocated(err)) call s%advance(1.99_wp, err)
+      call s%kinematics()
+      call check('at 1.99 s the load is held near target 1 (5 rad within 1e-2: it '// &
+                 'arrived within 1e-3 and drifts at 0 V)', abs(s%model%theta(2) - 5.0_wp) <= 1.0e-2_wp)
+      if (.not. allocated(err)) call s%save(p, err)
+      if (.not. allocated(err)) call s%advance(3.99_wp, err)
+      y2 = s%y
+      call s%kinematics()
+      call check('at 3.99 s near target 2 (10 rad within 1e-2)', abs(s%model%theta(2) - 10.0_wp) <= 1.0e-2_wp)
+      if (.not. allocated(err)) call s%restore(p, err)
+      if (.not. allocated(err)) call s%advance(3.99_wp, err)
+      call check('saved at 1.99 s, advanced to 3.99 s, restored and advanced again without error', .not. allocated(err))
+      call check('the second pass ends in the first''s state at 3.99 s, bit for bit', all(s%y == y2))
+      call s%finish()
+      call s%start(m, err)
+      if (.not. allocated(err)) call s2%start(m, err)
+      if (.not. allocated(err)) call s%advance(3.99_wp, err)
+      y1 = s%y
+      if (.not. allocated(err)) call s2%advance(3.99_wp, err)
+      call check('two sessions of one model advanced in turn end alike, bit for bit (no shared sequence)', &
+                 .not. allocated(err) .and. all(s2%y == y1) .and. all(y1 == y2))
+      call s%restore(p, err)
+      call check('a point saved by an earlier start is refused', allocated(err))
+      call s%finish()
+      call s2%finish()
+   end subroutine test_sequence_restored
 
    !> The text of a deck file.
    function deck_text(path) result(text)

@@ -80,6 +80,7 @@ _signatures = {
     "trainsim_sweep_values": (ctypes.c_int, [_p, _dp, _z]),
     "trainsim_session_start": (ctypes.c_int, [_p, _s]),
     "trainsim_session_set_torque": (ctypes.c_int, [_p, _s, ctypes.c_double]),
+    "trainsim_session_set_input": (ctypes.c_int, [_p, _s, ctypes.c_double]),
     "trainsim_session_advance": (ctypes.c_int, [_p, ctypes.c_double]),
     "trainsim_session_state": (ctypes.c_int, [_p, _dp, _dp, _dp, _z]),
     "trainsim_session_save": (ctypes.c_int, [_p, ctypes.POINTER(ctypes.c_int)]),

@@ -122,8 +122,10 @@ class Simulation:
 
     # -- a run advanced step by step (docs/c-api.md "Sessions") --------------------------
     def start_session(self, inputs=()):
-        """Start the run at t_start, to be advanced by advance(); `inputs`: node ids that
-        take an input torque (set_torque), 0 at first."""
+        """Start the run at t_start, to be advanced by advance(); `inputs`: the session's
+        inputs: "NODE" (or "NODE.tau") an input torque (set_torque), 0 at first;
+        "NODE.speed" the node's prescribed speed (set_speed) and "NODE.voltage" a DC
+        motor's voltage (set_voltage), each replacing the deck's, at its value at t_start."""
         L.check(lib.trainsim_session_start(self._h, ",".join(inputs).encode("utf-8")), self._h)
 
     def advance(self, t):
@@ -134,6 +136,21 @@ class Simulation:
     def set_torque(self, node, value):
         """The input torque on `node` from the session's time on."""
         L.check(lib.trainsim_session_set_torque(self._h, L.encode(node), float(value)), self._h)
+
+    def set_speed(self, node, value):
+        """The prescribed speed of `node` (an input "NODE.speed") from the session's time
+        on, its angle continuous."""
+        self.set_input(f"{node}.speed", value)
+
+    def set_voltage(self, node, value):
+        """The supply voltage of motor `node` (an input "NODE.voltage") from the session's
+        time on."""
+        self.set_input(f"{node}.voltage", value)
+
+    def set_input(self, name, value):
+        """The input `name` ("NODE.tau", "NODE.speed", "NODE.voltage") from the session's
+        time on, held until set again."""
+        L.check(lib.trainsim_session_set_input(self._h, L.encode(name), float(value)), self._h)
 
     def state(self):
         """(t, theta, omega): the session's time and every node's angle and speed."""

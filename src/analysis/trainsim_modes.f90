@@ -18,6 +18,7 @@ module trainsim_modes
    use trainsim_model, only: model_t
    use trainsim_element, only: element_t, lin_state_t, lin_start, lin_closed, lin_contact_closed, max_ports
    use trainsim_dt_bound, only: rk4_ray_radius, rk4_dt_bound, inverse_inertias
+   use trainsim_merged, only: null_space, rigid_projection
    implicit none
    private
 
@@ -62,14 +63,6 @@ module trainsim_modes
          real(wp), intent(out) :: wr(*), wi(*), vl(ldvl, *), vr(ldvr, *), work(*)
          integer, intent(out) :: info
       end subroutine dgeev
-      subroutine dsyev(jobz, uplo, n, a, lda, w, work, lwork, info)
-         import :: wp
-         character, intent(in) :: jobz, uplo
-         integer, intent(in) :: n, lda, lwork
-         real(wp), intent(inout) :: a(lda, *)
-         real(wp), intent(out) :: w(*), work(*)
-         integer, intent(out) :: info
-      end subroutine dsyev
       subroutine dsygv(itype, jobz, uplo, n, a, lda, b, ldb, w, work, lwork, info)
          import :: wp
          integer, intent(in) :: itype, n, lda, ldb, lwork
@@ -174,52 +167,6 @@ contains
       modes%omega_max = two_pi*maxval(modes%freq_hz(1:nr))
    end subroutine compute_modes
 
-   !> An orthonormal basis (n, nr) of the free inertias' motions that keep every
-   !> constraint row in force (D-81: rigid gears and joins, elements stuck as the
-   !> run starts): the null space of G over the degrees of freedom (a held or
-   !> fixed node's column is 0), from the eigenvectors of G^T G (eigenvalue below
-   !> 1e-12 of the largest). No rows: the identity. n_rows: the rows in force.
-   subroutine null_space(model, dof, n, basis, n_rows, err)
-      type(model_t), intent(in) :: model
-      integer, intent(in) :: dof(:), n
-      real(wp), allocatable, intent(out) :: basis(:, :)
-      integer, intent(out) :: n_rows
-      type(error_t), allocatable, intent(out) :: err
-      real(wp), allocatable :: gtg(:, :), w(:), work(:), row(:)
-      integer :: j, r, p, d, info, nr
-      allocate (gtg(n, n), row(n), w(n), work(max(1, 3*n)))
-      gtg = 0.0_wp
-      n_rows = 0
-      do j = 1, size(model%elements)
-         associate (e => model%elements(j)%e)
-            do r = 1, e%con%n
-               row = 0.0_wp
-               do p = 1, e%n_ports()
-                  d = dof(e%port(p))
-                  if (d > 0) row(d) = row(d) + e%con%g(r, p)
-               end do
-               n_rows = n_rows + 1
-               gtg = gtg + spread(row, 2, n)*spread(row, 1, n)
-            end do
-         end associate
-      end do
-      if (n_rows == 0) then
-         allocate (basis(n, n))
-         basis = 0.0_wp
-         do j = 1, n
-            basis(j, j) = 1.0_wp
-         end do
-         return
-      end if
-      call dsyev('V', 'U', n, gtg, n, w, work, size(work), info)
-      if (info /= 0) then
-         call fatal_error(err, 'the eigenvalue solver (LAPACK dsyev) failed with info = '//str(info), err_numeric)
-         return
-      end if
-      nr = count(w <= 1.0e-12_wp*max(maxval(abs(w)), tiny(1.0_wp)))   ! ascending: the first nr
-      basis = gtg(:, 1:nr)
-   end subroutine null_space
-
    !> Element e linearised over its np ports (D-73): their nodes ends(1:np), ke and
    !> ce (1:np, 1:np); `linearise` for two, `port_linearise` beyond (inv_j: all nodes').
    pure subroutine linearise_ports(e, state, inv_j, ends, np, ke, ce)
@@ -260,7 +207,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp), intent(out), optional :: freq_hz, damping_ratio
       logical, intent(in), optional :: dense
-      real(wp), allocatable :: y(:), inv_j(:)
+      real(wp), allocatable :: y(:), inv_j(:), lp(:, :), tr(:, :)
       real(wp) :: h(0:n_scale), a, b, c, d, fc, fd, f_bound
       complex(wp) :: lam(0:n_scale), lc, ld
       type(lin_state_t) :: st, state
@@ -280,6 +227,7 @@ contains
          return
       end if
       call inverse_inertias(model, inv_j)
+      call rigid_projection(model, lp, tr, err); if (allocated(err)) return   ! rigid gears and joins merged (D-86 (hold))
       st = state
       ! impact damping exists only where there are clearances (guards)
       if (state%contact /= lin_contact_closed .or. state%impact_scale == 0.0_wp .or. model%n_guards == 0) then
@@ -374,6 +322,10 @@ contains
                end do
             end do
          end do
+         if (allocated(lp)) then                    ! in the merged coordinates of the rigid connections
+            amat = matmul(lp, matmul(amat, tr))
+            n = size(amat, 1)
+         end if
          call dgeev('N', 'N', n, amat, n, wr, wi, vl, 1, vr, 1, work, size(work), info)
          if (info /= 0) then
             call fatal_error(err, 'the eigenvalue solver (LAPACK dgeev) failed with info = '//str(info), err_numeric)

@@ -14,8 +14,9 @@ module trainsim_capi_session
 contains
 
    !> `int trainsim_session_start(trainsim_sim *, const char *inputs)`: a session of
-   !> the handle's model (built now if it is not) at t_start; inputs: the ids of the
-   !> nodes that take an input torque, separated by commas (NULL or "": none).
+   !> the handle's model (built now if it is not) at t_start; inputs: the session's
+   !> inputs, separated by commas (NULL or "": none): NODE (or NODE.tau) an input
+   !> torque, NODE.speed the node's prescribed speed, NODE.voltage a motor's voltage.
    integer(c_int) function trainsim_session_start(p, inputs) result(code) bind(C, name='trainsim_session_start')
       type(c_ptr), value :: p, inputs
       type(capi_sim_t), pointer :: h
@@ -65,17 +66,35 @@ contains
       bind(C, name='trainsim_session_set_torque')
       type(c_ptr), value :: p, node
       real(c_double), value :: value
+      code = set_input(p, node, value, '.tau', 'trainsim_session_set_torque')
+   end function trainsim_session_set_torque
+
+   !> `int trainsim_session_set_input(trainsim_sim *, const char *name, double value)`:
+   !> the input `name` (NODE.tau or NODE, NODE.speed, NODE.voltage; one of the
+   !> session's inputs) from now on.
+   integer(c_int) function trainsim_session_set_input(p, name, value) result(code) &
+      bind(C, name='trainsim_session_set_input')
+      type(c_ptr), value :: p, name
+      real(c_double), value :: value
+      code = set_input(p, name, value, '', 'trainsim_session_set_input')
+   end function trainsim_session_set_input
+
+   !> The session's input name//suffix set to value.
+   integer(c_int) function set_input(p, name, value, suffix, what) result(code)
+      type(c_ptr), value :: p, name
+      real(c_double), value :: value
+      character(len=*), intent(in) :: suffix, what
       type(capi_sim_t), pointer :: h
       type(error_t), allocatable :: err
       code = code_argument
       if (.not. live(p, h, code)) return
-      if (.not. c_associated(node)) then
-         code = misuse(h, 'trainsim_session_set_torque: the node id is NULL')
+      if (.not. c_associated(name)) then
+         code = misuse(h, what//': the name is NULL')
          return
       end if
-      call h%session%set_torque(f_string(node), real(value, wp), err)
+      call h%session%set_input(f_string(name)//suffix, real(value, wp), err)
       code = finish(h, err)
-   end function trainsim_session_set_torque
+   end function set_input
 
    !> `int trainsim_session_state(trainsim_sim *, double *t, double *theta, double
    !> *omega, size_t n)`: the time reached and every node's angle and speed (n: the

@@ -1,9 +1,10 @@
 /* fmu_core.c: what the FMI 2.0 and 3.0 functions share (fmu_core.h; docs/fmu.md). The
- * deck travels in the FMU's resources (deck.nml) with the list of input nodes
- * (inputs.txt, one node id a line) and of parameters (parameters.txt, "PATH<TAB>VALUE" a
- * line), both written by `trainsim fmu`. A step advances a session (trainsim_session_*):
- * trainsim's own integrator with its event location inside each communication step; an
- * input is held constant over a step and acts as a load step at the communication point.
+ * deck travels in the FMU's resources (deck.nml) with the list of inputs (inputs.txt,
+ * "NAME<TAB>START" a line, NAME as NODE.tau, NODE.speed or NODE.voltage) and of parameters
+ * (parameters.txt, "PATH<TAB>TYPE<TAB>VALUE" a line, TYPE r, i or s), both written by
+ * `trainsim fmu`. A step advances a session (trainsim_session_*): trainsim's own
+ * integrator with its event location inside each communication step; an input is held
+ * constant over a step and acts as a step at the communication point.
  * A saved point is a session point (a restored FMU continues bit for bit as it did after
  * the save) with the time and the inputs' values. */
 #include <math.h>
@@ -71,6 +72,10 @@ static void release(fmu_core *c) {
     c->sim = NULL;
     free_lines(c->inputs, c->n_inputs);
     free_lines(c->params, c->n_params);
+    for (size_t i = 0; c->param_text && i < c->n_params; ++i) free(c->param_text[i]);
+    free(c->param_text);
+    free(c->param_type);
+    free(c->input_set);
     free(c->input_value);
     free(c->param_value);
     free(c->theta);
@@ -80,7 +85,9 @@ static void release(fmu_core *c) {
     free(c->contact);
     for (size_t i = 0; i < c->n_saved; ++i) free(c->saved[i].inputs);
     free(c->saved);
-    c->inputs = c->params = NULL;
+    c->inputs = c->params = c->param_text = NULL;
+    c->param_type = NULL;
+    c->input_set = NULL;
     c->input_value = c->param_value = c->theta = c->omega = c->disp = c->force = c->contact = NULL;
     c->saved = NULL;
     c->n_inputs = c->n_params = c->n_saved = c->n_nodes = 0;
@@ -102,38 +109,69 @@ static int load(fmu_core *c) {
     c->params = read_lines(c->dir, "parameters.txt", &c->n_params);
     c->input_value = calloc(c->n_inputs + 1, sizeof *c->input_value);
     c->param_value = calloc(c->n_params + 1, sizeof *c->param_value);
+    c->param_type = calloc(c->n_params + 1, 1);
+    c->param_text = calloc(c->n_params + 1, sizeof *c->param_text);
+    c->input_set = calloc(c->n_inputs + 1, sizeof *c->input_set);
     c->theta = calloc(c->n_nodes + 1, sizeof *c->theta);
     c->omega = calloc(c->n_nodes + 1, sizeof *c->omega);
     c->disp = calloc(c->n_elements + 1, sizeof *c->disp);
     c->force = calloc(c->n_elements + 1, sizeof *c->force);
     c->contact = calloc(c->n_elements + 1, sizeof *c->contact);
-    if (!c->input_value || !c->param_value || !c->theta || !c->omega || !c->disp || !c->force || !c->contact)
+    if (!c->input_value || !c->param_value || !c->param_type || !c->param_text || !c->input_set || !c->theta ||
+        !c->omega || !c->disp || !c->force || !c->contact)
         return 0;
-    for (i = 0; i < c->n_params; ++i) { /* "PATH<TAB>VALUE": the path kept, the value parsed */
+    for (i = 0; i < c->n_params; ++i) { /* "PATH<TAB>TYPE<TAB>VALUE": the path kept, the value parsed */
         char *tab = strchr(c->params[i], '\t');
-        if (tab) {
-            *tab = 0;
+        c->param_type[i] = 'r';
+        if (!tab) continue;
+        *tab = 0;
+        if (tab[1] && tab[2] == '\t') {
+            c->param_type[i] = tab[1];
+            tab += 2;
+        }
+        if (c->param_type[i] == 's') {
+            if (!(c->param_text[i] = dup(tab + 1))) return 0;
+        } else {
             c->param_value[i] = strtod(tab + 1, NULL);
         }
+    }
+    for (i = 0; i < c->n_inputs; ++i) { /* "NAME<TAB>START" */
+        char *tab = strchr(c->inputs[i], '\t');
+        if (!tab) continue;
+        *tab = 0;
+        c->input_value[i] = strtod(tab + 1, NULL);
     }
     c->time = 0;
     c->started = c->terminated = 0;
     return 1;
 }
 
+/* Parameter i set in the deck (its value in deck syntax for an Int32 or a String). */
+static int set_parameter(fmu_core *c, size_t i) {
+    char text[4200];
+    if (c->param_type[i] == 'i') {
+        snprintf(text, sizeof text, "%d", (int)c->param_value[i]);
+    } else if (c->param_type[i] == 's') {
+        snprintf(text, sizeof text, "'%s'", c->param_text[i] ? c->param_text[i] : "");
+    } else {
+        return trainsim_set_real(c->sim, c->params[i], c->param_value[i]);
+    }
+    return trainsim_set(c->sim, c->params[i], text);
+}
+
 /* The session started (at the end of initialisation, or when an output is asked first):
- * every parameter value set, then the inputs' values. */
+ * every parameter value set, then the inputs the importer set. */
 int fmu_start(fmu_core *c) {
     char list[65536] = "";
     size_t i, used = 0;
     if (c->started) return FMU_OK;
     for (i = 0; i < c->n_params; ++i)
-        if (trainsim_set_real(c->sim, c->params[i], c->param_value[i])) return failed(c, "setting a parameter");
+        if (set_parameter(c, i)) return failed(c, "setting a parameter");
     for (i = 0; i < c->n_inputs; ++i) used += (size_t)snprintf(list + used, sizeof list - used, "%s%s", i ? "," : "", c->inputs[i]);
     if (trainsim_session_start(c->sim, list)) return failed(c, "starting the run");
     c->started = 1;
     for (i = 0; i < c->n_inputs; ++i)
-        if (c->input_value[i] != 0 && trainsim_session_set_torque(c->sim, c->inputs[i], c->input_value[i]))
+        if (c->input_set[i] && trainsim_session_set_input(c->sim, c->inputs[i], c->input_value[i]))
             return failed(c, "setting an input");
     return FMU_OK;
 }
@@ -198,7 +236,7 @@ int fmu_get(fmu_core *c, const unsigned int vr[], size_t n, double value[]) {
             value[i] = k == 0 ? c->disp[e] : k == 1 ? c->force[e] : c->contact[e];
         } else if (r == 0) {
             value[i] = c->time;
-        } else if (r >= VR_PARAM && r - VR_PARAM < c->n_params) {
+        } else if (r >= VR_PARAM && r - VR_PARAM < c->n_params && c->param_type[r - VR_PARAM] == 'r') {
             value[i] = c->param_value[r - VR_PARAM];
         } else if (r >= VR_INPUT && r - VR_INPUT < c->n_inputs) {
             value[i] = c->input_value[r - VR_INPUT];
@@ -217,21 +255,76 @@ int fmu_get(fmu_core *c, const unsigned int vr[], size_t n, double value[]) {
     return FMU_OK;
 }
 
+/* Whether parameter r may be set (before initialisation ends). */
+static int settable(fmu_core *c, unsigned int r) {
+    if (!c->started) return 1;
+    fmu_say(c, FMU_ERROR, "parameter %s: set before initialisation ends", c->params[r - VR_PARAM]);
+    return 0;
+}
+
+/* The index of parameter vr of type t ('i', 's'), else -1 (and an error said). */
+static long parameter_of(fmu_core *c, unsigned int r, char t, const char *what) {
+    if (r >= VR_PARAM && r - VR_PARAM < c->n_params && c->param_type[r - VR_PARAM] == t) return (long)(r - VR_PARAM);
+    fmu_say(c, FMU_ERROR, "%s: value reference %u is not an %s parameter", what, r, t == 'i' ? "Int32" : "String");
+    return -1;
+}
+
+int fmu_get_int(fmu_core *c, const unsigned int vr[], size_t n, int value[]) {
+    for (size_t i = 0; i < n; ++i) {
+        long p = parameter_of(c, vr[i], 'i', "get");
+        if (p < 0) return FMU_ERROR;
+        value[i] = (int)c->param_value[p];
+    }
+    return FMU_OK;
+}
+
+int fmu_set_int(fmu_core *c, const unsigned int vr[], size_t n, const int value[]) {
+    for (size_t i = 0; i < n; ++i) {
+        long p = parameter_of(c, vr[i], 'i', "set");
+        if (p < 0 || !settable(c, vr[i])) return FMU_ERROR;
+        c->param_value[p] = value[i];
+    }
+    return FMU_OK;
+}
+
+int fmu_get_text(fmu_core *c, const unsigned int vr[], size_t n, const char *value[]) {
+    for (size_t i = 0; i < n; ++i) {
+        long p = parameter_of(c, vr[i], 's', "get");
+        if (p < 0) return FMU_ERROR;
+        value[i] = c->param_text[p] ? c->param_text[p] : "";
+    }
+    return FMU_OK;
+}
+
+int fmu_set_text(fmu_core *c, const unsigned int vr[], size_t n, const char *const value[]) {
+    for (size_t i = 0; i < n; ++i) {
+        long p = parameter_of(c, vr[i], 's', "set");
+        if (p < 0 || !settable(c, vr[i])) return FMU_ERROR;
+        if (!value[i] || strchr(value[i], '\'') || strlen(value[i]) > 4000) {
+            fmu_say(c, FMU_ERROR, "parameter %s: a text without a quote ' and under 4000 characters", c->params[p]);
+            return FMU_ERROR;
+        }
+        char *copy = dup(value[i]);
+        if (!copy) return FMU_ERROR;
+        free(c->param_text[p]);
+        c->param_text[p] = copy;
+    }
+    return FMU_OK;
+}
+
 int fmu_set(fmu_core *c, const unsigned int vr[], size_t n, const double value[]) {
     for (size_t i = 0; i < n; ++i) {
         unsigned int r = vr[i];
-        if (r >= VR_PARAM && r - VR_PARAM < c->n_params) {
-            if (c->started) {
-                fmu_say(c, FMU_ERROR, "parameter %s: set before initialisation ends", c->params[r - VR_PARAM]);
-                return FMU_ERROR;
-            }
+        if (r >= VR_PARAM && r - VR_PARAM < c->n_params && c->param_type[r - VR_PARAM] == 'r') {
+            if (!settable(c, r)) return FMU_ERROR;
             c->param_value[r - VR_PARAM] = value[i];
         } else if (r >= VR_INPUT && r - VR_INPUT < c->n_inputs) {
             c->input_value[r - VR_INPUT] = value[i];
-            if (c->started && trainsim_session_set_torque(c->sim, c->inputs[r - VR_INPUT], value[i]))
+            c->input_set[r - VR_INPUT] = 1;
+            if (c->started && trainsim_session_set_input(c->sim, c->inputs[r - VR_INPUT], value[i]))
                 return failed(c, "setting an input");
         } else {
-            fmu_say(c, FMU_ERROR, "set: value reference %u is not an input or a parameter", r);
+            fmu_say(c, FMU_ERROR, "set: value reference %u is not a Float64 input or parameter", r);
             return FMU_ERROR;
         }
     }

@@ -179,15 +179,25 @@ FMI2_EXPORT fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind
     return unsupported(c, "getStringStatus");
 }
 
-/* No integer, boolean or string variables: an empty call is fine, any reference an error. */
+/* Integer and String parameters (deck values written as integers or texts). */
+FMI2_EXPORT fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer v[]) {
+    return (fmi2Status)fmu_get_int(CORE(c), vr, n, v);
+}
+FMI2_EXPORT fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer v[]) {
+    return (fmi2Status)fmu_set_int(CORE(c), vr, n, v);
+}
+FMI2_EXPORT fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String v[]) {
+    return (fmi2Status)fmu_get_text(CORE(c), vr, n, v);
+}
+FMI2_EXPORT fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String v[]) {
+    return (fmi2Status)fmu_set_text(CORE(c), vr, n, v);
+}
+
+/* No boolean variables: an empty call is fine, any reference an error. */
 #define NO_VARIABLES(NAME, TYPE, CONST)                                                         \
     FMI2_EXPORT fmi2Status NAME(fmi2Component c, const fmi2ValueReference vr[], size_t n, CONST TYPE v[]) { \
         (void)vr, (void)v;                                                                      \
         return n == 0 ? fmi2OK : unsupported(c, #NAME " (no variable of this type)");           \
     }
-NO_VARIABLES(fmi2GetInteger, fmi2Integer, )
 NO_VARIABLES(fmi2GetBoolean, fmi2Boolean, )
-NO_VARIABLES(fmi2GetString, fmi2String, )
-NO_VARIABLES(fmi2SetInteger, fmi2Integer, const)
 NO_VARIABLES(fmi2SetBoolean, fmi2Boolean, const)
-NO_VARIABLES(fmi2SetString, fmi2String, const)

@@ -132,6 +132,27 @@ FMI3_EXPORT fmi3Status fmi3FreeFMUState(fmi3Instance inst, fmi3FMUState *state) 
     return fmi3OK;
 }
 
+/* Int32 and String parameters (deck values written as integers or texts). */
+FMI3_EXPORT fmi3Status fmi3GetInt32(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 v[],
+                                    size_t n) {
+    if (n != nvr) return unsupported(inst, "arrays (nValues other than nValueReferences)");
+    return (fmi3Status)fmu_get_int(CORE(inst), vr, nvr, v);
+}
+FMI3_EXPORT fmi3Status fmi3SetInt32(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 v[],
+                                    size_t n) {
+    if (n != nvr) return unsupported(inst, "arrays (nValues other than nValueReferences)");
+    return (fmi3Status)fmu_set_int(CORE(inst), vr, nvr, v);
+}
+FMI3_EXPORT fmi3Status fmi3GetString(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, fmi3String v[],
+                                     size_t n) {
+    if (n != nvr) return unsupported(inst, "arrays (nValues other than nValueReferences)");
+    return (fmi3Status)fmu_get_text(CORE(inst), vr, nvr, v);
+}
+FMI3_EXPORT fmi3Status fmi3SetString(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, const fmi3String v[],
+                                     size_t n) {
+    if (n != nvr) return unsupported(inst, "arrays (nValues other than nValueReferences)");
+    return (fmi3Status)fmu_set_text(CORE(inst), vr, nvr, v);
+}
 /* Types without variables: an empty call is fine, a reference an error. */
 #define NO_GET(NAME, T)                                                                                       \
     FMI3_EXPORT fmi3Status NAME(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, T v[], size_t n) { \
@@ -149,12 +170,10 @@ NO_GET(fmi3GetInt8, fmi3Int8) NO_SET(fmi3SetInt8, fmi3Int8)
 NO_GET(fmi3GetUInt8, fmi3UInt8) NO_SET(fmi3SetUInt8, fmi3UInt8)
 NO_GET(fmi3GetInt16, fmi3Int16) NO_SET(fmi3SetInt16, fmi3Int16)
 NO_GET(fmi3GetUInt16, fmi3UInt16) NO_SET(fmi3SetUInt16, fmi3UInt16)
-NO_GET(fmi3GetInt32, fmi3Int32) NO_SET(fmi3SetInt32, fmi3Int32)
 NO_GET(fmi3GetUInt32, fmi3UInt32) NO_SET(fmi3SetUInt32, fmi3UInt32)
 NO_GET(fmi3GetInt64, fmi3Int64) NO_SET(fmi3SetInt64, fmi3Int64)
 NO_GET(fmi3GetUInt64, fmi3UInt64) NO_SET(fmi3SetUInt64, fmi3UInt64)
 NO_GET(fmi3GetBoolean, fmi3Boolean) NO_SET(fmi3SetBoolean, fmi3Boolean)
-NO_GET(fmi3GetString, fmi3String) NO_SET(fmi3SetString, fmi3String)
 
 FMI3_EXPORT fmi3Status fmi3GetBinary(fmi3Instance inst, const fmi3ValueReference vr[], size_t nvr, size_t sizes[],
                                      fmi3Binary v[], size_t n) {

@@ -8,7 +8,7 @@
 !> leaves the torque of row k in lam(k): port p gets g(k, p) lam(k). An element
 !> whose guards in its current mode read its ports' accelerations sets
 !> `want_acc`; the model then evaluates a RHS before its guards and leaves each
-!> port's acceleration at (t, y) in acc(p) (a side that stops or starts, D-86).
+!> port's acceleration at (t, y) in acc(p) (a side that stops or starts, D-90).
 module trainsim_constraint_rows
    use trainsim_kinds, only: wp
    implicit none
@@ -22,6 +22,7 @@ module trainsim_constraint_rows
    !> An element's constraints (see above).
    type :: constraint_rows_t
       logical :: on = .false.                                  !< the element may constrain (any mode)
+      logical :: rigid = .false.                               !< its rows hold in every mode (rigid gear, join)
       integer :: n = 0                                         !< rows active in the current mode
       real(wp) :: g(max_constraints, max_con_ports) = 0.0_wp   !< g(k, p): row k over the ports
       real(wp) :: t_now = 0.0_wp                               !< time of the model's evaluation

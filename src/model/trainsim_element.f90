@@ -21,6 +21,8 @@ module trainsim_element
    use trainsim_event, only: event_t
    use trainsim_strings, only: string_t
    use trainsim_constraint_rows, only: constraint_rows_t
+   use trainsim_lin_state, only: lin_state_t, lin_start, lin_closed, lin_stiffest, lin_contact_initial, &
+                                 lin_contact_closed, lin_zone_initial, lin_zone_single, lin_zone_stiffest
    implicit none
    private
 
@@ -32,33 +34,6 @@ module trainsim_element
 
    !> Most ports of one element (the model's buffers for one element's ports).
    integer, parameter :: max_ports = 4
-
-   !> Contact state of a linearisation: as at t_start, or every clearance closed.
-   integer, parameter :: lin_contact_initial = 1, lin_contact_closed = 2
-   !> Mesh position of a linearisation: the zone at t_start, the softest (single
-   !> pair, shortest contact lines) or the stiffest (two pairs, longest lines).
-   integer, parameter :: lin_zone_initial = 1, lin_zone_single = 2, lin_zone_stiffest = 3
-
-   !> The state an element is linearised in (`linearise`, `trainsim modes`, the
-   !> RK4 step advice). `impact_scale` in [0, 1] scales the impact damping a
-   !> closed contact law can give at most (D-25). A later state (linearised about
-   !> the static preload) is a new `contact` value. `load_torque`: the largest
-   !> torque the loads can drive through one element (trainsim_modes'
-   !> load_torque_bound; 0: not known), which a contact closed gently under load
-   !> carries at a penetration that sets its damping (D-55).
-   type :: lin_state_t
-      integer :: contact = lin_contact_initial
-      integer :: zone = lin_zone_initial
-      real(wp) :: impact_scale = 1.0_wp
-      real(wp) :: load_torque = 0.0_wp
-   end type lin_state_t
-
-   !> As the run starts: current contact state and mesh zone.
-   type(lin_state_t), parameter :: lin_start = lin_state_t(lin_contact_initial, lin_zone_initial, 1.0_wp, 0.0_wp)
-   !> Every clearance closed, mesh zones as at t_start.
-   type(lin_state_t), parameter :: lin_closed = lin_state_t(lin_contact_closed, lin_zone_initial, 1.0_wp, 0.0_wp)
-   !> The stiffest state a run can reach: clearances closed, gears at their largest stiffness factor.
-   type(lin_state_t), parameter :: lin_stiffest = lin_state_t(lin_contact_closed, lin_zone_stiffest, 1.0_wp, 0.0_wp)
 
    !> Torque forms of `hot_form` (D-35): none (asked through `torques`), a
    !> clearance open (no force), a closed clearance with the yang_sun or the
@@ -133,6 +108,7 @@ module trainsim_element
       procedure :: init_mode => el_init_mode
       procedure :: preload_mode => el_preload_mode
       procedure :: update_mode => el_update_mode
+      procedure :: breakpoints => el_breakpoints
       procedure :: in_contact => el_in_contact
       procedure :: status => el_status
       procedure :: params => el_params
@@ -293,6 +269,16 @@ contains
       end associate
       n = 0
    end function el_n_guards
+
+   !> Times where the element's own time function jumps or kinks (an engagement
+   !> table's knots): the driver's stop times (default: none).
+   pure subroutine el_breakpoints(self, bp)
+      class(element_t), intent(in) :: self
+      real(wp), allocatable, intent(out) :: bp(:)
+      associate (unused => self)
+      end associate
+      allocate (bp(0))
+   end subroutine el_breakpoints
 
    !> Evaluate the guards of the current mode.
    pure subroutine el_guards(self, thl, wl, thr, wr, g)

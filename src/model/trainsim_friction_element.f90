@@ -7,7 +7,7 @@
 !> static limit. Its guard: slipping, max(s (wl - wr), s (al - ar)) >= 0 (the
 !> relative speed through zero with the relative acceleration against s: a
 !> release from rest is not stopped by the integrator's error in the speed,
-!> D-86; al, ar from the model, con%acc); stuck, limit - |lam|
+!> D-90; al, ar from the model, con%acc); stuck, limit - |lam|
 !> >= 0 (one-way: -lam >= 0, and capacity + lam >= 0).
 !>
 !>   slipping torque f(v) = e(t) (Tc + (Ts - Tc) exp(-|v|/vs) + cv |v|)   (vs > 0)
@@ -58,6 +58,7 @@ module trainsim_friction_element
       procedure :: params => friction_params
       procedure :: engagement => friction_engagement
       procedure :: limit => friction_limit
+      procedure :: breakpoints => friction_breakpoints
    end type friction_element_t
 
 contains
@@ -205,6 +206,18 @@ contains
       e = self%eng_v(k - 1) + f*(self%eng_v(k) - self%eng_v(k - 1))
    end function friction_engagement
 
+   !> The engagement table's knots, where e(t) kinks (D-87 (hold)): the driver
+   !> stops there, so RK4 never steps across a kink (its order holds).
+   pure subroutine friction_breakpoints(self, bp)
+      class(friction_element_t), intent(in) :: self
+      real(wp), allocatable, intent(out) :: bp(:)
+      if (allocated(self%eng_t) .and. .not. associated(self%command)) then
+         bp = self%eng_t
+      else
+         allocate (bp(0))
+      end if
+   end subroutine friction_breakpoints
+
    !> The static limit at t_now: e(t) Ts (a freewheel: its capacity).
    pure real(wp) function friction_limit(self) result(lim)
       class(friction_element_t), intent(in) :: self
@@ -283,7 +296,7 @@ contains
       real(wp), intent(out) :: g(:)
       associate (u1 => thl, u2 => thr)
       end associate
-      if (self%mode /= fm_stuck) then   ! speed through zero against the acceleration (D-86)
+      if (self%mode /= fm_stuck) then   ! speed through zero against the acceleration (D-90)
          g(1) = max(real(self%mode, wp)*(wl - wr), real(self%mode, wp)*(self%con%acc(1) - self%con%acc(2)))
       else if (self%one_way) then
          g(1) = min(-self%con%lam(1), self%capacity + self%con%lam(1))

@@ -139,6 +139,8 @@ module trainsim_model
       !> Kinematic constraints (D-81; allocatable: a plain one cost the simple kernels 11 instr/step)
       type(constraint_set_t), allocatable :: cn
       integer :: n_cand = 0   !< size(cn%cand): elements that may constrain (then never simple)
+      real(wp), allocatable :: g_el(:)      !< one element's guards: sized to the largest n_guards (finalize)
+      logical, allocatable :: fired_el(:)   !< and which of them fired
    contains
       procedure :: finalize => model_finalize
       procedure :: initial_state => model_initial_state
@@ -550,8 +552,8 @@ module trainsim_model
          real(wp), intent(out) :: e, pot
       end subroutine model_workspace_energy
 
-      !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed or a
-      !> node's own input (motor voltage) jumps or kinks: integrators end steps there.
+      !> Sorted times strictly inside (t0, t1) where a load, a prescribed speed, a node's
+      !> or an element's own input (motor voltage, engagement) jumps or kinks: steps end there.
       module subroutine model_breakpoints(model, t0, t1, bp)
          class(model_t), intent(in) :: model
          real(wp), intent(in) :: t0, t1

@@ -168,8 +168,7 @@ contains
    module procedure constraints_settle
       type(event_t) :: local(max_update_events)
       type(event_t), allocatable :: grown(:)
-      real(wp) :: g(4), ds
-      logical :: fired(4)
+      real(wp) :: ds
       integer :: pass, q, i, n, l, r, m, k
       logical :: any_slip
       dstored = 0.0_wp
@@ -187,14 +186,14 @@ contains
          do q = 1, size(self%cn%cand)
             i = self%cn%cand(q)
             n = self%fe(i)%ng
-            if (n == 0 .or. n > 4 .or. self%elements(i)%e%con%n == 0) cycle
+            if (n == 0 .or. self%elements(i)%e%con%n == 0) cycle
             l = self%fe(i)%l
             r = self%fe(i)%r
-            associate (e => self%elements(i)%e)
-               call e%guards(self%theta(l), self%omega(l), self%theta(r), self%omega(r), g(1:n))
-               fired(1:n) = g(1:n) < 0.0_wp
-               if (.not. any(fired(1:n))) cycle
-               call e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), fired(1:n), local, m)
+            associate (e => self%elements(i)%e, g => self%g_el(1:n), fired => self%fired_el(1:n))   ! (sized by finalize)
+               call e%guards(self%theta(l), self%omega(l), self%theta(r), self%omega(r), g)
+               fired = g < 0.0_wp
+               if (.not. any(fired)) cycle
+               call e%update_mode(t, self%theta(l), self%omega(l), self%theta(r), self%omega(r), fired, local, m)
             end associate
             call refresh_hot(self, i)
             any_slip = .true.

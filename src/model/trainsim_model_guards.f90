@@ -146,13 +146,12 @@ contains
    end procedure model_element_guards
 
    module procedure model_element_guard
-      real(wp) :: g(4)
       if (self%gr(i)%form > 0) then
          gk = row_guard(self%gr(i), k, y(self%gr(i)%yl), y(self%gr(i)%yr))
          return
       end if
-      call model_element_guards(self, i, t, y, g(1:self%fe(i)%ng))
-      gk = g(k)
+      call model_element_guards(self, i, t, y, self%g_el(1:self%fe(i)%ng))   ! (sized by finalize)
+      gk = self%g_el(k)
    end procedure model_element_guard
 
    module procedure model_guard_angles

@@ -10,7 +10,7 @@ submodule (trainsim_model) trainsim_model_layout
 contains
 
    module procedure model_finalize
-      integer :: i, nn, ne
+      integer :: i, nn, ne, ng
       nn = size(self%nodes)
       ne = size(self%elements)
       if (.not. allocated(self%speed_of)) then
@@ -35,10 +35,16 @@ contains
       if (allocated(self%guard_offset)) deallocate (self%guard_offset)
       allocate (self%guard_offset(ne))
       self%n_guards = 0
+      ng = 0
       do i = 1, ne
          self%guard_offset(i) = self%n_guards
          self%n_guards = self%n_guards + self%elements(i)%e%n_guards()
+         ng = max(ng, self%elements(i)%e%n_guards())
       end do
+      ! one element's guards at a time (element_guard, constraints_settle): as
+      ! many as the element with the most declares (a plug-in may declare any number)
+      if (allocated(self%g_el)) deallocate (self%g_el, self%fired_el)
+      allocate (self%g_el(max(ng, 1)), self%fired_el(max(ng, 1)))
       if (allocated(self%theta)) deallocate (self%theta, self%omega, self%torque)
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
@@ -153,6 +159,10 @@ contains
       end do
       do i = 1, size(model%nodes)
          call model%nodes(i)%n%breakpoints(b)
+         bp = [bp, b]
+      end do
+      do i = 1, size(model%elements)                 ! (an engagement table's knots: D-87 (hold))
+         call model%elements(i)%e%breakpoints(b)
          bp = [bp, b]
       end do
       bp = pack(bp, bp > t0 .and. bp < t1)

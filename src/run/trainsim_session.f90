@@ -37,10 +37,16 @@ module trainsim_session
    use trainsim_fixed_step, only: fixed_step_t
    use trainsim_run_checks, only: is_fixed_step
    use trainsim_simulate, only: drive_t, drive_setup, advance_to, check_fixed_step
+   use trainsim_session_inputs, only: in_torque, in_speed, input_of, check_input, input_start_value, &
+                                      hold_speed, hold_voltage, own_sequences, release_sequences, &
+                                      sequence_progress, set_sequence_progress
    implicit none
    private
 
    public :: session_t, session_state_t
+
+   !> Session starts so far (each start's number tells its saved points apart)
+   integer, save :: n_starts = 0
 
    !> A saved point of a session (`session_t%save`, `restore`).
    type :: session_state_t
@@ -49,7 +55,10 @@ module trainsim_session
       real(wp), allocatable, private :: y(:)
       type(drive_t), private :: d
       integer, allocatable, private :: input_load(:)
+      integer, allocatable, private :: input_kinds(:)
+      integer, allocatable, private :: reached(:)   !< each positioning sequence's progress
       logical, private :: saved = .false.
+      integer, private :: start_no = 0   !< the start of the session run that saved it
       !> a fixed-step integrator's grid (t0 + k dt, the next k)
       real(wp), private :: grid_t0 = 0.0_wp
       integer(i8), private :: grid_next = 0
@@ -74,12 +83,17 @@ module trainsim_session
       real(wp), private :: t_end = 0.0_wp, dout = 0.0_wp
       !> per node: its input torque's index in model%loads (0: none yet)
       integer, allocatable, private :: input_load(:)
+      !> per node: its inputs of speed and voltage (bits in_speed, in_voltage set)
+      integer, allocatable, private :: input_kinds(:)
+      logical, private :: owns_sequences = .false.
+      integer, private :: start_no = 0   !< this start's number (n_starts)
    contains
       procedure :: start => session_start
       procedure :: advance => session_advance
       procedure :: save => session_save
       procedure :: restore => session_restore
       procedure :: set_torque => session_set_torque
+      procedure :: set_input => session_set_input
       procedure :: kinematics => session_kinematics
       procedure :: element_status => session_element_status
       procedure :: finish => session_finish
@@ -87,22 +101,34 @@ module trainsim_session
 
 contains
 
-   !> Start a session of `model` (a copy is taken) at its t_start; the run
-   !> may be advanced up to its t_end. Each node of `inputs` gets an external
-   !> torque of 0 beside the deck's loads (the sums are unchanged: x + 0 = x).
+   !> Start a session of `model` (a copy is taken, with positioning sequences of
+   !> its own) at its t_start; the run may be advanced up to its t_end. `inputs`
+   !> names the co-simulation inputs (trainsim_session_inputs): `NODE` or
+   !> `NODE.tau`, an external torque of 0 beside the deck's loads (the sums are
+   !> unchanged: x + 0 = x); `NODE.speed`, `NODE.voltage`, the deck's prescribed
+   !> speed or motor voltage there, held at its value at t_start.
    subroutine session_start(self, model, err, inputs)
       class(session_t), intent(inout), target :: self
       type(model_t), intent(in) :: model
       type(error_t), allocatable, intent(out) :: err
-      !> ids of the nodes that take an input torque (`set_torque`), 0 at the start
+      !> the inputs (`set_input`, `set_torque`)
       type(string_t), intent(in), optional :: inputs(:)
       type(observer_t) :: fresh_obs
       type(run_stats_t) :: fresh_stats
       type(drive_t) :: fresh_d
       if (self%started) call self%finish()
+      if (self%owns_sequences) call release_sequences(self%model)
       if (allocated(self%input_load)) deallocate (self%input_load)
+      if (allocated(self%input_kinds)) deallocate (self%input_kinds)
+      n_starts = n_starts + 1
+      self%start_no = n_starts
       self%model = model
-      allocate (self%input_load(size(self%model%nodes)), source=0)
+      call own_sequences(self%model)
+      self%owns_sequences = .true.
+      allocate (self%input_load(size(self%model%nodes)), self%input_kinds(size(self%model%nodes)), source=0)
+      self%t = self%model%run%t_start
+      self%t_int = self%t
+      call self%model%initial_state(self%y)
       if (present(inputs)) then
          call add_inputs(self, inputs, err)
          if (allocated(err)) return
@@ -110,12 +136,9 @@ contains
       self%stats = fresh_stats
       call check_fixed_step(self%model, err)
       if (allocated(err)) return
-      self%t = self%model%run%t_start
-      self%t_int = self%t
       self%t_end = self%model%run%t_end
       self%dout = self%model%run%output_interval
       if (.not. self%dout > 0.0_wp) self%dout = self%model%run%dt
-      call self%model%initial_state(self%y)
       call self%model%init_modes(self%t, self%y)
       self%obs = fresh_obs
       self%obs%refine_peaks = .not. is_fixed_step(self%model%run%integrator)
@@ -164,19 +187,28 @@ contains
       state%y = self%y
       state%d = self%d
       state%input_load = self%input_load
+      state%input_kinds = self%input_kinds
+      call sequence_progress(self%model, state%reached)
       state%saved = .true.
+      state%start_no = self%start_no
       call grid_of(self%integ, state%grid_t0, state%grid_next)
       call fresh_integrator(self, err)
       if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
    end subroutine session_save
 
-   !> Go back (or forward) to a point `save` took of this session's run.
+   !> Go back (or forward) to a point `save` took of this session's run (since its
+   !> last start; a point of another run is refused: err_input).
    subroutine session_restore(self, state, err)
       class(session_t), intent(inout), target :: self
       type(session_state_t), intent(in) :: state
       type(error_t), allocatable, intent(out) :: err
       if (.not. (self%started .and. state%saved)) then
          call fatal_error(err, 'internal: a session restored from a state it did not save', err_internal)
+         return
+      end if
+      if (state%start_no /= self%start_no) then   ! (its sequences are another run's)
+         call fatal_error(err, 'a session restored from a point saved by another session run (a point '// &
+                          'belongs to the run between one start and the next)', err_input)
          return
       end if
       call self%integ%statistics(self%stats)
@@ -188,46 +220,88 @@ contains
       self%y = state%y
       self%d = state%d
       self%input_load = state%input_load
+      self%input_kinds = state%input_kinds
+      call set_sequence_progress(self%model, state%reached)   ! (the model's sequences are the session's own)
       call fresh_integrator(self, err)
       if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
    end subroutine session_restore
 
    !> An input of the run from now on: the external torque `value` on node
-   !> `node` (an id among the session's inputs), beside the deck's loads there,
-   !> held constant until the next call (a co-simulation input). The
-   !> change acts as a breakpoint of the inputs: the integrator starts afresh
-   !> at t (a fixed-step one on its grid). Saved and restored with the point.
+   !> `node` (an id among the session's inputs), as `set_input(node//'.tau', value)`.
    subroutine session_set_torque(self, node, value, err)
       class(session_t), intent(inout), target :: self
       character(len=*), intent(in) :: node
       real(wp), intent(in) :: value
       type(error_t), allocatable, intent(out) :: err
+      call self%set_input(node//'.tau', value, err)
+   end subroutine session_set_torque
+
+   !> An input of the run from now on (`name` among the session's inputs:
+   !> NODE.tau or NODE, NODE.speed, NODE.voltage), held constant until the next
+   !> call (a co-simulation input): a torque beside the deck's loads, the node's
+   !> speed (its angle continuous) or the motor's voltage. The change acts as a
+   !> breakpoint of the inputs: the integrator starts afresh at t (a fixed-step
+   !> one on its grid). Saved and restored with the point.
+   subroutine session_set_input(self, name, value, err)
+      class(session_t), intent(inout), target :: self
+      character(len=*), intent(in) :: name
+      real(wp), intent(in) :: value
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: node
       real(wp) :: t0
       integer(i8) :: next
-      integer :: i, k
+      integer :: i, kind
+      logical :: is_input, changed
       if (.not. self%started) then
          call fatal_error(err, 'internal: a session given an input before it was started', err_internal)
          return
       end if
+      call input_of(name, node, kind)
       i = self%model%node_index(node)
-      k = 0
-      if (i > 0) k = self%input_load(i)
-      if (k == 0) then
-         call fatal_error(err, "input torque on node '"//node//"': not an input of this session "// &
+      is_input = i > 0
+      if (is_input) then
+         if (kind == in_torque) then
+            is_input = self%input_load(i) > 0
+         else
+            is_input = btest(self%input_kinds(i), kind)
+         end if
+      end if
+      if (.not. is_input) then
+         call fatal_error(err, "input '"//name//"' (node '"//node//"'): not an input of this session "// &
                           '(name it among the inputs when the session starts)', err_input)
          return
       end if
       if (.not. (abs(value) <= huge(1.0_wp))) then
-         call fatal_error(err, "input torque on node '"//node//"': the value is not a finite number", err_input)
+         call fatal_error(err, "input '"//name//"' (node '"//node//"'): the value is not a finite number", err_input)
          return
       end if
-      if (self%model%loads(k)%torque%value0 == value) return
-      self%model%loads(k)%torque = constant_signal(value)
-      call self%model%build_fast_path()
+      call set_value(self, i, kind, value, changed)
+      if (.not. changed) return
       call grid_of(self%integ, t0, next)
       call fresh_integrator(self, err)
       if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
-   end subroutine session_set_torque
+   end subroutine session_set_input
+
+   !> Input `kind` of node i takes `value` at the session's point (the model only).
+   subroutine set_value(self, i, kind, value, changed)
+      type(session_t), intent(inout) :: self
+      integer, intent(in) :: i, kind
+      real(wp), intent(in) :: value
+      logical, intent(out) :: changed
+      integer :: k
+      select case (kind)
+      case (in_torque)
+         k = self%input_load(i)
+         changed = self%model%loads(k)%torque%value0 /= value
+         if (.not. changed) return
+         self%model%loads(k)%torque = constant_signal(value)
+         call self%model%build_fast_path()
+      case (in_speed)
+         call hold_speed(self%model, i, self%t_int, self%y, value, changed)
+      case default
+         call hold_voltage(self%model, i, value, changed)
+      end select
+   end subroutine set_value
 
    !> Every node's angle and speed at the session's point into model%theta,
    !> model%omega (as a run's sample there).
@@ -251,23 +325,26 @@ contains
       end do
    end subroutine session_element_status
 
-   !> A load of 0 on each node of `ids` (a free node), its index in input_load.
-   subroutine add_inputs(self, ids, err)
+   !> The inputs `names` (checked): a load of 0 on each node of a torque input
+   !> (its index in input_load); the deck's speed or voltage at t_start held
+   !> on each node of a speed or voltage input.
+   subroutine add_inputs(self, names, err)
       type(session_t), intent(inout) :: self
-      type(string_t), intent(in) :: ids(:)
+      type(string_t), intent(in) :: names(:)
       type(error_t), allocatable, intent(out) :: err
       type(load_t) :: l
-      integer :: j, i
-      do j = 1, size(ids)
-         i = self%model%node_index(ids(j)%s)
-         if (i == 0) then
-            call fatal_error(err, "input torque on node '"//ids(j)%s//"': the deck has no node of that id", err_input)
-            return
-         end if
-         if (self%model%nodes(i)%n%nstates() == 0 .or. self%model%is_held(i)) then
-            call fatal_error(err, "input torque on node '"//ids(j)%s//"': the node is fixed or its speed is "// &
-                             'prescribed (a torque there moves nothing)', err_input)
-            return
+      character(len=:), allocatable :: node
+      integer :: j, i, kind
+      logical :: changed
+      do j = 1, size(names)
+         call input_of(names(j)%s, node, kind)
+         i = self%model%node_index(node)
+         call check_input(self%model, i, node, kind, err)
+         if (allocated(err)) return
+         if (kind /= in_torque) then
+            self%input_kinds(i) = ibset(self%input_kinds(i), kind)
+            call set_value(self, i, kind, input_start_value(self%model, i, kind, self%t), changed)
+            cycle
          end if
          if (self%input_load(i) > 0) cycle
          l%node = i

@@ -147,6 +147,19 @@ static void test_session(const char *deck) {
     trainsim_session_state(sim, &t, th2, om2, nn);
     CHECK(memcmp(th, th2, nn * sizeof *th) == 0 && memcmp(om, om2, nn * sizeof *om) == 0,
           "the second pass from the saved point ends in the same state, bit for bit");
+    /* a speed input: n1 (driven by the deck) held at the value set, its angle continuous */
+    CHECK(trainsim_session_start(sim, "n1.speed,n4.tau") == 0, "a session with a speed and a torque input");
+    CHECK(trainsim_session_start(sim, "n4.speed") == TRAINSIM_ERR_INPUT, "a speed input on a free node is refused");
+    CHECK(trainsim_session_start(sim, "n1.speed") == 0, "again with n1.speed");
+    CHECK(trainsim_session_advance(sim, 1e-3) == 0 && trainsim_session_set_input(sim, "n1.speed", 100.0) == 0 &&
+              trainsim_session_set_input(sim, "n2.speed", 1.0) == TRAINSIM_ERR_INPUT &&
+              trainsim_session_set_input(sim, NULL, 1.0) == TRAINSIM_ERR_ARGUMENT,
+          "set n1.speed to 100 rad/s at 1 ms; n2.speed (not an input) and NULL refused");
+    trainsim_session_state(sim, &t, th, om, nn);
+    CHECK(trainsim_session_advance(sim, 2e-3) == 0, "advance to 2 ms");
+    trainsim_session_state(sim, &t, th2, om2, nn);
+    CHECK(om2[0] == 100.0 && fabs(th2[0] - (th[0] + 100.0 * 1e-3)) <= 1e-12 * fabs(th2[0]),
+          "n1 turns at 100 rad/s from 1 ms on, its angle continuous (%.17g, %.17g)", om2[0], th2[0] - th[0]);
     free(series);
     trainsim_free(sim);
 }
