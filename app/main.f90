@@ -7,7 +7,7 @@ program trainsim_main
    use trainsim_cli, only: cmd, nargs, arg, quit
    use trainsim_cmd_help, only: usage, command_usage
    use trainsim_cmd_deck, only: deck_command
-   use trainsim_cmd_calc, only: do_gear, do_key, do_worm
+   use trainsim_cmd_calc, only: do_gear, do_key, do_worm, do_planetary
    use trainsim_cmd_scripts, only: do_diagram, do_script
    use trainsim_cmd_fmu, only: do_fmu
    implicit none
@@ -27,7 +27,7 @@ program trainsim_main
       call quit(0)
    case ('run', 'modes', 'sweep')
       call deck_command()
-   case ('gear', 'key', 'worm')
+   case ('gear', 'key', 'worm', 'planetary')
       if (nargs >= 2) then
          select case (arg(2))
          case ('-h', '--help')
@@ -38,6 +38,7 @@ program trainsim_main
       if (cmd == 'gear') call do_gear()
       if (cmd == 'key') call do_key()
       if (cmd == 'worm') call do_worm()
+      if (cmd == 'planetary') call do_planetary()
    case ('export', 'plot')
       call do_script()
    case ('diagram')

@@ -9,13 +9,14 @@ module trainsim_cmd_calc
    use trainsim_gear_calc, only: gear_input_t, gear_result_t, gear_calc, gear_report, &
                                  key_input_t, key_result_t, key_calc, key_report, key_max_points
    use trainsim_worm_calc, only: worm_input_t, worm_result_t, worm_calc, worm_report
+   use trainsim_planetary_calc, only: planetary_input_t, planetary_result_t, planetary_calc, planetary_report
    use trainsim_units, only: units_t, make_units
    use trainsim_contact, only: fit_tight, fit_loose, fit_average
    use trainsim_cli, only: cmd, nargs, arg, quit, fail, real_value, text_value
    implicit none
    private
 
-   public :: do_gear, do_key, do_worm
+   public :: do_gear, do_key, do_worm, do_planetary
 
 contains
 
@@ -177,6 +178,40 @@ contains
       call worm_report(w, r, output_unit)
       call quit(0)
    end subroutine do_worm
+
+   !> trainsim planetary: ratios, assembly, mesh phases and a deck fragment of a planetary stage.
+   subroutine do_planetary()
+      type(planetary_input_t) :: q
+      type(planetary_result_t) :: r
+      type(error_t), allocatable :: err
+      integer :: k
+      call default_units(q%units)
+      k = 2
+      do while (k <= nargs)
+         select case (arg(k))
+         case ('--teeth-sun'); q%zs = real_value(k); k = k + 1
+         case ('--teeth-planet'); q%zp = real_value(k); k = k + 1
+         case ('--teeth-ring'); q%zr = real_value(k); k = k + 1
+         case ('--planets'); q%planets = real_value(k); k = k + 1
+         case ('--module'); q%module_mm = real_value(k); k = k + 1
+         case ('--diametral-pitch'); q%diametral_pitch = real_value(k); k = k + 1
+         case ('--pressure-angle'); q%pressure_angle_deg = real_value(k); k = k + 1
+         case ('--id'); q%id = text_value(k); k = k + 1
+         case ('--units'); call calc_units(k, q%units); k = k + 1
+         case default
+            write (error_unit, '(a)') "trainsim: planetary: error: unknown option '"//arg(k)//"'; valid: "// &
+               '--teeth-sun ZS, --teeth-planet ZP, --teeth-ring ZR, --planets N, --module M | --diametral-pitch P, '// &
+               '--pressure-angle DEG, --units U, --id ID'
+            call quit(2)
+         end select
+         k = k + 1
+      end do
+      call planetary_calc(q, r, err)
+      if (allocated(err)) call fail(err)
+      call print_warnings(r%warnings)
+      call planetary_report(q, r, output_unit)
+      call quit(0)
+   end subroutine do_planetary
 
    !> A calculator's warnings on stderr, one a line.
    subroutine print_warnings(warnings)

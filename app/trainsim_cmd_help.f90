@@ -43,6 +43,8 @@ contains
          '                                keyed-joint stiffness curve (Ch. IV) and a deck fragment', &
          '  trainsim worm --starts Z1 --teeth Z2 (--module M | --diametral-pitch P) --friction MU [...]', &
          '                                worm pair: ratio, lead angle, efficiencies, self-locking', &
+         '  trainsim planetary --teeth-sun ZS --teeth-planet ZP --planets N [...]', &
+         '                                planetary stage: ratios (Willis), assembly, mesh phases', &
          '  trainsim export FILE.h5 QUANTITY ... | --events | --metrics | --summary json | --spectrum', &
          '                                CSV/JSON of a history (scripts/trainsim_export.py --help)', &
          '  trainsim plot FILE.h5 Y ... [--x X] | --te GEAR | --te-spectrum GEAR | --overview [ID]  -o OUT', &
@@ -152,6 +154,20 @@ contains
             '  --fmi 3|2          the FMI version (default 3)', &
             '  -h, --help         this text', '', &
             'exit status: 0 success, 2 bad input or file'
+      case ('planetary')
+         write (unit, '(a)') 'usage: trainsim planetary --teeth-sun ZS --teeth-planet ZP --planets N [...]', '', &
+            'A simple planetary stage from its tooth counts: the ratio with each member held (the Willis', &
+            'equation (w_s - w_c)/(w_r - w_c) = -(z_r/z_s)), the planets'' speed on the carrier, the', &
+            'assembly condition of N equally spaced planets ((z_s + z_r)/N whole), the mesh phases of', &
+            'each planet, and a deck fragment for the &planetary group.', '', &
+            '  --teeth-sun ZS, --teeth-planet ZP   teeth of the sun and of each planet', &
+            '  --teeth-ring ZR            teeth of the ring (checked: ZS + 2 ZP; computed if not given)', &
+            '  --planets N                planets on the carrier, equally spaced', &
+            '  --module M                 module in mm; or --diametral-pitch P in 1/in (for the fragment)', &
+            '  --pressure-angle DEG       default 20', &
+            '  --id ID, --units U         the fragment''s stage id; in-lbf-s (default) or si', &
+            '  -h, --help                 this text', '', &
+            'exit status: 0 success, 2 bad input'
       case ('worm')
          write (unit, '(a)') 'usage: trainsim worm --starts Z1 --teeth Z2 (--module M | --diametral-pitch P) '// &
             '(--worm-diameter D1 | --diameter-factor Q) --friction MU [...]', '', &

@@ -7,8 +7,9 @@ module trainsim_el_ideal_gear
    use trainsim_strings, only: str, string_t
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_param_list, only: param_list_t, make_param_list, guarded_product, guarded_ratio
-   use trainsim_element, only: element_t, accept_carrier
+   use trainsim_param_list, only: param_list_t, make_param_list, guarded_product, guarded_ratio, add_choice
+   use trainsim_element, only: element_t
+   use trainsim_gear_mesh, only: accept_mesh, check_internal_radii
    implicit none
    private
 
@@ -17,6 +18,7 @@ module trainsim_el_ideal_gear
    !> Mesh stiffness k (force/length) and base radii of driver (left) and driven (right) gear.
    type, extends(element_t) :: ideal_gear_t
       real(wp) :: k = 0.0_wp, r1 = 0.0_wp, r2 = 0.0_wp
+      logical :: internal = .false.   !< mesh = 'internal' (trainsim_gear_mesh)
    contains
       procedure :: configure => gear_configure
       procedure :: torques => gear_torques
@@ -45,7 +47,8 @@ contains
       type(error_t), allocatable, intent(out) :: err
       associate (unused => units)
       end associate
-      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-73)
+      call accept_mesh(self, grp, self%internal, err)   ! external or internal, on an optional carrier (D-73)
+      if (allocated(err)) return
       call grp%get_real('stiffness', self%k, err); if (allocated(err)) return
       call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
       call grp%get_real('rb_driver', self%r1, err); if (allocated(err)) return
@@ -56,6 +59,8 @@ contains
          call fatal_error(err, grp%where('rb_driver')//': error: base radius must be > 0, got '//str(self%r1), err_input)
       else if (.not. self%r2 > 0.0_wp) then
          call fatal_error(err, grp%where('rb_driven')//': error: base radius must be > 0, got '//str(self%r2), err_input)
+      else
+         call check_internal_radii(grp, self%internal, self%r1, self%r2, 'rb_driven', err)
       end if
    end subroutine gear_configure
 
@@ -139,5 +144,6 @@ contains
       p = make_param_list([character(len=40) :: 'stiffness', 'rb_driver', 'rb_driven', &
                        'gear_ratio'], &
                        [self%k, self%r1, self%r2, guarded_ratio(self%r2, self%r1)])
+      if (self%internal) call add_choice(p, 'internal_mesh', 1.0_wp, 'internal')   ! (external pairs: as before)
    end function gear_params
 end module trainsim_el_ideal_gear

@@ -1,48 +1,47 @@
 !> Lossy gear pair: a gear mesh through the shared clearance model (stiffness,
 !> optional backlash, contact law) whose driven side receives eta times the
-!> power the driving side puts in. Which side drives follows the power flow
-!> (a discrete mode with guards, docs/elements.md "lossy_gear"): with fs the
-!> signed mesh force (+ on the front face) and the lossless torques
-!> tl0 = -fs r1, tr0 = fs r2,
-!>   forward  (left drives,  fs wr > 0): tl = tl0,         tr = eta_f tr0
+!> power the driving side puts in. Which side drives follows the power at the
+!> left (driver) node, the side that carries the loss (a discrete mode with
+!> guards, docs/elements.md "lossy_gear", D-90): with fs the signed mesh force
+!> (+ on the front face) and the lossless torques tl0 = -fs r1, tr0 = fs r2,
+!>   forward  (left drives,  fs wl > 0): tl = tl0 / eta_f, tr = tr0
 !>   backward (right drives, fs wl < 0): tl = eta_b tl0,   tr = tr0
-!>   neutral  (otherwise: no force, or speeds of opposite sign): tl = tl0, tr = tr0
-!>   held left  (wl = 0, row (1, 0), D-81): tl = tl0 + lam, tr = tr0, while the
-!>            left's mesh torque lies between backward's and neutral's:
-!>            0 <= lam fs <= (1 - eta_b) fs^2 r1
-!>   held right (wr = 0, row (0, 1)): tl = tl0, tr = tr0 + lam, while the right's
-!>            lies between forward's and neutral's: 0 <= -lam fs <= (1 - eta_f) fs^2 r2
-!> (a side stops where neither adjacent mode can continue: the losses exceed
-!> the torque that would drive it on; the self-locking worm, eta_b <= 0, is
-!> held back-driven whatever the wheel's torque) so the mesh loss, (1 - eta_f) fs r2 wr forward and -(1 - eta_b) fs r1 wl
-!> backward, is never negative. The worm gear (trainsim_el_worm_gear) is this
-!> element with its efficiencies from the lead angle and friction coefficient.
+!>   neutral  (faces open: no force):    tl = tl0 = 0,     tr = tr0 = 0
+!>   held left (wl = 0, row (1, 0), D-81): tl = tl0 + lam, tr = tr0, while the
+!>            left's mesh torque lies between forward's and backward's:
+!>            -(1/eta_f - 1) fs r1 <= s lam <= (1 - eta_b) fs r1 (s the force's sign)
+!> so the mesh loss, (1/eta_f - 1) fs r1 wl forward and -(1 - eta_b) fs r1 wl
+!> backward, is never negative, and the right side's torque is tr0 in every
+!> mode (a change of flow never jumps it). A left side at rest is held while
+!> the losses exceed the torque that would drive it on; the self-locking worm
+!> (eta_b <= 0) is held back-driven whatever the wheel's torque. The worm gear
+!> (trainsim_el_worm_gear) is this element with its efficiencies from the lead
+!> angle and friction coefficient.
 module trainsim_el_lossy_gear
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: str
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
-   use trainsim_event, only: event_t, ev_stick, ev_slip_forward, ev_slip_backward
+   use trainsim_event, only: event_t, ev_stick, ev_slip_forward, ev_slip_backward, ev_flow_forward, ev_flow_backward
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_ratio
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hf_none, hg_none
    implicit none
    private
 
-   public :: lossy_gear_t, new_lossy_gear, flow_forward, flow_backward, flow_neutral, choose_flow, &
-             read_mesh, get_efficiency, flow_hold_left, flow_hold_right
+   public :: lossy_gear_t, new_lossy_gear, flow_forward, flow_backward, flow_neutral, &
+             read_mesh, get_efficiency, flow_hold_left
 
    !> Power-flow modes.
-   integer, parameter :: flow_neutral = 0, flow_forward = 1, flow_backward = -1, flow_hold_left = 2, &
-                         flow_hold_right = 3
+   integer, parameter :: flow_neutral = 0, flow_forward = 1, flow_backward = -1, flow_hold_left = 2
 
    type, extends(clearance_element_t) :: lossy_gear_t
       real(wp) :: eta_f = 1.0_wp, eta_b = 1.0_wp   !< forward (left drives), backward (right drives)
       integer :: flow = flow_neutral
-      !> sign of the mesh force as the flow mode began (0: no force then); the
-      !> guards follow the force and each speed apart, so a speed reaching zero
-      !> (a side stops: held) is told from the force reaching zero (re-chosen)
+      !> sign of the mesh force as the flow mode began (its face's if 0; 0 while
+      !> open); the guards follow the force and the left's speed apart, so the
+      !> left stopping (held) is told from the force reaching zero (re-chosen)
       real(wp) :: sig = 0.0_wp
    contains
       procedure :: configure => lossy_configure
@@ -69,24 +68,6 @@ contains
       class(element_t), allocatable, intent(out) :: el
       allocate (lossy_gear_t :: el)
    end subroutine new_lossy_gear
-
-   !> The power-flow mode at a = fs wr, b = fs wl: forward if a > 0, backward if
-   !> b < 0 (both: the previous one, or forward), else neutral. Its guards are
-   !> then >= 0 at this state (forward a, backward -b, neutral -a and b).
-   pure integer function choose_flow(a, b, prev) result(flow)
-      real(wp), intent(in) :: a, b
-      integer, intent(in) :: prev
-      if (a > 0.0_wp .and. b < 0.0_wp) then
-         flow = flow_forward
-         if (prev == flow_backward) flow = flow_backward
-      else if (a > 0.0_wp) then
-         flow = flow_forward
-      else if (b < 0.0_wp) then
-         flow = flow_backward
-      else
-         flow = flow_neutral
-      end if
-   end function choose_flow
 
    !> The mesh keys both gears share: stiffness (force/length along the line),
    !> backlash (total, length; default 0) and the contact law (default linear,
@@ -172,17 +153,17 @@ contains
       tl = -fs*self%cl%r1
       tr = fs*self%cl%r2
       select case (self%flow)
-      case (flow_forward); tr = self%eta_f*tr
+      case (flow_forward); tl = tl/self%eta_f
       case (flow_backward); tl = self%eta_b*tl
       end select
    end subroutine lossy_torques
 
    !> The mesh loss at signed force fs (>= 0 in a mode whose guards hold).
-   pure real(wp) function mesh_loss(self, fs, wl, wr) result(p)
+   pure real(wp) function mesh_loss(self, fs, wl) result(p)
       class(lossy_gear_t), intent(in) :: self
-      real(wp), intent(in) :: fs, wl, wr
+      real(wp), intent(in) :: fs, wl
       select case (self%flow)
-      case (flow_forward); p = (1.0_wp - self%eta_f)*fs*self%cl%r2*wr
+      case (flow_forward); p = (1.0_wp/self%eta_f - 1.0_wp)*fs*self%cl%r1*wl
       case (flow_backward); p = -(1.0_wp - self%eta_b)*fs*self%cl%r1*wl
       case default; p = 0.0_wp
       end select
@@ -195,7 +176,7 @@ contains
       real(wp) :: c
       c = self%factor(thl)
       p = self%cl%dissipation(c, thl, wl, thr, wr) + &
-          self%mesh_loss(self%cl%contact_force(c, thl, wl, thr, wr), wl, wr)
+          self%mesh_loss(self%cl%contact_force(c, thl, wl, thr, wr), wl)
    end function lossy_dissipation
 
    pure subroutine lossy_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
@@ -206,14 +187,14 @@ contains
       p = self%dissipation_power(thl, wl, thr, wr)
    end subroutine lossy_torques_dissipation
 
-   !> The law's Jacobian with the driven side's row scaled by its efficiency.
+   !> The law's Jacobian with the left side's row scaled as its torque.
    pure subroutine lossy_jacobian(self, thl, wl, thr, wr, jt)
       class(lossy_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: jt(2, 4)
       call self%cl%torque_jacobian(self%factor(thl), 0.0_wp, thl, wl, thr, wr, jt)
       select case (self%flow)
-      case (flow_forward); jt(2, :) = self%eta_f*jt(2, :)
+      case (flow_forward); jt(1, :) = jt(1, :)/self%eta_f
       case (flow_backward); jt(1, :) = self%eta_b*jt(1, :)
       end select
    end subroutine lossy_jacobian
@@ -225,14 +206,15 @@ contains
       n = 4   ! (the model's buffers take at most 4 guards an element)
    end function lossy_n_guards
 
-   !> Guards 1-2 the faces; 3-4 the power flow, with sg the force's sign as the
-   !> mode began: forward sg wr, sg fs (self-locking: min(sg fs, sg wl)); backward
-   !> -sg wl, sg fs; neutral -sg wr, min(sg wl, sg fs) (no force as it began:
-   !> -fs wr, fs wl); held left lam fs, (1 - eta_b) fs^2 r1 - lam fs; held right
-   !> -lam fs, (1 - eta_f) fs^2 r2 + lam fs (all 1 while the faces are open).
-   !> Guard 3 of forward, backward and neutral is a side stopping (it is held);
-   !> guard 4 the force passing zero (the flow re-chosen), or the self-locking
-   !> worm or neutral's left side stopping, told apart at the event (next_flow).
+   !> Guards 1-2 the faces; 3-4 the power flow (all 1 while the faces are open),
+   !> with sg the force's sign as the mode began: forward moving(sg, wl), sg fs;
+   !> backward moving(-sg, wl), sg fs; held left sg lam + (1/eta_f - 1) sg fs
+   !> r1 (driven on: forward), (1 - eta_b) sg fs r1 - sg lam (driven back:
+   !> backward). moving(s, w, a) = max(s w, s a) with a the left's acceleration
+   !> (con%acc): the left stops where its speed has reached zero with its
+   !> acceleration against s, not while it starts from rest (D-90). Guard 3 of
+   !> forward and backward is the left stopping (it is held); guard 4 the force
+   !> passing zero (the flow re-chosen from the left's speed).
    pure subroutine lossy_guards(self, thl, wl, thr, wr, g)
       class(lossy_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
@@ -244,24 +226,22 @@ contains
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
       sg = self%sig
       select case (self%flow)
-      case (flow_forward)
-         g(3) = sg*wr; g(4) = sg*fs
-         if (self%self_locking()) g(4) = min(sg*fs, sg*wl)   ! the worm stops: it is held
-      case (flow_backward); g(3) = -sg*wl; g(4) = sg*fs
+      case (flow_forward); g(3) = moving(sg, wl, self%con%acc(1)); g(4) = sg*fs
+      case (flow_backward); g(3) = moving(-sg, wl, self%con%acc(1)); g(4) = sg*fs
       case (flow_hold_left)                      ! the holding torque within the friction
-         g(3) = self%con%lam(1)*fs
-         g(4) = (1.0_wp - self%eta_b)*fs*fs*self%cl%r1 - self%con%lam(1)*fs
-      case (flow_hold_right)
-         g(3) = -self%con%lam(1)*fs
-         g(4) = (1.0_wp - self%eta_f)*fs*fs*self%cl%r2 + self%con%lam(1)*fs
-      case default
-         if (sg /= 0.0_wp) then
-            g(3) = -sg*wr; g(4) = min(sg*wl, sg*fs)
-         else
-            g(3) = -fs*wr; g(4) = fs*wl
-         end if
+         g(3) = sg*self%con%lam(1) + (1.0_wp/self%eta_f - 1.0_wp)*sg*fs*self%cl%r1
+         g(4) = (1.0_wp - self%eta_b)*sg*fs*self%cl%r1 - sg*self%con%lam(1)
       end select
    end subroutine lossy_guards
+
+   !> A side moving (or starting to move) in direction s: >= 0 while its speed w
+   !> or its acceleration a points along s; below zero once both point against
+   !> it. A side released from rest starts with w = 0 and a along s, so the
+   !> integrator's error in w (which may have either sign) cannot stop it again.
+   pure real(wp) function moving(s, w, a) result(g)
+      real(wp), intent(in) :: s, w, a
+      g = max(s*w, s*a)
+   end function moving
 
    subroutine lossy_init_mode(self, thl, wl, thr, wr)
       class(lossy_gear_t), intent(inout) :: self
@@ -269,9 +249,8 @@ contains
       real(wp) :: fs
       call self%cl%init(thl, wl, thr, wr)
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
-      call self%set_flow(choose_flow(fs*wr, fs*wl, flow_neutral), fs)
       self%con%lam = 0.0_wp
-      if (self%self_locking() .and. self%cl%mode /= 0 .and. wl == 0.0_wp) call self%set_flow(flow_hold_left, fs)
+      call self%set_flow(closed_flow(self, fs, wl), fs)
    end subroutine lossy_init_mode
 
    !> A face or the power flow changed: the clearance first, then the flow from
@@ -284,69 +263,86 @@ contains
       type(event_t), intent(inout) :: ev(:)
       integer, intent(out) :: nev
       real(wp) :: fs
-      integer :: before, flow
+      integer :: before, flow, face
       real(wp) :: lam
       associate (u1 => t)
       end associate
       nev = 0
       before = self%flow
+      face = self%cl%mode
       call self%cl%update(wl, wr, fired(1:2), ev, nev)
+      if (self%cl%b == 0.0_wp .and. face /= 0 .and. self%cl%mode == 0) then
+         ! no backlash: the faces coincide, the one separating hands over to the
+         ! other at once (an open mode of zero width would start both its face
+         ! guards at 0, where an integrator's root finding cannot see them leave)
+         call self%cl%update(wl, wr, [face == -1, face == 1], ev, nev)
+      end if
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
-      flow = next_flow(self, before, fired, fs, wl, wr)
+      flow = next_flow(self, before, fired, fs, wl)
       lam = self%con%lam(1)
       call self%set_flow(flow, fs)
-      if (flow == before .or. nev >= size(ev)) return
-      if (.not. (held(flow) .or. held(before))) return
-      nev = nev + 1                                    ! sticking and its end are events
+      if (flow == before .or. nev >= size(ev) .or. flow == flow_neutral) return   ! (opened: the face's event)
+      if (before == flow_neutral .and. .not. held(flow)) return                  ! (closed: the face's event)
+      nev = nev + 1                                    ! sticking, its end and a turn of the flow are events
       ev(nev) = event_t()
       ev(nev)%theta_left = thl; ev(nev)%omega_left = wl; ev(nev)%theta_right = thr; ev(nev)%omega_right = wr
       ev(nev)%displacement = self%cl%delta(thl, thr)
       ev(nev)%force = lam                              ! the holding torque (0 as it sticks)
       if (held(flow)) then
          ev(nev)%kind = ev_stick
-      else if (flow == flow_forward) then
-         ev(nev)%kind = ev_slip_forward
-      else
-         ev(nev)%kind = ev_slip_backward
+      else if (held(before)) then
+         ev(nev)%kind = merge(ev_slip_forward, ev_slip_backward, flow == flow_forward)
+      else                                             ! forward <-> backward: the force passed zero
+         ev(nev)%kind = merge(ev_flow_forward, ev_flow_backward, flow == flow_forward)
+         ev(nev)%force = fs
       end if
    end subroutine lossy_update_mode
 
    !> The flow after guards `fired` (3-4; faces 1-2 already applied) at force fs.
-   pure integer function next_flow(self, before, fired, fs, wl, wr) result(flow)
+   pure integer function next_flow(self, before, fired, fs, wl) result(flow)
       class(lossy_gear_t), intent(in) :: self
       integer, intent(in) :: before
       logical, intent(in) :: fired(:)
-      real(wp), intent(in) :: fs, wl, wr
-      logical :: left_stopped
-      ! guard 4 of a self-locking forward, or of neutral, is min(sg fs, sg wl): the
-      ! smaller at the event is the one that reached zero
-      left_stopped = self%sig /= 0.0_wp .and. self%sig*wl <= self%sig*fs .and. &
-                     (before == flow_neutral .or. (before == flow_forward .and. self%self_locking()))
+      real(wp), intent(in) :: fs, wl
       flow = before
       if (self%cl%mode == 0) then
          flow = flow_neutral                           ! open: no force, nothing held
-      else if (before == flow_hold_left .and. (fired(3) .or. fired(4))) then
-         flow = merge(flow_forward, flow_backward, fired(3))   ! the left driven on / back
-      else if (before == flow_hold_right .and. (fired(3) .or. fired(4))) then
-         flow = merge(flow_neutral, flow_forward, fired(3))    ! pulled back past lossless / driven on
-      else if (held(before)) then
-         continue
-      else if ((before == flow_forward .and. fired(3)) .or. (before == flow_neutral .and. fired(3) .and. &
-                                                              self%sig /= 0.0_wp)) then
-         flow = flow_hold_right                        ! the right stops under load
-      else if ((before == flow_backward .and. fired(3)) .or. (fired(4) .and. left_stopped)) then
+      else if (before == flow_hold_left) then
+         if (fired(3)) flow = flow_forward             ! driven on past the forward losses
+         if (fired(4)) flow = flow_backward            ! driven back past the backward losses
+      else if (before /= flow_neutral .and. fired(3)) then
          flow = flow_hold_left                         ! the left stops under load
-      else
-         flow = choose_flow(fs*wr, fs*wl, before)      ! the force changed sign, a face, or no force before
+      else if (before == flow_neutral .or. fired(4) .or. any(fired(1:2))) then
+         flow = closed_flow(self, fs, wl)              ! a face closed, or the force passed zero
       end if
-      ! self-locking, the worm turning back while the wheel still turns on: the
-      ! mesh brakes the worm (forward's guard fs wl would be negative at once)
-      if (self%self_locking() .and. flow == flow_forward .and. fs*wl < 0.0_wp) flow = flow_backward
    end function next_flow
+
+   !> The flow of a closed mesh at force fs (its face's sign if fs = 0): the
+   !> left at rest held (the model lets it go at once if its torque lies outside
+   !> the band, constraints_settle, as friction sticks at equal speeds), else
+   !> forward where it moves along the force, backward against it.
+   pure integer function closed_flow(self, fs, wl) result(flow)
+      class(lossy_gear_t), intent(in) :: self
+      real(wp), intent(in) :: fs, wl
+      real(wp) :: s
+      if (self%cl%mode == 0) then
+         flow = flow_neutral
+         return
+      end if
+      s = real(self%cl%mode, wp)
+      if (fs /= 0.0_wp) s = sign(1.0_wp, fs)
+      if (wl == 0.0_wp) then
+         flow = flow_hold_left
+      else if (s*wl > 0.0_wp) then
+         flow = flow_forward
+      else
+         flow = flow_backward
+      end if
+   end function closed_flow
 
    pure logical function held(flow)
       integer, intent(in) :: flow
-      held = flow == flow_hold_left .or. flow == flow_hold_right
+      held = flow == flow_hold_left
    end function held
 
    !> A self-locking pair (eta_b <= 0): back-driven, the mesh holds the driver.
@@ -362,11 +358,12 @@ contains
       integer, intent(in) :: flow
       real(wp), intent(in) :: fs   !< the mesh force now
       self%flow = flow
-      self%sig = 0.0_wp
-      if (fs /= 0.0_wp) self%sig = sign(1.0_wp, fs)
+      self%sig = real(self%cl%mode, wp)            ! the face's sign where the force is 0
+      if (fs /= 0.0_wp .and. self%cl%mode /= 0) self%sig = sign(1.0_wp, fs)
       self%con%n = merge(1, 0, held(flow))
-      self%con%g(1, 1:2) = merge([1.0_wp, 0.0_wp], [0.0_wp, 1.0_wp], flow /= flow_hold_right)
+      self%con%g(1, 1:2) = [1.0_wp, 0.0_wp]
       if (.not. held(flow)) self%con%lam = 0.0_wp
+      self%con%want_acc = self%cl%mode /= 0 .and. .not. held(flow)   ! the guards read acc (D-90)
    end subroutine set_flow
 
    !> Declined (torques and guards through the element): the efficiency scales

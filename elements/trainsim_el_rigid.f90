@@ -12,6 +12,7 @@ module trainsim_el_rigid
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_ratio
    use trainsim_element, only: element_t
+   use trainsim_gear_mesh, only: accept_mesh, check_internal_radii
    implicit none
    private
 
@@ -20,6 +21,7 @@ module trainsim_el_rigid
    !> Lever arms r1, r2: the constraint r1 wl - r2 wr = 0 (1, 1 for a join).
    type, extends(element_t) :: rigid_gear_t
       real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp
+      logical :: internal = .false.   !< mesh = 'internal' (trainsim_gear_mesh; rigid_gear only)
    contains
       procedure :: configure => rigid_gear_configure
       procedure :: torques => rigid_torques
@@ -57,12 +59,15 @@ contains
       type(error_t), allocatable, intent(out) :: err
       associate (unused => units)
       end associate
+      call accept_mesh(self, grp, self%internal, err); if (allocated(err)) return   ! on a carrier: D-73, D-89
       call grp%get_real('rb_driver', self%r1, err); if (allocated(err)) return
       call grp%get_real('rb_driven', self%r2, err); if (allocated(err)) return
       if (.not. self%r1 > 0.0_wp) then
          call fatal_error(err, grp%where('rb_driver')//': error: base radius must be > 0, got '//str(self%r1), err_input)
       else if (.not. self%r2 > 0.0_wp) then
          call fatal_error(err, grp%where('rb_driven')//': error: base radius must be > 0, got '//str(self%r2), err_input)
+      else
+         call check_internal_radii(grp, self%internal, self%r1, self%r2, 'rb_driven', err)
       end if
       call set_row(self)
    end subroutine rigid_gear_configure
@@ -129,13 +134,18 @@ contains
       pairs = 0
    end subroutine rigid_status
 
-   !> The one row, always in force: r1 wl - r2 wr = 0.
+   !> The one row, always in force: r1 wl - r2 wr = 0; on a carrier (port 3) the
+   !> same in its frame, r1 (wl - wc) - r2 (a wr - s wc) = 0 (D-73, D-89).
    subroutine set_row(self)
       class(rigid_gear_t), intent(inout) :: self
       self%con%on = .true.
       self%con%rigid = .true.                  ! (merged in the RK4 step advice: D-86 (hold))
       self%con%n = 1
       self%con%g(1, 1:2) = [self%r1, -self%r2]
+      if (allocated(self%port_keys)) then
+         if (size(self%port_keys) > 0) self%con%g(1, 1:3) = [self%r1, -self%right_sign*self%r2, &
+                                                             -self%r1 + self%carrier_sense*self%r2]
+      end if
    end subroutine set_row
 
    function rigid_params(self) result(p)

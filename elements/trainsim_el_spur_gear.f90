@@ -26,7 +26,8 @@ module trainsim_el_spur_gear
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
-   use trainsim_element, only: element_t, accept_carrier, hot_form_t, hg_faces_zone
+   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone
+   use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
    implicit none
    private
 
@@ -45,6 +46,8 @@ module trainsim_el_spur_gear
       real(wp) :: alpha = 0.0_wp          !< approach angle, rad
       real(wp) :: c2 = 1.8_wp             !< stiffness factor in the two-pair zone
       logical :: truncate = .false.       !< zone_function = 'truncate'
+      logical :: internal = .false.       !< mesh = 'internal': a pinion (left) in a ring gear (right)
+      real(wp) :: phase = 0.0_wp          !< mesh_phase: the zones' shift in teeth, u = N (theta + alpha)/(2 pi) + phase
       integer :: pairs = 1                !< current zone: 1 or 2 pairs
       real(wp) :: th_lo = 0.0_wp, th_hi = 0.0_wp   !< driver-angle bounds of the current zone
       logical :: lo_open = .false.        !< the zone has no lower bound (truncate, u < 0)
@@ -122,7 +125,8 @@ contains
       character(len=:), allocatable :: zf
       real(wp) :: pd, modl, kw, bl, r1p, r2p, k, kdef
       logical :: geometry, has_pitch, has_module
-      call accept_carrier(self, grp, -1.0_wp)   ! an external pair on an optional housing (D-73)
+      call accept_mesh(self, grp, self%internal, err)   ! external or internal, on an optional carrier (D-73)
+      if (allocated(err)) return
 
       ! both asked (has records the query), so neither key is reported as unknown
       has_pitch = grp%has('diametral_pitch')
@@ -185,7 +189,19 @@ contains
          r2p = 0.5_wp*self%teeth2*self%pitch_module
          self%cl%r1 = r1p*cos(self%phi)
          self%cl%r2 = r2p*cos(self%phi)
-         self%mp = contact_ratio(self%phi, r1p, r2p, self%pitch_module)
+         call check_internal_radii(grp, self%internal, self%teeth, self%teeth2, 'teeth_driven', err)
+         if (allocated(err)) return
+         if (self%internal) then
+            self%mp = internal_contact_ratio(self%phi, r1p, r2p, self%pitch_module)
+            if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
+               call fatal_error(err, grp%where('teeth_driven')//': error: this internal pair ('//str(self%teeth)// &
+                                ' and '//str(self%teeth2)//' teeth) has contact ratio '//str(self%mp)// &
+                                ' (outside [1, 2]; 0: the ring''s tip circle lies inside its base circle)', err_input)
+               return
+            end if
+         else
+            self%mp = contact_ratio(self%phi, r1p, r2p, self%pitch_module)
+         end if
          self%alpha = pi*self%mp/self%teeth                      ! App. E
          self%cl%b = 0.5_wp*bl
          ! eq. (3.9): deflection W (0.39 + 1.49 cos phi) 1e-7 / F in inch-lbf (steel)
@@ -195,30 +211,7 @@ contains
          call grp%get_real('stiffness', k, err, default=kw*self%face); if (allocated(err)) return
          self%cl%law%k = k
       else
-         if (grp%holds('backlash')) then   ! the geometry form's key in the constants form (D-62)
-            call fatal_error(err, grp%where('backlash')//": error: backlash (the TOTAL backlash along the line of "// &
-                             'action) belongs to the geometry form (module or diametral_pitch, teeth_driver, '// &
-                             "teeth_driven, face_width); this group gives neither module nor diametral_pitch, so it "// &
-                             "is in TRAIN's constants form, whose key is 'half_backlash' = backlash / 2 (give "// &
-                             'half_backlash = half your value, in '//units%length//')', err_input)
-            return
-         end if
-         call grp%get_real('stiffness', self%cl%law%k, err); if (allocated(err)) return
-         call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
-         call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
-         call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
-         call grp%get_real('teeth', self%teeth, err); if (allocated(err)) return
-         call grp%get_real('contact_ratio', self%mp, err); if (allocated(err)) return
-         call grp%get_real('approach_angle', self%alpha, err); if (allocated(err)) return
-         call grp%get_real('half_backlash', self%cl%b, err); if (allocated(err)) return
-         call grp%require_positive('rb_driver', self%cl%r1, err); if (allocated(err)) return
-         call grp%require_positive('rb_driven', self%cl%r2, err); if (allocated(err)) return
-         call grp%require_positive('teeth', self%teeth, err); if (allocated(err)) return
-         if (.not. self%cl%b >= 0.0_wp) then
-            call fatal_error(err, grp%where('half_backlash')//': error: half_backlash must be >= 0, got '// &
-                             str(self%cl%b)//' '//units%length, err_input)
-            return
-         end if
+         call configure_constants(self, grp, units, err); if (allocated(err)) return
       end if
       call grp%require_positive('stiffness', self%cl%law%k, err); if (allocated(err)) return
       if (.not. (self%mp >= 1.0_wp .and. self%mp <= 2.0_wp)) then
@@ -239,6 +232,12 @@ contains
       if (.not. (self%c2 >= 1.0_wp .and. self%c2 <= 2.0_wp)) then
          call fatal_error(err, grp%where('two_pair_factor')//': error: two_pair_factor must be in [1, 2], got '// &
                           str(self%c2), err_input)
+         return
+      end if
+      call grp%get_real('mesh_phase', self%phase, err, default=0.0_wp); if (allocated(err)) return
+      if (.not. (self%phase > -1.0_wp .and. self%phase < 1.0_wp)) then
+         call fatal_error(err, grp%where('mesh_phase')//': error: mesh_phase (a fraction of a tooth) must be in '// &
+                          '(-1, 1), got '//str(self%phase), err_input)
          return
       end if
       call grp%get_string('zone_function', zf, err, default='periodic'); if (allocated(err)) return
@@ -263,13 +262,49 @@ contains
       end subroutine check_teeth
    end subroutine spur_configure
 
+   !> TRAIN's seven constants (stiffness, rb_driver, rb_driven, teeth, contact_ratio,
+   !> approach_angle, half_backlash): the form without module or diametral_pitch.
+   subroutine configure_constants(self, grp, units, err)
+      class(spur_gear_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      type(error_t), allocatable, intent(out) :: err
+      if (grp%holds('backlash')) then   ! the geometry form's key in the constants form (D-62)
+         call fatal_error(err, grp%where('backlash')//": error: backlash (the TOTAL backlash along the line of "// &
+                          'action) belongs to the geometry form (module or diametral_pitch, teeth_driver, '// &
+                          "teeth_driven, face_width); this group gives neither module nor diametral_pitch, so it "// &
+                          "is in TRAIN's constants form, whose key is 'half_backlash' = backlash / 2 (give "// &
+                          'half_backlash = half your value, in '//units%length//')', err_input)
+         return
+      end if
+      call grp%get_real('stiffness', self%cl%law%k, err); if (allocated(err)) return
+      call grp%expect([character(len=9) :: 'rb_driver', 'rb_driven'])   ! a step apart (D-62)
+      call grp%get_real('rb_driver', self%cl%r1, err); if (allocated(err)) return
+      call grp%get_real('rb_driven', self%cl%r2, err); if (allocated(err)) return
+      call grp%get_real('teeth', self%teeth, err); if (allocated(err)) return
+      call grp%get_real('contact_ratio', self%mp, err); if (allocated(err)) return
+      call grp%get_real('approach_angle', self%alpha, err); if (allocated(err)) return
+      call grp%get_real('half_backlash', self%cl%b, err); if (allocated(err)) return
+      call grp%require_positive('rb_driver', self%cl%r1, err); if (allocated(err)) return
+      call grp%require_positive('rb_driven', self%cl%r2, err); if (allocated(err)) return
+      call grp%require_positive('teeth', self%teeth, err); if (allocated(err)) return
+      call check_internal_radii(grp, self%internal, self%cl%r1, self%cl%r2, 'rb_driven', err)
+      if (allocated(err)) return
+      if (.not. self%cl%b >= 0.0_wp) then
+         call fatal_error(err, grp%where('half_backlash')//': error: half_backlash must be >= 0, got '// &
+                          str(self%cl%b)//' '//units%length, err_input)
+         return
+      end if
+   end subroutine configure_constants
+
    !> Set the zone from the driver angle.
    subroutine set_zone(self, thl)
       class(spur_gear_t), intent(inout) :: self
       real(wp), intent(in) :: thl
       real(wp) :: u, u_lo, u_hi
-      u = tooth_phase(thl, self%alpha, self%teeth)
+      u = tooth_phase(thl, self%alpha, self%teeth) + self%phase   ! (phase 0: u as before, bit for bit)
       call mesh_zone(u, self%mp, self%truncate, self%pairs, u_lo, u_hi)
+      u_lo = u_lo - self%phase; u_hi = u_hi - self%phase
       ! an unbounded side has no guard value (spur_guards): no huge numbers reach the root finder
       self%lo_open = u_lo == -huge(1.0_wp)
       if (self%lo_open) then
@@ -416,6 +451,8 @@ contains
       ! zone_function: the file's attribute truncate_zones (1 = 'truncate', 0 = 'periodic')
       call add_choice(p, 'truncate_zones', merge(1.0_wp, 0.0_wp, self%truncate), &
                       merge('truncate', 'periodic', self%truncate))
+      if (self%internal) call add_choice(p, 'internal_mesh', 1.0_wp, 'internal')   ! (external pairs: as before)
+      if (self%phase /= 0.0_wp) call append_params(p, [character(len=40) :: 'mesh_phase'], [self%phase])
       if (self%pitch_module > 0.0_wp) then
          call append_params(p, [character(len=40) :: 'teeth_driven', 'module_length', 'pressure_angle_rad', 'face_width'], &
                             [self%teeth2, self%pitch_module, self%phi, self%face])

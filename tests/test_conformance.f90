@@ -463,7 +463,7 @@ contains
          select type (e)
          class is (lossy_gear_t)   ! a lossy mesh takes its loss (eta < 1) from the motion, no more
             call e%status(x(1, s), x(2, s), x(3, s), x(4, s), d, fs, contact, pairs)
-            loss = e%mesh_loss(fs, v(1), v(2))
+            loss = e%mesh_loss(fs, v(1))
          end select
          if (ref > 0.0_wp) then
             loaded = loaded + 1

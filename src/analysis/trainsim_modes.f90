@@ -331,7 +331,7 @@ contains
             call fatal_error(err, 'the eigenvalue solver (LAPACK dgeev) failed with info = '//str(info), err_numeric)
             return
          end if
-         big = maxval(abs(cmplx(wr, wi, wp)))
+         big = maxval(abs(cmplx(wr(1:n), wi(1:n), wp)))   ! (n: the merged size; beyond it wr is unset)
          do i = 1, n
             l = cmplx(wr(i), wi(i), wp)
             ! rigid-body modes (lambda = 0 as a Jordan block: round-off of order

@@ -17,6 +17,7 @@ module trainsim_builder
    use trainsim_id_table, only: id_table_t
    use trainsim_plausibility, only: check_plausibility
    use trainsim_controller_deck, only: read_controllers, link_controllers
+   use trainsim_planetary_deck, only: expand_planetary
    implicit none
    private
 
@@ -42,19 +43,20 @@ contains
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
       type(id_table_t) :: node_ids   ! node id -> node index, for look-ups in O(1)
-      type(string_t) :: groups(7)
+      type(string_t) :: groups(8)
       integer :: i
 
       ! (not an array constructor of string_t(...): gfortran 12 leaks their strings,
       ! 50 bytes a run of a sweep)
       groups(1)%s = 'run'; groups(2)%s = 'node'; groups(3)%s = 'element'; groups(4)%s = 'load'
       groups(5)%s = 'initial'; groups(6)%s = 'controller'
-      groups(7)%s = 'fmu'   ! (&fmu: read by trainsim fmu alone)
+      groups(7)%s = 'fmu'; groups(8)%s = 'planetary'   ! (&fmu: read by trainsim fmu alone)
       call deck%check_group_names(groups, err, also='sweep (read by trainsim sweep)')
       if (allocated(err)) return
       model%deck_file = deck%file
       call move_alloc(deck%text, model%deck_text)   ! not copied: a deck may be 100 MB
       call read_run(deck, model, err); if (allocated(err)) return
+      call expand_planetary(deck, model%units, err); if (allocated(err)) return   ! into &node, &element (D-90)
       call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
       call read_elements(deck, model, node_ids, err); if (allocated(err)) return
       call read_loads(deck, model, node_ids, err); if (allocated(err)) return

@@ -9,8 +9,9 @@ module trainsim_deck
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
    use trainsim_strings, only: string_t, to_lower, str, join
    use trainsim_deck_lexer, only: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string, &
-                                  check_text, tokenize, display, parse_real, is_repeat, is_key
-   use trainsim_deck_group, only: deck_group_t, deck_entry_t
+                                  check_text, tokenize, display, parse_real, is_repeat, is_key, &
+                                  lower_in_place
+   use trainsim_deck_group, only: deck_group_t, deck_entry_t, same_key
    implicit none
    private
 
@@ -93,6 +94,12 @@ contains
             call read_failed()
             return
          end if
+         if (.not. pending_cr .and. index(blk(1:nb), achar(13)) == 0) then   ! no CR: every byte counts
+            nlen = nlen + nb
+            if (nb > 0) last = blk(nb:nb)
+            pos = pos + nb
+            cycle
+         end if
          do i = 1, nb
             if (blk(i:i) == achar(13)) then
                if (pending_cr) nlen = nlen + 1   ! a CR not followed by LF is kept
@@ -124,6 +131,13 @@ contains
          if (ios /= 0) then
             call read_failed()
             return
+         end if
+         if (.not. pending_cr .and. index(blk(1:nb), achar(13)) == 0) then   ! no CR: the block as it is
+            i = int(min(int(nb, int64), nlen - n))
+            text(n + 1:n + i) = blk(1:i)
+            n = n + i
+            pos = pos + nb
+            cycle
          end if
          do i = 1, nb
             if (blk(i:i) == achar(13)) then
@@ -206,7 +220,7 @@ contains
             call parse_group(toks, i, file, counts(k), groups(ngroups), err)
             if (allocated(err)) return
          case (tk_end)
-            if (toks%text(i)%s == '/') then
+            if (.not. allocated(toks%text(i)%s)) then   ! '/' (the lexer keeps only '&end''s text)
                call fatal_error(err, file//':'//str(toks%line(i))//": error: text outside a group: '/' "// &
                                 "(a group is closed twice, or a value holds an unquoted '/')", err_input)
             else
@@ -244,28 +258,28 @@ contains
    end subroutine parse_into
 
    !> Parse one group starting at token `i` (a tk_group token); on return `i` is past its end.
+   !> The texts of its tokens are moved into the group (no copy, D-90); the entries and
+   !> values are counted first and allocated once.
    subroutine parse_group(toks, i, file, ordinal, g, err)
-      type(token_list_t), intent(in) :: toks
+      type(token_list_t), intent(inout) :: toks
       integer, intent(inout) :: i
       character(len=*), intent(in) :: file
       integer, intent(in) :: ordinal   !< 1 for the first group of its name, 2 for the second...
       type(deck_group_t), intent(inout) :: g
       type(error_t), allocatable, intent(out) :: err
-      type(deck_entry_t), allocatable :: entries(:)
       integer :: nent, k
 
-      g%name = toks%text(i)%s
+      call move_alloc(toks%text(i)%s, g%name)
       g%file = file
       g%line = toks%line(i)
       g%ordinal = ordinal
-      allocate (g%entries(0))
-      allocate (entries(8))
+      allocate (g%entries(count_keys(toks, i + 1)))
       nent = 0
       i = i + 1
 
       do
          if (i > toks%n) then
-            call group_error(g, entries, nent, file, g%line, 'group not closed before the end of the file '// &
+            call group_error(g, nent, file, g%line, 'group not closed before the end of the file '// &
                              "(missing '/' or '&end')", err)
             return
          end if
@@ -274,7 +288,7 @@ contains
             i = i + 1
             exit
          case (tk_group)
-            call group_error(g, entries, nent, file, toks%line(i), "group not closed before '&"//toks%text(i)%s// &
+            call group_error(g, nent, file, toks%line(i), "group not closed before '&"//toks%text(i)%s// &
                              "' (missing '/' or '&end'; the group starts on line "//str(g%line)//')', err)
             return
          case (tk_comma)
@@ -282,63 +296,94 @@ contains
             cycle
          case (tk_word)
             if (.not. is_key(toks%text(i)%s)) then
-               call group_error(g, entries, nent, file, toks%line(i), "expected a key name, got '"// &
+               call group_error(g, nent, file, toks%line(i), "expected a key name, got '"// &
                                 display(toks, i)//"'", err)
                return
             end if
             if (.not. next_is_eq(toks, i)) then
-               call group_error(g, entries, nent, file, toks%line(i), "missing '=' after key '"// &
+               call group_error(g, nent, file, toks%line(i), "missing '=' after key '"// &
                                 to_lower(toks%text(i)%s)//"'", err)
                return
             end if
          case default
-            call group_error(g, entries, nent, file, toks%line(i), "expected a key name, got '"// &
+            call group_error(g, nent, file, toks%line(i), "expected a key name, got '"// &
                              display(toks, i)//"'", err)
             return
          end select
 
          ! toks(i) is a key, toks(i+1) is '='.
-         if (nent == size(entries)) call grow_entries(entries)
          nent = nent + 1
-         associate (e => entries(nent))
-            e%key = to_lower(toks%text(i)%s)
+         associate (e => g%entries(nent))
+            call lower_in_place(toks%text(i)%s)
+            call move_alloc(toks%text(i)%s, e%key)
             e%line = toks%line(i)
-            allocate (e%values(4), e%quoted(4))
             do k = 1, nent - 1
-               if (entries(k)%key == e%key) then
-                  call group_error(g, entries, nent, file, e%line, "duplicate key '"//e%key// &
-                                   "' (first given on line "//str(entries(k)%line)//')', err)
+               if (g%entries(k)%key == e%key) then
+                  call group_error(g, nent, file, e%line, "duplicate key '"//e%key// &
+                                   "' (first given on line "//str(g%entries(k)%line)//')', err)
                   return
                end if
             end do
          end associate
          i = i + 2
-         call parse_values(toks, i, file, g, entries, nent, err)
+         call parse_values(toks, i, file, g, nent, err)
          if (allocated(err)) return
-      end do
-      deallocate (g%entries)
-      allocate (g%entries(nent))
-      do k = 1, nent
-         call move_entry(entries(k), g%entries(k))
       end do
    end subroutine parse_group
 
+   !> Number of keys (words followed by '=') from token `j` to the group's end: the
+   !> entries parse_group can make, exactly as many when the group is well formed.
+   integer function count_keys(toks, j) result(n)
+      type(token_list_t), intent(in) :: toks
+      integer, intent(in) :: j
+      integer :: k
+      n = 0
+      do k = j, toks%n
+         if (toks%kind(k) == tk_end .or. toks%kind(k) == tk_group) exit
+         if (toks%kind(k) == tk_word) then
+            if (next_is_eq(toks, k)) n = n + 1
+         end if
+      end do
+   end function count_keys
+
+   !> Number of values parse_values takes from token `j` when they are well formed.
+   integer function count_values(toks, j) result(n)
+      type(token_list_t), intent(in) :: toks
+      integer, intent(in) :: j
+      integer :: k
+      n = 0
+      do k = j, toks%n
+         select case (toks%kind(k))
+         case (tk_comma)
+            cycle
+         case (tk_word)
+            if (next_is_eq(toks, k)) exit
+            n = n + 1
+         case (tk_string)
+            n = n + 1
+         case default
+            exit
+         end select
+      end do
+   end function count_values
+
    !> The values of entry `nent` (its key and '=' read), from token `i` to the next key, the
    !> group's end or a token that cannot be a value; on return `i` is at that token.
-   subroutine parse_values(toks, i, file, g, entries, nent, err)
-      type(token_list_t), intent(in) :: toks
+   subroutine parse_values(toks, i, file, g, nent, err)
+      type(token_list_t), intent(inout) :: toks
       integer, intent(inout) :: i
       character(len=*), intent(in) :: file
       type(deck_group_t), intent(inout) :: g
-      type(deck_entry_t), intent(inout) :: entries(:)
       integer, intent(in) :: nent
       type(error_t), allocatable, intent(out) :: err
-      integer :: nval, prev_value
-      logical :: after_sep
+      integer :: nval
+      logical :: after_sep, prev_name_like
 
-      associate (e => entries(nent))
+      nval = count_values(toks, i)
+      allocate (g%entries(nent)%values(nval), g%entries(nent)%quoted(nval))
+      associate (e => g%entries(nent))
          nval = 0
-         prev_value = 0
+         prev_name_like = .false.
          after_sep = .true.
          values: do while (i <= toks%n)
             select case (toks%kind(i))
@@ -365,11 +410,11 @@ contains
                             "' (if '"//toks%text(i)%s//"' is a value, quote it)")
                   return
                end if
+               prev_name_like = name_like(i)
                call add_value(.false.)
-               prev_value = i
             case (tk_string)
+               prev_name_like = .false.
                call add_value(.true.)
-               prev_value = i
             case (tk_eq)
                call fail(toks%line(i), "key '"//e%key//"': unexpected '=' after a value")
                return
@@ -382,8 +427,6 @@ contains
             call fail(e%line, "key '"//e%key//"' has no value")
             return
          end if
-         e%values = e%values(1:nval)
-         e%quoted = e%quoted(1:nval)
       end associate
 
    contains
@@ -404,7 +447,7 @@ contains
                next_plain = .not. name_like(j + 1) .and. .not. next_is_eq(toks, j + 1)
             end if
          end if
-         looks_like_lost_key = .not. name_like(prev_value) .or. next_plain
+         looks_like_lost_key = .not. prev_name_like .or. next_plain
       end function looks_like_lost_key
 
       !> Token j is a bare word that could be a key (and is not a logical like T or F).
@@ -420,29 +463,28 @@ contains
          name_like = .true.
       end function name_like
 
+      !> Token i's text moved into the entry: values counted exactly (count_values).
       subroutine add_value(is_quoted)
          logical, intent(in) :: is_quoted
-         type(string_t), allocatable :: tv(:)
-         logical, allocatable :: tq(:)
-         associate (e => entries(nent))
-            if (nval == size(e%values)) then
-               allocate (tv(2*nval), tq(2*nval))
-               tv(1:nval) = e%values
-               tq(1:nval) = e%quoted
-               call move_alloc(tv, e%values)
-               call move_alloc(tq, e%quoted)
-            end if
+         associate (e => g%entries(nent))
             nval = nval + 1
-            e%values(nval)%s = toks%text(i)%s
+            call move_alloc(toks%text(i)%s, e%values(nval)%s)
             e%quoted(nval) = is_quoted
          end associate
          after_sep = .false.
       end subroutine add_value
 
+      !> The entry keeps the values read so far (for the group's label), then the error.
       subroutine fail(line, text)
-         integer, intent(in) :: line
+         integer, value :: line   ! by value: e%line may be passed, and the entries shrink
          character(len=*), intent(in) :: text
-         call group_error(g, entries, nent, file, line, text, err)
+         associate (e => g%entries(nent))
+            if (nval < size(e%values)) then
+               e%values = e%values(1:nval)
+               e%quoted = e%quoted(1:nval)
+            end if
+         end associate
+         call group_error(g, nent, file, line, text, err)
       end subroutine fail
 
    end subroutine parse_values
@@ -456,13 +498,13 @@ contains
    end function next_is_eq
 
    !> "file:LINE: error: LABEL: text", the group holding the entries read so far.
-   subroutine group_error(g, entries, nent, file, line, text, err)
+   subroutine group_error(g, nent, file, line, text, err)
       type(deck_group_t), intent(inout) :: g
-      type(deck_entry_t), intent(in) :: entries(:)
-      integer, intent(in) :: nent, line
+      integer, intent(in) :: nent
+      integer, value :: line   ! by value: an entry's line may be passed, and the entries shrink
       character(len=*), intent(in) :: file, text
       type(error_t), allocatable, intent(out) :: err
-      g%entries = entries(1:nent)
+      if (nent < size(g%entries)) g%entries = g%entries(1:nent)
       call fatal_error(err, file//':'//str(line)//': error: '//g%label()//': '//text, err_input)
    end subroutine group_error
 
@@ -474,7 +516,7 @@ contains
       n = 0
       if (.not. allocated(self%groups)) return
       do i = 1, size(self%groups)
-         if (self%groups(i)%name == to_lower(name)) n = n + 1
+         if (same_key(self%groups(i)%name, name)) n = n + 1
       end do
    end function deck_count_groups
 
@@ -495,7 +537,7 @@ contains
       do i = 1, size(self%groups)
          ok = .false.
          do k = 1, size(allowed)
-            if (self%groups(i)%name == to_lower(allowed(k)%s)) then
+            if (same_key(self%groups(i)%name, allowed(k)%s)) then
                ok = .true.
                exit
             end if
@@ -537,27 +579,5 @@ contains
          end associate
       end do
    end function canonical_deck
-
-   subroutine grow_entries(entries)
-      type(deck_entry_t), allocatable, intent(inout) :: entries(:)
-      type(deck_entry_t), allocatable :: tmp(:)
-      integer :: k
-      allocate (tmp(2*size(entries)))
-      do k = 1, size(entries)
-         call move_entry(entries(k), tmp(k))
-      end do
-      call move_alloc(tmp, entries)
-   end subroutine grow_entries
-
-   !> `to` takes `from`'s contents without copying its strings (one allocation
-   !> fewer per string, D-74); `from` is left empty.
-   subroutine move_entry(from, to)
-      type(deck_entry_t), intent(inout) :: from, to
-      call move_alloc(from%key, to%key)
-      call move_alloc(from%values, to%values)
-      call move_alloc(from%quoted, to%quoted)
-      to%line = from%line
-      to%used = from%used
-   end subroutine move_entry
 
 end module trainsim_deck

@@ -6,11 +6,11 @@ module trainsim_deck_group
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: string_t, to_lower, str, join
-   use trainsim_deck_lexer, only: parse_real, parse_int
+   use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place
    implicit none
    private
 
-   public :: deck_group_t, deck_entry_t
+   public :: deck_group_t, deck_entry_t, same_key
 
    !> One `key = value[, value ...]` item of a group.
    type :: deck_entry_t
@@ -28,8 +28,10 @@ module trainsim_deck_group
       integer :: line = 0                           !< line of '&name'
       integer :: ordinal = 0                        !< 1 for the first group of this name, 2 for the second...
       type(deck_entry_t), allocatable :: entries(:) !< in file order
-      !> Keys asked for through has/get_*/count_values, in order of first query.
-      type(string_t), allocatable, private :: queried(:)
+      !> Keys asked for through has/get_*/count_values, in order of first query, each
+      !> followed by ',' in one text (one allocation a group, not one a key: D-90).
+      character(len=:), allocatable, private :: queried
+      integer, private :: queried_len = 0
    contains
       procedure :: has => group_has
       procedure :: holds => group_holds
@@ -88,21 +90,67 @@ contains
    end function group_count_values
 
    !> Location for messages: "file:LINE: &name #ordinal", plus ", key 'k'" (and the key's line)
-   !> if `key` is present in the group; otherwise the group's line.
+   !> if `key` is present in the group; otherwise the group's line. Built in one allocation
+   !> (it is every node's and element's origin, D-90).
    function group_where(self, key) result(s)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in), optional :: key
       character(len=:), allocatable :: s
-      integer :: k
+      character(len=12) :: lt, ot
+      integer :: k, nl, no, n, p
       k = 0
       if (present(key)) k = find(self, key)
       if (k > 0) then
-         s = self%file//':'//str(self%entries(k)%line)//': &'//self%name//' #'//str(self%ordinal)// &
-             ", key '"//self%entries(k)%key//"'"
+         call digits(self%entries(k)%line, lt, nl)
       else
-         s = self%file//':'//str(self%line)//': &'//self%name//' #'//str(self%ordinal)
+         call digits(self%line, lt, nl)
       end if
+      call digits(self%ordinal, ot, no)
+      n = len(self%file) + nl + len(self%name) + no + 6
+      if (k > 0) n = n + len(self%entries(k)%key) + 8
+      allocate (character(len=n) :: s)
+      p = 0
+      call put(self%file)
+      call put(':')
+      call put(lt(1:nl))
+      call put(': &')
+      call put(self%name)
+      call put(' #')
+      call put(ot(1:no))
+      if (k > 0) then
+         call put(", key '")
+         call put(self%entries(k)%key)
+         call put("'")
+      end if
+   contains
+      subroutine put(t)
+         character(len=*), intent(in) :: t
+         s(p + 1:p + len(t)) = t
+         p = p + len(t)
+      end subroutine put
    end function group_where
+
+   !> Decimal digits of i (a line or ordinal; as str(i) writes them, -1 too) in buf(1:n).
+   pure subroutine digits(i, buf, n)
+      integer, intent(in) :: i
+      character(len=12), intent(out) :: buf
+      integer, intent(out) :: n
+      integer :: v, m
+      v = abs(i)
+      m = 12
+      do
+         buf(m:m) = achar(iachar('0') + mod(v, 10))
+         v = v/10
+         if (v == 0) exit
+         m = m - 1
+      end do
+      if (i < 0) then
+         m = m - 1
+         buf(m:m) = '-'
+      end if
+      n = 13 - m
+      buf(1:n) = buf(m:12)
+   end subroutine digits
 
    !> "&element #2 (id 'g1')" if the group has an 'id' entry, else "&element #2".
    function group_label(self) result(s)
@@ -145,6 +193,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=*), intent(in), optional :: context
       character(len=:), allocatable :: msg
+      type(string_t), allocatable :: queried(:)
       integer :: k, best
       if (.not. allocated(self%entries)) return
       do k = 1, size(self%entries)
@@ -153,16 +202,11 @@ contains
          if (present(context)) then
             if (len_trim(context) > 0) msg = msg//' for '//trim(context)
          end if
-         if (allocated(self%queried)) then
-            best = closest_key(self%entries(k)%key, self%queried)
-            if (best > 0) msg = msg//"; did you mean '"//self%queried(best)%s//"'?"
-         end if
-         if (allocated(self%queried)) then
-            if (size(self%queried) > 0) then
-               msg = msg//'; valid keys are: '//join(self%queried, ', ')
-            else
-               msg = msg//'; this group takes no keys'
-            end if
+         queried = queried_keys(self)
+         best = closest_key(self%entries(k)%key, queried)
+         if (best > 0) msg = msg//"; did you mean '"//queried(best)%s//"'?"
+         if (size(queried) > 0) then
+            msg = msg//'; valid keys are: '//join(queried, ', ')
          else
             msg = msg//'; this group takes no keys'
          end if
@@ -380,13 +424,11 @@ contains
    integer function find(self, key) result(k)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in) :: key
-      character(len=len(key)) :: low
       integer :: j
       k = 0
       if (.not. allocated(self%entries)) return
-      low = to_lower(key)
       do j = 1, size(self%entries)
-         if (self%entries(j)%key == low) then
+         if (same_key(self%entries(j)%key, key)) then
             k = j
             return
          end if
@@ -405,8 +447,7 @@ contains
       if (.not. allocated(self%entries)) return
       do j = 1, size(self%entries)
          if (self%entries(j)%used) cycle
-         asked = .false.
-         if (allocated(self%queried)) asked = any_is(self%queried, self%entries(j)%key)
+         asked = was_queried(self, self%entries(j)%key)
          if (asked) cycle
          d = edit_distance(self%entries(j)%key, to_lower(key))
          if (is_near(d, to_lower(key)) .and. d < dbest) then
@@ -440,19 +481,6 @@ contains
       yes = d >= 1 .and. d <= min(2, max(1, len(key)/3))
    end function is_near
 
-   logical function any_is(list, word) result(yes)
-      type(string_t), intent(in) :: list(:)
-      character(len=*), intent(in) :: word
-      integer :: j
-      yes = .false.
-      do j = 1, size(list)
-         if (list(j)%s == word) then
-            yes = .true.
-            return
-         end if
-      end do
-   end function any_is
-
    !> Optimal-string-alignment distance (Damerau-Levenshtein without repeated edits of a
    !> substring): insertions, deletions, substitutions and swaps of neighbours cost 1.
    integer function edit_distance(a, b) result(dist)
@@ -484,21 +512,85 @@ contains
    subroutine record_query(self, key)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
-      type(string_t), allocatable :: tmp(:)
-      character(len=len(key)) :: low
-      integer :: j, n
-      if (.not. allocated(self%queried)) allocate (self%queried(0))
-      low = to_lower(key)
-      n = size(self%queried)
-      do j = 1, n
-         if (self%queried(j)%s == low) return
-      end do
-      allocate (tmp(n + 1))
-      do j = 1, n   ! the strings moved, not copied (D-74)
-         call move_alloc(self%queried(j)%s, tmp(j)%s)
-      end do
-      tmp(n + 1)%s = low
-      call move_alloc(tmp, self%queried)
+      character(len=:), allocatable :: tmp
+      integer :: n
+      if (was_queried(self, key)) return
+      n = self%queried_len + len(key) + 1
+      if (.not. allocated(self%queried)) then
+         allocate (character(len=max(256, n)) :: self%queried)
+      else if (n > len(self%queried)) then
+         allocate (character(len=max(2*len(self%queried), n)) :: tmp)
+         tmp(1:self%queried_len) = self%queried(1:self%queried_len)
+         call move_alloc(tmp, self%queried)
+      end if
+      self%queried(self%queried_len + 1:n - 1) = key
+      call lower_in_place(self%queried(self%queried_len + 1:n - 1))   ! to_lower's result is a temporary
+      self%queried(n:n) = ','
+      self%queried_len = n
    end subroutine record_query
+
+   !> `key` (any case) is one of the queried keys.
+   logical function was_queried(self, key) result(yes)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: key
+      integer :: p, q
+      yes = .false.
+      p = 1
+      do while (p <= self%queried_len)
+         q = p   ! the key is queried(p:q-1), queried(q:q) its ','
+         do while (self%queried(q:q) /= ',')
+            q = q + 1
+         end do
+         if (same_key(self%queried(p:q - 1), key)) then
+            yes = .true.
+            return
+         end if
+         p = q + 1
+      end do
+   end function was_queried
+
+   !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
+   !> without a lowered copy of `key` (an allocation a look-up, D-90).
+   pure logical function same_key(stored, key) result(yes)
+      character(len=*), intent(in) :: stored, key
+      character(len=1) :: a, b
+      integer :: i, c
+      yes = .false.
+      do i = 1, max(len(stored), len(key))
+         a = ' '
+         b = ' '
+         if (i <= len(stored)) a = stored(i:i)
+         if (i <= len(key)) b = key(i:i)
+         c = iachar(b)
+         if (c >= iachar('A') .and. c <= iachar('Z')) b = achar(c + 32)
+         if (a /= b) return
+      end do
+      yes = .true.
+   end function same_key
+
+   !> The queried keys as a list, in order of first query (for messages).
+   function queried_keys(self) result(keys)
+      class(deck_group_t), intent(in) :: self
+      type(string_t), allocatable :: keys(:)
+      integer :: p, q, n
+      n = 0
+      if (self%queried_len > 0) n = count_commas(self%queried(1:self%queried_len))
+      allocate (keys(n))
+      p = 1
+      do n = 1, size(keys)
+         q = p + index(self%queried(p:self%queried_len), ',') - 2
+         keys(n)%s = self%queried(p:q)
+         p = q + 2
+      end do
+   contains
+      pure integer function count_commas(t) result(c)
+         character(len=*), intent(in) :: t
+         integer :: k
+         c = 0
+         do k = 1, len(t)
+            if (t(k:k) == ',') c = c + 1
+         end do
+      end function count_commas
+   end function queried_keys
 
 end module trainsim_deck_group

@@ -11,7 +11,7 @@ module trainsim_deck_lexer
    private
 
    public :: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string
-   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key
+   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key, lower_in_place
 
    ! Token kinds produced by the lexer.
    integer, parameter :: tk_group = 1   ! '&name' (text = lower-case name)
@@ -21,7 +21,9 @@ module trainsim_deck_lexer
    integer, parameter :: tk_word = 5    ! bare token
    integer, parameter :: tk_string = 6  ! quoted string (text = contents, unquoted)
 
-   !> The tokens of a deck text, in order: kind (tk_*), line and text of each.
+   !> The tokens of a deck text, in order: kind (tk_*), line and text of each. Only group
+   !> names, words, strings and '&end' carry a text: '=', ',' and '/' are their kind alone
+   !> (no allocation a token, D-90); the parser moves the texts into the deck's entries.
    type :: token_list_t
       integer :: n = 0
       integer, allocatable :: kind(:), line(:)
@@ -100,13 +102,13 @@ contains
                i = i + 1
             end do
          else if (c == '=') then
-            call push(toks, tk_eq, '=', line)
+            call push_mark(toks, tk_eq, line)
             i = i + 1
          else if (c == ',') then
-            call push(toks, tk_comma, ',', line)
+            call push_mark(toks, tk_comma, line)
             i = i + 1
          else if (c == '/') then
-            call push(toks, tk_end, '/', line)
+            call push_mark(toks, tk_end, line)
             i = i + 1
          else if (c == '&') then
             j = i + 1
@@ -127,7 +129,8 @@ contains
             if (to_lower(text(i + 1:j - 1)) == 'end') then
                call push(toks, tk_end, '&end', line)
             else
-               call push(toks, tk_group, to_lower(text(i + 1:j - 1)), line)
+               call push(toks, tk_group, text(i + 1:j - 1), line)
+               call lower_in_place(toks%text(toks%n)%s)
             end if
             i = j
          else if (c == "'" .or. c == '"') then
@@ -199,7 +202,16 @@ contains
       type(token_list_t), intent(in) :: toks
       integer, intent(in) :: i
       character(len=:), allocatable :: s
-      if (toks%kind(i) == tk_string) then
+      if (.not. allocated(toks%text(i)%s)) then
+         select case (toks%kind(i))
+         case (tk_eq)
+            s = '='
+         case (tk_comma)
+            s = ','
+         case default
+            s = '/'
+         end select
+      else if (toks%kind(i) == tk_string) then
          s = '"'//toks%text(i)%s//'"'
       else if (toks%kind(i) == tk_group) then
          s = '&'//toks%text(i)%s
@@ -208,33 +220,49 @@ contains
       end if
    end function display
 
+   !> A token without text ('=', ',', '/').
+   subroutine push_mark(toks, kind, line)
+      type(token_list_t), intent(inout) :: toks
+      integer, intent(in) :: kind, line
+      if (toks%n == size(toks%kind)) call grow(toks)
+      toks%n = toks%n + 1
+      toks%kind(toks%n) = kind
+      toks%line(toks%n) = line
+   end subroutine push_mark
+
    subroutine push(toks, kind, text, line)
       type(token_list_t), intent(inout) :: toks
       integer, intent(in) :: kind, line
       character(len=*), intent(in) :: text
-      integer, allocatable :: ti(:)
-      type(string_t), allocatable :: ts(:)
-      integer :: n, k
+      integer :: n
       n = toks%n
-      if (n == size(toks%kind)) then
-         allocate (ti(2*n))
-         ti(1:n) = toks%kind
-         call move_alloc(ti, toks%kind)
-         allocate (ti(2*n))
-         ti(1:n) = toks%line
-         call move_alloc(ti, toks%line)
-         allocate (ts(2*n))
-         do k = 1, n   ! the strings moved, not copied
-            call move_alloc(toks%text(k)%s, ts(k)%s)
-         end do
-         call move_alloc(ts, toks%text)
-      end if
+      if (n == size(toks%kind)) call grow(toks)
       n = n + 1
       toks%kind(n) = kind
       toks%line(n) = line
       toks%text(n)%s = text
       toks%n = n
    end subroutine push
+
+   !> Double the capacity of the token list, moving (not copying) its texts.
+   subroutine grow(toks)
+      type(token_list_t), intent(inout) :: toks
+      integer, allocatable :: ti(:)
+      type(string_t), allocatable :: ts(:)
+      integer :: n, k
+      n = toks%n
+      allocate (ti(2*n))
+      ti(1:n) = toks%kind
+      call move_alloc(ti, toks%kind)
+      allocate (ti(2*n))
+      ti(1:n) = toks%line
+      call move_alloc(ti, toks%line)
+      allocate (ts(2*n))
+      do k = 1, n   ! the strings moved, not copied
+         if (allocated(toks%text(k)%s)) call move_alloc(toks%text(k)%s, ts(k)%s)
+      end do
+      call move_alloc(ts, toks%text)
+   end subroutine grow
 
    !> Strict real syntax: [sign] digits [. digits] [(e|d) [sign] digits], at least one mantissa
    !> digit. Values beyond the range of real(wp) are rejected before conversion, so no FP trap
@@ -375,6 +403,16 @@ contains
       is_key = .true.
    end function is_key
 
+   !> t in lower case (ASCII letters), without a temporary.
+   pure subroutine lower_in_place(t)
+      character(len=*), intent(inout) :: t
+      integer :: k, c
+      do k = 1, len(t)
+         c = iachar(t(k:k))
+         if (c >= iachar('A') .and. c <= iachar('Z')) t(k:k) = achar(c + 32)
+      end do
+   end subroutine lower_in_place
+
    pure logical function is_blank(c)
       character(len=1), intent(in) :: c
       is_blank = c == ' ' .or. c == achar(9) .or. c == achar(13)
@@ -382,7 +420,12 @@ contains
 
    pure logical function ends_word(c)
       character(len=1), intent(in) :: c
-      ends_word = is_blank(c) .or. c == new_line('a') .or. index(",=/!'""", c) > 0
+      select case (c)   ! not index(): a library call a character of the deck (D-90)
+      case (' ', achar(9), achar(13), achar(10), ',', '=', '/', '!', "'", '"')
+         ends_word = .true.
+      case default
+         ends_word = .false.
+      end select
    end function ends_word
 
    pure logical function is_letter(c)

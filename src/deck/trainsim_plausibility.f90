@@ -46,6 +46,8 @@ module trainsim_plausibility
       integer, allocatable :: gear_of(:)
       real(wp) :: to_m = 0.0_wp
       type(string_t), allocatable :: warnings(:)
+      !> Each element's and node's params(), asked once (D-90)
+      type(param_list_t), allocatable :: ep(:), np(:)
    end type ctx_t
 
 contains
@@ -76,18 +78,25 @@ contains
       c%to_m = model%units%to_inch*0.0254_wp
       call group_indices(deck, 'node', size(model%nodes), c%node_group)
       call group_indices(deck, 'element', size(model%elements), c%element_group)
+      allocate (c%ep(size(model%elements)), c%np(size(model%nodes)))
       do i = 1, size(model%elements)
-         call check_element(deck, model, c, i, err); if (allocated(err)) return
+         c%ep(i) = model%elements(i)%e%params()
       end do
       do i = 1, size(model%nodes)
-         call check_motor(deck, model, c, i, err); if (allocated(err)) return
+         c%np(i) = model%nodes(i)%n%params()
+      end do
+      do i = 1, size(model%elements)
+         call check_element(deck, model, c, i, c%ep(i), err); if (allocated(err)) return
+      end do
+      do i = 1, size(model%nodes)
+         call check_motor(deck, model, c, i, c%np(i), err); if (allocated(err)) return
       end do
       call pieces(model, c%piece)
       allocate (c%radius(maxval([c%piece, 0])))
       c%radius = 0.0_wp
       do i = 1, size(model%elements)
          associate (e => model%elements(i)%e)
-            c%radius(c%piece(e%left)) = max(c%radius(c%piece(e%left)), element_radius(e%params()))
+            c%radius(c%piece(e%left)) = max(c%radius(c%piece(e%left)), element_radius(c%ep(i)))
          end associate
       end do
       ! the heaviest steel pitch disk of a gear with a face width on each node
@@ -95,10 +104,10 @@ contains
       c%gear_disk = 0.0_wp
       c%gear_of = 0
       do i = 1, size(model%elements)
-         call note_gear_disk(model, c, i)
+         call note_gear_disk(model, c, i, c%ep(i))
       end do
       do i = 1, size(model%nodes)
-         call check_inertia(deck, model, c, i)
+         call check_inertia(deck, model, c, i, c%np(i))
       end do
       call check_topology(deck, model, c, err)
    end subroutine run_checks
@@ -167,19 +176,18 @@ contains
       end if
    end function other_units_hint
 
-   subroutine check_element(deck, model, c, ie, e)
+   subroutine check_element(deck, model, c, ie, p, e)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(in) :: model
       type(ctx_t), intent(inout) :: c
       integer, intent(in) :: ie
+      type(param_list_t), intent(in) :: p   !< element ie's params() (c%ep(ie), never changed here)
       type(error_t), allocatable, intent(out) :: e
-      type(param_list_t) :: p
       integer :: ig
       logical :: geom, f1, f2, f3, f4
       real(wp) :: rb1, rb2, teeth, b, pb, m_mm, face, rp, d, lk, mlen
       character(len=:), allocatable :: kr, kb, km
       ig = c%element_group(ie)
-      p = model%elements(ie)%e%params()
       select case (model%elements(ie)%e%type_name)
       case ('spur_gear', 'helical_gear', 'ideal_gear')
          rb1 = pv(p, 'rb_driver', f1)
@@ -278,17 +286,16 @@ contains
 
    !> k_t = k_e in consistent units (an ideal machine's power balance): in SI
    !> N*m/A = V*s/rad; in in-lbf-s k_t [lbf*in/A] = 8.8507 k_e [V*s/rad].
-   subroutine check_motor(deck, model, c, in, e)
+   subroutine check_motor(deck, model, c, in, p, e)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(in) :: model
       type(ctx_t), intent(inout) :: c
       integer, intent(in) :: in
       type(error_t), allocatable, intent(out) :: e
-      type(param_list_t) :: p
+      type(param_list_t), intent(in) :: p   !< node in's params()
       logical :: f1, f2
       real(wp) :: kt, ke, r, other
       character(len=:), allocatable :: slip, rule
-      p = model%nodes(in)%n%params()
       kt = pv(p, 'torque_constant', f1)
       ke = pv(p, 'back_emf_constant', f2)
       if (.not. (f1 .and. f2)) return
@@ -328,16 +335,15 @@ contains
    !> Inertia against the geometry: at most max_inertia_ratio steel disks of the
    !> c%piece's largest c%radius R (thickness R); a gear's node at least a fraction of
    !> its pitch disk.
-   subroutine check_inertia(deck, model, c, in)
+   subroutine check_inertia(deck, model, c, in, p)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(in) :: model
       type(ctx_t), intent(inout) :: c
       integer, intent(in) :: in
-      type(param_list_t) :: p
+      type(param_list_t), intent(in) :: p   !< node in's params()
       logical :: found
       real(wp) :: j, r, jref, rho_half_pi
       if (model%nodes(in)%n%is_fixed()) return
-      p = model%nodes(in)%n%params()
       j = pv(p, 'inertia', found)
       if (.not. found .or. .not. j > 0.0_wp) return
       rho_half_pi = half_pi_rho_steel_ips*model%units%to_inch**4/model%units%to_lbf
@@ -363,15 +369,14 @@ contains
    end subroutine check_inertia
 
    !> Record element ie's steel base-circle disks (pi rho r_b^4 F / 2) on its nodes.
-   subroutine note_gear_disk(model, c, ie)
+   subroutine note_gear_disk(model, c, ie, p)
       type(model_t), intent(in) :: model
       type(ctx_t), intent(inout) :: c
       integer, intent(in) :: ie
-      type(param_list_t) :: p
+      type(param_list_t), intent(in) :: p   !< element ie's params()
       logical :: found, f1, f2
       real(wp) :: face, r1, r2, w
       associate (e => model%elements(ie)%e)
-         p = e%params()
          face = pv(p, 'face_width', found)
          if (.not. found) return
          r1 = pv(p, 'rb_driver', f1)

@@ -91,6 +91,7 @@ module trainsim_sink
       procedure :: update_event => sink_update_event
       procedure :: stores_samples => sink_stores_samples
       procedure :: speeds_only => sink_speeds_only
+      procedure :: needs_meta => sink_needs_meta
       procedure :: metrics_from => sink_metrics_from
    end type sink_t
 
@@ -129,6 +130,7 @@ module trainsim_sink
       procedure :: write_sample => null_sample
       procedure :: close => null_close
       procedure :: stores_samples => null_stores_samples
+      procedure :: needs_meta => null_needs_meta
    end type null_sink_t
 
 contains
@@ -191,6 +193,24 @@ contains
       associate (u1 => self, u2 => row, u3 => ev)
       end associate
    end subroutine sink_update_event
+
+   !> Whether `open` reads its run_meta_t. Default: yes. A sink that ignores it is
+   !> opened with an empty one, so that start-up does not gather the model's names,
+   !> parameters and input files for nothing (D-90).
+   pure logical function sink_needs_meta(self) result(needs)
+      class(sink_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      needs = .true.
+   end function sink_needs_meta
+
+   !> The null sink ignores the run's description.
+   pure logical function null_needs_meta(self) result(needs)
+      class(null_sink_t), intent(in) :: self
+      associate (unused => self)
+      end associate
+      needs = .false.
+   end function null_needs_meta
 
    subroutine null_open(self, meta, err)
       class(null_sink_t), intent(inout) :: self

@@ -5,7 +5,10 @@
 !> and the rows g(1:n, 1:n_ports) current with its mode (sum_p g(k, p) w_p = 0,
 !> and the same on accelerations). The model sets `t_now` (the time of the
 !> evaluation) before the element's `torques` and `guards`, and after every RHS
-!> leaves the torque of row k in lam(k): port p gets g(k, p) lam(k).
+!> leaves the torque of row k in lam(k): port p gets g(k, p) lam(k). An element
+!> whose guards in its current mode read its ports' accelerations sets
+!> `want_acc`; the model then evaluates a RHS before its guards and leaves each
+!> port's acceleration at (t, y) in acc(p) (a side that stops or starts, D-90).
 module trainsim_constraint_rows
    use trainsim_kinds, only: wp
    implicit none
@@ -24,5 +27,7 @@ module trainsim_constraint_rows
       real(wp) :: g(max_constraints, max_con_ports) = 0.0_wp   !< g(k, p): row k over the ports
       real(wp) :: t_now = 0.0_wp                               !< time of the model's evaluation
       real(wp) :: lam(max_constraints) = 0.0_wp                !< row k's constraint torque
+      logical :: want_acc = .false.                            !< the guards read acc (this mode)
+      real(wp) :: acc(max_con_ports) = 0.0_wp                  !< port p's acceleration (want_acc)
    end type constraint_rows_t
 end module trainsim_constraint_rows

@@ -36,6 +36,7 @@ module trainsim_constraints
    type :: constraint_set_t
       integer, allocatable :: cand(:)            !< elements with `constrains`
       integer :: m = 0                           !< active rows
+      logical :: acc_wanted = .false.            !< a candidate's guards read its ports' accelerations
       integer, allocatable :: row_el(:), row_k(:), row_np(:)
       integer, allocatable :: row_slot(:, :)     !< (max_ports, row): slot of each port's node
       real(wp), allocatable :: row_g(:, :)       !< (max_ports, row)
@@ -99,6 +100,7 @@ contains
       integer :: q, i, k, p, np, m, nd, s
       m = 0
       changed = .false.
+      cn%acc_wanted = .false.
       do s = 1, cn%nc
          cn%slot(cn%node(s)) = 0
       end do
@@ -106,6 +108,7 @@ contains
       do q = 1, size(cn%cand)
          i = cn%cand(q)
          associate (e => elements(i)%e)
+            if (e%con%want_acc) cn%acc_wanted = .true.
             k = e%con%n
             if (k == 0) then
                e%con%lam = 0.0_wp

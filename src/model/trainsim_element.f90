@@ -84,12 +84,11 @@ module trainsim_element
       !> The deck keys that name the further ports, set by `configure` (the
       !> builder reads each as a node id into more_ports).
       type(string_t), allocatable :: port_keys(:)
-      !> On a carrier (port 3, D-73): the sense s of the right port's angle in
-      !> the carrier's frame, thr' = thr - s thc (the left port's is +1,
-      !> thl' = thl - thc): -1 for an external gear pair, whose driven gear
-      !> turns against the driver (TRAIN counts each gear's angle in its own
-      !> sense of rotation), +1 for an internal (ring) gear.
-      real(wp) :: carrier_sense = -1.0_wp
+      !> On a carrier (port 3, D-73): thr' = a thr - s thc, thl' = thl - thc. s, the right gear's
+      !> sense relative to the carrier: -1 external pair (TRAIN counts each gear in its own sense,
+      !> the driven one turns against the driver), +1 internal (ring) gear; a = right_sign: -1
+      !> where the right node is counted in the driver's sense (a planetary's members, D-89 (planet)).
+      real(wp) :: carrier_sense = -1.0_wp, right_sign = 1.0_wp
       type(constraint_rows_t) :: con   !< kinematic constraints in its mode (D-81, trainsim_constraint_rows)
    contains
       procedure(configure_i), deferred :: configure
@@ -398,11 +397,9 @@ contains
       bound = huge(1.0_wp)
    end function el_displacement_bound
 
-   !> A two-port element that may sit on a carrier (a gear pair's housing,
-   !> D-73) calls this in `configure`: with the deck key `carrier` the carrier
-   !> becomes its port 3 (the builder resolves the node) and the port
-   !> defaults evaluate the element in the carrier's frame; `sense` is the
-   !> right port's sense relative to the carrier (carrier_sense).
+   !> Called in `configure` by a two-port element that may sit on a carrier (a gear's housing, D-73):
+   !> the deck key `carrier` names its port 3 (resolved by the builder), and the port defaults evaluate
+   !> it in the carrier's frame; `sense`: the right port's sense relative to the carrier (carrier_sense).
    subroutine accept_carrier(self, grp, sense)
       class(element_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp
@@ -441,7 +438,8 @@ contains
       if (size(th) < 3) then
          x = [th(1), w(1), th(2), w(2)]
       else
-         x = [th(1) - th(3), w(1) - w(3), th(2) - self%carrier_sense*th(3), w(2) - self%carrier_sense*w(3)]
+         x = [th(1) - th(3), w(1) - w(3), self%right_sign*th(2) - self%carrier_sense*th(3), &
+              self%right_sign*w(2) - self%carrier_sense*w(3)]
       end if
    end subroutine el_frame
 
@@ -456,7 +454,7 @@ contains
       real(wp) :: x(4)
       call self%frame(th, w, x)
       call self%torques(x(1), x(2), x(3), x(4), t(1), t(2))
-      if (size(t) > 2) t(3) = -(t(1) + self%carrier_sense*t(2))
+      if (size(t) > 2) t(2:3) = [self%right_sign*t(2), -(t(1) + self%carrier_sense*t(2))]
    end subroutine el_port_torques
 
    !> `port_torques` and the power dissipated; below, each two-port procedure in the frame.
@@ -467,7 +465,7 @@ contains
       real(wp) :: x(4)
       call self%frame(th, w, x)
       call self%torques_dissipation(x(1), x(2), x(3), x(4), t(1), t(2), p)
-      if (size(t) > 2) t(3) = -(t(1) + self%carrier_sense*t(2))
+      if (size(t) > 2) t(2:3) = [self%right_sign*t(2), -(t(1) + self%carrier_sense*t(2))]
    end subroutine el_port_torques_dissipation
 
    pure real(wp) function el_port_input_power(self, th, w) result(p)
@@ -548,7 +546,7 @@ contains
 
    !> Partial derivatives jt(i, 2k-1) = d t_i / d th_k, jt(i, 2k) = d t_i / d w_k
    !> over the np ports. Default: `torque_jacobian` in the frame, by the chain
-   !> rule through el_frame's linear map (and t3 = -(t1 + s t2)).
+   !> rule through el_frame's linear map (and t3 = -(t1 + s t2), t2 = a t2').
    pure subroutine el_port_jacobian(self, th, w, jt)
       class(element_t), intent(in) :: self
       real(wp), intent(in) :: th(:), w(:)
@@ -562,7 +560,9 @@ contains
       s = self%carrier_sense
       jt(1:2, 5) = -(j2(:, 1) + s*j2(:, 3))
       jt(1:2, 6) = -(j2(:, 2) + s*j2(:, 4))
+      jt(1:2, 3:4) = self%right_sign*jt(1:2, 3:4)
       jt(3, :) = -(jt(1, :) + s*jt(2, :))
+      jt(2, :) = self%right_sign*jt(2, :)
    end subroutine el_port_jacobian
 
    !> Linearised stiffness k and damping c over the np ports (as `linearise`,
@@ -578,7 +578,7 @@ contains
       np = size(inv_j)
       call self%linearise(state, inv_j(1), inv_j(2), k2, c2)
       a = 0.0_wp
-      a(1, 1) = 1.0_wp; a(2, 2) = 1.0_wp
+      a(1, 1) = 1.0_wp; a(2, 2) = self%right_sign
       if (np > 2) a(:, 3) = [-1.0_wp, -self%carrier_sense]
       k = matmul(transpose(a(:, 1:np)), matmul(k2, a(:, 1:np)))
       c = matmul(transpose(a(:, 1:np)), matmul(c2, a(:, 1:np)))

@@ -7,7 +7,7 @@ module trainsim_event
    private
 
    public :: event_t, ev_contact_front, ev_contact_rear, ev_separation, ev_zone, ev_stick, ev_slip_forward, ev_slip_backward, &
-             ev_target_reached, ev_max_kind, ev_name, max_update_events
+             ev_target_reached, ev_flow_forward, ev_flow_backward, ev_max_kind, ev_name, max_update_events
 
    !> Event kinds (column `kind` of the event table).
    integer, parameter :: ev_contact_front = 1 !< contact begins on the front face (impact)
@@ -18,7 +18,10 @@ module trainsim_event
    !> the relative speed positive or negative (force: the torque at the switch).
    integer, parameter :: ev_stick = 5, ev_slip_forward = 6, ev_slip_backward = 7
    integer, parameter :: ev_target_reached = 8 !< a positioning sequence reached its target (trainsim_controller)
-   integer, parameter :: ev_max_kind = 8       !< the kinds are 1..ev_max_kind (the C API lists their names)
+   !> A lossy gear's power flow turned (D-90): the left now drives (forward) or
+   !> is driven (backward), its left moving on (force: the mesh force).
+   integer, parameter :: ev_flow_forward = 9, ev_flow_backward = 10
+   integer, parameter :: ev_max_kind = 10      !< the kinds are 1..ev_max_kind (the C API lists their names)
 
    !> Most events one element may report from one mode update (`update_mode`
    !> writes ev(1:nev) with nev <= this): a face contact or separation per
@@ -56,6 +59,8 @@ contains
       case (ev_slip_forward); name = 'slip_forward'
       case (ev_slip_backward); name = 'slip_backward'
       case (ev_target_reached); name = 'target_reached'
+      case (ev_flow_forward); name = 'flow_forward'
+      case (ev_flow_backward); name = 'flow_backward'
       case default; name = 'unknown'
       end select
    end function ev_name

@@ -4,7 +4,10 @@
 !> modes slipping forward (+1), slipping backward (-1) and stuck (0). Stuck,
 !> the element declares the constraint wl - wr = 0 (row (1, -1)) and carries
 !> the constraint torque lam (on the left node; -lam on the right) within its
-!> static limit. Its guard: slipping, s (wl - wr) >= 0; stuck, limit - |lam|
+!> static limit. Its guard: slipping, max(s (wl - wr), s (al - ar)) >= 0 (the
+!> relative speed through zero with the relative acceleration against s: a
+!> release from rest is not stopped by the integrator's error in the speed,
+!> D-90; al, ar from the model, con%acc); stuck, limit - |lam|
 !> >= 0 (one-way: -lam >= 0, and capacity + lam >= 0).
 !>
 !>   slipping torque f(v) = e(t) (Tc + (Ts - Tc) exp(-|v|/vs) + cv |v|)   (vs > 0)
@@ -293,8 +296,8 @@ contains
       real(wp), intent(out) :: g(:)
       associate (u1 => thl, u2 => thr)
       end associate
-      if (self%mode /= fm_stuck) then
-         g(1) = real(self%mode, wp)*(wl - wr)
+      if (self%mode /= fm_stuck) then   ! speed through zero against the acceleration (D-90)
+         g(1) = max(real(self%mode, wp)*(wl - wr), real(self%mode, wp)*(self%con%acc(1) - self%con%acc(2)))
       else if (self%one_way) then
          g(1) = min(-self%con%lam(1), self%capacity + self%con%lam(1))
       else
@@ -318,6 +321,7 @@ contains
          self%mode = fm_stuck                      ! (a freewheel whose driver is faster: locked)
       end if
       self%con%n = merge(1, 0, self%mode == fm_stuck)
+      self%con%want_acc = self%mode /= fm_stuck
    end subroutine friction_init_mode
 
    !> Slipping and the relative speed reached zero: stuck (the model then checks
@@ -341,6 +345,7 @@ contains
       if (self%mode /= fm_stuck) then
          self%mode = fm_stuck
          self%con%n = 1
+         self%con%want_acc = .false.
          ev(1)%kind = ev_stick
          ev(1)%force = self%con%lam(1)                 ! (the model sets the constraint torque once known)
          return
@@ -355,6 +360,7 @@ contains
       end if
       self%con%lam = 0.0_wp
       self%con%n = 0
+      self%con%want_acc = .true.      ! its guard reads the accelerations (released from rest)
    end subroutine friction_update_mode
 
    !> Relative angle, the torque on the right node (stuck: -lam, the constraint

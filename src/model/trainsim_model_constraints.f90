@@ -89,14 +89,17 @@ contains
          end do
          return
       end if
-      if (self%cn%m == 0) return
       if (present(dydt)) then                              ! the exact accelerations
-         do s = 1, self%cn%nc
-            if (self%cn%inv_j(s) == 0.0_wp) cycle
-            dydt(self%nodes(self%cn%node(s))%n%offset + 2) = self%cn%acc(s)
-         end do
+         if (self%cn%m > 0) then
+            do s = 1, self%cn%nc
+               if (self%cn%inv_j(s) == 0.0_wp) cycle
+               dydt(self%nodes(self%cn%node(s))%n%offset + 2) = self%cn%acc(s)
+            end do
+         end if
+         if (self%cn%acc_wanted) call port_accelerations(self, t, dydt)
          return
       end if
+      if (self%cn%m == 0) return
       do s = 1, self%cn%nc
          nd = self%cn%node(s)
          associate (f => self%fn(nd))
@@ -127,6 +130,30 @@ contains
          end do
       end do
    end procedure constraints_rhs
+
+   !> Into con%acc of every candidate that asks (`want_acc`): its ports'
+   !> accelerations in dydt (a held node's prescribed one, a fixed node's 0).
+   subroutine port_accelerations(self, t, dydt)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, dydt(:)
+      integer :: k, p, nd
+      real(wp) :: a
+      do k = 1, size(self%cn%cand)
+         associate (e => self%elements(self%cn%cand(k))%e)
+            if (.not. e%con%want_acc) cycle
+            do p = 1, min(e%n_ports(), size(e%con%acc))
+               nd = e%port(p)
+               a = 0.0_wp
+               if (self%fn(nd)%kind == nk_held) then
+                  if (.not. self%fn(nd)%const_speed) a = self%speeds(self%speed_of(nd))%derivative(t)
+               else if (self%nodes(nd)%n%nstates() > 0) then
+                  a = dydt(self%nodes(nd)%n%offset + 2)
+               end if
+               e%con%acc(p) = a
+            end do
+         end associate
+      end do
+   end subroutine port_accelerations
 
    !> A full RHS at (t, y), so that the elements' lam and t_now are those of (t, y).
    subroutine constraints_at(self, t, y)

@@ -82,7 +82,7 @@ contains
 
    module procedure model_guards_general
       integer :: k, i, j
-      if (self%cn%m > 0) call constraints_at(self, t, y)   ! lam and t_now at (t, y) (D-81)
+      if (self%cn%m > 0 .or. self%cn%acc_wanted) call constraints_at(self, t, y)   ! lam, acc at (t, y) (D-81)
       do k = 1, size(self%guard_els)
          i = self%guard_els(k)
          if (self%gr(i)%form == 0) then

@@ -17,7 +17,7 @@ module trainsim_observer
    use trainsim_element, only: element_slot_t
    use trainsim_input_series, only: input_series_count, input_drivers, input_series_values
    use trainsim_sink, only: sink_t, sample_t, event_t, run_stats_t, element_metrics_t, &
-                            ev_contact_front, ev_contact_rear, ev_separation
+                            ev_contact_front, ev_contact_rear, ev_separation, run_meta_t
    use trainsim_run_meta, only: make_meta
    use trainsim_metrics, only: p2p_detector_t, push_samples, push_block, push_value, turn_extreme
    implicit none
@@ -178,7 +178,7 @@ contains
       self%s%theta(:) = model%theta
       self%s%omega(:) = model%omega
       if (ws) then
-         self%s%torque_left(:) = model%el_torque(1, :size(self%s%torque_left))   ! (not its zero column, D-90)
+         self%s%torque_left(:) = model%el_torque(1, :size(self%s%torque_left))   ! (not its zero column, D-91)
          self%s%torque_right(:) = model%el_torque(2, :size(self%s%torque_right))
       else
          do i = 1, size(model%elements)

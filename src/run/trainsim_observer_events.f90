@@ -54,7 +54,11 @@ contains
       self%contact_prev = 0
       allocate (self%t_counted(ne))
       self%t_counted = -huge(1.0_wp)
-      call sink%open(make_meta(model), err)
+      if (sink%needs_meta()) then
+         call sink%open(make_meta(model), err)
+      else
+         call sink%open(run_meta_t(), err)
+      end if
       if (allocated(err)) return
       call self%step(model, t, y)
       call self%sample(model, t, t, y, sink, err)

@@ -614,6 +614,21 @@ def recap(groups, muts):
     if 0 < oi and 10 * MAX_STEPS < (t1 - t0) / oi <= 1e12:
         entry(runs[0], "t_end")[1] = [repr(t0 + max(dt, 10 * MAX_STEPS * oi))]
         muts.append(f"(t_end cut to {10 * MAX_STEPS} output times)")
+    # settling until periodic runs on past t_end up to its budget (settle_max_time,
+    # by default 1000 settle periods): a small dt makes that a long run, not a hang
+    try:
+        tol = float(entry(runs[0], "settle_tol")[1][0]) if entry(runs[0], "settle_tol") else 0.0
+        ts = float(entry(runs[0], "settle_time")[1][0]) if entry(runs[0], "settle_time") else 0.0
+        tmax = float(entry(runs[0], "settle_max_time")[1][0]) if entry(runs[0], "settle_max_time") else 0.0
+    except (ValueError, IndexError):
+        return
+    budget = max(ts, MAX_STEPS * dt)
+    if 0 < tol < 1 and 0 <= ts and (tmax == 0 or tmax > budget):
+        if entry(runs[0], "settle_max_time"):
+            entry(runs[0], "settle_max_time")[1] = [repr(budget)]
+        else:
+            runs[0][1].append(["settle_max_time", [repr(budget)]])
+        muts.append(f"(settling budget cut to {MAX_STEPS} steps)")
 
 
 DERIVED = ["mesh_frequency", "settle_cycles", "measure_cycles"]

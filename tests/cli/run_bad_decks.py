@@ -52,6 +52,12 @@ HOUSING = "&node id = 'h', type = 'inertia', inertia = 2.0 /\n"
 GEAR = ("&element id = 'g', type = 'ideal_gear', left = 'a', right = 'b', carrier = '{carrier}', "
         "stiffness = 1.0e5, rb_driver = 1.0, rb_driven = 2.0 /\n")
 
+# A planetary stage (line 2; planets and teeth on line 3), spur meshes, ring held.
+PLANETARY = ("&planetary id = 'ps', module = 2.0, face_width = 0.5,\n"
+             "  planets = {n}, teeth_sun = {zs}, teeth_planet = {zp}, teeth_ring = {zr},\n"
+             "  sun_inertia = 0.01, carrier_inertia = 0.2, planet_inertia = 0.003,\n"
+             "  held = 'ring' /\n")
+
 # Three disks of verification/table5_1 (19.68 and 32.25 Hz modes).
 TABLE5_1 = (
     "&run title = 'unstable', t_end = {t_end}, dt = {dt}, integrator = 'rk4' /\n"
@@ -172,6 +178,40 @@ CASES = [
          deck="&run t_end = 0.01, dt = 1.0e-4, initial_state = 'preload' /\n" + NODES + HOUSING
          + GEAR.format(carrier="h") + "&load node = 'b', value = 1.0 /\n",
          exit=2, stderr=["deck.nml:5:", "'g'", "preload", "more than two ports", "carrier"]),
+    # internal meshes and &planetary stages (issue 25): line 2 &planetary, its keys on lines 3-5
+    dict(name="internal ideal gear whose ring is not larger than its pinion",
+         deck=RUN + NODES + HOUSING + "&element id = 'g', type = 'ideal_gear', left = 'a', right = 'b', "
+         "carrier = 'h', mesh = 'internal', stiffness = 1.0e5, rb_driver = 2.0, rb_driven = 2.0 /\n",
+         exit=2, stderr=["deck.nml:5:", "rb_driven", "internal mesh", "larger than"]),
+    dict(name="unknown mesh kind of a gear pair",
+         deck=RUN + NODES + HOUSING + GEAR.format(carrier="h").replace(" /", ", mesh = 'inside' /"),
+         exit=2, stderr=["deck.nml:5:", "mesh", "'inside'", "external, internal"]),
+    dict(name="driven_sense = 'driver' without a carrier",
+         deck=RUN + NODES + "&element id = 'g', type = 'ideal_gear', left = 'a', right = 'b', "
+         "driven_sense = 'driver', stiffness = 1.0e5, rb_driver = 1.0, rb_driven = 2.0 /\n",
+         exit=2, stderr=["deck.nml:4:", "driven_sense", "needs a carrier"]),
+    dict(name="planetary: tooth counts that cannot assemble equally spaced",
+         deck=RUN + PLANETARY.format(n=4, zs=21, zp=30, zr=81),
+         exit=2, stderr=["deck.nml:3:", "&planetary #1", "key 'planets'", "(21 + 81)/4", "cannot be assembled"]),
+    dict(name="planetary: ring smaller than sun + 2 planets",
+         deck=RUN + PLANETARY.format(n=3, zs=21, zp=30, zr=78),
+         exit=2, stderr=["deck.nml:3:", "&planetary #1", "key 'teeth_ring'", "teeth_sun + 2 teeth_planet = 81",
+                         "got 78"]),
+    dict(name="planetary: zero planets",
+         deck=RUN + PLANETARY.format(n=0, zs=21, zp=30, zr=81),
+         exit=2, stderr=["deck.nml:3:", "&planetary #1", "key 'planets'", "got 0"]),
+    dict(name="planetary: a member given twice (an inertia and held)",
+         deck=RUN + PLANETARY.format(n=3, zs=21, zp=30, zr=81).replace("held = 'ring'", "held = 'sun'"),
+         exit=2, stderr=["deck.nml:2:", "&planetary #1", "the sun needs exactly one of", "gives 2"]),
+    dict(name="planetary: planet angle that does not assemble",
+         deck=RUN + PLANETARY.format(n=3, zs=21, zp=30, zr=81).replace(" /", ", planet_angles = 0, 100, 240 /"),
+         exit=2, stderr=["deck.nml:5:", "key 'planet_angles'", "planet angle 2 = 100", "cannot be assembled"]),
+    dict(name="planetary: a backlash per planet of the wrong count",
+         deck=RUN + PLANETARY.format(n=3, zs=21, zp=30, zr=81).replace(" /", ", sun_backlash = 0.01, 0.02 /"),
+         exit=2, stderr=["deck.nml:5:", "key 'sun_backlash'", "one per planet (3)", "got 2"]),
+    dict(name="planetary: unknown key",
+         deck=RUN + PLANETARY.format(n=3, zs=21, zp=30, zr=81).replace(" /", ", planet_inertial = 2 /"),
+         exit=2, stderr=["deck.nml:5:", "planet_inertial", "planet_inertia"]),
     dict(name="chain default runs out of nodes",
          deck=GOOD + "&element id = 's2', type = 'shaft', stiffness = 1.0e5 /\n",
          exit=2, stderr=["deck.nml:5:", "'s2'", "not defined", "right"]),
@@ -432,7 +472,7 @@ CASES = [
          exit=2, stderr=["deck.nml:1:", "unknown key 'colour'", "valid keys are"], not_stderr=["did you mean"]),
     dict(name="unknown group lists every group the reader takes, sweep too",
          deck=RUN + NODES + SHAFT + "&sweeps parameter = 's1.stiffness', values = 1e5 /\n",
-         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, controller, fmu, sweep"]),
+         exit=2, stderr=["deck.nml:5:", "unknown group '&sweeps'", "run, node, element, load, initial, controller, fmu, planetary, sweep"]),
     dict(name="half_backlash in the spur_gear geometry form is explained (in-lbf-s)",
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="half_backlash = 0.002"),
          exit=2, stderr=["deck.nml:6:", "half_backlash belongs to TRAIN's constants form", "geometry form",
