@@ -850,11 +850,11 @@ contains
    !> again after the elements'. On chains that take each of its ways (no term
    !> from an element or a node; only a node's; only an element's; both; an
    !> element that feeds power in; a held node in the middle and at the end)
-   !> and on a branched train, at random states, its dy/dt (the dissipated and
+   !> and on a branched train (with a held node of three element torques too), at random states, its dy/dt (the dissipated and
    !> the input power included) must be the full RHS's (which sums the
    !> elements' terms, then the nodes', in one pass) to the bit.
    subroutine test_stage_energy_rates_are_the_full_rhs_own()
-      integer, parameter :: n_case = 7
+      integer, parameter :: n_case = 8
       character(len=:), allocatable :: deck
       character(len=60) :: what(n_case)
       type(model_t) :: m
@@ -866,7 +866,7 @@ contains
       what = [character(len=60) :: 'chain, no dissipation (the rig''s way)', 'chain, a damped node only', &
               'chain, a damped shaft only', 'chain, damped nodes and shaft, a clearance', &
               'chain, an element feeding power in, damped nodes', 'chain, held nodes in the middle and at the end', &
-              'branched train (no chain)']
+              'branched train (no chain)', 'branched, a held node with three element torques']
       do ic = 1, n_case
          deck = "&run t_end = 1e-3, dt = 1e-6, track_energy = .true. /"//nl// &
                 "&node id='a', type='inertia', inertia=1.0 /"//nl// &
@@ -878,7 +878,7 @@ contains
                                                                    any(ic == [4, 5, 6]))//" /"//nl// &
                 "&node id='e', type='inertia', inertia=1.5 /"//nl// &
                 "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
-                "&element type='shaft', stiffness=2e3"//merge(", damping=0.1", "             ", any(ic == [3, 4, 7]))// &
+                "&element type='shaft', stiffness=2e3"//merge(", damping=0.1", "             ", any(ic == [3, 4, 7, 8]))// &
                 ", left='b', right='c' /"//nl
          if (ic == 4) then
             deck = deck//"&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, "// &
@@ -887,15 +887,15 @@ contains
             deck = deck//"&element type='ideal_gear', stiffness=2e4, rb_driver=0.7, rb_driven=1.1, left='c', "// &
                    "right='d' /"//nl
          end if
-         if (ic == 7) then
+         if (ic >= 7) then
             deck = deck//"&element type='shaft', stiffness=3e3, left='c', right='e' /"//nl
          else
             deck = deck//"&element type='shaft', stiffness=3e3, left='d', right='e' /"//nl
          end if
          deck = deck//"&load node='a', quantity='speed', kind='constant', value=5.0 /"//nl// &
                 "&load node='b', value=0.5 /"//nl//"&load node='e', value=-3.0 /"//nl
-         if (ic == 6) deck = deck//"&load node='c', quantity='speed', kind='constant', value=-2.0 /"//nl// &
-                             "&load node='e', quantity='speed', kind='constant', value=1.5 /"//nl
+         if (ic == 6 .or. ic == 8) deck = deck//"&load node='c', quantity='speed', kind='constant', value=-2.0 /"//nl
+         if (ic == 6) deck = deck//"&load node='e', quantity='speed', kind='constant', value=1.5 /"//nl
          call load_model_text(deck, m)
          if (ic == 5) then
             ! the shaft b-c feeds power in (an element asked through its procedures)

@@ -12,7 +12,7 @@ module trainsim_model_families
    public :: nk_other, nk_plain, nk_held
    public :: lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, lf_cl_linear
    public :: families_t, table_t, spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr, &
-             load_ni, load_nr
+             load_ni, load_nr, row_ends
 
    !> Kinds of node on the hot path.
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
@@ -98,11 +98,15 @@ module trainsim_model_families
    !> reaches the arithmetic).
    integer, parameter :: contact_ni = 4, contact_nr = 7
    !> Plain inertias: (node, state offset, x, y), (J, d, the sum of its constant
-   !> loads), in three tables of the same width one after another (`free` is
-   !> all three, for their kinematics): an undamped node with one element torque
-   !> on it (x: its index into the element torques), with two (x, y), any other
-   !> (its incidences iw(x : y)). Nodes held at a constant speed: (node,
-   !> first, last incidence in iw), (theta0, w, load sum). Constant loads on
+   !> loads), in two tables of the same width one after another (`free` is
+   !> both, for their kinematics): an undamped node with one or two element
+   !> torques on it (x, y: their indices into the element torques; with one, y
+   !> is the zero after the last element's, D-91), any other (its incidences
+   !> iw(x : y)). Nodes held at a constant speed: (node, x, y), (theta0, w,
+   !> load sum), in node order (their drive powers are summed in it), in two
+   !> tables one after another (`held` is both): the first ones with at most
+   !> two element torques (x, y as a free node's), the rest (the range of its
+   !> incidences in iw). Constant loads on
    !> free nodes: (node), (value). Damped plain inertias in node order (their
    !> dissipated power): (state offset), (d).
    integer, parameter :: free_ni = 4, free_nr = 3, held_ni = 3, held_nr = 3, load_ni = 1, load_nr = 1
@@ -118,8 +122,8 @@ module trainsim_model_families
       integer :: nn = 0, ne = 0, ns = 0
       integer, allocatable :: iw(:)
       real(wp), allocatable :: rw(:)
-      type(table_t) :: springs, dampers, contacts, c_open, c_ys, c_lin, general, free, free1, free2, free_n, &
-                       damped, held, loads
+      type(table_t) :: springs, dampers, contacts, c_open, c_ys, c_lin, general, free, free2, free_n, &
+                       damped, held, held2, held_n, loads
       !> per node i: its inertia (kinetic energy) at rw(jn + i)
       integer :: jn = 0
       !> per element: its row in the clearance family (0: none; its law's
@@ -132,4 +136,20 @@ module trainsim_model_families
       logical :: mixed = .false.
       real(wp), allocatable :: th(:), w(:), pw(:)   !< scratch: node angles, speeds; element powers
    end type families_t
+
+contains
+
+   !> A node row's element torques: with `straight` (at most two), their
+   !> indices into el_torque (for one it has not, its zero column ne + 1,
+   !> D-91), else the range i1 : i2 of its incidences in iw.
+   pure function row_ends(iw, i1, i2, ne, straight) result(x)
+      integer, intent(in) :: iw(:), i1, i2, ne
+      logical, intent(in) :: straight
+      integer :: x(2)
+      x = [i1, i2]
+      if (.not. straight) return
+      x = [2*ne + 1, 2*ne + 2]
+      if (i2 >= i1) x(1) = iw(i1)
+      if (i2 == i1 + 1) x(2) = iw(i2)
+   end function row_ends
 end module trainsim_model_families

@@ -49,7 +49,9 @@ contains
       allocate (self%theta(nn), self%omega(nn), self%torque(nn))
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
       if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force, self%el_pe)
-      allocate (self%el_torque(2, ne), self%el_disp(ne), self%el_force(ne), self%el_pe(ne))
+      ! (one column more, always zero: the second torque of a plain inertia with
+      ! one element torque in the stage kernel's node rows, D-91)
+      allocate (self%el_torque(2, ne + 1), self%el_disp(ne), self%el_force(ne), self%el_pe(ne))
       self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp; self%el_pe = 0.0_wp
       ! a block of steps (D-38): at most 64, its columns 32 KiB at most (they
       ! stay in the first-level cache; a long train gains little from blocks, its

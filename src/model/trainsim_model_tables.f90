@@ -9,7 +9,7 @@ submodule (trainsim_model) trainsim_model_tables
    use trainsim_element, only: element_t, hf_none, hf_open, hf_yang_sun, hf_linear, hg_none, hg_faces, hg_faces_zone
    use trainsim_model_families, only: nk_plain, nk_held, lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, &
                                       lf_cl_linear, fast_element_t, table_t, spring_ni, spring_nr, contact_ni, &
-                                      contact_nr, free_ni, free_nr, held_ni, held_nr, load_ni, load_nr
+                                      contact_nr, free_ni, free_nr, held_ni, held_nr, load_ni, load_nr, row_ends
    use trainsim_model_kernels, only: hot_potential, hot_force, hot_torques, hot_guards
    use trainsim_ports, only: port_init_at
    implicit none
@@ -158,7 +158,7 @@ contains
    !> appears or goes, refresh_hot).
    subroutine build_families(self)
       type(model_t), intent(inout) :: self
-      integer :: i, q, nn, ne, ni, nr, inc0
+      integer :: i, q, nn, ne, ni, nr, inc0, nh2
       integer, allocatable :: sp(:), sd(:), ct(:), gen(:), free(:), held(:), ld(:), dmp(:), first(:), cnt(:)
       logical, allocatable :: two(:), one(:)
       logical, allocatable :: contact(:)
@@ -183,6 +183,10 @@ contains
               pack([(i, i=1, nn)], self%fn(:)%kind == nk_plain .and. .not. (one .or. two))]
       dmp = pack([(i, i=1, nn)], self%fn(:)%kind == nk_plain .and. self%fn(:)%d /= 0.0_wp)
       held = pack([(i, i=1, nn)], self%fn(:)%kind == nk_held .and. self%fn(:)%const_speed)
+      ! in node order (their drive powers are summed in it): those with at most two
+      ! element torques first if they come first, else all through their incidences
+      nh2 = count(cnt(held) <= 2)
+      if (.not. all(cnt(held(1:nh2)) <= 2)) nh2 = 0
       ld = pack([(i, i=1, size(self%fl))], [(self%fn(self%fl(i)%node)%kind /= nk_held, i=1, size(self%fl))])
       associate (f => self%fam)
          f%nn = nn
@@ -199,13 +203,12 @@ contains
          f%c_lin = f%c_ys
          call place(f%general, size(gen), 1, 0)
          call place(f%free, size(free), free_ni, free_nr)
-         f%free1 = table_t(count(one), f%free%i0, f%free%r0)
-         f%free2 = table_t(count(two), f%free1%i0 + free_ni*f%free1%n, &
-                           f%free1%r0 + free_nr*f%free1%n)
-         f%free_n = table_t(f%free%n - f%free1%n - f%free2%n, f%free2%i0 + free_ni*f%free2%n, &
-                            f%free2%r0 + free_nr*f%free2%n)
+         f%free2 = table_t(count(one) + count(two), f%free%i0, f%free%r0)
+         f%free_n = table_t(f%free%n - f%free2%n, f%free%i0 + free_ni*f%free2%n, f%free%r0 + free_nr*f%free2%n)
          call place(f%damped, size(dmp), 1, 1)
          call place(f%held, size(held), held_ni, held_nr)
+         f%held2 = table_t(nh2, f%held%i0, f%held%r0)
+         f%held_n = table_t(f%held%n - f%held2%n, f%held%i0 + held_ni*f%held2%n, f%held%r0 + held_nr*f%held2%n)
          call place(f%loads, size(ld), load_ni, load_nr)
          inc0 = ni
          f%jn = nr
@@ -243,26 +246,20 @@ contains
          end do
          do q = 1, size(free)
             i = free(q)
-            ! one or two element torques: their indices; else the range of its incidences
-            if (one(i) .or. two(i)) then
-               f%iw(f%free%i0 + free_ni*(q - 1) + 1:f%free%i0 + free_ni*q) = &
-                  [i, self%fn(i)%off, f%iw(first(i)), f%iw(first(i + 1) - 1)]
-            else
-               f%iw(f%free%i0 + free_ni*(q - 1) + 1:f%free%i0 + free_ni*q) = [i, self%fn(i)%off, first(i), first(i + 1) - 1]
-            end if
+            f%iw(f%free%i0 + free_ni*(q - 1) + 1:f%free%i0 + free_ni*q) = &
+               [i, self%fn(i)%off, row_ends(f%iw, first(i), first(i + 1) - 1, ne, one(i) .or. two(i))]
             f%rw(f%free%r0 + free_nr*(q - 1) + 1:f%free%r0 + free_nr*q) = [self%fn(i)%j, self%fn(i)%d, self%fn(i)%load0]
          end do
          do q = 1, size(held)
             i = held(q)
-            f%iw(f%held%i0 + held_ni*(q - 1) + 1:f%held%i0 + held_ni*q) = [i, first(i), first(i + 1) - 1]
+            f%iw(f%held%i0 + held_ni*(q - 1) + 1:f%held%i0 + held_ni*q) = &
+               [i, row_ends(f%iw, first(i), first(i + 1) - 1, ne, q <= f%held2%n)]
             f%rw(f%held%r0 + held_nr*(q - 1) + 1:f%held%r0 + held_nr*q) = [self%fn(i)%theta0, self%fn(i)%w, &
                                                                             self%fn(i)%load0]
          end do
          if (allocated(f%th)) deallocate (f%th, f%w, f%pw)
          allocate (f%th(nn), f%w(nn), f%pw(ne))
-         f%th = 0.0_wp
-         f%w = 0.0_wp
-         f%pw = 0.0_wp
+         f%th = 0.0_wp; f%w = 0.0_wp; f%pw = 0.0_wp
       end associate
    contains
 

@@ -178,8 +178,8 @@ contains
       self%s%theta(:) = model%theta
       self%s%omega(:) = model%omega
       if (ws) then
-         self%s%torque_left(:) = model%el_torque(1, :)
-         self%s%torque_right(:) = model%el_torque(2, :)
+         self%s%torque_left(:) = model%el_torque(1, :size(self%s%torque_left))   ! (not its zero column, D-91)
+         self%s%torque_right(:) = model%el_torque(2, :size(self%s%torque_right))
       else
          do i = 1, size(model%elements)
             call model%element_torques(i, self%s%torque_left(i), self%s%torque_right(i))
