@@ -2,7 +2,7 @@
 !> optional backlash, contact law) whose driven side receives eta times the
 !> power the driving side puts in. Which side drives follows the power at the
 !> left (driver) node, the side that carries the loss (a discrete mode with
-!> guards, docs/elements.md "lossy_gear", D-90): with fs the signed mesh force
+!> guards, docs/elements.md "lossy_gear", D-91): with fs the signed mesh force
 !> (+ on the front face) and the lossless torques tl0 = -fs r1, tr0 = fs r2,
 !>   forward  (left drives,  fs wl > 0): tl = tl0 / eta_f, tr = tr0
 !>   backward (right drives, fs wl < 0): tl = eta_b tl0,   tr = tr0
@@ -212,7 +212,7 @@ contains
    !> r1 (driven on: forward), (1 - eta_b) sg fs r1 - sg lam (driven back:
    !> backward). moving(s, w, a) = max(s w, s a) with a the left's acceleration
    !> (con%acc): the left stops where its speed has reached zero with its
-   !> acceleration against s, not while it starts from rest (D-90). Guard 3 of
+   !> acceleration against s, not while it starts from rest (D-91). Guard 3 of
    !> forward and backward is the left stopping (it is held); guard 4 the force
    !> passing zero (the flow re-chosen from the left's speed).
    pure subroutine lossy_guards(self, thl, wl, thr, wr, g)
@@ -363,7 +363,7 @@ contains
       self%con%n = merge(1, 0, held(flow))
       self%con%g(1, 1:2) = [1.0_wp, 0.0_wp]
       if (.not. held(flow)) self%con%lam = 0.0_wp
-      self%con%want_acc = self%cl%mode /= 0 .and. .not. held(flow)   ! the guards read acc (D-90)
+      self%con%want_acc = self%cl%mode /= 0 .and. .not. held(flow)   ! the guards read acc (D-91)
    end subroutine set_flow
 
    !> Declined (torques and guards through the element): the efficiency scales

@@ -59,7 +59,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       associate (unused => units)
       end associate
-      call accept_mesh(self, grp, self%internal, err); if (allocated(err)) return   ! on a carrier: D-73, D-89
+      call accept_mesh(self, grp, self%internal, err); if (allocated(err)) return   ! on a carrier: D-73, D-92
       call grp%get_real('rb_driver', self%r1, err); if (allocated(err)) return
       call grp%get_real('rb_driven', self%r2, err); if (allocated(err)) return
       if (.not. self%r1 > 0.0_wp) then
@@ -135,11 +135,11 @@ contains
    end subroutine rigid_status
 
    !> The one row, always in force: r1 wl - r2 wr = 0; on a carrier (port 3) the
-   !> same in its frame, r1 (wl - wc) - r2 (a wr - s wc) = 0 (D-73, D-89).
+   !> same in its frame, r1 (wl - wc) - r2 (a wr - s wc) = 0 (D-73, D-92).
    subroutine set_row(self)
       class(rigid_gear_t), intent(inout) :: self
       self%con%on = .true.
-      self%con%rigid = .true.                  ! (merged in the RK4 step advice: D-86 (hold))
+      self%con%rigid = .true.                  ! (merged in the RK4 step advice: D-86)
       self%con%n = 1
       self%con%g(1, 1:2) = [self%r1, -self%r2]
       if (allocated(self%port_keys)) then

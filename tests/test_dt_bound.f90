@@ -16,7 +16,7 @@
 !>   of an undamped linear train cannot grow), and the same chain at 1.1 x
 !>   the dense limit blows up (|R| = 1.9 per step on its top mode): the test can fail;
 !> - nodes joined by a rigid_gear or rigid_join move as one body in the dense
-!>   advice (D-86 (hold)): its step is 2 sqrt 2 / omega of the merged train's
+!>   advice (D-86): its step is 2 sqrt 2 / omega of the merged train's
 !>   closed-form frequency, and a run at 0.99 x that limit is stable, at 1.05 x not.
 program test_dt_bound
    use trainsim_kinds, only: wp

@@ -1,5 +1,5 @@
 !> An engagement table e(t) is piecewise linear: its knots are kinks of the
-!> friction torque, which the driver makes step breakpoints (D-87 (hold)), so RK4
+!> friction torque, which the driver makes step breakpoints (D-87), so RK4
 !> never steps across one and keeps its fourth order. A slipping clutch with a
 !> ramp engagement (Coulomb + viscous) between a spinning disk and a disk on a
 !> shaft to ground, the knots off the step grid: the observed order of the
@@ -13,7 +13,7 @@ module clutch_no_breaks_plugin
    private
    public :: clutch_no_breaks_t
 
-   !> The clutch without its breakpoints (what the driver did before D-87 (hold)).
+   !> The clutch without its breakpoints (what the driver did before D-87).
    type, extends(clutch_t) :: clutch_no_breaks_t
    contains
       procedure :: breakpoints => no_breakpoints

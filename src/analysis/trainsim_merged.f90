@@ -1,7 +1,7 @@
 !> Merged coordinates of a train's kinematic constraint rows (D-81): the null
 !> space of the rows over the free inertias (`null_space`, what `trainsim modes`
 !> merges), and the projection of the first-order system onto it for the RK4
-!> step advice (`rigid_projection`, D-86 (hold)): nodes joined by an element that
+!> step advice (`rigid_projection`, D-86): nodes joined by an element that
 !> is rigid in every mode (rigid_gear, rigid_join: con%rigid) move as one body,
 !> so their joined inertia, not each node's own, sets the frequencies.
 module trainsim_merged

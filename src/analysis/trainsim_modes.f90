@@ -227,7 +227,7 @@ contains
          return
       end if
       call inverse_inertias(model, inv_j)
-      call rigid_projection(model, lp, tr, err); if (allocated(err)) return   ! rigid gears and joins merged (D-86 (hold))
+      call rigid_projection(model, lp, tr, err); if (allocated(err)) return   ! rigid gears and joins merged (D-86)
       st = state
       ! impact damping exists only where there are clearances (guards)
       if (state%contact /= lin_contact_closed .or. state%impact_scale == 0.0_wp .or. model%n_guards == 0) then

@@ -56,7 +56,7 @@ contains
       model%deck_file = deck%file
       call move_alloc(deck%text, model%deck_text)   ! not copied: a deck may be 100 MB
       call read_run(deck, model, err); if (allocated(err)) return
-      call expand_planetary(deck, model%units, err); if (allocated(err)) return   ! into &node, &element (D-90)
+      call expand_planetary(deck, model%units, err); if (allocated(err)) return   ! into &node, &element (D-93)
       call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
       call read_elements(deck, model, node_ids, err); if (allocated(err)) return
       call read_loads(deck, model, node_ids, err); if (allocated(err)) return

@@ -1,4 +1,4 @@
-!> The `&planetary` group (issue 25, D-90 (planet)): a planetary stage written as one group
+!> The `&planetary` group (issue 25, D-93): a planetary stage written as one group
 !> and expanded, before the nodes and elements are read, into ordinary `&node` and
 !> `&element` groups appended to the deck, so every metric, event, plot and `--set`
 !> of a node or element works per member and per mesh.

@@ -8,7 +8,7 @@
 !> leaves the torque of row k in lam(k): port p gets g(k, p) lam(k). An element
 !> whose guards in its current mode read its ports' accelerations sets
 !> `want_acc`; the model then evaluates a RHS before its guards and leaves each
-!> port's acceleration at (t, y) in acc(p) (a side that stops or starts, D-90).
+!> port's acceleration at (t, y) in acc(p) (a side that stops or starts, D-91).
 module trainsim_constraint_rows
    use trainsim_kinds, only: wp
    implicit none

@@ -87,7 +87,7 @@ module trainsim_element
       !> On a carrier (port 3, D-73): thr' = a thr - s thc, thl' = thl - thc. s, the right gear's
       !> sense relative to the carrier: -1 external pair (TRAIN counts each gear in its own sense,
       !> the driven one turns against the driver), +1 internal (ring) gear; a = right_sign: -1
-      !> where the right node is counted in the driver's sense (a planetary's members, D-89 (planet)).
+      !> where the right node is counted in the driver's sense (a planetary's members, D-92).
       real(wp) :: carrier_sense = -1.0_wp, right_sign = 1.0_wp
       type(constraint_rows_t) :: con   !< kinematic constraints in its mode (D-81, trainsim_constraint_rows)
    contains

@@ -18,7 +18,7 @@ module trainsim_event
    !> the relative speed positive or negative (force: the torque at the switch).
    integer, parameter :: ev_stick = 5, ev_slip_forward = 6, ev_slip_backward = 7
    integer, parameter :: ev_target_reached = 8 !< a positioning sequence reached its target (trainsim_controller)
-   !> A lossy gear's power flow turned (D-90): the left now drives (forward) or
+   !> A lossy gear's power flow turned (D-91): the left now drives (forward) or
    !> is driven (backward), its left moving on (force: the mesh force).
    integer, parameter :: ev_flow_forward = 9, ev_flow_backward = 10
    integer, parameter :: ev_max_kind = 10      !< the kinds are 1..ev_max_kind (the C API lists their names)

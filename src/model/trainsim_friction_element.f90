@@ -7,7 +7,7 @@
 !> static limit. Its guard: slipping, max(s (wl - wr), s (al - ar)) >= 0 (the
 !> relative speed through zero with the relative acceleration against s: a
 !> release from rest is not stopped by the integrator's error in the speed,
-!> D-90; al, ar from the model, con%acc); stuck, limit - |lam|
+!> D-91; al, ar from the model, con%acc); stuck, limit - |lam|
 !> >= 0 (one-way: -lam >= 0, and capacity + lam >= 0).
 !>
 !>   slipping torque f(v) = e(t) (Tc + (Ts - Tc) exp(-|v|/vs) + cv |v|)   (vs > 0)
@@ -206,7 +206,7 @@ contains
       e = self%eng_v(k - 1) + f*(self%eng_v(k) - self%eng_v(k - 1))
    end function friction_engagement
 
-   !> The engagement table's knots, where e(t) kinks (D-87 (hold)): the driver
+   !> The engagement table's knots, where e(t) kinks (D-87): the driver
    !> stops there, so RK4 never steps across a kink (its order holds).
    pure subroutine friction_breakpoints(self, bp)
       class(friction_element_t), intent(in) :: self
@@ -296,7 +296,7 @@ contains
       real(wp), intent(out) :: g(:)
       associate (u1 => thl, u2 => thr)
       end associate
-      if (self%mode /= fm_stuck) then   ! speed through zero against the acceleration (D-90)
+      if (self%mode /= fm_stuck) then   ! speed through zero against the acceleration (D-91)
          g(1) = max(real(self%mode, wp)*(wl - wr), real(self%mode, wp)*(self%con%acc(1) - self%con%acc(2)))
       else if (self%one_way) then
          g(1) = min(-self%con%lam(1), self%capacity + self%con%lam(1))

@@ -1,4 +1,4 @@
-!> The mesh keys a gear pair shares (D-89 (planet)). `mesh = 'external'` (default) or
+!> The mesh keys a gear pair shares (D-92). `mesh = 'external'` (default) or
 !> `'internal'`: a pinion (left, the driver) inside a ring gear (right). TRAIN counts each
 !> gear's angle in its own sense of rotation, so the deflection along the line of action
 !> is d = r1 thl - r2 thr for both kinds; what differs is the sense of the ring relative to

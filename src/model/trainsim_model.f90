@@ -74,7 +74,7 @@ module trainsim_model
       logical :: nport = .false.
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)
-      !> Per element: its torque on its left (1) and right (2) node at the last full RHS (column ne + 1: zeros, D-91).
+      !> Per element: its torque on its left (1) and right (2) node at the last full RHS (column ne + 1: zeros, D-95).
       real(wp), allocatable :: el_torque(:, :)
       !> Per element whose `status` is known to be (delta, F, 1, 0) of its linear
       !> spring (status_in_ws, checked bit for bit at build time, simple models

@@ -101,7 +101,7 @@ module trainsim_model_families
    !> loads), in two tables of the same width one after another (`free` is
    !> both, for their kinematics): an undamped node with one or two element
    !> torques on it (x, y: their indices into the element torques; with one, y
-   !> is the zero after the last element's, D-91), any other (its incidences
+   !> is the zero after the last element's, D-95), any other (its incidences
    !> iw(x : y)). Nodes held at a constant speed: (node, x, y), (theta0, w,
    !> load sum), in node order (their drive powers are summed in it), in two
    !> tables one after another (`held` is both): the first ones with at most
@@ -141,7 +141,7 @@ contains
 
    !> A node row's element torques: with `straight` (at most two), their
    !> indices into el_torque (for one it has not, its zero column ne + 1,
-   !> D-91), else the range i1 : i2 of its incidences in iw.
+   !> D-95), else the range i1 : i2 of its incidences in iw.
    pure function row_ends(iw, i1, i2, ne, straight) result(x)
       integer, intent(in) :: iw(:), i1, i2, ne
       logical, intent(in) :: straight

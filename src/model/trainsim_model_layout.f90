@@ -50,7 +50,7 @@ contains
       self%theta = 0.0_wp; self%omega = 0.0_wp; self%torque = 0.0_wp
       if (allocated(self%el_torque)) deallocate (self%el_torque, self%el_disp, self%el_force, self%el_pe)
       ! (one column more, always zero: the second torque of a plain inertia with
-      ! one element torque in the stage kernel's node rows, D-91)
+      ! one element torque in the stage kernel's node rows, D-95)
       allocate (self%el_torque(2, ne + 1), self%el_disp(ne), self%el_force(ne), self%el_pe(ne))
       self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp; self%el_pe = 0.0_wp
       ! a block of steps (D-38): at most 64, its columns 32 KiB at most (they
@@ -163,7 +163,7 @@ contains
          call model%nodes(i)%n%breakpoints(b)
          bp = [bp, b]
       end do
-      do i = 1, size(model%elements)                 ! (an engagement table's knots: D-87 (hold))
+      do i = 1, size(model%elements)                 ! (an engagement table's knots: D-87)
          call model%elements(i)%e%breakpoints(b)
          bp = [bp, b]
       end do

@@ -178,7 +178,7 @@ contains
       self%s%theta(:) = model%theta
       self%s%omega(:) = model%omega
       if (ws) then
-         self%s%torque_left(:) = model%el_torque(1, :size(self%s%torque_left))   ! (not its zero column, D-91)
+         self%s%torque_left(:) = model%el_torque(1, :size(self%s%torque_left))   ! (not its zero column, D-95)
          self%s%torque_right(:) = model%el_torque(2, :size(self%s%torque_right))
       else
          do i = 1, size(model%elements)

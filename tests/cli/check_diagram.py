@@ -123,7 +123,7 @@ with tempfile.TemporaryDirectory() as tmp:
         node_ids = [g.get("id", f"n{k + 1}") for k, g in enumerate(g for n, g in groups if n == "node")]
         els = [g for n, g in groups if n == "element"]
         el_ids = [g.get("id", f"e{k + 1}") for k, g in enumerate(els)]
-        # a &planetary stage expands (D-90) into its nodes and meshes after the deck's own
+        # a &planetary stage expands (D-93) into its nodes and meshes after the deck's own
         for k, g in enumerate(g for n, g in groups if n == "planetary"):
             sid, npl = g.get("id", f"planetary{k + 1}"), int(g["planets"])
             node_ids += [f"{sid}_{m}" for m in ("sun", "ring", "carrier") if m not in g]

@@ -1,13 +1,13 @@
 #!/usr/bin/python3
 """A self-locking worm holding a wheel that rattles in its backlash under a reversing load
-(issue 23; the tracker day's event flood, D-90).
+(issue 23; the tracker day's event flood, D-91).
 
 The worm (lead 3.58 deg, mu 0.08: eta_b = -0.36, self-locking) sits on a torsion spring to
 ground and is pushed by a constant 0.1 N m (the tracker's motor key, wound up by the
 holding brake); the wheel carries a load of -10 + 20 sin(2 pi 2 t) N m, so it reverses 8
 times in 2 s and crosses the mesh's 0.1 mm backlash each time. While the mesh force
 passes the spring's torque the worm's holding torque passes the edge of its band (the
-worm driven on, forward); before D-90 the worm was then stuck and released at once, more
+worm driven on, forward); before D-91 the worm was then stuck and released at once, more
 than 200 times within 1e-4 s (main at 923258e: "event flood at t = 0.0241 s", cvode-bdf).
 
 Runs it under cvode-bdf (rtol 1e-6, the tracker's), rk4 (dt 1e-5, omega_mesh dt = 0.11)
