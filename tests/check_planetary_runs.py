@@ -16,7 +16,11 @@ Usage (as CTest runs it, cwd = repo root):
     planet 2 with more backlash carries less, x solved over the planets in contact.
     The run's final mesh forces (/elements/force) against these to 1e-6 relative (the
     transient has decayed to e^-95; the rest is roundoff), and the load-sharing factor
-    N max F_n / sum F_n.
+    N max F_n / sum F_n: as computed from those forces, and as the run file's
+    /metrics/load_sharing (D-96; the metrics window is the last millisecond, the static
+    state) for every sun and ring mesh, to 1e-6 (equal planets: 1 to 1e-9); 0 for the
+    dampers, which are in no set. A sweep of that deck (two ring backlashes: the gaps'
+    differences, and so K, stay) has elements/load_sharing per run, the same figures.
 (b) inputs/planetary_start_stop.nml (sun driven through a shaft in start-stop duty, ring
     held, three planets a third of a tooth apart, the carrier driving a load through a
     clearance coupling): every one of the six meshes has impacts (/metrics/impacts) and
@@ -78,6 +82,7 @@ with tempfile.TemporaryDirectory() as d:
         with h5py.File(out) as f:
             ids = list(f["elements"].attrs["ids"])
             force = f["elements/force"][-1]
+            share = f["metrics/load_sharing"][:]
         fs = [force[ids.index(f"ps_sun_planet{n}")] for n in (1, 2, 3)]
         fr = [force[ids.index(f"ps_ring_planet{n}")] for n in (1, 2, 3)]
         gaps = [b / 2 + 0.004 / 2 for b in bs]
@@ -88,6 +93,34 @@ with tempfile.TemporaryDirectory() as d:
             check(abs(-fr[n] - want[n]) <= 1e-6 * max(want), f"{name}: ring mesh {n + 1} force {fr[n]:.9g} = -{want[n]:.9g}")
         lsf, lsf_want = 3 * max(fs) / sum(fs), 3 * max(want) / sum(want)
         check(abs(lsf - lsf_want) <= 1e-6, f"{name}: load-sharing factor {lsf:.6f} = {lsf_want:.6f}")
+        tol = 1e-9 if name.startswith("equal") else 1e-6
+        for mesh in ("sun", "ring"):
+            ks = [share[ids.index(f"ps_{mesh}_planet{n}")] for n in (1, 2, 3)]
+            check(all(abs(k - lsf_want) <= tol for k in ks),
+                  f"{name}: /metrics/load_sharing of the {mesh} meshes {ks[0]:.9f} = {lsf_want:.9f} (to {tol:g})")
+        others = [share[i] for i, s in enumerate(ids) if not s.startswith("ps_")]
+        check(len(others) == 4 and all(k == 0.0 for k in others), "load_sharing is 0 for the dampers (no set)")
+    # the sweep file: elements/load_sharing per run (K depends on the gaps' differences only)
+    with open(deck) as src:
+        text = src.read().replace("sun_backlash = 0.004,", "sun_backlash = 0.004, 0.0044, 0.004,")
+    sw = os.path.join(d, "sw.nml")
+    with open(sw, "w") as dst:
+        dst.write(text + "&sweep parameter = 'planetary#1.ring_backlash', values = 0.004, 0.005 /\n")
+    out = os.path.join(d, "sw.h5")
+    p = subprocess.run([EXE, "sweep", sw, "-o", out], capture_output=True, text=True, timeout=600)
+    check(p.returncode == 0, f"a sweep of the stage runs ({p.stderr.strip()[-300:]})")
+    if p.returncode == 0:
+        with h5py.File(out) as f:
+            ids = list(f["elements/ids"].asstr()[:])
+            share = f["elements/load_sharing"][:]
+        want = hand_sharing(T, RS, KS, KR, [b / 2 + 0.004 / 2 for b in (0.004, 0.0044, 0.004)])
+        lsf_want = 3 * max(want) / sum(want)
+        meshes = [i for i, s in enumerate(ids) if s.startswith("ps_")]
+        check(share.shape == (2, len(ids)) and len(meshes) == 6
+              and all(abs(share[r, i] - lsf_want) <= 1e-6 for r in (0, 1) for i in meshes)
+              and all(share[r, i] == 0.0 for r in (0, 1) for i in range(len(ids)) if i not in meshes),
+              f"sweep file: elements/load_sharing {share[0, meshes[0]]:.9f}, {share[1, meshes[0]]:.9f} = "
+              f"{lsf_want:.9f} in both runs, 0 for the dampers")
         if name.startswith("equal"):
             check(abs(fs[0] - T / (3 * RS)) <= 1e-6 * fs[0], f"equal planets carry T/(3 r_s) = {T / (3 * RS):.6f}")
         else:

@@ -59,7 +59,7 @@ module trainsim
    character(len=*), parameter :: metric_list(*) = [character(len=21) :: &
       'force_min', 'force_max', 'torque_min', 'torque_max', 'disp_min', 'disp_max', &
       'impacts', 'separations', 'zone_changes', 'max_approach_velocity', 'max_peak_force', &
-      'time_out_of_contact', 'p2p_range', 'p2p_mean', 'p2p_swings']
+      'time_out_of_contact', 'p2p_range', 'p2p_mean', 'p2p_swings', 'load_sharing']
 
    !> A deck, the model built from it and the result of its last run.
    type :: simulation_t
@@ -390,6 +390,7 @@ contains
       case ('p2p_range'); value = m%p2p_range
       case ('p2p_mean'); value = m%p2p_mean
       case ('p2p_swings'); value = real(m%p2p_swings, wp)
+      case ('load_sharing'); value = m%load_sharing
       case default
          call fatal_error(err, "metric: unknown metric '"//name//"'; valid: "//metric_names(), err_input)
       end select

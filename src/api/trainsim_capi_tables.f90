@@ -1,7 +1,7 @@
 !> The tables of the C interface (trainsim_capi): a run's metrics by name, with units,
 !> as one flat list, and the columns of the event table. The metrics are the figures a
 !> sweep file records of each run (docs/sweeps.md "The sweep file"), computed the same
-!> way: per element `ID.force_min` ... `ID.p2p_swings`, per node `ID.speed_min`,
+!> way: per element `ID.force_min` ... `ID.load_sharing`, per node `ID.speed_min`,
 !> `speed_max` (output samples from the start of the metrics' window), `end_angle`,
 !> `end_speed`, `start_speed`, and `run.steps`, `run.rhs_evals`, `run.events`,
 !> `run.energy_residual`, `run.settled` (1, 0, -1 not asked), `run.settle_periods`,
@@ -56,6 +56,7 @@ contains
             call add(id, 10, e%max_approach_velocity, d//'/s'); call add(id, 11, e%max_peak_force, f)
             call add(id, 12, e%time_out_of_contact, 's'); call add(id, 13, e%p2p_range, d)
             call add(id, 14, e%p2p_mean, d); call add(id, 15, real(e%p2p_swings, wp), '1')
+            call add(id, 16, e%load_sharing, '1')
          end associate
       end do
       do k = 1, nn

@@ -17,7 +17,7 @@ module trainsim_builder
    use trainsim_id_table, only: id_table_t
    use trainsim_plausibility, only: check_plausibility
    use trainsim_controller_deck, only: read_controllers, link_controllers
-   use trainsim_planetary_deck, only: expand_planetary
+   use trainsim_planetary_deck, only: expand_planetary, mark_share_sets
    implicit none
    private
 
@@ -59,6 +59,7 @@ contains
       call expand_planetary(deck, model%units, err); if (allocated(err)) return   ! into &node, &element (D-93)
       call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
       call read_elements(deck, model, node_ids, err); if (allocated(err)) return
+      call mark_share_sets(deck, model)   ! each stage's sun meshes and ring meshes (D-96)
       call read_loads(deck, model, node_ids, err); if (allocated(err)) return
       call read_controllers(deck, model, node_ids, err); if (allocated(err)) return
       call model%finalize()

@@ -18,10 +18,11 @@ module trainsim_planetary_deck
    use trainsim_strings, only: string_t, str, to_lower
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_t, deck_group_t, parse_deck
+   use trainsim_model, only: model_t
    implicit none
    private
 
-   public :: expand_planetary, planet_phases, assembles, max_planets
+   public :: expand_planetary, mark_share_sets, planet_phases, assembles, max_planets
 
    !> Most planets on one carrier (more is a typing error: 2 pi / 64 is under 6 degrees).
    integer, parameter :: max_planets = 64
@@ -98,6 +99,46 @@ contains
       end do
       call move_alloc(all, deck%groups)
    end subroutine expand_planetary
+
+   !> model%share_set: per element, its set of planet meshes (D-96): stage s's sun meshes
+   !> are set 2s - 1, its ring meshes set 2s (elastic stages only: a rigid stage's
+   !> sharing is statically indeterminate, D-94); 0 for every other element. After
+   !> `expand_planetary` (whose checks the groups passed) and `read_elements`.
+   subroutine mark_share_sets(deck, model)
+      type(deck_t), intent(inout) :: deck
+      type(model_t), intent(inout) :: model
+      type(error_t), allocatable :: err
+      character(len=:), allocatable :: id, mesh
+      integer :: i, j, n, s
+      allocate (model%share_set(size(model%elements)), source=0)
+      s = 0
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= 'planetary') cycle
+         associate (g => deck%groups(i))
+            call g%get_string('id', id, err, default='planetary'//str(g%ordinal)); if (allocated(err)) return
+            call g%get_string('mesh', mesh, err, default='spur'); if (allocated(err)) return
+            call g%get_int('planets', n, err); if (allocated(err)) return
+         end associate
+         s = s + 1
+         if (to_lower(mesh) == 'rigid') cycle
+         do j = 1, size(model%elements)
+            if (is_mesh(model%elements(j)%e%id, id//'_sun_planet')) model%share_set(j) = 2*s - 1
+            if (is_mesh(model%elements(j)%e%id, id//'_ring_planet')) model%share_set(j) = 2*s
+         end do
+      end do
+   contains
+      !> `eid` is `<stem><k>`, k in 1..n (the stage's planets).
+      logical function is_mesh(eid, stem)
+         character(len=*), intent(in) :: eid, stem
+         integer :: k
+         is_mesh = .false.
+         if (len(eid) <= len(stem)) return
+         if (eid(1:len(stem)) /= stem) return
+         do k = 1, n
+            if (eid(len(stem) + 1:) == str(k)) is_mesh = .true.
+         end do
+      end function is_mesh
+   end subroutine mark_share_sets
 
    !> Read and check one &planetary group.
    subroutine read_stage(g, units, st, err)

@@ -249,6 +249,7 @@ contains
       r = m%max_approach_velocity; if (.not. allocated(err)) call put_column_r(grp, 'max_approach_velocity', r, err, vel)
       r = m%max_peak_force; if (.not. allocated(err)) call put_column_r(grp, 'max_peak_force', r, err, u%el_force)
       r = m%time_out_of_contact; if (.not. allocated(err)) call put_column_r(grp, 'time_out_of_contact', r, err, sec)
+      r = m%load_sharing; if (.not. allocated(err)) call put_column_r(grp, 'load_sharing', r, err, cnt)
       call close_group(grp, err)
    end subroutine write_metrics
 

@@ -181,6 +181,18 @@ contains
             call out%end_line()
          end associate
       end do
+      if (allocated(model%share_set)) then
+         if (any(model%share_set > 0)) then
+            call out%a('load-sharing factor of each planetary stage''s sun meshes and ring meshes (N max F / sum F):', 0)
+            call out%end_line()
+            do i = 1, size(model%elements)   ! '(aWE,f12.6)'
+               if (model%share_set(i) == 0) cycle
+               call out%a(model%elements(i)%e%id, w)
+               call out%f(res%el(i)%load_sharing, 12, 6)
+               call out%end_line()
+            end do
+         end if
+      end if
       call out%flush()
       wn = id_width(model, nodes=.true.)
       write (unit, '(a)') 'final state:'

@@ -72,6 +72,9 @@ module trainsim_sink
       !> swing between successive peaks (trainsim_metrics), after settle_time
       real(wp) :: p2p_range = 0.0_wp, p2p_mean = 0.0_wp
       integer :: p2p_swings = 0
+      !> K = N max F_i / sum F_i of the element's set of planet meshes (D-96), F_i =
+      !> max(force_max, -force_min); 0 for an element of no set (set by the observer)
+      real(wp) :: load_sharing = 0.0_wp
       !> the online peak detector could confirm p2p_mean/p2p_swings are the
       !> whole-series figures (D-17); .false. if the range grew after a swing
       !> to over ten times that swing (memory only, not in the file)

@@ -29,7 +29,6 @@ module trainsim_model
 
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
-
    !> The end-of-step quantities the observer folds, for up to `cap` plain
    !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
    !> block, column `col` is written by `rhs_step_end` of a simple model (col =
@@ -63,6 +62,7 @@ module trainsim_model
       type(load_t), allocatable :: loads(:)
       type(motion_t), allocatable :: speeds(:)   !< prescribed motions (speed, angle or acceleration)
       integer, allocatable :: speed_of(:)        !< per node: index into speeds, 0 if free
+      integer, allocatable :: share_set(:)       !< per element: its set of planet meshes (D-96), 0 none
       integer :: n_states = 0                    !< physical states
       integer :: n_y = 0                         !< + 2 energy-accounting states if tracked
       integer :: n_guards = 0

@@ -268,6 +268,7 @@ contains
          call self%turns(i)%figures(self%res%el(i)%p2p_range, self%res%el(i)%p2p_mean, self%res%el(i)%p2p_swings)
          self%res%el(i)%p2p_exact = self%turns(i)%exact
       end do
+      call load_sharing(model%share_set, self%res%el)
       self%out => null()
       call sink%close(no_rows, self%res%stats, self%res%el, err)
       if (allocated(err)) return
@@ -279,4 +280,28 @@ contains
       result%series_theta = result%series_theta(:, 1:self%n_series)
       result%series_omega = result%series_omega(:, 1:self%n_series)
    end subroutine obs_finish
+
+   !> The load-sharing factor of each set of planet meshes (D-96): K = N max F_i / sum F_i
+   !> over the set's N meshes, F_i = max(force_max, -force_min) (the largest mesh force
+   !> of the metrics window, either face); 0 (K >= 1 for every set) for an element of
+   !> no set, and for a set that carried no load (sum F_i = 0).
+   subroutine load_sharing(set, m)
+      integer, allocatable, intent(in) :: set(:)   !< per element, 0 none (unallocated: none)
+      type(element_metrics_t), intent(inout) :: m(:)
+      real(wp) :: f(size(m)), total, top
+      integer :: i, k, n
+      m%load_sharing = 0.0_wp
+      if (.not. allocated(set)) return
+      if (size(set) /= size(m) .or. size(m) == 0) return
+      do i = 1, size(m)
+         f(i) = max(0.0_wp, m(i)%force_max, -m(i)%force_min)   ! (0: no sample in the window)
+      end do
+      do k = 1, maxval(set)
+         n = count(set == k)
+         if (n == 0) cycle
+         total = sum(f, mask=set == k)
+         top = maxval(f, mask=set == k)
+         if (total > 0.0_wp) where (set == k) m%load_sharing = n*top/total
+      end do
+   end subroutine load_sharing
 end submodule trainsim_observer_events

@@ -64,7 +64,7 @@ module trainsim_sweep_file
       integer(hid_t) :: file = -1
       integer(hid_t) :: d_status = -1, d_wall = -1, d_rank = -1, d_message = -1, t_message = -1
       integer(hid_t) :: d_run(n_run_values) = -1
-      integer(hid_t) :: d_el(15) = -1, d_node(5) = -1
+      integer(hid_t) :: d_el(size(element_metric_names)) = -1, d_node(5) = -1
       integer :: ne = 0, nn = 0, n_runs = 0
       integer, allocatable :: status(:)      !< as in the file once committed
       integer, allocatable :: batch(:)       !< runs written but not committed
