@@ -9,8 +9,9 @@
 !>   constraints_rhs: in the RHS before the elements' torques (t_now), their
 !>     t_now; after the elements' torques, the constraint
 !>     torques (added to self%torque and el_torque, handed to the elements as
-!>     lam); with dydt, after the nodes' derivatives, the exact accelerations of
-!>     the clustered nodes into dydt;
+!>     lam; a lossy row's dissipation into cn%loss, D-97); with dydt, after
+!>     the nodes' derivatives, the exact accelerations of the clustered nodes
+!>     into dydt;
 !>   constraints_settle: at an event (and at the run start), with `project`
 !>     the speeds of the current stuck clusters made exact (before the modes
 !>     change); else the rows rebuilt from the new modes, speeds made
@@ -118,13 +119,15 @@ contains
          end associate
       end do
       call cn_solve(self%cn)
+      self%cn%loss = 0.0_wp
       do r = 1, self%cn%m
          i = self%cn%row_el(r)
          k = self%cn%row_k(r)
          self%elements(i)%e%con%lam(k) = self%cn%lam(r)
          do p = 1, self%cn%row_np(r)
-            tc = self%cn%row_g(p, r)*self%cn%lam(r)
+            tc = self%cn%row_c(p, r)*self%cn%row_g(p, r)*self%cn%lam(r)
             nd = self%cn%node(self%cn%row_slot(p, r))
+            if (self%cn%lossy) self%cn%loss = self%cn%loss - (tc - self%cn%row_g(p, r)*self%cn%lam(r))*self%omega(nd)
             self%torque(nd) = self%torque(nd) + tc
             if (p <= 2) self%el_torque(p, i) = self%el_torque(p, i) + tc
          end do
