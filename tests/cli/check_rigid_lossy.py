@@ -14,6 +14,8 @@ RK4 is exact up to roundoff: the tolerances below are roundoff's, 1e-9):
 - held: T2 back-drives b while T1 on a lies within the band
   -T2 rho/eta_f <= T1 <= -eta_b T2 rho: both speeds stay exactly 0 (the losses hold
   it); just outside the band on either side it moves at the closed form above;
+- the flow turning while moving (a torque step on the left: forward, backward from the
+  step, stick, forward back) under rk4, cvode-bdf and arkode-dp, its events located;
 - a coast: both spinning, a constant torque against the left's motion, no load on the
   right: backward (the right's inertia drives the left) at the closed form until the speeds
   reach zero at t* = w2(0)/|a2|, a stick there, then forward (the left drives) the other
@@ -54,17 +56,20 @@ GEAR = (f"type = 'rigid_lossy_gear', rb_driver = {R1}, rb_driven = {R2}, "
         f"efficiency_forward = {EF}, efficiency_backward = {EB}")
 
 
-def simulate(tmp, name, element, t1, t2, t_end=0.5, w0=None, dt=1.0e-4):
+def simulate(tmp, name, element, t1, t2, t_end=0.5, w0=None, dt=1.0e-4, load_a=None):
+    integ = name.split('_', 1)[1] if name.startswith('turn_') else 'rk4'
     deck = os.path.join(tmp, name + '.nml')
     with open(deck, 'w') as f:
-        f.write(f"&run title = '{name}', units = 'si', t_end = {t_end}, dt = {dt}, integrator = 'rk4', "
+        f.write(f"&run title = '{name}', units = 'si', t_end = {t_end}, dt = {dt}, integrator = '{integ}', "
                 "output_interval = 1.0e-3 /\n")
         f.write(f"&node id = 'a', type = 'inertia', inertia = {J1} /\n")
         f.write(f"&node id = 'b', type = 'inertia', inertia = {J2} /\n")
         if w0 is not None:
             f.write(f"&initial node = 'a', speed = {w0} /\n&initial node = 'b', speed = {w0 * RHO} /\n")
         f.write(f"&element id = 'g', left = 'a', right = 'b', {element} /\n")
-        if t1 != 0.0:
+        if load_a is not None:
+            f.write(f"&load node = 'a', {load_a} /\n")
+        elif t1 != 0.0:
             f.write(f"&load node = 'a', kind = 'constant', value = {t1} /\n")
         if t2 != 0.0:
             f.write(f"&load node = 'b', kind = 'constant', value = {t2} /\n")
@@ -148,6 +153,25 @@ with tempfile.TemporaryDirectory() as tmp:
         check(f'coast: a stick at t* ({sticks} vs {t_star:.9f}, to 1e-9 s)',
               len(sticks) >= 1 and abs(sticks[0] - t_star) <= 1e-9)
         ledger('coast', res)
+
+    # the flow turns while moving: spinning, the left's torque steps from +0.5 to -0.5 at
+    # 0.1 s: forward, then backward from the step (a flow_backward row there), to rest, stick
+    # and forward the other way; every integrator family the same to 1e-9
+    w1 = w0 * RHO + a2_forward(0.5, 0.0) * 0.1
+    t_star = 0.1 + w1 / -a2_backward(-0.5, 0.0)
+    want = a2_forward(-0.5, 0.0) * (2.0 - t_star)
+    for integ in ('rk4', 'cvode-bdf', 'arkode-dp'):
+        res = simulate(tmp, f'turn_{integ}', GEAR, 0.0, 0.0, t_end=2.0, w0=w0,
+                       load_a="kind = 'step', value0 = 0.5, value1 = -0.5, t_step = 0.1")
+        if res is None:
+            continue
+        w = res['omega'][-1]
+        kinds, times = list(res['kinds']), res['ev_t']
+        check(f'turn ({integ}): w_b(2) {w[1]:.12g} = {want:.12g} (rel {abs(w[1] / want - 1):.1e} <= 1e-9), '
+              f'events {kinds} at {times} = [flow_backward 0.1, stick t* {t_star:.9f}, slip_forward t*]',
+              abs(w[1] / want - 1) <= 1e-9 and kinds == [10, 5, 6] and abs(times[0] - 0.1) <= 1e-9
+              and abs(times[1] - t_star) <= 1e-9)
+        ledger(f'turn ({integ})', res)
 
     # joined to another rigid element: b split into two halves joined by a rigid_join (the
     # cluster's weights, D-97): the same forward motion, ratio 1 bit for bit across the join
