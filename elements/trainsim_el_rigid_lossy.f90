@@ -20,7 +20,7 @@ module trainsim_el_rigid_lossy
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_ratio
    use trainsim_element, only: element_t
    use trainsim_el_rigid, only: rigid_gear_t
-   use trainsim_el_lossy_gear, only: get_efficiency, flow_forward, flow_backward, flow_hold_left
+   use trainsim_el_lossy_gear, only: read_efficiencies, flow_forward, flow_backward, flow_hold_left
    implicit none
    private
 
@@ -67,18 +67,7 @@ contains
          call fatal_error(err, grp%where('rb_driven')//': error: base radius must be > 0, got '//str(self%r2), err_input)
          return
       end if
-      if (grp%has('efficiency')) then
-         if (grp%holds('efficiency_forward') .or. grp%holds('efficiency_backward')) then
-            call fatal_error(err, grp%where('efficiency')//': error: give efficiency, or efficiency_forward and '// &
-                             'efficiency_backward, not both', err_input)
-            return
-         end if
-         call get_efficiency(grp, 'efficiency', self%eta_f, .false., err); if (allocated(err)) return
-         self%eta_b = self%eta_f
-      else
-         call get_efficiency(grp, 'efficiency_forward', self%eta_f, .false., err); if (allocated(err)) return
-         call get_efficiency(grp, 'efficiency_backward', self%eta_b, .false., err); if (allocated(err)) return
-      end if
+      call read_efficiencies(grp, self%eta_f, self%eta_b, err); if (allocated(err)) return
       self%con%on = .true.
       self%con%rigid = .false.   ! (its held mode adds a row: not merged in the RK4 advice, D-86)
       call self%set_flow(flow_hold_left)
@@ -216,11 +205,7 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: disp, force
       integer, intent(out) :: contact, pairs
-      associate (u1 => wl, u2 => wr)
-      end associate
-      disp = self%r1*thl - self%r2*thr
-      force = -self%con%lam(1)
-      contact = 1
+      call self%rigid_gear_t%status(thl, wl, thr, wr, disp, force, contact, pairs)
       pairs = self%flow
    end subroutine rl_status
 
