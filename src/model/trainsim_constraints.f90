@@ -374,7 +374,11 @@ contains
       do r = 1, cn%m
          do p = 1, cn%row_np(r)
             s = cn%row_slot(p, r)
-            cn%acc(s) = cn%acc(s) + cn%row_c(p, r)*cn%row_g(p, r)*cn%lam(r)
+            if (cn%lossy) then
+               cn%acc(s) = cn%acc(s) + cn%row_c(p, r)*cn%row_g(p, r)*cn%lam(r)
+            else
+               cn%acc(s) = cn%acc(s) + cn%row_g(p, r)*cn%lam(r)
+            end if
          end do
       end do
       do s = 1, cn%nc
@@ -404,8 +408,13 @@ contains
             den = 0.0_wp
             do s = 1, cn%nc
                if (cn%cl(s) /= c) cycle
-               num = num + cn%rho(s)*cn%fw(s)*cn%jn(s)*cn%afree(s)
-               den = den + cn%rho(s)**2*cn%fw(s)*cn%jn(s)
+               if (cn%lossy) then                       ! (weights f: D-97)
+                  num = num + cn%rho(s)*cn%fw(s)*cn%jn(s)*cn%afree(s)
+                  den = den + cn%rho(s)**2*cn%fw(s)*cn%jn(s)
+               else
+                  num = num + cn%rho(s)*cn%jn(s)*cn%afree(s)
+                  den = den + cn%rho(s)**2*cn%jn(s)
+               end if
             end do
             num = num/den
          end if

@@ -125,9 +125,12 @@ contains
          k = self%cn%row_k(r)
          self%elements(i)%e%con%lam(k) = self%cn%lam(r)
          do p = 1, self%cn%row_np(r)
-            tc = self%cn%row_c(p, r)*self%cn%row_g(p, r)*self%cn%lam(r)
+            tc = self%cn%row_g(p, r)*self%cn%lam(r)
             nd = self%cn%node(self%cn%row_slot(p, r))
-            if (self%cn%lossy) self%cn%loss = self%cn%loss - (tc - self%cn%row_g(p, r)*self%cn%lam(r))*self%omega(nd)
+            if (self%cn%lossy) then                          ! a lossy row's scale and work (D-97)
+               self%cn%loss = self%cn%loss - (self%cn%row_c(p, r) - 1.0_wp)*tc*self%omega(nd)
+               tc = self%cn%row_c(p, r)*tc
+            end if
             self%torque(nd) = self%torque(nd) + tc
             if (p <= 2) self%el_torque(p, i) = self%el_torque(p, i) + tc
          end do
