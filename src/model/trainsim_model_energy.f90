@@ -32,7 +32,7 @@ contains
       pin = 0.0_wp
       do i = 1, size(self%fl)
          l = self%fl(i)%node
-         if (.not. in_der(l) .or. self%fn(l)%kind == nk_held) cycle
+         if (.not. in_der(l)) cycle   ! (on a held node too: the drive's power below counts it against)
          if (self%fl(i)%const) then
             pin = pin + self%fl(i)%v*self%omega(l)
          else

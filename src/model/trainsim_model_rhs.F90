@@ -158,10 +158,10 @@ contains
       end do
       if (self%loads_vary .or. self%any_needs_loads) call loads_varying(self, t)
       if (track) then
-         ! power of the external loads on free nodes (before the elements add to self%torque)
+         ! power of the external loads (before the elements add to self%torque); on a
+         ! held node the drive's power below counts it against: the drive takes it
          do i = 1, size(self%fl)
             l = self%fl(i)%node
-            if (self%fn(l)%kind == nk_held) cycle
             if (self%fl(i)%const) then
                pin = pin + self%fl(i)%v*self%omega(l)
             else
