@@ -31,7 +31,7 @@ module trainsim_el_lossy_gear
    private
 
    public :: lossy_gear_t, new_lossy_gear, flow_forward, flow_backward, flow_neutral, &
-             read_mesh, get_efficiency, flow_hold_left
+             read_mesh, get_efficiency, flow_hold_left, read_efficiencies
 
    !> Power-flow modes.
    integer, parameter :: flow_neutral = 0, flow_forward = 1, flow_backward = -1, flow_hold_left = 2
@@ -112,20 +112,29 @@ contains
                           err_input)
          return
       end if
+      call read_efficiencies(grp, self%eta_f, self%eta_b, err); if (allocated(err)) return
+      call read_mesh(self, grp, units, err)
+   end subroutine lossy_configure
+
+   !> One efficiency (`efficiency`, both ways) or the two (`efficiency_forward`,
+   !> `efficiency_backward`), each in (0, 1] (also `rigid_lossy_gear`'s keys).
+   subroutine read_efficiencies(grp, eta_f, eta_b, err)
+      type(deck_group_t), intent(inout) :: grp
+      real(wp), intent(out) :: eta_f, eta_b
+      type(error_t), allocatable, intent(out) :: err
       if (grp%has('efficiency')) then
          if (grp%holds('efficiency_forward') .or. grp%holds('efficiency_backward')) then
             call fatal_error(err, grp%where('efficiency')//': error: give efficiency, or efficiency_forward and '// &
                              'efficiency_backward, not both', err_input)
             return
          end if
-         call get_efficiency(grp, 'efficiency', self%eta_f, .false., err); if (allocated(err)) return
-         self%eta_b = self%eta_f
+         call get_efficiency(grp, 'efficiency', eta_f, .false., err); if (allocated(err)) return
+         eta_b = eta_f
       else
-         call get_efficiency(grp, 'efficiency_forward', self%eta_f, .false., err); if (allocated(err)) return
-         call get_efficiency(grp, 'efficiency_backward', self%eta_b, .false., err); if (allocated(err)) return
+         call get_efficiency(grp, 'efficiency_forward', eta_f, .false., err); if (allocated(err)) return
+         call get_efficiency(grp, 'efficiency_backward', eta_b, .false., err); if (allocated(err)) return
       end if
-      call read_mesh(self, grp, units, err)
-   end subroutine lossy_configure
+   end subroutine read_efficiencies
 
    !> An efficiency key: in (0, 1], or in (-1, 1] with `may_lock` (a backward
    !> efficiency <= 0 is a self-locking pair).

@@ -9,6 +9,8 @@
 !> whose guards in its current mode read its ports' accelerations sets
 !> `want_acc`; the model then evaluates a RHS before its guards and leaves each
 !> port's acceleration at (t, y) in acc(p) (a side that stops or starts, D-91).
+!> A lossy row (the rigid lossy gear, D-97) scales the torque on its ports:
+!> port p gets c(k, p) g(k, p) lam(k) (c = 1: an ideal row, the default).
 module trainsim_constraint_rows
    use trainsim_kinds, only: wp
    implicit none
@@ -27,6 +29,7 @@ module trainsim_constraint_rows
       real(wp) :: g(max_constraints, max_con_ports) = 0.0_wp   !< g(k, p): row k over the ports
       real(wp) :: t_now = 0.0_wp                               !< time of the model's evaluation
       real(wp) :: lam(max_constraints) = 0.0_wp                !< row k's constraint torque
+      real(wp) :: c(max_constraints, max_con_ports) = 1.0_wp   !< c(k, p): torque scale of a lossy row (D-97)
       logical :: want_acc = .false.                            !< the guards read acc (this mode)
       real(wp) :: acc(max_con_ports) = 0.0_wp                  !< port p's acceleration (want_acc)
    end type constraint_rows_t

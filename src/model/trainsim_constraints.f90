@@ -17,6 +17,13 @@
 !> stuck elements, rank deficiency of G M^-1 G^T) are dropped: they carry no
 !> torque (lam = 0), the others carry the load.
 !>
+!> Lossy rows (the rigid lossy gear, D-97): port p of row r gets c_rp g_rp lam_r
+!> (H = C.G), so lam solves G M^-1 H^T lam = -G a, factorised by LU (no
+!> pivoting, the same dropping) when any row is lossy, and a cluster's exact
+!> acceleration weighs each slot by f, f_a c_ra = f_b c_rb along its rows:
+!> alpha = sum f rho J a / sum f rho^2 J (the lossy row's work removed).
+!> Without a lossy row every f and c is 1 and nothing changes (bit for bit).
+!>
 !> Plain arrays, sized once by `cn_setup`; nothing here allocates after it.
 !> The elements declare their rows in their `con` (trainsim_constraint_rows).
 module trainsim_constraints
@@ -40,6 +47,9 @@ module trainsim_constraints
       integer, allocatable :: row_el(:), row_k(:), row_np(:)
       integer, allocatable :: row_slot(:, :)     !< (max_ports, row): slot of each port's node
       real(wp), allocatable :: row_g(:, :)       !< (max_ports, row)
+      real(wp), allocatable :: row_c(:, :)       !< (max_ports, row): torque scale (lossy row; else 1)
+      logical :: lossy = .false.                 !< a row with c /= 1: LU, not Cholesky
+      real(wp) :: loss = 0.0_wp                  !< power the lossy rows dissipate (set by the model's RHS)
       logical, allocatable :: keep(:)            !< independent row (else dropped, lam = 0)
       real(wp), allocatable :: chol(:, :)        !< Cholesky factor of G M^-1 G^T (kept rows)
       real(wp), allocatable :: lam(:), b(:)
@@ -49,6 +59,7 @@ module trainsim_constraints
       !> per slot: inverse inertia (0 held/fixed), inertia, acceleration without
       !> constraints (held: prescribed), acceleration with them, speed ratio
       real(wp), allocatable :: inv_j(:), jn(:), afree(:), acc(:), rho(:), w(:)
+      real(wp), allocatable :: fw(:)             !< per slot: the weight f of a lossy cluster (else 1)
       integer, allocatable :: cl(:)              !< per slot: its cluster
       integer :: ncl = 0
       integer, allocatable :: cl_ref(:)          !< per cluster: its held slot (0: free)
@@ -77,12 +88,12 @@ contains
       if (allocated(cn%row_el)) deallocate (cn%row_el, cn%row_k, cn%row_np, cn%row_slot, cn%row_g, cn%keep, &
                                             cn%chol, cn%lam, cn%b, cn%node, cn%slot, cn%inv_j, cn%jn, cn%afree, &
                                             cn%acc, cn%rho, cn%w, cn%cl, cn%cl_ref, cn%cl_exact, cn%cl_locked, cn%scratch, &
-                                            cn%node_dydt)
+                                            cn%node_dydt, cn%row_c, cn%fw)
       allocate (cn%row_el(nmax), cn%row_k(nmax), cn%row_np(nmax), cn%row_slot(max_ports, nmax), &
-                cn%row_g(max_ports, nmax), cn%keep(nmax), cn%chol(nmax, nmax), cn%lam(nmax), cn%b(nmax))
+                cn%row_g(max_ports, nmax), cn%row_c(max_ports, nmax), cn%keep(nmax), cn%chol(nmax, nmax), cn%lam(nmax), cn%b(nmax))
       allocate (cn%node(ns), cn%slot(n_nodes), cn%inv_j(ns), cn%jn(ns), cn%afree(ns), cn%acc(ns), cn%rho(ns), cn%w(ns), &
                 cn%cl(ns), cn%cl_ref(ns), cn%cl_exact(ns), cn%cl_locked(ns), cn%scratch(max(1, n_y)), &
-                cn%node_dydt(max(1, n_y)))
+                cn%node_dydt(max(1, n_y)), cn%fw(ns))
       cn%slot = 0
       cn%lam = 0.0_wp
       cn%scratch = 0.0_wp
@@ -101,6 +112,7 @@ contains
       m = 0
       changed = .false.
       cn%acc_wanted = .false.
+      cn%lossy = .false.
       do s = 1, cn%nc
          cn%slot(cn%node(s)) = 0
       end do
@@ -123,12 +135,17 @@ contains
                   changed = .true.
                else if (any(cn%row_g(1:np, m) /= e%con%g(k, 1:np))) then
                   changed = .true.
+               else if (any(cn%row_c(1:np, m) /= e%con%c(k, 1:np))) then
+                  changed = .true.
                end if
                cn%row_el(m) = i
                cn%row_k(m) = k
                cn%row_np(m) = np
                cn%row_g(:, m) = 0.0_wp
                cn%row_g(1:np, m) = e%con%g(k, 1:np)
+               cn%row_c(:, m) = 1.0_wp
+               cn%row_c(1:np, m) = e%con%c(k, 1:np)
+               if (any(cn%row_c(1:np, m) /= 1.0_wp)) cn%lossy = .true.
                cn%row_slot(:, m) = 0
                do p = 1, np
                   nd = e%port(p)
@@ -151,7 +168,11 @@ contains
    subroutine cn_factor(cn)
       type(constraint_set_t), intent(inout) :: cn
       call clusters(cn)
-      call factor(cn)
+      if (cn%lossy) then
+         call factor_lu(cn)
+      else
+         call factor(cn)
+      end if
    end subroutine cn_factor
 
    !> Join the slots into clusters over the rows and carry the speed ratios.
@@ -159,7 +180,7 @@ contains
       type(constraint_set_t), intent(inout) :: cn
       integer :: r, p, a, b, s, c, pass, nz
       logical :: more
-      real(wp) :: ga, gb, tol
+      real(wp) :: ga, gb, tol, ca, cb
       ! cluster = smallest slot reachable (label propagation: m, nc are small)
       do s = 1, cn%nc
          cn%cl(s) = s
@@ -185,6 +206,7 @@ contains
       cn%cl_exact(1:cn%nc) = .true.
       cn%cl_locked(1:cn%nc) = .false.
       cn%rho(1:cn%nc) = 0.0_wp
+      cn%fw(1:cn%nc) = 1.0_wp
       ! the reference of each cluster: its held slot (a second one: not exact), else its first slot
       do s = 1, cn%nc
          c = cn%cl(s)
@@ -223,16 +245,20 @@ contains
                cycle
             end if
             ga = cn%row_g(a, r); gb = cn%row_g(b, r)
+            ca = cn%row_c(a, r); cb = cn%row_c(b, r)
             a = cn%row_slot(a, r); b = cn%row_slot(b, r)
             if (cn%rho(a) /= 0.0_wp .and. cn%rho(b) == 0.0_wp) then
                cn%rho(b) = -ga/gb*cn%rho(a)
+               if (ca /= cb) cn%fw(b) = cn%fw(a)*ca/cb          ! f_a c_a = f_b c_b (D-97)
                more = .true.
             else if (cn%rho(b) /= 0.0_wp .and. cn%rho(a) == 0.0_wp) then
                cn%rho(a) = -gb/ga*cn%rho(b)
+               if (ca /= cb) cn%fw(a) = cn%fw(b)*cb/ca
                more = .true.
             else if (cn%rho(a) /= 0.0_wp .and. pass > 1) then ! both known: a loop; consistent ratios?
                tol = 1.0e-12_wp*(abs(ga*cn%rho(a)) + abs(gb*cn%rho(b)))
                if (abs(ga*cn%rho(a) + gb*cn%rho(b)) > tol) cn%cl_locked(cn%cl(a)) = .true.
+               if (abs(cn%fw(a)*ca - cn%fw(b)*cb) > 1.0e-12_wp*abs(cn%fw(a)*ca)) cn%cl_exact(cn%cl(a)) = .false.
             end if
          end do
          if (.not. more .and. pass > 1) exit
@@ -290,6 +316,46 @@ contains
       end associate
    end subroutine factor
 
+   !> G M^-1 H^T (H = C.G, not symmetric: a lossy row, D-97) factorised by LU
+   !> without pivoting, rows dropped as in `factor` (pivot below rank_tol of the
+   !> largest diagonal): L unit lower and U in cn%chol.
+   subroutine factor_lu(cn)
+      type(constraint_set_t), intent(inout) :: cn
+      integer :: r, q, p, pp, i
+      real(wp) :: sum_, dmax, l
+      associate (a => cn%chol, m => cn%m)
+         do r = 1, m
+            do q = 1, m
+               sum_ = 0.0_wp
+               do p = 1, cn%row_np(r)
+                  do pp = 1, cn%row_np(q)
+                     if (cn%row_slot(p, r) /= cn%row_slot(pp, q)) cycle
+                     sum_ = sum_ + cn%row_g(p, r)*cn%inv_j(cn%row_slot(p, r))*cn%row_c(pp, q)*cn%row_g(pp, q)
+                  end do
+               end do
+               a(r, q) = sum_
+            end do
+         end do
+         dmax = 0.0_wp
+         do r = 1, m
+            dmax = max(dmax, abs(a(r, r)))
+         end do
+         do r = 1, m
+            cn%keep(r) = abs(a(r, r)) > rank_tol*dmax .and. dmax > 0.0_wp
+            if (.not. cn%keep(r)) then
+               a(r, 1:m) = 0.0_wp
+               a(1:m, r) = 0.0_wp
+               cycle
+            end if
+            do i = r + 1, m
+               l = a(i, r)/a(r, r)
+               a(i, r) = l
+               a(i, r + 1:m) = a(i, r + 1:m) - l*a(r, r + 1:m)
+            end do
+         end do
+      end associate
+   end subroutine factor_lu
+
    !> lam from afree (per slot; held slots: their prescribed acceleration), and
    !> acc per slot (exact per cluster where the cluster allows, see above).
    subroutine cn_solve(cn)
@@ -308,7 +374,11 @@ contains
       do r = 1, cn%m
          do p = 1, cn%row_np(r)
             s = cn%row_slot(p, r)
-            cn%acc(s) = cn%acc(s) + cn%row_g(p, r)*cn%lam(r)
+            if (cn%lossy) then
+               cn%acc(s) = cn%acc(s) + cn%row_c(p, r)*cn%row_g(p, r)*cn%lam(r)
+            else
+               cn%acc(s) = cn%acc(s) + cn%row_g(p, r)*cn%lam(r)
+            end if
          end do
       end do
       do s = 1, cn%nc
@@ -338,8 +408,13 @@ contains
             den = 0.0_wp
             do s = 1, cn%nc
                if (cn%cl(s) /= c) cycle
-               num = num + cn%rho(s)*cn%jn(s)*cn%afree(s)
-               den = den + cn%rho(s)**2*cn%jn(s)
+               if (cn%lossy) then                       ! (weights f: D-97)
+                  num = num + cn%rho(s)*cn%fw(s)*cn%jn(s)*cn%afree(s)
+                  den = den + cn%rho(s)**2*cn%fw(s)*cn%jn(s)
+               else
+                  num = num + cn%rho(s)*cn%jn(s)*cn%afree(s)
+                  den = den + cn%rho(s)**2*cn%jn(s)
+               end if
             end do
             num = num/den
          end if
@@ -359,6 +434,10 @@ contains
       type(constraint_set_t), intent(inout) :: cn
       integer :: r, k
       real(wp) :: s
+      if (cn%lossy) then
+         call lu_solve(cn)
+         return
+      end if
       associate (x => cn%lam, b => cn%b, a => cn%chol)
          do r = 1, cn%m
             if (.not. cn%keep(r)) then
@@ -382,6 +461,32 @@ contains
       end associate
    end subroutine chol_solve
 
+   !> lam = (G M^-1 H^T)^-1 b by `factor_lu`'s L and U (dropped rows: lam = 0).
+   subroutine lu_solve(cn)
+      type(constraint_set_t), intent(inout) :: cn
+      integer :: r, k
+      real(wp) :: s
+      associate (x => cn%lam, b => cn%b, a => cn%chol)
+         do r = 1, cn%m
+            x(r) = 0.0_wp
+            if (.not. cn%keep(r)) cycle
+            s = b(r)
+            do k = 1, r - 1
+               if (cn%keep(k)) s = s - a(r, k)*x(k)
+            end do
+            x(r) = s
+         end do
+         do r = cn%m, 1, -1
+            if (.not. cn%keep(r)) cycle
+            s = x(r)
+            do k = r + 1, cn%m
+               if (cn%keep(k)) s = s - a(r, k)*x(k)
+            end do
+            x(r) = s/a(r, r)
+         end do
+      end associate
+   end subroutine lu_solve
+
    !> Speeds cn%w (per slot) made to satisfy the constraints: per exact cluster its
    !> held reference's times rho (locked: 0), a free cluster its momentum-
    !> conserving common speed (sum rho J w / sum rho^2 J) times rho; any other
@@ -401,7 +506,7 @@ contains
       do r = 1, cn%m
          do p = 1, cn%row_np(r)
             s = cn%row_slot(p, r)
-            cn%w(s) = cn%w(s) + cn%inv_j(s)*cn%row_g(p, r)*cn%lam(r)
+            cn%w(s) = cn%w(s) + cn%inv_j(s)*cn%row_c(p, r)*cn%row_g(p, r)*cn%lam(r)
          end do
       end do
       call exact_clusters(cn, .true.)                  ! (afree holds the speeds before)

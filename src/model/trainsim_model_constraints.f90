@@ -9,8 +9,9 @@
 !>   constraints_rhs: in the RHS before the elements' torques (t_now), their
 !>     t_now; after the elements' torques, the constraint
 !>     torques (added to self%torque and el_torque, handed to the elements as
-!>     lam); with dydt, after the nodes' derivatives, the exact accelerations of
-!>     the clustered nodes into dydt;
+!>     lam; a lossy row's dissipation into cn%loss, D-97); with dydt, after
+!>     the nodes' derivatives, the exact accelerations of the clustered nodes
+!>     into dydt;
 !>   constraints_settle: at an event (and at the run start), with `project`
 !>     the speeds of the current stuck clusters made exact (before the modes
 !>     change); else the rows rebuilt from the new modes, speeds made
@@ -118,6 +119,7 @@ contains
          end associate
       end do
       call cn_solve(self%cn)
+      self%cn%loss = 0.0_wp
       do r = 1, self%cn%m
          i = self%cn%row_el(r)
          k = self%cn%row_k(r)
@@ -125,6 +127,10 @@ contains
          do p = 1, self%cn%row_np(r)
             tc = self%cn%row_g(p, r)*self%cn%lam(r)
             nd = self%cn%node(self%cn%row_slot(p, r))
+            if (self%cn%lossy) then                          ! a lossy row's scale and work (D-97)
+               self%cn%loss = self%cn%loss - (self%cn%row_c(p, r) - 1.0_wp)*tc*self%omega(nd)
+               tc = self%cn%row_c(p, r)*tc
+            end if
             self%torque(nd) = self%torque(nd) + tc
             if (p <= 2) self%el_torque(p, i) = self%el_torque(p, i) + tc
          end do

@@ -196,7 +196,10 @@ contains
          self%torque(l) = self%torque(l) + tl
          self%torque(r) = self%torque(r) + tr
       end do
-      if (nc > 0) call constraints_rhs(self, t, y)                     ! constraint torques (D-81)
+      if (nc > 0) then
+         call constraints_rhs(self, t, y)                                ! constraint torques (D-81)
+         if (track .and. self%cn%lossy) pdiss = pdiss + self%cn%loss      ! a lossy row's (D-97)
+      end if
       do i = 1, size(self%fn)
          associate (nd => self%fn(i))
             select case (nd%kind)

@@ -29,6 +29,7 @@ module trainsim_registry
    use trainsim_el_lossy_gear, only: new_lossy_gear
    use trainsim_el_worm_gear, only: new_worm_gear
    use trainsim_el_rigid, only: new_rigid_gear, new_rigid_join
+   use trainsim_el_rigid_lossy, only: new_rigid_lossy_gear
    implicit none
    private
 
@@ -143,6 +144,9 @@ contains
                          new_worm_gear), &
              element_row('rigid_gear', '', 'gear pair without compliance: the constraint r1 w_l = r2 w_r', &
                          'rb_driver = 1.0, rb_driven = 2.0', 'rb_driver rb_driven', '', new_rigid_gear), &
+             element_row('rigid_lossy_gear', '', 'rigid gear pair with mesh efficiencies: power flow, held', &
+                         'rb_driver = 1.0, rb_driven = 2.0, efficiency_forward = 0.95, efficiency_backward = 0.9', &
+                         'rb_driver rb_driven efficiency_forward efficiency_backward', '', new_rigid_lossy_gear), &
              element_row('rigid_join', '', 'two nodes one rigid body: the constraint w_l = w_r', '', '', '', &
                          new_rigid_join) &
              ]
