@@ -158,7 +158,8 @@ contains
          end do
          dx = -g
          call dgesv(n, 1, a, n, ipiv, dx, n, info)
-         if (info /= 0 .or. .not. all(abs(dx) <= huge(1.0_wp))) then
+         ! (a step of 1e8 state scales: M - I singular to the accuracy of M)
+         if (info /= 0 .or. .not. all(abs(dx) <= 1.0e8_wp*res%scale)) then
             res%status = shoot_singular
             res%message = 'M - I is singular at Newton step '//str(it)//' (a Floquet multiplier at 1: a fold, '// &
                           'or a free rigid-body rotation with no node of prescribed speed)'
@@ -180,7 +181,12 @@ contains
             if (rt < (1.0_wp - 1.0e-4_wp*lam)*r .or. lam < 1.0_wp/64.0_wp) exit
             lam = 0.5_wp*lam
          end do
-         if (.not. rt < (1.0_wp - 1.0e-4_wp*lam)*r) then
+         if (.not. rt < (1.0_wp - 1.0e-4_wp*lam)*r .and. r < 1.0e-12_wp) then
+            res%status = shoot_no_orbit
+            res%message = 'the residual stalled at '//str(r, 3)//' of the state scale, the rounding floor of the '// &
+                          'period map, above the tolerance '//str(opt%tol, 3)//' (ask a looser one)'
+            exit
+         else if (.not. rt < (1.0_wp - 1.0e-4_wp*lam)*r) then
             res%status = shoot_no_orbit
             res%message = 'no periodic orbit near the start: Newton step '//str(it)//' could not lower the '// &
                           'residual '//str(r, 3)//' of the state scale even at 1/64 of the step (the start is '// &
