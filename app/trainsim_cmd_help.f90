@@ -113,10 +113,9 @@ contains
       case ('periodic')
          write (unit, '(a)') 'usage: trainsim periodic DECK [--period-count K] [--period T] [--transient N] [--tol TOL]', &
             '                         [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
-            'The periodic steady state of the train under periodic forcing (a mesh frequency, a sine load),', &
-            'found by shooting: Newton on the period map P(x) - x from the end of a transient, the monodromy', &
-            'by central differences (docs/periodic.md). Prints the convergence, the orbit''s state at t0,', &
-            'its Floquet multipliers and stability, the grazing check and the metrics of the orbit''s run.', '', &
+            'The periodic state under periodic forcing (a mesh frequency, a sine load) by shooting: Newton on', &
+            'P(x) - x after a transient, the monodromy by central differences (docs/periodic.md). Prints the', &
+            'convergence, the orbit, its Floquet multipliers and stability, grazing, the orbit''s metrics.', '', &
             '  --period-count K   the orbit repeats after K forcing periods (default 1; K > 1: subharmonic)', &
             '  --period T         the forcing period in s (default: &run settle_period, else the mesh', &
             '                     period of the first gear pair, else the period of the first sine load)', &
