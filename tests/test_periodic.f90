@@ -14,7 +14,9 @@ program test_periodic
    use trainsim_observer, only: run_result_t
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_shooting, only: shoot_options_t, shoot_result_t, shoot, shoot_converged
-   use trainsim_floquet, only: floquet_multipliers
+   use trainsim_floquet, only: floquet_multipliers, stability_of
+   use trainsim_orbit, only: orbit_run, orbit_grazing, graze_tol
+   use trainsim_sink, only: null_sink_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check, check_close
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
    implicit none
@@ -26,6 +28,8 @@ program test_periodic
    call suite_begin('periodic orbits by shooting: closed forms and the Table 5.5 rig')
    call test_linear_oscillator_closed_form()
    call test_dead_zone_oscillator_segments()
+   call test_two_periods_square_the_multipliers()
+   call test_grazing_gap_closed_form()
    call test_ghm_rig_equals_settled_run(8.0e-6_wp)
    call suite_end()
 
@@ -95,21 +99,30 @@ contains
    end function matching
 
    !> Shoot the oscillator's orbit (b the half clearance).
-   subroutine shoot_oscillator(b, m, res, mu, w)
+   subroutine shoot_oscillator(b, m, res, mu, w, k, grazing_gap)
       real(wp), intent(in) :: b
       type(model_t), intent(out) :: m
       type(shoot_result_t), intent(out) :: res
       complex(wp), allocatable, intent(out) :: mu(:)
       real(wp), intent(out) :: w
+      integer, intent(in), optional :: k
+      !> the grazing check's gap on the orbit's run (orbit_grazing)
+      real(wp), intent(out), optional :: grazing_gap
       type(period_map_t) :: pm
       type(shoot_options_t) :: opt
       type(error_t), allocatable :: err
+      type(run_result_t) :: run
+      type(null_sink_t) :: none
+      real(wp), allocatable :: gap(:)
       real(wp) :: period
+      integer :: kk, worst
+      kk = 1
+      if (present(k)) kk = k
       call oscillator(b, m)
       w = m%loads(1)%torque%omega
       call forcing_period(m, period, err)
       call check('the forcing period is the sine load''s', .not. allocated(err))
-      call pm%setup(m, period, 1, err)
+      call pm%setup(m, period, kk, err)
       call check('the period map sets up', .not. allocated(err))
       call shoot(pm, opt, res, err)
       call check('the shooting ran without an integration error', .not. allocated(err))
@@ -118,8 +131,59 @@ contains
          ', residual ', res%residual
       call floquet_multipliers(res%m, mu, err)
       call check('the multipliers are computed', .not. allocated(err))
+      if (present(grazing_gap)) then
+         call orbit_run(m, pm, res%x, none, run, err)
+         call check('the orbit''s run', .not. allocated(err))
+         call orbit_grazing(m, run, gap, worst)
+         call check('the clearance is the element checked', worst == 2)
+         grazing_gap = gap(2)
+      end if
       call pm%finish()
    end subroutine shoot_oscillator
+
+   !> The linear oscillator's orbit is also an orbit of two periods: shooting over
+   !> k = 2 finds the same state and the squares of the one-period multipliers.
+   subroutine test_two_periods_square_the_multipliers()
+      type(model_t) :: m
+      type(shoot_result_t) :: r1, r2
+      complex(wp), allocatable :: mu1(:), mu2(:)
+      real(wp) :: w
+      integer :: j
+      call test_begin('two_periods_square_the_multipliers')
+      call shoot_oscillator(2.0_wp, m, r1, mu1, w)
+      call shoot_oscillator(2.0_wp, m, r2, mu2, w, k=2)
+      call check_close('angle at t0 (of the angle scale)', r2%x(1)/r1%scale(1), r1%x(1)/r1%scale(1), abs_tol=1.0e-8_wp)
+      call check_close('speed at t0 (of the speed scale)', r2%x(2)/r1%scale(2), r1%x(2)/r1%scale(2), abs_tol=1.0e-8_wp)
+      do j = 1, 2   ! (mu^2 of a conjugate pair keeps the order by |mu|; the imaginary parts may swap)
+         call check_close('|mu_'//str(j)//'(2T)| = |mu_'//str(j)//'(T)|^2', abs(mu2(j)), abs(mu1(j))**2, &
+                          abs_tol=1.0e-8_wp)
+      end do
+      call check_close('Re mu(2T) = Re mu(T)^2', real(mu2(1)), real(mu1(1)**2), abs_tol=1.0e-8_wp)
+      call check_close('|Im mu(2T)| = |Im mu(T)^2|', abs(aimag(mu2(1))), abs(aimag(mu1(1)**2)), abs_tol=1.0e-8_wp)
+      call check('stable', stability_of(mu2) == 'stable')
+   end subroutine test_two_periods_square_the_multipliers
+
+   !> The grazing check against the closed form: the linear orbit's largest angle is
+   !> t0/k + sqrt(p^2 + q^2); with the half clearance b at 1 + 1e-5 times it the orbit
+   !> just fails to touch (gap (b - th_max)/b = 9.99990e-6: grazing), at b = 2 it stays
+   !> 0.065 of b away (not grazing). The run's extremes are samples every dt (1e-4 s):
+   !> off by at most (W dt)^2/8 of the amplitude, 5.4e-8 of b here: checked to 1e-7.
+   subroutine test_grazing_gap_closed_form()
+      type(model_t) :: m
+      type(shoot_result_t) :: res
+      complex(wp), allocatable :: mu(:)
+      real(wp) :: w, p, q, th_max, gap, b
+      call test_begin('grazing_gap_closed_form')
+      call particular(k1, 8.0_wp, p, q)
+      th_max = tq0/k1 + hypot(p, q)
+      b = th_max*(1.0_wp + 1.0e-5_wp)
+      call shoot_oscillator(b, m, res, mu, w, grazing_gap=gap)
+      call check_close('gap of an orbit that just fails to touch', gap, (b - th_max)/b, abs_tol=1.0e-7_wp)
+      call check('reported as grazing (gap <= graze_tol)', gap <= graze_tol)
+      call shoot_oscillator(2.0_wp, m, res, mu, w, grazing_gap=gap)
+      call check_close('gap of an orbit far from its clearance', gap, (2.0_wp - th_max)/2.0_wp, abs_tol=1.0e-7_wp)
+      call check('not grazing', gap > graze_tol)
+   end subroutine test_grazing_gap_closed_form
 
    !> Never in contact (b = 2 rad, amplitude 1.27 rad about 0.6): the orbit is the
    !> linear steady state, th(0) = t0/k + q, w(0) = p W, and the multipliers are
