@@ -82,8 +82,8 @@ contains
       if (allocated(err)) call fail(err)
       write (output_unit, '(a)') 'trainsim periodic: '//deck_path//'  ('//model%title//')'
       write (output_unit, '(a)') 'forcing period T = '//str(period, 10)//' s, orbit of '//str(k)// &
-         ' period(s), from t_start = '//str(model%run%t_start)//' s after a transient of '//str(opt%transient*k)// &
-         ' period(s); integrator '//model%run%integrator//', dt = '//str(model%run%dt)//' s'
+         ' period(s), from t_start = '//str(model%run%t_start)//' s after a transient of at least '// &
+         str(opt%transient*k)//' period(s); integrator '//model%run%integrator//', dt = '//str(model%run%dt)//' s'
       call pm%setup(model, period, k, err)
       if (allocated(err)) call fail(err)
       call shoot(pm, opt, res, err)
@@ -127,7 +127,9 @@ contains
       type(shoot_result_t), intent(in) :: res
       type(shoot_options_t), intent(in) :: opt
       integer :: j
-      write (output_unit, '(a)') 'Newton on P(x) - x (monodromy by central differences), residual of the state scale:'
+      write (output_unit, '(a)') 'Newton on P(x) - x (monodromy by central differences) after '//str(res%transient)// &
+         ' periods of transient (start '//str(res%attempts)//' of at most '//str(opt%retries + 1)// &
+         '), residual of the state scale:'
       do j = 1, size(res%history)
          write (output_unit, '(4x,a,i3,a,es10.3)') 'step', j - 1, ':  ', res%history(j)
       end do

@@ -2,7 +2,8 @@
 !> orbit's k periods as a run history (the run's own layout) and adds the
 !> group /periodic (docs/periodic.md):
 !>   attributes  converged (1/0), status, message, period (s), period_count,
-!>               t0 (s), residual, newton_steps, period_maps, stable (1/0),
+!>               t0 (s), residual, newton_steps, period_maps, transient_periods,
+!>               newton_starts, stable (1/0),
 !>               stability (stable, marginal, unstable),
 !>               max_abs_multiplier, grazing_gap, grazing_element
 !>   datasets    state (the reduced state at t0, one entry per state, with its
@@ -62,6 +63,8 @@ contains
          if (.not. allocated(err)) call put_real_attr(grp, 'residual', res%residual, err)
          if (.not. allocated(err)) call put_int_attr(grp, 'newton_steps', res%newton, err)
          if (.not. allocated(err)) call put_int_attr(grp, 'period_maps', res%maps, err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'transient_periods', res%transient, err)
+         if (.not. allocated(err)) call put_int_attr(grp, 'newton_starts', res%attempts, err)
          if (.not. allocated(err) .and. size(mu) > 0) then
             call put_int_attr(grp, 'stable', merge(1, 0, stability_of(mu) == 'stable'), err)
             if (.not. allocated(err)) call put_str_attr(grp, 'stability', stability_of(mu), err)

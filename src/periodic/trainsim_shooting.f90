@@ -18,11 +18,11 @@ module trainsim_shooting
    private
 
    public :: shoot_options_t, shoot_result_t, shoot, monodromy_i, monodromy_fd
-   public :: shoot_converged, shoot_no_orbit, shoot_budget, shoot_singular, shoot_failed
+   public :: shoot_converged, shoot_no_orbit, shoot_budget, shoot_singular, shoot_failed, shoot_floor
 
    !> shoot_result_t%status
    integer, parameter :: shoot_converged = 0, shoot_no_orbit = 1, shoot_budget = 2, shoot_singular = 3, &
-                         shoot_failed = 4
+                         shoot_failed = 4, shoot_floor = 5
 
    !> The monodromy matrix m = dP/dx at x (px = P(x), already evaluated).
    abstract interface
@@ -37,8 +37,9 @@ module trainsim_shooting
 
    type :: shoot_options_t
       real(wp) :: tol = 1.0e-10_wp     !< of the state scale
-      integer :: max_newton = 40       !< Newton steps
+      integer :: max_newton = 25       !< Newton steps per start
       integer :: transient = 10        !< map applications (k periods each) before the first
+      integer :: retries = 4           !< Newton restarted after 2x more transient (10 -> 30 -> 90 -> ...)
       real(wp) :: fd_step = 1.0e-6_wp  !< central-difference step, of the state scale
    end type shoot_options_t
 
@@ -52,6 +53,8 @@ module trainsim_shooting
       real(wp), allocatable :: history(:)        !< the residual before each Newton step
       integer :: newton = 0                      !< Newton steps taken
       integer :: maps = 0                        !< period maps evaluated (all)
+      integer :: transient = 0                   !< forcing periods of transient before the last Newton start
+      integer :: attempts = 0                    !< Newton starts
    end type shoot_result_t
 
    interface
@@ -103,8 +106,10 @@ contains
    !> The periodic orbit of pm's map near the end of a transient from the deck's
    !> initial state (or from `x_start`): Newton on P(x) - x with `monodromy`
    !> (default monodromy_fd). res%status says whether it converged and, if
-   !> not, res%message why. err: the integration itself failed (a blow-up, an
-   !> event flood) at a state the map was asked about.
+   !> not, res%message why. When Newton finds no orbit near the start or spends
+   !> its budget, the transient goes on (to three times its length so far) and
+   !> Newton starts again, opt%retries times. err: the integration itself failed
+   !> (a blow-up, an event flood) at a state the map was asked about.
    subroutine shoot(pm, opt, res, err, monodromy, x_start)
       class(period_map_t), intent(inout) :: pm
       type(shoot_options_t), intent(in) :: opt
@@ -112,27 +117,52 @@ contains
       type(error_t), allocatable, intent(out) :: err
       procedure(monodromy_i), optional :: monodromy
       real(wp), intent(in), optional :: x_start(:)
-      real(wp), allocatable :: x(:), px(:), g(:), dx(:), xt(:), pt(:), a(:, :)
-      integer, allocatable :: ipiv(:)
-      real(wp) :: r, rt, lam
-      integer :: n, it, i, info, n0
-      n = pm%n
+      real(wp), allocatable :: x(:), xt(:)
+      integer :: attempt, periods, total, n0
       n0 = pm%n_evals
-      allocate (x(n), px(n), g(n), dx(n), xt(n), pt(n), a(n, n), ipiv(n), res%m(n, n))
-      allocate (res%history(0))
       if (present(x_start)) then
          x = x_start
       else
          x = pm%initial()
       end if
-      ! the phase-free start: a short transient
-      if (opt%transient > 0) then
-         call pm%map(x, xt, err, periods=opt%transient*pm%k)
+      allocate (xt(pm%n))
+      periods = opt%transient*pm%k   ! the phase-free start: a short transient
+      total = 0
+      do attempt = 0, opt%retries
+         if (periods > 0) then
+            call pm%map(x, xt, err, periods=periods)
+            if (allocated(err)) return
+            x = xt
+            total = total + periods
+         end if
+         call pm%rephase(x, err)   ! no contact with a memory in progress at t0
          if (allocated(err)) return
-         x = xt
-      end if
-      call pm%rephase(x, err)   ! no contact with a memory in progress at t0
-      if (allocated(err)) return
+         call newton(pm, opt, x, res, err, monodromy)
+         if (allocated(err)) return
+         res%transient = total
+         res%attempts = attempt + 1
+         if (res%status /= shoot_no_orbit .and. res%status /= shoot_budget) exit
+         periods = 2*max(total, pm%k)
+      end do
+      res%maps = pm%n_evals - n0
+   end subroutine shoot
+
+   !> Newton on P(x) - x from x (at pm's t0).
+   subroutine newton(pm, opt, x_start, res, err, monodromy)
+      class(period_map_t), intent(inout) :: pm
+      type(shoot_options_t), intent(in) :: opt
+      real(wp), intent(in) :: x_start(:)
+      type(shoot_result_t), intent(out) :: res
+      type(error_t), allocatable, intent(out) :: err
+      procedure(monodromy_i), optional :: monodromy
+      real(wp), allocatable :: x(:), px(:), g(:), dx(:), xt(:), pt(:), a(:, :)
+      integer, allocatable :: ipiv(:)
+      real(wp) :: r, rt, lam
+      integer :: n, it, i, info
+      n = pm%n
+      allocate (x(n), px(n), g(n), dx(n), xt(n), pt(n), a(n, n), ipiv(n), res%m(n, n))
+      allocate (res%history(0))
+      x = x_start
       call pm%map(x, px, err)
       if (allocated(err)) return
       res%scale = pm%scale(x)
@@ -182,7 +212,7 @@ contains
             lam = 0.5_wp*lam
          end do
          if (.not. rt < (1.0_wp - 1.0e-4_wp*lam)*r .and. r < 1.0e-12_wp) then
-            res%status = shoot_no_orbit
+            res%status = shoot_floor
             res%message = 'the residual stalled at '//str(r, 3)//' of the state scale, the rounding floor of the '// &
                           'period map, above the tolerance '//str(opt%tol, 3)//' (ask a looser one)'
             exit
@@ -206,7 +236,6 @@ contains
          call jacobian(x, px, res%m, err)   ! at the orbit itself
          if (allocated(err)) return
       end if
-      res%maps = pm%n_evals - n0
    contains
       subroutine jacobian(xx, pxx, m, e)
          real(wp), intent(in) :: xx(:), pxx(:)
@@ -222,5 +251,5 @@ contains
                                                                     err_numeric)
          end if
       end subroutine jacobian
-   end subroutine shoot
+   end subroutine newton
 end module trainsim_shooting

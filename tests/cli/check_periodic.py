@@ -6,6 +6,8 @@
   on the unit circle (marginal) and the mesh's pair inside it; -o FILE holds the orbit's run
   (/run_stats, the metrics) and /periodic (converged, the stability, six multipliers: four
   within 1e-6 of the unit circle, two inside, the mesh period);
+- the Table 7.1 train (inputs/two_clearance.nml) converges, restarting Newton after a
+  longer transient where needed;
 - an accelerating free train has no periodic orbit: exit 1, the reason (M - I singular), no
   backtrace; no forcing period: exit 2 naming the deck; bad options: exit 2.
 
@@ -53,6 +55,16 @@ with tempfile.TemporaryDirectory() as tmp:
               list(f.keys()))
         check("the period is the mesh period", abs(g.attrs["period"] - 2 * 3.141592653589793 / (32 * 95.2286)) < 1e-15,
               g.attrs["period"])
+    # the Table 7.1 train: Newton starts again after a longer transient until it converges
+    out2 = os.path.join(tmp, "two.h5")
+    r = run(os.path.abspath("inputs/two_clearance.nml"), "-o", out2)
+    check("the Table 7.1 train's orbit converges (exit 0)", r.returncode == 0, r.stderr[-300:])
+    with h5py.File(out2) as f:
+        g = f["periodic"]
+        check("its residual is within the tolerance", g.attrs["residual"] <= 1e-10, g.attrs["residual"])
+        check("ten multipliers (five free inertias)", len(g["multipliers_abs"][:]) == 10)
+        check("the transient before the last start is recorded", g.attrs["transient_periods"] >= 10 and
+              g.attrs["newton_starts"] >= 1, (g.attrs["transient_periods"], g.attrs["newton_starts"]))
     # no orbit: a free train driven by a mean torque accelerates
     acc = os.path.join(tmp, "acc.nml")
     with open(acc, "w") as fh:
