@@ -37,7 +37,7 @@ contains
          '                                            run can reach (what `run` checks dt against)', &
          '                                --preload   about the static wind-up under the loads (contacts', &
          '                                            closed on their loaded faces; its angles printed)', &
-         '  trainsim periodic DECK [--period-count K] [--period T] [--transient N] [--tol TOL] [-o FILE]', &
+         '  trainsim periodic DECK [--period-count K] [--segments M] [--transient N] [--tol TOL] [-o FILE]', &
          '                                the periodic orbit under periodic forcing by shooting: its', &
          '                                convergence, Floquet multipliers, stability, grazing, metrics', &
          '  trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', &
@@ -111,14 +111,15 @@ contains
             '  -h, --help  this text', '', &
             'exit status: 0 success, 2 bad input or file'
       case ('periodic')
-         write (unit, '(a)') 'usage: trainsim periodic DECK [--period-count K] [--period T] [--transient N] [--tol TOL]', &
-            '                         [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
+         write (unit, '(a)') 'usage: trainsim periodic DECK [--period-count K] [--period T] [--segments M] [--transient N]', &
+            '                         [--tol TOL] [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
             'The periodic state under periodic forcing (a mesh frequency, a sine load) by shooting: Newton on', &
             'P(x) - x after a transient, the monodromy by central differences (docs/periodic.md). Prints the', &
             'convergence, the orbit, its Floquet multipliers and stability, grazing, the orbit''s metrics.', '', &
             '  --period-count K   the orbit repeats after K forcing periods (default 1; K > 1: subharmonic)', &
             '  --period T         the forcing period in s (default: &run settle_period, else the mesh', &
             '                     period of the first gear pair, else the period of the first sine load)', &
+            '  --segments M       multiple shooting: M segments of the K periods (default 1)', &
             '  --transient N      map applications before Newton starts (default 10, K periods each)', &
             '  --tol TOL          convergence: ||P(x) - x|| <= TOL of the state scale (default 1e-10)', &
             '  -o FILE            the orbit''s run as a history, with the group /periodic', &

@@ -25,7 +25,7 @@ module trainsim_cmd_periodic
 
 contains
 
-   !> trainsim periodic DECK [--period-count K] [--period T] [--transient N] [--tol TOL]
+   !> trainsim periodic DECK [--period-count K] [--period T] [--segments M] [--transient N] [--tol TOL]
    !> [--set ...] [-o FILE]
    subroutine do_periodic()
       type(model_t) :: model
@@ -53,6 +53,9 @@ contains
             i = i + 1
          case ('--period-count')
             k = count_value(i, 1, 1000)
+            i = i + 1
+         case ('--segments')
+            opt%segments = count_value(i, 1, 64)
             i = i + 1
          case ('--transient')
             opt%transient = count_value(i, 0, 100000)
@@ -127,6 +130,7 @@ contains
       type(shoot_result_t), intent(in) :: res
       type(shoot_options_t), intent(in) :: opt
       integer :: j
+      if (res%segments > 1) write (output_unit, '(a)') 'multiple shooting over '//str(res%segments)//' segments'
       write (output_unit, '(a)') 'Newton on P(x) - x (monodromy by central differences) after '//str(res%transient)// &
          ' periods of transient (start '//str(res%attempts)//' of at most '//str(opt%retries + 1)// &
          '), residual of the state scale:'

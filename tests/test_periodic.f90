@@ -30,6 +30,7 @@ program test_periodic
    call test_dead_zone_oscillator_segments()
    call test_two_periods_square_the_multipliers()
    call test_grazing_gap_closed_form()
+   call test_multiple_shooting_same_orbit()
    call test_ghm_rig_equals_settled_run(8.0e-6_wp)
    call suite_end()
 
@@ -99,7 +100,7 @@ contains
    end function matching
 
    !> Shoot the oscillator's orbit (b the half clearance).
-   subroutine shoot_oscillator(b, m, res, mu, w, k, grazing_gap)
+   subroutine shoot_oscillator(b, m, res, mu, w, k, grazing_gap, segments)
       real(wp), intent(in) :: b
       type(model_t), intent(out) :: m
       type(shoot_result_t), intent(out) :: res
@@ -108,6 +109,7 @@ contains
       integer, intent(in), optional :: k
       !> the grazing check's gap on the orbit's run (orbit_grazing)
       real(wp), intent(out), optional :: grazing_gap
+      integer, intent(in), optional :: segments
       type(period_map_t) :: pm
       type(shoot_options_t) :: opt
       type(error_t), allocatable :: err
@@ -124,6 +126,7 @@ contains
       call check('the forcing period is the sine load''s', .not. allocated(err))
       call pm%setup(m, period, kk, err)
       call check('the period map sets up', .not. allocated(err))
+      if (present(segments)) opt%segments = segments
       call shoot(pm, opt, res, err)
       call check('the shooting ran without an integration error', .not. allocated(err))
       call check('the shooting converged ('//res%message//')', res%status == shoot_converged)
@@ -162,6 +165,27 @@ contains
       call check_close('|Im mu(2T)| = |Im mu(T)^2|', abs(aimag(mu2(1))), abs(aimag(mu1(1)**2)), abs_tol=1.0e-8_wp)
       call check('stable', stability_of(mu2) == 'stable')
    end subroutine test_two_periods_square_the_multipliers
+
+   !> Multiple shooting (4 segments of the period) finds the contact orbit of the
+   !> dead-zone oscillator and its multipliers as single shooting does, to 1e-8 of the
+   !> scale (the monodromy the product of the segments' Jacobians).
+   subroutine test_multiple_shooting_same_orbit()
+      type(model_t) :: m
+      type(shoot_result_t) :: r1, r4
+      complex(wp), allocatable :: mu1(:), mu4(:)
+      real(wp) :: w
+      integer :: j
+      call test_begin('multiple_shooting_same_orbit')
+      call shoot_oscillator(1.2_wp, m, r1, mu1, w)
+      call shoot_oscillator(1.2_wp, m, r4, mu4, w, segments=4)
+      call check('four segments were shot', r4%segments == 4)
+      call check_close('angle at t0 (of the angle scale)', r4%x(1)/r1%scale(1), r1%x(1)/r1%scale(1), abs_tol=1.0e-8_wp)
+      call check_close('speed at t0 (of the speed scale)', r4%x(2)/r1%scale(2), r1%x(2)/r1%scale(2), abs_tol=1.0e-8_wp)
+      do j = 1, 2
+         call check_close('multiplier '//str(j)//', real part', real(mu4(j)), real(mu1(j)), abs_tol=1.0e-8_wp)
+         call check_close('multiplier '//str(j)//', imaginary part', aimag(mu4(j)), aimag(mu1(j)), abs_tol=1.0e-8_wp)
+      end do
+   end subroutine test_multiple_shooting_same_orbit
 
    !> The grazing check against the closed form: the linear orbit's largest angle is
    !> t0/k + sqrt(p^2 + q^2); with the half clearance b at 1 + 1e-5 times it the orbit

@@ -51,6 +51,11 @@ module trainsim_period_map
       !> the clearances whose contact law remembers its impact (yang_sun: e and D
       !> from the approach velocity), which must be open at t0 (D-98)
       integer, allocatable :: memory(:)
+      !> multiple shooting (set_segments): the boundaries in s after t0 (0 and kT the
+      !> ends), the session's point at each, and the flow's reduced states there
+      real(wp), allocatable :: seg_tau(:)
+      type(session_state_t), allocatable :: seg_p(:)
+      real(wp), allocatable :: seg_x(:, :)
    contains
       procedure :: setup => pm_setup
       procedure :: map => pm_map
@@ -60,6 +65,9 @@ module trainsim_period_map
       procedure :: finish => pm_finish
       procedure :: flow => pm_flow
       procedure :: rephase => pm_rephase
+      procedure :: open_samples => pm_open_samples
+      procedure :: set_segments => pm_set_segments
+      procedure :: segment => pm_segment
    end type period_map_t
 
 contains
@@ -265,36 +273,25 @@ contains
       class(period_map_t), intent(inout) :: self
       real(wp), intent(inout) :: x(:)
       type(error_t), allocatable, intent(out) :: err
-      real(wp), allocatable :: disp(:), force(:), y(:)
-      integer, allocatable :: contact(:)
+      real(wp), allocatable :: y(:)
       logical, allocatable :: open(:)
-      integer :: n, i, best, run, best_end, ne
+      integer :: n, i, best, run, best_end
       real(wp) :: span, tau
       type(model_t) :: m
       if (size(self%memory) == 0) return
       span = real(self%k, wp)*self%period
-      n = max(64, min(2048, nint(span/self%model%run%dt)))
-      ne = size(self%model%elements)
-      allocate (disp(ne), force(ne), contact(ne), open(0:2*n - 1))
-      call self%s%restore(self%p0, err)
+      call self%open_samples(x, open, err)
       if (allocated(err)) return
-      call self%s%set_state(self%full_state(x), err)
-      if (allocated(err)) return
-      do i = 0, n - 1
-         if (i > 0) call self%s%advance(self%t0 + span*real(i, wp)/real(n, wp), err)
-         if (allocated(err)) return
-         call self%s%element_status(disp, force, contact)
-         open(i) = all(contact(self%memory) == 0)
-      end do
-      open(n:) = open(0:n - 1)   ! the orbit repeats: a stretch may wrap around
+      n = size(open)
+      open = [open, open]   ! the orbit repeats: a stretch may wrap around
       best = 0
       best_end = -1
       run = 0
-      do i = 0, 2*n - 1
+      do i = 1, 2*n
          run = merge(run + 1, 0, open(i))
          if (run > best .and. run <= n) then
             best = run
-            best_end = i
+            best_end = i - 1
          end if
       end do
       if (best == 0 .or. best == n) return   ! never open, or never closed: any t0 is as good
@@ -307,6 +304,118 @@ contains
       m%run%t_start = self%t0 + tau
       call self%setup(m, self%period, self%k, err)
    end subroutine pm_rephase
+
+   !> Whether every clearance with a memory is open at t0 + i kT/n, i = 0 .. n - 1
+   !> (open(i + 1)), on the flow from x at t0; n = max(64, min(2048, kT/dt)).
+   subroutine pm_open_samples(self, x, open, err)
+      class(period_map_t), intent(inout) :: self
+      real(wp), intent(in) :: x(:)
+      logical, allocatable, intent(out) :: open(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: disp(:), force(:)
+      integer, allocatable :: contact(:)
+      integer :: n, i, ne
+      real(wp) :: span
+      span = real(self%k, wp)*self%period
+      n = max(64, min(2048, nint(span/self%model%run%dt)))
+      ne = size(self%model%elements)
+      allocate (disp(ne), force(ne), contact(ne), open(n))
+      call self%s%restore(self%p0, err)
+      if (allocated(err)) return
+      call self%s%set_state(self%full_state(x), err)
+      if (allocated(err)) return
+      do i = 0, n - 1
+         if (i > 0) call self%s%advance(self%t0 + span*real(i, wp)/real(n, wp), err)
+         if (allocated(err)) return
+         call self%s%element_status(disp, force, contact)
+         open(i + 1) = all(contact(self%memory) == 0)
+      end do
+   end subroutine pm_open_samples
+
+   !> Multiple shooting: up to m segments of the k periods, boundaries near t0 + j kT/m
+   !> (j = 1 .. m - 1) moved to the nearest instant at which every clearance with a
+   !> memory is open on the flow from x (within kT/2m; else the boundary is dropped),
+   !> and the session's point saved at each. seg_tau(0:ns) are the boundaries (0 and kT
+   !> the ends), seg_x(:, j) the flow's reduced state at boundary j.
+   subroutine pm_set_segments(self, m, x, err)
+      class(period_map_t), intent(inout) :: self
+      integer, intent(in) :: m
+      real(wp), intent(in) :: x(:)
+      type(error_t), allocatable, intent(out) :: err
+      logical, allocatable :: open(:)
+      real(wp), allocatable :: tau(:)
+      real(wp) :: span, best, t
+      integer :: j, i, n
+      span = real(self%k, wp)*self%period
+      allocate (tau(0))
+      if (size(self%memory) > 0) then
+         call self%open_samples(x, open, err)
+         if (allocated(err)) return
+         n = size(open)
+      end if
+      do j = 1, m - 1
+         t = span*real(j, wp)/real(m, wp)
+         if (size(self%memory) > 0) then
+            best = huge(1.0_wp)
+            do i = 1, n
+               if (open(i) .and. abs(span*real(i - 1, wp)/real(n, wp) - t) < abs(best - t)) &
+                  best = span*real(i - 1, wp)/real(n, wp)
+            end do
+            if (.not. abs(best - t) <= 0.5_wp*span/real(m, wp)) cycle
+            t = best
+         end if
+         if (t > 0.0_wp .and. t < span) then
+            if (size(tau) == 0) then
+               tau = [t]
+            else if (t > tau(size(tau))) then
+               tau = [tau, t]
+            end if
+         end if
+      end do
+      if (allocated(self%seg_tau)) deallocate (self%seg_tau)
+      allocate (self%seg_tau(0:size(tau) + 1))   ! (0-based: boundary j is seg_tau(j))
+      self%seg_tau(0) = 0.0_wp
+      self%seg_tau(1:size(tau)) = tau
+      self%seg_tau(size(tau) + 1) = span
+      if (allocated(self%seg_p)) deallocate (self%seg_p, self%seg_x)
+      allocate (self%seg_p(0:size(self%seg_tau) - 2), self%seg_x(self%n, 0:size(self%seg_tau) - 2))
+      self%seg_p(0) = self%p0
+      self%seg_x(:, 0) = x
+      call self%s%restore(self%p0, err)
+      if (allocated(err)) return
+      call self%s%set_state(self%full_state(x), err)
+      if (allocated(err)) return
+      do j = 1, size(self%seg_tau) - 2
+         call self%s%advance(self%t0 + self%seg_tau(j), err)
+         if (allocated(err)) return
+         self%seg_x(:, j) = self%s%y(1:self%n)
+         self%seg_x(self%ang, j) = self%seg_x(self%ang, j) - self%w*self%seg_tau(j)
+         call self%s%save(self%seg_p(j), err)
+         if (allocated(err)) return
+      end do
+   end subroutine pm_set_segments
+
+   !> Segment j's map: the reduced state at boundary j + 1 from xj at boundary j
+   !> (reduced: angles less W (t - t0)).
+   subroutine pm_segment(self, j, xj, x1, err)
+      class(period_map_t), intent(inout) :: self
+      integer, intent(in) :: j
+      real(wp), intent(in) :: xj(:)
+      real(wp), intent(out) :: x1(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: y(size(self%y0))
+      call self%s%restore(self%seg_p(j), err)
+      if (allocated(err)) return
+      y = self%full_state(xj)
+      y(self%ang) = y(self%ang) + self%w*self%seg_tau(j)
+      call self%s%set_state(y, err)
+      if (allocated(err)) return
+      call self%s%advance(self%t0 + self%seg_tau(j + 1), err)
+      if (allocated(err)) return
+      x1 = self%s%y(1:self%n)
+      x1(self%ang) = x1(self%ang) - self%w*self%seg_tau(j + 1)
+      self%n_evals = self%n_evals + 1
+   end subroutine pm_segment
 
    subroutine pm_finish(self)
       class(period_map_t), intent(inout) :: self

@@ -41,6 +41,7 @@ module trainsim_shooting
       integer :: transient = 10        !< map applications (k periods each) before the first
       integer :: retries = 4           !< Newton restarted after 2x more transient (10 -> 30 -> 90 -> ...)
       real(wp) :: fd_step = 1.0e-6_wp  !< central-difference step, of the state scale
+      integer :: segments = 1          !< multiple shooting: segments of the k periods (1: single)
    end type shoot_options_t
 
    type :: shoot_result_t
@@ -55,6 +56,7 @@ module trainsim_shooting
       integer :: maps = 0                        !< period maps evaluated (all)
       integer :: transient = 0                   !< forcing periods of transient before the last Newton start
       integer :: attempts = 0                    !< Newton starts
+      integer :: segments = 1                    !< segments shot (multiple shooting)
    end type shoot_result_t
 
    interface
@@ -137,7 +139,13 @@ contains
          end if
          call pm%rephase(x, err)   ! no contact with a memory in progress at t0
          if (allocated(err)) return
-         call newton(pm, opt, x, res, err, monodromy)
+         if (opt%segments > 1) then
+            call pm%set_segments(opt%segments, x, err)
+            if (allocated(err)) return
+            call newton_segments(pm, opt, res, err)
+         else
+            call newton(pm, opt, x, res, err, monodromy)
+         end if
          if (allocated(err)) return
          res%transient = total
          res%attempts = attempt + 1
@@ -252,4 +260,130 @@ contains
          end if
       end subroutine jacobian
    end subroutine newton
+
+   !> Multiple shooting (pm%set_segments done): Newton on the ns segment conditions
+   !> S_j(x_j) - x_(j+1) = 0 (x_ns = x_0), the segments' Jacobians Phi_j by central
+   !> differences, the block-cyclic system solved whole (dgesv), the step damped as in
+   !> `newton`; the monodromy Phi_(ns-1) ... Phi_0 at the end. A long unstable period
+   !> becomes ns short maps, each amplifying errors by its own part of the growth only.
+   subroutine newton_segments(pm, opt, res, err)
+      class(period_map_t), intent(inout) :: pm
+      type(shoot_options_t), intent(in) :: opt
+      type(shoot_result_t), intent(out) :: res
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), allocatable :: x(:, :), sx(:, :), rr(:, :), xt(:, :), st(:, :), phi(:, :, :), a(:, :), dx(:)
+      integer, allocatable :: ipiv(:)
+      real(wp) :: r, rt, lam
+      integer :: n, ns, nn, it, j, i, info
+      n = pm%n
+      ns = size(pm%seg_tau) - 1
+      nn = n*ns
+      res%segments = ns
+      allocate (sx(n, 0:ns - 1), rr(n, 0:ns - 1), st(n, 0:ns - 1), phi(n, n, 0:ns - 1), a(nn, nn), dx(nn), &
+                ipiv(nn), res%history(0))
+      x = pm%seg_x
+      res%scale = pm%scale(x(:, 0))
+      call residuals(x, sx, rr, err)
+      if (allocated(err)) return
+      r = maxval(abs(rr)/spread(res%scale, 2, ns))
+      do it = 1, opt%max_newton + 1
+         res%history = [res%history, r]
+         if (r <= opt%tol) then
+            res%status = shoot_converged
+            exit
+         end if
+         if (it > opt%max_newton) then
+            res%status = shoot_budget
+            res%message = 'the Newton budget of '//str(opt%max_newton)//' steps was spent at a residual of '// &
+                          str(r, 3)//' of the state scale (tolerance '//str(opt%tol, 3)//')'
+            exit
+         end if
+         call jacobians(x, phi, err)
+         if (allocated(err)) return
+         a = 0.0_wp
+         do j = 0, ns - 1
+            a(j*n + 1:(j + 1)*n, j*n + 1:(j + 1)*n) = phi(:, :, j)
+            do i = 1, n
+               a(j*n + i, modulo(j + 1, ns)*n + i) = a(j*n + i, modulo(j + 1, ns)*n + i) - 1.0_wp
+            end do
+         end do
+         dx = -reshape(rr, [nn])
+         call dgesv(nn, 1, a, nn, ipiv, dx, nn, info)
+         if (info /= 0 .or. .not. all(abs(reshape(dx, [n, ns])) <= 1.0e8_wp*spread(res%scale, 2, ns))) then
+            res%status = shoot_singular
+            res%message = 'the segment system is singular at Newton step '//str(it)//' (a Floquet multiplier at '// &
+                          '1: a fold, or a free rigid-body rotation with no node of prescribed speed)'
+            exit
+         end if
+         res%newton = it
+         lam = 1.0_wp
+         do
+            xt = x + lam*reshape(dx, [n, ns])
+            call residuals(xt, st, rr, err)
+            if (allocated(err)) then
+               if (lam < 1.0_wp/32.0_wp) return
+               deallocate (err)
+               rt = huge(1.0_wp)
+            else
+               rt = maxval(abs(rr)/spread(res%scale, 2, ns))
+            end if
+            if (rt < (1.0_wp - 1.0e-4_wp*lam)*r .or. lam < 1.0_wp/64.0_wp) exit
+            lam = 0.5_wp*lam
+         end do
+         if (.not. rt < (1.0_wp - 1.0e-4_wp*lam)*r) then
+            res%status = merge(shoot_floor, shoot_no_orbit, r < 1.0e-12_wp)
+            res%message = 'no periodic orbit near the start: multiple-shooting step '//str(it)//' could not '// &
+                          'lower the residual '//str(r, 3)//' of the state scale even at 1/64 of the step'
+            if (r < 1.0e-12_wp) res%message = 'the residual stalled at '//str(r, 3)//' of the state scale, the '// &
+                                              'rounding floor, above the tolerance '//str(opt%tol, 3)
+            exit
+         end if
+         x = xt
+         r = rt
+      end do
+      res%x = x(:, 0)
+      res%residual = r
+      allocate (res%m(n, n))
+      if (res%status /= shoot_converged) return
+      res%message = ''
+      call jacobians(x, phi, err)
+      if (allocated(err)) return
+      res%m = phi(:, :, 0)
+      do j = 1, ns - 1
+         res%m = matmul(phi(:, :, j), res%m)
+      end do
+   contains
+      subroutine residuals(xx, s_out, r_out, e)
+         real(wp), intent(in) :: xx(:, 0:)
+         real(wp), intent(out) :: s_out(:, 0:), r_out(:, 0:)
+         type(error_t), allocatable, intent(out) :: e
+         integer :: jj
+         do jj = 0, ns - 1
+            call pm%segment(jj, xx(:, jj), s_out(:, jj), e)
+            if (allocated(e)) return
+            r_out(:, jj) = s_out(:, jj) - xx(:, modulo(jj + 1, ns))
+         end do
+      end subroutine residuals
+      subroutine jacobians(xx, ph, e)
+         real(wp), intent(in) :: xx(:, 0:)
+         real(wp), intent(out) :: ph(:, :, 0:)
+         type(error_t), allocatable, intent(out) :: e
+         real(wp) :: xp(n), xm(n), pp(n), pq(n), h
+         integer :: jj, c
+         do jj = 0, ns - 1
+            do c = 1, n
+               h = opt%fd_step*res%scale(c)
+               xp = xx(:, jj)
+               xm = xx(:, jj)
+               xp(c) = xp(c) + h
+               xm(c) = xm(c) - h
+               call pm%segment(jj, xp, pp, e)
+               if (allocated(e)) return
+               call pm%segment(jj, xm, pq, e)
+               if (allocated(e)) return
+               ph(:, c, jj) = (pp - pq)/(xp(c) - xm(c))
+            end do
+         end do
+      end subroutine jacobians
+   end subroutine newton_segments
 end module trainsim_shooting
