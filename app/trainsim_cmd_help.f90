@@ -117,8 +117,7 @@ contains
             'P(x) - x after a transient, the monodromy by central differences (docs/periodic.md). Prints the', &
             'convergence, the orbit, its Floquet multipliers and stability, grazing, the orbit''s metrics.', '', &
             '  --period-count K   the orbit repeats after K forcing periods (default 1; K > 1: subharmonic)', &
-            '  --period T         the forcing period in s (default: &run settle_period, else the mesh', &
-            '                     period of the first gear pair, else the period of the first sine load)', &
+            '  --period T         the forcing period in s (default: settle_period, a mesh period, a sine''s)', &
             '  --segments M       multiple shooting: M segments of the K periods (default 1)', &
             '  --transient N      map applications before Newton starts (default 10, K periods each)', &
             '  --tol TOL          convergence: ||P(x) - x|| <= TOL of the state scale (default 1e-10)', &
