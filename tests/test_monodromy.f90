@@ -10,6 +10,7 @@ program test_monodromy
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
+   use trainsim_session, only: session_t
    use trainsim_monodromy, only: monodromy_saltation, flow_events, monodromy_stats_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model, load_model_text, nl
@@ -17,6 +18,7 @@ program test_monodromy
 
    call suite_begin('monodromy with saltation matrices (issue 27)')
    call test_linear_oscillator_monodromy_is_exp_at()
+   call test_flow_is_the_decks_rk4_run()
    call test_gear_rig_monodromy_matches_flow_differences()
    call test_two_clearance_monodromy_matches_flow_differences()
    call test_stick_slip_is_refused()
@@ -51,6 +53,48 @@ contains
       call check('max |M - exp(A T)| / max |exp(A T)| (RK4 at w dt = 1e-3: ~1e-13)', &
                  maxval(abs(mm - e))/maxval(abs(e)), 0.0_wp, abs_tol=1.0e-10_wp)
    end subroutine test_linear_oscillator_monodromy_is_exp_at
+
+   !> The flow that M differentiates is trainsim's own RK4 run with its event
+   !> location (a session advanced on the deck's grid): the Table 5.5 rig over
+   !> 256 steps (zone changes) and the two-clearance train over 700 steps
+   !> (separations and impacts), to 1e-10 of each state's size.
+   subroutine test_flow_is_the_decks_rk4_run()
+      call test_begin('flow_is_the_decks_rk4_run')
+      call same_as_run('inputs/gregory_harris_munro.nml', 256, 2)
+      call same_as_run('inputs/two_clearance.nml', 700, 20)
+   end subroutine test_flow_is_the_decks_rk4_run
+
+   !> The flow over `steps` steps of the deck's dt from its start against a
+   !> session's run to the same grid point; at least `events` events on the way.
+   subroutine same_as_run(path, steps, events)
+      character(len=*), intent(in) :: path
+      integer, intent(in) :: steps, events
+      type(model_t) :: m
+      type(session_t), allocatable :: sess
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: x(:)
+      type(monodromy_stats_t) :: st
+      real(wp) :: t1, worst
+      integer :: k
+      call load_model(path, m)
+      call start(m, x)
+      t1 = m%run%t_start + steps*m%run%dt
+      allocate (sess)
+      call sess%start(m, err)
+      if (.not. allocated(err)) call sess%advance(t1, err)
+      call check(path//' session: no error', .not. allocated(err))
+      if (allocated(err)) return
+      call flow_events(m, m%run%t_start, t1 - m%run%t_start, x, err, stats=st)
+      call check(path//' flow: no error', .not. allocated(err))
+      call check(path//': events in the window', st%events >= events)
+      worst = 0.0_wp
+      do k = 1, m%n_states
+         worst = max(worst, abs(x(k) - sess%y(k))/max(abs(sess%y(k)), 1.0e-3_wp*maxval(abs(sess%y))))
+      end do
+      write (*, '(a,i0,a,es9.2)') '    events ', st%events, ', max relative difference ', worst
+      call check(path//': max |x - x_run| / |x| (the same RK4 and event location; roundoff)', worst, 0.0_wp, &
+                 abs_tol=1.0e-10_wp)
+   end subroutine same_as_run
 
    !> Table 5.5 rig at 485 teeth/s over one mesh period: the spur gear's zone
    !> changes (stiffness factor 1 <-> 1.8 with the teeth loaded: f jumps).
