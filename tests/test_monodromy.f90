@@ -167,7 +167,7 @@ contains
       real(wp), allocatable :: x0(:), x(:), mm(:, :), m_nosalt(:, :), m_nomem(:, :), d1(:, :), d2(:, :), dr(:, :), sc(:)
       type(error_t), allocatable :: err
       type(monodromy_stats_t) :: st
-      real(wp) :: t0, e_fd, e_nosalt, e_nomem
+      real(wp) :: t0, e_fd, e_nosalt, e_nomem, c0, c1
       integer :: n, k
       logical :: same
       call load_model(path, m0)
@@ -183,11 +183,14 @@ contains
       n = m0%n_states
       m = m0
       x = x0
+      call cpu_time(c0)
       call monodromy_saltation(m, t0, period, x, mm, err, stats=st)
+      call cpu_time(c1)
       e_m = huge(1.0_wp)
       call check('no error', .not. allocated(err))
       if (allocated(err)) return
-      write (*, '(a,es9.2,a,i0,a,i0,a,i0,a,i0,a,es9.2)') '    dt ', m0%run%dt, ', steps ', st%steps, ', events ', st%events, ', jumps ', &
+      write (*, '(a,i0,a,es9.2,a,es9.2,a,i0,a,i0,a,i0,a,i0,a,es9.2)') '    states ', n, ', M in ', c1 - c0, &
+         ' s; dt ', m0%run%dt, ', steps ', st%steps, ', events ', st%events, ', jumps ', &
          st%jumps, ', impacts ', st%impacts, ', min transversality ', st%min_transversality
       call check('the window has events where the vector field jumps', st%jumps > 0)
       if (impacts) call check('the window closes a contact (impact damping from V_i)', st%impacts > 0)
