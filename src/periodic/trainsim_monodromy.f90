@@ -62,8 +62,9 @@ contains
 
    !> The flow x(t0) -> x(t0 + period) and its monodromy matrix m (n_states x
    !> n_states; the energy-accounting states, if tracked, are carried but not
-   !> differentiated). x: the model's state y (n_y) at t0 in, at t0 + period
-   !> out; the model's modes go along. dt: the step (default the deck's dt).
+   !> differentiated). x: the model's state y (n_y, or n_states: the energy
+   !> integrals then start from 0) at t0 in, at t0 + period out; the model's
+   !> modes go along. dt: the step (default the deck's dt).
    !> saltation = .false. / memory = .false. leave out the jumps / the impact
    !> damping's sensitivity (for checking that they matter).
    subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, stats)
@@ -112,7 +113,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp), intent(in), optional :: dt
       real(wp) :: h, t, t_grid, t_to
-      real(wp), allocatable :: bp(:)
+      real(wp), allocatable :: bp(:), y(:)
       integer :: nsteps, i, ib, k
       h = model%run%dt
       if (present(dt)) h = dt
@@ -121,9 +122,9 @@ contains
                           ') must be > 0', err_input)
          return
       end if
-      if (size(x) /= model%n_y) then
+      if (size(x) /= model%n_y .and. size(x) /= model%n_states) then
          call fatal_error(err, 'monodromy: the state has '//str(size(x))//' entries, the model '// &
-                          str(model%n_y), err_input)
+                          str(model%n_states)//' (or '//str(model%n_y)//' with the energy integrals)', err_input)
          return
       end if
       if (allocated(model%cn)) then
@@ -150,6 +151,8 @@ contains
       nsteps = max(1, ceiling(period/h*(1.0_wp - 1.0e-12_wp)))
       h = period/nsteps
       call model%breakpoints(t0, t0 + period, bp)
+      allocate (y(model%n_y), source=0.0_wp)              ! (energy integrals from 0 if x has none)
+      y(1:size(x)) = x
       t = t0
       ib = 1
       do i = 1, nsteps
@@ -162,10 +165,11 @@ contains
                ib = ib + 1
             end do
             if (ib <= size(bp)) t_to = min(t_to, bp(ib))
-            call step_to(model, t, t_to, x, w, err)
+            call step_to(model, t, t_to, y, w, err)
             if (allocated(err)) return
          end do
       end do
+      x = y(1:size(x))
    end subroutine advance
 
    !> From (t, x) to t_to: one RK4 step, or, where a guard goes below zero in
