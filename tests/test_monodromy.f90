@@ -21,6 +21,7 @@ program test_monodromy
    call test_flow_is_the_decks_rk4_run()
    call test_gear_rig_monodromy_matches_flow_differences()
    call test_two_clearance_monodromy_matches_flow_differences()
+   call test_linear_law_impacts_match_flow_differences()
    call test_stick_slip_is_refused()
    call suite_end()
 
@@ -114,9 +115,11 @@ contains
    !> Table 5.5 rig at 485 teeth/s over one mesh period: the spur gear's zone
    !> changes (stiffness factor 1 <-> 1.8 with the teeth loaded: f jumps).
    subroutine test_gear_rig_monodromy_matches_flow_differences()
+      type(model_t) :: m0
       real(wp) :: e_m
       call test_begin('gear_rig_monodromy_matches_flow_differences')
-      call flow_difference_case('inputs/gregory_harris_munro.nml', 0.0_wp, 1.0_wp/485.0_wp, .false., 1.0e-6_wp, &
+      call load_model('inputs/gregory_harris_munro.nml', m0)
+      call flow_difference_case(m0, 0.0_wp, 1.0_wp/485.0_wp, .false., 1.0e-6_wp, &
                                 1.0_wp, 1.0e-6_wp, e_m)
    end subroutine test_gear_rig_monodromy_matches_flow_differences
 
@@ -127,14 +130,35 @@ contains
    !> differs from the step map's derivative by RK4's truncation (fourth order,
    !> checked); at dt/2 the issue's 1e-6 holds.
    subroutine test_two_clearance_monodromy_matches_flow_differences()
+      type(model_t) :: m0
       real(wp) :: e1, e2
       call test_begin('two_clearance_monodromy_matches_flow_differences')
-      call flow_difference_case('inputs/two_clearance.nml', 0.01_wp, 2.0_wp/260.0_wp, .true., 1.0e-7_wp, &
+      call load_model('inputs/two_clearance.nml', m0)
+      call flow_difference_case(m0, 0.01_wp, 2.0_wp/260.0_wp, .true., 1.0e-7_wp, &
                                 1.0_wp, 1.0e-4_wp, e1)
-      call flow_difference_case('inputs/two_clearance.nml', 0.01_wp, 2.0_wp/260.0_wp, .true., 1.0e-7_wp, &
+      call load_model('inputs/two_clearance.nml', m0)
+      call flow_difference_case(m0, 0.01_wp, 2.0_wp/260.0_wp, .true., 1.0e-7_wp, &
                                 0.5_wp, 1.0e-6_wp, e2)
       call check('M - D is RK4 truncation: halving dt divides it by > 10 (fourth order: 16)', e1/e2 > 10.0_wp)
    end subroutine test_two_clearance_monodromy_matches_flow_differences
+
+   !> A clearance coupling with the linear law (F = k p + d pdot: the force
+   !> jumps by d pdot at an impact) between a disk on a shaft to ground and a
+   !> free disk: the saltation matrix at contact onset and separation.
+   subroutine test_linear_law_impacts_match_flow_differences()
+      type(model_t) :: m0
+      real(wp) :: e_m
+      call test_begin('linear_law_impacts_match_flow_differences')
+      call load_model_text("&run t_end = 1.0, dt = 2.0e-5 /"//nl//"&node type = 'fixed' /"//nl// &
+                           "&node type = 'inertia', inertia = 0.5 /"//nl// &
+                           "&node type = 'inertia', inertia = 2.0 /"//nl// &
+                           "&element type = 'shaft', stiffness = 100.0 /"//nl// &
+                           "&element type = 'clearance_coupling', clearance = 0.02, stiffness = 1.0e4, "// &
+                           "contact_law = 'linear', contact_damping = 3.0 /"//nl// &
+                           "&initial node = 'n2', angle = 0.0, speed = 3.0 /"//nl// &
+                           "&initial node = 'n3', angle = 0.0, speed = -1.0 /", m0)
+      call flow_difference_case(m0, 0.0_wp, 0.2_wp, .false., 1.0e-6_wp, 1.0_wp, 1.0e-6_wp, e_m)
+   end subroutine test_linear_law_impacts_match_flow_differences
 
    !> Friction that sticks (a clutch) changes the state space at its events:
    !> refused with an error value, not a wrong matrix.
@@ -172,20 +196,19 @@ contains
    !> scale (h = 1e-6; scale: |x_k|, at least 1e-3 max |x|) and their
    !> Richardson extrapolation, in the norm scaled by those scales. With
    !> `impacts`, the window must close a contact (the damping memory matters).
-   subroutine flow_difference_case(path, t_pre, period, impacts, h, dt_factor, tol, e_m)
-      character(len=*), intent(in) :: path
+   subroutine flow_difference_case(m0, t_pre, period, impacts, h, dt_factor, tol, e_m)
+      type(model_t), intent(inout) :: m0
       real(wp), intent(in) :: t_pre, period
       logical, intent(in) :: impacts
       real(wp), intent(in) :: h, dt_factor, tol
       real(wp), intent(out) :: e_m
-      type(model_t) :: m0, m
+      type(model_t) :: m
       real(wp), allocatable :: x0(:), x(:), mm(:, :), m_nosalt(:, :), m_nomem(:, :), d1(:, :), d2(:, :), dr(:, :), sc(:)
       type(error_t), allocatable :: err
       type(monodromy_stats_t) :: st
       real(wp) :: t0, e_fd, e_nosalt, e_nomem, c0, c1
       integer :: n, k
       logical :: same
-      call load_model(path, m0)
       m0%run%dt = m0%run%dt*dt_factor
       call start(m0, x0)
       t0 = m0%run%t_start
