@@ -227,9 +227,9 @@ contains
       e_m = huge(1.0_wp)
       call check('no error', .not. allocated(err))
       if (allocated(err)) return
-      write (*, '(a,i0,a,es9.2,a,es9.2,a,i0,a,i0,a,i0,a,i0,a,es9.2)') '    states ', n, ', M in ', c1 - c0, &
+      write (*, '(a,i0,a,es9.2,a,es9.2,a,i0,a,i0,a,i0,a,i0,a,es9.2,a,es9.2)') '    states ', n, ', M in ', c1 - c0, &
          ' s; dt ', m0%run%dt, ', steps ', st%steps, ', events ', st%events, ', jumps ', &
-         st%jumps, ', impacts ', st%impacts, ', min transversality ', st%min_transversality
+         st%jumps, ', impacts ', st%impacts, ', min transversality ', st%min_transversality, ', min guard rate ', st%min_rate
       call check('the window has events where the vector field jumps', st%jumps > 0)
       if (impacts) call check('the window closes a contact (impact damping from V_i)', st%impacts > 0)
       allocate (sc(n))

@@ -40,9 +40,14 @@ module trainsim_monodromy
    type :: monodromy_stats_t
       integer :: steps = 0          !< RK4 steps (including the parts of a step split at an event)
       integer :: events = 0         !< events located (guards that fired)
-      integer :: jumps = 0          !< saltation matrices applied (f+ /= f- at the event)
+      integer :: jumps = 0          !< events where f jumps (|f+ - f-| > 1e-10 |f-|)
       integer :: impacts = 0        !< contact onsets whose damping sensitivity was set
       real(wp) :: min_transversality = huge(1.0_wp)   !< smallest |n^T f- + dg/dt| / (|n| |f-|) at an event
+      !> smallest rate at which a guard crossed, |n^T f- + dg/dt| / |n| (the
+      !> guard's units per second: a length or an angle), and that guard: a
+      !> near-grazing contact shows here (the saltation grows as 1 / rate)
+      real(wp) :: min_rate = huge(1.0_wp)
+      integer :: min_rate_guard = 0
    end type monodromy_stats_t
 
    !> The work of one pass: the variational state and its scratch.
@@ -301,6 +306,10 @@ contains
             return
          end if
          w%st%min_transversality = min(w%st%min_transversality, abs(den)/nrm)
+         if (abs(den)/norm2(nv) < w%st%min_rate) then
+            w%st%min_rate = abs(den)/norm2(nv)
+            w%st%min_rate_guard = j_min
+         end if
          do e = 1, size(model%elements)
             mode_before(e) = face_of(model, e)
          end do
@@ -312,7 +321,7 @@ contains
       row = matmul(nv, w%phi)/den                     ! n^T Phi- / (n^T f- + dg/dt) = -d t_e / d x(t0)
       ! the event state's sensitivity, d x_e / d x(t0) = Phi- - f- n^T Phi- / den
       dxe = w%phi - spread(fm(1:w%n), 2, w%n)*spread(row, 1, w%n)
-      if (any(fp(1:w%n) /= fm(1:w%n))) w%st%jumps = w%st%jumps + 1
+      if (maxval(abs(fp(1:w%n) - fm(1:w%n))) > 1.0e-10_wp*maxval(abs(fm(1:w%n)))) w%st%jumps = w%st%jumps + 1
       if (w%salt) w%phi = w%phi + spread(fp(1:w%n) - fm(1:w%n), 2, w%n)*spread(row, 1, w%n)
       do e = 1, size(model%elements)
          j = face_of(model, e)
