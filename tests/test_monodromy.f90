@@ -161,7 +161,8 @@ contains
    end subroutine test_linear_law_impacts_match_flow_differences
 
    !> Friction that sticks (a clutch) changes the state space at its events:
-   !> refused with an error value, not a wrong matrix.
+   !> refused with an error value, not a wrong matrix; so are a period of 0
+   !> and a state of the wrong size.
    subroutine test_stick_slip_is_refused()
       type(model_t) :: m
       real(wp), allocatable :: x(:), mm(:, :)
@@ -179,6 +180,14 @@ contains
       if (.not. allocated(err)) return
       call check('it says stick-slip is not supported: '//err%message, &
                  index(err%message, 'saltation for stick-slip not supported') > 0)
+      call load_model_text("&run t_end = 1.0, dt = 1.0e-3 /"//nl//"&node type = 'inertia', inertia = 0.5 /"//nl// &
+                           "&node type = 'inertia', inertia = 1.5 /"//nl//"&element type = 'shaft', stiffness = 1.0 /", m)
+      call start(m, x)
+      call monodromy_saltation(m, 0.0_wp, 0.0_wp, x, mm, err)
+      call check('a period of 0: an error naming it', allocated(err))
+      if (allocated(err)) call check('  '//err%message, index(err%message, 'period') > 0)
+      call monodromy_saltation(m, 0.0_wp, 0.1_wp, x(1:3), mm, err)
+      call check('a state of the wrong size: an error', allocated(err))
    end subroutine test_stick_slip_is_refused
 
    !> The model at its initial state and modes (energy states off).
