@@ -53,11 +53,14 @@ module trainsim_monodromy
    !> The work of one pass: the variational state and its scratch.
    type :: pass_t
       logical :: var = .false., salt = .true., memory = .true.
+      logical :: exact = .false.            !< the step map's own derivative (`exact_step`)
       integer :: n = 0, ny = 0
       real(wp), allocatable :: phi(:, :)    !< (n, n) d x / d x(t0)
       real(wp), allocatable :: q(:, :)      !< (n, elements) d D_e / d x(t0), rows where has_q
       logical, allocatable :: has_q(:)      !< element e's impact damping depends on x(t0)
       real(wp), allocatable :: jac(:, :)    !< (ny, ny) the model's Jacobian
+      real(wp), allocatable :: tau(:)       !< (n) d t / d x(t0) of the current time (exact_step: after an event)
+      real(wp), allocatable :: rl(:)        !< (ny) d R / d l of the last step to an event (exact_step)
       real(wp), allocatable :: g(:), g0(:), gw(:)
       type(event_t), allocatable :: events(:)
       type(monodromy_stats_t) :: st
@@ -72,7 +75,7 @@ contains
    !> modes go along. dt: the step (default the deck's dt).
    !> saltation = .false. / memory = .false. leave out the jumps / the impact
    !> damping's sensitivity (for checking that they matter).
-   subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, stats)
+   subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, exact_step, stats)
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t0, period
       real(wp), intent(inout) :: x(:)
@@ -80,11 +83,16 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp), intent(in), optional :: dt
       logical, intent(in), optional :: saltation, memory
+      !> .true.: the derivative of the discrete flow itself (the event times'
+      !> dependence through the RK4 step map's d R / d l, no saltation matrix):
+      !> equal to the flow's differences to rounding at any dt
+      logical, intent(in), optional :: exact_step
       type(monodromy_stats_t), intent(out), optional :: stats
       type(pass_t) :: w
       w%var = .true.
       if (present(saltation)) w%salt = saltation
       if (present(memory)) w%memory = memory
+      if (present(exact_step)) w%exact = exact_step
       call advance(model, t0, period, x, w, err, dt)
       if (present(stats)) stats = w%st
       if (allocated(err)) return
@@ -145,7 +153,8 @@ contains
       allocate (w%g(model%n_guards), w%g0(model%n_guards), w%gw(model%n_guards), w%events(16))
       if (w%var) then
          allocate (w%phi(w%n, w%n), w%q(w%n, size(model%elements)), w%jac(w%ny, w%ny))
-         allocate (w%has_q(size(model%elements)))
+         allocate (w%has_q(size(model%elements)), w%tau(w%n), w%rl(w%ny))
+         w%tau = 0.0_wp
          w%phi = 0.0_wp
          do k = 1, w%n
             w%phi(k, k) = 1.0_wp
@@ -204,11 +213,11 @@ contains
             end if
          end do
          if (j_min == 0) then
-            call advance_state(model, t, hs, x, w)
+            call advance_exact(model, t, hs, x, w, .false.)
             t = t_to
             return
          end if
-         call advance_state(model, t, s_min, x, w)
+         call advance_exact(model, t, s_min, x, w, .true.)
          t = t + s_min
          if (s_min >= hs) t = t_to
          call event_at(model, t, x, j_min, w, err)
@@ -217,6 +226,69 @@ contains
       call fatal_error(err, 'monodromy: more than 1000 events in one step at t = '//str(t)// &
                        ' (a guard chattering at zero)', err_numeric)
    end subroutine step_to
+
+   !> `advance_state`, and with exact_step the step's start time moving with
+   !> x(t0) (after an event): Phi += (dR/dt_a - dR/dl) tau^T, the step's end
+   !> held; to_event: keep dR/dl (w%rl) for the event's time sensitivity.
+   subroutine advance_exact(model, t, hs, x, w, to_event)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs
+      real(wp), intent(inout) :: x(:)
+      type(pass_t), intent(inout) :: w
+      logical, intent(in) :: to_event
+      real(wp) :: rt(size(x))
+      logical :: moving
+      moving = .false.
+      if (w%var .and. w%exact) then
+         moving = any(w%tau /= 0.0_wp)
+         if (moving .or. to_event) call step_partials(model, t, hs, x, w, w%rl, rt)
+      end if
+      call advance_state(model, t, hs, x, w)
+      if (moving) then
+         w%phi = w%phi + spread(rt(1:w%n) - w%rl(1:w%n), 2, w%n)*spread(w%tau, 1, w%n)
+         w%tau = 0.0_wp
+      end if
+   end subroutine advance_exact
+
+   !> The RK4 step map R(t, x, l)'s partials in its length l and its start
+   !> time t at (t, x, hs), through its stages: dk/dl and dk/dt from the
+   !> model's Jacobian at each stage and df/dt (central differences in t:
+   !> 0 exactly for a model whose RHS does not read t).
+   subroutine step_partials(model, t, hs, x, w, rl, rt)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs, x(:)
+      type(pass_t), intent(inout) :: w
+      real(wp), intent(out) :: rl(:), rt(:)
+      real(wp), dimension(size(x)) :: k1, k2, k3, k4, l2, l3, l4, d2, d3, d4, f1
+      call model%rhs(t, x, k1)
+      f1 = f_t(t, x)
+      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, k2)
+      call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, w%jac)
+      l2 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k1)
+      d2 = 2.0_wp*l2 + matmul(w%jac, 0.5_wp*hs*f1)
+      l2 = l2 + matmul(w%jac, 0.5_wp*k1)
+      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, k3)
+      call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, w%jac)
+      l3 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k2)
+      d3 = 2.0_wp*l3 + matmul(w%jac, 0.5_wp*hs*d2)
+      l3 = l3 + matmul(w%jac, 0.5_wp*k2 + 0.5_wp*hs*l2)
+      call model%rhs(t + hs, x + hs*k3, k4)
+      call model%jacobian(t + hs, x + hs*k3, w%jac)
+      l4 = f_t(t + hs, x + hs*k3)
+      d4 = l4 + matmul(w%jac, hs*d3)
+      l4 = l4 + matmul(w%jac, k3 + hs*l3)
+      rl = (k1 + 2.0_wp*(k2 + k3) + k4)/6.0_wp + hs/6.0_wp*(2.0_wp*(l2 + l3) + l4)
+      rt = hs/6.0_wp*(f1 + 2.0_wp*(d2 + d3) + d4)
+   contains
+      function f_t(ts, xs) result(ft)
+         real(wp), intent(in) :: ts, xs(:)
+         real(wp) :: ft(size(xs)), fp(size(xs)), fm(size(xs)), dt
+         dt = 1.0e-6_wp*max(abs(ts), abs(hs), 1.0e-9_wp)
+         call model%rhs(ts + dt, xs, fp)
+         call model%rhs(ts - dt, xs, fm)
+         ft = (fp - fm)/(2.0_wp*dt)
+      end function f_t
+   end subroutine step_partials
 
    !> x (and Phi) advanced by one RK4 step of length hs from t.
    subroutine advance_state(model, t, hs, x, w)
@@ -295,6 +367,7 @@ contains
       w%st%events = w%st%events + count(fired)
       if (w%var) then
          call model%rhs(t, x, fm)
+         if (w%exact) fm = w%rl                         ! the step map's d x_e / d t_e in place of f-
          call guard_gradient(model, t, x, j_min, nv, gt)
          den = dot_product(nv, fm(1:w%n)) + gt
          nrm = sqrt(dot_product(nv, nv))*sqrt(dot_product(fm(1:w%n), fm(1:w%n)))
@@ -321,8 +394,13 @@ contains
       row = matmul(nv, w%phi)/den                     ! n^T Phi- / (n^T f- + dg/dt) = -d t_e / d x(t0)
       ! the event state's sensitivity, d x_e / d x(t0) = Phi- - f- n^T Phi- / den
       dxe = w%phi - spread(fm(1:w%n), 2, w%n)*spread(row, 1, w%n)
-      if (maxval(abs(fp(1:w%n) - fm(1:w%n))) > 1.0e-10_wp*maxval(abs(fm(1:w%n)))) w%st%jumps = w%st%jumps + 1
-      if (w%salt) w%phi = w%phi + spread(fp(1:w%n) - fm(1:w%n), 2, w%n)*spread(row, 1, w%n)
+      if (w%exact) then             ! x_e moves with t_e; the next step's start moves with it (advance_exact)
+         w%phi = dxe
+         w%tau = -row
+      else
+         if (maxval(abs(fp(1:w%n) - fm(1:w%n))) > 1.0e-10_wp*maxval(abs(fm(1:w%n)))) w%st%jumps = w%st%jumps + 1
+         if (w%salt) w%phi = w%phi + spread(fp(1:w%n) - fm(1:w%n), 2, w%n)*spread(row, 1, w%n)
+      end if
       do e = 1, size(model%elements)
          j = face_of(model, e)
          if (j == mode_before(e)) cycle
