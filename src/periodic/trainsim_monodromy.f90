@@ -1,28 +1,15 @@
 !> The monodromy matrix of a train over a window [t0, t0 + T]: the derivative
 !> M = d x(t0 + T) / d x(t0) of its event-located flow, from the variational
-!> equations with a saltation matrix at every mode change (D-98).
-!>
-!> The flow is fixed-step RK4 on the grid t0 + i h (h = T / ceil(T / dt)),
-!> ending a step at every breakpoint of the inputs; a guard that goes below
-!> zero in a step is located on the RK4 step map itself (Illinois on the step
-!> length, to a few ulps), the modes are updated there (`apply_events`) and the
-!> step goes on from the event in the new mode. Alongside, the variational
-!> equations Phi' = J(t, x) Phi (+ the contact-memory term below) are carried
-!> through the same RK4 stages, J the model's analytic Jacobian (`jacobian`).
-!> At an event where guard g fires, Phi jumps by the saltation matrix
-!>    S = I + (f+ - f-) n^T / (n^T f- + dg/dt)
-!> (n = dg/dx, f-/f+ the vector field in the old/new mode at the event; n and
-!> dg/dt by central differences of the guard, which is affine in the state
-!> within a mode). A clearance closing (yang_sun law) fixes its damping D from
-!> the approach velocity V_i at the event (eq. 3.12): D is a state frozen
-!> until separation, so its sensitivity q = dD/dx(t0) is carried too, set at
-!> the impact to dD/dV dV/dx (I - f- n^T / (n^T f- + dg/dt)) Phi-, and adds
-!> (df/dD) q to Phi' while the contact lasts.
-!>
-!> M is taken with the modes at t0 (faces, zones, the impact damping of a
-!> contact already closed) held: what the model holds when called. Friction
-!> stick/slip (kinematic constraints, D-81) is refused: its saltation (a
-!> change of the state space's dimension) is not supported.
+!> equations with a saltation matrix at every mode change (D-98 (salt27),
+!> docs/periodic-monodromy.md). The flow is fixed-step RK4 on the grid
+!> t0 + i T / ceil(T / dt), through the inputs' breakpoints, a guard's zero
+!> located on the RK4 step map (trainsim's own run); Phi' = J Phi on the same
+!> stages (J the model's analytic Jacobian); at an event guard g fires and
+!>    S = I + (f+ - f-) n^T / (n^T f- + dg/dt),   n = dg/dx.
+!> A contact closing with the yang_sun law fixes its damping D(V_i) (eq. 3.12)
+!> until it opens: D's sensitivity to x(t0) is carried as a frozen state's.
+!> The modes at t0 (faces, zones, a closed contact's D) are held. Friction
+!> stick/slip (kinematic constraints, D-81) is refused.
 module trainsim_monodromy
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
