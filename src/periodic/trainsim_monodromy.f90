@@ -118,8 +118,7 @@ contains
       h = model%run%dt
       if (present(dt)) h = dt
       if (.not. (h > 0.0_wp .and. period > 0.0_wp)) then
-         call fatal_error(err, 'monodromy: the step ('//str(h)//') and the period ('//str(period)// &
-                          ') must be > 0', err_input)
+         call fatal_error(err, 'monodromy: the step ('//str(h)//') and the period ('//str(period)//') must be > 0', err_input)
          return
       end if
       if (size(x) /= model%n_y .and. size(x) /= model%n_states) then
@@ -252,21 +251,28 @@ contains
       call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, k2)
       call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, w%jac)
       l2 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k1)
-      d2 = 2.0_wp*l2 + matmul(w%jac, 0.5_wp*hs*f1)
-      l2 = l2 + matmul(w%jac, 0.5_wp*k1)
+      d2 = 2.0_wp*l2 + jv(w%jac, 0.5_wp*hs*f1)
+      l2 = l2 + jv(w%jac, 0.5_wp*k1)
       call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, k3)
       call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, w%jac)
       l3 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k2)
-      d3 = 2.0_wp*l3 + matmul(w%jac, 0.5_wp*hs*d2)
-      l3 = l3 + matmul(w%jac, 0.5_wp*k2 + 0.5_wp*hs*l2)
+      d3 = 2.0_wp*l3 + jv(w%jac, 0.5_wp*hs*d2)
+      l3 = l3 + jv(w%jac, 0.5_wp*k2 + 0.5_wp*hs*l2)
       call model%rhs(t + hs, x + hs*k3, k4)
       call model%jacobian(t + hs, x + hs*k3, w%jac)
       l4 = f_t(t + hs, x + hs*k3)
-      d4 = l4 + matmul(w%jac, hs*d3)
-      l4 = l4 + matmul(w%jac, k3 + hs*l3)
+      d4 = l4 + jv(w%jac, hs*d3)
+      l4 = l4 + jv(w%jac, k3 + hs*l3)
       rl = (k1 + 2.0_wp*(k2 + k3) + k4)/6.0_wp + hs/6.0_wp*(2.0_wp*(l2 + l3) + l4)
       rt = hs/6.0_wp*(f1 + 2.0_wp*(d2 + d3) + d4)
    contains
+      !> a v (gfortran 12 -O2 warns of an inline matmul on an expression's temporary)
+      pure function jv(a, v) result(r)
+         real(wp), intent(in) :: a(:, :), v(:)
+         real(wp) :: r(size(a, 1))
+         r = matmul(a, v)
+      end function jv
+
       function f_t(ts, xs) result(ft)
          real(wp), intent(in) :: ts, xs(:)
          real(wp) :: ft(size(xs)), fp(size(xs)), fm(size(xs)), dt
