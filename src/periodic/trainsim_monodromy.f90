@@ -365,10 +365,10 @@ contains
          den = dot_product(nv, fm(1:w%n)) + gt
          nrm = sqrt(dot_product(nv, nv))*sqrt(dot_product(fm(1:w%n), fm(1:w%n)))
          if (.not. (abs(den) > 1.0e-13_wp*nrm)) then
-            call fatal_error(err, 'monodromy: grazing event at t = '//str(t)//' (guard '//str(j_min)// &
-                             ' of element '//str(model%guard_element(j_min))// &
-                             ' crossed tangentially, n^T f = '//str(den)//'): the saltation matrix is undefined', &
-                             err_numeric)
+            e = max(1, model%guard_element(j_min))
+            call fatal_error(err, 'monodromy: grazing event at t = '//str(t)//" (a guard of element '"// &
+                             model%elements(e)%e%id//"' crossed tangentially, n^T f = "//str(den)// &
+                             '): the saltation matrix is undefined', err_numeric)
             return
          end if
          w%st%min_transversality = min(w%st%min_transversality, abs(den)/nrm)
