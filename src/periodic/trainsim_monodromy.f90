@@ -29,7 +29,6 @@ module trainsim_monodromy
       integer :: events = 0         !< events located (guards that fired)
       integer :: jumps = 0          !< events where f jumps (|f+ - f-| > 1e-10 |f-|)
       integer :: impacts = 0        !< contact onsets whose damping sensitivity was set
-      real(wp) :: min_transversality = huge(1.0_wp)   !< smallest |n^T f- + dg/dt| / (|n| |f-|) at an event
       !> smallest rate at which a guard crossed, |n^T f- + dg/dt| / |n| (the
       !> guard's units per second: a length or an angle), and that guard: a
       !> near-grazing contact shows here (the saltation grows as 1 / rate)
@@ -62,7 +61,7 @@ contains
    !> modes go along. dt: the step (default the deck's dt).
    !> saltation = .false. / memory = .false. leave out the jumps / the impact
    !> damping's sensitivity (for checking that they matter).
-   subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, exact_step, stats)
+   subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, exact_step, deck_grid, stats)
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t0, period
       real(wp), intent(inout) :: x(:)
@@ -74,13 +73,16 @@ contains
       !> dependence through the RK4 step map's d R / d l, no saltation matrix):
       !> equal to the flow's differences to rounding at any dt
       logical, intent(in), optional :: exact_step
+      !> .true.: steps of dt from t0, the last one shortened to t0 + period (a
+      !> session's grid, which a period map restarted at t0 takes); default: T / ceil(T / dt)
+      logical, intent(in), optional :: deck_grid
       type(monodromy_stats_t), intent(out), optional :: stats
       type(pass_t) :: w
       w%var = .true.
       if (present(saltation)) w%salt = saltation
       if (present(memory)) w%memory = memory
       if (present(exact_step)) w%exact = exact_step
-      call advance(model, t0, period, x, w, err, dt)
+      call advance(model, t0, period, x, w, err, dt, deck_grid)
       if (present(stats)) stats = w%st
       if (allocated(err)) return
       if (.not. all(abs(w%phi) <= huge(1.0_wp))) then
@@ -92,26 +94,29 @@ contains
 
    !> The flow alone, x(t0) -> x(t0 + period): the same steps and event
    !> location as `monodromy_saltation` (for finite differences of the flow).
-   subroutine flow_events(model, t0, period, x, err, dt, stats)
+   subroutine flow_events(model, t0, period, x, err, dt, deck_grid, stats)
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t0, period
       real(wp), intent(inout) :: x(:)
       type(error_t), allocatable, intent(out) :: err
       real(wp), intent(in), optional :: dt
+      logical, intent(in), optional :: deck_grid
       type(monodromy_stats_t), intent(out), optional :: stats
       type(pass_t) :: w
-      call advance(model, t0, period, x, w, err, dt)
+      call advance(model, t0, period, x, w, err, dt, deck_grid)
       if (present(stats)) stats = w%st
    end subroutine flow_events
 
    !> One pass over [t0, t0 + period] on the step grid, through the breakpoints.
-   subroutine advance(model, t0, period, x, w, err, dt)
+   subroutine advance(model, t0, period, x, w, err, dt, deck_grid)
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t0, period
       real(wp), intent(inout) :: x(:)
       type(pass_t), intent(inout) :: w
       type(error_t), allocatable, intent(out) :: err
       real(wp), intent(in), optional :: dt
+      logical, intent(in), optional :: deck_grid
+      logical :: grid
       real(wp) :: h, t, t_grid, t_to
       real(wp), allocatable :: bp(:), y(:)
       integer :: nsteps, i, ib, k
@@ -149,14 +154,16 @@ contains
          w%has_q = .false.
       end if
       nsteps = max(1, ceiling(period/h*(1.0_wp - 1.0e-12_wp)))
-      h = period/nsteps
+      grid = .false.
+      if (present(deck_grid)) grid = deck_grid
+      if (.not. grid) h = period/nsteps
       call model%breakpoints(t0, t0 + period, bp)
       allocate (y(model%n_y), source=0.0_wp)              ! (energy integrals from 0 if x has none)
       y(1:size(x)) = x
       t = t0
       ib = 1
       do i = 1, nsteps
-         t_grid = t0 + i*h
+         t_grid = min(t0 + i*h, t0 + period)
          if (i == nsteps) t_grid = t0 + period
          do while (t < t_grid)
             t_to = t_grid
@@ -371,7 +378,6 @@ contains
                              '): the saltation matrix is undefined', err_numeric)
             return
          end if
-         w%st%min_transversality = min(w%st%min_transversality, abs(den)/nrm)
          if (abs(den)/norm2(nv) < w%st%min_rate) then
             w%st%min_rate = abs(den)/norm2(nv)
             w%st%min_rate_guard = j_min
@@ -461,12 +467,8 @@ contains
          v = approach(model, e, t, x, face)
          if (abs(v) <= el%cl%law%v_min) return            ! D from the floor: no dependence on x
          hv = 1.0e-6_wp*abs(v)
-         lw = el%cl%law
-         call lw%begin_contact(v + hv, .false.)
-         dp = lw%d
-         lw = el%cl%law
-         call lw%begin_contact(v - hv, .false.)
-         dm = lw%d
+         lw = el%cl%law; call lw%begin_contact(v + hv, .false.); dp = lw%d
+         lw = el%cl%law; call lw%begin_contact(v - hv, .false.); dm = lw%d
          dd_dv = (dp - dm)/(2.0_wp*hv)
       class default
          return
@@ -490,14 +492,11 @@ contains
       type(model_t), intent(inout) :: model
       integer, intent(in) :: e, face
       real(wp), intent(in) :: t, x(:)
-      integer :: l, r
       call model%kinematics(t, x)
-      l = model%elements(e)%e%left
-      r = model%elements(e)%e%right
       v = 0.0_wp
       select type (el => model%elements(e)%e)
       class is (clearance_element_t)
-         v = face*(el%cl%r1*model%omega(l) - el%cl%r2*model%omega(r))
+         v = face*(el%cl%r1*model%omega(el%left) - el%cl%r2*model%omega(el%right))
       end select
    end function approach
 
