@@ -129,7 +129,7 @@ contains
       real(wp), intent(in) :: tol
       type(model_t) :: m
       type(run_result_t) :: res
-      real(wp) :: worst, t_p, wrong_kind
+      real(wp) :: worst, t_p, wrong_kind, d_hand
       integer :: j, n, mm
       call test_begin('both speeds held ('//integ//'): slide reversals at the pitch points')
       call load_model_text("&run t_end = 0.012, dt = 1e-6, integrator = '"//integ//"', track_energy"// &
@@ -156,6 +156,12 @@ contains
       ! rk4: the event time tolerance 1e-9 dt = 1e-15 s, plus the angle's rounding (~1e-16 rad at 100 rad/s);
       ! CVODE: its root finder's tolerance ~ 100 u (|t| + |h|)
       call check('max |t_event - t_pitch| (s)', worst, 0.0_wp, abs_tol=tol)
+      ! the energy the friction took: mu (w1 + w2) sum_k W_k |s_k - AP| integrated over the roll,
+      ! exact by trapezoids between the kinks (zone bounds, pitch points); CVODE's error control
+      ! holds the dissipation state to its tolerances
+      d_hand = hand_loss(-0.2_wp, -0.2_wp + w1*0.012_wp)
+      call check('dissipated energy / hand integral of mu W |v_s| - 1', res%y_final(m%n_states + 1)/d_hand - 1.0_wp, &
+                 0.0_wp, abs_tol=merge(1.0e-12_wp, 1.0e-7_wp, integ == 'rk4'))
       ! held speeds: the drives put in the friction loss; RK4 integrates the piecewise linear loss
       ! exactly between located events (rounding only)
       call check('energy ledger closes: max |residual| / scale', res%energy_residual_max/res%energy_scale, 0.0_wp, &
@@ -230,6 +236,59 @@ contains
              "&initial node = 'a', angle = -0.2, speed = 300.0 /"//nl// &
              "&initial node = 'b', angle = "//real_text((-0.2_wp*rb1 - b - pen/10.0_wp)/rb2)//", speed = 150.0 /"
    end function loaded_deck
+
+   !> The friction loss of the held-speed run from driver angle th0 to th1: per unit driver angle
+   !> P/w1 = mu (w1 + w2)/w1 sum_k W_k |s_k - AP| (single pair W = k pen at s; two pairs c2 k pen / 2
+   !> each at s and s + p_b), linear between the zone bounds and the pitch points.
+   real(wp) function hand_loss(th0, th1) result(e)
+      real(wp), intent(in) :: th0, th1
+      real(wp) :: knots(64), a, q
+      integer :: n, j, i
+      n = 0
+      do j = -2, 6
+         knots(n + 1:n + 3) = [j*two_pi/n1 - alpha, (j + mp - 1.0_wp)*two_pi/n1 - alpha, j*two_pi/n1]
+         n = n + 3
+      end do
+      knots(n + 1:n + 2) = [th0, th1]
+      n = n + 2
+      knots(1:n) = sorted(knots(1:n))
+      e = 0.0_wp
+      do i = 1, n - 1
+         if (knots(i) < th0 .or. knots(i + 1) > th1) cycle
+         a = knots(i); q = knots(i + 1)
+         e = e + 0.5_wp*(q - a)*(p_over_w(a + 1.0e-13_wp*(q - a), a) + p_over_w(q - 1.0e-13_wp*(q - a), q))
+      end do
+   end function hand_loss
+
+   !> Loss per driver angle at th, the zone taken at th_zone's side (th and th_zone within a zone piece)
+   real(wp) function p_over_w(th_zone, th) result(p)
+      real(wp), intent(in) :: th_zone, th
+      real(wp) :: u, f, s
+      u = n1*(th_zone + alpha)/two_pi
+      f = u - floor(u)
+      s = rb1*(th + alpha - floor(u)*two_pi/n1)          ! the trailing pair's roll from A
+      if (f > mp - 1.0_wp) then
+         p = k*pen*abs(s - ap)
+      else
+         p = 0.5_wp*c2*k*pen*(abs(s - ap) + abs(s + pb - ap))
+      end if
+      p = p*mu*(w1 + w1*rb1/rb2)/w1
+   end function p_over_w
+
+   pure function sorted(x) result(y)
+      real(wp), intent(in) :: x(:)
+      real(wp) :: y(size(x)), t
+      integer :: i, j
+      y = x
+      do i = 2, size(y)
+         t = y(i); j = i - 1
+         do while (j >= 1)
+            if (y(j) <= t) exit
+            y(j + 1) = y(j); j = j - 1
+         end do
+         y(j + 1) = t
+      end do
+   end function sorted
 
    function real_text(x) result(s)
       real(wp), intent(in) :: x
