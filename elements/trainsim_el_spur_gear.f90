@@ -26,7 +26,7 @@ module trainsim_el_spur_gear
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form, ce_torques, ce_torques_dissipation, &
-      ce_dissipation
+      ce_dissipation, ce_torque_jacobian
    use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hf_none, hg_none
    use trainsim_tooth_friction, only: tooth_friction_t
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
@@ -72,6 +72,7 @@ module trainsim_el_spur_gear
       procedure :: torques => spur_torques
       procedure :: dissipation_power => spur_dissipation
       procedure :: torques_dissipation => spur_torques_dissipation
+      procedure :: torque_jacobian => spur_torque_jacobian
       procedure, private :: roll
    end type spur_gear_t
 
@@ -496,6 +497,20 @@ contains
          call ce_torques(self, thl, wl, thr, wr, tl, tr)
       end if
    end subroutine spur_torques
+
+   !> The clearance element's Jacobian plus the friction's partials.
+   pure subroutine spur_torque_jacobian(self, thl, wl, thr, wr, jt)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      real(wp) :: fs
+      call ce_torque_jacobian(self, thl, wl, thr, wr, jt)
+      if (.not. self%fric%on()) return
+      fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      if (self%cl%mode*fs > 0.0_wp) call self%fric%add_jacobian(self%roll(thl), self%pairs, self%cl%mode, &
+                                                                self%cl%mode*fs, self%cl%mode*jt(2, :)/self%cl%r2, &
+                                                                wl, wr, self%cl%r1, jt)
+   end subroutine spur_torque_jacobian
 
    pure real(wp) function spur_dissipation(self, thl, wl, thr, wr) result(p)
       class(spur_gear_t), intent(in) :: self

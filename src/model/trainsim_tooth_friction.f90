@@ -51,6 +51,7 @@ module trainsim_tooth_friction
       procedure :: on => tf_on
       procedure :: n_guards => tf_n_guards
       procedure :: add => tf_add
+      procedure :: add_jacobian => tf_add_jacobian
       procedure :: guards => tf_guards
       procedure :: set_signs => tf_set_signs
       procedure :: flip => tf_flip
@@ -168,6 +169,36 @@ contains
          p = p + e*wk*v
       end do
    end subroutine tf_add
+
+   !> Add the partials of `add`'s torques with respect to (thl, wl, thr, wr) to
+   !> jt(2, 4): the normal force w with its partials dw, the roll s (ds/dthl = r_b1).
+   pure subroutine tf_add_jacobian(self, s, pairs, face, w, dw, wl, wr, r1, jt)
+      class(tooth_friction_t), intent(in) :: self
+      real(wp), intent(in) :: s, w, dw(4), wl, wr, r1
+      integer, intent(in) :: pairs, face
+      real(wp), intent(inout) :: jt(2, 4)
+      real(wp) :: rho1, rho2, d1, d2, v, e, de, wk, dv(4)
+      integer :: k
+      wk = w/real(pairs, wp)
+      d1 = merge(-r1, r1, face < 0)                   ! d rho1 / d thl
+      d2 = self%s2*d1                                 ! d rho2 / d thl
+      do k = 1, pairs
+         call friction_arms(self, s + (k - 1)*self%pb, face, rho1, rho2)
+         v = wl*rho1 - wr*rho2
+         if (self%speed) then
+            e = self%mu*tanh(v/self%v_reg)
+            de = self%mu*(1.0_wp - tanh(v/self%v_reg)**2)/self%v_reg
+         else
+            e = self%mu*self%sig(k)
+            de = 0.0_wp
+         end if
+         dv = [wl*d1 - wr*d2, rho1, 0.0_wp, -rho2]
+         jt(1, :) = jt(1, :) - (de*dv*wk*rho1 + e*dw/real(pairs, wp)*rho1)
+         jt(2, :) = jt(2, :) + (de*dv*wk*rho2 + e*dw/real(pairs, wp)*rho2)
+         jt(1, 1) = jt(1, 1) - e*wk*d1
+         jt(2, 1) = jt(2, 1) + e*wk*d2
+      end do
+   end subroutine tf_add_jacobian
 
    !> 'constant': guards sigma_k v_s,k of the pairs in contact (1: no pair).
    pure subroutine tf_guards(self, s, pairs, face, wl, wr, g)
