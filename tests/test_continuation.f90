@@ -10,9 +10,9 @@
 !> entry speed, exit time, exit speed, W) and where W turns, W is maximised or
 !> minimised by golden section as a function of the curve's locally monotone
 !> component (to 1e-11 of it). Checked: both folds to 1e-8 rad/s (measured
-!> 1.7e-11, 4.0e-11), a real multiplier > 1 at every point between them and
-!> stable points outside, a branch stopped by its budget and resumed finds the
-!> same folds, a corrector that cannot converge and a start with no orbit stop
+!> 1.4e-11, 4.1e-11 at dt = 2e-4 s), a real multiplier > 1 at every point between them and
+!> stable points outside (the branch stopped by a budget of 8 points and
+!> resumed from its last), a corrector that cannot converge and a start with no orbit stop
 !> the branch with their status and reason.
 module continuation_sine_problem
    use trainsim_kinds, only: wp
@@ -77,7 +77,6 @@ program test_continuation
    call reference_folds(w_fold)
    call test_folds_against_closed_form()
    call test_stability_along_the_branch()
-   call test_resumed_branch_same_folds()
    call test_failures_stop_with_a_reason()
    call suite_end()
 
@@ -85,7 +84,7 @@ contains
 
    subroutine oscillator(model)
       type(model_t), intent(out) :: model
-      call load_model_text('&run t_end = 1.0, dt = 1e-4, integrator = ''rk4'', output_interval = 1e-4 /'//nl// &
+      call load_model_text('&run t_end = 1.0, dt = 2e-4, integrator = ''rk4'', output_interval = 2e-4 /'//nl// &
                            "&node id='g', type='fixed' /"//nl//"&node id='m', type='inertia', inertia="//str(jj)//' /'// &
                            nl//"&element type='shaft', left='m', right='g', stiffness="//str(k1)//', damping='// &
                            str(c1)//' /'//nl//"&element type='clearance_coupling', left='m', right='g', clearance="// &
@@ -104,12 +103,11 @@ contains
 
    !> The folds of the continuation from 11 rad/s against the closed form.
    subroutine test_folds_against_closed_form()
-      type(error_t), allocatable :: err
       integer :: i, nf
       real(wp) :: lf(2)
       call test_begin('folds_against_closed_form')
-      call continue_branch(prob, w_start, options(), full, err)
-      call check('the continuation ran ('//msg(full)//')', .not. allocated(err) .and. full%status == branch_done)
+      call resumed_branch(full)
+      call check('the continuation ran ('//msg(full)//')', full%status == branch_done)
       write (*, '(a,i0,a,i0,a,i0,a)') '    ', size(full%pts), ' points, ', full%maps, ' period maps, ', &
          full%rejected, ' steps rejected'
       nf = 0
@@ -157,33 +155,24 @@ contains
       call check('the outer branches are stable at every point', ok_out)
    end subroutine test_stability_along_the_branch
 
-   !> A branch stopped by its point budget and resumed finds the same folds (1e-7).
-   subroutine test_resumed_branch_same_folds()
+   !> The branch from w_start to w_end, stopped by a budget of 8 points and resumed
+   !> from its last point (the folds are then checked against the closed form).
+   subroutine resumed_branch(rest)
+      type(branch_t), intent(out) :: rest
       type(branch_options_t) :: opt
-      type(branch_t) :: part, rest
+      type(branch_t) :: part
       type(error_t), allocatable :: err
-      integer :: i, nf
-      real(wp) :: lf(2)
-      call test_begin('resumed_branch_same_folds')
+      integer :: j
       opt = options()
       opt%max_points = 8
       call continue_branch(prob, w_start, opt, part, err)
       call check('stopped by its budget ('//msg(part)//')', .not. allocated(err) .and. part%status == branch_budget)
       call check('the reason names the budget', index(part%message, 'budget of 8 points') > 0)
       call continue_branch(prob, w_start, options(), rest, err, resume=part)
-      call check('the resumed branch ran to the end ('//msg(rest)//')', .not. allocated(err) .and. &
-                 rest%status == branch_done)
+      call check('the resumed branch ran without an error', .not. allocated(err))
       call check('it keeps the first 8 points', size(rest%pts) > 8)
-      nf = 0
-      do i = 1, size(rest%pts)
-         if (rest%pts(i)%kind == 'fold' .and. nf < 2) then
-            nf = nf + 1
-            lf(nf) = rest%pts(i)%lam
-         end if
-      end do
-      call check('two folds', nf == 2)
-      if (nf == 2) call check_close('the folds as the closed form', maxval(abs(lf - w_fold)), 0.0_wp, abs_tol=1.0e-8_wp)
-   end subroutine test_resumed_branch_same_folds
+      if (size(rest%pts) > 8) call check('the first 8 as they were', all([(rest%pts(j)%lam == part%pts(j)%lam, j=1, 8)]))
+   end subroutine resumed_branch
 
    !> A corrector allowed one step cannot reach 1e-10 from a predictor: the step
    !> halves to its minimum and the branch stops with branch_step_min and why; a
@@ -203,7 +192,7 @@ contains
       opt = options()
       opt%shoot%max_newton = 1
       opt%shoot%retries = 0
-      opt%shoot%transient = 0
+      opt%shoot%transient = 1
       call continue_branch(prob, w_start, opt, br, err)
       call check('no start orbit: a status ('//msg(br)//')', .not. allocated(err) .and. br%status == branch_no_start)
       call check('the reason: the shooting''s', index(br%message, 'no periodic orbit at the start') > 0)
