@@ -7,7 +7,7 @@ module trainsim_cmd_continue
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_io, err_input
-   use trainsim_strings, only: str
+   use trainsim_strings, only: str, string_t
    use trainsim_model, only: model_t
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
@@ -30,6 +30,7 @@ module trainsim_cmd_continue
       type(deck_t) :: deck
       type(override_t), allocatable :: ovs(:)
       character(len=:), allocatable :: key
+      real(wp) :: lam_first = 0.0_wp
    contains
       procedure :: model_at => deck_model_at
    end type deck_problem_t
@@ -109,6 +110,7 @@ contains
       end do
       if (len(deck_path) == 0) call refuse('no deck given (usage: trainsim continue DECK --param TARGET.KEY=FROM:TO)')
       call parse_param(param, prob%key, lam0, lam1)
+      prob%lam_first = lam0
       if (resume .and. len(out_path) == 0) call refuse('--resume needs -o FILE (the branch to continue)')
       opt%lam_min = min(lam0, lam1)
       opt%lam_max = max(lam0, lam1)
@@ -188,8 +190,11 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: u, ios, j
       real(wp), allocatable :: dmin(:), dmax(:)
+      type(string_t), allocatable :: ids(:)
       call print_point(br, i, err)
       if (i == 1) then
+         call element_ids(ids, err)
+         if (allocated(err)) return
          open (newunit=u, file=out_path, status='replace', action='write', iostat=ios)
          if (ios /= 0) then
             call fatal_error(err, "cannot write the branch file '"//out_path//"'", err_io)
@@ -200,8 +205,9 @@ contains
          write (u, '(a,es25.17)') '# phase', br%phase
          write (u, '(a,i0)') '# states ', size(br%scale)
          write (u, '(a,*(es25.17))') '# scale', br%scale
-         write (u, '(a)') 'lambda,period,t0,kind,stable,max_abs_mu,corrector,maps,ds,residual,disp_min,disp_max,'// &
-            'x...,tangent...,mu_re...,mu_im...'
+         write (u, '(a,i0,*(1x,a))') '# elements ', size(ids), (ids(j)%s, j=1, size(ids))
+         write (u, '(a)') 'lambda,period,t0,kind,stable,max_abs_mu,corrector,maps,ds,residual,'// &
+            'disp_min(element)...,disp_max(element)...,x...,tangent...,mu_re...,mu_im...'
       else
          open (newunit=u, file=out_path, status='old', position='append', action='write', iostat=ios)
          if (ios /= 0) then
@@ -222,12 +228,26 @@ contains
                    advance='no') p%lam, p%period, p%t0, findloc(kinds, p%kind, 1) - 1, &
                merge(1, 0, p%stability == 'stable'), maxval(abs(p%mu)), real(p%corrector, wp), real(p%maps, wp), &
                p%ds, p%residual
-            write (u, '(*(",",es25.17))') maxval(dmin), maxval(dmax), p%x, p%tangent, (real(p%mu(j)), j=1, size(p%mu)), &
+            write (u, '(*(",",es25.17))') dmin, dmax, p%x, p%tangent, (real(p%mu(j)), j=1, size(p%mu)), &
                (aimag(p%mu(j)), j=1, size(p%mu))
          end associate
       end if
       close (u)
    end subroutine on_point
+
+   !> The deck's element ids (the columns of the extremes).
+   subroutine element_ids(ids, err)
+      type(string_t), allocatable, intent(out) :: ids(:)
+      type(error_t), allocatable, intent(out) :: err
+      type(model_t) :: m
+      integer :: e
+      call prob%model_at(prob%lam_first, m, err)
+      if (allocated(err)) return
+      allocate (ids(size(m%elements)))
+      do e = 1, size(m%elements)
+         ids(e)%s = m%elements(e)%e%id
+      end do
+   end subroutine element_ids
 
    !> Every element's displacement extremes over the orbit of point p (its run).
    subroutine orbit_extremes(p, phase, dmin, dmax, err)
@@ -264,9 +284,10 @@ contains
       character(len=20000) :: line
       type(branch_point_t) :: p
       real(wp), allocatable :: row(:)
-      integer :: u, ios, n, kind, st
+      integer :: u, ios, n, kind, st, ne
       allocate (br%pts(0))
       n = -1
+      ne = -1
       open (newunit=u, file=path, status='old', action='read', iostat=ios)
       if (ios /= 0) then
          call fatal_error(err, "cannot read the branch file '"//path//"' to resume", err_io)
@@ -279,10 +300,14 @@ contains
          if (index(line, '# phase') == 1) read (line(8:), *) br%phase
          if (index(line, '# states') == 1) then
             read (line(9:), *) n
-            allocate (br%scale(n), row(12 + 4*n + 1))
+            allocate (br%scale(n))
          end if
          if (index(line, '# scale') == 1) read (line(8:), *) br%scale
-         if (line(1:1) == '#' .or. line(1:6) == 'lambda' .or. n < 0) cycle
+         if (index(line, '# elements') == 1) then
+            read (line(11:), *) ne
+            allocate (row(10 + 2*ne + 4*n + 1))
+         end if
+         if (line(1:1) == '#' .or. line(1:6) == 'lambda' .or. n < 0 .or. ne < 0) cycle
          read (line, *, iostat=ios) row
          if (ios /= 0) exit   ! a row cut by a kill: the points before it
          p%lam = row(1)
@@ -296,9 +321,11 @@ contains
          p%maps = nint(row(8))
          p%ds = row(9)
          p%residual = row(10)
-         p%x = row(13:12 + n)
-         p%tangent = row(13 + n:13 + 2*n)
-         p%mu = cmplx(row(14 + 2*n:13 + 3*n), row(14 + 3*n:13 + 4*n), kind=wp)
+         associate (o => 10 + 2*ne)
+            p%x = row(o + 1:o + n)
+            p%tangent = row(o + n + 1:o + 2*n + 1)
+            p%mu = cmplx(row(o + 2*n + 2:o + 3*n + 1), row(o + 3*n + 2:o + 4*n + 1), kind=wp)
+         end associate
          br%pts = [br%pts, p]
          br%maps = p%maps
       end do

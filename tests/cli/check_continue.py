@@ -69,7 +69,8 @@ with tempfile.TemporaryDirectory() as tmp:
           lam[0] == 645 and lam[-1] < 600 and all(b < a for a, b in zip(lam, lam[1:])), lam)
     check("every point stable (max |mu| < 1)", all(p[4] == 1 and p[5] < 1 for p in allr))
     n = len(scale)
-    x = allr[-1][12:12 + n]
+    ne = int(open(f).read().split("# elements ")[1].split()[0])
+    x = allr[-1][10 + 2 * ne:10 + 2 * ne + n]
     r = run("periodic", rig, *damped, "--set", f"mesh.mesh_frequency={lam[-1]!r}")
     check("trainsim periodic at the last point's frequency converges", r.returncode == 0, r.stderr)
     xs = [float(m.group(1)) for m in re.finditer(r"\):[ \t]+(\S+)", r.stdout.split("the orbit at t0")[1].split("Floquet")[0])][:n]
