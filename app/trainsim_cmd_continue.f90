@@ -225,7 +225,7 @@ contains
                return
             end if
             write (u, '(es25.17,2(",",es25.17),2(",",i0),5(",",es25.17))', &
-                   advance='no') p%lam, p%period, p%t0, findloc(kinds, p%kind, 1) - 1, &
+                   advance='no') p%lam, p%period, p%t0, kind_code(p%kind), &
                merge(1, 0, p%stability == 'stable'), maxval(abs(p%mu)), real(p%corrector, wp), real(p%maps, wp), &
                p%ds, p%residual
             write (u, '(*(",",es25.17))') dmin, dmax, p%x, p%tangent, (real(p%mu(j)), j=1, size(p%mu)), &
@@ -234,6 +234,14 @@ contains
       end if
       close (u)
    end subroutine on_point
+
+   !> 0 a regular point, 1 fold, 2 period-doubling, 3 Neimark-Sacker.
+   integer function kind_code(kind) result(k)
+      character(len=*), intent(in) :: kind
+      do k = 3, 1, -1
+         if (kind == trim(kinds(k))) return
+      end do
+   end function kind_code
 
    !> The deck's element ids (the columns of the extremes).
    subroutine element_ids(ids, err)
