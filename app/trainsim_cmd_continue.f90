@@ -19,7 +19,7 @@ module trainsim_cmd_continue
    use trainsim_arclength, only: branch_problem_t, branch_options_t, branch_point_t, branch_t, continue_branch, &
                                  branch_done
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
-   use trainsim_cmd_help, only: command_usage
+   use trainsim_cmd_help, only: continue_usage
    implicit none
    private
 
@@ -73,7 +73,7 @@ contains
       do while (i <= nargs)
          select case (arg(i))
          case ('-h', '--help')
-            call command_usage('continue', output_unit)
+            call continue_usage(output_unit)
             call quit(0)
          case ('-o', '--output')
             out_path = text_value(i)
