@@ -108,7 +108,10 @@ contains
             '  -h, --help  this text', '', &
             'exit status: 0 success, 2 bad input or file'
       case ('gear')
-         write (unit, '(a)') 'usage: trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', '', &
+         write (unit, '(a)') 'usage: trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', &
+            '       trainsim gear DECK [--mesh ID] [--points N] [-o TABLE] [--plot OUT.png|svg|pdf]', '', &
+            'With a DECK: a spur gear''s mesh stiffness k c(u) and its loaded and unloaded static', &
+            'transmission error over a tooth period (or the hunting period), as a table and a figure.', '', &
             'Spur gear constants from the geometry (App. E, eqs. 3.9 and 3.12): radii, addendum, length of', &
             'action, base pitch, contact ratio, approach angle, gear ratio, pitch-disk inertias, mesh', &
             'stiffness, and a deck fragment in TRAIN''s seven constants. Implausible geometry (a unit slip)', &
