@@ -14,12 +14,13 @@
 !> element's, bit for bit (a = theta_l, a' = omega_l).
 module trainsim_excited_mesh
    use trainsim_kinds, only: wp, two_pi
+   use trainsim_event, only: event_t
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_mesh_excitation, only: mesh_excitation_t
    implicit none
    private
 
-   public :: excited_mesh_t
+   public :: excited_mesh_t, excited_input_power
 
    !> |driver angle| beyond which the roll is taken at this value (D-26).
    real(wp), parameter :: theta_cap = 1.0e250_wp
@@ -40,9 +41,13 @@ module trainsim_excited_mesh
       procedure :: dissipation_power => em_dissipation
       procedure :: potential_energy => em_potential
       procedure :: torque_jacobian => em_torque_jacobian
-      procedure :: input_power => em_input_power
+      procedure :: input_power => excited_input_power
       procedure :: factor_derivative => em_factor_derivative
       procedure :: linear_factor => em_linear_factor
+      procedure :: guards => em_guards
+      procedure :: init_mode => em_init_mode
+      procedure :: update_mode => em_update_mode
+      procedure :: status => em_status
    end type excited_mesh_t
 
 contains
@@ -137,6 +142,8 @@ contains
       jt = 0.0_wp
       if (self%cl%mode == 0) return
       call self%excitation(thl, c, dc, e, e1)
+      c = self%factor(thl)
+      dc = self%factor_derivative(thl)
       h = 1.0e-6_wp*two_pi/self%teeth
       call self%excitation(thl + h, cx, dcx, ex, ep)
       call self%excitation(thl - h, cx, dcx, ex, em)
@@ -152,7 +159,7 @@ contains
    end subroutine em_torque_jacobian
 
    !> The excitation's work: dc/dt E(p) - F_s de/dt (see the module's doc).
-   pure real(wp) function em_input_power(self, thl, wl, thr, wr) result(pw)
+   pure real(wp) function excited_input_power(self, thl, wl, thr, wr) result(pw)
       class(excited_mesh_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp) :: c, dc, e, de, a, va, pen, fs
@@ -160,12 +167,13 @@ contains
       if (self%cl%mode == 0 .or. .not. self%ex%active) return
       call self%excitation(thl, c, dc, e, de)
       call self%shift(thl, wl, a, va)
+      c = self%factor(thl)
       pen = self%cl%mode*(self%cl%r1*a - self%cl%r2*thr) - self%cl%b
-      pw = dc*wl*self%cl%law%elastic_energy(pen)
+      pw = self%factor_derivative(thl)*wl*self%cl%law%elastic_energy(pen)
       if (.not. self%ex%has_te) return
       fs = self%cl%contact_force(c, a, va, thr, wr)
       pw = pw - fs*de*wl
-   end function em_input_power
+   end function excited_input_power
 
    !> d factor / d thl: 0 between zone events unless the stiffness varies.
    pure real(wp) function em_factor_derivative(self, thl) result(dc)
@@ -187,4 +195,52 @@ contains
          c = self%factor(0.0_wp)
       end if
    end function em_linear_factor
+
+   !> Guards 1-2: the faces at the shifted driver angle (a type with zones adds its own).
+   pure subroutine em_guards(self, thl, wl, thr, wr, g)
+      class(excited_mesh_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: g(:)
+      real(wp) :: a, va
+      associate (u1 => wl, u2 => wr)
+      end associate
+      call self%shift(thl, 0.0_wp, a, va)
+      call self%cl%guards(a, thr, g(1:2))
+   end subroutine em_guards
+
+   subroutine em_init_mode(self, thl, wl, thr, wr)
+      class(excited_mesh_t), intent(inout) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: a, va
+      call self%shift(thl, wl, a, va)
+      call self%cl%init(a, va, thr, wr)
+   end subroutine em_init_mode
+
+   subroutine em_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
+      class(excited_mesh_t), intent(inout) :: self
+      real(wp), intent(in) :: t, thl, wl, thr, wr
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(out) :: nev
+      real(wp) :: a, va
+      associate (u1 => t, u2 => thr)
+      end associate
+      nev = 0
+      call self%shift(thl, wl, a, va)
+      call self%cl%update(va, wr, fired(1:2), ev, nev)
+   end subroutine em_update_mode
+
+   !> displacement = delta (the measured TE, e included), force, contact = face, pairs = 0.
+   pure subroutine em_status(self, thl, wl, thr, wr, disp, force, contact, pairs)
+      class(excited_mesh_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      real(wp) :: a, va
+      call self%shift(thl, wl, a, va)
+      disp = self%cl%delta(thl, thr)
+      force = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
+      contact = self%cl%mode
+      pairs = 0
+   end subroutine em_status
 end module trainsim_excited_mesh

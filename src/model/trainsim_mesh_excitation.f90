@@ -54,6 +54,7 @@ module trainsim_mesh_excitation
       real(wp) :: cmin = 1.0_wp, cmax = 1.0_wp, cmean = 1.0_wp   !< over a tooth period (no fault)
    contains
       procedure :: configure => ex_configure
+      procedure :: configure_te => ex_configure_te
       procedure :: at => ex_at
       procedure :: at_roll => ex_at_roll
       procedure :: unloaded_te => ex_unloaded_te
@@ -162,17 +163,7 @@ contains
       call read_tooth_list(grp, 'pitch_errors_driver', teeth, self%pitch1, err); if (allocated(err)) return
       call read_tooth_list(grp, 'profile_errors_driven', teeth2, self%prof2, err); if (allocated(err)) return
       call read_tooth_list(grp, 'pitch_errors_driven', teeth2, self%pitch2, err); if (allocated(err)) return
-      call grp%get_real('runout_driver', self%ro1, err, default=0.0_wp); if (allocated(err)) return
-      call grp%require_nonnegative('runout_driver', self%ro1, err); if (allocated(err)) return
-      call grp%get_real('runout_driver_phase', self%rp1, err, default=0.0_wp); if (allocated(err)) return
-      call grp%get_real('runout_driven', self%ro2, err, default=0.0_wp); if (allocated(err)) return
-      call grp%require_nonnegative('runout_driven', self%ro2, err); if (allocated(err)) return
-      call grp%get_real('runout_driven_phase', self%rp2, err, default=0.0_wp); if (allocated(err)) return
-      if (self%ro2 > 0.0_wp .and. .not. teeth2 > 0.0_wp) then
-         call fatal_error(err, grp%where('runout_driven')//': error: the driven gear''s tooth count is not known '// &
-                          '(rb_driven/rb_driver * teeth is not a whole number): give the geometry form', err_input)
-         return
-      end if
+      call read_runout(self, grp, err); if (allocated(err)) return
       ! a fault: one tooth's stiffness times a factor over its mesh
       call grp%get_real('fault_tooth', v, err, default=0.0_wp); if (allocated(err)) return
       if (v /= 0.0_wp) then
@@ -208,6 +199,38 @@ contains
       if (self%model == sm_iso) call iso_shape(self)
       call sample_period(self)
    end subroutine ex_configure
+
+   !> The displacement excitation alone (te_harmonics, te_phases, run-out): for a
+   !> mesh whose stiffness is its own (the helical gear's eq. 6.1).
+   subroutine ex_configure_te(self, grp, teeth, teeth2, err)
+      class(mesh_excitation_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      real(wp), intent(in) :: teeth, teeth2
+      type(error_t), allocatable, intent(out) :: err
+      self%teeth = teeth; self%teeth2 = teeth2
+      call read_harmonics(grp, 'te_harmonics', 'te_phases', self%ea, self%ep, .false., err); if (allocated(err)) return
+      call read_runout(self, grp, err); if (allocated(err)) return
+      self%has_te = size(self%ea) > 0 .or. self%ro1 > 0.0_wp .or. self%ro2 > 0.0_wp
+      self%active = self%has_te
+   end subroutine ex_configure_te
+
+   !> runout_driver, runout_driven (>= 0) and their phases.
+   subroutine read_runout(self, grp, err)
+      class(mesh_excitation_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(error_t), allocatable, intent(inout) :: err
+      call grp%get_real('runout_driver', self%ro1, err, default=0.0_wp); if (allocated(err)) return
+      call grp%require_nonnegative('runout_driver', self%ro1, err); if (allocated(err)) return
+      call grp%get_real('runout_driver_phase', self%rp1, err, default=0.0_wp); if (allocated(err)) return
+      call grp%get_real('runout_driven', self%ro2, err, default=0.0_wp); if (allocated(err)) return
+      call grp%require_nonnegative('runout_driven', self%ro2, err); if (allocated(err)) return
+      call grp%get_real('runout_driven_phase', self%rp2, err, default=0.0_wp); if (allocated(err)) return
+      if (self%ro2 > 0.0_wp .and. .not. self%teeth2 > 0.0_wp) then
+         call fatal_error(err, grp%where('runout_driven')//': error: the driven gear''s tooth count is not known '// &
+                          '(rb_driven/rb_driver * teeth is not a whole number): give the geometry form', err_input)
+         return
+      end if
+   end subroutine read_runout
 
    !> Amplitudes (>= 0) and phases (rad) of the same length; phases default to 0.
    subroutine read_harmonics(grp, akey, pkey, a, p, required, err)
