@@ -33,9 +33,9 @@ module trainsim_excited_mesh
       integer :: pairs = 1                !< current zone: 1 or 2 pairs
       real(wp) :: zone_m = 0.0_wp         !< the current zone's count of teeth entered (its newest pair's)
    contains
-      procedure :: roll => em_roll
-      procedure :: excitation => em_excitation
-      procedure :: shift => em_shift
+      procedure, non_overridable :: roll => em_roll
+      procedure, non_overridable :: excitation => em_excitation
+      procedure, non_overridable :: shift => em_shift
       procedure :: torques => em_torques
       procedure :: torques_dissipation => em_torques_dissipation
       procedure :: dissipation_power => em_dissipation

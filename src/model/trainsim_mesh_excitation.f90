@@ -197,7 +197,7 @@ contains
       self%varies = self%model /= sm_zones
       self%active = self%varies .or. self%has_te .or. self%fault_tooth > 0
       if (self%model == sm_iso) call iso_shape(self)
-      call sample_period(self)
+      if (self%varies) call sample_period(self)   ! (TRAIN's zones: 1 and c2, no sampling at start-up)
    end subroutine ex_configure
 
    !> The displacement excitation alone (te_harmonics, te_phases, run-out): for a
