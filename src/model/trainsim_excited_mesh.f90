@@ -13,14 +13,19 @@
 !> Without excitation (`ex%active` false) every procedure is the clearance
 !> element's, bit for bit (a = theta_l, a' = omega_l).
 module trainsim_excited_mesh
-   use trainsim_kinds, only: wp, two_pi
+   use trainsim_kinds, only: wp, pi, two_pi
+   use trainsim_error, only: error_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
    use trainsim_event, only: event_t
    use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_mesh_excitation, only: mesh_excitation_t
+   use trainsim_mesh_excitation, only: mesh_excitation_t, sm_iso, iso_single_pair_stiffness
    implicit none
    private
 
-   public :: excited_mesh_t, excited_input_power
+   public :: excited_mesh_t, excited_input_power, configure_mesh_excitation
+   ! the torques under names a concrete type's own `torques` can fall back on (tooth friction)
+   public :: em_torques, em_torques_dissipation, em_dissipation, em_torque_jacobian
 
    !> |driver angle| beyond which the roll is taken at this value (D-26).
    real(wp), parameter :: theta_cap = 1.0e250_wp
@@ -33,7 +38,7 @@ module trainsim_excited_mesh
       integer :: pairs = 1                !< current zone: 1 or 2 pairs
       real(wp) :: zone_m = 0.0_wp         !< the current zone's count of teeth entered (its newest pair's)
    contains
-      procedure, non_overridable :: roll => em_roll
+      procedure, non_overridable :: mesh_roll => em_roll
       procedure, non_overridable :: excitation => em_excitation
       procedure, non_overridable :: shift => em_shift
       procedure :: torques => em_torques
@@ -52,6 +57,37 @@ module trainsim_excited_mesh
 
 contains
 
+   !> Read a spur pair's mesh excitation (after its own keys: teeth, r1, r2, the
+   !> contact ratio mp and two_pair_factor c2 known). teeth2 = 0 in TRAIN's
+   !> constants form: N2 = N r2/r1 when that is whole. stiffness_model =
+   !> 'iso6336' (geometry form: pitch module > 0, pressure angle phi in rad,
+   !> face width, no explicit stiffness) sets the mean mesh stiffness
+   !> c_gamma_alpha b (ISO 6336-1, N/(mm um) = 1e9 Pa; D-99).
+   subroutine configure_mesh_excitation(self, grp, units, teeth2, mp, c2, pitch_module, phi, face, internal, err)
+      class(excited_mesh_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      real(wp), intent(in) :: teeth2, mp, c2, pitch_module, phi, face
+      logical, intent(in) :: internal
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: n2, cp, cg
+      logical :: iso_ok
+      n2 = teeth2
+      if (.not. n2 > 0.0_wp) then
+         n2 = self%teeth*self%cl%r2/self%cl%r1
+         if (abs(n2 - anint(n2)) > 1.0e-6_wp*n2 .or. n2 < 1.0_wp) n2 = 0.0_wp
+         n2 = anint(n2)
+      end if
+      iso_ok = pitch_module > 0.0_wp .and. .not. (grp%holds('stiffness') .or. grp%holds('stiffness_per_width'))
+      call self%ex%configure(grp, self%teeth, n2, mp, c2, two_pi*self%cl%r1/self%teeth, iso_ok, err)
+      if (allocated(err)) return
+      if (self%ex%model == sm_iso) then
+         call iso_single_pair_stiffness(self%teeth, n2, phi*180.0_wp/pi, mp, internal, cp, cg)
+         self%cl%law%k = cg*1.0e9_wp/6894.757293168_wp*units%to_inch**2/units%to_lbf*face
+      end if
+      self%supplies_power = self%ex%varies .or. self%ex%has_te
+   end subroutine configure_mesh_excitation
+
    !> Roll position u (teeth) of the driver angle thl.
    pure real(wp) function em_roll(self, thl) result(u)
       class(excited_mesh_t), intent(in) :: self
@@ -64,7 +100,7 @@ contains
       class(excited_mesh_t), intent(in) :: self
       real(wp), intent(in) :: thl
       real(wp), intent(out) :: c, dc, e, de
-      call self%ex%at(self%roll(thl), self%zone_m, self%pairs, c, dc, e, de)
+      call self%ex%at(self%mesh_roll(thl), self%zone_m, self%pairs, c, dc, e, de)
       dc = dc*(self%teeth/two_pi)
       de = de*(self%teeth/two_pi)
    end subroutine em_excitation
