@@ -263,7 +263,7 @@ contains
       call self%fric%configure(grp, units, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%phi, &
                                self%internal, err)
       if (allocated(err)) return
-      ! the mesh excitation (issue 26; D-99); the geometry form's pitch, pressure angle and face for iso6336
+      ! the mesh excitation (issue 26; D-100); the geometry form's pitch, pressure angle and face for iso6336
       call configure_mesh_excitation(self, grp, units, self%teeth2, self%mp, self%c2, self%pitch_module, self%phi, &
                                      self%face, self%internal, err)
    contains

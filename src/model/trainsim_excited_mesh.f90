@@ -62,7 +62,7 @@ contains
    !> constants form: N2 = N r2/r1 when that is whole. stiffness_model =
    !> 'iso6336' (geometry form: pitch module > 0, pressure angle phi in rad,
    !> face width, no explicit stiffness) sets the mean mesh stiffness
-   !> c_gamma_alpha b (ISO 6336-1, N/(mm um) = 1e9 Pa; D-99).
+   !> c_gamma_alpha b (ISO 6336-1, N/(mm um) = 1e9 Pa; D-100).
    subroutine configure_mesh_excitation(self, grp, units, teeth2, mp, c2, pitch_module, phi, face, internal, err)
       class(excited_mesh_t), intent(inout) :: self
       type(deck_group_t), intent(inout) :: grp

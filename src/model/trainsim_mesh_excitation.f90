@@ -9,7 +9,7 @@
 !>   table    c(u) from (roll, factor) pairs over one tooth period, periodic
 !>   iso6336  a pair's stiffness along its path x in [0, m_p] (base pitches):
 !>            k_s(x) = c' b (1 - beta (2x/m_p - 1)^2), c' of ISO 6336-1 method B,
-!>            beta such that the mean mesh stiffness is c_gamma_alpha b (D-99)
+!>            beta such that the mean mesh stiffness is c_gamma_alpha b (D-100)
 !> A pair's stiffness is its share (zones, fourier, table: c/pairs; iso6336:
 !> k_s(x)) times fault_stiffness_factor on the faulted tooth.
 !>

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The spur gear's mesh excitation (issue 26, D-99) through the command line.
+"""The spur gear's mesh excitation (issue 26, D-100) through the command line.
 
 - `trainsim gear DECK -o TABLE` of a tip-relieved pair (linear and parabolic): the
   unloaded static TE of every row against the hand geometry, written here independently:
