@@ -2,17 +2,18 @@
 """Run trainsim's Kahraman-Singh-type sweep (inputs/sweep_kahraman_singh.nml) and compare it
 with the independent reference (ks_reference.py) on the same grid of Omega, up and down.
 
-    compare.py TRAINSIM [--short] [--ref REF.json] [--h5 SWEEP.h5] [--table] [--plot PNG]
+    compare.py TRAINSIM [--short] [--ref REF.json] [--h5 SWEEP.h5] [--table]
 
 Per point: the regime (no_impact / single_sided / double_sided), the response amplitude
 x_amp = (max - min)/2 of the dynamic transmission error over the measured cycles, in units
 of the half backlash b; per branch: the grid intervals of the jumps (neighbours whose
-amplitudes differ by more than a factor 1.5). Exit 0 when everything agrees within the
+regime changes between neighbours). Exit 0 when everything agrees within the
 tolerances (README.md, "Tolerances"), 1 when not, 77 when this trainsim does not have the
 spur gear's Fourier stiffness and TE keys yet (mesh26's; the comparison is then not made).
 
---short: the CTest's version, 9 values of Omega (both branches) bracketing the up-sweep's
-jump (0.70 -> 0.75) and the down-sweep's (0.55 -> 0.50), with the reference computed here.
+--short: the CTest's version, 8 values of Omega (0.35 to 0.7 by 0.05, both branches): the up-sweep's
+jump bracketed (0.60 -> 0.65), the hysteresis (0.60 single-sided down), double-sided at 0.40 down
+and the jump down 0.40 -> 0.35, with the reference computed here on the same grid.
 """
 import argparse
 import json
@@ -28,19 +29,34 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 import ks_reference as ref  # noqa: E402
 
-DECK = os.path.join(ROOT, "inputs", "sweep_kahraman_singh.nml")
 F_UNIT = 291.59642622813755     # teeth/s at Omega = 1: omega_n / (2 pi), README "Mapping"
 B = 0.005                       # half backlash, in
-SHORT = [0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.9]
+# The Fourier case's sweep deck: in inputs/ once the spur gear reads its keys; kept as
+# waiting/*.nml.waiting until then (a deck in inputs/ must run: decks_run, compare_builds).
+FOURIER_DECK = os.path.join(ROOT, "inputs", "sweep_kahraman_singh.nml")
+if not os.path.exists(FOURIER_DECK):
+    FOURIER_DECK = os.path.join(HERE, "waiting", "sweep_kahraman_singh.nml.waiting")
+# The cases: the deck, the reference's parameters, the full grid and the CTest's short one.
+CASES = {
+    "fourier": {"deck": FOURIER_DECK,
+                "params": ref.DEFAULT,
+                "full": [0.3 + 0.0125 * i for i in range(41)],
+                "short": [0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7]},
+    "two_level": {"deck": os.path.join(HERE, "two_level_sweep.nml"),
+                  "params": dict(ref.DEFAULT, e=[0.0, 0.0, 0.0], two_level={"c2": 1.8, "mp": 1.6676}),
+                  "full": [0.5 + 0.025 * i for i in range(41)],
+                  "short": [0.9, 0.95, 1.0, 1.1, 1.2]},
+}
+DECK = CASES["fourier"]["deck"]
 
 # Tolerances (README.md): both sides integrate the same ODE with RK4 and located events.
-AMP_RTOL = 0.01      # settled, same branch: amplitude to 1 %
+AMP_RTOL = 2e-3      # settled, same regime: amplitude to 0.2 % (README "Tolerances")
 JUMP_STEPS = 1       # a jump's grid interval may move by one grid step (slow transient at a fold)
 
 
-def sweep_deck(values):
+def sweep_deck(values, deck=None):
     """The bundled sweep deck with its Omega grid replaced by `values` (mesh frequencies)."""
-    text = open(DECK).read()
+    text = open(deck or DECK).read()
     vals = ", ".join("%.9g" % v for v in values)
     new, n = re.subn(r"&sweep parameter = 'mesh.mesh_frequency'[^/]*/",
                      "&sweep parameter = 'mesh.mesh_frequency', values = %s, continuation = 'both' /" % vals, text)
@@ -65,10 +81,10 @@ def has_fourier_keys(exe):
         return True, ""
 
 
-def run_trainsim(exe, values, h5):
+def run_trainsim(exe, values, h5, src=None):
     with tempfile.TemporaryDirectory() as tmp:
         deck = os.path.join(tmp, "ks_sweep.nml")
-        open(deck, "w").write(sweep_deck(values))
+        open(deck, "w").write(sweep_deck(values, src))
         if os.path.exists(h5):
             os.remove(h5)
         r = subprocess.run([exe, "sweep", deck, "-o", h5, "--progress", "0"], capture_output=True, text=True,
@@ -112,16 +128,19 @@ def read_sweep(h5, e_tot):
     return out
 
 
-def reference(omegas, steps=128):
-    m = ref.Model(ref.DEFAULT)
+def reference(omegas, steps=128, params=None):
+    m = ref.Model(params or ref.DEFAULT)
     kw = dict(steps_per_period=steps, settle_min=100, settle_max=2000, measure=40)
     return {"up": ref.sweep(m, omegas, **kw), "down": ref.sweep(m, omegas[::-1], **kw)}
 
 
-def jump_index(points, ratio=1.25):
-    return [i for i in range(len(points) - 1)
-            if min(points[i]["x_amp"], points[i + 1]["x_amp"]) > 0
-            and max(points[i]["x_amp"], points[i + 1]["x_amp"]) / min(points[i]["x_amp"], points[i + 1]["x_amp"]) > ratio]
+def jump_index(points):
+    """Jumps of a branch: the grid intervals where the regime changes between neighbours."""
+    return [i for i in range(len(points) - 1) if points[i]["regime"] != points[i + 1]["regime"]]
+
+
+def settled(p):
+    return bool(p["settled"]) and p["settled"] != -1
 
 
 def compare(ts, rf, table=False):
@@ -133,41 +152,44 @@ def compare(ts, rf, table=False):
             failures.append("%s: %d trainsim runs, %d reference points" % (br, len(a), len(b)))
             continue
         ja, jb = jump_index(a), jump_index(b)
-        near_jump = set()
-        for j in jb:
-            near_jump.update(range(j - JUMP_STEPS, j + JUMP_STEPS + 2))
+        moved = set()      # points between a jump's two positions, when it moved by a grid step
         if len(ja) != len(jb) or any(abs(x - y) > JUMP_STEPS for x, y in zip(ja, jb)):
             failures.append("%s: jumps at %s (trainsim) vs %s (reference)" % (
                 br, [(round(a[j]["omega"], 4), round(a[j + 1]["omega"], 4)) for j in ja],
                 [(round(b[j]["omega"], 4), round(b[j + 1]["omega"], 4)) for j in jb]))
+        else:
+            for x, y in zip(ja, jb):
+                moved.update(range(min(x, y) + 1, max(x, y) + 1))
         for i, (p, q) in enumerate(zip(a, b)):
             if abs(p["omega"] - q["omega"]) > 1e-6:
                 failures.append("%s: grids differ at %d: %g vs %g" % (br, i, p["omega"], q["omega"]))
                 continue
             rel = abs(p["x_amp"] - q["x_amp"]) / q["x_amp"]
-            ok_reg = p["regime"] == q["regime"] or i in near_jump
-            ok_amp = rel <= AMP_RTOL or i in near_jump
+            transient = not (settled(p) and settled(q))
+            ok_reg = p["regime"] == q["regime"] or i in moved
+            ok_amp = rel <= AMP_RTOL or transient or i in moved
             if p["status"] != 1:
                 failures.append("%s Omega %.4f: trainsim run failed" % (br, p["omega"]))
             if not ok_reg:
                 failures.append("%s Omega %.4f: regime %s (trainsim) vs %s (reference)" % (
                     br, p["omega"], p["regime"], q["regime"]))
             if not ok_amp:
-                failures.append("%s Omega %.4f: amplitude %.5f (trainsim) vs %.5f (reference), %.2f %% > %.1f %%" % (
-                    br, p["omega"], p["x_amp"], q["x_amp"], 100 * rel, 100 * AMP_RTOL))
+                failures.append("%s Omega %.4f: amplitude %.5f (trainsim) vs %.5f (reference), %.2e > %.1e" % (
+                    br, p["omega"], p["x_amp"], q["x_amp"], rel, AMP_RTOL))
             rows.append((br, p["omega"], q["regime"], p["regime"], q["x_amp"], p["x_amp"], rel,
-                         q["separations_per_period"], p["separations"], p["settled"], i in near_jump))
+                         q["separations_per_period"], p["separations"], "%d/%d" % (settled(q), settled(p)),
+                         transient or i in moved))
     if table:
         print("| branch | Omega | regime (reference) | regime (trainsim) | x_amp reference | x_amp trainsim | "
-              "rel. diff | sep./cycle ref. | separations trainsim | settled | near a jump |")
+              "rel. diff | sep./cycle ref. | separations trainsim | settled ref./trainsim | exempt |")
         print("|---|---|---|---|---|---|---|---|---|---|---|")
         for r in rows:
-            print("| %s | %.4f | %s | %s | %.5f | %.5f | %.2e | %.2f | %d | %d | %s |" % (
+            print("| %s | %.4f | %s | %s | %.5f | %.5f | %.2e | %.2f | %d | %s | %s |" % (
                 r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], "yes" if r[10] else ""))
     else:
         for r in rows:
             print("%-4s Omega %.4f  ref %-12s %.5f   trainsim %-12s %.5f   rel %.2e%s" % (
-                r[0], r[1], r[2], r[4], r[3], r[5], r[6], "  (near a jump)" if r[10] else ""))
+                r[0], r[1], r[2], r[4], r[3], r[5], r[6], "  (exempt: transient or moved jump)" if r[10] else ""))
     for br in ("up", "down"):
         print("jumps %s: reference %s, trainsim %s" % (
             br, [(round(rf[br][j]["omega"], 4), round(rf[br][j + 1]["omega"], 4)) for j in jump_index(rf[br])],
@@ -179,29 +201,31 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("trainsim")
     ap.add_argument("--short", action="store_true")
+    ap.add_argument("--case", choices=sorted(CASES), default="fourier",
+                    help="fourier: the Kahraman-Singh-type case; two_level: TRAIN's two-level stiffness, no TE")
     ap.add_argument("--ref", help="reference JSON from ks_reference.py sweep (the full grid)")
     ap.add_argument("--h5", help="sweep file to write (default: a temporary file)")
     ap.add_argument("--table", action="store_true", help="print a Markdown table")
     args = ap.parse_args()
-    ok, why = has_fourier_keys(args.trainsim)
+    case = CASES[args.case]
+    ok, why = has_fourier_keys(args.trainsim) if args.case == "fourier" else (True, "")
     if not ok:
         print("WAITING: this trainsim has no Fourier mesh stiffness / TE keys yet (issue 26, mesh26): " + why)
         print("the Kahraman-Singh comparison is not made (skipped, not passed)")
         sys.exit(77)
-    e_tot = sum(abs(x) for x in ref.DEFAULT["e"])
+    e_tot = sum(abs(x) for x in case["params"]["e"])
     if args.short:
-        omegas = SHORT
-        rf = reference(omegas)
+        omegas = case["short"]
+        rf = reference(omegas, params=case["params"])
     else:
         if args.ref:
             rf = json.load(open(args.ref))
         else:
-            omegas = [0.3 + 0.0125 * i for i in range(41)]
-            rf = reference(omegas)
+            rf = reference(case["full"], params=case["params"])
         omegas = [p["omega"] for p in rf["up"]]
     tmpdir = tempfile.mkdtemp()
     h5 = args.h5 or os.path.join(tmpdir, "ks.h5")
-    run_trainsim(args.trainsim, [o * F_UNIT for o in omegas], h5)
+    run_trainsim(args.trainsim, [o * F_UNIT for o in omegas], h5, case["deck"])
     ts = read_sweep(h5, e_tot)
     failures = compare(ts, rf, args.table)
     if failures:
@@ -209,8 +233,8 @@ def main():
         for f_ in failures:
             print("  " + f_)
         sys.exit(1)
-    print("ok: regimes, jumps and amplitudes agree within the tolerances (amplitude %.0f %%, jumps %d grid step)"
-          % (100 * AMP_RTOL, JUMP_STEPS))
+    print("ok: regimes, jumps and amplitudes agree within the tolerances (amplitude %.1e relative, jumps %d grid step)"
+          % (AMP_RTOL, JUMP_STEPS))
 
 
 if __name__ == "__main__":
