@@ -14,6 +14,8 @@
 !> geometry (teeth_driver, teeth_driven, diametral_pitch [1/in] or module [mm],
 !> pressure_angle [deg], face_width, backlash [total, along the line of action]);
 !> the mesh stiffness then defaults to eq. (3.9) per unit face width.
+!> stiffness_model, the static transmission error and tooth faults (issue 26):
+!> trainsim_mesh_excitation, through trainsim_excited_mesh.
 module trainsim_el_spur_gear
    use trainsim_kinds, only: wp, pi, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -25,8 +27,10 @@ module trainsim_el_spur_gear
       guarded_ratio
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
-   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
-   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone
+   use trainsim_clearance_element, only: clearance_hot_form
+   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hg_none, hf_none
+   use trainsim_excited_mesh, only: excited_mesh_t
+   use trainsim_mesh_excitation, only: sm_iso, iso_single_pair_stiffness, model_name
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
    implicit none
    private
@@ -40,15 +44,12 @@ module trainsim_el_spur_gear
    !> arithmetic must not overflow on the way there.
    real(wp), parameter :: theta_cap = 1.0e250_wp
 
-   type, extends(clearance_element_t) :: spur_gear_t
-      real(wp) :: teeth = 0.0_wp          !< teeth on the driver
+   !> teeth, alpha, phase (mesh_phase), pairs (the zone) and the excitation: excited_mesh_t.
+   type, extends(excited_mesh_t) :: spur_gear_t
       real(wp) :: mp = 1.0_wp             !< contact ratio
-      real(wp) :: alpha = 0.0_wp          !< approach angle, rad
       real(wp) :: c2 = 1.8_wp             !< stiffness factor in the two-pair zone
       logical :: truncate = .false.       !< zone_function = 'truncate'
       logical :: internal = .false.       !< mesh = 'internal': a pinion (left) in a ring gear (right)
-      real(wp) :: phase = 0.0_wp          !< mesh_phase: the zones' shift in teeth, u = N (theta + alpha)/(2 pi) + phase
-      integer :: pairs = 1                !< current zone: 1 or 2 pairs
       real(wp) :: th_lo = 0.0_wp, th_hi = 0.0_wp   !< driver-angle bounds of the current zone
       logical :: lo_open = .false.        !< the zone has no lower bound (truncate, u < 0)
       ! geometry (0 when given as TRAIN constants)
@@ -249,7 +250,8 @@ contains
                           "'; valid: periodic, truncate", err_input)
          return
       end select
-      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
+      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err); if (allocated(err)) return
+      call configure_excitation(self, grp, units, err)
    contains
 
       !> Error unless 1 <= n <= max_teeth (NaN fails).
@@ -261,6 +263,31 @@ contains
             ': error: '//key//' must be in [1, '//str(max_teeth)//'] and a whole number of teeth, got '//str(n), err_input)
       end subroutine check_teeth
    end subroutine spur_configure
+
+   !> The mesh excitation (issue 26). stiffness_model = 'iso6336' sets the mean
+   !> mesh stiffness c_gamma_alpha b (ISO 6336-1, N/(mm um) = 1e9 Pa; D-98).
+   subroutine configure_excitation(self, grp, units, err)
+      class(spur_gear_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: n2, cp, cg
+      logical :: iso_ok
+      n2 = self%teeth2
+      if (.not. n2 > 0.0_wp) then   ! the constants form: N2 from the base radii when it is whole
+         n2 = self%teeth*self%cl%r2/self%cl%r1
+         if (abs(n2 - anint(n2)) > 1.0e-6_wp*n2 .or. n2 < 1.0_wp) n2 = 0.0_wp
+         n2 = anint(n2)
+      end if
+      iso_ok = self%pitch_module > 0.0_wp .and. .not. (grp%holds('stiffness') .or. grp%holds('stiffness_per_width'))
+      call self%ex%configure(grp, self%teeth, n2, self%mp, self%c2, two_pi*self%cl%r1/self%teeth, iso_ok, err)
+      if (allocated(err)) return
+      if (self%ex%model == sm_iso) then
+         call iso_single_pair_stiffness(self%teeth, n2, self%phi*180.0_wp/pi, self%mp, self%internal, cp, cg)
+         self%cl%law%k = cg*1.0e9_wp/6894.757293168_wp*units%to_inch**2/units%to_lbf*self%face
+      end if
+      self%supplies_power = self%ex%varies .or. self%ex%has_te
+   end subroutine configure_excitation
 
    !> TRAIN's seven constants (stiffness, rb_driver, rb_driven, teeth, contact_ratio,
    !> approach_angle, half_backlash): the form without module or diametral_pitch.
@@ -304,6 +331,7 @@ contains
       real(wp) :: u, u_lo, u_hi
       u = tooth_phase(thl, self%alpha, self%teeth) + self%phase   ! (phase 0: u as before, bit for bit)
       call mesh_zone(u, self%mp, self%truncate, self%pairs, u_lo, u_hi)
+      self%zone_m = u_hi - merge(self%mp - 1.0_wp, 1.0_wp, self%pairs == 2)   ! the newest pair's entry
       u_lo = u_lo - self%phase; u_hi = u_hi - self%phase
       ! an unbounded side has no guard value (spur_guards): no huge numbers reach the root finder
       self%lo_open = u_lo == -huge(1.0_wp)
@@ -315,13 +343,15 @@ contains
       self%th_hi = u_hi*(two_pi/self%teeth) - self%alpha
    end subroutine set_zone
 
-   !> Stiffness factor of the current zone (1 single pair, two_pair_factor two pairs).
+   !> Stiffness factor of the current zone (1 single pair, two_pair_factor two
+   !> pairs), or of the excited mesh at thl (stiffness_model, faults).
    pure real(wp) function spur_factor(self, thl) result(c)
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl
-      associate (unused => thl)
-      end associate
-      if (self%pairs == 2) then
+      real(wp) :: dc, e, de
+      if (self%ex%active) then
+         call self%excitation(thl, c, dc, e, de)
+      else if (self%pairs == 2) then
          c = self%c2
       else
          c = 1.0_wp
@@ -335,9 +365,9 @@ contains
       type(lin_state_t), intent(in) :: state
       select case (state%zone)
       case (lin_zone_single)
-         c = 1.0_wp
+         c = merge(self%ex%cmin, 1.0_wp, self%ex%varies)
       case (lin_zone_stiffest)
-         c = self%c2
+         c = merge(self%ex%cmax, self%c2, self%ex%varies)
       case default
          c = self%factor(0.0_wp)
       end select
@@ -355,7 +385,9 @@ contains
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
-      call self%cl%guards(thl, thr, g(1:2))
+      real(wp) :: a, va
+      call self%shift(thl, 0.0_wp, a, va)
+      call self%cl%guards(a, thr, g(1:2))
       associate (u1 => wl, u2 => wr)
       end associate
       ! a zone without lower bound: a constant positive guard (never crosses), as
@@ -371,8 +403,10 @@ contains
    subroutine spur_init_mode(self, thl, wl, thr, wr)
       class(spur_gear_t), intent(inout) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: a, va
       call self%set_zone(thl)
-      call self%cl%init(thl, wl, thr, wr)
+      call self%shift(thl, wl, a, va)
+      call self%cl%init(a, va, thr, wr)
    end subroutine spur_init_mode
 
    subroutine spur_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
@@ -382,7 +416,7 @@ contains
       type(event_t), intent(inout) :: ev(:)
       integer, intent(out) :: nev
       integer :: old
-      real(wp) :: lo, hi
+      real(wp) :: lo, hi, a, va
       associate (u1 => t, u2 => thr)
       end associate
       nev = 0
@@ -406,7 +440,8 @@ contains
             ev(nev) = event_t(kind=ev_zone)
          end if
       end if
-      call self%cl%update(wl, wr, fired(1:2), ev, nev)
+      call self%shift(thl, wl, a, va)
+      call self%cl%update(va, wr, fired(1:2), ev, nev)
    end subroutine spur_update_mode
 
    !> TE = delta (length), force = signed mesh force, contact = face, pairs = zone (1/2).
@@ -415,8 +450,10 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: disp, force
       integer, intent(out) :: contact, pairs
+      real(wp) :: a, va
+      call self%shift(thl, wl, a, va)
       disp = self%cl%delta(thl, thr)
-      force = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      force = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
       contact = self%cl%mode
       pairs = self%pairs
    end subroutine spur_status
@@ -431,6 +468,10 @@ contains
       form%lo_open = self%lo_open
       form%th_lo = self%th_lo
       form%th_hi = self%th_hi
+      ! an excited mesh (issue 26): the torques stay with `torques` while the
+      ! stiffness varies or the TE moves the faces (their guards too)
+      if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none
+      if (self%ex%has_te) form%guards = hg_none
    end subroutine spur_hot_form
 
    function spur_params(self) result(p)
@@ -453,6 +494,11 @@ contains
                       merge('truncate', 'periodic', self%truncate))
       if (self%internal) call add_choice(p, 'internal_mesh', 1.0_wp, 'internal')   ! (external pairs: as before)
       if (self%phase /= 0.0_wp) call append_params(p, [character(len=40) :: 'mesh_phase'], [self%phase])
+      if (self%ex%active) then   ! (an unexcited mesh: as before)
+         call add_choice(p, 'stiffness_model', real(self%ex%model, wp), model_name(self%ex%model))
+         call append_params(p, [character(len=40) :: 'mean_stiffness_factor', 'hunting_period'], &
+                            [self%ex%cmean, self%ex%hunting_period()])
+      end if
       if (self%pitch_module > 0.0_wp) then
          call append_params(p, [character(len=40) :: 'teeth_driven', 'module_length', 'pressure_angle_rad', 'face_width'], &
                             [self%teeth2, self%pitch_module, self%phi, self%face])
