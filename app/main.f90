@@ -8,8 +8,10 @@ program trainsim_main
    use trainsim_cmd_help, only: usage, command_usage
    use trainsim_cmd_deck, only: deck_command
    use trainsim_cmd_calc, only: do_gear, do_key, do_worm, do_planetary
+   use trainsim_cmd_mesh, only: do_gear_mesh
    use trainsim_cmd_scripts, only: do_diagram, do_script
    use trainsim_cmd_fmu, only: do_fmu
+   use trainsim_cmd_periodic, only: do_periodic
    implicit none
 
    nargs = command_argument_count()
@@ -35,6 +37,9 @@ program trainsim_main
             call quit(0)
          end select
       end if
+      if (cmd == 'gear' .and. nargs >= 2) then
+         if (index(arg(2), '-') /= 1) call do_gear_mesh()   ! trainsim gear DECK: its mesh excitation
+      end if
       if (cmd == 'gear') call do_gear()
       if (cmd == 'key') call do_key()
       if (cmd == 'worm') call do_worm()
@@ -45,6 +50,8 @@ program trainsim_main
       call do_diagram()
    case ('fmu')
       call do_fmu()
+   case ('periodic')
+      call do_periodic()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)

@@ -29,8 +29,10 @@ module trainsim_el_spur_gear
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hg_none, hf_none
-   use trainsim_excited_mesh, only: excited_mesh_t
-   use trainsim_mesh_excitation, only: sm_iso, iso_single_pair_stiffness, model_name
+   use trainsim_excited_mesh, only: excited_mesh_t, em_torques, em_torques_dissipation, em_dissipation, &
+      em_torque_jacobian, configure_mesh_excitation
+   use trainsim_mesh_excitation, only: model_name
+   use trainsim_tooth_friction, only: tooth_friction_t
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
    implicit none
    private
@@ -54,6 +56,7 @@ module trainsim_el_spur_gear
       logical :: lo_open = .false.        !< the zone has no lower bound (truncate, u < 0)
       ! geometry (0 when given as TRAIN constants)
       real(wp) :: teeth2 = 0.0_wp, pitch_module = 0.0_wp, phi = 0.0_wp, face = 0.0_wp
+      type(tooth_friction_t) :: fric      !< tooth friction (eqs. 3.13-3.14, D-98): off at tooth_friction = 0
    contains
       procedure :: configure => spur_configure
       procedure :: n_guards => spur_n_guards
@@ -66,6 +69,12 @@ module trainsim_el_spur_gear
       procedure :: state_factor => spur_state_factor
       procedure :: hot_form => spur_hot_form
       procedure, private :: set_zone
+      ! tooth friction (D-98): with tooth_friction = 0 these are the excited mesh's
+      procedure :: torques => spur_torques
+      procedure :: dissipation_power => spur_dissipation
+      procedure :: torques_dissipation => spur_torques_dissipation
+      procedure :: torque_jacobian => spur_torque_jacobian
+      procedure, private :: roll
    end type spur_gear_t
 
 contains
@@ -251,7 +260,12 @@ contains
          return
       end select
       call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err); if (allocated(err)) return
-      call configure_excitation(self, grp, units, err)
+      call self%fric%configure(grp, units, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%phi, &
+                               self%internal, err)
+      if (allocated(err)) return
+      ! the mesh excitation (issue 26; D-100); the geometry form's pitch, pressure angle and face for iso6336
+      call configure_mesh_excitation(self, grp, units, self%teeth2, self%mp, self%c2, self%pitch_module, self%phi, &
+                                     self%face, self%internal, err)
    contains
 
       !> Error unless 1 <= n <= max_teeth (NaN fails).
@@ -263,31 +277,6 @@ contains
             ': error: '//key//' must be in [1, '//str(max_teeth)//'] and a whole number of teeth, got '//str(n), err_input)
       end subroutine check_teeth
    end subroutine spur_configure
-
-   !> The mesh excitation (issue 26). stiffness_model = 'iso6336' sets the mean
-   !> mesh stiffness c_gamma_alpha b (ISO 6336-1, N/(mm um) = 1e9 Pa; D-98).
-   subroutine configure_excitation(self, grp, units, err)
-      class(spur_gear_t), intent(inout) :: self
-      type(deck_group_t), intent(inout) :: grp
-      type(units_t), intent(in) :: units
-      type(error_t), allocatable, intent(out) :: err
-      real(wp) :: n2, cp, cg
-      logical :: iso_ok
-      n2 = self%teeth2
-      if (.not. n2 > 0.0_wp) then   ! the constants form: N2 from the base radii when it is whole
-         n2 = self%teeth*self%cl%r2/self%cl%r1
-         if (abs(n2 - anint(n2)) > 1.0e-6_wp*n2 .or. n2 < 1.0_wp) n2 = 0.0_wp
-         n2 = anint(n2)
-      end if
-      iso_ok = self%pitch_module > 0.0_wp .and. .not. (grp%holds('stiffness') .or. grp%holds('stiffness_per_width'))
-      call self%ex%configure(grp, self%teeth, n2, self%mp, self%c2, two_pi*self%cl%r1/self%teeth, iso_ok, err)
-      if (allocated(err)) return
-      if (self%ex%model == sm_iso) then
-         call iso_single_pair_stiffness(self%teeth, n2, self%phi*180.0_wp/pi, self%mp, self%internal, cp, cg)
-         self%cl%law%k = cg*1.0e9_wp/6894.757293168_wp*units%to_inch**2/units%to_lbf*self%face
-      end if
-      self%supplies_power = self%ex%varies .or. self%ex%has_te
-   end subroutine configure_excitation
 
    !> TRAIN's seven constants (stiffness, rb_driver, rb_driven, teeth, contact_ratio,
    !> approach_angle, half_backlash): the form without module or diametral_pitch.
@@ -375,9 +364,7 @@ contains
 
    pure integer function spur_n_guards(self) result(n)
       class(spur_gear_t), intent(in) :: self
-      associate (unused => self)
-      end associate
-      n = 4
+      n = 4 + self%fric%n_guards()
    end function spur_n_guards
 
    !> Guards 1-2: faces; 3-4: the driver angle inside its zone.
@@ -398,6 +385,7 @@ contains
          g(3) = thl - self%th_lo
       end if
       g(4) = self%th_hi - thl
+      if (size(g) > 4) call self%fric%guards(self%roll(thl), self%pairs, self%cl%mode, wl, wr, g(5:))   ! slides
    end subroutine spur_guards
 
    subroutine spur_init_mode(self, thl, wl, thr, wr)
@@ -407,6 +395,7 @@ contains
       call self%set_zone(thl)
       call self%shift(thl, wl, a, va)
       call self%cl%init(a, va, thr, wr)
+      if (self%fric%n_guards() > 0) call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
    end subroutine spur_init_mode
 
    subroutine spur_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
@@ -442,6 +431,12 @@ contains
       end if
       call self%shift(thl, wl, a, va)
       call self%cl%update(va, wr, fired(1:2), ev, nev)
+      if (self%fric%n_guards() == 0) return
+      if (any(fired(1:4))) then   ! new pairs or face: the slides' signs from the state
+         call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
+      else
+         call self%fric%flip(fired(5:), ev, nev)
+      end if
    end subroutine spur_update_mode
 
    !> TE = delta (length), force = signed mesh force, contact = face, pairs = zone (1/2).
@@ -472,7 +467,81 @@ contains
       ! stiffness varies or the TE moves the faces (their guards too)
       if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none
       if (self%ex%has_te) form%guards = hg_none
+      if (self%fric%on()) then   ! friction: the general path (D-98)
+         form%kind = hf_none
+         form%guards = hg_none
+      end if
    end subroutine spur_hot_form
+
+   !> Roll of the trailing pair in contact: its contact point's distance along the
+   !> line of action from the start of contact, r_b1 (theta - theta_A), theta_A the
+   !> driver angle at which it entered (the current zone's bounds).
+   pure real(wp) function roll(self, thl) result(s)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl
+      real(wp) :: th_a
+      th_a = self%th_hi - (two_pi/self%teeth)*merge(1.0_wp, self%mp - 1.0_wp, self%pairs == 1)
+      s = self%cl%r1*(thl - th_a)
+   end function roll
+
+   !> Torques, dissipated power: the excited mesh's plus the tooth friction
+   !> (trainsim_tooth_friction) on the normal force of the face in contact.
+   pure subroutine spur_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, p
+      real(wp) :: c, fs, a, va
+      if (.not. self%fric%on()) then
+         call em_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
+         return
+      end if
+      call self%shift(thl, wl, a, va)   ! (the mesh excitation's TE: a = thl without one)
+      c = self%factor(thl)
+      fs = self%cl%contact_force(c, a, va, thr, wr)
+      tl = -fs*self%cl%r1
+      tr = fs*self%cl%r2
+      p = self%cl%dissipation(c, a, va, thr, wr)
+      if (self%cl%mode*fs > 0.0_wp) call self%fric%add(self%roll(thl), self%pairs, self%cl%mode, self%cl%mode*fs, &
+                                                       wl, wr, tl, tr, p)
+   end subroutine spur_torques_dissipation
+
+   pure subroutine spur_torques(self, thl, wl, thr, wr, tl, tr)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      real(wp) :: p
+      if (self%fric%on()) then
+         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
+      else
+         call em_torques(self, thl, wl, thr, wr, tl, tr)
+      end if
+   end subroutine spur_torques
+
+   !> The excited mesh's Jacobian plus the friction's partials.
+   pure subroutine spur_torque_jacobian(self, thl, wl, thr, wr, jt)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      real(wp) :: fs, a, va
+      call em_torque_jacobian(self, thl, wl, thr, wr, jt)
+      if (.not. self%fric%on()) return
+      call self%shift(thl, wl, a, va)
+      fs = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
+      if (self%cl%mode*fs > 0.0_wp) call self%fric%add_jacobian(self%roll(thl), self%pairs, self%cl%mode, &
+                                                                self%cl%mode*fs, self%cl%mode*jt(2, :)/self%cl%r2, &
+                                                                wl, wr, self%cl%r1, jt)
+   end subroutine spur_torque_jacobian
+
+   pure real(wp) function spur_dissipation(self, thl, wl, thr, wr) result(p)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: tl, tr
+      if (self%fric%on()) then
+         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
+      else
+         p = em_dissipation(self, thl, wl, thr, wr)
+      end if
+   end function spur_dissipation
 
    function spur_params(self) result(p)
       class(spur_gear_t), intent(in) :: self
@@ -498,6 +567,12 @@ contains
          call add_choice(p, 'stiffness_model', real(self%ex%model, wp), model_name(self%ex%model))
          call append_params(p, [character(len=40) :: 'mean_stiffness_factor', 'hunting_period'], &
                             [self%ex%cmean, self%ex%hunting_period()])
+      end if
+      if (self%fric%on()) then   ! (without tooth friction: as before)
+         call append_params(p, [character(len=40) :: 'tooth_friction', 'tooth_friction_velocity'], &
+                            [self%fric%mu, self%fric%v_reg])
+         call add_choice(p, 'tooth_friction_speed', merge(1.0_wp, 0.0_wp, self%fric%speed), &
+                         trim(merge('speed   ', 'constant', self%fric%speed)))
       end if
       if (self%pitch_module > 0.0_wp) then
          call append_params(p, [character(len=40) :: 'teeth_driven', 'module_length', 'pressure_angle_rad', 'face_width'], &

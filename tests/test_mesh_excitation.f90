@@ -287,7 +287,7 @@ contains
    !> and a three-harmonic TE, (b) ISO-like geometry: tip relief, pitch errors,
    !> run-out and a fault (jumps at the zone events), under RK4 and CVODE: the
    !> ledger (stored + dissipated - input - E0) closes to 1e-10 of its scale
-   !> (measured 3e-15, 5e-13; CVODE 4e-12 under 1e-8). Dropping either term of
+   !> (measured 3e-15, 5e-13, with tooth friction 2e-15; CVODE 4e-12 under 1e-8). Dropping either term of
    !> the excitation's work, 1/2 p^2 dk/dt or -F de/dt, leaves 4e-7.
    subroutine test_energy_ledger_closes_with_excited_mesh()
       type(model_t) :: m
@@ -306,6 +306,11 @@ contains
       call run_model(m, res)
       call check('relief, pitch, run-out, fault, rk4: residual / scale', res%energy_residual_max/res%energy_scale, &
                  0.0_wp, abs_tol=1.0e-10_wp)
+      ! with tooth friction (issue 26 item 3) on the excited mesh's force: its loss in the ledger too
+      call load_model_text(rig_a//fourier(:len(fourier) - 1)//", tooth_friction = 0.06 /"//rig_b, m)
+      call run_model(m, res)
+      call check('fourier + TE + tooth friction, rk4: residual / scale', res%energy_residual_max/res%energy_scale, &
+                 0.0_wp, abs_tol=1.0e-10_wp)
       call load_model_text(replace_rk4(rig_a)//fourier//rig_b, m)
       call run_model(m, res)
       call check('fourier + TE, cvode-bdf: residual / scale', res%energy_residual_max/res%energy_scale, 0.0_wp, &
@@ -322,6 +327,10 @@ contains
                            "te_harmonics = 2.0e-4, 1.0e-4, runout_driver = 1e-4 /"//rig_b, m)
       call jacobian_fd_error(m, 0.0_wp, err, scale)
       call check('|J - J_fd| / |J| < 1e-6', err/scale < 1.0e-6_wp)
+      call load_model_text(rig_a//"stiffness_model = 'fourier', stiffness_harmonics = 0.2, 0.1, te_harmonics = 2.0e-4, "// &
+                           "tooth_friction = 0.06, tooth_friction_model = 'speed' /"//rig_b, m)
+      call jacobian_fd_error(m, 0.0_wp, err, scale)
+      call check('with tooth friction: |J - J_fd| / |J| < 1e-6', err/scale < 1.0e-6_wp)
    end subroutine test_excited_jacobian_matches_finite_differences
 
    subroutine test_bad_excitation_input_is_named()

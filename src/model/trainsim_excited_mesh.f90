@@ -13,13 +13,19 @@
 !> Without excitation (`ex%active` false) every procedure is the clearance
 !> element's, bit for bit (a = theta_l, a' = omega_l).
 module trainsim_excited_mesh
-   use trainsim_kinds, only: wp, two_pi
+   use trainsim_kinds, only: wp, pi, two_pi
+   use trainsim_error, only: error_t
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_event, only: event_t
    use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_mesh_excitation, only: mesh_excitation_t
+   use trainsim_mesh_excitation, only: mesh_excitation_t, sm_iso, iso_single_pair_stiffness
    implicit none
    private
 
-   public :: excited_mesh_t
+   public :: excited_mesh_t, excited_input_power, configure_mesh_excitation
+   ! the torques under names a concrete type's own `torques` can fall back on (tooth friction)
+   public :: em_torques, em_torques_dissipation, em_dissipation, em_torque_jacobian
 
    !> |driver angle| beyond which the roll is taken at this value (D-26).
    real(wp), parameter :: theta_cap = 1.0e250_wp
@@ -32,20 +38,55 @@ module trainsim_excited_mesh
       integer :: pairs = 1                !< current zone: 1 or 2 pairs
       real(wp) :: zone_m = 0.0_wp         !< the current zone's count of teeth entered (its newest pair's)
    contains
-      procedure :: roll => em_roll
-      procedure :: excitation => em_excitation
-      procedure :: shift => em_shift
+      procedure, non_overridable :: mesh_roll => em_roll
+      procedure, non_overridable :: excitation => em_excitation
+      procedure, non_overridable :: shift => em_shift
       procedure :: torques => em_torques
       procedure :: torques_dissipation => em_torques_dissipation
       procedure :: dissipation_power => em_dissipation
       procedure :: potential_energy => em_potential
       procedure :: torque_jacobian => em_torque_jacobian
-      procedure :: input_power => em_input_power
+      procedure :: input_power => excited_input_power
       procedure :: factor_derivative => em_factor_derivative
       procedure :: linear_factor => em_linear_factor
+      procedure :: guards => em_guards
+      procedure :: init_mode => em_init_mode
+      procedure :: update_mode => em_update_mode
+      procedure :: status => em_status
    end type excited_mesh_t
 
 contains
+
+   !> Read a spur pair's mesh excitation (after its own keys: teeth, r1, r2, the
+   !> contact ratio mp and two_pair_factor c2 known). teeth2 = 0 in TRAIN's
+   !> constants form: N2 = N r2/r1 when that is whole. stiffness_model =
+   !> 'iso6336' (geometry form: pitch module > 0, pressure angle phi in rad,
+   !> face width, no explicit stiffness) sets the mean mesh stiffness
+   !> c_gamma_alpha b (ISO 6336-1, N/(mm um) = 1e9 Pa; D-100).
+   subroutine configure_mesh_excitation(self, grp, units, teeth2, mp, c2, pitch_module, phi, face, internal, err)
+      class(excited_mesh_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      real(wp), intent(in) :: teeth2, mp, c2, pitch_module, phi, face
+      logical, intent(in) :: internal
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: n2, cp, cg
+      logical :: iso_ok
+      n2 = teeth2
+      if (.not. n2 > 0.0_wp) then
+         n2 = self%teeth*self%cl%r2/self%cl%r1
+         if (abs(n2 - anint(n2)) > 1.0e-6_wp*n2 .or. n2 < 1.0_wp) n2 = 0.0_wp
+         n2 = anint(n2)
+      end if
+      iso_ok = pitch_module > 0.0_wp .and. .not. (grp%holds('stiffness') .or. grp%holds('stiffness_per_width'))
+      call self%ex%configure(grp, self%teeth, n2, mp, c2, two_pi*self%cl%r1/self%teeth, iso_ok, err)
+      if (allocated(err)) return
+      if (self%ex%model == sm_iso) then
+         call iso_single_pair_stiffness(self%teeth, n2, phi*180.0_wp/pi, mp, internal, cp, cg)
+         self%cl%law%k = cg*1.0e9_wp/6894.757293168_wp*units%to_inch**2/units%to_lbf*face
+      end if
+      self%supplies_power = self%ex%varies .or. self%ex%has_te
+   end subroutine configure_mesh_excitation
 
    !> Roll position u (teeth) of the driver angle thl.
    pure real(wp) function em_roll(self, thl) result(u)
@@ -59,7 +100,7 @@ contains
       class(excited_mesh_t), intent(in) :: self
       real(wp), intent(in) :: thl
       real(wp), intent(out) :: c, dc, e, de
-      call self%ex%at(self%roll(thl), self%zone_m, self%pairs, c, dc, e, de)
+      call self%ex%at(self%mesh_roll(thl), self%zone_m, self%pairs, c, dc, e, de)
       dc = dc*(self%teeth/two_pi)
       de = de*(self%teeth/two_pi)
    end subroutine em_excitation
@@ -137,6 +178,8 @@ contains
       jt = 0.0_wp
       if (self%cl%mode == 0) return
       call self%excitation(thl, c, dc, e, e1)
+      c = self%factor(thl)
+      dc = self%factor_derivative(thl)
       h = 1.0e-6_wp*two_pi/self%teeth
       call self%excitation(thl + h, cx, dcx, ex, ep)
       call self%excitation(thl - h, cx, dcx, ex, em)
@@ -152,7 +195,7 @@ contains
    end subroutine em_torque_jacobian
 
    !> The excitation's work: dc/dt E(p) - F_s de/dt (see the module's doc).
-   pure real(wp) function em_input_power(self, thl, wl, thr, wr) result(pw)
+   pure real(wp) function excited_input_power(self, thl, wl, thr, wr) result(pw)
       class(excited_mesh_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp) :: c, dc, e, de, a, va, pen, fs
@@ -160,12 +203,13 @@ contains
       if (self%cl%mode == 0 .or. .not. self%ex%active) return
       call self%excitation(thl, c, dc, e, de)
       call self%shift(thl, wl, a, va)
+      c = self%factor(thl)
       pen = self%cl%mode*(self%cl%r1*a - self%cl%r2*thr) - self%cl%b
-      pw = dc*wl*self%cl%law%elastic_energy(pen)
+      pw = self%factor_derivative(thl)*wl*self%cl%law%elastic_energy(pen)
       if (.not. self%ex%has_te) return
       fs = self%cl%contact_force(c, a, va, thr, wr)
       pw = pw - fs*de*wl
-   end function em_input_power
+   end function excited_input_power
 
    !> d factor / d thl: 0 between zone events unless the stiffness varies.
    pure real(wp) function em_factor_derivative(self, thl) result(dc)
@@ -187,4 +231,52 @@ contains
          c = self%factor(0.0_wp)
       end if
    end function em_linear_factor
+
+   !> Guards 1-2: the faces at the shifted driver angle (a type with zones adds its own).
+   pure subroutine em_guards(self, thl, wl, thr, wr, g)
+      class(excited_mesh_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: g(:)
+      real(wp) :: a, va
+      associate (u1 => wl, u2 => wr)
+      end associate
+      call self%shift(thl, 0.0_wp, a, va)
+      call self%cl%guards(a, thr, g(1:2))
+   end subroutine em_guards
+
+   subroutine em_init_mode(self, thl, wl, thr, wr)
+      class(excited_mesh_t), intent(inout) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: a, va
+      call self%shift(thl, wl, a, va)
+      call self%cl%init(a, va, thr, wr)
+   end subroutine em_init_mode
+
+   subroutine em_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
+      class(excited_mesh_t), intent(inout) :: self
+      real(wp), intent(in) :: t, thl, wl, thr, wr
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(out) :: nev
+      real(wp) :: a, va
+      associate (u1 => t, u2 => thr)
+      end associate
+      nev = 0
+      call self%shift(thl, wl, a, va)
+      call self%cl%update(va, wr, fired(1:2), ev, nev)
+   end subroutine em_update_mode
+
+   !> displacement = delta (the measured TE, e included), force, contact = face, pairs = 0.
+   pure subroutine em_status(self, thl, wl, thr, wr, disp, force, contact, pairs)
+      class(excited_mesh_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: disp, force
+      integer, intent(out) :: contact, pairs
+      real(wp) :: a, va
+      call self%shift(thl, wl, a, va)
+      disp = self%cl%delta(thl, thr)
+      force = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
+      contact = self%cl%mode
+      pairs = 0
+   end subroutine em_status
 end module trainsim_excited_mesh

@@ -9,7 +9,7 @@
 !>   table    c(u) from (roll, factor) pairs over one tooth period, periodic
 !>   iso6336  a pair's stiffness along its path x in [0, m_p] (base pitches):
 !>            k_s(x) = c' b (1 - beta (2x/m_p - 1)^2), c' of ISO 6336-1 method B,
-!>            beta such that the mean mesh stiffness is c_gamma_alpha b (D-98)
+!>            beta such that the mean mesh stiffness is c_gamma_alpha b (D-100)
 !> A pair's stiffness is its share (zones, fourier, table: c/pairs; iso6336:
 !> k_s(x)) times fault_stiffness_factor on the faulted tooth.
 !>
@@ -54,6 +54,7 @@ module trainsim_mesh_excitation
       real(wp) :: cmin = 1.0_wp, cmax = 1.0_wp, cmean = 1.0_wp   !< over a tooth period (no fault)
    contains
       procedure :: configure => ex_configure
+      procedure :: configure_te => ex_configure_te
       procedure :: at => ex_at
       procedure :: at_roll => ex_at_roll
       procedure :: unloaded_te => ex_unloaded_te
@@ -162,17 +163,7 @@ contains
       call read_tooth_list(grp, 'pitch_errors_driver', teeth, self%pitch1, err); if (allocated(err)) return
       call read_tooth_list(grp, 'profile_errors_driven', teeth2, self%prof2, err); if (allocated(err)) return
       call read_tooth_list(grp, 'pitch_errors_driven', teeth2, self%pitch2, err); if (allocated(err)) return
-      call grp%get_real('runout_driver', self%ro1, err, default=0.0_wp); if (allocated(err)) return
-      call grp%require_nonnegative('runout_driver', self%ro1, err); if (allocated(err)) return
-      call grp%get_real('runout_driver_phase', self%rp1, err, default=0.0_wp); if (allocated(err)) return
-      call grp%get_real('runout_driven', self%ro2, err, default=0.0_wp); if (allocated(err)) return
-      call grp%require_nonnegative('runout_driven', self%ro2, err); if (allocated(err)) return
-      call grp%get_real('runout_driven_phase', self%rp2, err, default=0.0_wp); if (allocated(err)) return
-      if (self%ro2 > 0.0_wp .and. .not. teeth2 > 0.0_wp) then
-         call fatal_error(err, grp%where('runout_driven')//': error: the driven gear''s tooth count is not known '// &
-                          '(rb_driven/rb_driver * teeth is not a whole number): give the geometry form', err_input)
-         return
-      end if
+      call read_runout(self, grp, err); if (allocated(err)) return
       ! a fault: one tooth's stiffness times a factor over its mesh
       call grp%get_real('fault_tooth', v, err, default=0.0_wp); if (allocated(err)) return
       if (v /= 0.0_wp) then
@@ -206,8 +197,40 @@ contains
       self%varies = self%model /= sm_zones
       self%active = self%varies .or. self%has_te .or. self%fault_tooth > 0
       if (self%model == sm_iso) call iso_shape(self)
-      call sample_period(self)
+      if (self%varies) call sample_period(self)   ! (TRAIN's zones: 1 and c2, no sampling at start-up)
    end subroutine ex_configure
+
+   !> The displacement excitation alone (te_harmonics, te_phases, run-out): for a
+   !> mesh whose stiffness is its own (the helical gear's eq. 6.1).
+   subroutine ex_configure_te(self, grp, teeth, teeth2, err)
+      class(mesh_excitation_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      real(wp), intent(in) :: teeth, teeth2
+      type(error_t), allocatable, intent(out) :: err
+      self%teeth = teeth; self%teeth2 = teeth2
+      call read_harmonics(grp, 'te_harmonics', 'te_phases', self%ea, self%ep, .false., err); if (allocated(err)) return
+      call read_runout(self, grp, err); if (allocated(err)) return
+      self%has_te = size(self%ea) > 0 .or. self%ro1 > 0.0_wp .or. self%ro2 > 0.0_wp
+      self%active = self%has_te
+   end subroutine ex_configure_te
+
+   !> runout_driver, runout_driven (>= 0) and their phases.
+   subroutine read_runout(self, grp, err)
+      class(mesh_excitation_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(error_t), allocatable, intent(inout) :: err
+      call grp%get_real('runout_driver', self%ro1, err, default=0.0_wp); if (allocated(err)) return
+      call grp%require_nonnegative('runout_driver', self%ro1, err); if (allocated(err)) return
+      call grp%get_real('runout_driver_phase', self%rp1, err, default=0.0_wp); if (allocated(err)) return
+      call grp%get_real('runout_driven', self%ro2, err, default=0.0_wp); if (allocated(err)) return
+      call grp%require_nonnegative('runout_driven', self%ro2, err); if (allocated(err)) return
+      call grp%get_real('runout_driven_phase', self%rp2, err, default=0.0_wp); if (allocated(err)) return
+      if (self%ro2 > 0.0_wp .and. .not. self%teeth2 > 0.0_wp) then
+         call fatal_error(err, grp%where('runout_driven')//': error: the driven gear''s tooth count is not known '// &
+                          '(rb_driven/rb_driver * teeth is not a whole number): give the geometry form', err_input)
+         return
+      end if
+   end subroutine read_runout
 
    !> Amplitudes (>= 0) and phases (rad) of the same length; phases default to 0.
    subroutine read_harmonics(grp, akey, pkey, a, p, required, err)
