@@ -8,6 +8,7 @@ program trainsim_main
    use trainsim_cmd_help, only: usage, command_usage
    use trainsim_cmd_deck, only: deck_command
    use trainsim_cmd_calc, only: do_gear, do_key, do_worm, do_planetary
+   use trainsim_cmd_mesh, only: do_gear_mesh
    use trainsim_cmd_scripts, only: do_diagram, do_script
    use trainsim_cmd_fmu, only: do_fmu
    use trainsim_cmd_periodic, only: do_periodic
@@ -36,6 +37,9 @@ program trainsim_main
             call command_usage(cmd, output_unit)
             call quit(0)
          end select
+      end if
+      if (cmd == 'gear' .and. nargs >= 2) then
+         if (index(arg(2), '-') /= 1) call do_gear_mesh()   ! trainsim gear DECK: its mesh excitation
       end if
       if (cmd == 'gear') call do_gear()
       if (cmd == 'key') call do_key()

@@ -126,14 +126,14 @@ contains
             '  -h, --help         this text', '', &
             'exit status: 0 converged, 1 no orbit found (the reason printed) or the run failed, 2 bad input'
       case ('gear')
-         write (unit, '(a)') 'usage: trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', '', &
+         write (unit, '(a)') 'usage: trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', &
+            '   or: trainsim gear DECK [--mesh ID] [--points N] [-o TABLE] [--plot OUT.png]  (mesh stiffness, static TE)', '', &
             'Spur gear constants from the geometry (App. E, eqs. 3.9 and 3.12): radii, addendum, length of', &
             'action, base pitch, contact ratio, approach angle, gear ratio, pitch-disk inertias, mesh', &
             'stiffness, and a deck fragment in TRAIN''s seven constants. Implausible geometry (a unit slip)', &
             'is an error that names the likely slip.', '', &
             '  --teeth N1 [N2]            teeth of the driver (and the driven gear)', &
-            '  --diametral-pitch P        1/in; or --module M in mm', &
-            '  --pressure-angle DEG       default 20', &
+            '  --diametral-pitch P        1/in; or --module M in mm; --pressure-angle DEG (default 20)', &
             '  --face-width F             face width (in; m with --units si)', &
             '  --backlash B               total backlash along the line of action (in; m with --units si)', &
             '  --youngs-modulus E, --density RHO   material (steel by default)', &

@@ -6,6 +6,8 @@
 !> with e the mesh position in base pitches (the fractional tooth phase of the
 !> driver, u = N (theta + alpha)/(2 pi)), m_c = m_p + m_F. L_c is continuous and
 !> periodic in e, so the stiffness changes without events (kinks only).
+!> A static transmission error (te_harmonics, te_phases, run-out; issue 26)
+!> excites the mesh as the spur gear's does (trainsim_excited_mesh).
 module trainsim_el_helical_gear
    use trainsim_kinds, only: wp, pi, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -14,16 +16,17 @@ module trainsim_el_helical_gear
    use trainsim_deck, only: deck_group_t
    use trainsim_param_list, only: param_list_t, make_param_list, guarded_product, guarded_ratio
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
-   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
-   use trainsim_element, only: element_t, accept_carrier, hot_form_t, hf_none
+   use trainsim_clearance_element, only: clearance_hot_form
+   use trainsim_element, only: element_t, accept_carrier, hot_form_t, hf_none, hg_none
+   use trainsim_excited_mesh, only: excited_mesh_t, excited_input_power
    use trainsim_el_spur_gear, only: tooth_phase, max_teeth
    implicit none
    private
 
    public :: helical_gear_t, new_helical_gear, helical_contact_length
 
-   type, extends(clearance_element_t) :: helical_gear_t
-      real(wp) :: teeth = 0.0_wp, alpha = 0.0_wp
+   !> teeth, alpha and the displacement excitation: excited_mesh_t.
+   type, extends(excited_mesh_t) :: helical_gear_t
       real(wp) :: mp = 1.0_wp, mf = 0.0_wp, ptb = 0.0_wp, zeta = 0.0_wp, youngs = 0.0_wp, face = 0.0_wp
    contains
       procedure :: configure => hel_configure
@@ -116,7 +119,10 @@ contains
       end if
       self%cl%law%k = self%youngs/17.6_wp                        ! stiffness per unit length of contact line
       self%supplies_power = .true.
-      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
+      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err); if (allocated(err)) return
+      e_default = anint(self%teeth*self%cl%r2/self%cl%r1)     ! N2 when the radii give a whole number
+      if (abs(self%teeth*self%cl%r2/self%cl%r1 - e_default) > 1.0e-6_wp*e_default) e_default = 0.0_wp
+      call self%ex%configure_te(grp, self%teeth, e_default, err)
    end subroutine hel_configure
 
    !> floor(x) in real arithmetic (no default-integer overflow for any finite x).
@@ -181,8 +187,10 @@ contains
       class(helical_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp) :: p
-      associate (u1 => wr)
-      end associate
+      if (self%ex%has_te) then   ! the stiffness's work and the force through the TE
+         pw = excited_input_power(self, thl, wl, thr, wr)
+         return
+      end if
       pw = 0.0_wp
       if (self%cl%mode == 0) return
       p = self%cl%mode*self%cl%delta(thl, thr) - self%cl%b
@@ -202,6 +210,7 @@ contains
       type(hot_form_t), intent(out) :: form
       call clearance_hot_form(self, form)
       form%kind = hf_none
+      if (self%ex%has_te) form%guards = hg_none   ! (the TE moves the faces)
    end subroutine hel_hot_form
 
    function hel_params(self) result(p)

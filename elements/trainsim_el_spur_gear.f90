@@ -14,6 +14,8 @@
 !> geometry (teeth_driver, teeth_driven, diametral_pitch [1/in] or module [mm],
 !> pressure_angle [deg], face_width, backlash [total, along the line of action]);
 !> the mesh stiffness then defaults to eq. (3.9) per unit face width.
+!> stiffness_model, the static transmission error and tooth faults (issue 26):
+!> trainsim_mesh_excitation, through trainsim_excited_mesh.
 module trainsim_el_spur_gear
    use trainsim_kinds, only: wp, pi, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -25,9 +27,11 @@ module trainsim_el_spur_gear
       guarded_ratio
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
-   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form, ce_torques, ce_torques_dissipation, &
-      ce_dissipation, ce_torque_jacobian
-   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hf_none, hg_none
+   use trainsim_clearance_element, only: clearance_hot_form
+   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hg_none, hf_none
+   use trainsim_excited_mesh, only: excited_mesh_t, em_torques, em_torques_dissipation, em_dissipation, &
+      em_torque_jacobian, configure_mesh_excitation
+   use trainsim_mesh_excitation, only: model_name
    use trainsim_tooth_friction, only: tooth_friction_t
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
    implicit none
@@ -42,15 +46,12 @@ module trainsim_el_spur_gear
    !> arithmetic must not overflow on the way there.
    real(wp), parameter :: theta_cap = 1.0e250_wp
 
-   type, extends(clearance_element_t) :: spur_gear_t
-      real(wp) :: teeth = 0.0_wp          !< teeth on the driver
+   !> teeth, alpha, phase (mesh_phase), pairs (the zone) and the excitation: excited_mesh_t.
+   type, extends(excited_mesh_t) :: spur_gear_t
       real(wp) :: mp = 1.0_wp             !< contact ratio
-      real(wp) :: alpha = 0.0_wp          !< approach angle, rad
       real(wp) :: c2 = 1.8_wp             !< stiffness factor in the two-pair zone
       logical :: truncate = .false.       !< zone_function = 'truncate'
       logical :: internal = .false.       !< mesh = 'internal': a pinion (left) in a ring gear (right)
-      real(wp) :: phase = 0.0_wp          !< mesh_phase: the zones' shift in teeth, u = N (theta + alpha)/(2 pi) + phase
-      integer :: pairs = 1                !< current zone: 1 or 2 pairs
       real(wp) :: th_lo = 0.0_wp, th_hi = 0.0_wp   !< driver-angle bounds of the current zone
       logical :: lo_open = .false.        !< the zone has no lower bound (truncate, u < 0)
       ! geometry (0 when given as TRAIN constants)
@@ -68,7 +69,7 @@ module trainsim_el_spur_gear
       procedure :: state_factor => spur_state_factor
       procedure :: hot_form => spur_hot_form
       procedure, private :: set_zone
-      ! tooth friction (D-98): with tooth_friction = 0 these are the clearance element's
+      ! tooth friction (D-98): with tooth_friction = 0 these are the excited mesh's
       procedure :: torques => spur_torques
       procedure :: dissipation_power => spur_dissipation
       procedure :: torques_dissipation => spur_torques_dissipation
@@ -258,10 +259,13 @@ contains
                           "'; valid: periodic, truncate", err_input)
          return
       end select
-      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
-      if (allocated(err)) return
+      call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err); if (allocated(err)) return
       call self%fric%configure(grp, units, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%phi, &
                                self%internal, err)
+      if (allocated(err)) return
+      ! the mesh excitation (issue 26; D-100); the geometry form's pitch, pressure angle and face for iso6336
+      call configure_mesh_excitation(self, grp, units, self%teeth2, self%mp, self%c2, self%pitch_module, self%phi, &
+                                     self%face, self%internal, err)
    contains
 
       !> Error unless 1 <= n <= max_teeth (NaN fails).
@@ -316,6 +320,7 @@ contains
       real(wp) :: u, u_lo, u_hi
       u = tooth_phase(thl, self%alpha, self%teeth) + self%phase   ! (phase 0: u as before, bit for bit)
       call mesh_zone(u, self%mp, self%truncate, self%pairs, u_lo, u_hi)
+      self%zone_m = u_hi - merge(self%mp - 1.0_wp, 1.0_wp, self%pairs == 2)   ! the newest pair's entry
       u_lo = u_lo - self%phase; u_hi = u_hi - self%phase
       ! an unbounded side has no guard value (spur_guards): no huge numbers reach the root finder
       self%lo_open = u_lo == -huge(1.0_wp)
@@ -327,13 +332,15 @@ contains
       self%th_hi = u_hi*(two_pi/self%teeth) - self%alpha
    end subroutine set_zone
 
-   !> Stiffness factor of the current zone (1 single pair, two_pair_factor two pairs).
+   !> Stiffness factor of the current zone (1 single pair, two_pair_factor two
+   !> pairs), or of the excited mesh at thl (stiffness_model, faults).
    pure real(wp) function spur_factor(self, thl) result(c)
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl
-      associate (unused => thl)
-      end associate
-      if (self%pairs == 2) then
+      real(wp) :: dc, e, de
+      if (self%ex%active) then
+         call self%excitation(thl, c, dc, e, de)
+      else if (self%pairs == 2) then
          c = self%c2
       else
          c = 1.0_wp
@@ -347,9 +354,9 @@ contains
       type(lin_state_t), intent(in) :: state
       select case (state%zone)
       case (lin_zone_single)
-         c = 1.0_wp
+         c = merge(self%ex%cmin, 1.0_wp, self%ex%varies)
       case (lin_zone_stiffest)
-         c = self%c2
+         c = merge(self%ex%cmax, self%c2, self%ex%varies)
       case default
          c = self%factor(0.0_wp)
       end select
@@ -365,7 +372,9 @@ contains
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
-      call self%cl%guards(thl, thr, g(1:2))
+      real(wp) :: a, va
+      call self%shift(thl, 0.0_wp, a, va)
+      call self%cl%guards(a, thr, g(1:2))
       associate (u1 => wl, u2 => wr)
       end associate
       ! a zone without lower bound: a constant positive guard (never crosses), as
@@ -382,8 +391,10 @@ contains
    subroutine spur_init_mode(self, thl, wl, thr, wr)
       class(spur_gear_t), intent(inout) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: a, va
       call self%set_zone(thl)
-      call self%cl%init(thl, wl, thr, wr)
+      call self%shift(thl, wl, a, va)
+      call self%cl%init(a, va, thr, wr)
       if (self%fric%n_guards() > 0) call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
    end subroutine spur_init_mode
 
@@ -394,7 +405,7 @@ contains
       type(event_t), intent(inout) :: ev(:)
       integer, intent(out) :: nev
       integer :: old
-      real(wp) :: lo, hi
+      real(wp) :: lo, hi, a, va
       associate (u1 => t, u2 => thr)
       end associate
       nev = 0
@@ -418,7 +429,8 @@ contains
             ev(nev) = event_t(kind=ev_zone)
          end if
       end if
-      call self%cl%update(wl, wr, fired(1:2), ev, nev)
+      call self%shift(thl, wl, a, va)
+      call self%cl%update(va, wr, fired(1:2), ev, nev)
       if (self%fric%n_guards() == 0) return
       if (any(fired(1:4))) then   ! new pairs or face: the slides' signs from the state
          call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
@@ -433,8 +445,10 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: disp, force
       integer, intent(out) :: contact, pairs
+      real(wp) :: a, va
+      call self%shift(thl, wl, a, va)
       disp = self%cl%delta(thl, thr)
-      force = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      force = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
       contact = self%cl%mode
       pairs = self%pairs
    end subroutine spur_status
@@ -449,6 +463,10 @@ contains
       form%lo_open = self%lo_open
       form%th_lo = self%th_lo
       form%th_hi = self%th_hi
+      ! an excited mesh (issue 26): the torques stay with `torques` while the
+      ! stiffness varies or the TE moves the faces (their guards too)
+      if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none
+      if (self%ex%has_te) form%guards = hg_none
       if (self%fric%on()) then   ! friction: the general path (D-98)
          form%kind = hf_none
          form%guards = hg_none
@@ -466,22 +484,23 @@ contains
       s = self%cl%r1*(thl - th_a)
    end function roll
 
-   !> Torques, dissipated power: the clearance element's plus the tooth friction
+   !> Torques, dissipated power: the excited mesh's plus the tooth friction
    !> (trainsim_tooth_friction) on the normal force of the face in contact.
    pure subroutine spur_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: tl, tr, p
-      real(wp) :: c, fs
+      real(wp) :: c, fs, a, va
       if (.not. self%fric%on()) then
-         call ce_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
+         call em_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
          return
       end if
+      call self%shift(thl, wl, a, va)   ! (the mesh excitation's TE: a = thl without one)
       c = self%factor(thl)
-      fs = self%cl%contact_force(c, thl, wl, thr, wr)
+      fs = self%cl%contact_force(c, a, va, thr, wr)
       tl = -fs*self%cl%r1
       tr = fs*self%cl%r2
-      p = self%cl%dissipation(c, thl, wl, thr, wr)
+      p = self%cl%dissipation(c, a, va, thr, wr)
       if (self%cl%mode*fs > 0.0_wp) call self%fric%add(self%roll(thl), self%pairs, self%cl%mode, self%cl%mode*fs, &
                                                        wl, wr, tl, tr, p)
    end subroutine spur_torques_dissipation
@@ -494,19 +513,20 @@ contains
       if (self%fric%on()) then
          call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
       else
-         call ce_torques(self, thl, wl, thr, wr, tl, tr)
+         call em_torques(self, thl, wl, thr, wr, tl, tr)
       end if
    end subroutine spur_torques
 
-   !> The clearance element's Jacobian plus the friction's partials.
+   !> The excited mesh's Jacobian plus the friction's partials.
    pure subroutine spur_torque_jacobian(self, thl, wl, thr, wr, jt)
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: jt(2, 4)
-      real(wp) :: fs
-      call ce_torque_jacobian(self, thl, wl, thr, wr, jt)
+      real(wp) :: fs, a, va
+      call em_torque_jacobian(self, thl, wl, thr, wr, jt)
       if (.not. self%fric%on()) return
-      fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      call self%shift(thl, wl, a, va)
+      fs = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
       if (self%cl%mode*fs > 0.0_wp) call self%fric%add_jacobian(self%roll(thl), self%pairs, self%cl%mode, &
                                                                 self%cl%mode*fs, self%cl%mode*jt(2, :)/self%cl%r2, &
                                                                 wl, wr, self%cl%r1, jt)
@@ -519,7 +539,7 @@ contains
       if (self%fric%on()) then
          call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
       else
-         p = ce_dissipation(self, thl, wl, thr, wr)
+         p = em_dissipation(self, thl, wl, thr, wr)
       end if
    end function spur_dissipation
 
@@ -543,6 +563,11 @@ contains
                       merge('truncate', 'periodic', self%truncate))
       if (self%internal) call add_choice(p, 'internal_mesh', 1.0_wp, 'internal')   ! (external pairs: as before)
       if (self%phase /= 0.0_wp) call append_params(p, [character(len=40) :: 'mesh_phase'], [self%phase])
+      if (self%ex%active) then   ! (an unexcited mesh: as before)
+         call add_choice(p, 'stiffness_model', real(self%ex%model, wp), model_name(self%ex%model))
+         call append_params(p, [character(len=40) :: 'mean_stiffness_factor', 'hunting_period'], &
+                            [self%ex%cmean, self%ex%hunting_period()])
+      end if
       if (self%fric%on()) then   ! (without tooth friction: as before)
          call append_params(p, [character(len=40) :: 'tooth_friction', 'tooth_friction_velocity'], &
                             [self%fric%mu, self%fric%v_reg])
