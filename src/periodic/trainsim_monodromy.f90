@@ -1,0 +1,598 @@
+!> The monodromy matrix of a train over a window [t0, t0 + T]: the derivative
+!> M = d x(t0 + T) / d x(t0) of its event-located flow, from the variational
+!> equations with a saltation matrix at every mode change (D-98 (salt27), docs/periodic.md
+!> "The monodromy matrix with saltation matrices"). The flow is fixed-step RK4 on
+!> the grid t0 + i T / ceil(T / dt), through the inputs' breakpoints, a guard's zero
+!> located on the RK4 step map (trainsim's own run); Phi' = J Phi on the same
+!> stages (J the model's analytic Jacobian); at an event guard g fires and
+!>    S = I + (f+ - f-) n^T / (n^T f- + dg/dt),   n = dg/dx.
+!> A contact closing with the yang_sun law fixes its damping D(V_i) (eq. 3.12)
+!> until it opens: D's sensitivity to x(t0) is carried as a frozen state's.
+!> The modes at t0 (faces, zones, a closed contact's D) are held. Friction
+!> stick/slip (kinematic constraints, D-81) is refused.
+module trainsim_monodromy
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
+   use trainsim_strings, only: str
+   use trainsim_model, only: model_t
+   use trainsim_event, only: event_t
+   use trainsim_clearance_element, only: clearance_element_t
+   use trainsim_contact, only: law_yang_sun, contact_law_t
+   implicit none
+   private
+
+   public :: monodromy_saltation, flow_events, monodromy_stats_t
+
+   !> What one pass over the window did.
+   type :: monodromy_stats_t
+      integer :: steps = 0          !< RK4 steps (including the parts of a step split at an event)
+      integer :: events = 0         !< events located (guards that fired)
+      integer :: jumps = 0          !< events where f jumps (|f+ - f-| > 1e-10 |f-|)
+      integer :: impacts = 0        !< contact onsets whose damping sensitivity was set
+      !> smallest rate at which a guard crossed, |n^T f- + dg/dt| / |n| (the
+      !> guard's units per second: a length or an angle), and that guard: a
+      !> near-grazing contact shows here (the saltation grows as 1 / rate)
+      real(wp) :: min_rate = huge(1.0_wp)
+      integer :: min_rate_guard = 0
+   end type monodromy_stats_t
+
+   !> The work of one pass: the variational state and its scratch.
+   type :: pass_t
+      logical :: var = .false., salt = .true., memory = .true.
+      logical :: exact = .false.            !< the step map's own derivative (`exact_step`)
+      integer :: n = 0, ny = 0
+      real(wp), allocatable :: phi(:, :)    !< (n, n) d x / d x(t0)
+      real(wp), allocatable :: q(:, :)      !< (n, elements) d D_e / d x(t0), rows where has_q
+      logical, allocatable :: has_q(:)      !< element e's impact damping depends on x(t0)
+      real(wp), allocatable :: jac(:, :)    !< (ny, ny) the model's Jacobian
+      real(wp), allocatable :: tau(:)       !< (n) d t / d x(t0) of the current time (exact_step: after an event)
+      real(wp), allocatable :: rl(:)        !< (ny) d R / d l of the last step to an event (exact_step)
+      real(wp), allocatable :: g(:), g0(:), gw(:)
+      type(event_t), allocatable :: events(:)
+      type(monodromy_stats_t) :: st
+   end type pass_t
+
+contains
+
+   !> The flow x(t0) -> x(t0 + period) and its monodromy matrix m (n_states x
+   !> n_states; the energy-accounting states, if tracked, are carried but not
+   !> differentiated). x: the model's state y (n_y, or n_states: the energy
+   !> integrals then start from 0) at t0 in, at t0 + period out; the model's
+   !> modes go along. dt: the step (default the deck's dt).
+   !> saltation = .false. / memory = .false. leave out the jumps / the impact
+   !> damping's sensitivity (for checking that they matter).
+   subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, exact_step, deck_grid, stats)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t0, period
+      real(wp), intent(inout) :: x(:)
+      real(wp), allocatable, intent(out) :: m(:, :)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), intent(in), optional :: dt
+      logical, intent(in), optional :: saltation, memory
+      !> .true.: the derivative of the discrete flow itself (the event times'
+      !> dependence through the RK4 step map's d R / d l, no saltation matrix):
+      !> equal to the flow's differences to rounding at any dt
+      logical, intent(in), optional :: exact_step
+      !> .true.: steps of dt from t0, the last one shortened to t0 + period (a
+      !> session's grid, which a period map restarted at t0 takes); default: T / ceil(T / dt)
+      logical, intent(in), optional :: deck_grid
+      type(monodromy_stats_t), intent(out), optional :: stats
+      type(pass_t) :: w
+      w%var = .true.
+      if (present(saltation)) w%salt = saltation
+      if (present(memory)) w%memory = memory
+      if (present(exact_step)) w%exact = exact_step
+      call advance(model, t0, period, x, w, err, dt, deck_grid)
+      if (present(stats)) stats = w%st
+      if (allocated(err)) return
+      if (.not. all(abs(w%phi) <= huge(1.0_wp))) then
+         call fatal_error(err, 'monodromy: the variational equations overflowed or gave NaN', err_numeric)
+         return
+      end if
+      call move_alloc(w%phi, m)
+   end subroutine monodromy_saltation
+
+   !> The flow alone, x(t0) -> x(t0 + period): the same steps and event
+   !> location as `monodromy_saltation` (for finite differences of the flow).
+   subroutine flow_events(model, t0, period, x, err, dt, deck_grid, stats)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t0, period
+      real(wp), intent(inout) :: x(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), intent(in), optional :: dt
+      logical, intent(in), optional :: deck_grid
+      type(monodromy_stats_t), intent(out), optional :: stats
+      type(pass_t) :: w
+      call advance(model, t0, period, x, w, err, dt, deck_grid)
+      if (present(stats)) stats = w%st
+   end subroutine flow_events
+
+   !> One pass over [t0, t0 + period] on the step grid, through the breakpoints.
+   subroutine advance(model, t0, period, x, w, err, dt, deck_grid)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t0, period
+      real(wp), intent(inout) :: x(:)
+      type(pass_t), intent(inout) :: w
+      type(error_t), allocatable, intent(out) :: err
+      real(wp), intent(in), optional :: dt
+      logical, intent(in), optional :: deck_grid
+      logical :: grid
+      real(wp) :: h, t, t_grid, t_to
+      real(wp), allocatable :: bp(:), y(:)
+      integer :: nsteps, i, ib, k
+      h = model%run%dt
+      if (present(dt)) h = dt
+      if (.not. (h > 0.0_wp .and. period > 0.0_wp)) then
+         call fatal_error(err, 'monodromy: the step ('//str(h)//') and the period ('//str(period)//') must be > 0', err_input)
+         return
+      end if
+      if (size(x) /= model%n_y .and. size(x) /= model%n_states) then
+         call fatal_error(err, 'monodromy: the state has '//str(size(x))//' entries, the model '// &
+                          str(model%n_states)//' (or '//str(model%n_y)//' with the energy integrals)', err_input)
+         return
+      end if
+      if (allocated(model%cn)) then
+         if (size(model%cn%cand) > 0) then
+            call fatal_error(err, "monodromy: saltation for stick-slip not supported (element '"// &
+                             model%elements(model%cn%cand(1))%e%id//"' constrains its nodes when it sticks)", &
+                             err_input)
+            return
+         end if
+      end if
+      w%n = model%n_states
+      w%ny = model%n_y
+      allocate (w%g(model%n_guards), w%g0(model%n_guards), w%gw(model%n_guards), w%events(16))
+      if (w%var) then
+         allocate (w%phi(w%n, w%n), w%q(w%n, size(model%elements)), w%jac(w%ny, w%ny))
+         allocate (w%has_q(size(model%elements)), w%tau(w%n), w%rl(w%ny))
+         w%tau = 0.0_wp
+         w%phi = 0.0_wp
+         do k = 1, w%n
+            w%phi(k, k) = 1.0_wp
+         end do
+         w%q = 0.0_wp
+         w%has_q = .false.
+      end if
+      nsteps = max(1, ceiling(period/h*(1.0_wp - 1.0e-12_wp)))
+      grid = .false.
+      if (present(deck_grid)) grid = deck_grid
+      if (.not. grid) h = period/nsteps
+      call model%breakpoints(t0, t0 + period, bp)
+      allocate (y(model%n_y), source=0.0_wp)              ! (energy integrals from 0 if x has none)
+      y(1:size(x)) = x
+      t = t0
+      ib = 1
+      do i = 1, nsteps
+         t_grid = min(t0 + i*h, t0 + period)
+         if (i == nsteps) t_grid = t0 + period
+         do while (t < t_grid)
+            t_to = t_grid
+            do while (ib <= size(bp))
+               if (bp(ib) > t) exit
+               ib = ib + 1
+            end do
+            if (ib <= size(bp)) t_to = min(t_to, bp(ib))
+            call step_to(model, t, t_to, y, w, err)
+            if (allocated(err)) return
+         end do
+      end do
+      x = y(1:size(x))
+   end subroutine advance
+
+   !> From (t, x) to t_to: one RK4 step, or, where a guard goes below zero in
+   !> it, a step to the earliest such zero, the event, and the rest of the step.
+   subroutine step_to(model, t, t_to, x, w, err)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(inout) :: t, x(:)
+      real(wp), intent(in) :: t_to
+      type(pass_t), intent(inout) :: w
+      type(error_t), allocatable, intent(inout) :: err
+      real(wp) :: hs, s, s_min, xt(size(x))
+      integer :: j, j_min, pass
+      do pass = 1, 1000
+         hs = t_to - t
+         if (hs <= 0.0_wp) return
+         call model%guards(t, x, w%g0)
+         call rk4(model, t, hs, x, xt)
+         call model%guards(t + hs, xt, w%g)
+         j_min = 0
+         s_min = hs
+         do j = 1, size(w%g)
+            if (.not. (w%g0(j) >= 0.0_wp .and. w%g(j) < 0.0_wp)) cycle
+            s = guard_zero(model, t, hs, x, j, w)
+            if (j_min == 0 .or. s < s_min) then
+               j_min = j
+               s_min = s
+            end if
+         end do
+         if (j_min == 0) then
+            call advance_exact(model, t, hs, x, w, .false.)
+            t = t_to
+            return
+         end if
+         call advance_exact(model, t, s_min, x, w, .true.)
+         t = t + s_min
+         if (s_min >= hs) t = t_to
+         call event_at(model, t, x, j_min, w, err)
+         if (allocated(err)) return
+      end do
+      call fatal_error(err, 'monodromy: more than 1000 events in one step at t = '//str(t)// &
+                       ' (a guard chattering at zero)', err_numeric)
+   end subroutine step_to
+
+   !> `advance_state`, and with exact_step the step's start time moving with
+   !> x(t0) (after an event): Phi += (dR/dt_a - dR/dl) tau^T, the step's end
+   !> held; to_event: keep dR/dl (w%rl) for the event's time sensitivity.
+   subroutine advance_exact(model, t, hs, x, w, to_event)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs
+      real(wp), intent(inout) :: x(:)
+      type(pass_t), intent(inout) :: w
+      logical, intent(in) :: to_event
+      real(wp) :: rt(size(x))
+      logical :: moving
+      moving = .false.
+      if (w%var .and. w%exact) then
+         moving = any(w%tau /= 0.0_wp)
+         if (moving .or. to_event) call step_partials(model, t, hs, x, w, w%rl, rt)
+      end if
+      call advance_state(model, t, hs, x, w)
+      if (moving) then
+         w%phi = w%phi + spread(rt(1:w%n) - w%rl(1:w%n), 2, w%n)*spread(w%tau, 1, w%n)
+         w%tau = 0.0_wp
+      end if
+   end subroutine advance_exact
+
+   !> The RK4 step map R(t, x, l)'s partials in its length l and its start
+   !> time t at (t, x, hs), through its stages: dk/dl and dk/dt from the
+   !> model's Jacobian at each stage and df/dt (central differences in t:
+   !> 0 exactly for a model whose RHS does not read t).
+   subroutine step_partials(model, t, hs, x, w, rl, rt)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs, x(:)
+      type(pass_t), intent(inout) :: w
+      real(wp), intent(out) :: rl(:), rt(:)
+      real(wp), dimension(size(x)) :: k1, k2, k3, k4, l2, l3, l4, d2, d3, d4, f1
+      call model%rhs(t, x, k1)
+      f1 = f_t(t, x)
+      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, k2)
+      call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, w%jac)
+      l2 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k1)
+      d2 = 2.0_wp*l2 + jv(w%jac, 0.5_wp*hs*f1)
+      l2 = l2 + jv(w%jac, 0.5_wp*k1)
+      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, k3)
+      call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, w%jac)
+      l3 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k2)
+      d3 = 2.0_wp*l3 + jv(w%jac, 0.5_wp*hs*d2)
+      l3 = l3 + jv(w%jac, 0.5_wp*k2 + 0.5_wp*hs*l2)
+      call model%rhs(t + hs, x + hs*k3, k4)
+      call model%jacobian(t + hs, x + hs*k3, w%jac)
+      l4 = f_t(t + hs, x + hs*k3)
+      d4 = l4 + jv(w%jac, hs*d3)
+      l4 = l4 + jv(w%jac, k3 + hs*l3)
+      rl = (k1 + 2.0_wp*(k2 + k3) + k4)/6.0_wp + hs/6.0_wp*(2.0_wp*(l2 + l3) + l4)
+      rt = hs/6.0_wp*(f1 + 2.0_wp*(d2 + d3) + d4)
+   contains
+      !> a v (gfortran 12 -O2 warns of an inline matmul on an expression's temporary)
+      pure function jv(a, v) result(r)
+         real(wp), intent(in) :: a(:, :), v(:)
+         real(wp) :: r(size(a, 1))
+         r = matmul(a, v)
+      end function jv
+
+      function f_t(ts, xs) result(ft)
+         real(wp), intent(in) :: ts, xs(:)
+         real(wp) :: ft(size(xs)), fp(size(xs)), fm(size(xs)), dt
+         dt = 1.0e-6_wp*max(abs(ts), abs(hs), 1.0e-9_wp)
+         call model%rhs(ts + dt, xs, fp)
+         call model%rhs(ts - dt, xs, fm)
+         ft = (fp - fm)/(2.0_wp*dt)
+      end function f_t
+   end subroutine step_partials
+
+   !> x (and Phi) advanced by one RK4 step of length hs from t.
+   subroutine advance_state(model, t, hs, x, w)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs
+      real(wp), intent(inout) :: x(:)
+      type(pass_t), intent(inout) :: w
+      real(wp) :: xn(size(x))
+      w%st%steps = w%st%steps + 1
+      if (w%var) then
+         call rk4_var(model, t, hs, x, w)
+      else
+         call rk4(model, t, hs, x, xn)
+         x = xn
+      end if
+   end subroutine advance_state
+
+   !> The step length s in (0, hs] where guard j, >= 0 at the start and < 0
+   !> after the full step, reaches zero on the RK4 step map: Illinois on s,
+   !> then bisection, until the bracket is a few ulps wide; the end where the
+   !> guard is below zero (or zero) is returned, so that it has fired.
+   real(wp) function guard_zero(model, t, hs, x, j, w) result(s)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs, x(:)
+      integer, intent(in) :: j
+      type(pass_t), intent(inout) :: w
+      real(wp) :: lo, hi, glo, ghi, gm, sm, xt(size(x))
+      integer :: it, side
+      lo = 0.0_wp
+      hi = hs
+      glo = w%g0(j)
+      ghi = w%g(j)
+      side = 0
+      do it = 1, 200
+         if (hi - lo <= 4.0_wp*spacing(hi) .or. ghi == 0.0_wp) exit
+         if (it <= 60 .and. glo > ghi) then
+            sm = lo + (hi - lo)*glo/(glo - ghi)
+            if (.not. (sm > lo .and. sm < hi)) sm = 0.5_wp*(lo + hi)
+         else
+            sm = 0.5_wp*(lo + hi)
+         end if
+         call rk4(model, t, sm, x, xt)
+         call model%guards(t + sm, xt, w%gw)
+         gm = w%gw(j)
+         if (gm > 0.0_wp) then
+            lo = sm; glo = gm
+            if (side == -1) ghi = 0.5_wp*ghi      ! Illinois: the stale end's value halved
+            side = -1
+         else
+            hi = sm; ghi = gm
+            if (side == 1) glo = 0.5_wp*glo
+            side = 1
+         end if
+      end do
+      s = hi
+   end function guard_zero
+
+   !> The event at (t, x) where guard j_min fired (with every other guard that
+   !> crossed zero with it): the modes updated, Phi through the saltation
+   !> matrix, the impact damping's sensitivity set for a contact that closed.
+   subroutine event_at(model, t, x, j_min, w, err)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t
+      real(wp), intent(inout) :: x(:)
+      integer, intent(in) :: j_min
+      type(pass_t), intent(inout) :: w
+      type(error_t), allocatable, intent(inout) :: err
+      logical :: fired(size(w%g))
+      real(wp) :: fm(size(x)), fp(size(x)), nv(w%n), den, gt, nrm
+      real(wp), allocatable :: row(:), dxe(:, :)
+      integer :: j, nev, e
+      integer :: mode_before(size(model%elements))
+      call model%guards(t, x, w%g)
+      fired = w%g <= 0.0_wp .and. w%g0 >= 0.0_wp
+      fired(j_min) = .true.
+      w%st%events = w%st%events + count(fired)
+      if (w%var) then
+         call model%rhs(t, x, fm)
+         if (w%exact) fm = w%rl                         ! the step map's d x_e / d t_e in place of f-
+         call guard_gradient(model, t, x, j_min, nv, gt)
+         den = dot_product(nv, fm(1:w%n)) + gt
+         nrm = sqrt(dot_product(nv, nv))*sqrt(dot_product(fm(1:w%n), fm(1:w%n)))
+         if (.not. (abs(den) > 1.0e-13_wp*nrm)) then
+            e = max(1, model%guard_element(j_min))
+            call fatal_error(err, 'monodromy: grazing event at t = '//str(t)//" (a guard of element '"// &
+                             model%elements(e)%e%id//"' crossed tangentially, n^T f = "//str(den)// &
+                             '): the saltation matrix is undefined', err_numeric)
+            return
+         end if
+         if (abs(den)/norm2(nv) < w%st%min_rate) then
+            w%st%min_rate = abs(den)/norm2(nv)
+            w%st%min_rate_guard = j_min
+         end if
+         do e = 1, size(model%elements)
+            mode_before(e) = face_of(model, e)
+         end do
+      end if
+      nev = 0
+      call model%apply_events(t, x, fired, w%events, nev)
+      if (.not. w%var) return
+      call model%rhs(t, x, fp)
+      row = matmul(nv, w%phi)/den                     ! n^T Phi- / (n^T f- + dg/dt) = -d t_e / d x(t0)
+      ! the event state's sensitivity, d x_e / d x(t0) = Phi- - f- n^T Phi- / den
+      dxe = w%phi - spread(fm(1:w%n), 2, w%n)*spread(row, 1, w%n)
+      if (w%exact) then             ! x_e moves with t_e; the next step's start moves with it (advance_exact)
+         w%phi = dxe
+         w%tau = -row
+      else
+         if (maxval(abs(fp(1:w%n) - fm(1:w%n))) > 1.0e-10_wp*maxval(abs(fm(1:w%n)))) w%st%jumps = w%st%jumps + 1
+         if (w%salt) w%phi = w%phi + spread(fp(1:w%n) - fm(1:w%n), 2, w%n)*spread(row, 1, w%n)
+      end if
+      do e = 1, size(model%elements)
+         j = face_of(model, e)
+         if (j == mode_before(e)) cycle
+         w%has_q(e) = .false.
+         w%q(:, e) = 0.0_wp
+         if (mode_before(e) /= 0 .or. j == 0 .or. .not. w%memory) cycle
+         call impact_sensitivity(model, e, t, x, dxe, w)
+      end do
+   end subroutine event_at
+
+   !> The face element e is in contact on (+1 / -1), 0 if open or not a clearance.
+   integer function face_of(model, e) result(face)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: e
+      face = 0
+      select type (el => model%elements(e)%e)
+      class is (clearance_element_t)
+         face = el%cl%mode
+      end select
+   end function face_of
+
+   !> dg_j/dx (the physical states) and dg_j/dt at (t, x) by central
+   !> differences: a guard is affine in the angles within a mode, so the
+   !> differences are exact but for rounding (steps 1e-5 of each state's size).
+   subroutine guard_gradient(model, t, x, j, nv, gt)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, x(:)
+      integer, intent(in) :: j
+      real(wp), intent(out) :: nv(:), gt
+      real(wp) :: xp(size(x)), g(model%n_guards), gp, hx, ht
+      integer :: k
+      xp = x
+      do k = 1, size(nv)
+         hx = 1.0e-5_wp*max(1.0_wp, abs(x(k)))
+         xp(k) = x(k) + hx
+         call model%guards(t, xp, g)
+         gp = g(j)
+         xp(k) = x(k) - hx
+         call model%guards(t, xp, g)
+         nv(k) = (gp - g(j))/(2.0_wp*hx)
+         xp(k) = x(k)
+      end do
+      ht = 1.0e-5_wp*max(1.0e-3_wp, abs(t))
+      call model%guards(t + ht, x, g)
+      gp = g(j)
+      call model%guards(t - ht, x, g)
+      gt = (gp - g(j))/(2.0_wp*ht)
+   end subroutine guard_gradient
+
+   !> Element e (a clearance) closed at (t, x) with the damping D(V_i) of eq.
+   !> (3.12), V_i its approach velocity there: q_e = dD/dV_i dV_i/dx dxe.
+   !> Only the yang_sun law has a D that depends on V_i.
+   subroutine impact_sensitivity(model, e, t, x, dxe, w)
+      type(model_t), intent(inout) :: model
+      integer, intent(in) :: e
+      real(wp), intent(in) :: t, x(:), dxe(:, :)
+      type(pass_t), intent(inout) :: w
+      type(contact_law_t) :: lw
+      real(wp) :: v, hv, dp, dm, dd_dv, gv(w%n), xp(size(x)), vp, hx
+      integer :: k, face
+      face = face_of(model, e)
+      select type (el => model%elements(e)%e)
+      class is (clearance_element_t)
+         if (el%cl%law%law /= law_yang_sun) return
+         v = approach(model, e, t, x, face)
+         if (abs(v) <= el%cl%law%v_min) return            ! D from the floor: no dependence on x
+         hv = 1.0e-6_wp*abs(v)
+         lw = el%cl%law; call lw%begin_contact(v + hv, .false.); dp = lw%d
+         lw = el%cl%law; call lw%begin_contact(v - hv, .false.); dm = lw%d
+         dd_dv = (dp - dm)/(2.0_wp*hv)
+      class default
+         return
+      end select
+      xp = x
+      do k = 1, w%n                                      ! dV_i/dx: V_i is linear in the speeds
+         hx = 1.0e-5_wp*max(1.0_wp, abs(x(k)))
+         xp(k) = x(k) + hx
+         vp = approach(model, e, t, xp, face)
+         xp(k) = x(k) - hx
+         gv(k) = (vp - approach(model, e, t, xp, face))/(2.0_wp*hx)
+         xp(k) = x(k)
+      end do
+      w%q(:, e) = dd_dv*matmul(gv, dxe)
+      w%has_q(e) = .true.
+      w%st%impacts = w%st%impacts + 1
+   end subroutine impact_sensitivity
+
+   !> The approach velocity of clearance e on `face` at (t, x), as `cl_update` takes it.
+   real(wp) function approach(model, e, t, x, face) result(v)
+      type(model_t), intent(inout) :: model
+      integer, intent(in) :: e, face
+      real(wp), intent(in) :: t, x(:)
+      call model%kinematics(t, x)
+      v = 0.0_wp
+      select type (el => model%elements(e)%e)
+      class is (clearance_element_t)
+         v = face*(el%cl%r1*model%omega(el%left) - el%cl%r2*model%omega(el%right))
+      end select
+   end function approach
+
+   !> One RK4 step of the state alone: x -> xn over hs from t.
+   subroutine rk4(model, t, hs, x, xn)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs, x(:)
+      real(wp), intent(out) :: xn(:)
+      real(wp) :: k1(size(x)), k2(size(x)), k3(size(x)), k4(size(x))
+      call model%rhs(t, x, k1)
+      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, k2)
+      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, k3)
+      call model%rhs(t + hs, x + hs*k3, k4)
+      xn = x + hs/6.0_wp*(k1 + 2.0_wp*(k2 + k3) + k4)
+   end subroutine rk4
+
+   !> One RK4 step of the state and the variational equations together (the
+   !> same stages: the derivative of the step map, for a step length held).
+   subroutine rk4_var(model, t, hs, x, w)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, hs
+      real(wp), intent(inout) :: x(:)
+      type(pass_t), intent(inout) :: w
+      real(wp) :: k1(size(x)), k2(size(x)), k3(size(x)), k4(size(x)), xs(size(x))
+      real(wp), dimension(w%n, w%n) :: p1, p2, p3, p4
+      call model%rhs(t, x, k1)
+      call var_rhs(model, t, x, w%phi, p1, w)
+      xs = x + 0.5_wp*hs*k1
+      call model%rhs(t + 0.5_wp*hs, xs, k2)
+      call var_rhs(model, t + 0.5_wp*hs, xs, w%phi + 0.5_wp*hs*p1, p2, w)
+      xs = x + 0.5_wp*hs*k2
+      call model%rhs(t + 0.5_wp*hs, xs, k3)
+      call var_rhs(model, t + 0.5_wp*hs, xs, w%phi + 0.5_wp*hs*p2, p3, w)
+      xs = x + hs*k3
+      call model%rhs(t + hs, xs, k4)
+      call var_rhs(model, t + hs, xs, w%phi + hs*p3, p4, w)
+      x = x + hs/6.0_wp*(k1 + 2.0_wp*(k2 + k3) + k4)
+      w%phi = w%phi + hs/6.0_wp*(p1 + 2.0_wp*(p2 + p3) + p4)
+   end subroutine rk4_var
+
+   !> Phi' = J(t, x) Phi + sum over the closed contacts with a sensitive
+   !> damping of (df/dD_e) q_e^T.
+   subroutine var_rhs(model, t, x, phi, dphi, w)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, x(:), phi(:, :)
+      real(wp), intent(out) :: dphi(:, :)
+      type(pass_t), intent(inout) :: w
+      real(wp) :: b(w%n)
+      integer :: e
+      call model%jacobian(t, x, w%jac)
+      dphi = matmul(w%jac(1:w%n, 1:w%n), phi)
+      do e = 1, size(w%has_q)
+         if (.not. w%has_q(e)) cycle
+         call damping_column(model, e, t, x, b, w)
+         dphi = dphi + spread(b, 2, w%n)*spread(w%q(:, e), 1, w%n)
+      end do
+   end subroutine var_rhs
+
+   !> df/dD of clearance e (yang_sun, in contact) at (t, x): its contact force
+   !> F = c (k p + D p pdot) (eqs. 3.18-3.19) gives dF/dD = c p pdot (0 where
+   !> no_tension clips F), put on its nodes' states as their Jacobians put a torque.
+   subroutine damping_column(model, e, t, x, b, w)
+      type(model_t), intent(inout) :: model
+      integer, intent(in) :: e
+      real(wp), intent(in) :: t, x(:)
+      real(wp), intent(out) :: b(:)
+      type(pass_t), intent(inout) :: w
+      real(wp) :: s, c, p, pdot, dfs, dtq(8), tq(2)
+      integer :: l, r, a, nd, k, ns
+      b = 0.0_wp
+      call model%kinematics(t, x)
+      l = model%elements(e)%e%left
+      r = model%elements(e)%e%right
+      select type (el => model%elements(e)%e)
+      class is (clearance_element_t)
+         if (el%cl%mode == 0) return
+         s = real(el%cl%mode, wp)
+         c = el%factor(model%theta(l))
+         p = s*(el%cl%r1*model%theta(l) - el%cl%r2*model%theta(r)) - el%cl%b
+         pdot = s*(el%cl%r1*model%omega(l) - el%cl%r2*model%omega(r))
+         if (el%cl%law%no_tension .and. c*(el%cl%law%k*p + el%cl%law%d*p*pdot) < 0.0_wp) return
+         dfs = s*c*p*pdot
+         tq = [-el%cl%r1*dfs, el%cl%r2*dfs]
+      class default
+         return
+      end select
+      do a = 1, 2
+         nd = l
+         if (a == 2) nd = r
+         if (model%speed_of(nd) /= 0) cycle
+         ns = model%nodes(nd)%n%nstates()
+         if (ns == 0) cycle
+         call model%nodes(nd)%n%jacobian(t, x, w%jac, dtq(1:ns))
+         do k = 1, ns
+            b(model%nodes(nd)%n%offset + k) = b(model%nodes(nd)%n%offset + k) + dtq(k)*tq(a)
+         end do
+      end do
+   end subroutine damping_column
+end module trainsim_monodromy
