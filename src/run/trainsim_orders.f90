@@ -1,0 +1,96 @@
+!> Amplitudes of signals at the orders of a rotation (issue 26 item 5, D-99): for a
+!> gear mesh, its transmission error and mesh force at mesh orders 0..n_orders
+!> (order 1 = once per tooth of the driver: the phase phi = N theta_driver).
+!>
+!> The samples (t_j, rate w_j = dphi/dt, signals x_j) come in time order. The phase
+!> is the trapezoidal integral of the rate, phi_j = phi_{j-1} + (w_{j-1} + w_j)(t_j -
+!> t_{j-1})/2 (exact for a rate linear in time: a constant speed or a linear ramp),
+!> and the order-k coefficient is the trapezoidal rule in the phase,
+!>
+!>     c_k = (1/Phi) int x e^(-i k phi) dphi,   Phi = phi_last - phi_first,
+!>
+!> reported as the amplitude A_k = 2 |c_k| (k >= 1: x = A_0 + sum A_k cos(k phi + psi_k))
+!> and A_0 = Re c_0, the mean. On samples evenly spaced in phase over a whole number
+!> of cycles, the trapezoidal rule is exact for every order below half the samples a
+!> cycle (it is the discrete Fourier transform): a single harmonic comes back to
+!> rounding (test_orders). Over a window that is not a whole number of cycles the
+!> leakage is of the order of (the missing fraction of a cycle) / (cycles in the window).
+!>
+!> The sums are kept as e^(-i phi) and its powers from one cos/sin per sample, the
+!> phase reduced to [0, 2 pi). No allocation: fixed-size state.
+module trainsim_orders
+   use trainsim_kinds, only: wp, two_pi
+   implicit none
+   private
+
+   public :: order_tracker_t, n_orders, n_order_signals
+
+   !> Orders kept above the mean (mesh orders 1..n_orders).
+   integer, parameter :: n_orders = 4
+   !> Signals per tracker (a mesh: 1 transmission error, 2 mesh force).
+   integer, parameter :: n_order_signals = 2
+
+   type :: order_tracker_t
+      integer :: n = 0                         !< samples taken
+      real(wp) :: t = 0.0_wp, w = 0.0_wp       !< the last sample's time and phase rate
+      real(wp) :: phi = 0.0_wp                 !< the last sample's phase, reduced to [0, 2 pi)
+      real(wp) :: span = 0.0_wp                !< phase advanced since the first sample
+      real(wp) :: t0 = 0.0_wp                  !< the first sample's time
+      complex(wp) :: g(0:n_orders, n_order_signals) = (0.0_wp, 0.0_wp)   !< last sample's x e^(-i k phi)
+      complex(wp) :: c(0:n_orders, n_order_signals) = (0.0_wp, 0.0_wp)   !< int x e^(-i k phi) dphi so far
+   contains
+      procedure :: push => ot_push
+      procedure :: amplitudes => ot_amplitudes
+      procedure :: cycles => ot_cycles
+   end type order_tracker_t
+
+contains
+
+   !> The sample (t, w, x): time, phase rate (rad/s of the order-1 phase), signal values.
+   pure subroutine ot_push(self, t, w, x)
+      class(order_tracker_t), intent(inout) :: self
+      real(wp), intent(in) :: t, w, x(n_order_signals)
+      real(wp) :: dphi
+      complex(wp) :: e1, ek, gn(0:n_orders, n_order_signals)
+      integer :: k
+      if (self%n > 0) then
+         if (.not. t > self%t) return     ! (a repeated instant adds nothing)
+         dphi = 0.5_wp*(self%w + w)*(t - self%t)
+         self%phi = modulo(self%phi + dphi, two_pi)
+      else
+         dphi = 0.0_wp
+         self%phi = 0.0_wp
+         self%t0 = t
+      end if
+      e1 = cmplx(cos(self%phi), -sin(self%phi), wp)
+      ek = (1.0_wp, 0.0_wp)
+      do k = 0, n_orders
+         gn(k, :) = x*ek
+         ek = ek*e1
+      end do
+      if (self%n > 0) then
+         self%c = self%c + (0.5_wp*dphi)*(self%g + gn)
+         self%span = self%span + dphi
+      end if
+      self%g = gn
+      self%n = self%n + 1
+      self%t = t
+      self%w = w
+   end subroutine ot_push
+
+   !> a(0:n_orders, signal): the mean (order 0) and the amplitudes 2 |c_k| (0 before a phase advanced).
+   pure subroutine ot_amplitudes(self, a)
+      class(order_tracker_t), intent(in) :: self
+      real(wp), intent(out) :: a(0:n_orders, n_order_signals)
+      a = 0.0_wp
+      if (self%span == 0.0_wp) return
+      a = 2.0_wp*abs(self%c)/abs(self%span)
+      a(0, :) = real(self%c(0, :), wp)/self%span
+   end subroutine ot_amplitudes
+
+   !> Order-1 cycles covered so far.
+   pure real(wp) function ot_cycles(self) result(c)
+      class(order_tracker_t), intent(in) :: self
+      c = abs(self%span)/two_pi
+   end function ot_cycles
+end module trainsim_orders
