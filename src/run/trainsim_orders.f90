@@ -13,8 +13,10 @@
 !> and A_0 = Re c_0, the mean. On samples evenly spaced in phase over a whole number
 !> of cycles, the trapezoidal rule is exact for every order below half the samples a
 !> cycle (it is the discrete Fourier transform): a single harmonic comes back to
-!> rounding (test_orders). Over a window that is not a whole number of cycles the
-!> leakage is of the order of (the missing fraction of a cycle) / (cycles in the window).
+!> rounding (test_gear_metrics). The figures are taken over the whole cycles of the
+!> samples (the last partial cycle is left out, its step cut at the cycle's end with x
+!> linear along it), so a mean much larger than the harmonics (a TE behind a backlash)
+!> does not leak into them.
 !>
 !> The sums are kept as e^(-i phi) and its powers from one cos/sin per sample, the
 !> phase reduced to [0, 2 pi). No allocation: fixed-size state.
@@ -36,6 +38,8 @@ module trainsim_orders
       real(wp) :: phi = 0.0_wp                 !< the last sample's phase, reduced to [0, 2 pi)
       real(wp) :: span = 0.0_wp                !< phase advanced since the first sample
       real(wp) :: t0 = 0.0_wp                  !< the first sample's time
+      integer :: cycles_done = 0               !< whole cycles completed (the snapshot's)
+      complex(wp) :: c_whole(0:n_orders, n_order_signals) = (0.0_wp, 0.0_wp)   !< c over those whole cycles
       complex(wp) :: g(0:n_orders, n_order_signals) = (0.0_wp, 0.0_wp)   !< last sample's x e^(-i k phi)
       complex(wp) :: c(0:n_orders, n_order_signals) = (0.0_wp, 0.0_wp)   !< int x e^(-i k phi) dphi so far
    contains
@@ -69,6 +73,7 @@ contains
          ek = ek*e1
       end do
       if (self%n > 0) then
+         call whole_cycles(self, dphi, x)
          self%c = self%c + (0.5_wp*dphi)*(self%g + gn)
          self%span = self%span + dphi
       end if
@@ -78,14 +83,49 @@ contains
       self%w = w
    end subroutine ot_push
 
-   !> a(0:n_orders, signal): the mean (order 0) and the amplitudes 2 |c_k| (0 before a phase advanced).
+   !> Before the step of dphi from the last sample to the sample x: each whole cycle the
+   !> step completes, |phase since the first sample| = 2 pi m, gives the snapshot c_whole of
+   !> the integral up to it (the step cut there, x and the phase linear along the step).
+   pure subroutine whole_cycles(self, dphi, x)
+      type(order_tracker_t), intent(inout) :: self
+      real(wp), intent(in) :: dphi, x(n_order_signals)
+      real(wp) :: goal, frac, phc, xc(n_order_signals)
+      complex(wp) :: e1, ek, gc(0:n_orders, n_order_signals)
+      integer :: k
+      if (dphi == 0.0_wp) return
+      do
+         goal = two_pi*real(self%cycles_done + 1, wp)
+         if (abs(self%span + dphi) < goal) return
+         frac = (goal - abs(self%span))/abs(dphi)
+         xc = self%g(0, :) + frac*(x - real(self%g(0, :), wp))
+         phc = self%phi - (1.0_wp - frac)*dphi   ! (self%phi is already the new sample's)
+         e1 = cmplx(cos(phc), -sin(phc), wp)
+         ek = (1.0_wp, 0.0_wp)
+         do k = 0, n_orders
+            gc(k, :) = xc*ek
+            ek = ek*e1
+         end do
+         self%c_whole = self%c + (0.5_wp*frac*dphi)*(self%g + gc)
+         self%cycles_done = self%cycles_done + 1
+      end do
+   end subroutine whole_cycles
+
+   !> a(0:n_orders, signal): the mean (order 0) and the amplitudes 2 |c_k| over the whole
+   !> cycles completed (over the samples' span when not one cycle is complete; 0 before a
+   !> phase advanced).
    pure subroutine ot_amplitudes(self, a)
       class(order_tracker_t), intent(in) :: self
       real(wp), intent(out) :: a(0:n_orders, n_order_signals)
+      complex(wp) :: c(0:n_orders, n_order_signals)
+      real(wp) :: span
       a = 0.0_wp
-      if (self%span == 0.0_wp) return
-      a = 2.0_wp*abs(self%c)/abs(self%span)
-      a(0, :) = real(self%c(0, :), wp)/self%span
+      c = self%c; span = self%span
+      if (self%cycles_done > 0) then
+         c = self%c_whole; span = sign(two_pi*real(self%cycles_done, wp), self%span)
+      end if
+      if (span == 0.0_wp) return
+      a = 2.0_wp*abs(c)/abs(span)
+      a(0, :) = real(c(0, :), wp)/span
    end subroutine ot_amplitudes
 
    !> Order-1 cycles covered so far.
