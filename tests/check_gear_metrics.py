@@ -88,6 +88,12 @@ with tempfile.TemporaryDirectory() as d:
     check(abs(g["p2p_mean"][i] / 0.00319 - 1) < 0.03 and 395 <= x[i] <= 415,
           f"peak of p2p_mean {g['p2p_mean'][i]:.5f} in at {x[i]:.0f} teeth/s (thesis 0.00319 near 405)")
     check(g["kv"][i] > 3.0, f"Kv at the Fig. 5.11 peak {g['kv'][i]:.3f} > 3 (the mesh separates)")
+    png, npz = os.path.join(d, "te.png"), os.path.join(d, "te.npz")
+    p = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "scripts", "plot_sweep.py"), out, "--te-spectrum", "mesh",
+                        "--out", png, "--data", npz], capture_output=True, text=True)
+    z = np.load(npz) if p.returncode == 0 else None
+    check(p.returncode == 0 and os.path.getsize(png) > 0 and np.array_equal(z["amplitude"][0], g["te_order_1"]),
+          f"plot_sweep.py --te-spectrum mesh draws the order map of the file's te_order_1..4 ({p.stderr.strip()[-150:]})")
     print("mesh frequency, Kv, p2p_mean, TE order 1:")
     for k in range(len(x)):
         print(f"  {x[k]:5.0f} {g['kv'][k]:7.4f} {g['p2p_mean'][k]:.6f} {g['te_order_1'][k]:.6e}"
