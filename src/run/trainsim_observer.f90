@@ -100,6 +100,8 @@ module trainsim_observer
       !> the gear meshes (qs%mesh): their elements, and the order tracker of each, fed
       !> with the output samples from t_metrics on (TE and mesh force, D-99)
       integer, allocatable :: mesh_el(:)
+      integer, allocatable :: mesh_drv(:)           !< its driver (left node)
+      real(wp), allocatable :: mesh_rate(:)         !< N: the order-1 phase per radian of the driver
       type(order_tracker_t), allocatable :: orders(:)
    contains
       procedure :: start => obs_start
@@ -592,9 +594,11 @@ contains
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: t, disp(:), force(:), omega(:)
       integer :: q, i
+      real(wp) :: x(2)
       do q = 1, size(self%mesh_el)
          i = self%mesh_el(q)
-         call self%orders(q)%push(t, two_pi/self%qs%period(i)*omega(model%elements(i)%e%left), [disp(i), force(i)])
+         x(1) = disp(i); x(2) = force(i)
+         call self%orders(q)%push(t, self%mesh_rate(q)*omega(self%mesh_drv(q)), x)
       end do
    end subroutine block_orders
 

@@ -59,6 +59,8 @@ contains
          if (size(self%qs%mesh) == ne) self%mesh_el = pack([(i, i=1, ne)], self%qs%mesh)
       end if
       allocate (self%orders(size(self%mesh_el)))
+      self%mesh_drv = [(model%elements(self%mesh_el(i))%e%left, i=1, size(self%mesh_el))]
+      self%mesh_rate = [(two_pi/self%qs%period(self%mesh_el(i)), i=1, size(self%mesh_el))]
       if (sink%needs_meta()) then
          call sink%open(make_meta(model), err)
       else
@@ -321,7 +323,7 @@ contains
             call model%elements(i)%e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), d, f, c, p)
             w = model%omega(l)
          end if
-         call self%orders(q)%push(t_out, two_pi/self%qs%period(i)*w, [self%s%displacement(i), f])
+         call self%orders(q)%push(t_out, self%mesh_rate(q)*w, [self%s%displacement(i), f])
       end do
    end subroutine obs_feed_orders
 
