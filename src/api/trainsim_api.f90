@@ -61,7 +61,7 @@ module trainsim
       'impacts', 'separations', 'zone_changes', 'max_approach_velocity', 'max_peak_force', &
       'time_out_of_contact', 'p2p_range', 'p2p_mean', 'p2p_swings', 'load_sharing', 'kv', 'static_force', &
       'static_te_mean', 'static_te_p2p', 'force_mean', 'te_order_1', 'te_order_2', 'te_order_3', 'te_order_4', &
-      'force_order_1', 'force_order_2', 'force_order_3', 'force_order_4']
+      'force_order_1', 'force_order_2', 'force_order_3', 'force_order_4', 'rattle_impacts', 'rattle_open']
 
    !> A deck, the model built from it and the result of its last run.
    type :: simulation_t
@@ -401,6 +401,8 @@ contains
       case ('te_order_1', 'te_order_2', 'te_order_3', 'te_order_4'); value = m%te_order(index('1234', name(10:10)))
       case ('force_order_1', 'force_order_2', 'force_order_3', 'force_order_4')
          value = m%force_order(index('1234', name(13:13)))
+      case ('rattle_impacts'); value = m%rattle_impacts
+      case ('rattle_open'); value = m%rattle_open
       case default
          call fatal_error(err, "metric: unknown metric '"//name//"'; valid: "//metric_names(), err_input)
       end select

@@ -63,6 +63,7 @@ contains
             do q = 1, n_orders
                call add(id, 21 + q, e%te_order(q), d); call add(id, 21 + n_orders + q, e%force_order(q), f)
             end do
+            call add(id, 30, e%rattle_impacts, '1'); call add(id, 31, e%rattle_open, '1')
          end associate
       end do
       do k = 1, nn

@@ -262,6 +262,8 @@ contains
       do n = 1, n_orders
          r = m%force_order(n); if (.not. allocated(err)) call put_column_r(grp, 'force_order_'//str(n), r, err, u%el_force)
       end do
+      r = m%rattle_impacts; if (.not. allocated(err)) call put_column_r(grp, 'rattle_impacts', r, err, cnt)
+      r = m%rattle_open; if (.not. allocated(err)) call put_column_r(grp, 'rattle_open', r, err, cnt)
       call close_group(grp, err)
    end subroutine write_metrics
 

@@ -85,6 +85,9 @@ module trainsim_sink
       !> 1..n_orders and the mean mesh force, over the output samples of the metrics
       !> window (trainsim_orders); 0 for any other element
       real(wp) :: te_order(n_orders) = 0.0_wp, force_order(n_orders) = 0.0_wp, force_mean = 0.0_wp
+      !> gear meshes, rattle indices (D-100): impacts per mesh cycle of the window and the
+      !> fraction of the window's time the mesh was out of contact
+      real(wp) :: rattle_impacts = 0.0_wp, rattle_open = 0.0_wp
       !> the online peak detector could confirm p2p_mean/p2p_swings are the
       !> whole-series figures (D-17); .false. if the range grew after a swing
       !> to over ten times that swing (memory only, not in the file)

@@ -283,6 +283,10 @@ contains
          self%res%el(self%mesh_el(i))%te_order = a(1:, 1)
          self%res%el(self%mesh_el(i))%force_order = a(1:, 2)
          self%res%el(self%mesh_el(i))%force_mean = a(0, 2)
+         associate (m => self%res%el(self%mesh_el(i)))   ! rattle indices (D-100)
+            if (self%orders(i)%cycles() > 0.0_wp) m%rattle_impacts = real(m%impacts, wp)/self%orders(i)%cycles()
+            if (t > self%t_metrics) m%rattle_open = m%time_out_of_contact/(t - self%t_metrics)
+         end associate
       end do
       self%out => null()
       call sink%close(no_rows, self%res%stats, self%res%el, err)
