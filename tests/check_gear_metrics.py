@@ -90,9 +90,10 @@ with tempfile.TemporaryDirectory() as d:
           f"peak of p2p_mean {g['p2p_mean'][i]:.5f} in at {x[i]:.0f} teeth/s (thesis 0.00319 near 405)")
     check(g["kv"][i] > 3.0, f"Kv at the Fig. 5.11 peak {g['kv'][i]:.3f} > 3 (the mesh separates)")
     # rattle indices (D-100): 60 measured cycles of the held speed; the window is 60 / f s long. The
-    # driver's cycles differ from 60 by its vibration: N x the shaft's twist range / 2 pi < 2e-3 cycles
+    # driver's cycles differ from 60 by its vibration (N x the shaft's twist range / 2 pi, 2e-3 cycles)
+    # and the window's ends at output samples (1/194 cycle at 645 teeth/s): 1.2e-2 cycles, 2e-4 of 60
     sep = ok & (g["impacts"] > 0)
-    check(np.all(np.abs(g["rattle_impacts"][ok] - g["impacts"][ok] / 60.0) <= 2e-3 / 60.0 * g["impacts"][ok] / 60.0),
+    check(np.all(np.abs(g["rattle_impacts"][ok] - g["impacts"][ok] / 60.0) <= 2e-4 * g["impacts"][ok] / 60.0),
           f"rattle_impacts = impacts / 60 cycles ({g['rattle_impacts'][sep].min():.6f} .. "
           f"{g['rattle_impacts'][sep].max():.6f} where the mesh separates, 0 elsewhere)")
     want = g["time_out_of_contact"] * x / 60.0
