@@ -54,8 +54,10 @@ contains
       self%contact_prev = 0
       allocate (self%t_counted(ne))
       self%t_counted = -huge(1.0_wp)
+      ! the gear meshes' orders over a settled window only (settle_time or settle_tol: the
+      ! window is the vibration's, not a start-up's), so a run without one pays nothing a step
       self%mesh_el = [integer ::]
-      if (allocated(self%qs%mesh)) then   ! (static_reference ran: simulate)
+      if (allocated(self%qs%mesh) .and. (model%run%settle_time > 0.0_wp .or. model%run%settle_tol > 0.0_wp)) then
          if (size(self%qs%mesh) == ne) self%mesh_el = pack([(i, i=1, ne)], self%qs%mesh)
       end if
       allocate (self%orders(size(self%mesh_el)))
@@ -283,11 +285,13 @@ contains
          self%res%el(self%mesh_el(i))%te_order = a(1:, 1)
          self%res%el(self%mesh_el(i))%force_order = a(1:, 2)
          self%res%el(self%mesh_el(i))%force_mean = a(0, 2)
-         associate (m => self%res%el(self%mesh_el(i)))   ! rattle indices (D-100)
+         associate (m => self%res%el(self%mesh_el(i)))   ! rattle index: impacts a mesh cycle (D-100)
             if (self%orders(i)%cycles() > 0.0_wp) m%rattle_impacts = real(m%impacts, wp)/self%orders(i)%cycles()
-            if (t > self%t_metrics) m%rattle_open = m%time_out_of_contact/(t - self%t_metrics)
          end associate
       end do
+      if (allocated(self%qs%mesh) .and. t > self%t_metrics) then   ! rattle index: the time out of contact
+         where (self%qs%mesh) self%res%el%rattle_open = self%res%el%time_out_of_contact/(t - self%t_metrics)
+      end if
       self%out => null()
       call sink%close(no_rows, self%res%stats, self%res%el, err)
       if (allocated(err)) return
