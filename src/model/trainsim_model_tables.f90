@@ -9,7 +9,8 @@ submodule (trainsim_model) trainsim_model_tables
    use trainsim_element, only: element_t, hf_none, hf_open, hf_yang_sun, hf_linear, hg_none, hg_faces, hg_faces_zone
    use trainsim_model_families, only: nk_plain, nk_held, lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, &
                                       lf_cl_linear, fast_element_t, table_t, spring_ni, spring_nr, contact_ni, &
-                                      contact_nr, free_ni, free_nr, held_ni, held_nr, load_ni, load_nr, row_ends
+                                      contact_nr, free_ni, free_nr, held_ni, held_nr, load_ni, load_nr, row_ends, &
+                                      build_chain, chain_laws
    use trainsim_model_kernels, only: hot_potential, hot_force, hot_torques, hot_guards
    use trainsim_ports, only: port_init_at
    implicit none
@@ -260,6 +261,7 @@ contains
          if (allocated(f%th)) deallocate (f%th, f%w, f%pw)
          allocate (f%th(nn), f%w(nn), f%pw(ne))
          f%th = 0.0_wp; f%w = 0.0_wp; f%pw = 0.0_wp
+         call build_chain(f, self%fn, self%fe, self%simple)   ! (a serial chain's table, D-98)
       end associate
    contains
 
@@ -355,7 +357,6 @@ contains
          end associate
       end subroutine swap_rows
    end subroutine set_contact_row
-
 
    !> The element's own `status` gives, bit for bit at two probe points, the
    !> displacement and force `rhs_simple` computes for its form of linear
@@ -475,6 +476,7 @@ contains
    module procedure model_hot_kinds
       kind = self%fh(i)%kind
       guards = self%fe(i)%gform
+      if (present(chain)) chain = self%fam%chain%n
    end procedure model_hot_kinds
 
    module procedure refresh_hot
@@ -562,6 +564,7 @@ contains
             call build_families(self)
          else if (in_family) then
             call set_contact_row(self, i)
+            call chain_laws(self%fam)
          end if
       end if
    end procedure refresh_hot
