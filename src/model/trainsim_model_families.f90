@@ -208,19 +208,41 @@ contains
    end subroutine build_chain
 
    !> The links of the chain's clearances to their rows and laws (a row moves
-   !> between the law's tables when its element changes mode).
-   subroutine chain_laws(f)
+   !> between the law's tables when its element changes mode, by swaps at the
+   !> tables' borders, D-75): all of them, or with `e` (its row just set; p0
+   !> its row before) e's, row p0's (a swap's other row) and the rows next
+   !> to the two borders, where a second swap puts the others.
+   subroutine chain_laws(f, e, p0)
       type(families_t), intent(inout) :: f
-      integer :: p, a, law
+      integer, intent(in), optional :: e, p0
+      integer :: p, j, b1, b2
       if (f%chain%n == 0) return
-      do p = 1, f%contacts%n
+      if (.not. present(e)) then
+         do p = 1, f%contacts%n
+            call point(p)
+         end do
+         return
+      end if
+      call point(f%contact_row(e))
+      call point(p0)
+      b1 = f%c_open%n
+      b2 = f%c_open%n + f%c_ys%n
+      do j = -1, 2
+         if (b1 + j >= 1 .and. b1 + j <= f%contacts%n) call point(b1 + j)
+         if (b2 + j >= 1 .and. b2 + j <= f%contacts%n) call point(b2 + j)
+      end do
+   contains
+      !> Row p's element's link
+      subroutine point(p)
+         integer, intent(in) :: p
+         integer :: a, law
          a = f%contacts%i0 + contact_ni*(p - 1)
          law = ch_open
          if (p > f%c_open%n) law = ch_ys
          if (p > f%c_open%n + f%c_ys%n) law = ch_lin
          f%iw(f%chain%i0 + chain_ni*f%iw(a + 1) + 1:f%chain%i0 + chain_ni*f%iw(a + 1) + 3) = &
             [law, a, f%contacts%r0 + contact_nr*(p - 1)]
-      end do
+      end subroutine point
    end subroutine chain_laws
 
    !> A node row's element torques: with `straight` (at most two), their

@@ -290,10 +290,9 @@ contains
       end subroutine place
    end subroutine build_families
 
-   !> Element i's row of the clearance family from its hot form (D-35), in the
-   !> table of its law (open, closed yang_sun, closed linear: one after another
-   !> in `contacts`). A row whose law changed moves there by swaps at the
-   !> tables' borders, one border at a time (D-75).
+   !> Element i's row of the clearance family from its hot form (D-35), in the table of its
+   !> law (open, closed yang_sun, closed linear: one after another in `contacts`). A row
+   !> whose law changed moves there by swaps at the tables' borders, one at a time (D-75).
    subroutine set_contact_row(self, i)
       type(model_t), intent(inout) :: self
       integer, intent(in) :: i
@@ -563,8 +562,9 @@ contains
          if (in_family .neqv. self%fam%contact_row(i) > 0) then
             call build_families(self)
          else if (in_family) then
+            p = self%fam%contact_row(i)   ! (its row before: another element's after a swap)
             call set_contact_row(self, i)
-            call chain_laws(self%fam)
+            call chain_laws(self%fam, i, p)
          end if
       end if
    end procedure refresh_hot
