@@ -131,7 +131,7 @@ contains
       integer, intent(in) :: w, d
       integer, parameter :: i16 = selected_int_kind(38)
       integer(i16) :: num, den, q, r, p10
-      integer(int64) :: m
+      integer(int64) :: m, q8
       integer :: e2, ex, sc, pass, j, k, n
       character(len=32) :: t
       done = .false.
@@ -167,12 +167,13 @@ contains
       n = d + 6
       if (sign(1.0_wp, x) < 0.0_wp) n = n + 1
       k = n - 4                                              ! the last mantissa digit
+      q8 = int(q, int64)                                     ! q < 10^17: the digits in 64 bits
       do j = k, k - d + 1, -1
-         t(j:j) = achar(48 + int(mod(q, 10_i16)))
-         q = q/10
+         t(j:j) = achar(48 + int(mod(q8, 10_int64)))
+         q8 = q8/10
       end do
       t(k - d:k - d) = '.'
-      t(k - d - 1:k - d - 1) = achar(48 + int(q))
+      t(k - d - 1:k - d - 1) = achar(48 + int(q8))
       if (n == d + 7) t(1:1) = '-'
       t(k + 1:k + 1) = 'E'
       t(k + 2:k + 2) = merge('-', '+', ex < 0)
