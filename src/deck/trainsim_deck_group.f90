@@ -508,13 +508,14 @@ contains
       dist = d(m, n)
    end function edit_distance
 
-   !> Add `key` (lower case) to the group's list of queried keys, once.
+   !> Add `key` (lower case) to the group's list of queried keys. Appended without
+   !> a look for it first (that look was O(keys) a query: D-98); `queried_keys`
+   !> lists each key once.
    subroutine record_query(self, key)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
       character(len=:), allocatable :: tmp
       integer :: n
-      if (was_queried(self, key)) return
       n = self%queried_len + len(key) + 1
       if (.not. allocated(self%queried)) then
          allocate (character(len=max(256, n)) :: self%queried)
@@ -568,19 +569,28 @@ contains
       yes = .true.
    end function same_key
 
-   !> The queried keys as a list, in order of first query (for messages).
+   !> The queried keys as a list, each once, in order of first query (for messages).
    function queried_keys(self) result(keys)
       class(deck_group_t), intent(in) :: self
-      type(string_t), allocatable :: keys(:)
-      integer :: p, q, n
+      type(string_t), allocatable :: keys(:), all(:)
+      integer :: p, q, n, j
+      logical :: seen
       n = 0
       if (self%queried_len > 0) n = count_commas(self%queried(1:self%queried_len))
-      allocate (keys(n))
+      allocate (all(n))
       p = 1
-      do n = 1, size(keys)
+      do n = 1, size(all)
          q = p + index(self%queried(p:self%queried_len), ',') - 2
-         keys(n)%s = self%queried(p:q)
+         all(n)%s = self%queried(p:q)
          p = q + 2
+      end do
+      allocate (keys(0))
+      do n = 1, size(all)
+         seen = .false.
+         do j = 1, size(keys)
+            if (keys(j)%s == all(n)%s) seen = .true.
+         end do
+         if (.not. seen) keys = [keys, all(n)]
       end do
    contains
       pure integer function count_commas(t) result(c)

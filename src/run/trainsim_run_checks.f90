@@ -279,9 +279,12 @@ contains
    !> The message names the node or element that limits the step alone
    !> (`limiting_part`), its deck group, and the dt that would do.
    !> rk4-thesis steps dt/10 in contact; Euler's region reaches 2 on the real axis.
-   subroutine check_fixed_step(model, err)
+   !> `start_bound`: the O(n) bound of the train as it starts (`rk4_dt_quick` of
+   !> `lin_start`, RK4's own radius), 0 where the check did not compute it.
+   subroutine check_fixed_step(model, err, start_bound)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
+      real(wp), intent(out), optional :: start_bound
       type(integrator_entry_t), allocatable :: rows(:)
       type(lin_state_t) :: states(4)
       character(len=40), parameter :: state_text(4) = [character(len=40) :: 'the train as it starts', &
@@ -291,6 +294,7 @@ contains
       character(len=:), allocatable :: part, name, limit_name
       real(wp) :: dt_start
       integer :: i, k
+      if (present(start_bound)) start_bound = 0.0_wp
       allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == model%run%integrator) exit
@@ -322,6 +326,7 @@ contains
             call quick_limit(states(k), dt_safe)
          end if
          if (k == 1) dt_start = dt_safe
+         if (k == 1 .and. present(start_bound)) start_bound = dt_safe
          if (k <= 2) then
             if (.not. h/max_dt_over_limit > dt_safe*rescale) cycle
          else
