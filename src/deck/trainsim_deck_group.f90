@@ -518,7 +518,7 @@ contains
       integer :: n
       n = self%queried_len + len(key) + 1
       if (.not. allocated(self%queried)) then
-         allocate (character(len=max(256, n)) :: self%queried)
+         allocate (character(len=max(64, n)) :: self%queried)
       else if (n > len(self%queried)) then
          allocate (character(len=max(2*len(self%queried), n)) :: tmp)
          tmp(1:self%queried_len) = self%queried(1:self%queried_len)
