@@ -6,9 +6,8 @@
 !> record which keys were read, so that check_unused can report misspelt keys.
 module trainsim_deck
    use, intrinsic :: iso_fortran_env, only: int64
-   use, intrinsic :: iso_c_binding, only: c_ptr, c_char, c_int, c_size_t, c_associated
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
-   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_strings, only: string_t, to_lower, str, join, has_cr
    use trainsim_deck_lexer, only: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string, &
                                   check_text, tokenize, display, parse_real, is_repeat, is_key, &
                                   lower_in_place
@@ -31,25 +30,7 @@ module trainsim_deck
    !> Largest deck file read, in bytes: positions in the text are default integers.
    integer(int64), parameter :: max_deck_bytes = huge(1)
 
-   interface
-      !> C's memchr: the text's CRs are looked for at memory speed (gfortran's index
-      !> takes ~10 instructions a byte, 2.5 % of a 5 000-node start-up).
-      pure type(c_ptr) function c_memchr(s, c, n) bind(c, name='memchr')
-         import :: c_ptr, c_char, c_int, c_size_t
-         character(kind=c_char), intent(in) :: s(*)
-         integer(c_int), value :: c
-         integer(c_size_t), value :: n
-      end function c_memchr
-   end interface
-
 contains
-
-   !> s holds a CR.
-   pure logical function has_cr(s)
-      character(len=*), intent(in) :: s
-      has_cr = .false.
-      if (len(s) > 0) has_cr = c_associated(c_memchr(s, 13_c_int, int(len(s), c_size_t)))
-   end function has_cr
 
    !> Read the deck file `path` and parse it. A missing, unreadable or directory path gives
    !> an error with code err_io; syntax errors give err_input.

@@ -5,7 +5,7 @@
 module trainsim_deck_group
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_strings, only: string_t, to_lower, str, join, edit_distance
    use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place
    implicit none
    private
@@ -480,33 +480,6 @@ contains
       character(len=*), intent(in) :: key
       yes = d >= 1 .and. d <= min(2, max(1, len(key)/3))
    end function is_near
-
-   !> Optimal-string-alignment distance (Damerau-Levenshtein without repeated edits of a
-   !> substring): insertions, deletions, substitutions and swaps of neighbours cost 1.
-   integer function edit_distance(a, b) result(dist)
-      character(len=*), intent(in) :: a, b
-      integer, allocatable :: d(:, :)
-      integer :: i, j, m, n, cost
-      m = len(a)
-      n = len(b)
-      allocate (d(0:m, 0:n))
-      do i = 0, m
-         d(i, 0) = i
-      end do
-      do j = 0, n
-         d(0, j) = j
-      end do
-      do j = 1, n
-         do i = 1, m
-            cost = merge(0, 1, a(i:i) == b(j:j))
-            d(i, j) = min(d(i - 1, j) + 1, d(i, j - 1) + 1, d(i - 1, j - 1) + cost)
-            if (i > 1 .and. j > 1) then
-               if (a(i:i) == b(j - 1:j - 1) .and. a(i - 1:i - 1) == b(j:j)) d(i, j) = min(d(i, j), d(i - 2, j - 2) + 1)
-            end if
-         end do
-      end do
-      dist = d(m, n)
-   end function edit_distance
 
    !> Add `key` (lower case) to the group's list of queried keys. Appended without
    !> a look for it first (that look was O(keys) a query: D-98); `queried_keys`
