@@ -303,11 +303,10 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=*), intent(in), optional :: default
       integer :: k
-      val = ''
       call scalar_entry(self, key, 'a string', present(default), k, err)
-      if (allocated(err)) return
-      if (k == 0) then
-         if (present(default)) val = default
+      if (k == 0 .or. allocated(err)) then   ! (val allocated once: '' or the default)
+         val = ''
+         if (present(default) .and. .not. allocated(err)) val = default
          return
       end if
       val = self%entries(k)%values(1)%s
