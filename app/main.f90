@@ -10,6 +10,7 @@ program trainsim_main
    use trainsim_cmd_calc, only: do_gear, do_key, do_worm, do_planetary
    use trainsim_cmd_scripts, only: do_diagram, do_script
    use trainsim_cmd_fmu, only: do_fmu
+   use trainsim_cmd_periodic, only: do_periodic
    implicit none
 
    nargs = command_argument_count()
@@ -45,6 +46,8 @@ program trainsim_main
       call do_diagram()
    case ('fmu')
       call do_fmu()
+   case ('periodic')
+      call do_periodic()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)

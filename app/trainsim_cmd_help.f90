@@ -37,6 +37,9 @@ contains
          '                                            run can reach (what `run` checks dt against)', &
          '                                --preload   about the static wind-up under the loads (contacts', &
          '                                            closed on their loaded faces; its angles printed)', &
+         '  trainsim periodic DECK [--period-count K] [--segments M] [--transient N] [--tol TOL] [-o FILE]', &
+         '                                the periodic orbit under periodic forcing by shooting: its', &
+         '                                convergence, Floquet multipliers, stability, grazing, metrics', &
          '  trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', &
          '                                spur gear constants (App. E) and a deck fragment', &
          '  trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', &
@@ -107,6 +110,20 @@ contains
             '  --stiffest  = --closed --zone two-pair: the stiffest state a run can reach', &
             '  -h, --help  this text', '', &
             'exit status: 0 success, 2 bad input or file'
+      case ('periodic')
+         write (unit, '(a)') 'usage: trainsim periodic DECK [--period-count K] [--period T] [--segments M] [--transient N]', &
+            '                         [--tol TOL] [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
+            'The periodic state under periodic forcing (a mesh frequency, a sine load) by shooting: Newton on', &
+            'P(x) - x after a transient, the monodromy by central differences (docs/periodic.md). Prints the', &
+            'convergence, the orbit, its Floquet multipliers and stability, grazing, the orbit''s metrics.', '', &
+            '  --period-count K   the orbit repeats after K forcing periods (default 1; K > 1: subharmonic)', &
+            '  --period T         the forcing period in s (default: settle_period, a mesh period, a sine''s)', &
+            '  --segments M       multiple shooting: M segments of the K periods (default 1)', &
+            '  --transient N      map applications before Newton starts (default 10, K periods each)', &
+            '  --tol TOL          convergence: ||P(x) - x|| <= TOL of the state scale (default 1e-10)', &
+            '  -o FILE            the orbit''s run as a history, with the group /periodic', &
+            '  -h, --help         this text', '', &
+            'exit status: 0 converged, 1 no orbit found (the reason printed) or the run failed, 2 bad input'
       case ('gear')
          write (unit, '(a)') 'usage: trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', '', &
             'Spur gear constants from the geometry (App. E, eqs. 3.9 and 3.12): radii, addendum, length of', &

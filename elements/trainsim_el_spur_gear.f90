@@ -25,8 +25,10 @@ module trainsim_el_spur_gear
       guarded_ratio
    use trainsim_event, only: event_t, ev_zone
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
-   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form
-   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone
+   use trainsim_clearance_element, only: clearance_element_t, clearance_hot_form, ce_torques, ce_torques_dissipation, &
+      ce_dissipation, ce_torque_jacobian
+   use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hf_none, hg_none
+   use trainsim_tooth_friction, only: tooth_friction_t
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
    implicit none
    private
@@ -53,6 +55,7 @@ module trainsim_el_spur_gear
       logical :: lo_open = .false.        !< the zone has no lower bound (truncate, u < 0)
       ! geometry (0 when given as TRAIN constants)
       real(wp) :: teeth2 = 0.0_wp, pitch_module = 0.0_wp, phi = 0.0_wp, face = 0.0_wp
+      type(tooth_friction_t) :: fric      !< tooth friction (eqs. 3.13-3.14, D-98): off at tooth_friction = 0
    contains
       procedure :: configure => spur_configure
       procedure :: n_guards => spur_n_guards
@@ -65,6 +68,12 @@ module trainsim_el_spur_gear
       procedure :: state_factor => spur_state_factor
       procedure :: hot_form => spur_hot_form
       procedure, private :: set_zone
+      ! tooth friction (D-98): with tooth_friction = 0 these are the clearance element's
+      procedure :: torques => spur_torques
+      procedure :: dissipation_power => spur_dissipation
+      procedure :: torques_dissipation => spur_torques_dissipation
+      procedure :: torque_jacobian => spur_torque_jacobian
+      procedure, private :: roll
    end type spur_gear_t
 
 contains
@@ -250,6 +259,9 @@ contains
          return
       end select
       call self%cl%law%configure(grp, units, 1.0_wp, 'yang_sun', err)
+      if (allocated(err)) return
+      call self%fric%configure(grp, units, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%phi, &
+                               self%internal, err)
    contains
 
       !> Error unless 1 <= n <= max_teeth (NaN fails).
@@ -345,9 +357,7 @@ contains
 
    pure integer function spur_n_guards(self) result(n)
       class(spur_gear_t), intent(in) :: self
-      associate (unused => self)
-      end associate
-      n = 4
+      n = 4 + self%fric%n_guards()
    end function spur_n_guards
 
    !> Guards 1-2: faces; 3-4: the driver angle inside its zone.
@@ -366,6 +376,7 @@ contains
          g(3) = thl - self%th_lo
       end if
       g(4) = self%th_hi - thl
+      if (size(g) > 4) call self%fric%guards(self%roll(thl), self%pairs, self%cl%mode, wl, wr, g(5:))   ! slides
    end subroutine spur_guards
 
    subroutine spur_init_mode(self, thl, wl, thr, wr)
@@ -373,6 +384,7 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       call self%set_zone(thl)
       call self%cl%init(thl, wl, thr, wr)
+      if (self%fric%n_guards() > 0) call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
    end subroutine spur_init_mode
 
    subroutine spur_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
@@ -407,6 +419,12 @@ contains
          end if
       end if
       call self%cl%update(wl, wr, fired(1:2), ev, nev)
+      if (self%fric%n_guards() == 0) return
+      if (any(fired(1:4))) then   ! new pairs or face: the slides' signs from the state
+         call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
+      else
+         call self%fric%flip(fired(5:), ev, nev)
+      end if
    end subroutine spur_update_mode
 
    !> TE = delta (length), force = signed mesh force, contact = face, pairs = zone (1/2).
@@ -431,7 +449,79 @@ contains
       form%lo_open = self%lo_open
       form%th_lo = self%th_lo
       form%th_hi = self%th_hi
+      if (self%fric%on()) then   ! friction: the general path (D-98)
+         form%kind = hf_none
+         form%guards = hg_none
+      end if
    end subroutine spur_hot_form
+
+   !> Roll of the trailing pair in contact: its contact point's distance along the
+   !> line of action from the start of contact, r_b1 (theta - theta_A), theta_A the
+   !> driver angle at which it entered (the current zone's bounds).
+   pure real(wp) function roll(self, thl) result(s)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl
+      real(wp) :: th_a
+      th_a = self%th_hi - (two_pi/self%teeth)*merge(1.0_wp, self%mp - 1.0_wp, self%pairs == 1)
+      s = self%cl%r1*(thl - th_a)
+   end function roll
+
+   !> Torques, dissipated power: the clearance element's plus the tooth friction
+   !> (trainsim_tooth_friction) on the normal force of the face in contact.
+   pure subroutine spur_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, p
+      real(wp) :: c, fs
+      if (.not. self%fric%on()) then
+         call ce_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
+         return
+      end if
+      c = self%factor(thl)
+      fs = self%cl%contact_force(c, thl, wl, thr, wr)
+      tl = -fs*self%cl%r1
+      tr = fs*self%cl%r2
+      p = self%cl%dissipation(c, thl, wl, thr, wr)
+      if (self%cl%mode*fs > 0.0_wp) call self%fric%add(self%roll(thl), self%pairs, self%cl%mode, self%cl%mode*fs, &
+                                                       wl, wr, tl, tr, p)
+   end subroutine spur_torques_dissipation
+
+   pure subroutine spur_torques(self, thl, wl, thr, wr, tl, tr)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      real(wp) :: p
+      if (self%fric%on()) then
+         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
+      else
+         call ce_torques(self, thl, wl, thr, wr, tl, tr)
+      end if
+   end subroutine spur_torques
+
+   !> The clearance element's Jacobian plus the friction's partials.
+   pure subroutine spur_torque_jacobian(self, thl, wl, thr, wr, jt)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: jt(2, 4)
+      real(wp) :: fs
+      call ce_torque_jacobian(self, thl, wl, thr, wr, jt)
+      if (.not. self%fric%on()) return
+      fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
+      if (self%cl%mode*fs > 0.0_wp) call self%fric%add_jacobian(self%roll(thl), self%pairs, self%cl%mode, &
+                                                                self%cl%mode*fs, self%cl%mode*jt(2, :)/self%cl%r2, &
+                                                                wl, wr, self%cl%r1, jt)
+   end subroutine spur_torque_jacobian
+
+   pure real(wp) function spur_dissipation(self, thl, wl, thr, wr) result(p)
+      class(spur_gear_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp) :: tl, tr
+      if (self%fric%on()) then
+         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
+      else
+         p = ce_dissipation(self, thl, wl, thr, wr)
+      end if
+   end function spur_dissipation
 
    function spur_params(self) result(p)
       class(spur_gear_t), intent(in) :: self
@@ -453,6 +543,12 @@ contains
                       merge('truncate', 'periodic', self%truncate))
       if (self%internal) call add_choice(p, 'internal_mesh', 1.0_wp, 'internal')   ! (external pairs: as before)
       if (self%phase /= 0.0_wp) call append_params(p, [character(len=40) :: 'mesh_phase'], [self%phase])
+      if (self%fric%on()) then   ! (without tooth friction: as before)
+         call append_params(p, [character(len=40) :: 'tooth_friction', 'tooth_friction_velocity'], &
+                            [self%fric%mu, self%fric%v_reg])
+         call add_choice(p, 'tooth_friction_speed', merge(1.0_wp, 0.0_wp, self%fric%speed), &
+                         trim(merge('speed   ', 'constant', self%fric%speed)))
+      end if
       if (self%pitch_module > 0.0_wp) then
          call append_params(p, [character(len=40) :: 'teeth_driven', 'module_length', 'pressure_angle_rad', 'face_width'], &
                             [self%teeth2, self%pitch_module, self%phi, self%face])

@@ -12,7 +12,8 @@ module trainsim_clearance_element
    implicit none
    private
 
-   public :: clearance_element_t, clearance_hot_form
+   public :: clearance_element_t, clearance_hot_form, ce_torques, ce_torques_dissipation, ce_dissipation, &
+             ce_torque_jacobian
 
    type, abstract, extends(element_t) :: clearance_element_t
       type(clearance_t) :: cl

@@ -92,6 +92,7 @@ module trainsim_session
       procedure :: advance => session_advance
       procedure :: save => session_save
       procedure :: restore => session_restore
+      procedure :: set_state => session_set_state
       procedure :: set_torque => session_set_torque
       procedure :: set_input => session_set_input
       procedure :: kinematics => session_kinematics
@@ -225,6 +226,28 @@ contains
       call fresh_integrator(self, err)
       if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
    end subroutine session_restore
+
+   !> Replace the state at the session's point by y (the layout of `y`): every
+   !> element's mode chosen afresh from it (as at a run's start) and the
+   !> integrator started afresh there, its grid kept. For callers that integrate
+   !> from states of their own (the period map, trainsim_period_map).
+   subroutine session_set_state(self, y, err)
+      class(session_t), intent(inout), target :: self
+      real(wp), intent(in) :: y(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: t0
+      integer(i8) :: next
+      if (.not. (self%started .and. size(y) == size(self%y))) then
+         call fatal_error(err, 'internal: a session given a state before it was started, or of another size', &
+                          err_internal)
+         return
+      end if
+      self%y = y
+      call self%model%init_modes(self%t_int, self%y)
+      call grid_of(self%integ, t0, next)
+      call fresh_integrator(self, err)
+      if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
+   end subroutine session_set_state
 
    !> An input of the run from now on: the external torque `value` on node
    !> `node` (an id among the session's inputs), as `set_input(node//'.tau', value)`.

@@ -477,6 +477,17 @@ CASES = [
          deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="half_backlash = 0.002"),
          exit=2, stderr=["deck.nml:6:", "half_backlash belongs to TRAIN's constants form", "geometry form",
                          "TOTAL backlash", "2 x half_backlash", "in in)"]),
+    dict(name="negative tooth_friction is refused (D-98)",
+         deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56", k2="backlash = 0.004, tooth_friction = -0.05"),
+         exit=2, stderr=["deck.nml:6:", "&element", "tooth_friction must be >= 0", "-0.05"]),
+    dict(name="unknown tooth_friction_model is refused (D-98)",
+         deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56",
+                          k2="backlash = 0.004, tooth_friction = 0.05, tooth_friction_model = 'stribeck'"),
+         exit=2, stderr=["deck.nml:6:", "&element", "unknown tooth_friction_model 'stribeck'", "valid: constant, speed"]),
+    dict(name="tooth_friction_velocity <= 0 is refused (D-98)",
+         deck=GEOM.format(units="", k1="teeth_driver = 28, teeth_driven = 56",
+                          k2="backlash = 0.004, tooth_friction = 0.05, tooth_friction_velocity = 0.0"),
+         exit=2, stderr=["deck.nml:6:", "&element", "tooth_friction_velocity must be > 0", "got 0"]),
     dict(name="backlash in the spur_gear constants form is explained (SI)",
          deck="&run t_end = 0.01, dt = 1.0e-6, units = 'si' /\n" + NODES +
          "&element id = 'mesh', type = 'spur_gear', stiffness = 3.0e9, rb_driver = 0.04, rb_driven = 0.08,\n"

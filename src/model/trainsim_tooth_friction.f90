@@ -1,0 +1,250 @@
+!> Sliding friction between meshing spur-gear teeth (thesis §3.1.4, eqs. 3.13,
+!> 3.14, Figs. 3.5-3.7; TRAIN did not simulate it; issue 26 item 3, D-98 (fric26)).
+!>
+!> The contact point of a tooth pair lies on the line of action at s from the
+!> start of contact A (s = r_b1 times the driver's roll since the pair entered,
+!> 0 <= s <= m_p p_b). Its distances from the base-circle tangent points T1, T2
+!> (the involutes' radii of curvature, the moment arms of a force across the line
+!> of action) are rho1 = T1P + (s - AP), rho2 = T2P -/+ (s - AP) (external /
+!> internal mesh; T_iP = r_bi tan(phi), AP = alpha r_b1 with the approach angle
+!> alpha). The teeth slide across the line of action at v_s = w1 rho1 - w2 rho2
+!> (each gear's speed in its own sense), zero at the pitch point when
+!> w1 r_b1 = w2 r_b2. A pair carrying W_k gets the friction mu W_k against the
+!> sliding: torques -e W_k rho1 on the driver and +e W_k rho2 on the driven with
+!> e = mu sign(v_s) ('constant') or mu tanh(v_s / v_reg) ('speed'); their power,
+!> e W_k v_s >= 0, is dissipated. One pair carries the mesh force W; two pairs
+!> share it equally (W/2 each, TRAIN's two-level zones have no stiffness per
+!> pair). With equal shares, contacts one base pitch apart and the slides opposed
+!> (one pair on each side of the pitch point) the net driver torque is
+!> -mu W p_b / 2: eq. (3.14). Rear-face contact takes the same roll map mirrored
+!> about the pitch point (TRAIN's zones do not distinguish the faces either).
+!>
+!> 'constant' switches sign(v_s) by events: per pair a guard sigma_k v_s,k with
+!> the sign sigma_k held between events (RK4-events and CVODE locate it). Pure
+!> functions of the geometry, the roll and the speeds: no allocation, no I/O.
+module trainsim_tooth_friction
+   use trainsim_kinds, only: wp, pi, two_pi
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str, to_lower
+   use trainsim_units, only: units_t
+   use trainsim_deck, only: deck_group_t
+   use trainsim_event, only: event_t, ev_slip_forward, ev_slip_backward
+   implicit none
+   private
+
+   public :: tooth_friction_t, friction_arms
+
+   !> Default regularisation speed of 'speed': 1 mm/s (in the deck's length units per s).
+   real(wp), parameter :: v_reg_default_m = 1.0e-3_wp
+
+   type :: tooth_friction_t
+      real(wp) :: mu = 0.0_wp            !< tooth_friction (0: off)
+      logical :: speed = .false.         !< tooth_friction_model = 'speed': mu tanh(v_s / v_reg)
+      real(wp) :: v_reg = 0.0_wp         !< tooth_friction_velocity (length/s)
+      real(wp) :: t1p = 0.0_wp, t2p = 0.0_wp   !< T1P = r_b1 tan(phi), T2P = r_b2 tan(phi)
+      real(wp) :: ap = 0.0_wp            !< AP = alpha r_b1: from the start of contact to the pitch point
+      real(wp) :: pb = 0.0_wp            !< base pitch 2 pi r_b1 / N
+      real(wp) :: s2 = -1.0_wp           !< d rho2 / d rho1: -1 external, +1 internal
+      real(wp) :: sig(2) = 1.0_wp        !< 'constant': sign of the slide of the trailing and leading pair
+   contains
+      procedure :: configure => tf_configure
+      procedure :: on => tf_on
+      procedure :: n_guards => tf_n_guards
+      procedure :: add => tf_add
+      procedure :: add_jacobian => tf_add_jacobian
+      procedure :: guards => tf_guards
+      procedure :: set_signs => tf_set_signs
+      procedure :: flip => tf_flip
+   end type tooth_friction_t
+
+contains
+
+   !> Read tooth_friction, tooth_friction_model, tooth_friction_velocity (and, when
+   !> phi = 0, TRAIN's constants form, pressure_angle [deg], default 20) and set the
+   !> geometry: base radii rb1, rb2, driver teeth n, contact ratio mp, approach
+   !> angle alpha [rad], pressure angle phi [rad].
+   subroutine tf_configure(self, grp, units, rb1, rb2, n, mp, alpha, phi, internal, err)
+      class(tooth_friction_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      type(units_t), intent(in) :: units
+      real(wp), intent(in) :: rb1, rb2, n, mp, alpha, phi
+      logical, intent(in) :: internal
+      type(error_t), allocatable, intent(out) :: err
+      character(len=:), allocatable :: model
+      real(wp) :: ph, r1a, r1, r2
+      integer :: k
+      call grp%get_real('tooth_friction', self%mu, err, default=0.0_wp); if (allocated(err)) return
+      call grp%require_nonnegative('tooth_friction', self%mu, err); if (allocated(err)) return
+      call grp%get_string('tooth_friction_model', model, err, default='constant'); if (allocated(err)) return
+      select case (to_lower(model))
+      case ('constant'); self%speed = .false.
+      case ('speed'); self%speed = .true.
+      case default
+         call fatal_error(err, grp%where('tooth_friction_model')//": error: unknown tooth_friction_model '"//model// &
+                          "'; valid: constant, speed", err_input)
+         return
+      end select
+      call grp%get_real('tooth_friction_velocity', self%v_reg, err, default=v_reg_default_m/0.0254_wp/units%to_inch)
+      if (allocated(err)) return
+      call grp%require_positive('tooth_friction_velocity', self%v_reg, err); if (allocated(err)) return
+      if (.not. self%on()) return
+      ph = phi
+      if (ph == 0.0_wp) then   ! TRAIN's constants form has no pressure angle: asked only with friction
+         call grp%get_real('pressure_angle', ph, err, default=20.0_wp); if (allocated(err)) return
+         if (.not. (ph > 0.0_wp .and. ph < 45.0_wp)) then
+            call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, '// &
+                             'got '//str(ph), err_input)
+            return
+         end if
+         ph = ph*pi/180.0_wp
+      end if
+      self%t1p = rb1*tan(ph)
+      self%t2p = rb2*tan(ph)
+      self%ap = alpha*rb1
+      self%pb = two_pi*rb1/n
+      self%s2 = merge(1.0_wp, -1.0_wp, internal)
+      ! the arms over the path of contact [0, m_p p_b] on either flank: a contact beyond a
+      ! tangent point is interference
+      r1a = huge(1.0_wp)
+      do k = 0, 3
+         call friction_arms(self, merge(mp*self%pb, 0.0_wp, mod(k, 2) == 1), merge(1, -1, k < 2), r1, r2)
+         r1a = min(r1a, r1, r2)
+      end do
+      if (.not. r1a >= 0.0_wp) then
+         call fatal_error(err, grp%where('tooth_friction')//': error: tooth friction needs the path of contact between '// &
+                          'the base-circle tangent points; here a radius of curvature at an end of contact is '// &
+                          str(r1a)//' '//units%length//' (interference: check pressure_angle, approach_angle, '// &
+                          'contact_ratio)', err_input)
+         return
+      end if
+   end subroutine tf_configure
+
+   pure logical function tf_on(self) result(on)
+      class(tooth_friction_t), intent(in) :: self
+      on = self%mu > 0.0_wp
+   end function tf_on
+
+   !> Guards the friction adds: one per pair for 'constant' (the slide's sign), none for 'speed'.
+   pure integer function tf_n_guards(self) result(ng)
+      class(tooth_friction_t), intent(in) :: self
+      ng = 0
+      if (self%on() .and. .not. self%speed) ng = 2
+   end function tf_n_guards
+
+   !> Moment arms rho1, rho2 of the contact at s from A on the front (face >= 0)
+   !> or rear (face < 0) flank.
+   pure subroutine friction_arms(self, s, face, rho1, rho2)
+      type(tooth_friction_t), intent(in) :: self
+      real(wp), intent(in) :: s
+      integer, intent(in) :: face
+      real(wp), intent(out) :: rho1, rho2
+      real(wp) :: d
+      d = s - self%ap
+      if (face < 0) d = -d
+      rho1 = self%t1p + d
+      rho2 = self%t2p + self%s2*d
+   end subroutine friction_arms
+
+   !> Add the friction of `pairs` pairs (the trailing at s, the leading at
+   !> s + p_b) under the normal force w >= 0 to the torques tl, tr (own senses)
+   !> and its power to p.
+   pure subroutine tf_add(self, s, pairs, face, w, wl, wr, tl, tr, p)
+      class(tooth_friction_t), intent(in) :: self
+      real(wp), intent(in) :: s, w, wl, wr
+      integer, intent(in) :: pairs, face
+      real(wp), intent(inout) :: tl, tr, p
+      real(wp) :: rho1, rho2, v, e, wk
+      integer :: k
+      wk = w/real(pairs, wp)                          ! equal shares in the two-pair zone
+      do k = 1, pairs
+         call friction_arms(self, s + (k - 1)*self%pb, face, rho1, rho2)
+         v = wl*rho1 - wr*rho2                         ! sliding velocity
+         if (self%speed) then
+            e = self%mu*tanh(v/self%v_reg)
+         else
+            e = self%mu*self%sig(k)
+         end if
+         tl = tl - e*wk*rho1                           ! eq. (3.13) on each pair
+         tr = tr + e*wk*rho2
+         p = p + e*wk*v
+      end do
+   end subroutine tf_add
+
+   !> Add the partials of `add`'s torques with respect to (thl, wl, thr, wr) to
+   !> jt(2, 4): the normal force w with its partials dw, the roll s (ds/dthl = r_b1).
+   pure subroutine tf_add_jacobian(self, s, pairs, face, w, dw, wl, wr, r1, jt)
+      class(tooth_friction_t), intent(in) :: self
+      real(wp), intent(in) :: s, w, dw(4), wl, wr, r1
+      integer, intent(in) :: pairs, face
+      real(wp), intent(inout) :: jt(2, 4)
+      real(wp) :: rho1, rho2, d1, d2, v, e, de, wk, dv(4)
+      integer :: k
+      wk = w/real(pairs, wp)
+      d1 = merge(-r1, r1, face < 0)                   ! d rho1 / d thl
+      d2 = self%s2*d1                                 ! d rho2 / d thl
+      do k = 1, pairs
+         call friction_arms(self, s + (k - 1)*self%pb, face, rho1, rho2)
+         v = wl*rho1 - wr*rho2
+         if (self%speed) then
+            e = self%mu*tanh(v/self%v_reg)
+            de = self%mu*(1.0_wp - tanh(v/self%v_reg)**2)/self%v_reg
+         else
+            e = self%mu*self%sig(k)
+            de = 0.0_wp
+         end if
+         dv = [wl*d1 - wr*d2, rho1, 0.0_wp, -rho2]
+         jt(1, :) = jt(1, :) - (de*dv*wk*rho1 + e*dw/real(pairs, wp)*rho1)
+         jt(2, :) = jt(2, :) + (de*dv*wk*rho2 + e*dw/real(pairs, wp)*rho2)
+         jt(1, 1) = jt(1, 1) - e*wk*d1
+         jt(2, 1) = jt(2, 1) + e*wk*d2
+      end do
+   end subroutine tf_add_jacobian
+
+   !> 'constant': guards sigma_k v_s,k of the pairs in contact (1: no pair).
+   pure subroutine tf_guards(self, s, pairs, face, wl, wr, g)
+      class(tooth_friction_t), intent(in) :: self
+      real(wp), intent(in) :: s, wl, wr
+      integer, intent(in) :: pairs, face
+      real(wp), intent(out) :: g(:)
+      real(wp) :: rho1, rho2
+      integer :: k
+      g = 1.0_wp
+      do k = 1, min(pairs, size(g))
+         call friction_arms(self, s + (k - 1)*self%pb, face, rho1, rho2)
+         g(k) = self%sig(k)*(wl*rho1 - wr*rho2)
+      end do
+   end subroutine tf_guards
+
+   !> The slides' signs from the state (at the start, and when the pairs or the
+   !> face change). A pair at rest takes the sign its roll gives past the pitch point.
+   pure subroutine tf_set_signs(self, s, pairs, face, wl, wr)
+      class(tooth_friction_t), intent(inout) :: self
+      real(wp), intent(in) :: s, wl, wr
+      integer, intent(in) :: pairs, face
+      real(wp) :: rho1, rho2, v
+      integer :: k
+      self%sig = 1.0_wp
+      do k = 1, pairs
+         call friction_arms(self, s + (k - 1)*self%pb, face, rho1, rho2)
+         v = wl*rho1 - wr*rho2
+         if (v == 0.0_wp) v = (rho1 - self%t1p)*(wl + wr)
+         if (v < 0.0_wp) self%sig(k) = -1.0_wp
+      end do
+   end subroutine tf_set_signs
+
+   !> A slide's guard fired: reverse its sign and report slip_forward (now
+   !> v_s > 0) or slip_backward.
+   subroutine tf_flip(self, fired, ev, nev)
+      class(tooth_friction_t), intent(inout) :: self
+      logical, intent(in) :: fired(:)
+      type(event_t), intent(inout) :: ev(:)
+      integer, intent(inout) :: nev
+      integer :: k
+      do k = 1, size(fired)
+         if (.not. fired(k)) cycle
+         self%sig(k) = -self%sig(k)
+         nev = nev + 1
+         ev(nev) = event_t(kind=merge(ev_slip_forward, ev_slip_backward, self%sig(k) > 0.0_wp))
+      end do
+   end subroutine tf_flip
+end module trainsim_tooth_friction
