@@ -27,7 +27,11 @@ contains
       do i = 1, size(model%elements)
          p = model%elements(i)%e%params()
          if (size(p%names) == 0) cycle
-         call out%a('element '//model%elements(i)%e%id//' ('//model%elements(i)%e%type_name//'):', 0)
+         call out%a('element ', 0)   ! (piece by piece: no concatenated temporary a line)
+         call out%a(model%elements(i)%e%id, 0)
+         call out%a(' (', 0)
+         call out%a(model%elements(i)%e%type_name, 0)
+         call out%a('):', 0)
          call out%end_line()
          w = 24
          do j = 1, size(p%names)
