@@ -3,7 +3,13 @@
 
     /usr/bin/python3 scripts/plot_sweep.py SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean \
         [--x mesh.mesh_frequency] [--label TEXT ...] [--out fig.png] [--fig5-11] [--data d.npz]
+    /usr/bin/python3 scripts/plot_sweep.py SWEEP.h5 --te-spectrum mesh [--force] [--out fig.png]
     trainsim plot SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean -o fig.png   (the same)
+
+--te-spectrum ID   the transmission error of gear mesh ID at mesh orders 1..4 (elements/te_order_K,
+                   D-99) against the swept parameter: above, one curve per order (a waterfall seen
+                   from the side); below, the order map (orders against the parameter, the amplitude
+                   in colour, log scale). --force: the mesh force's orders instead.
 
 --metric ID.NAME   an element metric (elements/NAME column ID: p2p_range, p2p_mean,
                    impacts, time_out_of_contact, max_peak_force, ...) or a node metric
@@ -167,7 +173,9 @@ def main(argv=None, prog=None):
     ap = argparse.ArgumentParser(prog=prog, description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("files", nargs="+")
-    ap.add_argument("--metric", required=True)
+    ap.add_argument("--metric")
+    ap.add_argument("--te-spectrum", dest="te_spectrum", metavar="ID")
+    ap.add_argument("--force", action="store_true", help="with --te-spectrum: the mesh force's orders")
     ap.add_argument("--x")
     ap.add_argument("--label", action="append")
     ap.add_argument("--out", default="sweep.png")
@@ -178,6 +186,10 @@ def main(argv=None, prog=None):
                                    "and branch)")
     ap.add_argument("--describe", help=argparse.SUPPRESS)   # the axes as JSON (tests)
     a = ap.parse_args(argv)
+    if a.te_spectrum:
+        return order_map(a)
+    if not a.metric:
+        ap.error("give --metric ID.NAME or --te-spectrum ID")
     plotted = {}
 
     fig, ax = plt.subplots(figsize=(8, 5))
@@ -230,6 +242,49 @@ def main(argv=None, prog=None):
         describe_figure(fig, a.describe)
     if a.data:
         np.savez(a.data, **plotted)
+    print(a.out)
+    return 0
+
+
+def order_map(a):
+    """--te-spectrum: the mesh orders of one gear mesh's TE (or force) against the swept parameter."""
+    sig = "force" if a.force else "te"
+    orders = [1, 2, 3, 4]
+    cols = [read(a.files[0], f"{a.te_spectrum}.{sig}_order_{k}", a.x) for k in orders]
+    d = cols[0]
+    ok = d["status"] == 1
+    order = np.argsort(d["x"], kind="stable")
+    order = order[ok[order]]
+    x = d["x"][order]
+    amp = np.array([c["y"][order] for c in cols])          # (order, run)
+    y_unit = d["y_unit"] or "1"
+    ky, y_unit = display_unit(amp.ravel(), y_unit)
+    kx, x_unit = display_unit(x, d["p_units"][d["xname"]] or "1")
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 7.5), sharex=True)
+    what = "mesh force" if a.force else "transmission error"
+    for k, row in zip(orders, amp):
+        ax1.plot(x * kx, row * ky, "-o", ms=3, lw=1.2, label=f"mesh order {k}", gid="curve")
+    ax1.set_yscale("log")
+    ax1.set_ylabel(axis_label(f"{a.te_spectrum}: {what} amplitude", y_unit))
+    ax1.legend(fontsize=8)
+    ax1.grid(alpha=0.3, which="both")
+    ax1.set_title(f"{a.te_spectrum}: {what} at mesh orders 1-4 (settled window) vs {d['xname']}", fontsize=10)
+    floor = max(np.max(amp) * 1e-6, np.min(amp[amp > 0]) if np.any(amp > 0) else 1e-30)
+    edges = np.concatenate([[x[0] - (x[1] - x[0]) / 2 if len(x) > 1 else x[0] - 0.5],
+                            (x[1:] + x[:-1]) / 2, [x[-1] + (x[-1] - x[-2]) / 2 if len(x) > 1 else x[0] + 0.5]])
+    mesh = ax2.pcolormesh(edges * kx, np.arange(0.5, len(orders) + 1), np.log10(np.maximum(amp * ky, floor * ky)),
+                          shading="flat", cmap="viridis")
+    fig.colorbar(mesh, ax=ax2, label=f"log10 amplitude [{pretty(y_unit)}]")
+    ax2.set_yticks(orders)
+    ax2.set_ylabel("mesh order")
+    x_words = METRIC_WORDS.get(d["xname"].rpartition(".")[2])
+    ax2.set_xlabel(axis_label(f"{d['xname']}: {x_words}" if x_words else d["xname"], x_unit))
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=120)
+    if a.describe:
+        describe_figure(fig, a.describe)
+    if a.data:
+        np.savez(a.data, x=x, amplitude=amp, orders=np.array(orders))
     print(a.out)
     return 0
 

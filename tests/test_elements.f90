@@ -117,6 +117,9 @@ program test_elements
    call test_rhs_on_a_part_of_the_train_is_bit_for_bit_the_whole_rhs()
    call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.false.)
    call test_rhs_kernel_is_the_generic_rhs_and_fills_workspace(.true.)
+   call test_chain_kernel_is_the_generic_rhs(.false., .true.)
+   call test_chain_kernel_is_the_generic_rhs(.true., .true.)
+   call test_chain_kernel_is_the_generic_rhs(.true., .false.)
    call test_stage_energy_rates_are_the_full_rhs_own()
    call test_hot_forms_are_the_elements_own_arithmetic()
    call test_hot_form_follows_mode_changes()
@@ -480,6 +483,117 @@ contains
          deallocate (dydt, ref)
       end do
    end subroutine test_model_rhs_is_the_plug_ins_own_torques_and_derivatives
+
+   !> D-100: a serial chain (each element joins the node after the last one;
+   !> undamped inertias, the head held or free; springs, a damped shaft and
+   !> clearances in their hot forms) runs the chain kernel; the same train with
+   !> one load given as a sine of zero amplitude runs the generic RHS. Both must
+   !> give the same derivatives, energy rates, node torques and workspace to the
+   !> bit, at the step end, an inner stage and RK4's inner stages at y + c k.
+   subroutine test_chain_kernel_is_the_generic_rhs(track, held)
+      logical, intent(in) :: track, held
+      type(model_t) :: ms, mg
+      real(wp), allocatable :: y(:), ds(:), dg(:), yk(:), ya(:), k2(:), k3(:), k4(:), y2(:)
+      real(wp) :: stored, elastic, sg, eg, disp, force
+      integer :: i, k, kind, gk, ns, ng, contact, pairs, changes, oc
+      logical :: status_ok, same, was(2), now(2)
+      character(len=:), allocatable :: train, run
+      call test_begin('chain_kernel_is_bit_for_bit_the_generic_rhs, track_energy = '//merge('on ', 'off', track)// &
+                      ', head '//merge('held', 'free', held))
+      run = "&run t_end = 1e-3, dt = 1e-6, track_energy = "//merge('.true. ', '.false.', track)//' /'//nl
+      train = "&node id='a', type='inertia', inertia=1.0 /"//nl// &
+              "&node id='b', type='inertia', inertia=0.3 /"//nl// &
+              "&node id='c', type='inertia', inertia=0.7 /"//nl// &
+              "&node id='d', type='inertia', inertia=0.4 /"//nl// &
+              "&node id='e', type='inertia', inertia=1.5 /"//nl// &
+              "&node id='f', type='inertia', inertia=2.0 /"//nl// &
+              "&node id='g', type='inertia', inertia=0.9 /"//nl// &
+              "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
+              "&element type='shaft', stiffness=2e3, damping=0.1, left='b', right='c' /"//nl// &
+              "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
+              "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001, left='c', right='d' /"//nl// &
+              "&element type='ideal_gear', stiffness=2e4, rb_driver=0.7, rb_driven=1.1, left='d', right='e' /"//nl// &
+              "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, left='e', right='f' /"//nl// &
+              "&element type='shaft', stiffness=3e3, left='f', right='g' /"//nl// &
+              "&load node='c', value=0.5 /"//nl// &
+              "&load node='a', value=1.25 /"//nl
+      if (held) train = train//"&load node='a', quantity='speed', kind='constant', value=5.0 /"//nl
+      call load_model_text(run//train//"&load node='g', value=-3.0 /"//nl, ms)
+      call load_model_text(run//train//"&load node='g', kind='sine', offset=-3.0, amplitude=0.0, frequency=7.0 /"// &
+                           nl, mg)
+      call ms%initial_state(y)
+      do i = 1, size(y) - merge(2, 0, track)
+         y(i) = 0.01_wp*sin(1.7_wp*i) + merge(0.05_wp, 0.0_wp, i == 3) + merge(0.0004_wp, 0.0_wp, i == 9)
+      end do
+      call ms%init_modes(0.1_wp, y)
+      call mg%init_modes(0.1_wp, y)
+      call ms%hot_kinds(1, kind, gk, ns)
+      call mg%hot_kinds(1, kind, gk, ng)
+      call check('the simple model runs the chain kernel over its six elements, the other the generic RHS', &
+                 ns == 6 .and. ng == 0)
+      call check('the gear and the keyed joint are in contact (their torques take part)', &
+                 ms%elements(3)%e%in_contact() .and. ms%elements(5)%e%in_contact())
+      allocate (ds(size(y)), dg(size(y)))
+      ds = huge(1.0_wp); dg = -huge(1.0_wp)
+      call ms%rhs_step_end(0.1_wp, y, ds)
+      call mg%rhs_step_end(0.1_wp, y, dg)
+      call check('step end: derivatives (energy rates too) identical to the bit', all(ds == dg))
+      call check('step end: node angles, speeds, torques and element torques identical to the bit', &
+                 all(ms%theta == mg%theta) .and. all(ms%omega == mg%omega) .and. all(ms%torque == mg%torque) &
+                 .and. all(ms%el_torque == mg%el_torque))
+      status_ok = all(ms%ws_status)
+      do i = 1, size(ms%elements)
+         associate (e => ms%elements(i)%e)
+            call e%status(ms%theta(e%left), ms%omega(e%left), ms%theta(e%right), ms%omega(e%right), disp, force, &
+                          contact, pairs)
+         end associate
+         status_ok = status_ok .and. disp == ms%el_disp(i) .and. force == ms%el_force(i) .and. &
+                     contact == ms%el_contact(i)
+      end do
+      call check('step end: every element''s displacement, force and contact in the workspace, its own', status_ok)
+      if (track) then
+         call ms%workspace_energy(y, stored, elastic)
+         call mg%workspace_energy(y, sg, eg)
+         call check('step end: stored and elastic energy in the workspace, identical to the bit', ms%ws_energy .and. &
+                    ms%ws_stored == stored .and. ms%ws_elastic == elastic .and. stored == sg .and. elastic == eg)
+      end if
+      ds = huge(1.0_wp); dg = -huge(1.0_wp)
+      call ms%rhs_stage(0.1_wp, y, ds)
+      call mg%rhs(0.1_wp, y, dg)
+      call check('inner stage: the same derivatives to the bit', all(ds == dg))
+      yk = [(0.5_wp*cos(0.7_wp*i), i=1, size(y))]
+      allocate (k2(size(y)), k3(size(y)), k4(size(y)), ya(size(y)))
+      call rk4_by_stages(mg, 0.1_wp, 0.37_wp, y, yk, dg)
+      ds = huge(1.0_wp)
+      call ms%rk4_stages(0.1_wp, 0.37_wp, 0.1_wp + 0.37_wp, y, yk, k2, k3, k4, ya, ds)
+      call check('RK4 inner stages at y + c k: the step of the generic stages to the bit', all(ds == dg))
+      ! the clearances change mode at other states (their rows move between the
+      ! law's tables, the chain's links follow them: chain_laws), without the
+      ! tables rebuilt: again the generic RHS's derivatives to the bit
+      changes = 0
+      same = .true.
+      was = [ms%elements(3)%e%in_contact(), ms%elements(5)%e%in_contact()]
+      oc = merge(3, 5, held)   ! node c's angle (then d, e, f every second state)
+      do k = 1, 8
+         y2 = y
+         select case (mod(k, 4))
+         case (1); y2(oc:oc + 6:2) = 0.0_wp            ! both open
+         case (2); y2(oc:oc + 2:2) = 0.0_wp            ! the gear open
+         case (3); y2(oc + 4:oc + 6:2) = 0.0_wp        ! the keyed joint open
+         end select
+         call ms%init_modes(0.1_wp, y2, tables=.false.)
+         call mg%init_modes(0.1_wp, y2)
+         now = [ms%elements(3)%e%in_contact(), ms%elements(5)%e%in_contact()]
+         changes = changes + count(now .neqv. was)
+         was = now
+         ds = huge(1.0_wp); dg = -huge(1.0_wp)
+         call ms%rhs_stage(0.1_wp, y2, ds)
+         call mg%rhs(0.1_wp, y2, dg)
+         same = same .and. all(ds == dg)
+      end do
+      call check('mode changes: the clearances changed mode twelve times', changes == 12)
+      call check('mode changes: the chain kernel''s derivatives are the generic RHS''s to the bit', same)
+   end subroutine test_chain_kernel_is_the_generic_rhs
 
    !> A type extended from a shaft or an inertia that overrides the physics but
    !> keeps the parent's hot-path claim must still be asked through its own

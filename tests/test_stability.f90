@@ -32,10 +32,23 @@ contains
    !> |R(z)| = 1 at z = 2 sqrt(2) i (|R(iy)|^2 = 1 - y^6/72 + y^8/576) and at the
    !> real root -2.785293563405282 of 1 + x + x^2/2 + x^3/6 + x^4/24 = 1.
    subroutine test_rk4_region_radius_on_the_axes()
+      integer :: k
       call test_begin('rk4_region_radius_on_the_axes')
       call check('imaginary axis: 2 sqrt 2', rk4_ray_radius((0.0_wp, 1.0_wp)), sqrt(8.0_wp), rel_tol=1.0e-13_wp)
       call check('negative real axis: 2.7853', rk4_ray_radius((-1.0_wp, 0.0_wp)), 2.785293563405282_wp, rel_tol=1.0e-12_wp)
+      ! the tabulated rays (dt_bound's rk4_radii) start stepping at 2.5, below the region's
+      ! least radius over the left half-plane (2.6156): the same bracket, the same radius
+      call check('rays from 2.5 give the same radii', real(count([(rk4_ray_radius(ray(k)) /= &
+                 rk4_ray_radius(ray(k), from=250), k=0, 180)]), wp), 0.0_wp, abs_tol=0.0_wp)
    end subroutine test_rk4_region_radius_on_the_axes
+
+   !> The k-th of dt_bound's 181 tabulated rays, k/2 deg from the imaginary axis.
+   complex(wp) function ray(k)
+      integer, intent(in) :: k
+      real(wp) :: psi
+      psi = 0.25_wp*two_pi*real(k, wp)/180   ! as rk4_radii
+      ray = cmplx(-sin(psi), cos(psi), wp)
+   end function ray
 
    !> One disk on a shaft to ground: lambda = +-i sqrt(k/J), limit 2 sqrt 2 / omega.
    subroutine test_undamped_oscillator_limit_is_two_root_two_over_omega()

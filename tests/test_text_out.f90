@@ -87,6 +87,9 @@ contains
       end do
       r = [x(1:40), p, r(1:1000)]
       call check('f8.2 texts that differ', real(mismatches(r, 8, 2, .true.), wp), 0.0_wp, abs_tol=0.0_wp)
+      ! the load-sharing factor's f12.6 (about 1; any real here)
+      call check('f12.6 texts that differ', real(mismatches([r, x(41:2000)], 12, 6, .true.), wp), 0.0_wp, &
+                 abs_tol=0.0_wp)
    end subroutine test_reals_as_fortran_writes_them
 
    subroutine test_text_and_integers_as_fortran_writes_them()

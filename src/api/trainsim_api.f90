@@ -59,7 +59,9 @@ module trainsim
    character(len=*), parameter :: metric_list(*) = [character(len=21) :: &
       'force_min', 'force_max', 'torque_min', 'torque_max', 'disp_min', 'disp_max', &
       'impacts', 'separations', 'zone_changes', 'max_approach_velocity', 'max_peak_force', &
-      'time_out_of_contact', 'p2p_range', 'p2p_mean', 'p2p_swings', 'load_sharing']
+      'time_out_of_contact', 'p2p_range', 'p2p_mean', 'p2p_swings', 'load_sharing', 'kv', 'static_force', &
+      'static_te_mean', 'static_te_p2p', 'force_mean', 'te_order_1', 'te_order_2', 'te_order_3', 'te_order_4', &
+      'force_order_1', 'force_order_2', 'force_order_3', 'force_order_4', 'rattle_impacts', 'rattle_open']
 
    !> A deck, the model built from it and the result of its last run.
    type :: simulation_t
@@ -391,6 +393,16 @@ contains
       case ('p2p_mean'); value = m%p2p_mean
       case ('p2p_swings'); value = real(m%p2p_swings, wp)
       case ('load_sharing'); value = m%load_sharing
+      case ('kv'); value = m%kv
+      case ('static_force'); value = m%static_force
+      case ('static_te_mean'); value = m%static_te_mean
+      case ('static_te_p2p'); value = m%static_te_p2p
+      case ('force_mean'); value = m%force_mean
+      case ('te_order_1', 'te_order_2', 'te_order_3', 'te_order_4'); value = m%te_order(index('1234', name(10:10)))
+      case ('force_order_1', 'force_order_2', 'force_order_3', 'force_order_4')
+         value = m%force_order(index('1234', name(13:13)))
+      case ('rattle_impacts'); value = m%rattle_impacts
+      case ('rattle_open'); value = m%rattle_open
       case default
          call fatal_error(err, "metric: unknown metric '"//name//"'; valid: "//metric_names(), err_input)
       end select

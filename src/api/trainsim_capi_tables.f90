@@ -1,7 +1,7 @@
 !> The tables of the C interface (trainsim_capi): a run's metrics by name, with units,
 !> as one flat list, and the columns of the event table. The metrics are the figures a
 !> sweep file records of each run (docs/sweeps.md "The sweep file"), computed the same
-!> way: per element `ID.force_min` ... `ID.load_sharing`, per node `ID.speed_min`,
+!> way: per element `ID.force_min` ... `ID.static_te_p2p`, per node `ID.speed_min`,
 !> `speed_max` (output samples from the start of the metrics' window), `end_angle`,
 !> `end_speed`, `start_speed`, and `run.steps`, `run.rhs_evals`, `run.events`,
 !> `run.energy_residual`, `run.settled` (1, 0, -1 not asked), `run.settle_periods`,
@@ -11,6 +11,7 @@ module trainsim_capi_tables
    use trainsim_strings, only: string_t
    use trainsim_model, only: model_t
    use trainsim_observer, only: run_result_t
+   use trainsim_orders, only: n_orders
    use trainsim_event, only: event_t
    use trainsim_sweep_file, only: element_metric_names, node_metric_names
    use trainsim_continuation, only: chain_state_t
@@ -36,7 +37,7 @@ contains
       type(string_t), allocatable, intent(out) :: names(:), units(:)
       real(wp), allocatable, intent(out) :: values(:)
       character(len=:), allocatable :: d, f, tq
-      integer :: k, n, ne, nn
+      integer :: k, n, ne, nn, q
       ne = size(model%elements); nn = size(model%nodes)
       n = size(element_metric_names)*ne + size(node_metric_names)*nn + n_run_values
       allocate (names(n), units(n), values(n))
@@ -56,7 +57,13 @@ contains
             call add(id, 10, e%max_approach_velocity, d//'/s'); call add(id, 11, e%max_peak_force, f)
             call add(id, 12, e%time_out_of_contact, 's'); call add(id, 13, e%p2p_range, d)
             call add(id, 14, e%p2p_mean, d); call add(id, 15, real(e%p2p_swings, wp), '1')
-            call add(id, 16, e%load_sharing, '1')
+            call add(id, 16, e%load_sharing, '1'); call add(id, 17, e%kv, '1')
+            call add(id, 18, e%static_force, f); call add(id, 19, e%static_te_mean, d)
+            call add(id, 20, e%static_te_p2p, d); call add(id, 21, e%force_mean, f)
+            do q = 1, n_orders
+               call add(id, 21 + q, e%te_order(q), d); call add(id, 21 + n_orders + q, e%force_order(q), f)
+            end do
+            call add(id, 30, e%rattle_impacts, '1'); call add(id, 31, e%rattle_open, '1')
          end associate
       end do
       do k = 1, nn

@@ -111,17 +111,17 @@ contains
       slot = int(shiftr(x, 32 - bits))
    end function spread_bits
 
-   !> Polynomial hash of the bytes of `s` modulo the prime 2**31 - 1 (no intermediate
-   !> exceeds 2**40, so nothing overflows).
+   !> FNV-1a hash of the bytes of `s` in 32 bits, its low 31 bits (no division a
+   !> byte, as a polynomial modulo a prime took; nothing overflows in 64 bits).
    pure integer function hash(s) result(h)
       character(len=*), intent(in) :: s
-      integer(int64), parameter :: p = 2147483647_int64
+      integer(int64), parameter :: mask32 = 4294967295_int64
       integer(int64) :: x
       integer :: i
-      x = 0
+      x = 2166136261_int64
       do i = 1, len(s)
-         x = mod(257_int64*x + iachar(s(i:i)), p)
+         x = iand(ieor(x, int(iachar(s(i:i)), int64))*16777619_int64, mask32)
       end do
-      h = int(x)
+      h = int(iand(x, 2147483647_int64))
    end function hash
 end module trainsim_id_table

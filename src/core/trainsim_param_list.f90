@@ -29,7 +29,7 @@ contains
       integer :: i
       allocate (p%names(size(names)))
       do i = 1, size(names)
-         p%names(i)%s = trim(names(i))
+         p%names(i)%s = names(i)(1:len_trim(names(i)))   ! (not trim(): no temporary)
       end do
       p%values = values
    end function make_param_list

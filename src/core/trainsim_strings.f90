@@ -1,10 +1,11 @@
 !> Small string utilities shared by the deck reader, the registry and the output.
 module trainsim_strings
+   use, intrinsic :: iso_c_binding, only: c_ptr, c_char, c_int, c_size_t, c_associated
    use trainsim_kinds, only: wp
    implicit none
    private
 
-   public :: string_t, to_lower, str, join, invalid_text_byte
+   public :: string_t, to_lower, str, join, invalid_text_byte, edit_distance, has_cr
 
    !> A variable-length string, for arrays of names.
    type :: string_t
@@ -14,6 +15,17 @@ module trainsim_strings
    interface str
       module procedure str_int, str_real
    end interface str
+
+   interface
+      !> C's memchr: a deck's CRs are looked for at memory speed (gfortran's index
+      !> takes ~10 instructions a byte, 2.5 % of a 5 000-node start-up).
+      pure type(c_ptr) function c_memchr(s, c, n) bind(c, name='memchr')
+         import :: c_ptr, c_char, c_int, c_size_t
+         character(kind=c_char), intent(in) :: s(*)
+         integer(c_int), value :: c
+         integer(c_size_t), value :: n
+      end function c_memchr
+   end interface
 
 contains
 
@@ -158,4 +170,38 @@ contains
          i = i + nfollow + 1
       end do
    end function invalid_text_byte
+
+   !> Optimal-string-alignment distance (Damerau-Levenshtein without repeated edits of a
+   !> substring): insertions, deletions, substitutions and swaps of neighbours cost 1.
+   integer function edit_distance(a, b) result(dist)
+      character(len=*), intent(in) :: a, b
+      integer, allocatable :: d(:, :)
+      integer :: i, j, m, n, cost
+      m = len(a)
+      n = len(b)
+      allocate (d(0:m, 0:n))
+      do i = 0, m
+         d(i, 0) = i
+      end do
+      do j = 0, n
+         d(0, j) = j
+      end do
+      do j = 1, n
+         do i = 1, m
+            cost = merge(0, 1, a(i:i) == b(j:j))
+            d(i, j) = min(d(i - 1, j) + 1, d(i, j - 1) + 1, d(i - 1, j - 1) + cost)
+            if (i > 1 .and. j > 1) then
+               if (a(i:i) == b(j - 1:j - 1) .and. a(i - 1:i - 1) == b(j:j)) d(i, j) = min(d(i, j), d(i - 2, j - 2) + 1)
+            end if
+         end do
+      end do
+      dist = d(m, n)
+   end function edit_distance
+
+   !> s holds a CR.
+   pure logical function has_cr(s)
+      character(len=*), intent(in) :: s
+      has_cr = .false.
+      if (len(s) > 0) has_cr = c_associated(c_memchr(s, 13_c_int, int(len(s), c_size_t)))
+   end function has_cr
 end module trainsim_strings

@@ -7,7 +7,7 @@
 module trainsim_deck
    use, intrinsic :: iso_fortran_env, only: int64
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
-   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_strings, only: string_t, to_lower, str, join, has_cr
    use trainsim_deck_lexer, only: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string, &
                                   check_text, tokenize, display, parse_real, is_repeat, is_key, &
                                   lower_in_place
@@ -94,7 +94,7 @@ contains
             call read_failed()
             return
          end if
-         if (.not. pending_cr .and. index(blk(1:nb), achar(13)) == 0) then   ! no CR: every byte counts
+         if (.not. (pending_cr .or. has_cr(blk(1:nb)))) then   ! no CR: every byte counts
             nlen = nlen + nb
             if (nb > 0) last = blk(nb:nb)
             pos = pos + nb
@@ -132,7 +132,7 @@ contains
             call read_failed()
             return
          end if
-         if (.not. pending_cr .and. index(blk(1:nb), achar(13)) == 0) then   ! no CR: the block as it is
+         if (.not. (pending_cr .or. has_cr(blk(1:nb)))) then   ! no CR: the block as it is
             i = int(min(int(nb, int64), nlen - n))
             text(n + 1:n + i) = blk(1:i)
             n = n + i

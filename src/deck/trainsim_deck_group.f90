@@ -5,7 +5,7 @@
 module trainsim_deck_group
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: string_t, to_lower, str, join
+   use trainsim_strings, only: string_t, to_lower, str, join, edit_distance
    use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place
    implicit none
    private
@@ -303,11 +303,10 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=*), intent(in), optional :: default
       integer :: k
-      val = ''
       call scalar_entry(self, key, 'a string', present(default), k, err)
-      if (allocated(err)) return
-      if (k == 0) then
-         if (present(default)) val = default
+      if (k == 0 .or. allocated(err)) then   ! (val allocated once: '' or the default)
+         val = ''
+         if (present(default) .and. .not. allocated(err)) val = default
          return
       end if
       val = self%entries(k)%values(1)%s
@@ -481,43 +480,17 @@ contains
       yes = d >= 1 .and. d <= min(2, max(1, len(key)/3))
    end function is_near
 
-   !> Optimal-string-alignment distance (Damerau-Levenshtein without repeated edits of a
-   !> substring): insertions, deletions, substitutions and swaps of neighbours cost 1.
-   integer function edit_distance(a, b) result(dist)
-      character(len=*), intent(in) :: a, b
-      integer, allocatable :: d(:, :)
-      integer :: i, j, m, n, cost
-      m = len(a)
-      n = len(b)
-      allocate (d(0:m, 0:n))
-      do i = 0, m
-         d(i, 0) = i
-      end do
-      do j = 0, n
-         d(0, j) = j
-      end do
-      do j = 1, n
-         do i = 1, m
-            cost = merge(0, 1, a(i:i) == b(j:j))
-            d(i, j) = min(d(i - 1, j) + 1, d(i, j - 1) + 1, d(i - 1, j - 1) + cost)
-            if (i > 1 .and. j > 1) then
-               if (a(i:i) == b(j - 1:j - 1) .and. a(i - 1:i - 1) == b(j:j)) d(i, j) = min(d(i, j), d(i - 2, j - 2) + 1)
-            end if
-         end do
-      end do
-      dist = d(m, n)
-   end function edit_distance
-
-   !> Add `key` (lower case) to the group's list of queried keys, once.
+   !> Add `key` (lower case) to the group's list of queried keys. Appended without
+   !> a look for it first (that look was O(keys) a query: D-98); `queried_keys`
+   !> lists each key once.
    subroutine record_query(self, key)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
       character(len=:), allocatable :: tmp
       integer :: n
-      if (was_queried(self, key)) return
       n = self%queried_len + len(key) + 1
       if (.not. allocated(self%queried)) then
-         allocate (character(len=max(256, n)) :: self%queried)
+         allocate (character(len=max(64, n)) :: self%queried)
       else if (n > len(self%queried)) then
          allocate (character(len=max(2*len(self%queried), n)) :: tmp)
          tmp(1:self%queried_len) = self%queried(1:self%queried_len)
@@ -568,19 +541,28 @@ contains
       yes = .true.
    end function same_key
 
-   !> The queried keys as a list, in order of first query (for messages).
+   !> The queried keys as a list, each once, in order of first query (for messages).
    function queried_keys(self) result(keys)
       class(deck_group_t), intent(in) :: self
-      type(string_t), allocatable :: keys(:)
-      integer :: p, q, n
+      type(string_t), allocatable :: keys(:), all(:)
+      integer :: p, q, n, j
+      logical :: seen
       n = 0
       if (self%queried_len > 0) n = count_commas(self%queried(1:self%queried_len))
-      allocate (keys(n))
+      allocate (all(n))
       p = 1
-      do n = 1, size(keys)
+      do n = 1, size(all)
          q = p + index(self%queried(p:self%queried_len), ',') - 2
-         keys(n)%s = self%queried(p:q)
+         all(n)%s = self%queried(p:q)
          p = q + 2
+      end do
+      allocate (keys(0))
+      do n = 1, size(all)
+         seen = .false.
+         do j = 1, size(keys)
+            if (keys(j)%s == all(n)%s) seen = .true.
+         end do
+         if (.not. seen) keys = [keys, all(n)]
       end do
    contains
       pure integer function count_commas(t) result(c)

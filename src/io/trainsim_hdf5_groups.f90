@@ -8,6 +8,7 @@ module trainsim_hdf5_groups
    use trainsim_strings, only: string_t, str
    use trainsim_version, only: git_revision
    use trainsim_sink, only: run_meta_t, run_stats_t, element_metrics_t, param_list_t
+   use trainsim_orders, only: n_orders
    use trainsim_h5, only: hid_t, h5_real, h5_int, make_group, close_group, list_text, put_str_attr, &
       put_names_attr, put_list_attr, put_index_attr, put_real_attr, put_int_attr, put_i8_attr
    use trainsim_h5_dsets, only: make_series, put_column_r, put_column_i
@@ -250,6 +251,19 @@ contains
       r = m%max_peak_force; if (.not. allocated(err)) call put_column_r(grp, 'max_peak_force', r, err, u%el_force)
       r = m%time_out_of_contact; if (.not. allocated(err)) call put_column_r(grp, 'time_out_of_contact', r, err, sec)
       r = m%load_sharing; if (.not. allocated(err)) call put_column_r(grp, 'load_sharing', r, err, cnt)
+      r = m%kv; if (.not. allocated(err)) call put_column_r(grp, 'kv', r, err, cnt)
+      r = m%static_force; if (.not. allocated(err)) call put_column_r(grp, 'static_force', r, err, u%el_force)
+      r = m%static_te_mean; if (.not. allocated(err)) call put_column_r(grp, 'static_te_mean', r, err, u%el_disp)
+      r = m%static_te_p2p; if (.not. allocated(err)) call put_column_r(grp, 'static_te_p2p', r, err, u%el_disp)
+      r = m%force_mean; if (.not. allocated(err)) call put_column_r(grp, 'force_mean', r, err, u%el_force)
+      do n = 1, n_orders   ! (n is free here)
+         r = m%te_order(n); if (.not. allocated(err)) call put_column_r(grp, 'te_order_'//str(n), r, err, u%el_disp)
+      end do
+      do n = 1, n_orders
+         r = m%force_order(n); if (.not. allocated(err)) call put_column_r(grp, 'force_order_'//str(n), r, err, u%el_force)
+      end do
+      r = m%rattle_impacts; if (.not. allocated(err)) call put_column_r(grp, 'rattle_impacts', r, err, cnt)
+      r = m%rattle_open; if (.not. allocated(err)) call put_column_r(grp, 'rattle_open', r, err, cnt)
       call close_group(grp, err)
    end subroutine write_metrics
 

@@ -27,7 +27,11 @@ contains
       do i = 1, size(model%elements)
          p = model%elements(i)%e%params()
          if (size(p%names) == 0) cycle
-         call out%a('element '//model%elements(i)%e%id//' ('//model%elements(i)%e%type_name//'):', 0)
+         call out%a('element ', 0)   ! (piece by piece: no concatenated temporary a line)
+         call out%a(model%elements(i)%e%id, 0)
+         call out%a(' (', 0)
+         call out%a(model%elements(i)%e%type_name, 0)
+         call out%a('):', 0)
          call out%end_line()
          w = 24
          do j = 1, size(p%names)
@@ -192,6 +196,20 @@ contains
                call out%end_line()
             end do
          end if
+      end if
+      if (any(res%el%static_force /= 0.0_wp)) then
+         call out%a('dynamic factor Kv (max dynamic / static mesh force) and the loaded static TE (mean, p-p):', 0)
+         call out%end_line()
+         do i = 1, size(model%elements)   ! '(aWE,f12.6,3es15.6)'
+            if (res%el(i)%static_force == 0.0_wp) cycle
+            call out%a(model%elements(i)%e%id, w)
+            call out%f(res%el(i)%kv, 12, 6)
+            call out%es(res%el(i)%static_force, 15, 6)
+            call out%es(res%el(i)%static_te_mean, 15, 6)
+            call out%es(res%el(i)%static_te_p2p, 15, 6)
+            call out%a(' '//disp_unit(model, model%elements(i)%e), 0)
+            call out%end_line()
+         end do
       end if
       call out%flush()
       wn = id_width(model, nodes=.true.)

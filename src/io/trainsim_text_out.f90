@@ -9,7 +9,6 @@ module trainsim_text_out
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use, intrinsic :: iso_fortran_env, only: int64
    use trainsim_kinds, only: wp
-   use trainsim_strings, only: str
    implicit none
    private
 
@@ -93,12 +92,25 @@ contains
    subroutine put_i(self, k, w)
       class(text_out_t), intent(inout) :: self
       integer, intent(in) :: k, w
-      character(len=:), allocatable :: s
-      s = str(k)
-      if (w > 0 .and. len(s) > w) then
+      character(len=12) :: s
+      integer(int64) :: v
+      integer :: j
+      v = abs(int(k, int64))   ! (in 64 bits: -huge(1) - 1 has no 32-bit absolute value)
+      j = len(s) + 1
+      do
+         j = j - 1
+         s(j:j) = achar(48 + int(mod(v, 10_int64)))
+         v = v/10
+         if (v == 0) exit
+      end do
+      if (k < 0) then
+         j = j - 1
+         s(j:j) = '-'
+      end if
+      if (w > 0 .and. len(s) - j + 1 > w) then
          call self%a(repeat('*', w), w)
       else
-         call self%a(s, w)
+         call self%a(s(j:), w)
       end if
    end subroutine put_i
 
@@ -131,7 +143,7 @@ contains
       integer, intent(in) :: w, d
       integer, parameter :: i16 = selected_int_kind(38)
       integer(i16) :: num, den, q, r, p10
-      integer(int64) :: m
+      integer(int64) :: m, q8
       integer :: e2, ex, sc, pass, j, k, n
       character(len=32) :: t
       done = .false.
@@ -167,12 +179,13 @@ contains
       n = d + 6
       if (sign(1.0_wp, x) < 0.0_wp) n = n + 1
       k = n - 4                                              ! the last mantissa digit
+      q8 = int(q, int64)                                     ! q < 10^17: the digits in 64 bits
       do j = k, k - d + 1, -1
-         t(j:j) = achar(48 + int(mod(q, 10_i16)))
-         q = q/10
+         t(j:j) = achar(48 + int(mod(q8, 10_int64)))
+         q8 = q8/10
       end do
       t(k - d:k - d) = '.'
-      t(k - d - 1:k - d - 1) = achar(48 + int(q))
+      t(k - d - 1:k - d - 1) = achar(48 + int(q8))
       if (n == d + 7) t(1:1) = '-'
       t(k + 1:k + 1) = 'E'
       t(k + 2:k + 2) = merge('-', '+', ex < 0)
@@ -189,6 +202,7 @@ contains
       integer, intent(in) :: w, d
       character(kind=c_char) :: c(48)
       integer :: m
+      if (f_exact(self, x, w, d)) return
       m = 0
       if (ieee_is_finite(x)) then
          if (abs(x) < 1.0e15_wp .and. d <= 20) m = c_fmt_f(real(x, c_double), d, c, 48)
@@ -196,6 +210,60 @@ contains
       if (m > w) m = 0
       call put_c_or_fortran(self, c, m, x, 'f', w, d)
    end subroutine put_f
+
+   !> Fw.d of x as C's %.*f writes it (what put_f takes when it fits) for |x| < 1e9
+   !> and 1 <= d <= 9, in 128-bit integers as es_exact: q = |x| 10^d rounded to
+   !> nearest, ties to even; the sign of a negative x (or -0) kept. False (nothing
+   !> written) outside that range or wider than w: put_f then asks snprintf.
+   logical function f_exact(self, x, w, d) result(done)
+      class(text_out_t), intent(inout) :: self
+      real(wp), intent(in) :: x
+      integer, intent(in) :: w, d
+      integer, parameter :: i16 = selected_int_kind(38)
+      integer(i16) :: num, den, q, r
+      integer(int64) :: ip, fp, p10
+      integer :: e2, n, j, k
+      character(len=32) :: t
+      done = .false.
+      if (d < 1 .or. d > 9) return
+      if (.not. ieee_is_finite(x)) return
+      if (.not. abs(x) < 1.0e9_wp) return
+      q = 0
+      if (abs(x) >= 1.0e-18_wp) then   ! (below: |x| 10^d < 1e-9 rounds to 0; above: 2^-e2 < 2^113)
+         e2 = exponent(x) - digits(x)
+         num = int(scale(fraction(abs(x)), digits(x)), i16)*2_i16**max(e2, 0)*10_i16**d
+         den = 2_i16**max(-e2, 0)
+         q = num/den
+         r = num - q*den
+         if (2*r > den .or. (2*r == den .and. mod(q, 2_i16) == 1)) q = q + 1
+      end if
+      p10 = 10_int64**d
+      ip = int(q/p10, int64)
+      fp = int(mod(q, int(p10, i16)), int64)
+      n = 0
+      if (sign(1.0_wp, x) < 0.0_wp) then
+         n = 1
+         t(1:1) = '-'
+      end if
+      k = 1                                   ! digits of the integer part (at least one)
+      do while (ip >= 10_int64**k)
+         k = k + 1
+      end do
+      do j = n + k, n + 1, -1
+         t(j:j) = achar(48 + int(mod(ip, 10_int64)))
+         ip = ip/10
+      end do
+      n = n + k + 1
+      t(n:n) = '.'
+      do j = n + d, n + 1, -1
+         t(j:j) = achar(48 + int(mod(fp, 10_int64)))
+         fp = fp/10
+      end do
+      n = n + d
+      if (n > w) return
+      call self%a(t(1:n), w)
+      done = .true.
+   end function f_exact
 
    !> The m characters of c right-justified in w columns, or (m = 0) Fortran's own
    !> write of x with edit descriptor `letter`w.d (es or f).

@@ -129,8 +129,7 @@ module trainsim_model
       !> Every node a plain inertia or held at a constant speed, every load
       !> constant, no element reads the loads: `rhs` runs the kernel `rhs_simple`.
       logical, private :: simple = .false.
-      !> The families of a simple model, which its stage and step-end kernels
-      !> evaluate (trainsim_model_kernels), built with the tables above.
+      !> The families of a simple model, its kernels' tables (built with those above).
       type(families_t), private :: fam
       !> Elements whose elastic energy `rhs_simple` cannot compute (fe%cold), and
       !> that kernel's per-element elastic energies (summed after the kinetic).
@@ -473,12 +472,13 @@ module trainsim_model
          real(wp), intent(in) :: thl, wl, thr, wr
       end subroutine model_preload_mode
 
-      !> The hot form (D-35) the model holds for element i: the torque form
-      !> (hf_*, hf_none when asked through `torques`) and the guard form (hg_*).
-      module pure subroutine model_hot_kinds(self, i, kind, guards)
+      !> The hot form (D-35) the model holds for element i: the torque form (hf_*, hf_none
+      !> when asked through `torques`) and the guard form (hg_*); the serial chain's links (D-100).
+      module pure subroutine model_hot_kinds(self, i, kind, guards, chain)
          class(model_t), intent(in) :: self
          integer, intent(in) :: i
          integer, intent(out) :: kind, guards
+         integer, intent(out), optional :: chain
       end subroutine model_hot_kinds
 
       !> Ask element i for its hot form (D-35) in its current mode and take it only

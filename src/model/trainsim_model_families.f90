@@ -12,7 +12,8 @@ module trainsim_model_families
    public :: nk_other, nk_plain, nk_held
    public :: lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, lf_cl_linear
    public :: families_t, table_t, spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr, &
-             load_ni, load_nr, row_ends
+             load_ni, load_nr, row_ends, chain_ni, chain_nr, build_chain, chain_laws
+   public :: ch_spring, ch_damper, ch_open, ch_ys, ch_lin
 
    !> Kinds of node on the hot path.
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
@@ -110,6 +111,15 @@ module trainsim_model_families
    !> free nodes: (node), (value). Damped plain inertias in node order (their
    !> dissipated power): (state offset), (d).
    integer, parameter :: free_ni = 4, free_nr = 3, held_ni = 3, held_nr = 3, load_ni = 1, load_nr = 1
+   !> The serial chain (D-100): a train whose elements, in element order, join
+   !> its nodes one after another (element q: node q - 1 left, node q right),
+   !> every node an undamped plain inertia but the head, which may also be
+   !> held, and every element a linear spring or a clearance. Row 0 is the
+   !> head, row q element q and its right-hand node: (law, a, b, element,
+   !> node, state offset: -1 for a held head), (J or theta0, w, constant load);
+   !> a, b: the element's row in its family's table, law: which (ch_*).
+   integer, parameter :: chain_ni = 6, chain_nr = 3
+   integer, parameter :: ch_spring = 1, ch_damper = 2, ch_open = 3, ch_ys = 4, ch_lin = 5
 
    !> The families of a simple model (every node a plain inertia or held at a
    !> constant speed, every load constant), which the stage and step-end kernels
@@ -123,7 +133,7 @@ module trainsim_model_families
       integer, allocatable :: iw(:)
       real(wp), allocatable :: rw(:)
       type(table_t) :: springs, dampers, contacts, c_open, c_ys, c_lin, general, free, free2, free_n, &
-                       damped, held, held2, held_n, loads
+                       damped, held, held2, held_n, loads, chain
       !> per node i: its inertia (kinetic energy) at rw(jn + i)
       integer :: jn = 0
       !> per element: its row in the clearance family (0: none; its law's
@@ -138,6 +148,102 @@ module trainsim_model_families
    end type families_t
 
 contains
+
+   !> The serial chain of the families f (table `chain`, n = 0: none) from
+   !> the node and element tables, when the train is one and simple (its
+   !> kernels run): its rows placed after the other tables in iw and rw.
+   subroutine build_chain(f, fn, fe, simple)
+      type(families_t), intent(inout) :: f
+      type(fast_node_t), intent(in) :: fn(:)
+      type(fast_element_t), intent(in) :: fe(:)
+      logical, intent(in) :: simple
+      integer :: q, nd, ne, i0, r0
+      logical :: ok
+      logical, allocatable :: seen(:)
+      f%chain = table_t(0, size(f%iw), size(f%rw))
+      ne = size(fe)
+      ok = simple .and. ne > 0 .and. size(fn) == ne + 1 .and. f%general%n == 0 .and. f%damped%n == 0
+      if (ok) ok = all(fe(2:ne)%l == fe(1:ne - 1)%r) .and. fn(fe(1)%l)%kind /= nk_other
+      if (ok) ok = all(fn(fe(:)%r)%kind == nk_plain .and. fn(fe(:)%r)%d == 0.0_wp)
+      if (ok) ok = fn(fe(1)%l)%d == 0.0_wp .or. fn(fe(1)%l)%kind == nk_held
+      if (.not. ok) return
+      allocate (seen(size(fn)))   ! (n + 1 nodes, each reached once: a path)
+      seen = .false.
+      seen(fe(1)%l) = .true.
+      do q = 1, ne
+         if (seen(fe(q)%r)) return
+         seen(fe(q)%r) = .true.
+      end do
+      i0 = size(f%iw); r0 = size(f%rw)
+      f%iw = [f%iw, (0, q=1, chain_ni*(ne + 1))]
+      f%rw = [f%rw, (0.0_wp, q=1, chain_nr*(ne + 1))]
+      f%chain = table_t(ne, i0, r0)
+      nd = fe(1)%l
+      associate (h => fn(nd))
+         f%iw(i0 + 5:i0 + 6) = [nd, merge(-1, h%off, h%kind == nk_held)]
+         f%rw(r0 + 1:r0 + 3) = [merge(h%theta0, h%j, h%kind == nk_held), h%w, h%load0]
+      end associate
+      do q = 1, ne
+         nd = fe(q)%r
+         f%iw(i0 + chain_ni*q + 4:i0 + chain_ni*q + 6) = [q, nd, fn(nd)%off]
+         f%rw(r0 + chain_nr*q + 1:r0 + chain_nr*q + 3) = [fn(nd)%j, 0.0_wp, fn(nd)%load0]
+      end do
+      do q = 1, f%springs%n
+         call link(f%springs, q, spring_ni, spring_nr, ch_spring)
+      end do
+      do q = 1, f%dampers%n
+         call link(f%dampers, q, spring_ni, spring_nr, ch_damper)
+      end do
+      call chain_laws(f)
+      f%mixed = .false.   ! (the chain sums each row's power straight, in element order)
+   contains
+      !> Row q of table tab as its element's link, with law
+      subroutine link(tab, q, ni, nr, law)
+         type(table_t), intent(in) :: tab
+         integer, intent(in) :: q, ni, nr, law
+         integer :: a
+         a = tab%i0 + ni*(q - 1)
+         f%iw(i0 + chain_ni*f%iw(a + 1) + 1:i0 + chain_ni*f%iw(a + 1) + 3) = [law, a, tab%r0 + nr*(q - 1)]
+      end subroutine link
+   end subroutine build_chain
+
+   !> The links of the chain's clearances to their rows and laws (a row moves
+   !> between the law's tables when its element changes mode, by swaps at the
+   !> tables' borders, D-75): all of them, or with `e` (its row just set; p0
+   !> its row before) e's, row p0's (a swap's other row) and the rows next
+   !> to the two borders, where a second swap puts the others.
+   subroutine chain_laws(f, e, p0)
+      type(families_t), intent(inout) :: f
+      integer, intent(in), optional :: e, p0
+      integer :: p, j, b1, b2
+      if (f%chain%n == 0) return
+      if (.not. present(e)) then
+         do p = 1, f%contacts%n
+            call point(p)
+         end do
+         return
+      end if
+      call point(f%contact_row(e))
+      call point(p0)
+      b1 = f%c_open%n
+      b2 = f%c_open%n + f%c_ys%n
+      do j = -1, 2
+         if (b1 + j >= 1 .and. b1 + j <= f%contacts%n) call point(b1 + j)
+         if (b2 + j >= 1 .and. b2 + j <= f%contacts%n) call point(b2 + j)
+      end do
+   contains
+      !> Row p's element's link
+      subroutine point(p)
+         integer, intent(in) :: p
+         integer :: a, law
+         a = f%contacts%i0 + contact_ni*(p - 1)
+         law = ch_open
+         if (p > f%c_open%n) law = ch_ys
+         if (p > f%c_open%n + f%c_ys%n) law = ch_lin
+         f%iw(f%chain%i0 + chain_ni*f%iw(a + 1) + 1:f%chain%i0 + chain_ni*f%iw(a + 1) + 3) = &
+            [law, a, f%contacts%r0 + contact_nr*(p - 1)]
+      end subroutine point
+   end subroutine chain_laws
 
    !> A node row's element torques: with `straight` (at most two), their
    !> indices into el_torque (for one it has not, its zero column ne + 1,

@@ -153,19 +153,19 @@ contains
       allocate (bp(0))
       do i = 1, size(model%loads)
          call model%loads(i)%torque%breakpoints(b)
-         bp = [bp, b]
+         if (size(b) > 0) bp = [bp, b]   ! (most have none: no copy of bp a node)
       end do
       do i = 1, size(model%speeds)
          call model%speeds(i)%breakpoints(b)
-         bp = [bp, b]
+         if (size(b) > 0) bp = [bp, b]   ! (most have none: no copy of bp a node)
       end do
       do i = 1, size(model%nodes)
          call model%nodes(i)%n%breakpoints(b)
-         bp = [bp, b]
+         if (size(b) > 0) bp = [bp, b]   ! (most have none: no copy of bp a node)
       end do
       do i = 1, size(model%elements)                 ! (an engagement table's knots: D-87)
          call model%elements(i)%e%breakpoints(b)
-         bp = [bp, b]
+         if (size(b) > 0) bp = [bp, b]   ! (most have none: no copy of bp a node)
       end do
       bp = pack(bp, bp > t0 .and. bp < t1)
       call sort_unique(bp, 1.0e-12_wp*max(abs(t0), abs(t1), 1.0e-300_wp))

@@ -9,7 +9,8 @@ submodule (trainsim_model) trainsim_model_tables
    use trainsim_element, only: element_t, hf_none, hf_open, hf_yang_sun, hf_linear, hg_none, hg_faces, hg_faces_zone
    use trainsim_model_families, only: nk_plain, nk_held, lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, &
                                       lf_cl_linear, fast_element_t, table_t, spring_ni, spring_nr, contact_ni, &
-                                      contact_nr, free_ni, free_nr, held_ni, held_nr, load_ni, load_nr, row_ends
+                                      contact_nr, free_ni, free_nr, held_ni, held_nr, load_ni, load_nr, row_ends, &
+                                      build_chain, chain_laws
    use trainsim_model_kernels, only: hot_potential, hot_force, hot_torques, hot_guards
    use trainsim_ports, only: port_init_at
    implicit none
@@ -260,6 +261,7 @@ contains
          if (allocated(f%th)) deallocate (f%th, f%w, f%pw)
          allocate (f%th(nn), f%w(nn), f%pw(ne))
          f%th = 0.0_wp; f%w = 0.0_wp; f%pw = 0.0_wp
+         call build_chain(f, self%fn, self%fe, self%simple)   ! (a serial chain's table, D-100)
       end associate
    contains
 
@@ -288,10 +290,9 @@ contains
       end subroutine place
    end subroutine build_families
 
-   !> Element i's row of the clearance family from its hot form (D-35), in the
-   !> table of its law (open, closed yang_sun, closed linear: one after another
-   !> in `contacts`). A row whose law changed moves there by swaps at the
-   !> tables' borders, one border at a time (D-75).
+   !> Element i's row of the clearance family from its hot form (D-35), in the table of its
+   !> law (open, closed yang_sun, closed linear: one after another in `contacts`). A row
+   !> whose law changed moves there by swaps at the tables' borders, one at a time (D-75).
    subroutine set_contact_row(self, i)
       type(model_t), intent(inout) :: self
       integer, intent(in) :: i
@@ -355,7 +356,6 @@ contains
          end associate
       end subroutine swap_rows
    end subroutine set_contact_row
-
 
    !> The element's own `status` gives, bit for bit at two probe points, the
    !> displacement and force `rhs_simple` computes for its form of linear
@@ -475,6 +475,7 @@ contains
    module procedure model_hot_kinds
       kind = self%fh(i)%kind
       guards = self%fe(i)%gform
+      if (present(chain)) chain = self%fam%chain%n
    end procedure model_hot_kinds
 
    module procedure refresh_hot
@@ -561,7 +562,9 @@ contains
          if (in_family .neqv. self%fam%contact_row(i) > 0) then
             call build_families(self)
          else if (in_family) then
+            p = self%fam%contact_row(i)   ! (its row before: another element's after a swap)
             call set_contact_row(self, i)
+            call chain_laws(self%fam, i, p)
          end if
       end if
    end procedure refresh_hot

@@ -11,7 +11,7 @@
 !> figures come from an online detector (trainsim_metrics). The whole event
 !> table is kept in the result only when run%keep_events asks for it.
 module trainsim_observer
-   use trainsim_kinds, only: wp, i8
+   use trainsim_kinds, only: wp, i8, two_pi
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_element, only: element_slot_t
@@ -20,6 +20,8 @@ module trainsim_observer
                             ev_contact_front, ev_contact_rear, ev_separation, run_meta_t
    use trainsim_run_meta, only: make_meta
    use trainsim_metrics, only: p2p_detector_t, push_samples, push_block, push_value, turn_extreme
+   use trainsim_quasi_static, only: static_ref_t
+   use trainsim_orders, only: order_tracker_t, n_orders
    implicit none
    private
 
@@ -94,6 +96,13 @@ module trainsim_observer
       !> per element: the time up to which its time out of contact is counted by
       !> a local event instant (step_part) past t_prev (-huge: none)
       real(wp), allocatable :: t_counted(:)
+      type(static_ref_t) :: qs   !< the gear meshes' static reference (set before start; Kv at finish, D-98)
+      !> the gear meshes (qs%mesh): their elements, and the order tracker of each, fed
+      !> with the output samples from t_metrics on (TE and mesh force, D-99)
+      integer, allocatable :: mesh_el(:)
+      integer, allocatable :: mesh_drv(:)           !< its driver (left node)
+      real(wp), allocatable :: mesh_rate(:)         !< N: the order-1 phase per radian of the driver
+      type(order_tracker_t), allocatable :: orders(:)
    contains
       procedure :: start => obs_start
       procedure :: step => obs_step
@@ -107,6 +116,7 @@ module trainsim_observer
       procedure, private :: refine => obs_refine
       procedure :: record_events => obs_record_events
       procedure :: finish => obs_finish
+      procedure, private :: feed_orders => obs_feed_orders
       procedure, private :: fill => obs_fill
       procedure, private :: emit => obs_emit
    end type observer_t
@@ -143,6 +153,11 @@ module trainsim_observer
          type(error_t), allocatable, intent(out) :: err
          integer, intent(in), optional :: nodes(:), els(:)
       end subroutine obs_record_events
+      module subroutine obs_feed_orders(self, model, t_out, t, y)
+         class(observer_t), intent(inout) :: self
+         type(model_t), intent(inout) :: model
+         real(wp), intent(in) :: t_out, t, y(:)
+      end subroutine obs_feed_orders
       module subroutine obs_finish(self, model, t, y, stats, sink, result, err, interrupted)
          class(observer_t), intent(inout) :: self
          type(model_t), intent(inout) :: model
@@ -495,6 +510,11 @@ contains
             end do
          end if
          call block_turns(self, b%t, b%disp, n, j0, samples)
+         if (samples .and. size(self%mesh_el) > 0) then   ! every step end an output sample (D-99)
+            do j = j0, n
+               call block_orders(self, model, b%t(j), b%disp(:, j), b%force(:, j), b%omega(:, j))
+            end do
+         end if
          if (samples .and. self%speeds_only) then
             do j = 1, n
                self%s%t = b%t(j)
@@ -566,6 +586,21 @@ contains
       end if
       self%turn_t1 = tc(n)
    end subroutine block_turns
+
+   !> One step end of a block, an output sample at t >= t_metrics, into the gear
+   !> meshes' order trackers: the block's displacements, forces and node speeds (D-99).
+   subroutine block_orders(self, model, t, disp, force, omega)
+      type(observer_t), intent(inout) :: self
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: t, disp(:), force(:), omega(:)
+      integer :: q, i
+      real(wp) :: x(2)
+      do q = 1, size(self%mesh_el)
+         i = self%mesh_el(q)
+         x(1) = disp(i); x(2) = force(i)
+         call self%orders(q)%push(t, self%mesh_rate(q)*omega(self%mesh_drv(q)), x)
+      end do
+   end subroutine block_orders
 
    !> The steps j = js .. n of a block (columns of disp, (element, step)) at
    !> whose end element i's point before is a turning point (`track_turns`'
@@ -847,7 +882,10 @@ contains
             end if
          end if
          self%s%t = t_out
-         if (t_out >= self%t_metrics) call push_samples(self%turns, self%s%displacement)
+         if (t_out >= self%t_metrics) then
+            call push_samples(self%turns, self%s%displacement)
+            if (size(self%mesh_el) > 0) call self%feed_orders(model, t_out, t, y)
+         end if
          if (self%speeds_only) then
             call sink%write_sample(self%s, err)
             self%t_sampled = t_out
@@ -856,6 +894,7 @@ contains
       end if
       if (self%s%t /= t .or. .not. self%s_whole) call self%fill(model, t, y)
       self%s%t = t_out
+      if (t_out >= self%t_metrics .and. size(self%mesh_el) > 0) call self%feed_orders(model, t_out, t, y)
       call self%emit(sink, err)
    end subroutine obs_sample
 

@@ -15,7 +15,7 @@ contains
       real(wp), intent(in) :: t, y(:)
       class(sink_t), intent(inout), target :: sink   !< kept by the observer until finish (events)
       type(error_t), allocatable, intent(out) :: err
-      integer :: nn, ne, nmax
+      integer :: nn, ne, nmax, i
       nn = size(model%nodes); ne = size(model%elements)
       allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
       allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
@@ -54,6 +54,15 @@ contains
       self%contact_prev = 0
       allocate (self%t_counted(ne))
       self%t_counted = -huge(1.0_wp)
+      ! the gear meshes' orders over a settled window only (settle_time or settle_tol: the
+      ! window is the vibration's, not a start-up's), so a run without one pays nothing a step
+      self%mesh_el = [integer ::]
+      if (allocated(self%qs%mesh) .and. (model%run%settle_time > 0.0_wp .or. model%run%settle_tol > 0.0_wp)) then
+         if (size(self%qs%mesh) == ne) self%mesh_el = pack([(i, i=1, ne)], self%qs%mesh)
+      end if
+      allocate (self%orders(size(self%mesh_el)))
+      self%mesh_drv = [(model%elements(self%mesh_el(i))%e%left, i=1, size(self%mesh_el))]
+      self%mesh_rate = [(two_pi/self%qs%period(self%mesh_el(i)), i=1, size(self%mesh_el))]
       if (sink%needs_meta()) then
          call sink%open(make_meta(model), err)
       else
@@ -232,6 +241,7 @@ contains
       logical, intent(in), optional :: interrupted
       type(event_t) :: no_rows(0)
       integer :: i
+      real(wp) :: a(0:n_orders, 2)
       logical :: stopped
       stopped = .false.
       if (present(interrupted)) stopped = interrupted
@@ -269,6 +279,19 @@ contains
          self%res%el(i)%p2p_exact = self%turns(i)%exact
       end do
       call load_sharing(model%share_set, self%res%el)
+      call dynamic_factor(self%qs, self%res%el)
+      do i = 1, size(self%mesh_el)   ! the mesh orders of TE and force (D-99)
+         call self%orders(i)%amplitudes(a)
+         self%res%el(self%mesh_el(i))%te_order = a(1:, 1)
+         self%res%el(self%mesh_el(i))%force_order = a(1:, 2)
+         self%res%el(self%mesh_el(i))%force_mean = a(0, 2)
+         associate (m => self%res%el(self%mesh_el(i)))   ! rattle index: impacts a mesh cycle (D-100)
+            if (self%orders(i)%cycles() > 0.0_wp) m%rattle_impacts = real(m%impacts, wp)/self%orders(i)%cycles()
+         end associate
+      end do
+      if (allocated(self%qs%mesh) .and. t > self%t_metrics) then   ! rattle index: the time out of contact
+         where (self%qs%mesh) self%res%el%rattle_open = self%res%el%time_out_of_contact/(t - self%t_metrics)
+      end if
       self%out => null()
       call sink%close(no_rows, self%res%stats, self%res%el, err)
       if (allocated(err)) return
@@ -280,6 +303,37 @@ contains
       result%series_theta = result%series_theta(:, 1:self%n_series)
       result%series_omega = result%series_omega(:, 1:self%n_series)
    end subroutine obs_finish
+
+   !> The output sample at t_out (the state at t, t >= t_metrics) into the gear meshes'
+   !> order trackers (D-99): each mesh's TE, mesh force and its driver's speed, from the
+   !> sample buffer when it is whole, else from the model's workspace at t (its
+   !> displacements are in the buffer: the observer's short way), else filled.
+   module subroutine obs_feed_orders(self, model, t_out, t, y)
+      class(observer_t), intent(inout) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t_out, t, y(:)
+      integer :: q, i, l, r, c, p
+      real(wp) :: d, f, w
+      logical :: ws
+      ws = model%ws_step_end .and. model%ws_t == t
+      if (.not. (self%s_whole .or. ws)) then
+         call self%fill(model, t, y)
+         self%s%t = t_out
+      end if
+      do q = 1, size(self%mesh_el)
+         i = self%mesh_el(q)
+         l = model%elements(i)%e%left; r = model%elements(i)%e%right
+         if (self%s_whole) then
+            f = self%s%force(i); w = self%s%omega(l)
+         else if (model%ws_status(i)) then
+            f = model%el_force(i); w = model%omega(l)
+         else
+            call model%elements(i)%e%status(model%theta(l), model%omega(l), model%theta(r), model%omega(r), d, f, c, p)
+            w = model%omega(l)
+         end if
+         call self%orders(q)%push(t_out, self%mesh_rate(q)*w, [self%s%displacement(i), f])
+      end do
+   end subroutine obs_feed_orders
 
    !> The load-sharing factor of each set of planet meshes (D-96): K = N max F_i / sum F_i
    !> over the set's N meshes, F_i = max(force_max, -force_min) (the largest mesh force
@@ -304,4 +358,29 @@ contains
          if (total > 0.0_wp) where (set == k) m%load_sharing = n*top/total
       end do
    end subroutine load_sharing
+
+   !> The dynamic factor of each gear mesh (D-98): Kv = F_dyn / |F_s|, F_s the static mesh
+   !> force of largest magnitude over a mesh cycle (qs, trainsim_quasi_static), F_dyn
+   !> the largest mesh force of the metrics window on the face F_s presses (force_max
+   !> for F_s > 0, -force_min for F_s < 0). With the static figures into m. 0 where no
+   !> static reference was computed, F_s = 0 (an unloaded mesh), or the window is empty.
+   subroutine dynamic_factor(qs, m)
+      type(static_ref_t), intent(in) :: qs
+      type(element_metrics_t), intent(inout) :: m(:)
+      integer :: i
+      real(wp) :: fdyn
+      m%kv = 0.0_wp
+      if (.not. qs%computed) return
+      if (size(qs%force) /= size(m)) return
+      do i = 1, size(m)
+         if (.not. qs%mesh(i)) cycle
+         m(i)%static_force = qs%force(i)
+         m(i)%static_te_mean = qs%te_mean(i)
+         m(i)%static_te_p2p = qs%te_max(i) - qs%te_min(i)
+         if (qs%force(i) == 0.0_wp .or. m(i)%force_max < m(i)%force_min) cycle
+         fdyn = m(i)%force_max
+         if (qs%force(i) < 0.0_wp) fdyn = -m(i)%force_min
+         m(i)%kv = max(0.0_wp, fdyn)/abs(qs%force(i))
+      end do
+   end subroutine dynamic_factor
 end submodule trainsim_observer_events

@@ -279,9 +279,12 @@ contains
    !> The message names the node or element that limits the step alone
    !> (`limiting_part`), its deck group, and the dt that would do.
    !> rk4-thesis steps dt/10 in contact; Euler's region reaches 2 on the real axis.
-   subroutine check_fixed_step(model, err)
+   !> `start_bound`: the O(n) bound of the train as it starts (`rk4_dt_quick` of
+   !> `lin_start`, RK4's own radius), 0 where the check did not compute it.
+   subroutine check_fixed_step(model, err, start_bound)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
+      real(wp), intent(out), optional :: start_bound
       type(integrator_entry_t), allocatable :: rows(:)
       type(lin_state_t) :: states(4)
       character(len=40), parameter :: state_text(4) = [character(len=40) :: 'the train as it starts', &
@@ -289,8 +292,9 @@ contains
                                                        'the stiffest state the run can reach']
       real(wp) :: dt_safe, omega, f_hz, zeta, h, rescale
       character(len=:), allocatable :: part, name, limit_name
+      real(wp) :: dt_start
       integer :: i, k
-      type(model_t) :: quick   ! one copy for the four O(n) bounds (each re-initialises it)
+      if (present(start_bound)) start_bound = 0.0_wp
       allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == model%run%integrator) exit
@@ -310,12 +314,19 @@ contains
       ! the contacts closed at t_start have their own D (states(3)), and what a
       ! run does reach is caught at the output times (check_physical)
       states(4)%load_torque = -1.0_wp
-      quick = model
+      dt_start = 0.0_wp
       do k = 1, 4
          h = model%run%dt
          if (name == 'rk4-thesis' .and. states(k)%contact == lin_contact_closed) h = h/10.0_wp   ! App. F: dt/10 in contact
-         ! the O(n) bound first: within it, every eigenvalue is stable (no eigenvalue problem)
-         call quick_limit(states(k), dt_safe)
+         ! the O(n) bound first: within it, every eigenvalue is stable (no eigenvalue problem);
+         ! states(3) is states(1) (their bound once)
+         if (k == 3) then
+            dt_safe = dt_start
+         else
+            call quick_limit(states(k), dt_safe)
+         end if
+         if (k == 1) dt_start = dt_safe
+         if (k == 1 .and. present(start_bound)) start_bound = dt_safe
          if (k <= 2) then
             if (.not. h/max_dt_over_limit > dt_safe*rescale) cycle
          else
@@ -353,7 +364,9 @@ contains
          type(lin_state_t), intent(in) :: state
          real(wp), intent(out) :: dt_lim
          real(wp) :: bound
-         call rk4_dt_quick(quick, state, dt_lim, bound)
+         ! on the model itself, not a copy: the bound re-initialises its modes, as every
+         ! run and session does again before its first step (D-98, startup3)
+         call rk4_dt_quick(model, state, dt_lim, bound)
       end subroutine quick_limit
       subroutine limit_of(state, dt_lim, f, z)
          type(lin_state_t), intent(in) :: state

@@ -22,6 +22,7 @@ module trainsim_simulate
    use trainsim_sink, only: sink_t
    use trainsim_run_stats, only: run_stats_t
    use trainsim_observer, only: observer_t, run_result_t
+   use trainsim_quasi_static, only: static_reference
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    use trainsim_integrator_registry, only: make_integrator
    use trainsim_progress, only: progress_t
@@ -93,11 +94,9 @@ contains
       type(run_stats_t) :: stats
       class(integrator_t), allocatable, target :: integ
       real(wp), allocatable :: y(:)
-      real(wp) :: t
+      real(wp) :: t, t_end_deck
       integer(i8) :: c0, c1, rate
-
       type(settle_t) :: settle
-      real(wp) :: t_end_deck
       logical :: checked
 
       call system_clock(c0, rate)
@@ -114,6 +113,7 @@ contains
          if (allocated(err)) return
       end if
       t = model%run%t_start
+      call static_reference(model, obs%qs)   ! each gear mesh's static force and TE, for Kv (D-98)
       call model%initial_state(y)
       call model%init_modes(t, y)
       obs%refine_peaks = .not. is_fixed_step(model%run%integrator)

@@ -557,7 +557,9 @@ contains
                rec%el(:, k) = [e%force_min, e%force_max, e%torque_min, e%torque_max, e%disp_min, e%disp_max, &
                                real(e%impacts, wp), real(e%separations, wp), real(e%zone_changes, wp), &
                                e%max_approach_velocity, e%max_peak_force, e%time_out_of_contact, e%p2p_range, &
-                               e%p2p_mean, real(e%p2p_swings, wp), e%load_sharing]
+                               e%p2p_mean, real(e%p2p_swings, wp), e%load_sharing, e%kv, e%static_force, &
+                               e%static_te_mean, e%static_te_p2p, e%force_mean, e%te_order, e%force_order, &
+                               e%rattle_impacts, e%rattle_open]
             end associate
          end do
          if (allocated(sink%wmin)) then

@@ -19,17 +19,22 @@ module trainsim_sweep_layout
    !> file is invalid (the run is made again).
    integer, parameter :: status_pending = 0, status_ok = 1, status_failed = 2
    character(len=*), parameter :: status_names(0:2) = [character(len=7) :: 'pending', 'ok', 'failed']
-   !> Layout version (2: variable-length UTF-8 strings, nodes/start_speed; 3: elements/load_sharing).
-   character(len=*), parameter :: format_version = '3'
+   !> Layout version (2: variable-length UTF-8 strings, nodes/start_speed; 3: elements/load_sharing;
+   !> 4: elements/kv, static_force, static_te_mean, static_te_p2p, force_mean, te_order_1..4, force_order_1..4,
+   !> rattle_impacts, rattle_open).
+   character(len=*), parameter :: format_version = '4'
 
    !> Per-element metrics (element_metrics_t), in record order; the integer counts are
    !> stored as integer datasets.
-   character(len=*), parameter :: element_metric_names(16) = [character(len=21) :: &
+   character(len=*), parameter :: element_metric_names(31) = [character(len=21) :: &
       'force_min', 'force_max', 'torque_min', 'torque_max', 'disp_min', 'disp_max', 'impacts', 'separations', &
       'zone_changes', 'max_approach_velocity', 'max_peak_force', 'time_out_of_contact', 'p2p_range', &
-      'p2p_mean', 'p2p_swings', 'load_sharing']
-   logical, parameter :: element_metric_is_int(16) = [.false., .false., .false., .false., .false., .false., &
-      .true., .true., .true., .false., .false., .false., .false., .false., .true., .false.]
+      'p2p_mean', 'p2p_swings', 'load_sharing', 'kv', 'static_force', 'static_te_mean', 'static_te_p2p', &
+      'force_mean', 'te_order_1', 'te_order_2', 'te_order_3', 'te_order_4', 'force_order_1', 'force_order_2', &
+      'force_order_3', 'force_order_4', 'rattle_impacts', 'rattle_open']
+   logical, parameter :: element_metric_is_int(31) = [.false., .false., .false., .false., .false., .false., &
+      .true., .true., .true., .false., .false., .false., .false., .false., .true., .false., .false., .false., .false., &
+      .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false.]
    !> Per-node metrics: the speed range after settle_time, the angle and speed at the
    !> end of the run, and the run's initial speed (what the next run of a continuation
    !> branch starts from, trainsim_continuation, also when a killed sweep is resumed).
