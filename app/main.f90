@@ -12,6 +12,7 @@ program trainsim_main
    use trainsim_cmd_scripts, only: do_diagram, do_script
    use trainsim_cmd_fmu, only: do_fmu
    use trainsim_cmd_periodic, only: do_periodic
+   use trainsim_cmd_continue, only: do_continue
    implicit none
 
    nargs = command_argument_count()
@@ -52,6 +53,8 @@ program trainsim_main
       call do_fmu()
    case ('periodic')
       call do_periodic()
+   case ('continue')
+      call do_continue()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)

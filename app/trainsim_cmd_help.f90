@@ -4,7 +4,7 @@ module trainsim_cmd_help
    implicit none
    private
 
-   public :: usage, command_usage
+   public :: usage, command_usage, continue_usage
 
 contains
 
@@ -40,6 +40,7 @@ contains
          '  trainsim periodic DECK [--period-count K] [--segments M] [--transient N] [--tol TOL] [-o FILE]', &
          '                                the periodic orbit under periodic forcing by shooting: its', &
          '                                convergence, Floquet multipliers, stability, grazing, metrics', &
+         '  trainsim continue DECK --param KEY=FROM:TO [-o F]  the periodic orbit continued, through folds', &
          '  trainsim gear --teeth N1 [N2] (--diametral-pitch P | --module M) --face-width F [...]', &
          '                                spur gear constants (App. E) and a deck fragment', &
          '  trainsim key --diameter D --key-length L [--fit tight|loose|average|all] [...]', &
@@ -215,4 +216,19 @@ contains
             'exit status: 0 success, 2 bad input'
       end select
    end subroutine command_usage
+
+   !> trainsim continue --help
+   subroutine continue_usage(unit)
+      integer, intent(in) :: unit
+      write (unit, '(a)') 'usage: trainsim continue DECK --param TARGET.KEY=FROM:TO [--ds DS] [--ds-max DS] [--points N]', &
+         '                         [--period-count K] [--transient N] [--set ...] [-o FILE [--resume]]', '', &
+         'The periodic orbit followed from FROM towards TO by pseudo-arclength continuation, through folds', &
+         '(docs/periodic.md "Continuation"): each point''s parameter, period, largest |mu|, stability and any', &
+         'fold / period-doubling / Neimark-Sacker point located on the way. With -o the branch is written', &
+         'as it grows (one row a point), and --resume continues a killed run from its last stored point.', '', &
+         '  --ds DS, --ds-max DS  first and largest step (scaled arclength; defaults 0.005, 0.05)', &
+         '  --points N            at most N points (default 400)', &
+         '  -h, --help            this text', '', &
+         'exit status: 0 the branch left the range, 1 it stopped early (the reason printed), 2 bad input'
+   end subroutine continue_usage
 end module trainsim_cmd_help

@@ -1,0 +1,566 @@
+!> Pseudo-arclength continuation of periodic orbits in a deck parameter lambda
+!> (issue 27 item 3; docs/periodic.md "Continuation"; D-101 (cont27)).
+!>
+!> Unknowns z = (x, lambda): the reduced state x at the forcing phase t0 and the
+!> parameter. G(x, lambda) = P(x; lambda) - x, P the period map at lambda (the
+!> deck rebuilt by the problem's `model_at`, its forcing period taken as shooting
+!> takes it). In the scaled variables (x/s, lambda/l) the Jacobian is
+!> A = [S^-1 (M - I) S, S^-1 dP/dlambda l], M by central differences
+!> (monodromy_fd), dP/dlambda by a central difference of the period map.
+!> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is
+!> z + ds t, the corrector chord Newton on [G; t'(z - z_pred)] with the bordered
+!> matrix of the last point. Step control: halve on failure (down to ds_min: the
+!> branch stops with the reason), grow by 1.5 after at most 3 corrector steps
+!> (up to ds_max).
+!>
+!> Bifurcations between two accepted points: a fold where the lambda-component
+!> of the tangent changes sign (a multiplier through +1), a period-doubling where
+!> det(M + I) does (a real multiplier through -1), a Neimark-Sacker point where
+!> the number of complex multipliers outside the unit circle changes. Each is
+!> located by the Illinois secant on its test function along the arclength from
+!> the earlier point, to lam_tol in lambda (a fold: to a tangent lambda-component
+!> below 1e-9, which puts lambda within ~1e-18/curvature of the turn).
+module trainsim_arclength
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str
+   use trainsim_model, only: model_t
+   use trainsim_period_map, only: period_map_t, forcing_period
+   use trainsim_shooting, only: shoot_options_t, shoot_result_t, shoot, shoot_converged, monodromy_fd
+   use trainsim_floquet, only: floquet_multipliers, stability_of
+   implicit none
+   private
+
+   public :: branch_problem_t, point_hook_i, branch_options_t, branch_point_t, branch_t, continue_branch
+   public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed
+
+   !> branch_t%status
+   integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
+                         branch_failed = 4
+
+   !> The deck at a parameter value: extend and give `model_at`.
+   type, abstract :: branch_problem_t
+   contains
+      procedure(model_at_i), deferred :: model_at
+   end type branch_problem_t
+
+   abstract interface
+      subroutine model_at_i(self, lam, model, err)
+         import :: branch_problem_t, wp, model_t, error_t
+         class(branch_problem_t), intent(in) :: self
+         real(wp), intent(in) :: lam
+         type(model_t), intent(out) :: model
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine model_at_i
+   end interface
+
+   type :: branch_options_t
+      real(wp) :: lam_min = -huge(1.0_wp), lam_max = huge(1.0_wp)   !< the branch stops when it leaves these
+      integer :: direction = 1          !< +1: start towards larger lambda
+      real(wp) :: ds = 0.005_wp         !< the first step (scaled arclength: lambda/|lambda_0|, x/s)
+      real(wp) :: ds_min = 1.0e-6_wp, ds_max = 0.05_wp
+      integer :: max_points = 400
+      integer :: max_corrector = 8
+      real(wp) :: tol = 1.0e-10_wp      !< ||G/s||_inf of a point
+      real(wp) :: lam_tol = 1.0e-7_wp   !< bifurcation location, relative to |lambda_0|
+      real(wp) :: fd_lam = 1.0e-6_wp    !< dP/dlambda: central difference, step of |lambda_0|
+      integer :: k = 1                  !< forcing periods per orbit
+      type(shoot_options_t) :: shoot   !< the first orbit
+   end type branch_options_t
+
+   type :: branch_point_t
+      real(wp) :: lam = 0.0_wp, period = 0.0_wp, t0 = 0.0_wp
+      real(wp), allocatable :: x(:), tangent(:)   !< tangent: scaled (x/s, lambda/l), unit
+      complex(wp), allocatable :: mu(:)
+      character(len=:), allocatable :: stability   !< stable / marginal / unstable
+      character(len=:), allocatable :: kind        !< '' (a regular point), fold, period-doubling, neimark-sacker
+      real(wp) :: residual = 0.0_wp, ds = 0.0_wp
+      integer :: corrector = 0, maps = 0           !< corrector steps; period maps up to this point
+   end type branch_point_t
+
+   type :: branch_t
+      type(branch_point_t), allocatable :: pts(:)
+      integer :: status = branch_failed
+      character(len=:), allocatable :: message
+      integer :: maps = 0, rejected = 0
+      real(wp), allocatable :: scale(:)   !< s
+      real(wp) :: lam_scale = 1.0_wp      !< l
+      real(wp) :: phase = 0.0_wp          !< (t0 - t_start)/T, kept at every lambda
+   end type branch_t
+
+   abstract interface
+      !> Called with i > 0 after point i is stored, and with i = 0 when the branch
+      !> ends (br%status, br%message set): a branch file written as it grows, so
+      !> that a killed run can be resumed.
+      subroutine point_hook_i(br, i, err)
+         import :: branch_t, error_t
+         type(branch_t), intent(in) :: br
+         integer, intent(in) :: i
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine point_hook_i
+   end interface
+
+   !> The evaluation context: the period map set up at lambda `lam`.
+   type :: ctx_t
+      class(branch_problem_t), allocatable :: prob
+      type(period_map_t) :: pm
+      real(wp) :: lam = huge(1.0_wp)
+      real(wp) :: phase = 0.0_wp
+      integer :: k = 1, n = 0, maps = 0
+      real(wp), allocatable :: s(:)
+      real(wp) :: ls = 1.0_wp, fd = 1.0e-6_wp
+      real(wp) :: t_start = 0.0_wp   !< the deck's t_start (t0 = t_start + phase T)
+   end type ctx_t
+
+   !> an accepted point's data for the next step
+   type :: node_t
+      real(wp), allocatable :: z(:), px(:), a(:, :), t(:), m(:, :)
+      complex(wp), allocatable :: mu(:)
+      integer :: corrector = 0
+      real(wp) :: residual = 0.0_wp
+   end type node_t
+
+   interface
+      subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
+         import :: wp
+         integer, intent(in) :: n, nrhs, lda, ldb
+         real(wp), intent(inout) :: a(lda, *), b(ldb, *)
+         integer, intent(out) :: ipiv(*), info
+      end subroutine dgesv
+   end interface
+
+contains
+
+   !> Continue the periodic orbit of `prob` from lam0 (shot there from the deck's
+   !> start), or from the last point of `resume` (a branch stored earlier: its
+   !> scale, phase and points). br%status / br%message say why it stopped; err:
+   !> the deck could not be built, or the monodromy failed, at an accepted point.
+   subroutine continue_branch(prob, lam0, opt, br, err, resume, hook)
+      class(branch_problem_t), intent(in) :: prob
+      real(wp), intent(in) :: lam0
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t), intent(out) :: br
+      type(error_t), allocatable, intent(out) :: err
+      type(branch_t), intent(in), optional :: resume
+      procedure(point_hook_i), optional :: hook
+      type(ctx_t) :: c
+      integer :: stored
+      type(node_t) :: cur, nxt
+      real(wp), allocatable :: t_prev(:)
+      real(wp) :: ds, lam
+      character(len=:), allocatable :: why
+      allocate (c%prob, source=prob)
+      c%k = opt%k
+      c%fd = opt%fd_lam
+      allocate (br%pts(0))
+      if (present(resume)) then
+         call start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
+      else
+         call start_shot(c, lam0, opt, br, cur, t_prev, ds, err)
+      end if
+      if (allocated(err) .or. br%status == branch_no_start) return
+      call evaluate(c, cur%z, cur%px, why, err)
+      if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'the start point: '//why, err_input)
+      if (.not. allocated(err)) call linearise(c, cur, t_prev, err)
+      if (allocated(err)) return
+      if (size(br%pts) == 0) call store(br, c, cur, 0.0_wp, '')
+      stored = 0
+      if (present(resume)) stored = size(resume%pts)
+      do
+         call report_points()
+         if (allocated(err)) return
+         if (size(br%pts) >= opt%max_points) then
+            br%status = branch_budget
+            br%message = 'the budget of '//str(opt%max_points)//' points was spent at lambda = '// &
+                         str(cur%z(c%n + 1)*c%ls, 10)
+            exit
+         end if
+         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why)
+         if (len(why) == 0) then
+            call linearise(c, nxt, cur%t, err)
+            if (allocated(err)) then
+               why = err%message
+               deallocate (err)
+            else if (dot_product(nxt%t, cur%t) < 0.9_wp .and. ds > opt%ds_min) then
+               why = 'the tangent turned by more than 25 degrees in one step'
+            end if
+         end if
+         if (len(why) > 0) then
+            br%rejected = br%rejected + 1
+            if (ds <= opt%ds_min) then
+               br%status = branch_step_min
+               br%message = 'the step reached its minimum '//str(opt%ds_min, 3)//' at lambda = '// &
+                            str(cur%z(c%n + 1)*c%ls, 10)//' and the corrector still failed: '//why
+               exit
+            end if
+            ds = max(0.5_wp*ds, opt%ds_min)
+            cycle
+         end if
+         call detect(c, br, cur, nxt, ds, opt)
+         call store(br, c, nxt, ds, '')
+         cur = nxt
+         if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
+         lam = cur%z(c%n + 1)*c%ls
+         if (lam > opt%lam_max .or. lam < opt%lam_min) then
+            br%status = branch_done
+            br%message = ''
+            exit
+         end if
+      end do
+      br%maps = c%maps
+      call c%pm%finish()
+      call report_points()
+      if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
+   contains
+      subroutine report_points()
+         if (.not. present(hook)) return
+         do while (stored < size(br%pts))
+            stored = stored + 1
+            call hook(br, stored, err)
+            if (allocated(err)) return
+         end do
+      end subroutine report_points
+   end subroutine continue_branch
+
+   !> The first point: the orbit shot at lam0; t0 there (moved by shooting to an
+   !> instant with no memory contact in progress) kept as a phase of the period.
+   subroutine start_shot(c, lam0, opt, br, cur, t_prev, ds, err)
+      type(ctx_t), intent(inout) :: c
+      real(wp), intent(in) :: lam0
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(out) :: cur
+      real(wp), allocatable, intent(out) :: t_prev(:)
+      real(wp), intent(out) :: ds
+      type(error_t), allocatable, intent(out) :: err
+      type(shoot_result_t) :: res
+      c%ls = max(abs(lam0), tiny(1.0_wp))
+      call at(c, lam0, err)
+      if (allocated(err)) return
+      call shoot(c%pm, opt%shoot, res, err)
+      c%maps = c%maps + res%maps
+      br%maps = c%maps
+      if (allocated(err)) then
+         br%status = branch_no_start
+         br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//err%message
+         deallocate (err)
+         return
+      end if
+      if (res%status /= shoot_converged) then
+         br%status = branch_no_start
+         br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//res%message
+         return
+      end if
+      c%n = c%pm%n
+      c%phase = (c%pm%t0 - c%t_start)/c%pm%period
+      c%s = res%scale
+      br%scale = c%s
+      br%lam_scale = c%ls
+      br%phase = c%phase
+      cur%z = [res%x/c%s, lam0/c%ls]
+      allocate (t_prev(c%n + 1))
+      t_prev = 0.0_wp
+      t_prev(c%n + 1) = real(sign(1, opt%direction), wp)
+      ds = opt%ds
+   end subroutine start_shot
+
+   !> The first point of a resumed branch: its last stored point.
+   subroutine start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(in) :: resume
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(out) :: cur
+      real(wp), allocatable, intent(out) :: t_prev(:)
+      real(wp), intent(out) :: ds
+      type(error_t), allocatable, intent(out) :: err
+      integer :: last
+      last = size(resume%pts)
+      if (last == 0) then
+         call fatal_error(err, 'the branch to resume has no point', err_input)
+         return
+      end if
+      br = resume
+      c%phase = br%phase
+      c%s = br%scale
+      c%ls = br%lam_scale
+      c%maps = br%maps
+      call at(c, br%pts(last)%lam, err)
+      if (allocated(err)) return
+      c%n = c%pm%n
+      if (size(c%s) /= c%n .or. size(br%pts(last)%tangent) /= c%n + 1) then
+         call fatal_error(err, 'the branch to resume has '//str(size(c%s))//' states, the deck '//str(c%n), err_input)
+         return
+      end if
+      cur%z = [br%pts(last)%x/c%s, br%pts(last)%lam/c%ls]
+      t_prev = br%pts(last)%tangent
+      ds = min(max(br%pts(last)%ds, opt%ds_min), opt%ds_max)
+      if (last == 1) ds = opt%ds
+   end subroutine start_resumed
+
+   !> The period map set up at lambda (the deck rebuilt there; t0 = t_start + phase T).
+   subroutine at(c, lam, err)
+      type(ctx_t), intent(inout) :: c
+      real(wp), intent(in) :: lam
+      type(error_t), allocatable, intent(out) :: err
+      type(model_t) :: m
+      real(wp) :: period
+      if (lam == c%lam) return
+      c%lam = huge(1.0_wp)
+      call c%prob%model_at(lam, m, err)
+      if (allocated(err)) return
+      call forcing_period(m, period, err)
+      if (allocated(err)) return
+      c%t_start = m%run%t_start
+      m%run%t_start = m%run%t_start + c%phase*period
+      call c%pm%setup(m, period, c%k, err)
+      if (allocated(err)) return
+      c%lam = lam
+   end subroutine at
+
+   !> px = P(x; lambda) for the scaled z = (x/s, lambda/l). why: the integration failed.
+   subroutine evaluate(c, z, px, why, err)
+      type(ctx_t), intent(inout) :: c
+      real(wp), intent(in) :: z(:)
+      real(wp), allocatable, intent(out) :: px(:)
+      character(len=:), allocatable, intent(out) :: why
+      type(error_t), allocatable, intent(out) :: err
+      type(error_t), allocatable :: e
+      why = ''
+      allocate (px(c%n))
+      call at(c, z(c%n + 1)*c%ls, err)
+      if (allocated(err)) return
+      call c%pm%map(z(1:c%n)*c%s, px, e)
+      c%maps = c%maps + 1
+      if (allocated(e)) why = 'the period map failed: '//e%message
+   end subroutine evaluate
+
+   !> The point's monodromy, multipliers, scaled Jacobian A and tangent (oriented along t_prev).
+   subroutine linearise(c, p, t_prev, err)
+      type(ctx_t), intent(inout) :: c
+      type(node_t), intent(inout) :: p
+      real(wp), intent(in) :: t_prev(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: x(c%n), lam, h, pp(c%n), pq(c%n)
+      real(wp), allocatable :: b(:, :), rhs(:)
+      character(len=:), allocatable :: why
+      integer :: i, n, info
+      integer :: ipiv(c%n + 1)
+      n = c%n
+      x = p%z(1:n)*c%s
+      lam = p%z(n + 1)*c%ls
+      h = c%fd*c%ls
+      call map_at(lam + h, pp)
+      if (allocated(err)) return
+      call map_at(lam - h, pq)
+      if (allocated(err)) return
+      call at(c, lam, err)
+      if (allocated(err)) return
+      if (allocated(p%m)) deallocate (p%m)
+      allocate (p%m(n, n), p%a(n, n + 1))
+      call monodromy_fd(c%pm, x, p%px, p%m, err)
+      c%maps = c%maps + 2*n
+      if (allocated(err)) return
+      call floquet_multipliers(p%m, p%mu, err)
+      if (allocated(err)) return
+      do i = 1, n
+         p%a(i, 1:n) = p%m(i, :)*c%s/c%s(i)
+         p%a(i, i) = p%a(i, i) - 1.0_wp
+         p%a(i, n + 1) = (pp(i) - pq(i))/(2.0_wp*h)*c%ls/c%s(i)
+      end do
+      b = bordered(p%a, t_prev)
+      allocate (rhs(n + 1))
+      rhs = 0.0_wp
+      rhs(n + 1) = 1.0_wp
+      call dgesv(n + 1, 1, b, n + 1, ipiv, rhs, n + 1, info)
+      if (info /= 0) then
+         call fatal_error(err, 'the bordered Jacobian is singular at lambda = '//str(lam)//' (a branch point)', &
+                          err_input)
+         return
+      end if
+      p%t = rhs/norm2(rhs)
+      if (dot_product(p%t, t_prev) < 0.0_wp) p%t = -p%t
+   contains
+      subroutine map_at(l, y)
+         real(wp), intent(in) :: l
+         real(wp), intent(out) :: y(:)
+         type(error_t), allocatable :: e
+         call at(c, l, err)
+         if (allocated(err)) return
+         call c%pm%map(x, y, e)
+         c%maps = c%maps + 1
+         if (allocated(e)) then
+            why = e%message
+            call fatal_error(err, 'dP/dlambda: the period map failed at lambda = '//str(l)//': '//why, err_input)
+         end if
+      end subroutine map_at
+   end subroutine linearise
+
+   !> [A; t'] of A (n x n+1) and t (n+1).
+   function bordered(a, t) result(b)
+      real(wp), intent(in) :: a(:, :), t(:)
+      real(wp) :: b(size(t), size(t))
+      b(1:size(a, 1), :) = a
+      b(size(t), :) = t
+   end function bordered
+
+   !> The corrector: chord Newton from z_pred on [G(z)/s; t'(z - z_pred)] = 0 with
+   !> the bordered matrix [A; t'] of the point `p`. why = '' if it converged.
+   subroutine correct(c, p, z_pred, opt, q, why)
+      type(ctx_t), intent(inout) :: c
+      type(node_t), intent(in) :: p
+      real(wp), intent(in) :: z_pred(:)
+      type(branch_options_t), intent(in) :: opt
+      type(node_t), intent(out) :: q
+      character(len=:), allocatable, intent(out) :: why
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: b(:, :), rhs(:), px(:)
+      real(wp) :: r, r_old, lam
+      integer :: it, n, info
+      integer, allocatable :: ipiv(:)
+      n = c%n
+      q%z = z_pred
+      r_old = huge(1.0_wp)
+      allocate (ipiv(n + 1))
+      do it = 0, opt%max_corrector
+         lam = q%z(n + 1)*c%ls
+         call evaluate(c, q%z, px, why, err)
+         if (allocated(err)) why = err%message
+         if (len(why) > 0) return
+         r = maxval(abs(px/c%s - q%z(1:n)))
+         q%px = px
+         q%residual = r
+         q%corrector = it
+         if (r <= opt%tol) return
+         if (.not. r < r_old) then
+            why = 'the corrector diverged at lambda = '//str(lam, 10)//' (residual '//str(r, 3)//' after '// &
+                  str(r_old, 3)//')'
+            return
+         end if
+         if (it == opt%max_corrector) exit
+         r_old = r
+         b = bordered(p%a, p%t)
+         rhs = [q%z(1:n) - px/c%s, -dot_product(p%t, q%z - z_pred)]
+         call dgesv(n + 1, 1, b, n + 1, ipiv, rhs, n + 1, info)
+         if (info /= 0) then
+            why = 'the bordered Jacobian is singular'
+            return
+         end if
+         q%z = q%z + rhs
+      end do
+      why = 'the corrector spent its '//str(opt%max_corrector)//' steps at lambda = '//str(lam, 10)// &
+            ' (residual '//str(r, 3)//', tolerance '//str(opt%tol, 3)//')'
+   end subroutine correct
+
+   !> Append the point p (with its kind: '' or a bifurcation) to the branch.
+   subroutine store(br, c, p, ds, kind)
+      type(branch_t), intent(inout) :: br
+      type(ctx_t), intent(in) :: c
+      type(node_t), intent(in) :: p
+      real(wp), intent(in) :: ds
+      character(len=*), intent(in) :: kind
+      type(branch_point_t) :: bp
+      bp%lam = p%z(c%n + 1)*c%ls
+      bp%period = c%pm%period
+      bp%t0 = c%pm%t0
+      bp%x = p%z(1:c%n)*c%s
+      bp%tangent = p%t
+      bp%mu = p%mu
+      bp%stability = stability_of(p%mu)
+      bp%kind = kind
+      bp%residual = p%residual
+      bp%ds = ds
+      bp%corrector = p%corrector
+      bp%maps = c%maps
+      br%pts = [br%pts, bp]
+      br%maps = c%maps
+   end subroutine store
+
+   !> The bifurcations between the accepted points p and q (q = p + ds along p's
+   !> tangent, corrected), each located and stored before q.
+   subroutine detect(c, br, p, q, ds, opt)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(in) :: p, q
+      real(wp), intent(in) :: ds
+      type(branch_options_t), intent(in) :: opt
+      integer :: j
+      character(len=*), parameter :: kinds(3) = [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker']
+      do j = 1, 3
+         if (test_fn(j, p, c%n) * test_fn(j, q, c%n) < 0.0_wp) call locate(c, br, p, q, ds, opt, j, trim(kinds(j)))
+      end do
+   end subroutine detect
+
+   !> Test function j at a point: 1 fold (the tangent's lambda-component), 2
+   !> period-doubling (det(M + I) = prod(1 + mu)), 3 Neimark-Sacker (|mu| - 1 of
+   !> the complex pair nearest the unit circle; +-1 with none).
+   real(wp) function test_fn(j, p, n) result(f)
+      integer, intent(in) :: j, n
+      type(node_t), intent(in) :: p
+      integer :: i
+      select case (j)
+      case (1)
+         f = p%t(n + 1)
+      case (2)
+         f = real(product(1.0_wp + p%mu), wp)
+      case default
+         f = huge(1.0_wp)
+         do i = 1, size(p%mu)
+            if (abs(aimag(p%mu(i))) > 1.0e-8_wp*abs(p%mu(i))) then
+               if (abs(abs(p%mu(i)) - 1.0_wp) < abs(f)) f = abs(p%mu(i)) - 1.0_wp
+            end if
+         end do
+         if (f == huge(1.0_wp)) f = -1.0_wp
+      end select
+   end function test_fn
+
+   !> Locate the zero of test function j between p (sigma = 0) and q (sigma = ds)
+   !> by the Illinois secant on sigma, each trial point corrected from p along p's
+   !> tangent (the arclength condition t_p'(z - z_p) = sigma); stored with its kind.
+   !> A trial that fails to converge ends the search at the best bracket.
+   subroutine locate(c, br, p, q, ds, opt, j, kind)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(in) :: p, q
+      real(wp), intent(in) :: ds
+      type(branch_options_t), intent(in) :: opt
+      integer, intent(in) :: j
+      character(len=*), intent(in) :: kind
+      type(node_t) :: r, best
+      type(error_t), allocatable :: err
+      real(wp) :: sa, sb, fa, fb, sm, fm, la, lb
+      character(len=:), allocatable :: why
+      integer :: it, side
+      sa = 0.0_wp
+      sb = ds
+      fa = test_fn(j, p, c%n)
+      fb = test_fn(j, q, c%n)
+      la = p%z(c%n + 1)
+      lb = q%z(c%n + 1)
+      best = q
+      side = 0
+      do it = 1, 40
+         sm = sb - fb*(sb - sa)/(fb - fa)
+         call correct(c, p, p%z + sm*p%t, opt, r, why)
+         if (len(why) == 0) call linearise(c, r, p%t, err)
+         if (allocated(err) .or. len(why) > 0) exit
+         fm = test_fn(j, r, c%n)
+         best = r
+         if (fm*fb < 0.0_wp) then
+            sa = sb
+            fa = fb
+            la = lb
+            side = 0
+         else
+            if (side == 1) fa = 0.5_wp*fa
+            side = 1
+         end if
+         sb = sm
+         fb = fm
+         lb = r%z(c%n + 1)
+         if (j == 1 .and. abs(fm) < 1.0e-9_wp) exit
+         if (j /= 1 .and. abs(la - lb) < opt%lam_tol) exit
+      end do
+      call store(br, c, best, sm, kind)
+   end subroutine locate
+end module trainsim_arclength
