@@ -96,7 +96,7 @@ contains
       end if
       call print_convergence(res, opt)
       if (pm%t0 /= model%run%t_start) write (output_unit, '(a)') 'the forcing phase moved to t0 = '//str(pm%t0, 10)// &
-         ' s, where no contact with a memory of its impact is in progress (D-98)'
+         ' s, where no contact with a memory of its impact is in progress (D-99)'
       if (res%status /= shoot_converged) then
          write (error_unit, '(a)') 'trainsim: error: no periodic orbit found: '//res%message
          call quit(1)

@@ -48,7 +48,7 @@ contains
       if (allocated(err)) call fail(err)
       if (model%run%integrator(1:3) == 'rk4') then
          ! RK4 step advice from the damped linearised train (D-25): first as it starts;
-         ! above the dense limit that is the check's own O(n) bound (D-98): asked again
+         ! above the dense limit that is the check's own O(n) bound (D-107): asked again
          ! only for the text of a warning
          warned = .false.
          if (model%n_states > dense_state_limit .and. .not. model%nport .and. model%run%dt <= dt_quick) then

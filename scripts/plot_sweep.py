@@ -7,7 +7,7 @@
     trainsim plot SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean -o fig.png   (the same)
 
 --te-spectrum ID   the transmission error of gear mesh ID at mesh orders 1..4 (elements/te_order_K,
-                   D-99) against the swept parameter: above, one curve per order (a waterfall seen
+                   D-104) against the swept parameter: above, one curve per order (a waterfall seen
                    from the side); below, the order map (orders against the parameter, the amplitude
                    in colour, log scale). --force: the mesh force's orders instead.
 

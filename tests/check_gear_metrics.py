@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The gear-rating metrics of issue 26 item 5 (D-98, D-99), against physics:
+"""The gear-rating metrics of issue 26 item 5 (D-103, D-104), against physics:
 
 (a) The Table 5.5 rig's Fig. 5.11 sweep (inputs/sweep_ghm_mesh_frequency.nml, 27 runs, each
     with its own static reference): the static mesh force is the load over the base radius,
@@ -89,7 +89,7 @@ with tempfile.TemporaryDirectory() as d:
     check(abs(g["p2p_mean"][i] / 0.00319 - 1) < 0.03 and 395 <= x[i] <= 415,
           f"peak of p2p_mean {g['p2p_mean'][i]:.5f} in at {x[i]:.0f} teeth/s (thesis 0.00319 near 405)")
     check(g["kv"][i] > 3.0, f"Kv at the Fig. 5.11 peak {g['kv'][i]:.3f} > 3 (the mesh separates)")
-    # rattle indices (D-100): 60 measured cycles of the held speed; the window is 60 / f s long. The
+    # rattle indices (D-105): 60 measured cycles of the held speed; the window is 60 / f s long. The
     # driver's cycles differ from 60 by its vibration (N x the shaft's twist range / 2 pi, 2e-3 cycles)
     # and the window's ends at output samples (1/194 cycle at 645 teeth/s): 1.2e-2 cycles, 2e-4 of 60
     sep = ok & (g["impacts"] > 0)

@@ -484,7 +484,7 @@ contains
       end do
    end subroutine test_model_rhs_is_the_plug_ins_own_torques_and_derivatives
 
-   !> D-100: a serial chain (each element joins the node after the last one;
+   !> D-106: a serial chain (each element joins the node after the last one;
    !> undamped inertias, the head held or free; springs, a damped shaft and
    !> clearances in their hot forms) runs the chain kernel; the same train with
    !> one load given as a sine of zero amplitude runs the generic RHS. Both must

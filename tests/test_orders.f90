@@ -1,4 +1,4 @@
-!> The order tracker (trainsim_orders, D-99) on prescribed signals: a single harmonic
+!> The order tracker (trainsim_orders, D-104) on prescribed signals: a single harmonic
 !> comes back with its amplitude at its order and nothing at the others, to rounding
 !> (the trapezoidal rule on samples evenly spaced over whole cycles is the DFT, exact
 !> for orders below half the samples a cycle); the mean to rounding; a window that ends

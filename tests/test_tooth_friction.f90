@@ -1,5 +1,5 @@
 !> Tooth friction in the spur gear mesh (thesis §3.1.4, eqs. 3.13-3.14; issue 26
-!> item 3, D-98 (fric26)) against the closed forms, by hand from the geometry:
+!> item 3, D-98) against the closed forms, by hand from the geometry:
 !> a 20/40-tooth pair, diametral pitch 10, 20 deg, full depth, so r_b1 = cos 20,
 !> r_b2 = 2 cos 20 and the contact ratio from the addendum circles.
 !> 1. Over one mesh cycle, the driver at a constant speed and the driven at the

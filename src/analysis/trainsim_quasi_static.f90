@@ -1,4 +1,4 @@
-!> The quasi-static reference of each gear mesh (issue 26 item 5, D-98): the static
+!> The quasi-static reference of each gear mesh (issue 26 item 5, D-103): the static
 !> mesh force and the loaded static transmission error at the run's loads, from the
 !> static equilibrium (trainsim_preload) at `static_positions` driver positions
 !> spread evenly over one mesh cycle, for the dynamic factor Kv = max dynamic /

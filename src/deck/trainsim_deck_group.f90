@@ -481,7 +481,7 @@ contains
    end function is_near
 
    !> Add `key` (lower case) to the group's list of queried keys. Appended without
-   !> a look for it first (that look was O(keys) a query: D-98); `queried_keys`
+   !> a look for it first (that look was O(keys) a query: D-107); `queried_keys`
    !> lists each key once.
    subroutine record_query(self, key)
       class(deck_group_t), intent(inout) :: self

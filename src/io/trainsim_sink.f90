@@ -76,16 +76,16 @@ module trainsim_sink
       !> K = N max F_i / sum F_i of the element's set of planet meshes (D-96), F_i =
       !> max(force_max, -force_min); 0 for an element of no set (set by the observer)
       real(wp) :: load_sharing = 0.0_wp
-      !> gear meshes (D-98): the dynamic factor Kv = max dynamic / max static mesh force on
+      !> gear meshes (D-103): the dynamic factor Kv = max dynamic / max static mesh force on
       !> the face the loads press; the static reference (trainsim_quasi_static): the static
       !> mesh force (signed) and the loaded static TE's mean and peak-to-peak over a mesh
       !> cycle. 0 for any other element and when no static reference was computed.
       real(wp) :: kv = 0.0_wp, static_force = 0.0_wp, static_te_mean = 0.0_wp, static_te_p2p = 0.0_wp
-      !> gear meshes (D-99): the amplitudes of the TE and of the mesh force at mesh orders
+      !> gear meshes (D-104): the amplitudes of the TE and of the mesh force at mesh orders
       !> 1..n_orders and the mean mesh force, over the output samples of the metrics
       !> window (trainsim_orders); 0 for any other element
       real(wp) :: te_order(n_orders) = 0.0_wp, force_order(n_orders) = 0.0_wp, force_mean = 0.0_wp
-      !> gear meshes, rattle indices (D-100): impacts per mesh cycle of the window and the
+      !> gear meshes, rattle indices (D-105): impacts per mesh cycle of the window and the
       !> fraction of the window's time the mesh was out of contact
       real(wp) :: rattle_impacts = 0.0_wp, rattle_open = 0.0_wp
       !> the online peak detector could confirm p2p_mean/p2p_swings are the

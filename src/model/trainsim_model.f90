@@ -473,7 +473,7 @@ module trainsim_model
       end subroutine model_preload_mode
 
       !> The hot form (D-35) the model holds for element i: the torque form (hf_*, hf_none
-      !> when asked through `torques`) and the guard form (hg_*); the serial chain's links (D-100).
+      !> when asked through `torques`) and the guard form (hg_*); the serial chain's links (D-106).
       module pure subroutine model_hot_kinds(self, i, kind, guards, chain)
          class(model_t), intent(in) :: self
          integer, intent(in) :: i

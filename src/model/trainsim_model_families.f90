@@ -111,7 +111,7 @@ module trainsim_model_families
    !> free nodes: (node), (value). Damped plain inertias in node order (their
    !> dissipated power): (state offset), (d).
    integer, parameter :: free_ni = 4, free_nr = 3, held_ni = 3, held_nr = 3, load_ni = 1, load_nr = 1
-   !> The serial chain (D-100): a train whose elements, in element order, join
+   !> The serial chain (D-106): a train whose elements, in element order, join
    !> its nodes one after another (element q: node q - 1 left, node q right),
    !> every node an undamped plain inertia but the head, which may also be
    !> held, and every element a linear spring or a clearance. Row 0 is the

@@ -261,7 +261,7 @@ contains
          if (allocated(f%th)) deallocate (f%th, f%w, f%pw)
          allocate (f%th(nn), f%w(nn), f%pw(ne))
          f%th = 0.0_wp; f%w = 0.0_wp; f%pw = 0.0_wp
-         call build_chain(f, self%fn, self%fe, self%simple)   ! (a serial chain's table, D-100)
+         call build_chain(f, self%fn, self%fe, self%simple)   ! (a serial chain's table, D-106)
       end associate
    contains
 

@@ -1,5 +1,5 @@
 !> Sliding friction between meshing spur-gear teeth (thesis §3.1.4, eqs. 3.13,
-!> 3.14, Figs. 3.5-3.7; TRAIN did not simulate it; issue 26 item 3, D-98 (fric26)).
+!> 3.14, Figs. 3.5-3.7; TRAIN did not simulate it; issue 26 item 3, D-98).
 !>
 !> The contact point of a tooth pair lies on the line of action at s from the
 !> start of contact A (s = r_b1 times the driver's roll since the pair entered,

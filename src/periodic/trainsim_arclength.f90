@@ -1,5 +1,5 @@
 !> Pseudo-arclength continuation of periodic orbits in a deck parameter lambda
-!> (issue 27 item 3; docs/periodic.md "Continuation"; D-101 (cont27)).
+!> (issue 27 item 3; docs/periodic.md "Continuation"; D-108).
 !>
 !> Unknowns z = (x, lambda): the reduced state x at the forcing phase t0 and the
 !> parameter. G(x, lambda) = P(x; lambda) - x, P the period map at lambda (the

@@ -1,6 +1,6 @@
 !> The monodromy matrix of a train over a window [t0, t0 + T]: the derivative
 !> M = d x(t0 + T) / d x(t0) of its event-located flow, from the variational
-!> equations with a saltation matrix at every mode change (D-98 (salt27), docs/periodic.md
+!> equations with a saltation matrix at every mode change (D-102, docs/periodic.md
 !> "The monodromy matrix with saltation matrices"). The flow is fixed-step RK4 on
 !> the grid t0 + i T / ceil(T / dt), through the inputs' breakpoints, a guard's zero
 !> located on the RK4 step map (trainsim's own run); Phi' = J Phi on the same

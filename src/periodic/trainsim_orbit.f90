@@ -2,7 +2,7 @@
 !> state at t0 integrated into a sink (the run's own metrics, events and
 !> history), and the grazing check on its clearances.
 !>
-!> Grazing (D-98): an orbit whose displacement across a clearance turns at the
+!> Grazing (D-99): an orbit whose displacement across a clearance turns at the
 !> contact boundary, delta = +-b (a contact that just touches, or just fails to
 !> open). For every clearance element the orbit's extremes of delta (the run's
 !> metrics disp_min, disp_max) are compared with both faces, and the closest,

@@ -4,7 +4,7 @@
 !> trainsim_session), and return the state there.
 !>
 !> The state of a rotating train is not periodic in its absolute angles: the
-!> map works on the reduced state (D-98, shoot27). x has the layout of the
+!> map works on the reduced state (D-99, shoot27). x has the layout of the
 !> model's physical states y(1:n_states) (the energy integrals are left out);
 !> each free node's angle is taken relative to the rigid rotation of the
 !> train,
@@ -49,7 +49,7 @@ module trainsim_period_map
       type(session_state_t) :: p0      !< the session's point at t0
       type(model_t) :: model           !< the deck's model (a new t0: set up again)
       !> the clearances whose contact law remembers its impact (yang_sun: e and D
-      !> from the approach velocity), which must be open at t0 (D-98)
+      !> from the approach velocity), which must be open at t0 (D-99)
       integer, allocatable :: memory(:)
       !> multiple shooting (set_segments): the boundaries in s after t0 (0 and kT the
       !> ends), the session's point at each, and the flow's reduced states there
@@ -217,7 +217,7 @@ contains
       self%n_evals = self%n_evals + 1
    end subroutine pm_map
 
-   !> The scale of each component of the reduced state x (D-98): one for every speed,
+   !> The scale of each component of the reduced state x (D-99): one for every speed,
    !> the largest |speed| of x (at least the largest |W|); one for every angle, that
    !> speed scale times T/(2 pi) (the angle a speed of that size turns per radian of
    !> the forcing phase; a harmonic motion's amplitude from its speed amplitude);
@@ -265,7 +265,7 @@ contains
    !> A new forcing phase t0 for the state x (the map restarts there): the middle of
    !> the longest stretch of the k periods from x in which every clearance with a
    !> memory (`memory`) is open, so that no contact is in progress at t0 (its law's
-   !> damping comes from its impact, which a state at t0 does not hold; D-98). x
+   !> damping comes from its impact, which a state at t0 does not hold; D-99). x
    !> becomes the state at the new t0 and the map is set up there. Nothing changes
    !> without such clearances, or when they never open (then a contact closed at t0
    !> has the law's start, D-13).

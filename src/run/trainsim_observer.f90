@@ -96,9 +96,9 @@ module trainsim_observer
       !> per element: the time up to which its time out of contact is counted by
       !> a local event instant (step_part) past t_prev (-huge: none)
       real(wp), allocatable :: t_counted(:)
-      type(static_ref_t) :: qs   !< the gear meshes' static reference (set before start; Kv at finish, D-98)
+      type(static_ref_t) :: qs   !< the gear meshes' static reference (set before start; Kv at finish, D-103)
       !> the gear meshes (qs%mesh): their elements, and the order tracker of each, fed
-      !> with the output samples from t_metrics on (TE and mesh force, D-99)
+      !> with the output samples from t_metrics on (TE and mesh force, D-104)
       integer, allocatable :: mesh_el(:)
       integer, allocatable :: mesh_drv(:)           !< its driver (left node)
       real(wp), allocatable :: mesh_rate(:)         !< N: the order-1 phase per radian of the driver
@@ -510,7 +510,7 @@ contains
             end do
          end if
          call block_turns(self, b%t, b%disp, n, j0, samples)
-         if (samples .and. size(self%mesh_el) > 0) then   ! every step end an output sample (D-99)
+         if (samples .and. size(self%mesh_el) > 0) then   ! every step end an output sample (D-104)
             do j = j0, n
                call block_orders(self, model, b%t(j), b%disp(:, j), b%force(:, j), b%omega(:, j))
             end do
@@ -588,7 +588,7 @@ contains
    end subroutine block_turns
 
    !> One step end of a block, an output sample at t >= t_metrics, into the gear
-   !> meshes' order trackers: the block's displacements, forces and node speeds (D-99).
+   !> meshes' order trackers: the block's displacements, forces and node speeds (D-104).
    subroutine block_orders(self, model, t, disp, force, omega)
       type(observer_t), intent(inout) :: self
       type(model_t), intent(in) :: model

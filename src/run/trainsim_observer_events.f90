@@ -280,12 +280,12 @@ contains
       end do
       call load_sharing(model%share_set, self%res%el)
       call dynamic_factor(self%qs, self%res%el)
-      do i = 1, size(self%mesh_el)   ! the mesh orders of TE and force (D-99)
+      do i = 1, size(self%mesh_el)   ! the mesh orders of TE and force (D-104)
          call self%orders(i)%amplitudes(a)
          self%res%el(self%mesh_el(i))%te_order = a(1:, 1)
          self%res%el(self%mesh_el(i))%force_order = a(1:, 2)
          self%res%el(self%mesh_el(i))%force_mean = a(0, 2)
-         associate (m => self%res%el(self%mesh_el(i)))   ! rattle index: impacts a mesh cycle (D-100)
+         associate (m => self%res%el(self%mesh_el(i)))   ! rattle index: impacts a mesh cycle (D-105)
             if (self%orders(i)%cycles() > 0.0_wp) m%rattle_impacts = real(m%impacts, wp)/self%orders(i)%cycles()
          end associate
       end do
@@ -305,7 +305,7 @@ contains
    end subroutine obs_finish
 
    !> The output sample at t_out (the state at t, t >= t_metrics) into the gear meshes'
-   !> order trackers (D-99): each mesh's TE, mesh force and its driver's speed, from the
+   !> order trackers (D-104): each mesh's TE, mesh force and its driver's speed, from the
    !> sample buffer when it is whole, else from the model's workspace at t (its
    !> displacements are in the buffer: the observer's short way), else filled.
    module subroutine obs_feed_orders(self, model, t_out, t, y)
@@ -359,7 +359,7 @@ contains
       end do
    end subroutine load_sharing
 
-   !> The dynamic factor of each gear mesh (D-98): Kv = F_dyn / |F_s|, F_s the static mesh
+   !> The dynamic factor of each gear mesh (D-103): Kv = F_dyn / |F_s|, F_s the static mesh
    !> force of largest magnitude over a mesh cycle (qs, trainsim_quasi_static), F_dyn
    !> the largest mesh force of the metrics window on the face F_s presses (force_max
    !> for F_s > 0, -force_min for F_s < 0). With the static figures into m. 0 where no

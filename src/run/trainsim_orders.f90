@@ -1,4 +1,4 @@
-!> Amplitudes of signals at the orders of a rotation (issue 26 item 5, D-99): for a
+!> Amplitudes of signals at the orders of a rotation (issue 26 item 5, D-104): for a
 !> gear mesh, its transmission error and mesh force at mesh orders 0..n_orders
 !> (order 1 = once per tooth of the driver: the phase phi = N theta_driver).
 !>
@@ -56,7 +56,7 @@ contains
 
    !> The sample (t, w, x): time, phase rate (rad/s of the order-1 phase), signal values.
    !> Real arithmetic: cos k phi and sin k phi by the Chebyshev recurrence from one
-   !> cos/sin (D-99).
+   !> cos/sin (D-104).
    pure subroutine ot_push(self, t, w, x)
       class(order_tracker_t), intent(inout) :: self
       real(wp), intent(in) :: t, w, x(n_order_signals)

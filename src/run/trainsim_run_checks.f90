@@ -365,7 +365,7 @@ contains
          real(wp), intent(out) :: dt_lim
          real(wp) :: bound
          ! on the model itself, not a copy: the bound re-initialises its modes, as every
-         ! run and session does again before its first step (D-98, startup3)
+         ! run and session does again before its first step (D-107, startup3)
          call rk4_dt_quick(model, state, dt_lim, bound)
       end subroutine quick_limit
       subroutine limit_of(state, dt_lim, f, z)

@@ -113,7 +113,7 @@ contains
          if (allocated(err)) return
       end if
       t = model%run%t_start
-      call static_reference(model, obs%qs)   ! each gear mesh's static force and TE, for Kv (D-98)
+      call static_reference(model, obs%qs)   ! each gear mesh's static force and TE, for Kv (D-103)
       call model%initial_state(y)
       call model%init_modes(t, y)
       obs%refine_peaks = .not. is_fixed_step(model%run%integrator)
