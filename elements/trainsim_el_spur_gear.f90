@@ -30,7 +30,7 @@ module trainsim_el_spur_gear
    use trainsim_clearance_element, only: clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hg_none, hf_none
    use trainsim_excited_mesh, only: excited_mesh_t, em_torques, em_torques_dissipation, em_dissipation, &
-      em_torque_jacobian, configure_mesh_excitation
+      em_torque_jacobian, em_status, configure_mesh_excitation
    use trainsim_mesh_excitation, only: model_name
    use trainsim_tooth_friction, only: tooth_friction_t
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
@@ -445,11 +445,7 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: disp, force
       integer, intent(out) :: contact, pairs
-      real(wp) :: a, va
-      call self%shift(thl, wl, a, va)
-      disp = self%cl%delta(thl, thr)
-      force = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
-      contact = self%cl%mode
+      call em_status(self, thl, wl, thr, wr, disp, force, contact, pairs)
       pairs = self%pairs
    end subroutine spur_status
 

@@ -155,6 +155,26 @@ contains
       res%maps = pm%n_evals - n0
    end subroutine shoot
 
+   !> Newton's verdict at step it with the residual r (of the state scale): r joins
+   !> res%history; converged when r <= opt%tol, the budget spent after opt%max_newton steps.
+   logical function newton_done(r, it, opt, res) result(done)
+      real(wp), intent(in) :: r
+      integer, intent(in) :: it
+      type(shoot_options_t), intent(in) :: opt
+      type(shoot_result_t), intent(inout) :: res
+      res%history = [res%history, r]
+      done = .true.
+      if (r <= opt%tol) then
+         res%status = shoot_converged
+      else if (it > opt%max_newton) then
+         res%status = shoot_budget
+         res%message = 'the Newton budget of '//str(opt%max_newton)//' steps was spent at a residual of '// &
+                       str(r, 3)//' of the state scale (tolerance '//str(opt%tol, 3)//')'
+      else
+         done = .false.
+      end if
+   end function newton_done
+
    !> Newton on P(x) - x from x (at pm's t0).
    subroutine newton(pm, opt, x_start, res, err, monodromy)
       class(period_map_t), intent(inout) :: pm
@@ -177,17 +197,7 @@ contains
       g = px - x
       r = maxval(abs(g)/res%scale)
       do it = 1, opt%max_newton + 1
-         res%history = [res%history, r]
-         if (r <= opt%tol) then
-            res%status = shoot_converged
-            exit
-         end if
-         if (it > opt%max_newton) then
-            res%status = shoot_budget
-            res%message = 'the Newton budget of '//str(opt%max_newton)//' steps was spent at a residual of '// &
-                          str(r, 3)//' of the state scale (tolerance '//str(opt%tol, 3)//')'
-            exit
-         end if
+         if (newton_done(r, it, opt, res)) exit
          call jacobian(x, px, res%m, err)
          if (allocated(err)) return
          a = res%m
@@ -287,17 +297,7 @@ contains
       if (allocated(err)) return
       r = maxval(abs(rr)/spread(res%scale, 2, ns))
       do it = 1, opt%max_newton + 1
-         res%history = [res%history, r]
-         if (r <= opt%tol) then
-            res%status = shoot_converged
-            exit
-         end if
-         if (it > opt%max_newton) then
-            res%status = shoot_budget
-            res%message = 'the Newton budget of '//str(opt%max_newton)//' steps was spent at a residual of '// &
-                          str(r, 3)//' of the state scale (tolerance '//str(opt%tol, 3)//')'
-            exit
-         end if
+         if (newton_done(r, it, opt, res)) exit
          call jacobians(x, phi, err)
          if (allocated(err)) return
          a = 0.0_wp
