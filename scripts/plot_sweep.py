@@ -216,7 +216,7 @@ def main(argv=None, prog=None):
         groups = groups_of(d)
         if d["runup"]:
             r = d["runup"]
-            name = (label + ", " if len(files) > 1 else "") + \
+            name = label if a.label and i < len(a.label) else \
                 f"run-up {float(r['from']):g} -> {float(r['to']):g} at {float(r['rate']):g} /s per s, " \
                 f"{r['block_cycles']} cycles a point"
             ax.plot(d["x"] * kx, d["y"] * ky, "-", lw=1.4, color=f"C{curve % 10}", label=name, gid="curve")
