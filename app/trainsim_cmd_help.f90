@@ -114,23 +114,6 @@ contains
             '  --stiffest  = --closed --zone two-pair: the stiffest state a run can reach', &
             '  -h, --help  this text', '', &
             'exit status: 0 success, 2 bad input or file'
-      case ('runup')
-         write (unit, '(a)') 'usage: trainsim runup DECK [--from F1 --to F2 --rate R] [--mesh ID] [--settle N] [--cycles M]', &
-            '                      [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
-            'A run-up: the gear mesh''s driver held at F1 teeth/s for N mesh cycles, then its prescribed', &
-            'speeds on a linear ramp to F2 at R teeth/s^2; its transmission error and mesh force tracked at', &
-            'mesh orders 0..4 over blocks of M whole mesh cycles, one point per block against the block''s', &
-            'mesh frequency, into a file in the sweep file''s layout (default DECK_runup.h5): plot_sweep.py', &
-            'draws it, beside a sweep (docs/sweeps.md, "Run-up"). The deck''s &runup group gives the same', &
-            'keys (mesh, from, to, rate, settle_cycles, block_cycles); the options win.', '', &
-            '  --from F1, --to F2 the range, teeth/s (> 0; F2 < F1: a run-down)', &
-            '  --rate R           |df/dt|, teeth/s^2 (> 0)', &
-            '  --mesh ID          the gear mesh (default: the first)', &
-            '  --settle N         mesh cycles at F1 before the ramp (default 100)', &
-            '  --cycles M         mesh cycles per block (default 20)', &
-            '  -o FILE            the run-up file', &
-            '  -h, --help         this text', '', &
-            'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file'
       case ('periodic')
          write (unit, '(a)') 'usage: trainsim periodic DECK [--period-count K] [--period T] [--segments M] [--transient N]', &
             '                         [--tol TOL] [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &

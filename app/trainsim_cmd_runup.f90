@@ -18,7 +18,6 @@ module trainsim_cmd_runup
    use trainsim_runup_file, only: runup_file_info_t, write_runup_file
    use trainsim_interrupt, only: install_interrupt_handlers
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
-   use trainsim_cmd_help, only: command_usage
    implicit none
    private
 
@@ -56,7 +55,7 @@ contains
       do while (i <= nargs)
          select case (arg(i))
          case ('-h', '--help')
-            call command_usage('runup', output_unit)
+            call runup_usage(output_unit)
             call quit(0)
          case ('-o', '--output')
             out = text_value(i)
@@ -216,6 +215,27 @@ contains
          call fail(error_t(g%where('block_cycles')//': error: block_cycles must be >= 1, got '// &
                            str(spec%block_cycles), err_input))
    end subroutine read_runup_group
+
+   !> trainsim runup --help.
+   subroutine runup_usage(unit)
+      integer, intent(in) :: unit
+      write (unit, '(a)') 'usage: trainsim runup DECK [--from F1 --to F2 --rate R] [--mesh ID] [--settle N] [--cycles M]', &
+         '                      [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
+         'A run-up: the gear mesh''s driver held at F1 teeth/s for N mesh cycles, then its prescribed', &
+         'speeds on a linear ramp to F2 at R teeth/s^2; its transmission error and mesh force tracked at', &
+         'mesh orders 0..4 over blocks of M whole mesh cycles, one point per block against the block''s', &
+         'mesh frequency, into a file in the sweep file''s layout (default DECK_runup.h5): plot_sweep.py', &
+         'draws it, beside a sweep (docs/sweeps.md, "Run-up"). The deck''s &runup group gives the same', &
+         'keys (mesh, from, to, rate, settle_cycles, block_cycles); the options win.', '', &
+         '  --from F1, --to F2 the range, teeth/s (> 0; F2 < F1: a run-down)', &
+         '  --rate R           |df/dt|, teeth/s^2 (> 0)', &
+         '  --mesh ID          the gear mesh (default: the first)', &
+         '  --settle N         mesh cycles at F1 before the ramp (default 100)', &
+         '  --cycles M         mesh cycles per block (default 20)', &
+         '  -o FILE            the run-up file', &
+         '  -h, --help         this text', '', &
+         'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file'
+   end subroutine runup_usage
 
    !> Default run-up file: the deck's base name with `_runup.h5`, in the current directory.
    function default_path(path) result(p)
