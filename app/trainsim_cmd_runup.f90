@@ -12,6 +12,7 @@ module trainsim_cmd_runup
    use trainsim_model, only: model_t
    use trainsim_overrides, only: split_sweep_groups, describe_overrides
    use trainsim_prepare, only: prepare_model_in_place
+   use trainsim_sweep, only: default_sweep_path
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
    use trainsim_runup, only: runup_spec_t, runup_sink_t, prepare_runup, runup_mesh
@@ -237,14 +238,11 @@ contains
          'exit status: 0 success, 1 the run failed (numerics), 2 bad input or file'
    end subroutine runup_usage
 
-   !> Default run-up file: the deck's base name with `_runup.h5`, in the current directory.
+   !> Default run-up file: the deck's base name with `_runup.h5` (as a sweep's, `_sweep.h5`).
    function default_path(path) result(p)
       character(len=*), intent(in) :: path
       character(len=:), allocatable :: p
-      integer :: i
-      p = path(index(path, '/', back=.true.) + 1:)
-      i = index(p, '.', back=.true.)
-      if (i > 1) p = p(1:i - 1)
-      p = p//'_runup.h5'
+      p = default_sweep_path(path)
+      p = p(1:len(p) - len('_sweep.h5'))//'_runup.h5'
    end function default_path
 end module trainsim_cmd_runup
