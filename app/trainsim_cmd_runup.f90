@@ -5,8 +5,8 @@ module trainsim_cmd_runup
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
    use trainsim_kinds, only: wp, two_pi
    use trainsim_quasi_static, only: mesh_period_angle
-   use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: str, string_t
+   use trainsim_error, only: error_t, err_input
+   use trainsim_strings, only: str
    use trainsim_version, only: version_full
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_model, only: model_t
@@ -26,7 +26,7 @@ module trainsim_cmd_runup
 
    !> What names each value in a message: the &runup key's place or the option.
    type :: places_t
-      character(len=:), allocatable :: mesh, from, to, rate, settle, cycles
+      character(len=:), allocatable :: mesh, from, to, rate
    end type places_t
 
 contains
