@@ -429,7 +429,7 @@ contains
          if (m%n_ranks > 1) call m%service()
          if (m%n_ready < m%n_ranks - 1) then
             ! every worker's "ready" is answered before rank 0 takes a run of its own, and
-            ! rank 0 takes one right after the last (D-109)
+            ! rank 0 takes one right after the last (D-110)
             rc = c_usleep(250_c_int)
             cycle
          end if

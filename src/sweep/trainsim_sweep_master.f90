@@ -208,7 +208,7 @@ contains
          if (.not. allocated(self%err)) irun = self%take(rec%irun)
          call comm_send_index(src, irun)
          if (irun == 0) self%stopped = self%stopped + 1
-         ! the last worker's first request answered: rank 0 takes a run before any more (D-109)
+         ! the last worker's first request answered: rank 0 takes a run before any more (D-110)
          if (rec%irun == 0 .and. self%n_ready == self%n_ranks - 1 .and. .not. self%own_taken) exit
       end do
    end subroutine master_service

@@ -6,7 +6,7 @@
 cases:
   mpi_matches_serial  mpirun -np 2 gives metrics bit-identical to the serial sweep, and both
                       ranks made runs (rank 0 answers the worker's first request with a run,
-                      then takes one of its own before it answers another: D-109, so this
+                      then takes one of its own before it answers another: D-110, so this
                       holds whatever the timing) (exit 77 = skipped when mpirun is missing
                       or trainsim was built without MPI)
   resume_after_kill   kill -9 part-way, then the same command: every run present exactly
