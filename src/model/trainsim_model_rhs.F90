@@ -11,6 +11,7 @@ submodule (trainsim_model) trainsim_model_rhs
    use trainsim_model_kernels, only: spring, hot_torques
    use trainsim_ports, only: port_torques_at, general_torques
    use trainsim_element, only: max_ports
+   use trainsim_kinds, only: i8
    implicit none
 
 contains
