@@ -251,11 +251,11 @@ contains
 #define SE_COL b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c)
 #define SE_STORED self%ws_energy, self%ws_stored, self%ws_elastic
          if (track .and. b%col > 0) then
-            call step_end_energy_col(SE_HEAD, self%fam%pw, SE_WS, SE_COL, SE_STORED)
+            call step_end_energy_col(SE_HEAD, self%fam%pw, SE_WS, SE_STORED, SE_COL)
          else if (track) then
             call step_end_energy(SE_HEAD, self%fam%pw, SE_WS, SE_STORED)
          else if (b%col > 0) then
-            call step_end_plain_col(SE_HEAD, SE_WS, SE_COL, SE_STORED)
+            call step_end_plain_col(SE_HEAD, SE_WS, SE_STORED, SE_COL)
          else
             call step_end_plain(SE_HEAD, SE_WS, SE_STORED)
          end if
