@@ -11,6 +11,7 @@ submodule (trainsim_model) trainsim_model_rhs
    use trainsim_model_kernels, only: spring, hot_torques
    use trainsim_ports, only: port_torques_at, general_torques
    use trainsim_element, only: max_ports
+   use trainsim_kinds, only: i8
    implicit none
 
 contains
@@ -243,19 +244,25 @@ contains
       self%ws_energy = step_end .and. track .and. self%n_cold == 0
       c = max(self%blk%col, 1)
       associate (b => self%blk)
-         if (track) then
-            call step_end_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, &
-                                 self%el_torque, self%theta, self%omega, self%fam%pw, &
-                                 self%torque, self%el_disp, self%el_force, self%el_pe, b%disp(:, c), b%force(:, c), &
-                                 b%torque(:, c), b%omega(:, c), b%col > 0, self%ws_energy, self%ws_stored, &
-                                 self%ws_elastic)
+         ! (the kernel's arguments but the element powers, and the workspace's
+         ! and the column's; the column is written by the _col variants, D-38)
+#define SE_HEAD self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, self%theta, self%omega
+#define SE_WS self%torque, self%el_disp, self%el_force, self%el_pe
+#define SE_COL b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c)
+#define SE_STORED self%ws_energy, self%ws_stored, self%ws_elastic
+         if (track .and. b%col > 0) then
+            call step_end_energy_col(SE_HEAD, self%fam%pw, SE_WS, SE_STORED, SE_COL)
+         else if (track) then
+            call step_end_energy(SE_HEAD, self%fam%pw, SE_WS, SE_STORED)
+         else if (b%col > 0) then
+            call step_end_plain_col(SE_HEAD, SE_WS, SE_STORED, SE_COL)
          else
-            call step_end_plain(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, &
-                                self%el_torque, self%theta, self%omega, &
-                                self%torque, self%el_disp, self%el_force, self%el_pe, b%disp(:, c), b%force(:, c), &
-                                b%torque(:, c), b%omega(:, c), b%col > 0, self%ws_energy, self%ws_stored, &
-                                self%ws_elastic)
+            call step_end_plain(SE_HEAD, SE_WS, SE_STORED)
          end if
+#undef SE_HEAD
+#undef SE_WS
+#undef SE_COL
+#undef SE_STORED
          if (step_end .and. b%col > 0) then
             ! the step's end in the block's column (D-38)
             b%t(c) = t
@@ -268,14 +275,27 @@ contains
          end if
       end associate
    contains
-      ! the step-end kernel, energy off and on (internal: inlined here)
+      ! the step-end kernel, energy off and on, without and with the block's
+      ! column (STEP_END 1, 2; internal: each inlined at its one call)
+#define STEP_END 1
 #define KERNEL step_end_plain
 #define ENERGY 0
-#define STEP_END 1
 #include "trainsim_model_stage.inc"
 #undef KERNEL
 #undef ENERGY
 #define KERNEL step_end_energy
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+#define STEP_END 2
+#define KERNEL step_end_plain_col
+#define ENERGY 0
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#define KERNEL step_end_energy_col
 #define ENERGY 1
 #include "trainsim_model_stage.inc"
 #undef KERNEL
