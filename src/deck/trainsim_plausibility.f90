@@ -54,18 +54,67 @@ contains
 
    !> Check `model` (built from `deck`): the first impossible value is `err`; the
    !> implausible ones are appended to `warnings`.
-   subroutine check_plausibility(deck, model, warnings, err)
+   subroutine check_plausibility(deck, model, warnings, err, ep, np)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(in) :: model
       type(string_t), allocatable, intent(inout) :: warnings(:)
       type(error_t), allocatable, intent(out) :: err
+      !> the first elements' and nodes' params() as the builder asked them (moved
+      !> in; the rest, an element added after them, asked here: D-109)
+      type(param_list_t), allocatable, intent(inout), optional :: ep(:), np(:)
       type(ctx_t) :: c
 
       if (.not. allocated(warnings)) allocate (warnings(0))
       call move_alloc(warnings, c%warnings)
+      if (present(ep)) then
+         if (allocated(ep)) call move_alloc(ep, c%ep)
+      end if
+      if (present(np)) then
+         if (allocated(np)) call move_alloc(np, c%np)
+      end if
       call run_checks(deck, model, c, err)
       call move_alloc(c%warnings, warnings)
    end subroutine check_plausibility
+
+   !> c%ep and c%np for every element and node: those the builder gave kept (moved,
+   !> not copied), params() asked for the others.
+   subroutine complete_params(model, c)
+      type(model_t), intent(in) :: model
+      type(ctx_t), intent(inout) :: c
+      type(param_list_t), allocatable :: p(:)
+      integer :: i, n0
+      n0 = 0
+      if (allocated(c%ep)) n0 = min(size(c%ep), size(model%elements))
+      if (n0 < size(model%elements) .or. .not. allocated(c%ep)) then
+         allocate (p(size(model%elements)))
+         do i = 1, n0
+            call move_list(c%ep(i), p(i))
+         end do
+         do i = n0 + 1, size(model%elements)
+            p(i) = model%elements(i)%e%params()
+         end do
+         call move_alloc(p, c%ep)
+      end if
+      n0 = 0
+      if (allocated(c%np)) n0 = min(size(c%np), size(model%nodes))
+      if (n0 < size(model%nodes) .or. .not. allocated(c%np)) then
+         allocate (p(size(model%nodes)))
+         do i = 1, n0
+            call move_list(c%np(i), p(i))
+         end do
+         do i = n0 + 1, size(model%nodes)
+            p(i) = model%nodes(i)%n%params()
+         end do
+         call move_alloc(p, c%np)
+      end if
+   contains
+      subroutine move_list(a, b)
+         type(param_list_t), intent(inout) :: a, b
+         if (allocated(a%names)) call move_alloc(a%names, b%names)
+         if (allocated(a%values)) call move_alloc(a%values, b%values)
+         if (allocated(a%words)) call move_alloc(a%words, b%words)
+      end subroutine move_list
+   end subroutine complete_params
 
    !> The rules in order: each element, each motor, each node's inertia, the topology.
    subroutine run_checks(deck, model, c, err)
@@ -78,13 +127,7 @@ contains
       c%to_m = model%units%to_inch*0.0254_wp
       call group_indices(deck, 'node', size(model%nodes), c%node_group)
       call group_indices(deck, 'element', size(model%elements), c%element_group)
-      allocate (c%ep(size(model%elements)), c%np(size(model%nodes)))
-      do i = 1, size(model%elements)
-         c%ep(i) = model%elements(i)%e%params()
-      end do
-      do i = 1, size(model%nodes)
-         c%np(i) = model%nodes(i)%n%params()
-      end do
+      call complete_params(model, c)
       do i = 1, size(model%elements)
          call check_element(deck, model, c, i, c%ep(i), err); if (allocated(err)) return
       end do
