@@ -5,7 +5,7 @@ module trainsim_strings
    implicit none
    private
 
-   public :: string_t, to_lower, str, join, invalid_text_byte, edit_distance, has_cr, same_key
+   public :: string_t, to_lower, str, join, invalid_text_byte, edit_distance, has_cr
 
    !> A variable-length string, for arrays of names.
    type :: string_t
@@ -197,26 +197,6 @@ contains
       end do
       dist = d(m, n)
    end function edit_distance
-
-   !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
-   !> without a lowered copy of `key` (an allocation a look-up, D-90: deck keys,
-   !> registry type names).
-   pure logical function same_key(stored, key) result(yes)
-      character(len=*), intent(in) :: stored, key
-      character(len=1) :: a, b
-      integer :: i, c
-      yes = .false.
-      do i = 1, max(len(stored), len(key))
-         a = ' '
-         b = ' '
-         if (i <= len(stored)) a = stored(i:i)
-         if (i <= len(key)) b = key(i:i)
-         c = iachar(b)
-         if (c >= iachar('A') .and. c <= iachar('Z')) b = achar(c + 32)
-         if (a /= b) return
-      end do
-      yes = .true.
-   end function same_key
 
    !> s holds a CR.
    pure logical function has_cr(s)

@@ -36,7 +36,6 @@ module trainsim_builder
 
 contains
 
-
    !> Build a model from a parsed deck. The deck's text moves into the model
    !> (`deck%text` is deallocated afterwards).
    subroutine build_model(deck, model, err)
@@ -314,7 +313,6 @@ contains
       end subroutine refuse
    end subroutine check_run_times
 
-
    subroutine read_nodes(deck, model, node_ids, np, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
@@ -336,7 +334,8 @@ contains
          if (deck%groups(i)%name /= 'node') cycle
          k = k + 1
          associate (g => deck%groups(i))
-            call g%get_string('id', id, err, default='n'//str(k)); if (allocated(err)) return
+            call g%get_string('id', id, err, default=''); if (allocated(err)) return
+            if (.not. g%holds('id')) id = 'n'//str(k)   ! (the default built only when it is used)
             call g%get_string('type', tname, err); if (allocated(err)) return
             call node_ids%insert(id, k, j)
             if (j /= 0) then
@@ -378,7 +377,8 @@ contains
          if (deck%groups(i)%name /= 'element') cycle
          k = k + 1
          associate (g => deck%groups(i))
-            call g%get_string('id', id, err, default='e'//str(k)); if (allocated(err)) return
+            call g%get_string('id', id, err, default=''); if (allocated(err)) return
+            if (.not. g%holds('id')) id = 'e'//str(k)   ! (the default built only when it is used)
             call g%get_string('type', tname, err); if (allocated(err)) return
             call element_ids%insert(id, k, j)
             if (j /= 0) then

@@ -5,7 +5,7 @@
 module trainsim_deck_group
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: string_t, to_lower, str, join, edit_distance, same_key
+   use trainsim_strings, only: string_t, to_lower, str, join, edit_distance
    use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place
    implicit none
    private
@@ -521,6 +521,25 @@ contains
          p = q + 1
       end do
    end function was_queried
+
+   !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
+   !> without a lowered copy of `key` (an allocation a look-up, D-90).
+   pure logical function same_key(stored, key) result(yes)
+      character(len=*), intent(in) :: stored, key
+      character(len=1) :: a, b
+      integer :: i, c
+      yes = .false.
+      do i = 1, max(len(stored), len(key))
+         a = ' '
+         b = ' '
+         if (i <= len(stored)) a = stored(i:i)
+         if (i <= len(key)) b = key(i:i)
+         c = iachar(b)
+         if (c >= iachar('A') .and. c <= iachar('Z')) b = achar(c + 32)
+         if (a /= b) return
+      end do
+      yes = .true.
+   end function same_key
 
    !> The queried keys as a list, each once, in order of first query (for messages).
    function queried_keys(self) result(keys)

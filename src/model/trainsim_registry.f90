@@ -9,7 +9,8 @@
 !> Adding an element = one new file in elements/ (with its `new_<type>`
 !> factory) + one row in `element_registry` (docs/plugins.md).
 module trainsim_registry
-   use trainsim_strings, only: string_t, same_key
+   use trainsim_strings, only: string_t
+   use trainsim_deck_group, only: same_key   ! (case-insensitive, without a lowered copy)
    use trainsim_node, only: node_t
    use trainsim_element, only: element_t
    use trainsim_node_inertia, only: new_inertia_node
