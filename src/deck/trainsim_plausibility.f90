@@ -81,39 +81,36 @@ contains
    subroutine complete_params(model, c)
       type(model_t), intent(in) :: model
       type(ctx_t), intent(inout) :: c
-      type(param_list_t), allocatable :: p(:)
       integer :: i, n0
-      n0 = 0
-      if (allocated(c%ep)) n0 = min(size(c%ep), size(model%elements))
-      if (n0 < size(model%elements) .or. .not. allocated(c%ep)) then
-         allocate (p(size(model%elements)))
-         do i = 1, n0
-            call move_list(c%ep(i), p(i))
-         end do
-         do i = n0 + 1, size(model%elements)
-            p(i) = model%elements(i)%e%params()
-         end do
-         call move_alloc(p, c%ep)
-      end if
-      n0 = 0
-      if (allocated(c%np)) n0 = min(size(c%np), size(model%nodes))
-      if (n0 < size(model%nodes) .or. .not. allocated(c%np)) then
-         allocate (p(size(model%nodes)))
-         do i = 1, n0
-            call move_list(c%np(i), p(i))
-         end do
-         do i = n0 + 1, size(model%nodes)
-            p(i) = model%nodes(i)%n%params()
-         end do
-         call move_alloc(p, c%np)
-      end if
+      call keep_first(c%ep, size(model%elements), n0)
+      do i = n0 + 1, size(model%elements)
+         c%ep(i) = model%elements(i)%e%params()
+      end do
+      call keep_first(c%np, size(model%nodes), n0)
+      do i = n0 + 1, size(model%nodes)
+         c%np(i) = model%nodes(i)%n%params()
+      end do
    contains
-      subroutine move_list(a, b)
-         type(param_list_t), intent(inout) :: a, b
-         if (allocated(a%names)) call move_alloc(a%names, b%names)
-         if (allocated(a%values)) call move_alloc(a%values, b%values)
-         if (allocated(a%words)) call move_alloc(a%words, b%words)
-      end subroutine move_list
+      !> `lists` of size n, its first n0 entries those it held (moved).
+      subroutine keep_first(lists, n, n0)
+         type(param_list_t), allocatable, intent(inout) :: lists(:)
+         integer, intent(in) :: n
+         integer, intent(out) :: n0
+         type(param_list_t), allocatable :: p(:)
+         integer :: j
+         n0 = 0
+         if (allocated(lists)) then
+            n0 = min(size(lists), n)
+            if (size(lists) == n) return
+         end if
+         allocate (p(n))
+         do j = 1, n0
+            if (allocated(lists(j)%names)) call move_alloc(lists(j)%names, p(j)%names)
+            if (allocated(lists(j)%values)) call move_alloc(lists(j)%values, p(j)%values)
+            if (allocated(lists(j)%words)) call move_alloc(lists(j)%words, p(j)%words)
+         end do
+         call move_alloc(p, lists)
+      end subroutine keep_first
    end subroutine complete_params
 
    !> The rules in order: each element, each motor, each node's inertia, the topology.

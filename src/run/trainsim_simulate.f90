@@ -89,10 +89,7 @@ contains
       logical, intent(in), optional :: keep_interrupted
       type(progress_t), intent(inout), optional :: progress
       logical, intent(in), optional :: step_checked   !< the caller ran check_fixed_step on this model (D-82)
-      !> the model's fast-path tables are those of its present parameters (its finalize
-      !> built them and nothing re-parameterised it since): the modes are set without
-      !> building them again (D-109)
-      logical, intent(in), optional :: tables_built
+      logical, intent(in), optional :: tables_built   !< its fast-path tables are its parameters' (D-109)
       type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
@@ -110,17 +107,14 @@ contains
          return
       end if
       integ%region_instants = .true.   ! advance_to works on the region alone at local event instants
-      checked = .false.
+      checked = .false.; fresh = .false.
       if (present(step_checked)) checked = step_checked
-      if (.not. checked) then
-         call check_fixed_step(model, err)
-         if (allocated(err)) return
-      end if
+      if (present(tables_built)) fresh = tables_built   ! (finalize's tables: not built again)
+      if (.not. checked) call check_fixed_step(model, err)
+      if (allocated(err)) return
       t = model%run%t_start
       call static_reference(model, obs%qs)   ! each gear mesh's static force and TE, for Kv (D-103)
       call model%initial_state(y)
-      fresh = .false.
-      if (present(tables_built)) fresh = tables_built
       call model%init_modes(t, y, tables=.not. fresh)
       obs%refine_peaks = .not. is_fixed_step(model%run%integrator)
       ! settling until periodic: the integrator and the loop run to the latest end the
