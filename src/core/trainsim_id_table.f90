@@ -55,7 +55,7 @@ contains
    end function table_get
 
    !> Room for `n` keys without a rehash as they go in (a table about to take
-   !> every node's or element's id: D-110).
+   !> every node's or element's id: D-114).
    subroutine table_reserve(self, n)
       class(id_table_t), intent(inout) :: self
       integer, intent(in) :: n

@@ -44,7 +44,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(id_table_t) :: node_ids   ! node id -> node index, for look-ups in O(1)
       type(string_t) :: groups(8)
-      type(param_list_t), allocatable :: np(:), ep(:)   ! params(), asked once for both checks (D-110)
+      type(param_list_t), allocatable :: np(:), ep(:)   ! params(), asked once for both checks (D-114)
       integer :: i
 
       ! (not an array constructor of string_t(...): gfortran 12 leaks their strings,
@@ -63,7 +63,7 @@ contains
       call mark_share_sets(deck, model)   ! each stage's sun meshes and ring meshes (D-96)
       call read_loads(deck, model, node_ids, err); if (allocated(err)) return
       call read_controllers(deck, model, node_ids, err); if (allocated(err)) return
-      ! &initial before finalize: its tables hold held nodes' angles and speeds (D-110)
+      ! &initial before finalize: its tables hold held nodes' angles and speeds (D-114)
       call read_initial(deck, model, node_ids, err); if (allocated(err)) return
       do i = 1, size(model%nodes)   ! a prescribed acceleration starts from the &initial speed
          if (model%speed_of(i) /= 0) model%speeds(model%speed_of(i))%w0 = model%nodes(i)%n%omega0

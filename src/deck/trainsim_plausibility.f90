@@ -60,7 +60,7 @@ contains
       type(string_t), allocatable, intent(inout) :: warnings(:)
       type(error_t), allocatable, intent(out) :: err
       !> the first elements' and nodes' params() as the builder asked them (moved
-      !> in; the rest, an element added after them, asked here: D-110)
+      !> in; the rest, an element added after them, asked here: D-114)
       type(param_list_t), allocatable, intent(inout), optional :: ep(:), np(:)
       type(ctx_t) :: c
 

@@ -89,7 +89,7 @@ contains
       logical, intent(in), optional :: keep_interrupted
       type(progress_t), intent(inout), optional :: progress
       logical, intent(in), optional :: step_checked   !< the caller ran check_fixed_step on this model (D-82)
-      logical, intent(in), optional :: tables_built   !< its fast-path tables are its parameters' (D-110)
+      logical, intent(in), optional :: tables_built   !< its fast-path tables are its parameters' (D-114)
       type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
