@@ -82,9 +82,11 @@ contains
       if (len(model%run%output) > 0) then
          h5%path = model%run%output
          h5%compression = model%run%compression
-         call simulate(model, h5, res, err, keep_interrupted=.true., progress=progress, step_checked=.true.)
+         call simulate(model, h5, res, err, keep_interrupted=.true., progress=progress, step_checked=.true., &
+                       tables_built=.true.)
       else
-         call simulate(model, none, res, err, progress=progress, step_checked=.true.)
+         call simulate(model, none, res, err, progress=progress, step_checked=.true., &
+                       tables_built=.true.)
       end if
       if (allocated(err)) then
          if (err%code == err_interrupted) then

@@ -22,6 +22,7 @@ module trainsim_id_table
       procedure :: insert => table_insert
       procedure :: get => table_get
       procedure :: count => table_count
+      procedure :: reserve => table_reserve
    end type id_table_t
 
 contains
@@ -52,6 +53,22 @@ contains
       if (.not. allocated(self%vals)) return
       call probe(self, key, slot, val)
    end function table_get
+
+   !> Room for `n` keys without a rehash as they go in (a table about to take
+   !> every node's or element's id: D-114).
+   subroutine table_reserve(self, n)
+      class(id_table_t), intent(inout) :: self
+      integer, intent(in) :: n
+      integer :: cap
+      cap = 64
+      do while (cap < 2*n + 2)
+         cap = 2*cap
+      end do
+      if (allocated(self%vals)) then
+         if (size(self%vals) >= cap) return
+      end if
+      call rehash(self, cap)
+   end subroutine table_reserve
 
    !> Number of keys stored.
    pure integer function table_count(self) result(n)

@@ -15,6 +15,7 @@ module trainsim_builder
    use trainsim_element, only: element_t, max_ports
    use trainsim_integrator_registry, only: integrator_names
    use trainsim_id_table, only: id_table_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_plausibility, only: check_plausibility
    use trainsim_controller_deck, only: read_controllers, link_controllers
    use trainsim_planetary_deck, only: expand_planetary, mark_share_sets
@@ -35,7 +36,6 @@ module trainsim_builder
 
 contains
 
-
    !> Build a model from a parsed deck. The deck's text moves into the model
    !> (`deck%text` is deallocated afterwards).
    subroutine build_model(deck, model, err)
@@ -44,6 +44,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(id_table_t) :: node_ids   ! node id -> node index, for look-ups in O(1)
       type(string_t) :: groups(8)
+      type(param_list_t), allocatable :: np(:), ep(:)   ! params(), asked once for both checks (D-114)
       integer :: i
 
       ! (not an array constructor of string_t(...): gfortran 12 leaks their strings,
@@ -57,17 +58,18 @@ contains
       call move_alloc(deck%text, model%deck_text)   ! not copied: a deck may be 100 MB
       call read_run(deck, model, err); if (allocated(err)) return
       call expand_planetary(deck, model%units, err); if (allocated(err)) return   ! into &node, &element (D-93)
-      call read_nodes(deck, model, node_ids, err); if (allocated(err)) return
-      call read_elements(deck, model, node_ids, err); if (allocated(err)) return
+      call read_nodes(deck, model, node_ids, np, err); if (allocated(err)) return
+      call read_elements(deck, model, node_ids, ep, err); if (allocated(err)) return
       call mark_share_sets(deck, model)   ! each stage's sun meshes and ring meshes (D-96)
       call read_loads(deck, model, node_ids, err); if (allocated(err)) return
       call read_controllers(deck, model, node_ids, err); if (allocated(err)) return
-      call model%finalize()
+      ! &initial before finalize: its tables hold held nodes' angles and speeds (D-114)
       call read_initial(deck, model, node_ids, err); if (allocated(err)) return
-      call link_controllers(model)
       do i = 1, size(model%nodes)   ! a prescribed acceleration starts from the &initial speed
          if (model%speed_of(i) /= 0) model%speeds(model%speed_of(i))%w0 = model%nodes(i)%n%omega0
       end do
+      call model%finalize()
+      call link_controllers(model)   ! (the sensors' state offsets: finalize's)
       do i = 1, size(deck%groups)
          associate (g => deck%groups(i))
             if (g%name == 'run') call g%check_unused(err, 'the &run group')
@@ -77,7 +79,7 @@ contains
          if (allocated(err)) return
       end do
       allocate (model%warnings(0))
-      call check_plausibility(deck, model, model%warnings, err)
+      call check_plausibility(deck, model, model%warnings, err, ep, np)
    end subroutine build_model
 
    subroutine read_run(deck, model, err)
@@ -311,27 +313,29 @@ contains
       end subroutine refuse
    end subroutine check_run_times
 
-
-   subroutine read_nodes(deck, model, node_ids, err)
+   subroutine read_nodes(deck, model, node_ids, np, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
       type(id_table_t), intent(inout) :: node_ids
+      type(param_list_t), allocatable, intent(out) :: np(:)
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j
       character(len=:), allocatable :: id, tname
 
-      allocate (model%nodes(deck%count_groups('node')))
+      allocate (model%nodes(deck%count_groups('node')), np(deck%count_groups('node')))
       if (size(model%nodes) == 0) then
          call fatal_error(err, deck%file//': error: the deck has no &node group (a train needs at least one node)', &
                           err_input)
          return
       end if
+      call node_ids%reserve(size(model%nodes))
       k = 0
       do i = 1, size(deck%groups)
          if (deck%groups(i)%name /= 'node') cycle
          k = k + 1
          associate (g => deck%groups(i))
-            call g%get_string('id', id, err, default='n'//str(k)); if (allocated(err)) return
+            call g%get_string('id', id, err, default=''); if (allocated(err)) return
+            if (.not. g%holds('id')) id = 'n'//str(k)   ! (the default built only when it is used)
             call g%get_string('type', tname, err); if (allocated(err)) return
             call node_ids%insert(id, k, j)
             if (j /= 0) then
@@ -348,29 +352,33 @@ contains
             model%nodes(k)%n%id = id
             model%nodes(k)%n%origin = g%where()
             call model%nodes(k)%n%configure(g, model%units, err); if (allocated(err)) return
-            call check_params(g, model%nodes(k)%n%params(), err); if (allocated(err)) return
+            np(k) = model%nodes(k)%n%params()
+            call check_params(g, np(k), err); if (allocated(err)) return
             call g%check_unused(err, "node type '"//model%nodes(k)%n%type_name//"'"); if (allocated(err)) return
          end associate
       end do
    end subroutine read_nodes
 
-   subroutine read_elements(deck, model, node_ids, err)
+   subroutine read_elements(deck, model, node_ids, ep, err)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(inout) :: model
       type(id_table_t), intent(in) :: node_ids
+      type(param_list_t), allocatable, intent(out) :: ep(:)
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j, nn
       character(len=:), allocatable :: id, tname, lid, rid, dl, dr
       type(id_table_t) :: element_ids
 
-      allocate (model%elements(deck%count_groups('element')))
+      allocate (model%elements(deck%count_groups('element')), ep(deck%count_groups('element')))
       nn = size(model%nodes)
+      call element_ids%reserve(size(model%elements))
       k = 0
       do i = 1, size(deck%groups)
          if (deck%groups(i)%name /= 'element') cycle
          k = k + 1
          associate (g => deck%groups(i))
-            call g%get_string('id', id, err, default='e'//str(k)); if (allocated(err)) return
+            call g%get_string('id', id, err, default=''); if (allocated(err)) return
+            if (.not. g%holds('id')) id = 'e'//str(k)   ! (the default built only when it is used)
             call g%get_string('type', tname, err); if (allocated(err)) return
             call element_ids%insert(id, k, j)
             if (j /= 0) then
@@ -387,17 +395,9 @@ contains
                e%id = id
                e%origin = g%where()
                ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1
-               if (k <= nn) then
-                  lid = model%nodes(k)%n%id
-               else
-                  lid = ''
-               end if
-               if (k + 1 <= nn) then
-                  rid = model%nodes(k + 1)%n%id
-               else
-                  rid = ''
-               end if
-               dl = lid; dr = rid
+               dl = ''; dr = ''
+               if (k <= nn) dl = model%nodes(k)%n%id
+               if (k + 1 <= nn) dr = model%nodes(k + 1)%n%id
                call g%get_string('left', lid, err, default=dl); if (allocated(err)) return
                call g%get_string('right', rid, err, default=dr); if (allocated(err)) return
                e%left = node_ids%get(lid)
@@ -421,7 +421,8 @@ contains
                end if
                call e%configure(g, model%units, err); if (allocated(err)) return
                call read_ports(g, e, node_ids, err); if (allocated(err)) return
-               call check_params(g, e%params(), err); if (allocated(err)) return
+               ep(k) = e%params()
+               call check_params(g, ep(k), err); if (allocated(err)) return
                call g%check_unused(err, "element type '"//e%type_name//"'"); if (allocated(err)) return
             end associate
          end associate

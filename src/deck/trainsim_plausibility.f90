@@ -54,18 +54,64 @@ contains
 
    !> Check `model` (built from `deck`): the first impossible value is `err`; the
    !> implausible ones are appended to `warnings`.
-   subroutine check_plausibility(deck, model, warnings, err)
+   subroutine check_plausibility(deck, model, warnings, err, ep, np)
       type(deck_t), intent(inout) :: deck
       type(model_t), intent(in) :: model
       type(string_t), allocatable, intent(inout) :: warnings(:)
       type(error_t), allocatable, intent(out) :: err
+      !> the first elements' and nodes' params() as the builder asked them (moved
+      !> in; the rest, an element added after them, asked here: D-114)
+      type(param_list_t), allocatable, intent(inout), optional :: ep(:), np(:)
       type(ctx_t) :: c
 
       if (.not. allocated(warnings)) allocate (warnings(0))
       call move_alloc(warnings, c%warnings)
+      if (present(ep)) then
+         if (allocated(ep)) call move_alloc(ep, c%ep)
+      end if
+      if (present(np)) then
+         if (allocated(np)) call move_alloc(np, c%np)
+      end if
       call run_checks(deck, model, c, err)
       call move_alloc(c%warnings, warnings)
    end subroutine check_plausibility
+
+   !> c%ep and c%np for every element and node: those the builder gave kept (moved,
+   !> not copied), params() asked for the others.
+   subroutine complete_params(model, c)
+      type(model_t), intent(in) :: model
+      type(ctx_t), intent(inout) :: c
+      integer :: i, n0
+      call keep_first(c%ep, size(model%elements), n0)
+      do i = n0 + 1, size(model%elements)
+         c%ep(i) = model%elements(i)%e%params()
+      end do
+      call keep_first(c%np, size(model%nodes), n0)
+      do i = n0 + 1, size(model%nodes)
+         c%np(i) = model%nodes(i)%n%params()
+      end do
+   contains
+      !> `lists` of size n, its first n0 entries those it held (moved).
+      subroutine keep_first(lists, n, n0)
+         type(param_list_t), allocatable, intent(inout) :: lists(:)
+         integer, intent(in) :: n
+         integer, intent(out) :: n0
+         type(param_list_t), allocatable :: p(:)
+         integer :: j
+         n0 = 0
+         if (allocated(lists)) then
+            n0 = min(size(lists), n)
+            if (size(lists) == n) return
+         end if
+         allocate (p(n))
+         do j = 1, n0
+            if (allocated(lists(j)%names)) call move_alloc(lists(j)%names, p(j)%names)
+            if (allocated(lists(j)%values)) call move_alloc(lists(j)%values, p(j)%values)
+            if (allocated(lists(j)%words)) call move_alloc(lists(j)%words, p(j)%words)
+         end do
+         call move_alloc(p, lists)
+      end subroutine keep_first
+   end subroutine complete_params
 
    !> The rules in order: each element, each motor, each node's inertia, the topology.
    subroutine run_checks(deck, model, c, err)
@@ -78,13 +124,7 @@ contains
       c%to_m = model%units%to_inch*0.0254_wp
       call group_indices(deck, 'node', size(model%nodes), c%node_group)
       call group_indices(deck, 'element', size(model%elements), c%element_group)
-      allocate (c%ep(size(model%elements)), c%np(size(model%nodes)))
-      do i = 1, size(model%elements)
-         c%ep(i) = model%elements(i)%e%params()
-      end do
-      do i = 1, size(model%nodes)
-         c%np(i) = model%nodes(i)%n%params()
-      end do
+      call complete_params(model, c)
       do i = 1, size(model%elements)
          call check_element(deck, model, c, i, c%ep(i), err); if (allocated(err)) return
       end do

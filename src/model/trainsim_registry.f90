@@ -9,7 +9,8 @@
 !> Adding an element = one new file in elements/ (with its `new_<type>`
 !> factory) + one row in `element_registry` (docs/plugins.md).
 module trainsim_registry
-   use trainsim_strings, only: string_t, to_lower
+   use trainsim_strings, only: string_t
+   use trainsim_deck_group, only: same_key   ! (case-insensitive, without a lowered copy)
    use trainsim_node, only: node_t
    use trainsim_element, only: element_t
    use trainsim_node_inertia, only: new_inertia_node
@@ -236,9 +237,9 @@ contains
       character(len=*), intent(in) :: given, name
       type(string_t), intent(in) :: aliases(:)
       integer :: j
-      matches = to_lower(given) == name
+      matches = same_key(name, given)   ! (no lowered copy of `given` a comparison)
       do j = 1, size(aliases)
-         matches = matches .or. to_lower(given) == aliases(j)%s
+         matches = matches .or. same_key(aliases(j)%s, given)
       end do
    end function matches
 

@@ -81,7 +81,7 @@ contains
    !> (result%stats%t_final: the time reached; result%t_sampled: the last
    !> output time written); `err` is still the interrupt. With `progress`, the
    !> driver reports to it once per output time or block of steps.
-   subroutine simulate(model, sink, result, err, keep_interrupted, progress, step_checked)
+   subroutine simulate(model, sink, result, err, keep_interrupted, progress, step_checked, tables_built)
       type(model_t), intent(inout), target :: model
       class(sink_t), intent(inout), target :: sink   ! the observer streams the event rows to it
       type(run_result_t), intent(out) :: result
@@ -89,6 +89,7 @@ contains
       logical, intent(in), optional :: keep_interrupted
       type(progress_t), intent(inout), optional :: progress
       logical, intent(in), optional :: step_checked   !< the caller ran check_fixed_step on this model (D-82)
+      logical, intent(in), optional :: tables_built   !< its fast-path tables are its parameters' (D-114)
       type(error_t), allocatable :: err_close
       type(observer_t) :: obs
       type(run_stats_t) :: stats
@@ -97,7 +98,7 @@ contains
       real(wp) :: t, t_end_deck
       integer(i8) :: c0, c1, rate
       type(settle_t) :: settle
-      logical :: checked
+      logical :: checked, fresh
 
       call system_clock(c0, rate)
       call make_integrator(model%run%integrator, integ)
@@ -106,16 +107,15 @@ contains
          return
       end if
       integ%region_instants = .true.   ! advance_to works on the region alone at local event instants
-      checked = .false.
+      checked = .false.; fresh = .false.
       if (present(step_checked)) checked = step_checked
-      if (.not. checked) then
-         call check_fixed_step(model, err)
-         if (allocated(err)) return
-      end if
+      if (present(tables_built)) fresh = tables_built   ! (finalize's tables: not built again)
+      if (.not. checked) call check_fixed_step(model, err)
+      if (allocated(err)) return
       t = model%run%t_start
       call static_reference(model, obs%qs)   ! each gear mesh's static force and TE, for Kv (D-103)
       call model%initial_state(y)
-      call model%init_modes(t, y)
+      call model%init_modes(t, y, tables=.not. fresh)
       obs%refine_peaks = .not. is_fixed_step(model%run%integrator)
       ! settling until periodic: the integrator and the loop run to the latest end the
       ! budget allows; the loop ends the run a measured window after the settling

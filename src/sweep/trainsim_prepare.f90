@@ -49,6 +49,8 @@ contains
       if (.not. allocated(err)) call build_model(deck, model, err)
       if (.not. allocated(err)) model%overrides = describe_overrides(ovs)
       if (.not. allocated(err)) call apply_derived(model, ovs, err)
+      ! (parameters set after finalize: its fast-path tables built again, D-114)
+      if (.not. allocated(err) .and. any(ovs(:)%derived)) call model%build_fast_path()
       if (.not. allocated(err)) call default_settle_period(model, err)
       if (.not. allocated(err) .and. model%run%preload) call apply_preload(model, info, err)
       if (present(preload)) preload = info
