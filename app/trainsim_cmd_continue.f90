@@ -20,6 +20,7 @@ module trainsim_cmd_continue
                                  branch_done
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: continue_usage
+   use trainsim_monodromy_map, only: monodromy_code
    implicit none
    private
 
@@ -35,7 +36,8 @@ module trainsim_cmd_continue
       procedure :: model_at => deck_model_at
    end type deck_problem_t
 
-   character(len=*), parameter :: kinds(0:3) = [character(len=15) :: '', 'fold', 'period-doubling', 'neimark-sacker']
+   character(len=*), parameter :: kinds(0:4) = [character(len=15) :: '', 'fold', 'period-doubling', 'neimark-sacker', &
+                                                 'grazing']
 
    type(deck_problem_t), save :: prob
    character(len=:), allocatable, save :: out_path
@@ -98,6 +100,12 @@ contains
          case ('--transient')
             opt%shoot%transient = nint(real_value(i))
             i = i + 1
+         case ('--monodromy')
+            opt%monodromy = monodromy_code(text_value(i))
+            i = i + 1
+            if (opt%monodromy < 0) call refuse("option --monodromy needs auto, saltation or fd, got '"//arg(i)//"'")
+         case ('--smooth')
+            opt%nonsmooth = .false.
          case ('--set')
             call add_set(i)
             i = i + 1
@@ -133,7 +141,7 @@ contains
       end if
       if (allocated(err)) call fail(err)
       write (output_unit, '(a)') str(size(br%pts))//' points, '//str(br%maps)//' period maps, '//str(br%rejected)// &
-         ' steps refused'
+         ' steps refused, '//str(br%passes)//' variational passes'
       if (br%status /= branch_done) then
          write (error_unit, '(a)') 'trainsim: continue: the branch stopped early (status '//str(br%status)//'): '// &
             br%message
@@ -219,7 +227,7 @@ contains
          write (u, '(a)') '# status '//str(br%status)//' '//br%message
       else
          associate (p => br%pts(i))
-            call orbit_extremes(p, br%phase, dmin, dmax, err)
+            call orbit_extremes(p, dmin, dmax, err)
             if (allocated(err)) then
                close (u)
                return
@@ -235,10 +243,10 @@ contains
       close (u)
    end subroutine on_point
 
-   !> 0 a regular point, 1 fold, 2 period-doubling, 3 Neimark-Sacker.
+   !> 0 a regular point, 1 fold, 2 period-doubling, 3 Neimark-Sacker, 4 grazing (a contact-sequence change).
    integer function kind_code(kind) result(k)
       character(len=*), intent(in) :: kind
-      do k = 3, 1, -1
+      do k = 4, 1, -1
          if (kind == trim(kinds(k))) return
       end do
    end function kind_code
@@ -258,9 +266,8 @@ contains
    end subroutine element_ids
 
    !> Every element's displacement extremes over the orbit of point p (its run).
-   subroutine orbit_extremes(p, phase, dmin, dmax, err)
+   subroutine orbit_extremes(p, dmin, dmax, err)
       type(branch_point_t), intent(in) :: p
-      real(wp), intent(in) :: phase
       real(wp), allocatable, intent(out) :: dmin(:), dmax(:)
       type(error_t), allocatable, intent(out) :: err
       type(model_t) :: m
@@ -272,7 +279,7 @@ contains
       call prob%model_at(p%lam, m, err)
       if (.not. allocated(err)) call forcing_period(m, period, err)
       if (allocated(err)) return
-      m%run%t_start = m%run%t_start + phase*period
+      m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
       call pm%setup(m, period, 1, err)
       if (.not. allocated(err)) call orbit_run(m, pm, p%x, none, run, err)
       call pm%finish()

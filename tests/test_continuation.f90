@@ -174,8 +174,9 @@ contains
       if (size(rest%pts) > 8) call check('the first 8 as they were', all([(rest%pts(j)%lam == part%pts(j)%lam, j=1, 8)]))
    end subroutine resumed_branch
 
-   !> A corrector allowed one step cannot reach 1e-10 from a predictor: the step
-   !> halves to its minimum and the branch stops with branch_step_min and why; a
+   !> A chord corrector (the smooth one: no full-Newton retry) allowed one step cannot
+   !> reach 1e-10 from a predictor: the step halves to its minimum and the branch
+   !> stops with branch_step_min and why; a
    !> start with no Newton budget stops with branch_no_start and why.
    subroutine test_failures_stop_with_a_reason()
       type(branch_options_t) :: opt
@@ -184,6 +185,7 @@ contains
       call test_begin('failures_stop_with_a_reason')
       opt = options()
       opt%max_corrector = 1
+      opt%nonsmooth = .false.
       opt%ds_min = 0.00125_wp
       call continue_branch(prob, w_start, opt, br, err)
       call check('no error, a status ('//msg(br)//')', .not. allocated(err) .and. br%status == branch_step_min)
