@@ -14,37 +14,8 @@
 !> period-one orbit: their mean is closer to it than d (measured 0.20, 0.24, 0.29 d),
 !> the more so the nearer the point (an O(d^2) offset).
 !> No closed form for this PD point is given (not done).
-module pd_sine_problem
-   use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t
-   use trainsim_model, only: model_t
-   use trainsim_arclength, only: branch_problem_t
-   implicit none
-   private
-   public :: pd_problem_t
-
-   !> the oscillator at forcing frequency lambda = W (rad/s)
-   type, extends(branch_problem_t) :: pd_problem_t
-      type(model_t) :: base
-   contains
-      procedure :: model_at => pd_model_at
-   end type pd_problem_t
-
-contains
-
-   subroutine pd_model_at(self, lam, model, err)
-      class(pd_problem_t), intent(in) :: self
-      real(wp), intent(in) :: lam
-      type(model_t), intent(out) :: model
-      type(error_t), allocatable, intent(out) :: err
-      model = self%base
-      model%loads(1)%torque%omega = lam
-      model%loads(1)%torque%integral_at_zero = -model%loads(1)%torque%amplitude/lam*cos(model%loads(1)%torque%phase)
-   end subroutine pd_model_at
-end module pd_sine_problem
-
 program test_period_doubling
-   use pd_sine_problem, only: pd_problem_t
+   use trainsim_test_branch, only: sine_problem_t
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_strings, only: str
@@ -57,7 +28,7 @@ program test_period_doubling
    implicit none
 
    real(wp), parameter :: two_pi = 6.283185307179586476925286766559_wp
-   type(pd_problem_t) :: prob
+   type(sine_problem_t) :: prob
    type(error_t), allocatable :: err
 
    call suite_begin('period-doubling branch switching: an impact oscillator')
