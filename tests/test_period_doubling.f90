@@ -1,5 +1,5 @@
 !> Branch switching at a period-doubling point (issue 27 item 3; docs/periodic.md
-!> "Period-doubling branch switching"; D-113 ns27). An impact oscillator: a disk
+!> "Period-doubling branch switching"; D-115). An impact oscillator: a disk
 !> (J = 1) on a shaft to ground (k = 100, c = 0.2) against a stiff stop (k2 = 10 000,
 !> linear law, no damping: a continuous force) 0.1 rad above its mean angle 3
 !> (torque 300 + 300 sin(W t), half clearance 3.1), continued in W from 2 pi x 8

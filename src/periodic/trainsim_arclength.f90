@@ -73,7 +73,7 @@ module trainsim_arclength
       !> the monodromy: mono_auto (saltation where the deck allows it), mono_saltation, mono_fd
       integer :: monodromy = mono_auto
       !> the non-smooth corrector: a change of the contact sequence (grazing) located,
-      !> stored as a point of kind 'grazing' and crossed with full Newton (D-113 ns27)
+      !> stored as a point of kind 'grazing' and crossed with full Newton (D-115)
       logical :: nonsmooth = .true.
    end type branch_options_t
 

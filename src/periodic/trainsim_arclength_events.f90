@@ -1,5 +1,5 @@
 !> The steps of trainsim_arclength's continuation (its submodule; docs/periodic.md
-!> "Continuation", "Through contact-sequence changes"; D-108, D-113 ns27): the map
+!> "Continuation", "Through contact-sequence changes"; D-108, D-115): the map
 !> set up at a parameter value, a point's linearisation, the corrector (chord or full
 !> Newton), a point stored; and the non-smooth part: the forcing phase moved when a
 !> memory contact drifts onto t0, a contact-sequence change (grazing) located and
@@ -117,7 +117,7 @@ contains
    !> The corrector from z_pred on [G(z)/s; t'(z - z_pred)] = 0, t = p's tangent:
    !> chord Newton with the bordered matrix [A; t'] of the point `p`, or with
    !> `full` Newton with the Jacobian A(z) of each iterate (the one-sided Jacobian
-   !> of its own contact sequence: the non-smooth corrector, D-113 ns27). why = ''
+   !> of its own contact sequence: the non-smooth corrector, D-115). why = ''
    !> if it converged.
    module procedure correct
       type(error_t), allocatable :: err
@@ -293,7 +293,7 @@ contains
    !> last point of p's sequence stored as kind 'grazing' (after the bifurcations
    !> between p and it), and q's tangent oriented along the secant from it: the
    !> multipliers and the tangent jump there (the map's derivative is
-   !> discontinuous), and the branch goes on in q's sequence (D-113 ns27).
+   !> discontinuous), and the branch goes on in q's sequence (D-115).
    module procedure cross_grazing
       type(node_t) :: a, r
       type(error_t), allocatable :: err
