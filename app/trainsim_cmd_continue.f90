@@ -17,9 +17,10 @@ module trainsim_cmd_continue
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_orbit, only: orbit_run
    use trainsim_arclength, only: branch_problem_t, branch_options_t, branch_point_t, branch_t, continue_branch, &
-                                 branch_done
+                                 branch_done, switch_period_doubling
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: continue_usage
+   use trainsim_monodromy_map, only: monodromy_code
    implicit none
    private
 
@@ -35,7 +36,8 @@ module trainsim_cmd_continue
       procedure :: model_at => deck_model_at
    end type deck_problem_t
 
-   character(len=*), parameter :: kinds(0:3) = [character(len=15) :: '', 'fold', 'period-doubling', 'neimark-sacker']
+   character(len=*), parameter :: kinds(0:4) = [character(len=15) :: '', 'fold', 'period-doubling', 'neimark-sacker', &
+                                                 'grazing']
 
    type(deck_problem_t), save :: prob
    character(len=:), allocatable, save :: out_path
@@ -62,9 +64,10 @@ contains
       type(deck_group_t), allocatable :: sweeps(:)
       character(len=:), allocatable :: param
       real(wp) :: lam0, lam1
-      logical :: resume
+      logical :: resume, switch_pd
       integer :: i
       deck_path = ''
+      switch_pd = .false.
       out_path = ''
       param = ''
       resume = .false.
@@ -98,6 +101,14 @@ contains
          case ('--transient')
             opt%shoot%transient = nint(real_value(i))
             i = i + 1
+         case ('--monodromy')
+            opt%monodromy = monodromy_code(text_value(i))
+            i = i + 1
+            if (opt%monodromy < 0) call refuse("option --monodromy needs auto, saltation or fd, got '"//arg(i)//"'")
+         case ('--smooth')
+            opt%nonsmooth = .false.
+         case ('--switch-pd')
+            switch_pd = .true.
          case ('--set')
             call add_set(i)
             i = i + 1
@@ -133,13 +144,53 @@ contains
       end if
       if (allocated(err)) call fail(err)
       write (output_unit, '(a)') str(size(br%pts))//' points, '//str(br%maps)//' period maps, '//str(br%rejected)// &
-         ' steps refused'
+         ' steps refused, '//str(br%passes)//' variational passes'
+      if (br%status == branch_done .and. allocated(br%message)) then
+         if (len(br%message) > 0) write (output_unit, '(a)') br%message
+      end if
+      if (switch_pd) call doubled_branch(br, opt)
       if (br%status /= branch_done) then
          write (error_unit, '(a)') 'trainsim: continue: the branch stopped early (status '//str(br%status)//'): '// &
             br%message
          call quit(1)
       end if
    end subroutine do_continue
+
+   !> --switch-pd: the period-doubled branch from the branch's first period-doubling
+   !> point, printed and (with -o FILE) written to FILE with '.pd2' before its
+   !> extension (resume it with --period-count 2 times the first's).
+   subroutine doubled_branch(br, opt)
+      type(branch_t), intent(in) :: br
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t) :: br2
+      type(error_t), allocatable :: err
+      integer :: i, ipd, dot
+      ipd = 0
+      do i = size(br%pts), 1, -1
+         if (br%pts(i)%kind == 'period-doubling') ipd = i
+      end do
+      if (ipd == 0) then
+         write (output_unit, '(a)') 'no period-doubling point on the branch: nothing to switch onto'
+         return
+      end if
+      write (output_unit, '(a)') 'the period-doubled branch from lambda = '//str(br%pts(ipd)%lam, 12)//':'
+      if (len(out_path) > 0) then
+         dot = index(out_path, '.', back=.true.)
+         if (dot <= index(out_path, '/', back=.true.)) dot = len(out_path) + 1
+         out_path = out_path(1:dot - 1)//'.pd2'//out_path(dot:)
+         call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=on_point)
+      else
+         call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=print_point)
+      end if
+      if (allocated(err)) call fail(err)
+      write (output_unit, '(a)') str(size(br2%pts))//' points, '//str(br2%maps)//' period maps, '// &
+         str(br2%rejected)//' steps refused'
+      if (br2%status /= branch_done) then
+         write (error_unit, '(a)') 'trainsim: continue: the doubled branch stopped early (status '// &
+            str(br2%status)//'): '//br2%message
+         call quit(1)
+      end if
+   end subroutine doubled_branch
 
    real(wp) function positive(k) result(x)
       integer, intent(in) :: k
@@ -219,7 +270,7 @@ contains
          write (u, '(a)') '# status '//str(br%status)//' '//br%message
       else
          associate (p => br%pts(i))
-            call orbit_extremes(p, br%phase, dmin, dmax, err)
+            call orbit_extremes(p, dmin, dmax, err)
             if (allocated(err)) then
                close (u)
                return
@@ -235,10 +286,10 @@ contains
       close (u)
    end subroutine on_point
 
-   !> 0 a regular point, 1 fold, 2 period-doubling, 3 Neimark-Sacker.
+   !> 0 a regular point, 1 fold, 2 period-doubling, 3 Neimark-Sacker, 4 grazing (a contact-sequence change).
    integer function kind_code(kind) result(k)
       character(len=*), intent(in) :: kind
-      do k = 3, 1, -1
+      do k = 4, 1, -1
          if (kind == trim(kinds(k))) return
       end do
    end function kind_code
@@ -258,9 +309,8 @@ contains
    end subroutine element_ids
 
    !> Every element's displacement extremes over the orbit of point p (its run).
-   subroutine orbit_extremes(p, phase, dmin, dmax, err)
+   subroutine orbit_extremes(p, dmin, dmax, err)
       type(branch_point_t), intent(in) :: p
-      real(wp), intent(in) :: phase
       real(wp), allocatable, intent(out) :: dmin(:), dmax(:)
       type(error_t), allocatable, intent(out) :: err
       type(model_t) :: m
@@ -272,7 +322,7 @@ contains
       call prob%model_at(p%lam, m, err)
       if (.not. allocated(err)) call forcing_period(m, period, err)
       if (allocated(err)) return
-      m%run%t_start = m%run%t_start + phase*period
+      m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
       call pm%setup(m, period, 1, err)
       if (.not. allocated(err)) call orbit_run(m, pm, p%x, none, run, err)
       call pm%finish()

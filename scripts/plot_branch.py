@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Frequency response of a branch from `trainsim continue -o BRANCH` (docs/periodic.md
 "Continuation"): an element's displacement extremes over each periodic orbit against the
-parameter, stable parts solid, unstable parts dashed, folds (o), period-doubling (s) and
+parameter, stable parts solid, unstable parts dashed, folds (o), period-doubling (s), grazing (x) and
 Neimark-Sacker points (^) marked; with --sweep FILE.h5 the settled brute-force sweep's
 points of the same metric overlaid (plot_sweep.py's reader).
 
@@ -16,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-KINDS = {1: ("fold", "o"), 2: ("period-doubling", "s"), 3: ("Neimark-Sacker", "^")}
+KINDS = {1: ("fold", "o"), 2: ("period-doubling", "s"), 3: ("Neimark-Sacker", "^"), 4: ("grazing", "x")}
 
 
 def read_branch(path):

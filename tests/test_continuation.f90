@@ -14,37 +14,8 @@
 !> stable points outside (the branch stopped by a budget of 8 points and
 !> resumed from its last), a corrector that cannot converge and a start with no orbit stop
 !> the branch with their status and reason.
-module continuation_sine_problem
-   use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t
-   use trainsim_model, only: model_t
-   use trainsim_arclength, only: branch_problem_t
-   implicit none
-   private
-   public :: sine_problem_t
-
-   !> the oscillator at forcing frequency lambda = W (rad/s)
-   type, extends(branch_problem_t) :: sine_problem_t
-      type(model_t) :: base
-   contains
-      procedure :: model_at => sine_model_at
-   end type sine_problem_t
-
-contains
-
-   subroutine sine_model_at(self, lam, model, err)
-      class(sine_problem_t), intent(in) :: self
-      real(wp), intent(in) :: lam
-      type(model_t), intent(out) :: model
-      type(error_t), allocatable, intent(out) :: err
-      model = self%base
-      model%loads(1)%torque%omega = lam
-      model%loads(1)%torque%integral_at_zero = -model%loads(1)%torque%amplitude/lam*cos(model%loads(1)%torque%phase)
-   end subroutine sine_model_at
-end module continuation_sine_problem
-
 program test_continuation
-   use continuation_sine_problem, only: sine_problem_t
+   use trainsim_test_branch, only: sine_problem_t
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_strings, only: str
@@ -176,8 +147,9 @@ contains
       if (size(rest%pts) > 8) call check('the first 8 as they were', all([(rest%pts(j)%lam == part%pts(j)%lam, j=1, 8)]))
    end subroutine resumed_branch
 
-   !> A corrector allowed one step cannot reach 1e-10 from a predictor: the step
-   !> halves to its minimum and the branch stops with branch_step_min and why; a
+   !> A chord corrector (the smooth one: no full-Newton retry) allowed one step cannot
+   !> reach 1e-10 from a predictor: the step halves to its minimum and the branch
+   !> stops with branch_step_min and why; a
    !> start with no Newton budget stops with branch_no_start and why.
    subroutine test_failures_stop_with_a_reason()
       type(branch_options_t) :: opt
@@ -186,6 +158,7 @@ contains
       call test_begin('failures_stop_with_a_reason')
       opt = options()
       opt%max_corrector = 1
+      opt%nonsmooth = .false.
       opt%ds_min = 0.00125_wp
       call continue_branch(prob, w_start, opt, br, err)
       call check('no error, a status ('//msg(br)//')', .not. allocated(err) .and. br%status == branch_step_min)

@@ -28,10 +28,14 @@ module trainsim_arclength
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_shooting, only: shoot_options_t, shoot_result_t, shoot, shoot_converged, monodromy_fd
    use trainsim_floquet, only: floquet_multipliers, stability_of
+   use trainsim_monodromy, only: monodromy_stats_t
+   use trainsim_monodromy_map, only: monodromy_map_stats, flow_signature, monodromy_choice, mono_auto, &
+                                     monodromy_variational
    implicit none
    private
 
    public :: branch_problem_t, point_hook_i, branch_options_t, branch_point_t, branch_t, continue_branch
+   public :: switch_period_doubling
    public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed
 
    !> branch_t%status
@@ -66,6 +70,11 @@ module trainsim_arclength
       real(wp) :: fd_lam = 1.0e-6_wp    !< dP/dlambda: central difference, step of |lambda_0|
       integer :: k = 1                  !< forcing periods per orbit
       type(shoot_options_t) :: shoot   !< the first orbit
+      !> the monodromy: mono_auto (saltation where the deck allows it), mono_saltation, mono_fd
+      integer :: monodromy = mono_auto
+      !> the non-smooth corrector: a change of the contact sequence (grazing) located,
+      !> stored as a point of kind 'grazing' and crossed with full Newton (D-115)
+      logical :: nonsmooth = .true.
    end type branch_options_t
 
    type :: branch_point_t
@@ -83,6 +92,7 @@ module trainsim_arclength
       integer :: status = branch_failed
       character(len=:), allocatable :: message
       integer :: maps = 0, rejected = 0
+      integer :: passes = 0               !< variational passes (saltation monodromy or signature)
       real(wp), allocatable :: scale(:)   !< s
       real(wp) :: lam_scale = 1.0_wp      !< l
       real(wp) :: phase = 0.0_wp          !< (t0 - t_start)/T, kept at every lambda
@@ -110,6 +120,9 @@ module trainsim_arclength
       real(wp), allocatable :: s(:)
       real(wp) :: ls = 1.0_wp, fd = 1.0e-6_wp
       real(wp) :: t_start = 0.0_wp   !< the deck's t_start (t0 = t_start + phase T)
+      logical :: salt = .false.      !< the monodromy by saltation matrices (else differences)
+      logical :: sig = .true.        !< take each point's contact-sequence signature
+      integer :: passes = 0          !< variational (or signature) passes
    end type ctx_t
 
    !> an accepted point's data for the next step
@@ -118,6 +131,7 @@ module trainsim_arclength
       complex(wp), allocatable :: mu(:)
       integer :: corrector = 0
       real(wp) :: residual = 0.0_wp
+      type(monodromy_stats_t) :: st   !< the flow's events over the orbit: its contact sequence's signature
    end type node_t
 
    interface
@@ -127,6 +141,83 @@ module trainsim_arclength
          real(wp), intent(inout) :: a(lda, *), b(ldb, *)
          integer, intent(out) :: ipiv(*), info
       end subroutine dgesv
+   end interface
+
+   interface
+      module subroutine rephase_point(c, br, cur, moved, err)
+         type(ctx_t), intent(inout) :: c
+         type(branch_t), intent(inout) :: br
+         type(node_t), intent(inout) :: cur
+         logical, intent(out) :: moved
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine rephase_point
+      module logical function closed_loop(br, before, c) result(closed)
+         type(branch_t), intent(in) :: br
+         integer, intent(in) :: before
+         type(ctx_t), intent(in) :: c
+      end function closed_loop
+      module logical function same_sequence(a, b)
+         type(monodromy_stats_t), intent(in) :: a, b
+      end function same_sequence
+      module subroutine cross_grazing(c, br, p, q, ds, opt)
+         type(ctx_t), intent(inout) :: c
+         type(branch_t), intent(inout) :: br
+         type(node_t), intent(in) :: p
+         type(node_t), intent(inout) :: q
+         real(wp), intent(in) :: ds
+         type(branch_options_t), intent(in) :: opt
+      end subroutine cross_grazing
+      module subroutine detect(c, br, p, q, ds, opt)
+         type(ctx_t), intent(inout) :: c
+         type(branch_t), intent(inout) :: br
+         type(node_t), intent(in) :: p, q
+         real(wp), intent(in) :: ds
+         type(branch_options_t), intent(in) :: opt
+      end subroutine detect
+      module subroutine start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
+         type(ctx_t), intent(inout) :: c
+         type(branch_t), intent(in) :: resume
+         type(branch_options_t), intent(in) :: opt
+         type(branch_t), intent(inout) :: br
+         type(node_t), intent(out) :: cur
+         real(wp), allocatable, intent(out) :: t_prev(:)
+         real(wp), intent(out) :: ds
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine start_resumed
+      module subroutine at(c, lam, err)
+         type(ctx_t), intent(inout) :: c
+         real(wp), intent(in) :: lam
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine at
+      module subroutine evaluate(c, z, px, why, err)
+         type(ctx_t), intent(inout) :: c
+         real(wp), intent(in) :: z(:)
+         real(wp), allocatable, intent(out) :: px(:)
+         character(len=:), allocatable, intent(out) :: why
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine evaluate
+      module subroutine linearise(c, p, t_prev, err)
+         type(ctx_t), intent(inout) :: c
+         type(node_t), intent(inout) :: p
+         real(wp), intent(in) :: t_prev(:)
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine linearise
+      module subroutine correct(c, p, z_pred, opt, q, why, full)
+         type(ctx_t), intent(inout) :: c
+         type(node_t), intent(in) :: p
+         real(wp), intent(in) :: z_pred(:)
+         type(branch_options_t), intent(in) :: opt
+         type(node_t), intent(out) :: q
+         character(len=:), allocatable, intent(out) :: why
+         logical, intent(in), optional :: full
+      end subroutine correct
+      module subroutine store(br, c, p, ds, kind)
+         type(branch_t), intent(inout) :: br
+         type(ctx_t), intent(inout) :: c
+         type(node_t), intent(in) :: p
+         real(wp), intent(in) :: ds
+         character(len=*), intent(in) :: kind
+      end subroutine store
    end interface
 
 contains
@@ -145,11 +236,12 @@ contains
       procedure(point_hook_i), optional :: hook
       type(ctx_t) :: c
       integer :: stored
-      type(node_t) :: cur, nxt
+      type(node_t) :: cur
       real(wp), allocatable :: t_prev(:)
-      real(wp) :: ds, lam
+      real(wp) :: ds
       character(len=:), allocatable :: why
       allocate (c%prob, source=prob)
+      c%sig = opt%nonsmooth
       c%k = opt%k
       c%fd = opt%fd_lam
       allocate (br%pts(0))
@@ -166,6 +258,120 @@ contains
       if (size(br%pts) == 0) call store(br, c, cur, 0.0_wp, '')
       stored = 0
       if (present(resume)) stored = size(resume%pts)
+      call follow(c, br, cur, ds, opt, stored, err, hook)
+   end subroutine continue_branch
+
+   !> Branch switching at the period-doubling point br%pts(ipd): the doubled branch
+   !> (2k forcing periods per orbit) from that point, whose P^2 has the multiplier +1
+   !> with M's eigenvector v for -1 (inverse iteration on S^-1 (M^2 - I) S): the
+   !> first point by full Newton on the hyperplane v'(z - z_pd - ds v) = 0 (the
+   !> period-k branch crosses it far away: its tangent is across v), then the
+   !> continuation as `continue_branch` (opt%k is the period-k branch's). br2%status
+   !> branch_no_start when no doubled orbit is found down to ds_min.
+   subroutine switch_period_doubling(prob, br, ipd, opt, br2, err, hook)
+      class(branch_problem_t), intent(in) :: prob
+      type(branch_t), intent(in) :: br
+      integer, intent(in) :: ipd
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t), intent(out) :: br2
+      type(error_t), allocatable, intent(out) :: err
+      procedure(point_hook_i), optional :: hook
+      type(ctx_t) :: c
+      type(node_t) :: cur, nxt
+      real(wp), allocatable :: b(:, :), v(:), t_dir(:)
+      integer, allocatable :: ipiv(:)
+      character(len=:), allocatable :: why
+      real(wp) :: ds
+      integer :: n, it, info, stored, i
+      allocate (c%prob, source=prob)
+      allocate (br2%pts(0))
+      c%sig = opt%nonsmooth
+      c%k = 2*opt%k
+      c%fd = opt%fd_lam
+      c%s = br%scale
+      c%ls = br%lam_scale
+      c%phase = br%phase
+      associate (p => br%pts(ipd))
+         call at(c, p%lam, err)                          ! (for t_start)
+         if (allocated(err)) return
+         c%phase = (p%t0 - c%t_start)/p%period          ! its own t0
+         c%lam = huge(1.0_wp)
+         call at(c, p%lam, err)
+         if (allocated(err)) return
+         call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
+         if (allocated(err)) return
+         n = c%pm%n
+         c%n = n
+         br2%scale = c%s
+         br2%lam_scale = c%ls
+         br2%phase = c%phase
+         cur%z = [p%x/c%s, p%lam/c%ls]
+      end associate
+      call evaluate(c, cur%z, cur%px, why, err)
+      if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'the period-doubling point: '//why, err_input)
+      if (allocated(err)) return
+      allocate (t_dir(n + 1), v(n), ipiv(n))
+      t_dir = 0.0_wp
+      t_dir(n + 1) = 1.0_wp
+      call linearise(c, cur, t_dir, err)
+      if (allocated(err) .and. allocated(cur%a)) deallocate (err)   ! (the bordered system is singular there)
+      if (allocated(err)) return
+      v = 1.0_wp/sqrt(real(n, wp))
+      do it = 1, 4   ! inverse iteration: the null vector of S^-1 (M^2 - I) S
+         b = cur%a(:, 1:n)
+         do i = 1, n
+            b(i, i) = b(i, i) + 1.0e-9_wp
+         end do
+         call dgesv(n, 1, b, n, ipiv, v, n, info)
+         if (info /= 0) exit
+         v = v/norm2(v)
+      end do
+      cur%t = [v, 0.0_wp]
+      call store(br2, c, cur, 0.0_wp, 'period-doubling')
+      ds = opt%ds
+      do
+         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
+         if (len(why) == 0) then
+            call linearise(c, nxt, cur%t, err)
+            if (allocated(err)) then
+               why = err%message
+               deallocate (err)
+            end if
+         end if
+         if (len(why) == 0) exit
+         if (ds <= opt%ds_min) then
+            br2%status = branch_no_start
+            br2%message = 'no period-doubled orbit found next to lambda = '//str(br%pts(ipd)%lam, 10)//': '//why
+            br2%maps = c%maps
+            return
+         end if
+         ds = max(0.5_wp*ds, opt%ds_min)
+      end do
+      call store(br2, c, nxt, ds, '')
+      cur = nxt
+      stored = 0
+      call follow(c, br2, cur, ds, opt, stored, err, hook)
+   end subroutine switch_period_doubling
+
+   !> The continuation loop from the accepted point cur (stored) with the step ds:
+   !> predictor, corrector (chord, then full Newton: the non-smooth corrector),
+   !> grazing crossed, bifurcations detected, step control, until the branch leaves
+   !> [lam_min, lam_max] or stops. stored: the points already given to `hook`.
+   subroutine follow(c, br, cur, ds, opt, stored, err, hook)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(inout) :: cur
+      real(wp), intent(inout) :: ds
+      type(branch_options_t), intent(in) :: opt
+      integer, intent(inout) :: stored
+      type(error_t), allocatable, intent(out) :: err
+      procedure(point_hook_i), optional :: hook
+      type(node_t) :: nxt
+      real(wp) :: lam
+      character(len=:), allocatable :: why
+      logical :: crossed, rephased
+      integer :: before
+      rephased = .false.
       do
          call report_points()
          if (allocated(err)) return
@@ -176,11 +382,27 @@ contains
             exit
          end if
          call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why)
+         if (len(why) > 0 .and. opt%nonsmooth) call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
+         crossed = .false.
          if (len(why) == 0) then
             call linearise(c, nxt, cur%t, err)
             if (allocated(err)) then
                why = err%message
                deallocate (err)
+            end if
+         end if
+         if (opt%nonsmooth .and. .not. rephased) then
+            ! a memory contact reaching t0 (odd events) or a failed step: move t0 first
+            if (len(why) > 0 .or. modulo(nxt%st%events, 2) /= 0) then
+               call rephase_point(c, br, cur, rephased, err)
+               if (allocated(err)) return
+               if (rephased) cycle
+            end if
+         end if
+         if (len(why) == 0) then
+            if (opt%nonsmooth .and. .not. same_sequence(cur%st, nxt%st)) then
+               call cross_grazing(c, br, cur, nxt, ds, opt)
+               crossed = .true.
             else if (dot_product(nxt%t, cur%t) < 0.9_wp .and. ds > opt%ds_min) then
                why = 'the tangent turned by more than 25 degrees in one step'
             end if
@@ -196,9 +418,17 @@ contains
             ds = max(0.5_wp*ds, opt%ds_min)
             cycle
          end if
-         call detect(c, br, cur, nxt, ds, opt)
+         before = size(br%pts)
+         if (.not. crossed) call detect(c, br, cur, nxt, ds, opt)
+         if (closed_loop(br, before, c)) then
+            br%status = branch_done
+            br%message = 'the branch closed on itself: the fold at lambda = '// &
+                         str(br%pts(size(br%pts))%lam, 10)//' was met before'
+            exit
+         end if
          call store(br, c, nxt, ds, '')
          cur = nxt
+         rephased = .false.
          if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
          lam = cur%z(c%n + 1)*c%ls
          if (lam > opt%lam_max .or. lam < opt%lam_min) then
@@ -208,6 +438,7 @@ contains
          end if
       end do
       br%maps = c%maps
+      br%passes = c%passes
       call c%pm%finish()
       call report_points()
       if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
@@ -220,7 +451,7 @@ contains
             if (allocated(err)) return
          end do
       end subroutine report_points
-   end subroutine continue_branch
+   end subroutine follow
 
    !> The first point: the orbit shot at lam0; t0 there (moved by shooting to an
    !> instant with no memory contact in progress) kept as a phase of the period.
@@ -237,7 +468,13 @@ contains
       c%ls = max(abs(lam0), tiny(1.0_wp))
       call at(c, lam0, err)
       if (allocated(err)) return
-      call shoot(c%pm, opt%shoot, res, err)
+      call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
+      if (allocated(err)) return
+      if (c%salt) then
+         call shoot(c%pm, opt%shoot, res, err, monodromy=monodromy_variational)
+      else
+         call shoot(c%pm, opt%shoot, res, err)
+      end if
       c%maps = c%maps + res%maps
       br%maps = c%maps
       if (allocated(err)) then
@@ -264,303 +501,5 @@ contains
       ds = opt%ds
    end subroutine start_shot
 
-   !> The first point of a resumed branch: its last stored point.
-   subroutine start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
-      type(ctx_t), intent(inout) :: c
-      type(branch_t), intent(in) :: resume
-      type(branch_options_t), intent(in) :: opt
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(out) :: cur
-      real(wp), allocatable, intent(out) :: t_prev(:)
-      real(wp), intent(out) :: ds
-      type(error_t), allocatable, intent(out) :: err
-      integer :: last
-      last = size(resume%pts)
-      if (last == 0) then
-         call fatal_error(err, 'the branch to resume has no point', err_input)
-         return
-      end if
-      br = resume
-      c%phase = br%phase
-      c%s = br%scale
-      c%ls = br%lam_scale
-      c%maps = br%maps
-      call at(c, br%pts(last)%lam, err)
-      if (allocated(err)) return
-      c%n = c%pm%n
-      if (size(c%s) /= c%n .or. size(br%pts(last)%tangent) /= c%n + 1) then
-         call fatal_error(err, 'the branch to resume has '//str(size(c%s))//' states, the deck '//str(c%n), err_input)
-         return
-      end if
-      cur%z = [br%pts(last)%x/c%s, br%pts(last)%lam/c%ls]
-      t_prev = br%pts(last)%tangent
-      ds = min(max(br%pts(last)%ds, opt%ds_min), opt%ds_max)
-      if (last == 1) ds = opt%ds
-   end subroutine start_resumed
 
-   !> The period map set up at lambda (the deck rebuilt there; t0 = t_start + phase T).
-   subroutine at(c, lam, err)
-      type(ctx_t), intent(inout) :: c
-      real(wp), intent(in) :: lam
-      type(error_t), allocatable, intent(out) :: err
-      type(model_t) :: m
-      real(wp) :: period
-      if (lam == c%lam) return
-      c%lam = huge(1.0_wp)
-      call c%prob%model_at(lam, m, err)
-      if (allocated(err)) return
-      call forcing_period(m, period, err)
-      if (allocated(err)) return
-      c%t_start = m%run%t_start
-      m%run%t_start = m%run%t_start + c%phase*period
-      call c%pm%setup(m, period, c%k, err)
-      if (allocated(err)) return
-      c%lam = lam
-   end subroutine at
-
-   !> px = P(x; lambda) for the scaled z = (x/s, lambda/l). why: the integration failed.
-   subroutine evaluate(c, z, px, why, err)
-      type(ctx_t), intent(inout) :: c
-      real(wp), intent(in) :: z(:)
-      real(wp), allocatable, intent(out) :: px(:)
-      character(len=:), allocatable, intent(out) :: why
-      type(error_t), allocatable, intent(out) :: err
-      type(error_t), allocatable :: e
-      why = ''
-      allocate (px(c%n))
-      call at(c, z(c%n + 1)*c%ls, err)
-      if (allocated(err)) return
-      call c%pm%map(z(1:c%n)*c%s, px, e)
-      c%maps = c%maps + 1
-      if (allocated(e)) why = 'the period map failed: '//e%message
-   end subroutine evaluate
-
-   !> The point's monodromy, multipliers, scaled Jacobian A and tangent (oriented along t_prev).
-   subroutine linearise(c, p, t_prev, err)
-      type(ctx_t), intent(inout) :: c
-      type(node_t), intent(inout) :: p
-      real(wp), intent(in) :: t_prev(:)
-      type(error_t), allocatable, intent(out) :: err
-      real(wp) :: x(c%n), lam, h, pp(c%n), pq(c%n)
-      real(wp), allocatable :: b(:, :), rhs(:)
-      character(len=:), allocatable :: why
-      integer :: i, n, info
-      integer :: ipiv(c%n + 1)
-      n = c%n
-      x = p%z(1:n)*c%s
-      lam = p%z(n + 1)*c%ls
-      h = c%fd*c%ls
-      call map_at(lam + h, pp)
-      if (allocated(err)) return
-      call map_at(lam - h, pq)
-      if (allocated(err)) return
-      call at(c, lam, err)
-      if (allocated(err)) return
-      if (allocated(p%m)) deallocate (p%m)
-      allocate (p%m(n, n), p%a(n, n + 1))
-      call monodromy_fd(c%pm, x, p%px, p%m, err)
-      c%maps = c%maps + 2*n
-      if (allocated(err)) return
-      call floquet_multipliers(p%m, p%mu, err)
-      if (allocated(err)) return
-      do i = 1, n
-         p%a(i, 1:n) = p%m(i, :)*c%s/c%s(i)
-         p%a(i, i) = p%a(i, i) - 1.0_wp
-         p%a(i, n + 1) = (pp(i) - pq(i))/(2.0_wp*h)*c%ls/c%s(i)
-      end do
-      b = bordered(p%a, t_prev)
-      allocate (rhs(n + 1))
-      rhs = 0.0_wp
-      rhs(n + 1) = 1.0_wp
-      call dgesv(n + 1, 1, b, n + 1, ipiv, rhs, n + 1, info)
-      if (info /= 0) then
-         call fatal_error(err, 'the bordered Jacobian is singular at lambda = '//str(lam)//' (a branch point)', &
-                          err_input)
-         return
-      end if
-      p%t = rhs/norm2(rhs)
-      if (dot_product(p%t, t_prev) < 0.0_wp) p%t = -p%t
-   contains
-      subroutine map_at(l, y)
-         real(wp), intent(in) :: l
-         real(wp), intent(out) :: y(:)
-         type(error_t), allocatable :: e
-         call at(c, l, err)
-         if (allocated(err)) return
-         call c%pm%map(x, y, e)
-         c%maps = c%maps + 1
-         if (allocated(e)) then
-            why = e%message
-            call fatal_error(err, 'dP/dlambda: the period map failed at lambda = '//str(l)//': '//why, err_input)
-         end if
-      end subroutine map_at
-   end subroutine linearise
-
-   !> [A; t'] of A (n x n+1) and t (n+1).
-   function bordered(a, t) result(b)
-      real(wp), intent(in) :: a(:, :), t(:)
-      real(wp) :: b(size(t), size(t))
-      b(1:size(a, 1), :) = a
-      b(size(t), :) = t
-   end function bordered
-
-   !> The corrector: chord Newton from z_pred on [G(z)/s; t'(z - z_pred)] = 0 with
-   !> the bordered matrix [A; t'] of the point `p`. why = '' if it converged.
-   subroutine correct(c, p, z_pred, opt, q, why)
-      type(ctx_t), intent(inout) :: c
-      type(node_t), intent(in) :: p
-      real(wp), intent(in) :: z_pred(:)
-      type(branch_options_t), intent(in) :: opt
-      type(node_t), intent(out) :: q
-      character(len=:), allocatable, intent(out) :: why
-      type(error_t), allocatable :: err
-      real(wp), allocatable :: b(:, :), rhs(:), px(:)
-      real(wp) :: r, r_old, lam
-      integer :: it, n, info
-      integer, allocatable :: ipiv(:)
-      n = c%n
-      q%z = z_pred
-      r_old = huge(1.0_wp)
-      allocate (ipiv(n + 1))
-      do it = 0, opt%max_corrector
-         lam = q%z(n + 1)*c%ls
-         call evaluate(c, q%z, px, why, err)
-         if (allocated(err)) why = err%message
-         if (len(why) > 0) return
-         r = maxval(abs(px/c%s - q%z(1:n)))
-         q%px = px
-         q%residual = r
-         q%corrector = it
-         if (r <= opt%tol) return
-         if (.not. r < r_old) then
-            why = 'the corrector diverged at lambda = '//str(lam, 10)//' (residual '//str(r, 3)//' after '// &
-                  str(r_old, 3)//')'
-            return
-         end if
-         if (it == opt%max_corrector) exit
-         r_old = r
-         b = bordered(p%a, p%t)
-         rhs = [q%z(1:n) - px/c%s, -dot_product(p%t, q%z - z_pred)]
-         call dgesv(n + 1, 1, b, n + 1, ipiv, rhs, n + 1, info)
-         if (info /= 0) then
-            why = 'the bordered Jacobian is singular'
-            return
-         end if
-         q%z = q%z + rhs
-      end do
-      why = 'the corrector spent its '//str(opt%max_corrector)//' steps at lambda = '//str(lam, 10)// &
-            ' (residual '//str(r, 3)//', tolerance '//str(opt%tol, 3)//')'
-   end subroutine correct
-
-   !> Append the point p (with its kind: '' or a bifurcation) to the branch.
-   subroutine store(br, c, p, ds, kind)
-      type(branch_t), intent(inout) :: br
-      type(ctx_t), intent(in) :: c
-      type(node_t), intent(in) :: p
-      real(wp), intent(in) :: ds
-      character(len=*), intent(in) :: kind
-      type(branch_point_t) :: bp
-      bp%lam = p%z(c%n + 1)*c%ls
-      bp%period = c%pm%period
-      bp%t0 = c%pm%t0
-      bp%x = p%z(1:c%n)*c%s
-      bp%tangent = p%t
-      bp%mu = p%mu
-      bp%stability = stability_of(p%mu)
-      bp%kind = kind
-      bp%residual = p%residual
-      bp%ds = ds
-      bp%corrector = p%corrector
-      bp%maps = c%maps
-      br%pts = [br%pts, bp]
-      br%maps = c%maps
-   end subroutine store
-
-   !> The bifurcations between the accepted points p and q (q = p + ds along p's
-   !> tangent, corrected), each located and stored before q.
-   subroutine detect(c, br, p, q, ds, opt)
-      type(ctx_t), intent(inout) :: c
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(in) :: p, q
-      real(wp), intent(in) :: ds
-      type(branch_options_t), intent(in) :: opt
-      integer :: j
-      character(len=*), parameter :: kinds(3) = [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker']
-      do j = 1, 3
-         if (test_fn(j, p, c%n) * test_fn(j, q, c%n) < 0.0_wp) call locate(c, br, p, q, ds, opt, j, trim(kinds(j)))
-      end do
-   end subroutine detect
-
-   !> Test function j at a point: 1 fold (the tangent's lambda-component), 2
-   !> period-doubling (det(M + I) = prod(1 + mu)), 3 Neimark-Sacker (|mu| - 1 of
-   !> the complex pair nearest the unit circle; +-1 with none).
-   real(wp) function test_fn(j, p, n) result(f)
-      integer, intent(in) :: j, n
-      type(node_t), intent(in) :: p
-      integer :: i
-      select case (j)
-      case (1)
-         f = p%t(n + 1)
-      case (2)
-         f = real(product(1.0_wp + p%mu), wp)
-      case default
-         f = huge(1.0_wp)
-         do i = 1, size(p%mu)
-            if (abs(aimag(p%mu(i))) > 1.0e-8_wp*abs(p%mu(i))) then
-               if (abs(abs(p%mu(i)) - 1.0_wp) < abs(f)) f = abs(p%mu(i)) - 1.0_wp
-            end if
-         end do
-         if (f == huge(1.0_wp)) f = -1.0_wp
-      end select
-   end function test_fn
-
-   !> Locate the zero of test function j between p (sigma = 0) and q (sigma = ds)
-   !> by the Illinois secant on sigma, each trial point corrected from p along p's
-   !> tangent (the arclength condition t_p'(z - z_p) = sigma); stored with its kind.
-   !> A trial that fails to converge ends the search at the best bracket.
-   subroutine locate(c, br, p, q, ds, opt, j, kind)
-      type(ctx_t), intent(inout) :: c
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(in) :: p, q
-      real(wp), intent(in) :: ds
-      type(branch_options_t), intent(in) :: opt
-      integer, intent(in) :: j
-      character(len=*), intent(in) :: kind
-      type(node_t) :: r, best
-      type(error_t), allocatable :: err
-      real(wp) :: sa, sb, fa, fb, sm, fm, la, lb
-      character(len=:), allocatable :: why
-      integer :: it, side
-      sa = 0.0_wp
-      sb = ds
-      fa = test_fn(j, p, c%n)
-      fb = test_fn(j, q, c%n)
-      la = p%z(c%n + 1)
-      lb = q%z(c%n + 1)
-      best = q
-      side = 0
-      do it = 1, 40
-         sm = sb - fb*(sb - sa)/(fb - fa)
-         call correct(c, p, p%z + sm*p%t, opt, r, why)
-         if (len(why) == 0) call linearise(c, r, p%t, err)
-         if (allocated(err) .or. len(why) > 0) exit
-         fm = test_fn(j, r, c%n)
-         best = r
-         if (fm*fb < 0.0_wp) then
-            sa = sb
-            fa = fb
-            la = lb
-            side = 0
-         else
-            if (side == 1) fa = 0.5_wp*fa
-            side = 1
-         end if
-         sb = sm
-         fb = fm
-         lb = r%z(c%n + 1)
-         if (j == 1 .and. abs(fm) < 1.0e-9_wp) exit
-         if (j /= 1 .and. abs(la - lb) < opt%lam_tol) exit
-      end do
-      call store(br, c, best, sm, kind)
-   end subroutine locate
 end module trainsim_arclength
