@@ -14,7 +14,8 @@
 !> element's, bit for bit (a = theta_l, a' = omega_l).
 module trainsim_excited_mesh
    use trainsim_kinds, only: wp, pi, two_pi
-   use trainsim_error, only: error_t
+   use trainsim_error, only: error_t, fatal_error, err_input
+   use trainsim_strings, only: str
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_event, only: event_t
@@ -72,7 +73,7 @@ contains
       real(wp), intent(in) :: teeth2, mp, c2, pitch_module, phi, face
       logical, intent(in) :: internal
       type(error_t), allocatable, intent(out) :: err
-      real(wp) :: n2, cp, cg
+      real(wp) :: n2, cp, cg, ph
       logical :: iso_ok
       n2 = teeth2
       if (.not. n2 > 0.0_wp) then
@@ -81,6 +82,20 @@ contains
          n2 = anint(n2)
       end if
       iso_ok = pitch_module > 0.0_wp .and. .not. (grp%holds('stiffness') .or. grp%holds('stiffness_per_width'))
+      if (grp%holds('tip_relief_start_roll')) then   ! T1E for a relief by roll angle (constants form: phi 20 deg default)
+         ph = phi
+         if (ph == 0.0_wp) then
+            call grp%get_real('pressure_angle', ph, err, default=20.0_wp); if (allocated(err)) return
+            if (.not. (ph > 0.0_wp .and. ph < 45.0_wp)) then
+               call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) '// &
+                                'degrees, got '//str(ph), err_input)
+               return
+            end if
+            ph = ph*pi/180.0_wp
+         end if
+         self%ex%rb1 = self%cl%r1
+         self%ex%t1e = self%cl%r1*tan(ph) + mp*two_pi*self%cl%r1/self%teeth - self%alpha*self%cl%r1
+      end if
       call self%ex%configure(grp, self%teeth, n2, mp, c2, two_pi*self%cl%r1/self%teeth, iso_ok, err)
       if (allocated(err)) return
       if (self%ex%model == sm_iso) then
