@@ -32,7 +32,7 @@ module trainsim_el_helical_gear
       em_torque_jacobian
    use trainsim_el_spur_gear, only: tooth_phase, max_teeth
    use trainsim_mesh_excitation, only: iso_single_pair_stiffness
-   use trainsim_tooth_friction, only: tooth_friction_t
+   use trainsim_tooth_friction, only: tooth_friction_t, pressure_angle_of
    use trainsim_param_list, only: append_params, add_choice
    implicit none
    private
@@ -165,13 +165,8 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: word
       real(wp) :: an_deg, zn1, zn2
-      call grp%get_real('pressure_angle', an_deg, err, default=20.0_wp); if (allocated(err)) return
-      if (.not. (an_deg > 0.0_wp .and. an_deg < 45.0_wp)) then
-         call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle (normal, degrees) must be in '// &
-                          '(0, 45), got '//str(an_deg), err_input)
-         return
-      end if
-      self%alpha_n = an_deg*pi/180.0_wp
+      call pressure_angle_of(grp, 0.0_wp, self%alpha_n, err); if (allocated(err)) return   ! normal
+      an_deg = self%alpha_n*180.0_wp/pi
       self%beta = asin(min(1.0_wp, sin(self%zeta)/cos(self%alpha_n)))   ! sin beta_b = sin beta cos alpha_n
       self%alpha_t = atan(tan(self%alpha_n)/cos(self%beta))
       call grp%get_string('stiffness_model', word, err, default='contact_lines'); if (allocated(err)) return

@@ -14,8 +14,8 @@
 !> element's, bit for bit (a = theta_l, a' = omega_l).
 module trainsim_excited_mesh
    use trainsim_kinds, only: wp, pi, two_pi
-   use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: str
+   use trainsim_error, only: error_t
+   use trainsim_tooth_friction, only: pressure_angle_of
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_event, only: event_t
@@ -83,16 +83,7 @@ contains
       end if
       iso_ok = pitch_module > 0.0_wp .and. .not. (grp%holds('stiffness') .or. grp%holds('stiffness_per_width'))
       if (grp%holds('tip_relief_start_roll')) then   ! T1E for a relief by roll angle (constants form: phi 20 deg default)
-         ph = phi
-         if (ph == 0.0_wp) then
-            call grp%get_real('pressure_angle', ph, err, default=20.0_wp); if (allocated(err)) return
-            if (.not. (ph > 0.0_wp .and. ph < 45.0_wp)) then
-               call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) '// &
-                                'degrees, got '//str(ph), err_input)
-               return
-            end if
-            ph = ph*pi/180.0_wp
-         end if
+         call pressure_angle_of(grp, phi, ph, err); if (allocated(err)) return
          self%ex%rb1 = self%cl%r1
          self%ex%t1e = self%cl%r1*tan(ph) + mp*two_pi*self%cl%r1/self%teeth - self%alpha*self%cl%r1
       end if

@@ -44,7 +44,7 @@ module trainsim_tooth_friction
    implicit none
    private
 
-   public :: tooth_friction_t, friction_arms
+   public :: tooth_friction_t, friction_arms, pressure_angle_of
 
    !> Default regularisation speed of 'speed': 1 mm/s (in the deck's length units per s).
    real(wp), parameter :: v_reg_default_m = 1.0e-3_wp
@@ -102,16 +102,7 @@ contains
       if (allocated(err)) return
       call grp%require_positive('tooth_friction_velocity', self%v_reg, err); if (allocated(err)) return
       if (.not. self%on()) return
-      ph = phi
-      if (ph == 0.0_wp) then   ! TRAIN's constants form has no pressure angle: asked only with friction
-         call grp%get_real('pressure_angle', ph, err, default=20.0_wp); if (allocated(err)) return
-         if (.not. (ph > 0.0_wp .and. ph < 45.0_wp)) then
-            call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, '// &
-                             'got '//str(ph), err_input)
-            return
-         end if
-         ph = ph*pi/180.0_wp
-      end if
+      call pressure_angle_of(grp, phi, ph, err); if (allocated(err)) return   ! (asked only with friction)
       self%t1p = rb1*tan(ph)
       self%t2p = rb2*tan(ph)
       self%ap = alpha*rb1
@@ -132,6 +123,24 @@ contains
          return
       end if
    end subroutine tf_configure
+
+   !> The pressure angle ph (rad): phi if > 0 (a geometry form's), else the group's
+   !> `pressure_angle` in degrees, default 20, in (0, 45) (TRAIN's constants form has none).
+   subroutine pressure_angle_of(grp, phi, ph, err)
+      type(deck_group_t), intent(inout) :: grp
+      real(wp), intent(in) :: phi
+      real(wp), intent(out) :: ph
+      type(error_t), allocatable, intent(inout) :: err
+      ph = phi
+      if (ph > 0.0_wp) return
+      call grp%get_real('pressure_angle', ph, err, default=20.0_wp); if (allocated(err)) return
+      if (.not. (ph > 0.0_wp .and. ph < 45.0_wp)) then
+         call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, '// &
+                          'got '//str(ph), err_input)
+         return
+      end if
+      ph = ph*pi/180.0_wp
+   end subroutine pressure_angle_of
 
    pure logical function tf_on(self) result(on)
       class(tooth_friction_t), intent(in) :: self
