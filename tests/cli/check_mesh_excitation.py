@@ -12,7 +12,7 @@
   (every dataset of the history file);
 - a run of the rig with the Fourier stiffness and TE of the Kahraman-Singh form closes its
   ledger (the printed residual to 1e-10 of the printed scale);
-- tip relief by its start roll angle (D-110) gives the table of the same relief by length;
+- tip relief by its start roll angle (D-114) gives the table of the same relief by length;
 - bad input: a tip relief longer than half the path of contact (by length or by a start
   roll angle beyond the tip), a stiffness table that is
   not periodic, a negative harmonic amplitude, harmonics and phases of different lengths:
@@ -24,26 +24,13 @@ usage: check_mesh_excitation.py TRAINSIM_EXE
 import math
 import os
 import re
-import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
+from clicheck import check, EXE, failures, finish, run
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
-
-
-def run(args, cwd=None):
-    return subprocess.run([EXE] + args, capture_output=True, text=True, timeout=300, cwd=cwd)
 
 
 HEAD = ("&run t_end = 1e-3, dt = 1e-6 /\n&node id = 'a', type = 'inertia', inertia = 1.0 /\n"
@@ -105,7 +92,7 @@ with tempfile.TemporaryDirectory() as tmp:
             check(f'{shape}: the two-pair zone peaks at C_a (1 - (m_p - 1)/(2 L_a))^n = {peak:.6e} '
                   f'(table {d[:, 5].max():.6e})', abs(d[:, 5].max() - peak) < 1e-3 * ca)
 
-    # tip relief by its start roll angle (D-110): the driver's roll xi_s from T1, so
+    # tip relief by its start roll angle (D-114): the driver's roll xi_s from T1, so
     # L_a = T1E - r_b1 xi_s with T1E = r_b1 tan(phi) + m_p p_b - alpha r_b1 (phi = 20 deg in
     # TRAIN's constants form, alpha = 0 here): the same table as by the length, to rounding
     t1e = math.tan(math.radians(20.0)) + MP * PB
@@ -205,4 +192,4 @@ with tempfile.TemporaryDirectory() as tmp:
         check('gear --plot writes the figure', r.returncode == 0 and os.path.getsize(png) > 1000)
 
 print(f'{len(failures)} failure(s)')
-sys.exit(1 if failures else 0)
+finish()
