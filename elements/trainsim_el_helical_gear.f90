@@ -9,7 +9,7 @@
 !> A static transmission error (te_harmonics, te_phases, run-out; issue 26)
 !> excites the mesh as the spur gear's does (trainsim_excited_mesh).
 !>
-!> Issue 26 (D-113): stiffness_model = 'contact_lines' (default, the above) or
+!> Issue 26 (D-116): stiffness_model = 'contact_lines' (default, the above) or
 !> 'iso6336': the same shape L_c(e) scaled so that the mean mesh stiffness is
 !> c_gamma_alpha b of ISO 6336-1 method B for the virtual spur pair (z_n =
 !> z / (cos^2 beta_b cos beta)), c' times cos(beta). Crowning (a parabolic lead
@@ -49,7 +49,7 @@ module trainsim_el_helical_gear
       real(wp) :: crown = 0.0_wp          !< crowning C_c at either face end (length)
       logical :: iso = .false.            !< stiffness_model = 'iso6336'
       real(wp) :: cprime = 0.0_wp, cgamma = 0.0_wp   !< ISO c', c_gamma_alpha, N/(mm um)
-      type(tooth_friction_t) :: fric      !< tooth friction over the lines of contact (D-113)
+      type(tooth_friction_t) :: fric      !< tooth friction over the lines of contact (D-116)
    contains
       procedure :: excitation => hel_excitation
       procedure :: mesh_at_roll => hel_mesh_at_roll
@@ -155,7 +155,7 @@ contains
       call configure_issue26(self, grp, units, e_default, err)
    end subroutine hel_configure
 
-   !> pressure_angle, stiffness_model, crowning and tooth friction (D-113); n2 the
+   !> pressure_angle, stiffness_model, crowning and tooth friction (D-116); n2 the
    !> driven gear's teeth (0: not a whole number).
    subroutine configure_issue26(self, grp, units, n2, err)
       class(helical_gear_t), intent(inout) :: self
@@ -484,7 +484,7 @@ contains
                         self%face, self%youngs, self%cl%law%k, &
                         self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b, &
                         guarded_ratio(self%cl%r2, self%cl%r1), self%mp + self%mf])
-      ! issue 26 (D-113): only when used (bundled decks: as before)
+      ! issue 26 (D-116): only when used (bundled decks: as before)
       if (self%iso) then
          call add_choice(p, 'stiffness_model', 3.0_wp, 'iso6336')
          call append_params(p, [character(len=40) :: 'iso_cprime', 'iso_cgamma_alpha', 'pressure_angle_rad', &

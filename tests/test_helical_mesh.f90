@@ -1,4 +1,4 @@
-!> The helical gear's issue-26 leftovers (D-113) against hand geometry on the
+!> The helical gear's issue-26 leftovers (D-116) against hand geometry on the
 !> plane of action, written here independently of the element:
 !> a 24/48-tooth pair on r_b1 = 1.4095 in, m_p = 1.55, beta_b = 18 deg,
 !> face 1.2 in (m_F = F tan(beta_b) / p_b = 1.06).
@@ -40,7 +40,7 @@ program test_helical_mesh
                                           "&node id = 'b', type = 'inertia', inertia = 0.08 /"//nl
    character(len=:), allocatable :: mesh
 
-   call suite_begin('helical gear: friction over the lines of contact, crowning, ISO 6336 stiffness (D-113)')
+   call suite_begin('helical gear: friction over the lines of contact, crowning, ISO 6336 stiffness (D-116)')
    call hand_geometry()
    call lines_are_eq_6_1()
    call friction_against_quadrature()

@@ -1,4 +1,4 @@
-!> The quasi-static reference (D-103) over the hunting period (D-115) and in a session.
+!> The quasi-static reference (D-103) over the hunting period (D-118) and in a session.
 !> A 20-tooth driver with one pitch error x on tooth 3 (the pair that entered at count
 !> m = 2), TRAIN's two levels k, c2 k, the driver held at a speed and the driven gear
 !> under a torque T_b: the static mesh force is F = T_b / r_b2 at every position and the
@@ -23,7 +23,7 @@ program test_static_hunting
    real(wp), parameter :: k = 1.0e6_wp, c2 = 1.8_wp, b = 0.01_wp, x = 1.0e-4_wp, tb = 200.0_wp, rb2 = 2.0_wp
    real(wp), parameter :: f = tb/rb2
 
-   call suite_begin('static reference over the hunting period, and in a session (D-115)')
+   call suite_begin('static reference over the hunting period, and in a session (D-118)')
    call hunting_period_static_te()
    call both_gears_two_driver_turns()
    call session_has_the_static_reference()

@@ -68,7 +68,7 @@ contains
       type(preload_info_t), intent(out) :: info
       type(error_t), allocatable, intent(out) :: err
       !> accept a residual at the angles' rounding, 16 eps max|theta| max|J| (angles of many
-      !> turns: the quasi-static reference over a hunting period, D-115); default off
+      !> turns: the quasi-static reference over a hunting period, D-118); default off
       logical, intent(in), optional :: rounding_floor
       real(wp), allocatable :: kappa(:), y(:)
       integer, allocatable :: dof(:)

@@ -5,7 +5,7 @@
 !> max static mesh force (trainsim_observer, obs_finish). With per-tooth errors,
 !> run-out or a fault (the element's `hunting_period` H > 1) the positions span the
 !> whole hunting period, 24 per mesh cycle over H cycles (at most max_static_cycles), so
-!> every pair of teeth is met (D-115).
+!> every pair of teeth is met (D-118).
 !>
 !> A gear mesh is an element with the parameter `mesh_period_angle` (2 pi / N of its
 !> driver, the left node): spur_gear, helical_gear. For position j the whole train

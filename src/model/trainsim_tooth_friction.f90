@@ -19,7 +19,7 @@
 !> -mu W p_b / 2: eq. (3.14). Rear-face contact takes the same roll map mirrored
 !> about the pitch point (TRAIN's zones do not distinguish the faces either).
 !>
-!> A helical pair (tf_add_lines, D-113): the load spreads uniformly over the
+!> A helical pair (tf_add_lines, D-116): the load spreads uniformly over the
 !> lines of contact, which cross the path of contact obliquely, so every point
 !> of a line has its own roll s and slide v_s(s), linear in s. The friction is
 !> mu W_n per unit normal load with W_n = W / cos(zeta_b) (the normal force on

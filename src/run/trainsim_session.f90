@@ -139,7 +139,7 @@ contains
       self%stats = fresh_stats
       call check_fixed_step(self%model, err)
       if (allocated(err)) return
-      call static_reference(self%model, self%obs%qs)   ! Kv, mesh orders, rattle as a run's (D-103, D-115)
+      call static_reference(self%model, self%obs%qs)   ! Kv, mesh orders, rattle as a run's (D-103, D-118)
       self%t_end = self%model%run%t_end
       self%dout = self%model%run%output_interval
       if (.not. self%dout > 0.0_wp) self%dout = self%model%run%dt

@@ -12,7 +12,7 @@
   (every dataset of the history file);
 - a run of the rig with the Fourier stiffness and TE of the Kahraman-Singh form closes its
   ledger (the printed residual to 1e-10 of the printed scale);
-- tip relief by its start roll angle (D-114) gives the table of the same relief by length;
+- tip relief by its start roll angle (D-117) gives the table of the same relief by length;
 - bad input: a tip relief longer than half the path of contact (by length or by a start
   roll angle beyond the tip), a stiffness table that is
   not periodic, a negative harmonic amplitude, harmonics and phases of different lengths:
@@ -92,7 +92,7 @@ with tempfile.TemporaryDirectory() as tmp:
             check(f'{shape}: the two-pair zone peaks at C_a (1 - (m_p - 1)/(2 L_a))^n = {peak:.6e} '
                   f'(table {d[:, 5].max():.6e})', abs(d[:, 5].max() - peak) < 1e-3 * ca)
 
-    # tip relief by its start roll angle (D-114): the driver's roll xi_s from T1, so
+    # tip relief by its start roll angle (D-117): the driver's roll xi_s from T1, so
     # L_a = T1E - r_b1 xi_s with T1E = r_b1 tan(phi) + m_p p_b - alpha r_b1 (phi = 20 deg in
     # TRAIN's constants form, alpha = 0 here): the same table as by the length, to rounding
     t1e = math.tan(math.radians(20.0)) + MP * PB
