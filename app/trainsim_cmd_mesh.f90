@@ -1,4 +1,4 @@
-!> trainsim gear DECK [--mesh ID]: a spur gear's mesh excitation (issue 26)
+!> trainsim gear DECK [--mesh ID]: a spur or helical gear's mesh excitation (issue 26)
 !> from the deck: the mesh stiffness k c(u), the loaded and the unloaded
 !> static transmission error over a tooth period, or over the hunting period
 !> when per-tooth data, run-out or a fault repeat later; as a table, and as a
@@ -12,7 +12,6 @@ module trainsim_cmd_mesh
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
    use trainsim_excited_mesh, only: excited_mesh_t
-   use trainsim_mesh_excitation, only: model_name
    use trainsim_cli, only: nargs, arg, quit, fail, text_value, real_value
    use trainsim_cmd_scripts, only: find_script, env_text, quoted
    implicit none
@@ -71,9 +70,9 @@ contains
       end do
       if (found == 0) then
          if (len(mesh_id) == 0) then
-            write (error_unit, '(a)') 'trainsim: gear: error: '//deck_file//' has no spur_gear'
+            write (error_unit, '(a)') 'trainsim: gear: error: '//deck_file//' has no spur_gear or helical_gear'
          else
-            write (error_unit, '(a)') "trainsim: gear: error: '"//mesh_id//"' is not a spur_gear of "//deck_file
+            write (error_unit, '(a)') "trainsim: gear: error: '"//mesh_id//"' is not a spur_gear or helical_gear of "//deck_file
          end if
          call quit(2)
       end if
@@ -125,12 +124,11 @@ contains
       emin = huge(1.0_wp); emax = -emin; umin = emin; umax = -emin
       do j = 0, n - 1
          u = period*(j + 0.5_wp)/n
-         call e%ex%at_roll(u, c, te, pairs)
-         tu = e%ex%unloaded_te(u)
+         call e%mesh_at_roll(u, c, te, tu, pairs)
          cmin = min(cmin, c); cmax = max(cmax, c); csum = csum + c
          emin = min(emin, te); emax = max(emax, te); umin = min(umin, tu); umax = max(umax, tu)
       end do
-      write (unit, '(a)') '# mesh '//e%id//': stiffness_model = '//model_name(e%ex%model)
+      write (unit, '(a)') '# mesh '//e%id//': stiffness_model = '//e%stiffness_name()
       write (unit, '(a, es15.7)') '# stiffness k (force/length)          ', e%cl%law%k
       write (unit, '(a, 3es15.7)') '# k c(u): mean, min, max             ', e%cl%law%k*csum/n, e%cl%law%k*cmin, &
          e%cl%law%k*cmax
@@ -141,8 +139,8 @@ contains
       write (unit, '(a)') '# u (teeth), pairs, k c(u), c(u), TE loaded, TE unloaded'
       do j = 0, n - 1
          u = period*real(j, wp)/n
-         call e%ex%at_roll(u, c, te, pairs)
-         write (unit, '(es24.16, i6, 4es24.16)') u, pairs, e%cl%law%k*c, c, te, e%ex%unloaded_te(u)
+         call e%mesh_at_roll(u, c, te, tu, pairs)
+         write (unit, '(es24.16, i6, 4es24.16)') u, pairs, e%cl%law%k*c, c, te, tu
       end do
    end subroutine write_table
 end module trainsim_cmd_mesh

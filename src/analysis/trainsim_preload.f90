@@ -63,10 +63,13 @@ contains
 
    !> Replace the initial angles of the free nodes of `model` by the static preload
    !> (held and fixed nodes, the reference of a free train, all speeds kept).
-   subroutine apply_preload(model, info, err)
+   subroutine apply_preload(model, info, err, rounding_floor)
       type(model_t), intent(inout) :: model
       type(preload_info_t), intent(out) :: info
       type(error_t), allocatable, intent(out) :: err
+      !> accept a residual at the angles' rounding, 16 eps max|theta| max|J| (angles of many
+      !> turns: the quasi-static reference over a hunting period, D-118); default off
+      logical, intent(in), optional :: rounding_floor
       real(wp), allocatable :: kappa(:), y(:)
       integer, allocatable :: dof(:)
       integer :: n, i, pass, ne
@@ -106,7 +109,7 @@ contains
       do pass = 1, max_passes
          info%passes = pass
          call set_modes(model, y, info%face)
-         call newton(model, y, dof, n, kappa, info, err); if (allocated(err)) return
+         call newton(model, y, dof, n, kappa, info, err, rounding_floor); if (allocated(err)) return
          call check_modes(model, y, info%face, changed)
          if (.not. changed) exit
          if (pass == max_passes) then
@@ -287,13 +290,15 @@ contains
    end subroutine node_residuals
 
    !> Newton's method on R(theta, a) = 0 in the current modes.
-   subroutine newton(model, y, dof, n, kappa, info, err)
+   subroutine newton(model, y, dof, n, kappa, info, err, rounding_floor)
       type(model_t), intent(inout) :: model
       real(wp), intent(inout) :: y(:)
       integer, intent(in) :: dof(:), n
       real(wp), intent(in) :: kappa(:)
       type(preload_info_t), intent(inout) :: info
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: rounding_floor
+      real(wp) :: r_floor
       real(wp), allocatable :: jac(:, :), rhs(:, :), res(:), ra(:)
       integer, allocatable :: ipiv(:), row(:)
       real(wp) :: scale, jt(2, 4), rmax
@@ -313,11 +318,12 @@ contains
          return
       end if
       if (n == 0) return
+      r_floor = 0.0_wp
       do it = 0, max_newton
          call node_residuals(model, y, kappa, info%acceleration, ra, scale)
          res = ra
          rmax = maxval(abs(res))
-         if (rmax <= tol_residual*max(scale, tiny(1.0_wp))) return
+         if (rmax <= max(tol_residual*max(scale, tiny(1.0_wp)), r_floor)) return
          if (it == max_newton) exit
          info%iterations = info%iterations + 1
          jac = 0.0_wp
@@ -342,6 +348,9 @@ contains
             do i = 1, size(model%nodes)
                if (row(i) > 0) jac(row(i), n) = -model%nodes(i)%n%inertia()*kappa(i)
             end do
+         end if
+         if (present(rounding_floor)) then
+            if (rounding_floor) r_floor = 16.0_wp*epsilon(1.0_wp)*maxval(abs(model%theta))*maxval(abs(jac))
          end if
          rhs(:, 1) = -res
          call dgesv(n, 1, jac, n, ipiv, rhs, n, info_la)

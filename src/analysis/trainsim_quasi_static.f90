@@ -2,7 +2,10 @@
 !> mesh force and the loaded static transmission error at the run's loads, from the
 !> static equilibrium (trainsim_preload) at `static_positions` driver positions
 !> spread evenly over one mesh cycle, for the dynamic factor Kv = max dynamic /
-!> max static mesh force (trainsim_observer, obs_finish).
+!> max static mesh force (trainsim_observer, obs_finish). With per-tooth errors,
+!> run-out or a fault (the element's `hunting_period` H > 1) the positions span the
+!> whole hunting period, 24 per mesh cycle over H cycles (at most max_static_cycles), so
+!> every pair of teeth is met (D-118).
 !>
 !> A gear mesh is an element with the parameter `mesh_period_angle` (2 pi / N of its
 !> driver, the left node): spur_gear, helical_gear. For position j the whole train
@@ -29,13 +32,16 @@ module trainsim_quasi_static
    implicit none
    private
 
-   public :: static_ref_t, static_reference, mesh_period_angle, static_positions, max_static_nodes
+   public :: static_ref_t, static_reference, mesh_period_angle, static_positions, max_static_nodes, max_static_cycles
 
    !> Driver positions per mesh cycle (a two-level stiffness has two static values;
    !> 24 places at least 7 in the shorter zone of any contact ratio in [1.3, 1.7]).
    integer, parameter :: static_positions = 24
    !> Largest train (nodes) whose static reference is computed.
    integer, parameter :: max_static_nodes = 400
+   !> Most mesh cycles of a hunting period the static reference spans (24 positions each;
+   !> a longer period is cut here: 48 000 static solves).
+   integer, parameter :: max_static_cycles = 2000
 
    !> Per element (0 for an element that is no gear mesh, or when not computed).
    type :: static_ref_t
@@ -53,16 +59,37 @@ contains
    real(wp) function mesh_period_angle(model, i) result(a)
       type(model_t), intent(in) :: model
       integer, intent(in) :: i
+      a = param_value(model, i, 'mesh_period_angle', 0.0_wp)
+      if (.not. a > 0.0_wp) a = 0.0_wp
+   end function mesh_period_angle
+
+   !> Element i's parameter `name`, or `default` if it has none.
+   real(wp) function param_value(model, i, name, default) result(a)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: i
+      character(len=*), intent(in) :: name
+      real(wp), intent(in) :: default
       type(param_list_t) :: p
       integer :: k
-      a = 0.0_wp
+      a = default
       p = model%elements(i)%e%params()
       if (.not. allocated(p%names)) return
       do k = 1, size(p%names)
-         if (p%names(k)%s == 'mesh_period_angle') a = p%values(k)
+         if (p%names(k)%s == name) a = p%values(k)
       end do
-      if (.not. a > 0.0_wp) a = 0.0_wp
-   end function mesh_period_angle
+   end function param_value
+
+   !> Mesh cycles the static reference of element i spans: its hunting period (per-tooth
+   !> errors, run-out, a fault: the excitation repeats after lcm(N1, N2) cycles or a gear's
+   !> turn), at most max_static_cycles; 1 without such data.
+   integer function static_cycles(model, i) result(nc)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: i
+      real(wp) :: h
+      h = param_value(model, i, 'hunting_period', 1.0_wp)
+      nc = 1
+      if (h >= 1.0_wp) nc = nint(min(h, real(max_static_cycles, wp)))
+   end function static_cycles
 
    !> The static reference of every gear mesh of `model` (see the module note).
    subroutine static_reference(model, ref)
@@ -73,7 +100,7 @@ contains
       type(preload_info_t) :: info
       type(error_t), allocatable :: err
       real(wp) :: d, f, fmag
-      integer :: ne, nn, i, j, n, l, r, c, p, loop_el
+      integer :: ne, nn, i, j, n, l, r, c, p, loop_el, npos
       ne = size(model%elements); nn = size(model%nodes)
       allocate (ref%force(ne), ref%te_min(ne), ref%te_max(ne), ref%te_mean(ne), ref%mesh(ne), ref%period(ne))
       ref%force = 0.0_wp; ref%te_min = 0.0_wp; ref%te_max = 0.0_wp; ref%te_mean = 0.0_wp
@@ -96,13 +123,14 @@ contains
          l = model%elements(i)%e%left; r = model%elements(i)%e%right
          call rigid_speeds(model, l, 1.0_wp, kappa, known, loop_el)
          fmag = -1.0_wp
-         do j = 0, static_positions - 1
+         npos = static_positions*static_cycles(model, i)
+         do j = 0, npos - 1
             do n = 1, nn
                model%nodes(n)%n%theta0 = theta_saved(n)
                if (known(n) .and. .not. model%nodes(n)%n%is_fixed()) &
                   model%nodes(n)%n%theta0 = theta_saved(n) + kappa(n)*ref%period(i)*real(j, wp)/real(static_positions, wp)
             end do
-            call apply_preload(model, info, err)
+            call apply_preload(model, info, err, rounding_floor=npos > static_positions)
             if (allocated(err)) then
                ref%note = err%message
                exit mesh_loop
@@ -114,7 +142,7 @@ contains
                ref%te_min(i) = d; ref%te_max(i) = d
             end if
             ref%te_min(i) = min(ref%te_min(i), d); ref%te_max(i) = max(ref%te_max(i), d)
-            ref%te_mean(i) = ref%te_mean(i) + d/real(static_positions, wp)
+            ref%te_mean(i) = ref%te_mean(i) + d/real(npos, wp)
             if (abs(f) > fmag) then
                fmag = abs(f); ref%force(i) = f
             end if

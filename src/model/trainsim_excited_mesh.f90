@@ -15,11 +15,12 @@
 module trainsim_excited_mesh
    use trainsim_kinds, only: wp, pi, two_pi
    use trainsim_error, only: error_t
+   use trainsim_tooth_friction, only: pressure_angle_of
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_event, only: event_t
    use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_mesh_excitation, only: mesh_excitation_t, sm_iso, iso_single_pair_stiffness
+   use trainsim_mesh_excitation, only: mesh_excitation_t, sm_iso, iso_single_pair_stiffness, model_name
    implicit none
    private
 
@@ -39,7 +40,9 @@ module trainsim_excited_mesh
       real(wp) :: zone_m = 0.0_wp         !< the current zone's count of teeth entered (its newest pair's)
    contains
       procedure, non_overridable :: mesh_roll => em_roll
-      procedure, non_overridable :: excitation => em_excitation
+      procedure :: excitation => em_excitation
+      procedure :: mesh_at_roll => em_mesh_at_roll
+      procedure :: stiffness_name => em_stiffness_name
       procedure, non_overridable :: shift => em_shift
       procedure :: torques => em_torques
       procedure :: torques_dissipation => em_torques_dissipation
@@ -70,7 +73,7 @@ contains
       real(wp), intent(in) :: teeth2, mp, c2, pitch_module, phi, face
       logical, intent(in) :: internal
       type(error_t), allocatable, intent(out) :: err
-      real(wp) :: n2, cp, cg
+      real(wp) :: n2, cp, cg, ph
       logical :: iso_ok
       n2 = teeth2
       if (.not. n2 > 0.0_wp) then
@@ -79,6 +82,11 @@ contains
          n2 = anint(n2)
       end if
       iso_ok = pitch_module > 0.0_wp .and. .not. (grp%holds('stiffness') .or. grp%holds('stiffness_per_width'))
+      if (grp%holds('tip_relief_start_roll')) then   ! T1E for a relief by roll angle (constants form: phi 20 deg default)
+         call pressure_angle_of(grp, phi, ph, err); if (allocated(err)) return
+         self%ex%rb1 = self%cl%r1
+         self%ex%t1e = self%cl%r1*tan(ph) + mp*two_pi*self%cl%r1/self%teeth - self%alpha*self%cl%r1
+      end if
       call self%ex%configure(grp, self%teeth, n2, mp, c2, two_pi*self%cl%r1/self%teeth, iso_ok, err)
       if (allocated(err)) return
       if (self%ex%model == sm_iso) then
@@ -104,6 +112,24 @@ contains
       dc = dc*(self%teeth/two_pi)
       de = de*(self%teeth/two_pi)
    end subroutine em_excitation
+
+   !> The mesh at roll u (teeth) from the geometry alone, for `trainsim gear`:
+   !> stiffness factor c, loaded TE te, unloaded TE tu, pairs in contact (0: lines).
+   pure subroutine em_mesh_at_roll(self, u, c, te, tu, pairs)
+      class(excited_mesh_t), intent(in) :: self
+      real(wp), intent(in) :: u
+      real(wp), intent(out) :: c, te, tu
+      integer, intent(out) :: pairs
+      call self%ex%at_roll(u, c, te, pairs)
+      tu = self%ex%unloaded_te(u)
+   end subroutine em_mesh_at_roll
+
+   !> The deck's word for the stiffness model.
+   pure function em_stiffness_name(self) result(w)
+      class(excited_mesh_t), intent(in) :: self
+      character(len=:), allocatable :: w
+      w = model_name(self%ex%model)
+   end function em_stiffness_name
 
    !> The driver angle and speed the contact law sees: a = thl - e/r1, va = wl - e'/r1.
    pure subroutine em_shift(self, thl, wl, a, va)

@@ -52,6 +52,7 @@ module trainsim_mesh_excitation
       real(wp) :: fault_factor = 1.0_wp
       logical :: has_dev = .false.                   !< per-pair deviations (relief, profile, pitch)
       real(wp) :: cmin = 1.0_wp, cmax = 1.0_wp, cmean = 1.0_wp   !< over a tooth period (no fault)
+      real(wp) :: rb1 = 0.0_wp, t1e = 0.0_wp         !< driver base radius, T1 to the end of contact (0: unknown)
    contains
       procedure :: configure => ex_configure
       procedure :: configure_te => ex_configure_te
@@ -140,7 +141,11 @@ contains
       call grp%get_real('tip_relief', self%ca, err, default=0.0_wp); if (allocated(err)) return
       call grp%require_nonnegative('tip_relief', self%ca, err); if (allocated(err)) return
       if (self%ca > 0.0_wp) then
-         call grp%get_real('tip_relief_length', lr, err); if (allocated(err)) return
+         if (grp%holds('tip_relief_start_roll')) then
+            call relief_from_roll(self, grp, lr, err); if (allocated(err)) return
+         else
+            call grp%get_real('tip_relief_length', lr, err); if (allocated(err)) return
+         end if
          call grp%require_positive('tip_relief_length', lr, err); if (allocated(err)) return
          if (.not. lr <= 0.5_wp*mp*pb) then
             call fatal_error(err, grp%where('tip_relief_length')//': error: tip_relief_length '//str(lr)// &
@@ -213,6 +218,34 @@ contains
       self%has_te = size(self%ea) > 0 .or. self%ro1 > 0.0_wp .or. self%ro2 > 0.0_wp
       self%active = self%has_te
    end subroutine ex_configure_te
+
+   !> tip_relief_start_roll xi_s (degrees, the driver's roll angle where the relief
+   !> starts) as a relief length: L_a = T1E - r_b1 xi_s, T1E = r_b1 xi_a the roll to
+   !> the driver's tip (the end of contact); 0 < L_a <= m_p p_b / 2.
+   subroutine relief_from_roll(self, grp, lr, err)
+      class(mesh_excitation_t), intent(inout) :: self
+      type(deck_group_t), intent(inout) :: grp
+      real(wp), intent(out) :: lr
+      type(error_t), allocatable, intent(inout) :: err
+      real(wp) :: xs, xa, xlo
+      lr = 0.0_wp
+      if (grp%holds('tip_relief_length')) then
+         call fatal_error(err, grp%where('tip_relief_start_roll')//': error: give tip_relief_length or '// &
+                          'tip_relief_start_roll, not both', err_input)
+         return
+      end if
+      call grp%get_real('tip_relief_start_roll', xs, err); if (allocated(err)) return
+      xa = self%t1e/self%rb1*180.0_wp/pi                  ! the tip's roll angle, degrees
+      xlo = (self%t1e - 0.5_wp*self%mp*self%pb)/self%rb1*180.0_wp/pi
+      if (.not. (xs >= xlo .and. xs < xa)) then
+         call fatal_error(err, grp%where('tip_relief_start_roll')//': error: tip_relief_start_roll '//str(xs)// &
+                          ' deg must lie between the roll angle of mid-path, '//str(xlo)//' deg, and that of '// &
+                          'the driver''s tip, '//str(xa)//' deg (exclusive): a relief of at most half the '// &
+                          'path of contact', err_input)
+         return
+      end if
+      lr = self%t1e - self%rb1*xs*pi/180.0_wp
+   end subroutine relief_from_roll
 
    !> runout_driver, runout_driven (>= 0) and their phases.
    subroutine read_runout(self, grp, err)

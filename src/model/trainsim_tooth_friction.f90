@@ -19,6 +19,18 @@
 !> -mu W p_b / 2: eq. (3.14). Rear-face contact takes the same roll map mirrored
 !> about the pitch point (TRAIN's zones do not distinguish the faces either).
 !>
+!> A helical pair (tf_add_lines, D-116): the load spreads uniformly over the
+!> lines of contact, which cross the path of contact obliquely, so every point
+!> of a line has its own roll s and slide v_s(s), linear in s. The friction is
+!> mu W_n per unit normal load with W_n = W / cos(zeta_b) (the normal force on
+!> the helicoid; W, the transverse force, gives the torques W r_b), against the
+!> slide, in the transverse plane, arm rho1(s):
+!>   T_1 = -mu (W / cos zeta_b) sum_j int_{lo_j}^{hi_j} sign(v_s) rho1 ds / S,
+!>   S = sum_j (hi_j - lo_j) = L_c sin(zeta_b),
+!> [lo_j, hi_j] the roll extent of line j. sign(v_s) changes once along the
+!> path, at s* where v_s = 0 (the pitch point at matched speeds), so the
+!> integrals are closed-form and continuous in the state: no events.
+!>
 !> 'constant' switches sign(v_s) by events: per pair a guard sigma_k v_s,k with
 !> the sign sigma_k held between events (RK4-events and CVODE locate it). Pure
 !> functions of the geometry, the roll and the speeds: no allocation, no I/O.
@@ -32,7 +44,7 @@ module trainsim_tooth_friction
    implicit none
    private
 
-   public :: tooth_friction_t, friction_arms
+   public :: tooth_friction_t, friction_arms, pressure_angle_of
 
    !> Default regularisation speed of 'speed': 1 mm/s (in the deck's length units per s).
    real(wp), parameter :: v_reg_default_m = 1.0e-3_wp
@@ -55,6 +67,8 @@ module trainsim_tooth_friction
       procedure :: guards => tf_guards
       procedure :: set_signs => tf_set_signs
       procedure :: flip => tf_flip
+      procedure :: add_lines => tf_add_lines
+      procedure :: add_lines_jacobian => tf_add_lines_jacobian
    end type tooth_friction_t
 
 contains
@@ -88,16 +102,7 @@ contains
       if (allocated(err)) return
       call grp%require_positive('tooth_friction_velocity', self%v_reg, err); if (allocated(err)) return
       if (.not. self%on()) return
-      ph = phi
-      if (ph == 0.0_wp) then   ! TRAIN's constants form has no pressure angle: asked only with friction
-         call grp%get_real('pressure_angle', ph, err, default=20.0_wp); if (allocated(err)) return
-         if (.not. (ph > 0.0_wp .and. ph < 45.0_wp)) then
-            call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, '// &
-                             'got '//str(ph), err_input)
-            return
-         end if
-         ph = ph*pi/180.0_wp
-      end if
+      call pressure_angle_of(grp, phi, ph, err); if (allocated(err)) return   ! (asked only with friction)
       self%t1p = rb1*tan(ph)
       self%t2p = rb2*tan(ph)
       self%ap = alpha*rb1
@@ -118,6 +123,24 @@ contains
          return
       end if
    end subroutine tf_configure
+
+   !> The pressure angle ph (rad): phi if > 0 (a geometry form's), else the group's
+   !> `pressure_angle` in degrees, default 20, in (0, 45) (TRAIN's constants form has none).
+   subroutine pressure_angle_of(grp, phi, ph, err)
+      type(deck_group_t), intent(inout) :: grp
+      real(wp), intent(in) :: phi
+      real(wp), intent(out) :: ph
+      type(error_t), allocatable, intent(inout) :: err
+      ph = phi
+      if (ph > 0.0_wp) return
+      call grp%get_real('pressure_angle', ph, err, default=20.0_wp); if (allocated(err)) return
+      if (.not. (ph > 0.0_wp .and. ph < 45.0_wp)) then
+         call fatal_error(err, grp%where('pressure_angle')//': error: pressure_angle must be in (0, 45) degrees, '// &
+                          'got '//str(ph), err_input)
+         return
+      end if
+      ph = ph*pi/180.0_wp
+   end subroutine pressure_angle_of
 
    pure logical function tf_on(self) result(on)
       class(tooth_friction_t), intent(in) :: self
@@ -231,6 +254,105 @@ contains
          if (v < 0.0_wp) self%sig(k) = -1.0_wp
       end do
    end subroutine tf_set_signs
+
+   !> int_lo^hi sign(av + bv s) (a + b s) ds and its partial in s* = -av/bv
+   !> (0 when s* lies outside (lo, hi) or bv = 0).
+   pure subroutine signed_integral(a, b, av, bv, lo, hi, v, dv_ds)
+      real(wp), intent(in) :: a, b, av, bv, lo, hi
+      real(wp), intent(out) :: v, dv_ds
+      real(wp) :: sc, sg
+      dv_ds = 0.0_wp
+      if (bv == 0.0_wp) then
+         sg = 0.0_wp
+         if (av /= 0.0_wp) sg = sign(1.0_wp, av)
+         v = sg*(prim(hi) - prim(lo))
+         return
+      end if
+      sg = sign(1.0_wp, bv)
+      sc = max(lo, min(hi, -av/bv))
+      v = sg*(prim(hi) + prim(lo) - 2.0_wp*prim(sc))
+      if (sc > lo .and. sc < hi) dv_ds = -2.0_wp*sg*(a + b*sc)
+   contains
+      pure real(wp) function prim(s)
+         real(wp), intent(in) :: s
+         prim = s*(a + 0.5_wp*b*s)
+      end function prim
+   end subroutine signed_integral
+
+   !> sign(v_s) at roll s (0 at rest).
+   pure real(wp) function slide_sign(av, bv, s) result(sg)
+      real(wp), intent(in) :: av, bv, s
+      sg = 0.0_wp
+      if (av + bv*s /= 0.0_wp) sg = sign(1.0_wp, av + bv*s)
+   end function slide_sign
+
+   !> Linear coefficients in the roll s of rho1 = a1 + b1 s and rho2 = a2 + b2 s on the face.
+   pure subroutine arm_lines(self, face, a1, b1, a2, b2)
+      class(tooth_friction_t), intent(in) :: self
+      integer, intent(in) :: face
+      real(wp), intent(out) :: a1, b1, a2, b2
+      b1 = merge(-1.0_wp, 1.0_wp, face < 0)
+      b2 = self%s2*b1
+      a1 = self%t1p - b1*self%ap
+      a2 = self%t2p - b2*self%ap
+   end subroutine arm_lines
+
+   !> Add the friction spread over the lines of contact [lo(j), hi(j)] (roll
+   !> from A, length) of a helical pair under the transverse mesh force w >= 0,
+   !> base helix angle zeta (module note), to tl, tr and its power to p.
+   pure subroutine tf_add_lines(self, lo, hi, zeta, face, w, wl, wr, tl, tr, p)
+      class(tooth_friction_t), intent(in) :: self
+      real(wp), intent(in) :: lo(:), hi(:), zeta, w, wl, wr
+      integer, intent(in) :: face
+      real(wp), intent(inout) :: tl, tr, p
+      real(wp) :: a1, b1, a2, b2, av, bv, g1, g2, gv, x, d, sl
+      integer :: j
+      call arm_lines(self, face, a1, b1, a2, b2)
+      av = wl*a1 - wr*a2; bv = wl*b1 - wr*b2            ! v_s = av + bv s
+      g1 = 0.0_wp; g2 = 0.0_wp; gv = 0.0_wp; sl = 0.0_wp
+      do j = 1, size(lo)
+         call signed_integral(a1, b1, av, bv, lo(j), hi(j), x, d); g1 = g1 + x
+         call signed_integral(a2, b2, av, bv, lo(j), hi(j), x, d); g2 = g2 + x
+         call signed_integral(av, bv, av, bv, lo(j), hi(j), x, d); gv = gv + x   ! int |v_s|
+         sl = sl + (hi(j) - lo(j))
+      end do
+      if (.not. sl > 0.0_wp) return
+      x = self%mu*w/(cos(zeta)*sl)
+      tl = tl - x*g1
+      tr = tr + x*g2
+      p = p + x*gv
+   end subroutine tf_add_lines
+
+   !> Partials of `add_lines`'s torques in (thl, wl, thr, wr) added to jt: the
+   !> normal force's partials dw, the lines' ends' rates dlo, dhi (d/d thl).
+   pure subroutine tf_add_lines_jacobian(self, lo, hi, dlo, dhi, zeta, face, w, dw, wl, wr, jt)
+      class(tooth_friction_t), intent(in) :: self
+      real(wp), intent(in) :: lo(:), hi(:), dlo(:), dhi(:), zeta, w, dw(4), wl, wr
+      integer, intent(in) :: face
+      real(wp), intent(inout) :: jt(2, 4)
+      real(wp) :: a1, b1, a2, b2, av, bv, g(2), dg(2, 4), x, d(2), sl, dsl, ds(2), q
+      integer :: j
+      call arm_lines(self, face, a1, b1, a2, b2)
+      av = wl*a1 - wr*a2; bv = wl*b1 - wr*b2
+      ds = 0.0_wp                                          ! ds*/dwl, ds*/dwr
+      if (bv /= 0.0_wp) ds = [-(a1*bv - av*b1), (a2*bv - av*b2)]/bv**2
+      g = 0.0_wp; dg = 0.0_wp; sl = 0.0_wp; dsl = 0.0_wp
+      do j = 1, size(lo)
+         call signed_integral(a1, b1, av, bv, lo(j), hi(j), x, d(1)); g(1) = g(1) + x
+         call signed_integral(a2, b2, av, bv, lo(j), hi(j), x, d(2)); g(2) = g(2) + x
+         dg(:, 1) = dg(:, 1) + slide_sign(av, bv, hi(j))*[a1 + b1*hi(j), a2 + b2*hi(j)]*dhi(j) &
+                    - slide_sign(av, bv, lo(j))*[a1 + b1*lo(j), a2 + b2*lo(j)]*dlo(j)
+         dg(:, 2) = dg(:, 2) + d*ds(1)
+         dg(:, 4) = dg(:, 4) + d*ds(2)
+         sl = sl + (hi(j) - lo(j)); dsl = dsl + (dhi(j) - dlo(j))
+      end do
+      if (.not. sl > 0.0_wp) return
+      q = self%mu/(cos(zeta)*sl)
+      jt(1, :) = jt(1, :) - q*(dw*g(1) + w*dg(1, :))
+      jt(2, :) = jt(2, :) + q*(dw*g(2) + w*dg(2, :))
+      jt(1, 1) = jt(1, 1) + q*w*g(1)*dsl/sl
+      jt(2, 1) = jt(2, 1) - q*w*g(2)*dsl/sl
+   end subroutine tf_add_lines_jacobian
 
    !> A slide's guard fired: reverse its sign and report slip_forward (now
    !> v_s > 0) or slip_backward.

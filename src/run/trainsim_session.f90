@@ -37,6 +37,7 @@ module trainsim_session
    use trainsim_fixed_step, only: fixed_step_t
    use trainsim_run_checks, only: is_fixed_step
    use trainsim_simulate, only: drive_t, drive_setup, advance_to, check_fixed_step
+   use trainsim_quasi_static, only: static_ref_t, static_reference
    use trainsim_session_inputs, only: in_torque, in_speed, input_of, check_input, input_start_value, &
                                       hold_speed, hold_voltage, own_sequences, release_sequences, &
                                       sequence_progress, set_sequence_progress
@@ -117,6 +118,7 @@ contains
       type(observer_t) :: fresh_obs
       type(run_stats_t) :: fresh_stats
       type(drive_t) :: fresh_d
+      type(static_ref_t) :: qs
       if (self%started) call self%finish()
       if (self%owns_sequences) call release_sequences(self%model)
       if (allocated(self%input_load)) deallocate (self%input_load)
@@ -137,11 +139,14 @@ contains
       self%stats = fresh_stats
       call check_fixed_step(self%model, err)
       if (allocated(err)) return
+      call static_reference(self%model, self%obs%qs)   ! Kv, mesh orders, rattle as a run's (D-103, D-118)
       self%t_end = self%model%run%t_end
       self%dout = self%model%run%output_interval
       if (.not. self%dout > 0.0_wp) self%dout = self%model%run%dt
       call self%model%init_modes(self%t, self%y)
+      qs = self%obs%qs
       self%obs = fresh_obs
+      self%obs%qs = qs
       self%obs%refine_peaks = .not. is_fixed_step(self%model%run%integrator)
       call self%obs%start(self%model, self%t, self%y, self%sink, err)
       if (allocated(err)) return

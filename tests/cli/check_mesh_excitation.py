@@ -12,7 +12,9 @@
   (every dataset of the history file);
 - a run of the rig with the Fourier stiffness and TE of the Kahraman-Singh form closes its
   ledger (the printed residual to 1e-10 of the printed scale);
-- bad input: a tip relief longer than half the path of contact, a stiffness table that is
+- tip relief by its start roll angle (D-117) gives the table of the same relief by length;
+- bad input: a tip relief longer than half the path of contact (by length or by a start
+  roll angle beyond the tip), a stiffness table that is
   not periodic, a negative harmonic amplitude, harmonics and phases of different lengths:
   exit 2 and a message naming file:line, the group and the key, no backtrace;
 - `--plot OUT.png` writes the figure (when matplotlib is there).
@@ -90,6 +92,18 @@ with tempfile.TemporaryDirectory() as tmp:
             check(f'{shape}: the two-pair zone peaks at C_a (1 - (m_p - 1)/(2 L_a))^n = {peak:.6e} '
                   f'(table {d[:, 5].max():.6e})', abs(d[:, 5].max() - peak) < 1e-3 * ca)
 
+    # tip relief by its start roll angle (D-117): the driver's roll xi_s from T1, so
+    # L_a = T1E - r_b1 xi_s with T1E = r_b1 tan(phi) + m_p p_b - alpha r_b1 (phi = 20 deg in
+    # TRAIN's constants form, alpha = 0 here): the same table as by the length, to rounding
+    t1e = math.tan(math.radians(20.0)) + MP * PB
+    xs = math.degrees(t1e - la * PB)
+    d_len = table(tmp, 'relief_len', f"tip_relief = {ca}, tip_relief_length = {la * PB!r}")
+    d_roll = table(tmp, 'relief_roll', f"tip_relief = {ca}, tip_relief_start_roll = {xs!r}")
+    if d_len is not None and d_roll is not None:
+        err = np.abs(d_len[:, 4:6] - d_roll[:, 4:6]).max()
+        check(f'tip relief by start roll {xs:.6f} deg = by length {la * PB:.6f}: TE columns to {err:.1e} '
+              f'(<= 1e-14 C_a)', err <= 1e-14 * ca)
+
     # Fourier stiffness: FFT of one period
     a, p = [0.2, 0.1, 0.05], [0.0, 1.0, -2.0]
     d = table(tmp, 'fourier', "stiffness_model = 'fourier', stiffness_harmonics = 0.2, 0.1, 0.05, "
@@ -154,6 +168,7 @@ with tempfile.TemporaryDirectory() as tmp:
         'stiffness_factors': "stiffness_model = 'table', stiffness_roll = 0, 0.5, 1, stiffness_factors = 1.4, 1.0, 1.3",
         'stiffness_harmonics': "stiffness_model = 'fourier', stiffness_harmonics = 0.2, -0.1",
         'te_phases': "te_harmonics = 1e-4, 2e-4, te_phases = 0.0",
+        'tip_relief_start_roll': "tip_relief = 1e-3, tip_relief_start_roll = 50.0",
     }
     for key, keys in bad.items():
         deck = os.path.join(tmp, 'bad_' + key + '.nml')
