@@ -32,11 +32,15 @@ module trainsim_arclength
    private
 
    public :: branch_problem_t, point_hook_i, branch_options_t, branch_point_t, branch_t, continue_branch
-   public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed
+   public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed, branch_fold
 
-   !> branch_t%status
+   !> branch_t%status, and a failed point's status (branch_point_t%status): why it stopped
+   !> (or, with restarts, why a stretch of the branch ended): 1 no periodic orbit near the
+   !> start, 2 the corrector failed at the smallest step (not at a fold), 3 the point
+   !> budget spent, 4 an error, 5 the corrector failed at the smallest step at a fold (a
+   !> multiplier near +1: a fold it could not turn).
    integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
-                         branch_failed = 4
+                         branch_failed = 4, branch_fold = 5
 
    !> The deck at a parameter value: extend and give `model_at`.
    type, abstract :: branch_problem_t
@@ -66,6 +70,12 @@ module trainsim_arclength
       real(wp) :: fd_lam = 1.0e-6_wp    !< dP/dlambda: central difference, step of |lambda_0|
       integer :: k = 1                  !< forcing periods per orbit
       type(shoot_options_t) :: shoot   !< the first orbit
+      !> restarts: where the corrector fails at the smallest step (or no orbit is found at a
+      !> restart), a failed point is stored with its reason and the orbit is shot again
+      !> restart_step |lambda_0| further on in lambda (from the last orbit's state, through a
+      !> transient: where a brute-force sweep would jump), up to `restarts` times
+      integer :: restarts = 0
+      real(wp) :: restart_step = 0.01_wp
    end type branch_options_t
 
    type :: branch_point_t
@@ -76,6 +86,13 @@ module trainsim_arclength
       character(len=:), allocatable :: kind        !< '' (a regular point), fold, period-doubling, neimark-sacker
       real(wp) :: residual = 0.0_wp, ds = 0.0_wp
       integer :: corrector = 0, maps = 0           !< corrector steps; period maps up to this point
+      !> for an exact resume: the scaled unknowns z, the vector that bordered the Jacobian
+      !> when the tangent was computed, the step after this point, the phase of t0
+      real(wp), allocatable :: z(:), border(:)
+      real(wp) :: ds_next = 0.0_wp, phase = 0.0_wp
+      integer :: segment = 1                       !< 1 + the restarts before it
+      integer :: status = branch_done              !< a failed point (restarts): its reason, lam where
+      character(len=:), allocatable :: message     !< it failed, no orbit
    end type branch_point_t
 
    type :: branch_t
@@ -144,7 +161,7 @@ contains
       type(branch_t), intent(in), optional :: resume
       procedure(point_hook_i), optional :: hook
       type(ctx_t) :: c
-      integer :: stored
+      integer :: stored, restarts
       type(node_t) :: cur, nxt
       real(wp), allocatable :: t_prev(:)
       real(wp) :: ds, lam
@@ -153,19 +170,41 @@ contains
       c%k = opt%k
       c%fd = opt%fd_lam
       allocate (br%pts(0))
+      restarts = 0
       if (present(resume)) then
          call start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
+         restarts = br%pts(size(br%pts))%segment - 1
       else
-         call start_shot(c, lam0, opt, br, cur, t_prev, ds, err)
+         lam = lam0
+         call start_shot(c, lam, opt, br, cur, t_prev, ds, err)
+         do while (br%status == branch_no_start .and. restarts < opt%restarts .and. .not. allocated(err))
+            call failed_point(br, lam, branch_no_start, br%message)
+            restarts = restarts + 1
+            lam = lam + opt%restart_step*abs(lam0)*sign(1, opt%direction)
+            if (lam > opt%lam_max .or. lam < opt%lam_min) lam = huge(1.0_wp)
+            if (lam == huge(1.0_wp)) exit
+            call start_shot(c, lam, opt, br, cur, t_prev, ds, err)
+         end do
       end if
-      if (allocated(err) .or. br%status == branch_no_start) return
+      stored = 0
+      if (present(resume)) stored = size(br%pts)
+      if (allocated(err)) return
+      if (br%status == branch_no_start) then
+         if (lam < huge(1.0_wp)) call failed_point(br, lam, branch_no_start, br%message)
+         call report_points()
+         if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
+         return
+      end if
       call evaluate(c, cur%z, cur%px, why, err)
       if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'the start point: '//why, err_input)
       if (.not. allocated(err)) call linearise(c, cur, t_prev, err)
       if (allocated(err)) return
-      if (size(br%pts) == 0) call store(br, c, cur, 0.0_wp, '')
-      stored = 0
-      if (present(resume)) stored = size(resume%pts)
+      if (present(resume)) then
+         c%maps = br%maps   ! (the resumed point's linearisation is counted once, as uninterrupted)
+      else
+         call store(br, c, cur, 0.0_wp, '', t_prev, restarts + 1)
+         br%pts(size(br%pts))%ds_next = ds
+      end if
       do
          call report_points()
          if (allocated(err)) return
@@ -189,17 +228,27 @@ contains
             br%rejected = br%rejected + 1
             if (ds <= opt%ds_min) then
                br%status = branch_step_min
+               if (at_fold(cur, c%n)) br%status = branch_fold
                br%message = 'the step reached its minimum '//str(opt%ds_min, 3)//' at lambda = '// &
-                            str(cur%z(c%n + 1)*c%ls, 10)//' and the corrector still failed: '//why
-               exit
+                            str(cur%z(c%n + 1)*c%ls, 10)//trim(merge(' (a fold: a multiplier near +1)', ' (not at a fold)               ', &
+                            br%status == branch_fold))//' and the corrector still failed: '//why
+               if (restarts >= opt%restarts) then
+                  call failed_point(br, cur%z(c%n + 1)*c%ls, br%status, br%message)
+                  exit
+               end if
+               call restart(c, opt, br, cur, t_prev, ds, restarts, err)
+               if (allocated(err)) return
+               if (br%status /= branch_failed) exit
+               cycle
             end if
             ds = max(0.5_wp*ds, opt%ds_min)
             cycle
          end if
          call detect(c, br, cur, nxt, ds, opt)
-         call store(br, c, nxt, ds, '')
+         call store(br, c, nxt, ds, '', cur%t, restarts + 1)
          cur = nxt
          if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
+         br%pts(size(br%pts))%ds_next = ds
          lam = cur%z(c%n + 1)*c%ls
          if (lam > opt%lam_max .or. lam < opt%lam_min) then
             br%status = branch_done
@@ -222,6 +271,116 @@ contains
       end subroutine report_points
    end subroutine continue_branch
 
+   !> A fold at p: a real multiplier within 0.05 of +1, or the tangent nearly normal
+   !> to lambda (|t_lambda| < 0.05).
+   logical function at_fold(p, n)
+      type(node_t), intent(in) :: p
+      integer, intent(in) :: n
+      at_fold = abs(p%t(n + 1)) < 0.05_wp .or. &
+                any(abs(aimag(p%mu)) <= 1.0e-8_wp*abs(p%mu) .and. abs(real(p%mu, wp) - 1.0_wp) < 0.05_wp)
+   end function at_fold
+
+   !> A stretch of the branch ended (br%status, br%message: why, at cur): store that as a
+   !> failed point and shoot the orbit again restart_step further on in lambda (in the
+   !> direction of the sweep, opt%direction, as a brute-force sweep goes on), from cur's state through the shooting's transient;
+   !> again further on while no orbit is found, up to the restarts left. On return
+   !> br%status is branch_failed (going on from the new cur) or why it stopped.
+   subroutine restart(c, opt, br, cur, t_prev, ds, restarts, err)
+      type(ctx_t), intent(inout) :: c
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(inout) :: cur
+      real(wp), allocatable, intent(inout) :: t_prev(:)
+      real(wp), intent(inout) :: ds
+      integer, intent(inout) :: restarts
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: lam, dir
+      real(wp), allocatable :: x(:)
+      character(len=:), allocatable :: why
+      dir = real(sign(1, opt%direction), wp)
+      lam = cur%z(c%n + 1)*c%ls
+      x = cur%z(1:c%n)*c%s
+      call failed_point(br, lam, br%status, br%message)
+      do while (restarts < opt%restarts .and. size(br%pts) < opt%max_points)
+         restarts = restarts + 1
+         lam = lam + dir*opt%restart_step*c%ls
+         if (lam > opt%lam_max .or. lam < opt%lam_min) then
+            br%status = branch_done
+            br%message = ''
+            return
+         end if
+         call reshoot(c, lam, opt, x, cur, why, err)
+         if (allocated(err)) return
+         if (len(why) == 0) then
+            t_prev = 0.0_wp
+            t_prev(c%n + 1) = dir
+            call linearise(c, cur, t_prev, err)
+            if (allocated(err)) return
+            ds = opt%ds
+            call store(br, c, cur, 0.0_wp, '', t_prev, restarts + 1)
+            br%pts(size(br%pts))%ds_next = ds
+            br%status = branch_failed
+            return
+         end if
+         br%status = branch_no_start
+         br%message = 'no periodic orbit at the restart lambda = '//str(lam)//': '//why
+         call failed_point(br, lam, br%status, br%message)
+      end do
+      if (size(br%pts) >= opt%max_points) then
+         br%status = branch_budget
+         br%message = 'the budget of '//str(opt%max_points)//' points was spent at lambda = '//str(lam, 10)
+      end if
+   end subroutine restart
+
+   !> The orbit at lam shot from x (through the shooting's transient), as the node cur
+   !> (scaled by the branch's scale; t0's phase as shooting left it). why: no orbit.
+   subroutine reshoot(c, lam, opt, x, cur, why, err)
+      type(ctx_t), intent(inout) :: c
+      real(wp), intent(in) :: lam, x(:)
+      type(branch_options_t), intent(in) :: opt
+      type(node_t), intent(out) :: cur
+      character(len=:), allocatable, intent(out) :: why
+      type(error_t), allocatable, intent(out) :: err
+      type(shoot_result_t) :: res
+      why = ''
+      call at(c, lam, err)
+      if (allocated(err)) return
+      call shoot(c%pm, opt%shoot, res, err, x_start=x)
+      c%maps = c%maps + res%maps
+      if (allocated(err)) then
+         why = err%message
+         deallocate (err)
+      else if (res%status /= shoot_converged) then
+         why = res%message
+      end if
+      c%lam = huge(1.0_wp)   ! (shooting may have moved t0: set the map up again at the new phase)
+      if (len(why) > 0) return
+      c%phase = (c%pm%t0 - c%t_start)/c%pm%period
+      cur%z = [res%x/c%s, lam/c%ls]
+      call evaluate(c, cur%z, cur%px, why, err)
+   end subroutine reshoot
+
+   !> A failed point: lambda where a stretch ended, its reason and message, no orbit.
+   subroutine failed_point(br, lam, status, message)
+      type(branch_t), intent(inout) :: br
+      real(wp), intent(in) :: lam
+      integer, intent(in) :: status
+      character(len=*), intent(in) :: message
+      type(branch_point_t) :: bp
+      bp%lam = lam
+      bp%status = status
+      bp%message = message
+      bp%stability = ''
+      bp%kind = ''
+      bp%maps = br%maps
+      if (size(br%pts) > 0) then
+         bp%segment = br%pts(size(br%pts))%segment
+         bp%phase = br%pts(size(br%pts))%phase
+      end if
+      allocate (bp%x(0), bp%tangent(0), bp%mu(0), bp%z(0), bp%border(0))
+      br%pts = [br%pts, bp]
+   end subroutine failed_point
+
    !> The first point: the orbit shot at lam0; t0 there (moved by shooting to an
    !> instant with no memory contact in progress) kept as a phase of the period.
    subroutine start_shot(c, lam0, opt, br, cur, t_prev, ds, err)
@@ -235,6 +394,8 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(shoot_result_t) :: res
       c%ls = max(abs(lam0), tiny(1.0_wp))
+      if (size(br%pts) > 0) c%ls = max(abs(br%pts(1)%lam), tiny(1.0_wp))
+      c%lam = huge(1.0_wp)
       call at(c, lam0, err)
       if (allocated(err)) return
       call shoot(c%pm, opt%shoot, res, err)
@@ -251,6 +412,7 @@ contains
          br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//res%message
          return
       end if
+      br%status = branch_failed
       c%n = c%pm%n
       c%phase = (c%pm%t0 - c%t_start)/c%pm%period
       c%s = res%scale
@@ -264,7 +426,9 @@ contains
       ds = opt%ds
    end subroutine start_shot
 
-   !> The first point of a resumed branch: its last stored point.
+   !> The first point of a resumed branch: its last stored regular point (the located
+   !> bifurcations and failed points after it are made again), restored exactly as the
+   !> uninterrupted run had it (its scaled unknowns, bordering vector, next step).
    subroutine start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
       type(ctx_t), intent(inout) :: c
       type(branch_t), intent(in) :: resume
@@ -276,14 +440,21 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: last
       last = size(resume%pts)
+      do while (last > 0)
+         if (resume%pts(last)%status == branch_done .and. len(resume%pts(last)%kind) == 0) exit
+         last = last - 1
+      end do
       if (last == 0) then
          call fatal_error(err, 'the branch to resume has no point', err_input)
          return
       end if
       br = resume
-      c%phase = br%phase
+      br%pts = resume%pts(1:last)
+      br%status = branch_failed
+      c%phase = br%pts(last)%phase
       c%s = br%scale
       c%ls = br%lam_scale
+      br%maps = br%pts(last)%maps
       c%maps = br%maps
       call at(c, br%pts(last)%lam, err)
       if (allocated(err)) return
@@ -292,10 +463,18 @@ contains
          call fatal_error(err, 'the branch to resume has '//str(size(c%s))//' states, the deck '//str(c%n), err_input)
          return
       end if
-      cur%z = [br%pts(last)%x/c%s, br%pts(last)%lam/c%ls]
-      t_prev = br%pts(last)%tangent
-      ds = min(max(br%pts(last)%ds, opt%ds_min), opt%ds_max)
-      if (last == 1) ds = opt%ds
+      associate (p => br%pts(last))
+         cur%z = [p%x/c%s, p%lam/c%ls]
+         if (allocated(p%z)) then
+            if (size(p%z) == c%n + 1) cur%z = p%z
+         end if
+         t_prev = p%tangent
+         if (allocated(p%border)) then
+            if (size(p%border) == c%n + 1) t_prev = p%border
+         end if
+         ds = min(max(p%ds_next, opt%ds_min), opt%ds_max)
+         if (.not. p%ds_next > 0.0_wp) ds = opt%ds
+      end associate
    end subroutine start_resumed
 
    !> The period map set up at lambda (the deck rebuilt there; t0 = t_start + phase T).
@@ -453,12 +632,13 @@ contains
    end subroutine correct
 
    !> Append the point p (with its kind: '' or a bifurcation) to the branch.
-   subroutine store(br, c, p, ds, kind)
+   subroutine store(br, c, p, ds, kind, border, segment)
       type(branch_t), intent(inout) :: br
       type(ctx_t), intent(in) :: c
       type(node_t), intent(in) :: p
-      real(wp), intent(in) :: ds
+      real(wp), intent(in) :: ds, border(:)
       character(len=*), intent(in) :: kind
+      integer, intent(in) :: segment
       type(branch_point_t) :: bp
       bp%lam = p%z(c%n + 1)*c%ls
       bp%period = c%pm%period
@@ -472,6 +652,11 @@ contains
       bp%ds = ds
       bp%corrector = p%corrector
       bp%maps = c%maps
+      bp%z = p%z
+      bp%border = border
+      bp%phase = c%phase
+      bp%segment = segment
+      bp%message = ''
       br%pts = [br%pts, bp]
       br%maps = c%maps
    end subroutine store
@@ -561,6 +746,6 @@ contains
          if (j == 1 .and. abs(fm) < 1.0e-9_wp) exit
          if (j /= 1 .and. abs(la - lb) < opt%lam_tol) exit
       end do
-      call store(br, c, best, sm, kind)
+      call store(br, c, best, sm, kind, p%t, br%pts(size(br%pts))%segment)
    end subroutine locate
 end module trainsim_arclength
