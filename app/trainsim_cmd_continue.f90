@@ -25,6 +25,7 @@ module trainsim_cmd_continue
    use trainsim_version, only: version_full
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: continue_usage
+   use trainsim_monodromy_map, only: monodromy_code
    implicit none
    private
 
@@ -122,6 +123,12 @@ contains
          case ('--corrector')
             opt%max_corrector = nint(positive(i))
             i = i + 1
+         case ('--monodromy')
+            opt%monodromy = monodromy_code(text_value(i))
+            i = i + 1
+            if (opt%monodromy < 0) call refuse("option --monodromy needs auto, saltation or fd, got '"//arg(i)//"'")
+         case ('--smooth')
+            opt%nonsmooth = .false.
          case ('--set')
             call add_set(i)
             i = i + 1
@@ -165,7 +172,7 @@ contains
       call bfile%close()
       n_failed = count(br%pts%status /= branch_done)
       write (output_unit, '(a)') str(size(br%pts))//' points ('//str(n_failed)//' failed), '//str(br%maps)// &
-         ' period maps, '//str(br%rejected)//' steps refused'
+         ' period maps, '//str(br%rejected)//' steps refused, '//str(br%passes)//' variational passes'
       if (br%status /= branch_done) then
          write (error_unit, '(a)') 'trainsim: continue: the branch stopped early (status '//str(br%status)//'): '// &
             br%message
@@ -260,7 +267,7 @@ contains
       call prob%model_at(p%lam, m, err)
       if (.not. allocated(err)) call forcing_period(m, period, err)
       if (allocated(err)) return
-      m%run%t_start = m%run%t_start + p%phase*period
+      m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
       call pm%setup(m, period, kperiods, err)
       if (.not. allocated(err)) call orbit_run(m, pm, p%x, none, run, err)
       call pm%finish()

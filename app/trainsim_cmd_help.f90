@@ -115,13 +115,14 @@ contains
          write (unit, '(a)') 'usage: trainsim periodic DECK [--period-count K] [--period T] [--segments M] [--transient N]', &
             '                         [--tol TOL] [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
             'The periodic state under periodic forcing (a mesh frequency, a sine load) by shooting: Newton on', &
-            'P(x) - x after a transient, the monodromy by central differences (docs/periodic.md). Prints the', &
+            'P(x) - x after a transient, the monodromy by saltation matrices (or differences; docs/periodic.md). Prints the', &
             'convergence, the orbit, its Floquet multipliers and stability, grazing, the orbit''s metrics.', '', &
             '  --period-count K   the orbit repeats after K forcing periods (default 1; K > 1: subharmonic)', &
             '  --period T         the forcing period in s (default: settle_period, a mesh period, a sine''s)', &
             '  --segments M       multiple shooting: M segments of the K periods (default 1)', &
             '  --transient N      map applications before Newton starts (default 10, K periods each)', &
             '  --tol TOL          convergence: ||P(x) - x|| <= TOL of the state scale (default 1e-10)', &
+            '  --monodromy HOW    auto (saltation where the deck allows: rk4, no stick-slip), saltation, fd', &
             '  -o FILE            the orbit''s run as a history, with the group /periodic', &
             '  -h, --help         this text', '', &
             'exit status: 0 converged, 1 no orbit found (the reason printed) or the run failed, 2 bad input'
@@ -228,6 +229,9 @@ contains
          'as it grows (one row a point), and --resume continues a killed run from its last stored point.', '', &
          '  --ds DS, --ds-max DS  first and largest step (scaled arclength; defaults 0.005, 0.05)', &
          '  --points N            at most N points (default 400)', &
+         '  --monodromy HOW       auto (saltation where the deck allows), saltation, fd (central differences)', &
+         '  --smooth              no non-smooth corrector: stop at a contact-sequence change (grazing)', &
+         '  --switch-pd           at the first period-doubling point, continue the doubled branch (2T)', &
          '  -h, --help            this text', '', &
          'exit status: 0 the branch left the range, 1 it stopped early (the reason printed), 2 bad input'
    end subroutine continue_usage

@@ -18,6 +18,8 @@ module trainsim_cmd_periodic
    use trainsim_periodic_file, only: write_periodic_group
    use trainsim_cli, only: nargs, arg, quit, fail, load, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: command_usage
+   use trainsim_monodromy_map, only: monodromy_variational, monodromy_choice, monodromy_name, monodromy_code, &
+                                     mono_auto
    implicit none
    private
 
@@ -36,8 +38,10 @@ contains
       complex(wp), allocatable :: mu(:)
       character(len=:), allocatable :: out
       real(wp) :: period
-      integer :: k, i
+      integer :: k, i, mono
+      logical :: salt
       deck_path = ''
+      mono = mono_auto
       out = ''
       allocate (sets(0))
       k = 1
@@ -69,6 +73,10 @@ contains
             i = i + 1
             if (.not. (opt%tol > 0.0_wp .and. opt%tol < 1.0_wp)) &
                call refuse('option --tol needs a tolerance between 0 and 1, got '//arg(i))
+         case ('--monodromy')
+            mono = monodromy_code(text_value(i))
+            i = i + 1
+            if (mono < 0) call refuse("option --monodromy needs auto, saltation or fd, got '"//arg(i)//"'")
          case ('--set')
             call add_set(i)
             i = i + 1
@@ -89,12 +97,19 @@ contains
          str(opt%transient*k)//' period(s); integrator '//model%run%integrator//', dt = '//str(model%run%dt)//' s'
       call pm%setup(model, period, k, err)
       if (allocated(err)) call fail(err)
-      call shoot(pm, opt, res, err)
+      call monodromy_choice(mono, model, salt, err)
+      if (allocated(err)) call refuse(err%message)
+      if (opt%segments > 1) salt = .false.   ! (multiple shooting: differences per segment)
+      if (salt) then
+         call shoot(pm, opt, res, err, monodromy=monodromy_variational)
+      else
+         call shoot(pm, opt, res, err)
+      end if
       if (allocated(err)) then
          err%message = 'the periodic orbit could not be computed: '//err%message
          call fail(err)
       end if
-      call print_convergence(res, opt)
+      call print_convergence(res, opt, salt)
       if (pm%t0 /= model%run%t_start) write (output_unit, '(a)') 'the forcing phase moved to t0 = '//str(pm%t0, 10)// &
          ' s, where no contact with a memory of its impact is in progress (D-99)'
       if (res%status /= shoot_converged) then
@@ -126,12 +141,13 @@ contains
       n = nint(x)
    end function count_value
 
-   subroutine print_convergence(res, opt)
+   subroutine print_convergence(res, opt, salt)
       type(shoot_result_t), intent(in) :: res
       type(shoot_options_t), intent(in) :: opt
+      logical, intent(in) :: salt
       integer :: j
       if (res%segments > 1) write (output_unit, '(a)') 'multiple shooting over '//str(res%segments)//' segments'
-      write (output_unit, '(a)') 'Newton on P(x) - x (monodromy by central differences) after '//str(res%transient)// &
+      write (output_unit, '(a)') 'Newton on P(x) - x (monodromy by '//monodromy_name(salt)//') after '//str(res%transient)// &
          ' periods of transient (start '//str(res%attempts)//' of at most '//str(opt%retries + 1)// &
          '), residual of the state scale:'
       do j = 1, size(res%history)

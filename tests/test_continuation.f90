@@ -175,8 +175,9 @@ contains
       if (size(rest%pts) > 8) call check('the first 8 as they were', all([(rest%pts(j)%lam == part%pts(j)%lam, j=1, 8)]))
    end subroutine resumed_branch
 
-   !> A corrector allowed one step cannot reach 1e-10 from a predictor: the step
-   !> halves to its minimum and the branch stops with branch_step_min and why; a
+   !> A chord corrector (the smooth one: no full-Newton retry) allowed one step cannot
+   !> reach 1e-10 from a predictor: the step halves to its minimum and the branch
+   !> stops with branch_step_min and why; a
    !> start with no Newton budget stops with branch_no_start and why.
    subroutine test_failures_stop_with_a_reason()
       type(branch_options_t) :: opt
@@ -185,6 +186,7 @@ contains
       call test_begin('failures_stop_with_a_reason')
       opt = options()
       opt%max_corrector = 1
+      opt%nonsmooth = .false.
       opt%ds_min = 0.00125_wp
       call continue_branch(prob, w_start, opt, br, err)
       call check('no error, a status ('//msg(br)//')', .not. allocated(err) .and. br%status == branch_step_min)
@@ -202,7 +204,7 @@ contains
    end subroutine test_failures_stop_with_a_reason
 
    !> Each reason a branch stops for, constructed, and with restarts the branch going on
-   !> past a failure: a corrector of 4 chord steps at a smallest step of 0.04 cannot turn
+   !> past a failure: a chord corrector of 4 steps (no full-Newton retry) at a smallest step of 0.04 cannot turn
    !> the jump-down fold (the chord Newton needs more steps near a fold, whose curvature
    !> the step cannot follow): status fold, within 0.05 rad/s of the closed-form fold;
    !> with one restart the orbit is shot again 1 % further up in W, beyond the fold,
@@ -216,6 +218,7 @@ contains
       integer :: i, nf
       call test_begin('reasons_and_restarts')
       opt = options()
+      opt%nonsmooth = .false.     ! (the chord corrector alone: no full-Newton retry)
       opt%max_corrector = 4
       opt%ds_min = 0.04_wp
       call continue_branch(prob, w_start, opt, br, err)

@@ -28,6 +28,9 @@ module trainsim_arclength
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_shooting, only: shoot_options_t, shoot_result_t, shoot, shoot_converged, monodromy_fd
    use trainsim_floquet, only: floquet_multipliers, stability_of
+   use trainsim_monodromy, only: monodromy_stats_t
+   use trainsim_monodromy_map, only: monodromy_map_stats, flow_signature, monodromy_choice, mono_auto, &
+                                     monodromy_variational
    implicit none
    private
 
@@ -70,6 +73,11 @@ module trainsim_arclength
       real(wp) :: fd_lam = 1.0e-6_wp    !< dP/dlambda: central difference, step of |lambda_0|
       integer :: k = 1                  !< forcing periods per orbit
       type(shoot_options_t) :: shoot   !< the first orbit
+      !> the monodromy: mono_auto (saltation where the deck allows it), mono_saltation, mono_fd
+      integer :: monodromy = mono_auto
+      !> the non-smooth corrector: a change of the contact sequence (grazing) located,
+      !> stored as a point of kind 'grazing' and crossed with full Newton (D-109 ns27)
+      logical :: nonsmooth = .true.
       !> restarts: where the corrector fails at the smallest step (or no orbit is found at a
       !> restart), a failed point is stored with its reason and the orbit is shot again
       !> restart_step |lambda_0| further on in lambda (from the last orbit's state, through a
@@ -100,6 +108,7 @@ module trainsim_arclength
       integer :: status = branch_failed
       character(len=:), allocatable :: message
       integer :: maps = 0, rejected = 0
+      integer :: passes = 0               !< variational passes (saltation monodromy or signature)
       real(wp), allocatable :: scale(:)   !< s
       real(wp) :: lam_scale = 1.0_wp      !< l
       real(wp) :: phase = 0.0_wp          !< (t0 - t_start)/T, kept at every lambda
@@ -127,6 +136,9 @@ module trainsim_arclength
       real(wp), allocatable :: s(:)
       real(wp) :: ls = 1.0_wp, fd = 1.0e-6_wp
       real(wp) :: t_start = 0.0_wp   !< the deck's t_start (t0 = t_start + phase T)
+      logical :: salt = .false.      !< the monodromy by saltation matrices (else differences)
+      logical :: sig = .true.        !< take each point's contact-sequence signature
+      integer :: passes = 0          !< variational (or signature) passes
    end type ctx_t
 
    !> an accepted point's data for the next step
@@ -135,6 +147,7 @@ module trainsim_arclength
       complex(wp), allocatable :: mu(:)
       integer :: corrector = 0
       real(wp) :: residual = 0.0_wp
+      type(monodromy_stats_t) :: st   !< the flow's events over the orbit: its contact sequence's signature
    end type node_t
 
    interface
@@ -162,11 +175,12 @@ contains
       procedure(point_hook_i), optional :: hook
       type(ctx_t) :: c
       integer :: stored, restarts
-      type(node_t) :: cur, nxt
+      type(node_t) :: cur
       real(wp), allocatable :: t_prev(:)
       real(wp) :: ds, lam
       character(len=:), allocatable :: why
       allocate (c%prob, source=prob)
+      c%sig = opt%nonsmooth
       c%k = opt%k
       c%fd = opt%fd_lam
       allocate (br%pts(0))
@@ -205,6 +219,37 @@ contains
          call store(br, c, cur, 0.0_wp, '', t_prev, restarts + 1)
          br%pts(size(br%pts))%ds_next = ds
       end if
+      call follow(c, br, cur, ds, opt, stored, restarts, err, hook)
+   contains
+      subroutine report_points()
+         if (.not. present(hook)) return
+         do while (stored < size(br%pts))
+            stored = stored + 1
+            call hook(br, stored, err)
+            if (allocated(err)) return
+         end do
+      end subroutine report_points
+   end subroutine continue_branch
+
+   !> The continuation loop from the accepted point cur (stored) with the step ds:
+   !> predictor, corrector (chord, then full Newton: the non-smooth corrector),
+   !> grazing crossed, bifurcations detected, step control, until the branch leaves
+   !> [lam_min, lam_max] or stops. stored: the points already given to `hook`.
+   subroutine follow(c, br, cur, ds, opt, stored, restarts, err, hook)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(inout) :: cur
+      real(wp), intent(inout) :: ds
+      type(branch_options_t), intent(in) :: opt
+      integer, intent(inout) :: stored, restarts   !< restarts: made so far (opt%restarts)
+      type(error_t), allocatable, intent(out) :: err
+      procedure(point_hook_i), optional :: hook
+      type(node_t) :: nxt
+      real(wp) :: lam
+      character(len=:), allocatable :: why
+      logical :: crossed, rephased
+      integer :: before
+      rephased = .false.
       do
          call report_points()
          if (allocated(err)) return
@@ -215,11 +260,27 @@ contains
             exit
          end if
          call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why)
+         if (len(why) > 0 .and. opt%nonsmooth) call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
+         crossed = .false.
          if (len(why) == 0) then
             call linearise(c, nxt, cur%t, err)
             if (allocated(err)) then
                why = err%message
                deallocate (err)
+            end if
+         end if
+         if (opt%nonsmooth .and. .not. rephased) then
+            ! a memory contact reaching t0 (odd events) or a failed step: move t0 first
+            if (len(why) > 0 .or. modulo(nxt%st%events, 2) /= 0) then
+               call rephase_point(c, br, cur, rephased, err)
+               if (allocated(err)) return
+               if (rephased) cycle
+            end if
+         end if
+         if (len(why) == 0) then
+            if (opt%nonsmooth .and. .not. same_sequence(cur%st, nxt%st)) then
+               call cross_grazing(c, br, cur, nxt, ds, opt)
+               crossed = .true.
             else if (dot_product(nxt%t, cur%t) < 0.9_wp .and. ds > opt%ds_min) then
                why = 'the tangent turned by more than 25 degrees in one step'
             end if
@@ -236,7 +297,7 @@ contains
                   call failed_point(br, cur%z(c%n + 1)*c%ls, br%status, br%message)
                   exit
                end if
-               call restart(c, opt, br, cur, t_prev, ds, restarts, err)
+               call restart(c, opt, br, cur, ds, restarts, err)
                if (allocated(err)) return
                if (br%status /= branch_failed) exit
                cycle
@@ -244,9 +305,17 @@ contains
             ds = max(0.5_wp*ds, opt%ds_min)
             cycle
          end if
-         call detect(c, br, cur, nxt, ds, opt)
+         before = size(br%pts)
+         if (.not. crossed) call detect(c, br, cur, nxt, ds, opt)
+         if (closed_loop(br, before, c)) then
+            br%status = branch_done
+            br%message = 'the branch closed on itself: the fold at lambda = '// &
+                         str(br%pts(size(br%pts))%lam, 10)//' was met before'
+            exit
+         end if
          call store(br, c, nxt, ds, '', cur%t, restarts + 1)
          cur = nxt
+         rephased = .false.
          if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
          br%pts(size(br%pts))%ds_next = ds
          lam = cur%z(c%n + 1)*c%ls
@@ -257,6 +326,7 @@ contains
          end if
       end do
       br%maps = c%maps
+      br%passes = c%passes
       call c%pm%finish()
       call report_points()
       if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
@@ -269,7 +339,7 @@ contains
             if (allocated(err)) return
          end do
       end subroutine report_points
-   end subroutine continue_branch
+   end subroutine follow
 
    !> A fold at p: a real multiplier within 0.05 of +1, or the tangent nearly normal
    !> to lambda (|t_lambda| < 0.05).
@@ -285,12 +355,12 @@ contains
    !> direction of the sweep, opt%direction, as a brute-force sweep goes on), from cur's state through the shooting's transient;
    !> again further on while no orbit is found, up to the restarts left. On return
    !> br%status is branch_failed (going on from the new cur) or why it stopped.
-   subroutine restart(c, opt, br, cur, t_prev, ds, restarts, err)
+   subroutine restart(c, opt, br, cur, ds, restarts, err)
       type(ctx_t), intent(inout) :: c
       type(branch_options_t), intent(in) :: opt
       type(branch_t), intent(inout) :: br
       type(node_t), intent(inout) :: cur
-      real(wp), allocatable, intent(inout) :: t_prev(:)
+      real(wp) :: t_prev(c%n + 1)
       real(wp), intent(inout) :: ds
       integer, intent(inout) :: restarts
       type(error_t), allocatable, intent(out) :: err
@@ -345,7 +415,13 @@ contains
       why = ''
       call at(c, lam, err)
       if (allocated(err)) return
-      call shoot(c%pm, opt%shoot, res, err, x_start=x)
+      call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
+      if (allocated(err)) return
+      if (c%salt) then
+         call shoot(c%pm, opt%shoot, res, err, monodromy=monodromy_variational, x_start=x)
+      else
+         call shoot(c%pm, opt%shoot, res, err, x_start=x)
+      end if
       c%maps = c%maps + res%maps
       if (allocated(err)) then
          why = err%message
@@ -398,7 +474,13 @@ contains
       c%lam = huge(1.0_wp)
       call at(c, lam0, err)
       if (allocated(err)) return
-      call shoot(c%pm, opt%shoot, res, err)
+      call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
+      if (allocated(err)) return
+      if (c%salt) then
+         call shoot(c%pm, opt%shoot, res, err, monodromy=monodromy_variational)
+      else
+         call shoot(c%pm, opt%shoot, res, err)
+      end if
       c%maps = c%maps + res%maps
       br%maps = c%maps
       if (allocated(err)) then
@@ -426,9 +508,7 @@ contains
       ds = opt%ds
    end subroutine start_shot
 
-   !> The first point of a resumed branch: its last stored regular point (the located
-   !> bifurcations and failed points after it are made again), restored exactly as the
-   !> uninterrupted run had it (its scaled unknowns, bordering vector, next step).
+   !> The first point of a resumed branch: its last stored point.
    subroutine start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
       type(ctx_t), intent(inout) :: c
       type(branch_t), intent(in) :: resume
@@ -452,11 +532,21 @@ contains
       br%pts = resume%pts(1:last)
       br%status = branch_failed
       c%phase = br%pts(last)%phase
+      br%phase = c%phase
       c%s = br%scale
       c%ls = br%lam_scale
       br%maps = br%pts(last)%maps
       c%maps = br%maps
       call at(c, br%pts(last)%lam, err)
+      if (allocated(err)) return
+      if (abs(c%pm%t0 - br%pts(last)%t0) > 1.0e-12_wp*c%pm%period) then
+         c%phase = (br%pts(last)%t0 - c%t_start)/c%pm%period   ! t0 moved along the branch (rephase_point)
+         br%phase = c%phase
+         c%lam = huge(1.0_wp)
+         call at(c, br%pts(last)%lam, err)
+         if (allocated(err)) return
+      end if
+      call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
       if (allocated(err)) return
       c%n = c%pm%n
       if (size(c%s) /= c%n .or. size(br%pts(last)%tangent) /= c%n + 1) then
@@ -536,9 +626,19 @@ contains
       call at(c, lam, err)
       if (allocated(err)) return
       if (allocated(p%m)) deallocate (p%m)
+      if (allocated(p%a)) deallocate (p%a)
       allocate (p%m(n, n), p%a(n, n + 1))
-      call monodromy_fd(c%pm, x, p%px, p%m, err)
-      c%maps = c%maps + 2*n
+      if (c%salt) then
+         call monodromy_map_stats(c%pm, x, p%m, p%st, err)
+         c%passes = c%passes + 1
+      else
+         call monodromy_fd(c%pm, x, p%px, p%m, err)
+         c%maps = c%maps + 2*n
+         if (.not. allocated(err) .and. c%sig) then
+            call flow_signature(c%pm, x, p%st, err)
+            c%passes = c%passes + 1
+         end if
+      end if
       if (allocated(err)) return
       call floquet_multipliers(p%m, p%mu, err)
       if (allocated(err)) return
@@ -583,23 +683,31 @@ contains
       b(size(t), :) = t
    end function bordered
 
-   !> The corrector: chord Newton from z_pred on [G(z)/s; t'(z - z_pred)] = 0 with
-   !> the bordered matrix [A; t'] of the point `p`. why = '' if it converged.
-   subroutine correct(c, p, z_pred, opt, q, why)
+   !> The corrector from z_pred on [G(z)/s; t'(z - z_pred)] = 0, t = p's tangent:
+   !> chord Newton with the bordered matrix [A; t'] of the point `p`, or with
+   !> `full` Newton with the Jacobian A(z) of each iterate (the one-sided Jacobian
+   !> of its own contact sequence: the non-smooth corrector, D-109 ns27). why = ''
+   !> if it converged.
+   subroutine correct(c, p, z_pred, opt, q, why, full)
       type(ctx_t), intent(inout) :: c
       type(node_t), intent(in) :: p
       real(wp), intent(in) :: z_pred(:)
       type(branch_options_t), intent(in) :: opt
       type(node_t), intent(out) :: q
       character(len=:), allocatable, intent(out) :: why
+      logical, intent(in), optional :: full
       type(error_t), allocatable :: err
       real(wp), allocatable :: b(:, :), rhs(:), px(:)
       real(wp) :: r, r_old, lam
-      integer :: it, n, info
+      integer :: it, n, info, grown
       integer, allocatable :: ipiv(:)
+      logical :: newton
+      newton = .false.
+      if (present(full)) newton = full
       n = c%n
       q%z = z_pred
       r_old = huge(1.0_wp)
+      grown = 0
       allocate (ipiv(n + 1))
       do it = 0, opt%max_corrector
          lam = q%z(n + 1)*c%ls
@@ -611,14 +719,24 @@ contains
          q%residual = r
          q%corrector = it
          if (r <= opt%tol) return
-         if (.not. r < r_old) then
+         if (.not. r < r_old) grown = grown + 1
+         if (grown > merge(1, 0, newton)) then
             why = 'the corrector diverged at lambda = '//str(lam, 10)//' (residual '//str(r, 3)//' after '// &
                   str(r_old, 3)//')'
             return
          end if
          if (it == opt%max_corrector) exit
          r_old = r
-         b = bordered(p%a, p%t)
+         if (newton) then
+            call linearise(c, q, p%t, err)
+            if (allocated(err)) then
+               why = err%message
+               return
+            end if
+            b = bordered(q%a, p%t)
+         else
+            b = bordered(p%a, p%t)
+         end if
          rhs = [q%z(1:n) - px/c%s, -dot_product(p%t, q%z - z_pred)]
          call dgesv(n + 1, 1, b, n + 1, ipiv, rhs, n + 1, info)
          if (info /= 0) then
@@ -631,16 +749,129 @@ contains
             ' (residual '//str(r, 3)//', tolerance '//str(opt%tol, 3)//')'
    end subroutine correct
 
+   !> Move the forcing phase t0 of the accepted point cur to the middle of the
+   !> longest stretch of its orbit with every memory contact open (as shooting
+   !> does, D-99): along a branch the contacts drift in phase, and one that spans
+   !> t0 makes the map wrong (its impact's damping is not in the state). cur's x
+   !> becomes its state at the new t0, its Jacobian and tangent (oriented by the
+   !> old one's lambda-component) are taken again. moved: whether t0 moved.
+   subroutine rephase_point(c, br, cur, moved, err)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(inout) :: cur
+      logical, intent(out) :: moved
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: x(c%n), t_dir(c%n + 1), t0_old
+      character(len=:), allocatable :: why
+      moved = .false.
+      call at(c, cur%z(c%n + 1)*c%ls, err)
+      if (allocated(err)) return
+      x = cur%z(1:c%n)*c%s
+      t0_old = c%pm%t0
+      call c%pm%rephase(x, err)
+      if (allocated(err)) return
+      c%maps = c%maps + 2
+      if (c%pm%t0 == t0_old) return
+      moved = .true.
+      c%phase = (c%pm%t0 - c%t_start)/c%pm%period
+      br%phase = c%phase
+      cur%z(1:c%n) = x/c%s
+      t_dir = 0.0_wp
+      t_dir(c%n + 1) = sign(1.0_wp, cur%t(c%n + 1))
+      call evaluate(c, cur%z, cur%px, why, err)
+      if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'moving t0: '//why, err_input)
+      if (.not. allocated(err)) call linearise(c, cur, t_dir, err)
+   end subroutine rephase_point
+
+   !> Whether a fold stored after index `before` repeats an earlier fold (lambda
+   !> to 1e-7 of |lambda_0|, the state to 1e-6 of its scale, or where t0 moved in
+   !> between the multipliers' moduli to 1e-4): a closed branch, which the
+   !> continuation would go round again.
+   logical function closed_loop(br, before, c) result(closed)
+      type(branch_t), intent(in) :: br
+      integer, intent(in) :: before
+      type(ctx_t), intent(in) :: c
+      integer :: i, j
+      closed = .false.
+      do i = before + 1, size(br%pts)
+         if (br%pts(i)%kind /= 'fold') cycle
+         do j = 1, before
+            if (br%pts(j)%kind /= 'fold') cycle
+            if (abs(br%pts(i)%lam - br%pts(j)%lam) > 1.0e-7_wp*c%ls) cycle
+            if (abs(br%pts(i)%t0 - br%pts(j)%t0) <= 1.0e-9_wp*br%pts(i)%period) then
+               if (maxval(abs(br%pts(i)%x - br%pts(j)%x)/c%s) > 1.0e-6_wp) cycle
+            else if (maxval(abs(abs(br%pts(i)%mu) - abs(br%pts(j)%mu))) > 1.0e-4_wp) then
+               cycle   ! (t0 moved in between: the state is another section's; the multipliers are not)
+            end if
+            closed = .true.
+         end do
+      end do
+   end function closed_loop
+
+   !> Whether two points' flows met the same contact sequence: as many events,
+   !> events where f jumps, and impacts over the orbit.
+   logical function same_sequence(a, b)
+      type(monodromy_stats_t), intent(in) :: a, b
+      same_sequence = a%events == b%events .and. a%jumps == b%jumps .and. a%impacts == b%impacts
+   end function same_sequence
+
+   !> A contact-sequence change between the accepted p and q (q = p + ds along p's
+   !> tangent, corrected, its sequence another): the grazing orbit located by
+   !> bisection on the arclength from p (each trial corrected by full Newton on p's
+   !> hyperplane; a trial that fails counts as past the change) to lam_tol, the
+   !> last point of p's sequence stored as kind 'grazing' (after the bifurcations
+   !> between p and it), and q's tangent oriented along the secant from it: the
+   !> multipliers and the tangent jump there (the map's derivative is
+   !> discontinuous), and the branch goes on in q's sequence (D-109 ns27).
+   subroutine cross_grazing(c, br, p, q, ds, opt)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(in) :: p
+      type(node_t), intent(inout) :: q
+      real(wp), intent(in) :: ds
+      type(branch_options_t), intent(in) :: opt
+      type(node_t) :: a, r
+      type(error_t), allocatable :: err
+      character(len=:), allocatable :: why
+      real(wp) :: sa, sb, sm
+      integer :: it
+      sa = 0.0_wp
+      sb = ds
+      a = p
+      do it = 1, 60
+         if (abs(sb - sa)*abs(p%t(c%n + 1)) <= opt%lam_tol .and. abs(sb - sa) <= 1.0e3_wp*opt%lam_tol) exit
+         sm = 0.5_wp*(sa + sb)
+         call correct(c, p, p%z + sm*p%t, opt, r, why, full=.true.)
+         if (len(why) == 0) call linearise(c, r, p%t, err)
+         if (allocated(err)) deallocate (err)
+         if (len(why) == 0 .and. same_sequence(r%st, p%st)) then
+            sa = sm
+            a = r
+         else
+            sb = sm
+         end if
+      end do
+      if (sa > 0.0_wp) then
+         call detect(c, br, p, a, sa, opt)
+         call store(br, c, a, sa, 'grazing', a%t, br%pts(size(br%pts))%segment)
+      else
+         call store(br, c, p, 0.0_wp, 'grazing', p%t, br%pts(size(br%pts))%segment)
+      end if
+      if (dot_product(q%t, q%z - a%z) < 0.0_wp) q%t = -q%t
+   end subroutine cross_grazing
+
    !> Append the point p (with its kind: '' or a bifurcation) to the branch.
    subroutine store(br, c, p, ds, kind, border, segment)
       type(branch_t), intent(inout) :: br
-      type(ctx_t), intent(in) :: c
+      type(ctx_t), intent(inout) :: c
       type(node_t), intent(in) :: p
       real(wp), intent(in) :: ds, border(:)
       character(len=*), intent(in) :: kind
       integer, intent(in) :: segment
       type(branch_point_t) :: bp
+      type(error_t), allocatable :: err
       bp%lam = p%z(c%n + 1)*c%ls
+      call at(c, bp%lam, err)   ! (the map at the point's own lambda: its period and t0)
       bp%period = c%pm%period
       bp%t0 = c%pm%t0
       bp%x = p%z(1:c%n)*c%s

@@ -43,7 +43,8 @@ module trainsim_branch_file
    !> /branch: vectors per point (n states, or n + 1 for the scaled unknowns)
    character(len=*), parameter :: vec(7) = [character(len=15) :: 'state', 'z', 'tangent', 'border', &
                                             'multipliers_re', 'multipliers_im', 'multipliers_abs']
-   character(len=*), parameter :: kinds(0:3) = [character(len=15) :: '', 'fold', 'period-doubling', 'neimark-sacker']
+   character(len=*), parameter :: kinds(0:4) = [character(len=15) :: '', 'fold', 'period-doubling', 'neimark-sacker', &
+                                                 'grazing']
    character(len=*), parameter :: stabilities(0:2) = [character(len=8) :: 'stable', 'marginal', 'unstable']
 
    type :: branch_file_t
@@ -180,7 +181,7 @@ contains
          call new_slots(g, trim(run_i(k)), [np], h5_int, d, hs, ifill=-1)
          if (k == 1 .and. .not. allocated(err) .and. hs == 0) call put_str_attr(d, 'meaning', reason_meaning(), err)
          if (k == 2 .and. .not. allocated(err) .and. hs == 0) &
-            call put_str_attr(d, 'meaning', '0 regular, 1 fold, 2 period-doubling, 3 neimark-sacker', err)
+            call put_str_attr(d, 'meaning', '0 regular, 1 fold, 2 period-doubling, 3 neimark-sacker, 4 grazing', err)
          if (k == 4 .and. .not. allocated(err) .and. hs == 0) &
             call put_str_attr(d, 'meaning', '0 stable, 1 marginal, 2 unstable', err)
          call close_dset(d)
