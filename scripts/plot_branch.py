@@ -87,7 +87,7 @@ def main(argv=None):
         import plot_sweep
         for j, m in enumerate(names):
             sw = plot_sweep.read(a.sweep, f"{ids[e]}.{m}", param or None)
-            good = sw["status"] == 0
+            good = sw["status"] == 1   # (1 ok: docs/sweeps.md)
             ax.plot(sw["x"][good], sw["y"][good], "x", color="C3", ms=5, label="brute-force sweep" if j == 0 else None)
     ax.plot([], [], "-", color="k", label="stable")
     ax.plot([], [], "--", color="k", label="unstable")
