@@ -113,16 +113,15 @@ contains
             'exit status: 0 success, 2 bad input or file'
       case ('periodic')
          write (unit, '(a)') 'usage: trainsim periodic DECK [--period-count K] [--period T] [--segments M] [--transient N]', &
-            '                         [--tol TOL] [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
+            '                         [--tol TOL] [--monodromy auto|saltation|fd] [--set TARGET.KEY=VALUE ...] [-o FILE]', '', &
             'The periodic state under periodic forcing (a mesh frequency, a sine load) by shooting: Newton on', &
-            'P(x) - x after a transient, the monodromy by saltation matrices (or differences; docs/periodic.md). Prints the', &
-            'convergence, the orbit, its Floquet multipliers and stability, grazing, the orbit''s metrics.', '', &
+            'P(x) - x after a transient, the monodromy by saltation matrices (auto: rk4, no stick-slip) or by', &
+            'differences (docs/periodic.md). Prints convergence, orbit, multipliers, stability, grazing, metrics.', '', &
             '  --period-count K   the orbit repeats after K forcing periods (default 1; K > 1: subharmonic)', &
             '  --period T         the forcing period in s (default: settle_period, a mesh period, a sine''s)', &
             '  --segments M       multiple shooting: M segments of the K periods (default 1)', &
             '  --transient N      map applications before Newton starts (default 10, K periods each)', &
             '  --tol TOL          convergence: ||P(x) - x|| <= TOL of the state scale (default 1e-10)', &
-            '  --monodromy HOW    auto (saltation where the deck allows: rk4, no stick-slip), saltation, fd', &
             '  -o FILE            the orbit''s run as a history, with the group /periodic', &
             '  -h, --help         this text', '', &
             'exit status: 0 converged, 1 no orbit found (the reason printed) or the run failed, 2 bad input'

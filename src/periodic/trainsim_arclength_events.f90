@@ -1,0 +1,484 @@
+!> The steps of trainsim_arclength's continuation (its submodule; docs/periodic.md
+!> "Continuation", "Through contact-sequence changes"; D-108, D-109 ns27): the map
+!> set up at a parameter value, a point's linearisation, the corrector (chord or full
+!> Newton), a point stored; and the non-smooth part: the forcing phase moved when a
+!> memory contact drifts onto t0, a contact-sequence change (grazing) located and
+!> crossed, a closed branch recognised, folds / period-doubling / Neimark-Sacker
+!> points detected and located.
+submodule(trainsim_arclength) trainsim_arclength_events
+   implicit none
+
+contains
+
+   !> The period map set up at lambda (the deck rebuilt there; t0 = t_start + phase T).
+   module subroutine at(c, lam, err)
+      type(ctx_t), intent(inout) :: c
+      real(wp), intent(in) :: lam
+      type(error_t), allocatable, intent(out) :: err
+      type(model_t) :: m
+      real(wp) :: period
+      if (lam == c%lam) return
+      c%lam = huge(1.0_wp)
+      call c%prob%model_at(lam, m, err)
+      if (allocated(err)) return
+      call forcing_period(m, period, err)
+      if (allocated(err)) return
+      c%t_start = m%run%t_start
+      m%run%t_start = m%run%t_start + c%phase*period
+      call c%pm%setup(m, period, c%k, err)
+      if (allocated(err)) return
+      c%lam = lam
+   end subroutine at
+
+   !> px = P(x; lambda) for the scaled z = (x/s, lambda/l). why: the integration failed.
+   module subroutine evaluate(c, z, px, why, err)
+      type(ctx_t), intent(inout) :: c
+      real(wp), intent(in) :: z(:)
+      real(wp), allocatable, intent(out) :: px(:)
+      character(len=:), allocatable, intent(out) :: why
+      type(error_t), allocatable, intent(out) :: err
+      type(error_t), allocatable :: e
+      why = ''
+      allocate (px(c%n))
+      call at(c, z(c%n + 1)*c%ls, err)
+      if (allocated(err)) return
+      call c%pm%map(z(1:c%n)*c%s, px, e)
+      c%maps = c%maps + 1
+      if (allocated(e)) why = 'the period map failed: '//e%message
+   end subroutine evaluate
+
+   !> The point's monodromy, multipliers, scaled Jacobian A and tangent (oriented along t_prev).
+   module subroutine linearise(c, p, t_prev, err)
+      type(ctx_t), intent(inout) :: c
+      type(node_t), intent(inout) :: p
+      real(wp), intent(in) :: t_prev(:)
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: x(c%n), lam, h, pp(c%n), pq(c%n)
+      real(wp), allocatable :: b(:, :), rhs(:)
+      character(len=:), allocatable :: why
+      integer :: i, n, info
+      integer :: ipiv(c%n + 1)
+      n = c%n
+      x = p%z(1:n)*c%s
+      lam = p%z(n + 1)*c%ls
+      h = c%fd*c%ls
+      call map_at(lam + h, pp)
+      if (allocated(err)) return
+      call map_at(lam - h, pq)
+      if (allocated(err)) return
+      call at(c, lam, err)
+      if (allocated(err)) return
+      if (allocated(p%m)) deallocate (p%m)
+      if (allocated(p%a)) deallocate (p%a)
+      allocate (p%m(n, n), p%a(n, n + 1))
+      if (c%salt) then
+         call monodromy_map_stats(c%pm, x, p%m, p%st, err)
+         c%passes = c%passes + 1
+      else
+         call monodromy_fd(c%pm, x, p%px, p%m, err)
+         c%maps = c%maps + 2*n
+         if (.not. allocated(err) .and. c%sig) then
+            call flow_signature(c%pm, x, p%st, err)
+            c%passes = c%passes + 1
+         end if
+      end if
+      if (allocated(err)) return
+      call floquet_multipliers(p%m, p%mu, err)
+      if (allocated(err)) return
+      do i = 1, n
+         p%a(i, 1:n) = p%m(i, :)*c%s/c%s(i)
+         p%a(i, i) = p%a(i, i) - 1.0_wp
+         p%a(i, n + 1) = (pp(i) - pq(i))/(2.0_wp*h)*c%ls/c%s(i)
+      end do
+      b = bordered(p%a, t_prev)
+      allocate (rhs(n + 1))
+      rhs = 0.0_wp
+      rhs(n + 1) = 1.0_wp
+      call dgesv(n + 1, 1, b, n + 1, ipiv, rhs, n + 1, info)
+      if (info /= 0) then
+         call fatal_error(err, 'the bordered Jacobian is singular at lambda = '//str(lam)//' (a branch point)', &
+                          err_input)
+         return
+      end if
+      p%t = rhs/norm2(rhs)
+      if (dot_product(p%t, t_prev) < 0.0_wp) p%t = -p%t
+   contains
+      subroutine map_at(l, y)
+         real(wp), intent(in) :: l
+         real(wp), intent(out) :: y(:)
+         type(error_t), allocatable :: e
+         call at(c, l, err)
+         if (allocated(err)) return
+         call c%pm%map(x, y, e)
+         c%maps = c%maps + 1
+         if (allocated(e)) then
+            why = e%message
+            call fatal_error(err, 'dP/dlambda: the period map failed at lambda = '//str(l)//': '//why, err_input)
+         end if
+      end subroutine map_at
+   end subroutine linearise
+
+   !> [A; t'] of A (n x n+1) and t (n+1).
+   function bordered(a, t) result(b)
+      real(wp), intent(in) :: a(:, :), t(:)
+      real(wp) :: b(size(t), size(t))
+      b(1:size(a, 1), :) = a
+      b(size(t), :) = t
+   end function bordered
+
+   !> The corrector from z_pred on [G(z)/s; t'(z - z_pred)] = 0, t = p's tangent:
+   !> chord Newton with the bordered matrix [A; t'] of the point `p`, or with
+   !> `full` Newton with the Jacobian A(z) of each iterate (the one-sided Jacobian
+   !> of its own contact sequence: the non-smooth corrector, D-109 ns27). why = ''
+   !> if it converged.
+   module subroutine correct(c, p, z_pred, opt, q, why, full)
+      type(ctx_t), intent(inout) :: c
+      type(node_t), intent(in) :: p
+      real(wp), intent(in) :: z_pred(:)
+      type(branch_options_t), intent(in) :: opt
+      type(node_t), intent(out) :: q
+      character(len=:), allocatable, intent(out) :: why
+      logical, intent(in), optional :: full
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: b(:, :), rhs(:), px(:)
+      real(wp) :: r, r_old, lam
+      integer :: it, n, info, grown
+      integer, allocatable :: ipiv(:)
+      logical :: newton
+      newton = .false.
+      if (present(full)) newton = full
+      n = c%n
+      q%z = z_pred
+      r_old = huge(1.0_wp)
+      grown = 0
+      allocate (ipiv(n + 1))
+      do it = 0, opt%max_corrector
+         lam = q%z(n + 1)*c%ls
+         call evaluate(c, q%z, px, why, err)
+         if (allocated(err)) why = err%message
+         if (len(why) > 0) return
+         r = maxval(abs(px/c%s - q%z(1:n)))
+         q%px = px
+         q%residual = r
+         q%corrector = it
+         if (r <= opt%tol) return
+         if (.not. r < r_old) grown = grown + 1
+         if (grown > merge(1, 0, newton)) then
+            why = 'the corrector diverged at lambda = '//str(lam, 10)//' (residual '//str(r, 3)//' after '// &
+                  str(r_old, 3)//')'
+            return
+         end if
+         if (it == opt%max_corrector) exit
+         r_old = r
+         if (newton) then
+            call linearise(c, q, p%t, err)
+            if (allocated(err)) then
+               why = err%message
+               return
+            end if
+            b = bordered(q%a, p%t)
+         else
+            b = bordered(p%a, p%t)
+         end if
+         rhs = [q%z(1:n) - px/c%s, -dot_product(p%t, q%z - z_pred)]
+         call dgesv(n + 1, 1, b, n + 1, ipiv, rhs, n + 1, info)
+         if (info /= 0) then
+            why = 'the bordered Jacobian is singular'
+            return
+         end if
+         q%z = q%z + rhs
+      end do
+      why = 'the corrector spent its '//str(opt%max_corrector)//' steps at lambda = '//str(lam, 10)// &
+            ' (residual '//str(r, 3)//', tolerance '//str(opt%tol, 3)//')'
+   end subroutine correct
+
+   !> Append the point p (with its kind: '' or a bifurcation) to the branch.
+   module subroutine store(br, c, p, ds, kind, border, segment)
+      type(branch_t), intent(inout) :: br
+      type(ctx_t), intent(inout) :: c
+      type(node_t), intent(in) :: p
+      real(wp), intent(in) :: ds, border(:)
+      character(len=*), intent(in) :: kind
+      integer, intent(in) :: segment
+      type(branch_point_t) :: bp
+      type(error_t), allocatable :: err
+      bp%lam = p%z(c%n + 1)*c%ls
+      call at(c, bp%lam, err)   ! (the map at the point's own lambda: its period and t0)
+      bp%period = c%pm%period
+      bp%t0 = c%pm%t0
+      bp%x = p%z(1:c%n)*c%s
+      bp%tangent = p%t
+      bp%mu = p%mu
+      bp%stability = stability_of(p%mu)
+      bp%kind = kind
+      bp%residual = p%residual
+      bp%ds = ds
+      bp%corrector = p%corrector
+      bp%maps = c%maps
+      bp%z = p%z
+      bp%border = border
+      bp%phase = c%phase
+      bp%segment = segment
+      bp%message = ''
+      br%pts = [br%pts, bp]
+      br%maps = c%maps
+   end subroutine store
+
+   !> The first point of a resumed branch: its last stored point.
+   module subroutine start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(in) :: resume
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(out) :: cur
+      real(wp), allocatable, intent(out) :: t_prev(:)
+      real(wp), intent(out) :: ds
+      type(error_t), allocatable, intent(out) :: err
+      integer :: last
+      last = size(resume%pts)
+      do while (last > 0)
+         if (resume%pts(last)%status == branch_done .and. len(resume%pts(last)%kind) == 0) exit
+         last = last - 1
+      end do
+      if (last == 0) then
+         call fatal_error(err, 'the branch to resume has no point', err_input)
+         return
+      end if
+      br = resume
+      br%pts = resume%pts(1:last)
+      br%status = branch_failed
+      c%phase = br%pts(last)%phase
+      br%phase = c%phase
+      c%s = br%scale
+      c%ls = br%lam_scale
+      br%maps = br%pts(last)%maps
+      c%maps = br%maps
+      call at(c, br%pts(last)%lam, err)
+      if (allocated(err)) return
+      if (abs(c%pm%t0 - br%pts(last)%t0) > 1.0e-12_wp*c%pm%period) then
+         c%phase = (br%pts(last)%t0 - c%t_start)/c%pm%period   ! t0 moved along the branch (rephase_point)
+         br%phase = c%phase
+         c%lam = huge(1.0_wp)
+         call at(c, br%pts(last)%lam, err)
+         if (allocated(err)) return
+      end if
+      call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
+      if (allocated(err)) return
+      c%n = c%pm%n
+      if (size(c%s) /= c%n .or. size(br%pts(last)%tangent) /= c%n + 1) then
+         call fatal_error(err, 'the branch to resume has '//str(size(c%s))//' states, the deck '//str(c%n), err_input)
+         return
+      end if
+      associate (p => br%pts(last))
+         cur%z = [p%x/c%s, p%lam/c%ls]
+         if (allocated(p%z)) then
+            if (size(p%z) == c%n + 1) cur%z = p%z
+         end if
+         t_prev = p%tangent
+         if (allocated(p%border)) then
+            if (size(p%border) == c%n + 1) t_prev = p%border
+         end if
+         ds = min(max(p%ds_next, opt%ds_min), opt%ds_max)
+         if (.not. p%ds_next > 0.0_wp) ds = opt%ds
+      end associate
+   end subroutine start_resumed
+
+   !> Move the forcing phase t0 of the accepted point cur to the middle of the
+   !> longest stretch of its orbit with every memory contact open (as shooting
+   !> does, D-99): along a branch the contacts drift in phase, and one that spans
+   !> t0 makes the map wrong (its impact's damping is not in the state). cur's x
+   !> becomes its state at the new t0, its Jacobian and tangent (oriented by the
+   !> old one's lambda-component) are taken again. moved: whether t0 moved.
+   module subroutine rephase_point(c, br, cur, moved, err)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(inout) :: cur
+      logical, intent(out) :: moved
+      type(error_t), allocatable, intent(out) :: err
+      real(wp) :: x(c%n), t_dir(c%n + 1), t0_old
+      character(len=:), allocatable :: why
+      moved = .false.
+      call at(c, cur%z(c%n + 1)*c%ls, err)
+      if (allocated(err)) return
+      x = cur%z(1:c%n)*c%s
+      t0_old = c%pm%t0
+      call c%pm%rephase(x, err)
+      if (allocated(err)) return
+      c%maps = c%maps + 2
+      if (c%pm%t0 == t0_old) return
+      moved = .true.
+      c%phase = (c%pm%t0 - c%t_start)/c%pm%period
+      br%phase = c%phase
+      cur%z(1:c%n) = x/c%s
+      t_dir = 0.0_wp
+      t_dir(c%n + 1) = sign(1.0_wp, cur%t(c%n + 1))
+      call evaluate(c, cur%z, cur%px, why, err)
+      if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'moving t0: '//why, err_input)
+      if (.not. allocated(err)) call linearise(c, cur, t_dir, err)
+   end subroutine rephase_point
+
+   !> Whether a fold stored after index `before` repeats an earlier fold (lambda
+   !> to 1e-7 of |lambda_0|, the state to 1e-6 of its scale, or where t0 moved in
+   !> between the multipliers' moduli to 1e-4): a closed branch, which the
+   !> continuation would go round again.
+   module logical function closed_loop(br, before, c) result(closed)
+      type(branch_t), intent(in) :: br
+      integer, intent(in) :: before
+      type(ctx_t), intent(in) :: c
+      integer :: i, j
+      closed = .false.
+      do i = before + 1, size(br%pts)
+         if (br%pts(i)%kind /= 'fold') cycle
+         do j = 1, before
+            if (br%pts(j)%kind /= 'fold') cycle
+            if (abs(br%pts(i)%lam - br%pts(j)%lam) > 1.0e-7_wp*c%ls) cycle
+            if (abs(br%pts(i)%t0 - br%pts(j)%t0) <= 1.0e-9_wp*br%pts(i)%period) then
+               if (maxval(abs(br%pts(i)%x - br%pts(j)%x)/c%s) > 1.0e-6_wp) cycle
+            else if (maxval(abs(abs(br%pts(i)%mu) - abs(br%pts(j)%mu))) > 1.0e-4_wp) then
+               cycle   ! (t0 moved in between: the state is another section's; the multipliers are not)
+            end if
+            closed = .true.
+         end do
+      end do
+   end function closed_loop
+
+   !> Whether two points' flows met the same contact sequence: as many events,
+   !> events where f jumps, and impacts over the orbit.
+   module logical function same_sequence(a, b)
+      type(monodromy_stats_t), intent(in) :: a, b
+      same_sequence = a%events == b%events .and. a%jumps == b%jumps .and. a%impacts == b%impacts
+   end function same_sequence
+
+   !> A contact-sequence change between the accepted p and q (q = p + ds along p's
+   !> tangent, corrected, its sequence another): the grazing orbit located by
+   !> bisection on the arclength from p (each trial corrected by full Newton on p's
+   !> hyperplane; a trial that fails counts as past the change) to lam_tol, the
+   !> last point of p's sequence stored as kind 'grazing' (after the bifurcations
+   !> between p and it), and q's tangent oriented along the secant from it: the
+   !> multipliers and the tangent jump there (the map's derivative is
+   !> discontinuous), and the branch goes on in q's sequence (D-109 ns27).
+   module subroutine cross_grazing(c, br, p, q, ds, opt)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(in) :: p
+      type(node_t), intent(inout) :: q
+      real(wp), intent(in) :: ds
+      type(branch_options_t), intent(in) :: opt
+      type(node_t) :: a, r
+      type(error_t), allocatable :: err
+      character(len=:), allocatable :: why
+      real(wp) :: sa, sb, sm
+      integer :: it
+      sa = 0.0_wp
+      sb = ds
+      a = p
+      do it = 1, 60
+         if (abs(sb - sa)*abs(p%t(c%n + 1)) <= opt%lam_tol .and. abs(sb - sa) <= 1.0e3_wp*opt%lam_tol) exit
+         sm = 0.5_wp*(sa + sb)
+         call correct(c, p, p%z + sm*p%t, opt, r, why, full=.true.)
+         if (len(why) == 0) call linearise(c, r, p%t, err)
+         if (allocated(err)) deallocate (err)
+         if (len(why) == 0 .and. same_sequence(r%st, p%st)) then
+            sa = sm
+            a = r
+         else
+            sb = sm
+         end if
+      end do
+      if (sa > 0.0_wp) then
+         call detect(c, br, p, a, sa, opt)
+         call store(br, c, a, sa, 'grazing', a%t, br%pts(size(br%pts))%segment)
+      else
+         call store(br, c, p, 0.0_wp, 'grazing', p%t, br%pts(size(br%pts))%segment)
+      end if
+      if (dot_product(q%t, q%z - a%z) < 0.0_wp) q%t = -q%t
+   end subroutine cross_grazing
+
+   !> The bifurcations between the accepted points p and q (q = p + ds along p's
+   !> tangent, corrected), each located and stored before q.
+   module subroutine detect(c, br, p, q, ds, opt)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(in) :: p, q
+      real(wp), intent(in) :: ds
+      type(branch_options_t), intent(in) :: opt
+      integer :: j
+      character(len=*), parameter :: kinds(3) = [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker']
+      do j = 1, 3
+         if (test_fn(j, p, c%n) * test_fn(j, q, c%n) < 0.0_wp) call locate(c, br, p, q, ds, opt, j, trim(kinds(j)))
+      end do
+   end subroutine detect
+
+   !> Test function j at a point: 1 fold (the tangent's lambda-component), 2
+   !> period-doubling (det(M + I) = prod(1 + mu)), 3 Neimark-Sacker (|mu| - 1 of
+   !> the complex pair nearest the unit circle; +-1 with none).
+   real(wp) function test_fn(j, p, n) result(f)
+      integer, intent(in) :: j, n
+      type(node_t), intent(in) :: p
+      integer :: i
+      select case (j)
+      case (1)
+         f = p%t(n + 1)
+      case (2)
+         f = real(product(1.0_wp + p%mu), wp)
+      case default
+         f = huge(1.0_wp)
+         do i = 1, size(p%mu)
+            if (abs(aimag(p%mu(i))) > 1.0e-8_wp*abs(p%mu(i))) then
+               if (abs(abs(p%mu(i)) - 1.0_wp) < abs(f)) f = abs(p%mu(i)) - 1.0_wp
+            end if
+         end do
+         if (f == huge(1.0_wp)) f = -1.0_wp
+      end select
+   end function test_fn
+
+   !> Locate the zero of test function j between p (sigma = 0) and q (sigma = ds)
+   !> by the Illinois secant on sigma, each trial point corrected from p along p's
+   !> tangent (the arclength condition t_p'(z - z_p) = sigma); stored with its kind.
+   !> A trial that fails to converge ends the search at the best bracket.
+   subroutine locate(c, br, p, q, ds, opt, j, kind)
+      type(ctx_t), intent(inout) :: c
+      type(branch_t), intent(inout) :: br
+      type(node_t), intent(in) :: p, q
+      real(wp), intent(in) :: ds
+      type(branch_options_t), intent(in) :: opt
+      integer, intent(in) :: j
+      character(len=*), intent(in) :: kind
+      type(node_t) :: r, best
+      type(error_t), allocatable :: err
+      real(wp) :: sa, sb, fa, fb, sm, fm, la, lb
+      character(len=:), allocatable :: why
+      integer :: it, side
+      sa = 0.0_wp
+      sb = ds
+      fa = test_fn(j, p, c%n)
+      fb = test_fn(j, q, c%n)
+      la = p%z(c%n + 1)
+      lb = q%z(c%n + 1)
+      best = q
+      side = 0
+      do it = 1, 40
+         sm = sb - fb*(sb - sa)/(fb - fa)
+         call correct(c, p, p%z + sm*p%t, opt, r, why)
+         if (len(why) == 0) call linearise(c, r, p%t, err)
+         if (allocated(err) .or. len(why) > 0) exit
+         fm = test_fn(j, r, c%n)
+         best = r
+         if (fm*fb < 0.0_wp) then
+            sa = sb
+            fa = fb
+            la = lb
+            side = 0
+         else
+            if (side == 1) fa = 0.5_wp*fa
+            side = 1
+         end if
+         sb = sm
+         fb = fm
+         lb = r%z(c%n + 1)
+         if (j == 1 .and. abs(fm) < 1.0e-9_wp) exit
+         if (j /= 1 .and. abs(la - lb) < opt%lam_tol) exit
+      end do
+      call store(br, c, best, sm, kind, p%t, br%pts(size(br%pts))%segment)
+   end subroutine locate
+end submodule trainsim_arclength_events
