@@ -306,7 +306,7 @@ contains
       if (allocated(err)) return
       if (br%status == branch_no_start) then
          if (lam < huge(1.0_wp)) call failed_point(br, lam, branch_no_start, br%message)
-         call report_points()
+         call report_points(br, stored, err, hook)
          if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
          return
       end if
@@ -321,15 +321,6 @@ contains
          br%pts(size(br%pts))%ds_next = ds
       end if
       call follow(c, br, cur, ds, opt, stored, restarts, err, hook)
-   contains
-      subroutine report_points()
-         if (.not. present(hook)) return
-         do while (stored < size(br%pts))
-            stored = stored + 1
-            call hook(br, stored, err)
-            if (allocated(err)) return
-         end do
-      end subroutine report_points
    end subroutine continue_branch
 
    !> The continuation loop from the accepted point cur (stored) with the step ds:
@@ -352,7 +343,7 @@ contains
       integer :: before
       rephased = .false.
       do
-         call report_points()
+         call report_points(br, stored, err, hook)
          if (allocated(err)) return
          if (size(br%pts) >= opt%max_points) then
             br%status = branch_budget
@@ -429,18 +420,23 @@ contains
       br%maps = c%maps
       br%passes = c%passes
       call c%pm%finish()
-      call report_points()
+      call report_points(br, stored, err, hook)
       if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
-   contains
-      subroutine report_points()
-         if (.not. present(hook)) return
-         do while (stored < size(br%pts))
-            stored = stored + 1
-            call hook(br, stored, err)
-            if (allocated(err)) return
-         end do
-      end subroutine report_points
    end subroutine follow
+
+   !> The points of br after `stored` given to `hook` (if present), in order.
+   subroutine report_points(br, stored, err, hook)
+      type(branch_t), intent(in) :: br
+      integer, intent(inout) :: stored
+      type(error_t), allocatable, intent(inout) :: err
+      procedure(point_hook_i), optional :: hook
+      if (.not. present(hook)) return
+      do while (stored < size(br%pts))
+         stored = stored + 1
+         call hook(br, stored, err)
+         if (allocated(err)) return
+      end do
+   end subroutine report_points
 
    !> The first point: the orbit shot at lam0; t0 there (moved by shooting to an
    !> instant with no memory contact in progress) kept as a phase of the period.
