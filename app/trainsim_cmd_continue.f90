@@ -18,7 +18,7 @@ module trainsim_cmd_continue
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_orbit, only: orbit_run
    use trainsim_arclength, only: branch_problem_t, branch_options_t, branch_point_t, branch_t, continue_branch, &
-                                 branch_done
+                                 branch_done, switch_period_doubling
    use trainsim_branch_file, only: branch_file_t
    use trainsim_sweep_layout, only: sweep_layout_t, element_metric_names
    use trainsim_sweep, only: fingerprint, element_record
@@ -43,6 +43,9 @@ module trainsim_cmd_continue
 
    type(deck_problem_t), save :: prob
    type(branch_file_t), save :: bfile
+   type(sweep_layout_t), save :: blay     !< the branch file's layout (also for --switch-pd's)
+   integer, save :: bn = 0                 !< its states
+   character(len=:), allocatable, save :: out_path
    integer, save :: kperiods = 1
 
 contains
@@ -66,11 +69,12 @@ contains
       type(error_t), allocatable :: err
       type(deck_group_t), allocatable :: sweeps(:)
       type(sweep_layout_t) :: lay
-      character(len=:), allocatable :: param, out_path
+      character(len=:), allocatable :: param
       real(wp) :: lam0, lam1
-      logical :: resume
+      logical :: resume, switch_pd
       integer :: i, n, n_failed
       deck_path = ''
+      switch_pd = .false.
       out_path = ''
       param = ''
       resume = .false.
@@ -129,6 +133,8 @@ contains
             if (opt%monodromy < 0) call refuse("option --monodromy needs auto, saltation or fd, got '"//arg(i)//"'")
          case ('--smooth')
             opt%nonsmooth = .false.
+         case ('--switch-pd')
+            switch_pd = .true.
          case ('--set')
             call add_set(i)
             i = i + 1
@@ -156,6 +162,8 @@ contains
       if (len(out_path) > 0) then
          call branch_layout(prob%deck, lam0, opt, param, lay, n, err)
          if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err)
+         blay = lay
+         bn = n
          if (allocated(err)) call fail(err)
       end if
       if (resume) then
@@ -173,6 +181,10 @@ contains
       n_failed = count(br%pts%status /= branch_done)
       write (output_unit, '(a)') str(size(br%pts))//' points ('//str(n_failed)//' failed), '//str(br%maps)// &
          ' period maps, '//str(br%rejected)//' steps refused, '//str(br%passes)//' variational passes'
+      if (br%status == branch_done .and. allocated(br%message)) then
+         if (len(br%message) > 0) write (output_unit, '(a)') br%message
+      end if
+      if (switch_pd) call doubled_branch(br, opt)
       if (br%status /= branch_done) then
          write (error_unit, '(a)') 'trainsim: continue: the branch stopped early (status '//str(br%status)//'): '// &
             br%message
@@ -189,6 +201,46 @@ contains
       call bfile%close()
       call fail(err)
    end subroutine close_fail
+
+   !> --switch-pd: the period-doubled branch from the branch's first period-doubling
+   !> point, printed and (with -o FILE) written to FILE with '.pd2' before its
+   !> extension (resume it with --period-count 2 times the first's).
+   subroutine doubled_branch(br, opt)
+      type(branch_t), intent(in) :: br
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t) :: br2
+      type(error_t), allocatable :: err
+      integer :: i, ipd, dot
+      ipd = 0
+      do i = size(br%pts), 1, -1
+         if (br%pts(i)%kind == 'period-doubling') ipd = i
+      end do
+      if (ipd == 0) then
+         write (output_unit, '(a)') 'no period-doubling point on the branch: nothing to switch onto'
+         return
+      end if
+      write (output_unit, '(a)') 'the period-doubled branch from lambda = '//str(br%pts(ipd)%lam, 12)//':'
+      if (len(out_path) > 0) then
+         dot = index(out_path, '.', back=.true.)
+         if (dot <= index(out_path, '/', back=.true.)) dot = len(out_path) + 1
+         out_path = out_path(1:dot - 1)//'.pd2'//out_path(dot:)
+         kperiods = 2*opt%k
+         call bfile%open(out_path, blay, bn, prob%key, .false., err)
+         if (allocated(err)) call fail(err)
+         call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=on_point)
+         call bfile%close()
+      else
+         call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=print_point)
+      end if
+      if (allocated(err)) call fail(err)
+      write (output_unit, '(a)') str(size(br2%pts))//' points, '//str(br2%maps)//' period maps, '// &
+         str(br2%rejected)//' steps refused'
+      if (br2%status /= branch_done) then
+         write (error_unit, '(a)') 'trainsim: continue: the doubled branch stopped early (status '// &
+            str(br2%status)//'): '//br2%message
+         call quit(1)
+      end if
+   end subroutine doubled_branch
 
    real(wp) function positive(k) result(x)
       integer, intent(in) :: k

@@ -14,37 +14,8 @@
 !> stable points outside (the branch stopped by a budget of 8 points and
 !> resumed from its last), a corrector that cannot converge and a start with no orbit stop
 !> the branch with their status and reason.
-module continuation_sine_problem
-   use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t
-   use trainsim_model, only: model_t
-   use trainsim_arclength, only: branch_problem_t
-   implicit none
-   private
-   public :: sine_problem_t
-
-   !> the oscillator at forcing frequency lambda = W (rad/s)
-   type, extends(branch_problem_t) :: sine_problem_t
-      type(model_t) :: base
-   contains
-      procedure :: model_at => sine_model_at
-   end type sine_problem_t
-
-contains
-
-   subroutine sine_model_at(self, lam, model, err)
-      class(sine_problem_t), intent(in) :: self
-      real(wp), intent(in) :: lam
-      type(model_t), intent(out) :: model
-      type(error_t), allocatable, intent(out) :: err
-      model = self%base
-      model%loads(1)%torque%omega = lam
-      model%loads(1)%torque%integral_at_zero = -model%loads(1)%torque%amplitude/lam*cos(model%loads(1)%torque%phase)
-   end subroutine sine_model_at
-end module continuation_sine_problem
-
 program test_continuation
-   use continuation_sine_problem, only: sine_problem_t
+   use trainsim_test_branch, only: sine_problem_t
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_strings, only: str

@@ -1,5 +1,5 @@
 !> The saltation monodromy in shooting and the non-smooth continuation (issue 27;
-!> docs/periodic.md "Through contact-sequence changes"; D-109 ns27).
+!> docs/periodic.md "Through contact-sequence changes"; D-110 ns27).
 !>
 !> 1. Shooting with the monodromy from the variational equations with saltation
 !>    matrices against central differences, on the Table 5.5 rig (shafts damped, 485

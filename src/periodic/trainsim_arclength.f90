@@ -35,6 +35,7 @@ module trainsim_arclength
    private
 
    public :: branch_problem_t, point_hook_i, branch_options_t, branch_point_t, branch_t, continue_branch
+   public :: switch_period_doubling
    public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed, branch_fold
 
    !> branch_t%status, and a failed point's status (branch_point_t%status): why it stopped
@@ -76,7 +77,7 @@ module trainsim_arclength
       !> the monodromy: mono_auto (saltation where the deck allows it), mono_saltation, mono_fd
       integer :: monodromy = mono_auto
       !> the non-smooth corrector: a change of the contact sequence (grazing) located,
-      !> stored as a point of kind 'grazing' and crossed with full Newton (D-109 ns27)
+      !> stored as a point of kind 'grazing' and crossed with full Newton (D-110 ns27)
       logical :: nonsmooth = .true.
       !> restarts: where the corrector fails at the smallest step (or no orbit is found at a
       !> restart), a failed point is stored with its reason and the orbit is shot again
@@ -322,6 +323,98 @@ contains
       end if
       call follow(c, br, cur, ds, opt, stored, restarts, err, hook)
    end subroutine continue_branch
+
+   !> Branch switching at the period-doubling point br%pts(ipd): the doubled branch
+   !> (2k forcing periods per orbit) from that point, whose P^2 has the multiplier +1
+   !> with M's eigenvector v for -1 (inverse iteration on S^-1 (M^2 - I) S): the
+   !> first point by full Newton on the hyperplane v'(z - z_pd - ds v) = 0 (the
+   !> period-k branch crosses it far away: its tangent is across v), then the
+   !> continuation as `continue_branch` (opt%k is the period-k branch's). br2%status
+   !> branch_no_start when no doubled orbit is found down to ds_min.
+   subroutine switch_period_doubling(prob, br, ipd, opt, br2, err, hook)
+      class(branch_problem_t), intent(in) :: prob
+      type(branch_t), intent(in) :: br
+      integer, intent(in) :: ipd
+      type(branch_options_t), intent(in) :: opt
+      type(branch_t), intent(out) :: br2
+      type(error_t), allocatable, intent(out) :: err
+      procedure(point_hook_i), optional :: hook
+      type(ctx_t) :: c
+      type(node_t) :: cur, nxt
+      real(wp), allocatable :: b(:, :), v(:), t_dir(:)
+      integer, allocatable :: ipiv(:)
+      character(len=:), allocatable :: why
+      real(wp) :: ds
+      integer :: n, it, info, stored, i
+      allocate (c%prob, source=prob)
+      allocate (br2%pts(0))
+      c%sig = opt%nonsmooth
+      c%k = 2*opt%k
+      c%fd = opt%fd_lam
+      c%s = br%scale
+      c%ls = br%lam_scale
+      c%phase = br%phase
+      associate (p => br%pts(ipd))
+         call at(c, p%lam, err)                          ! (for t_start)
+         if (allocated(err)) return
+         c%phase = (p%t0 - c%t_start)/p%period          ! its own t0
+         c%lam = huge(1.0_wp)
+         call at(c, p%lam, err)
+         if (allocated(err)) return
+         call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
+         if (allocated(err)) return
+         n = c%pm%n
+         c%n = n
+         br2%scale = c%s
+         br2%lam_scale = c%ls
+         br2%phase = c%phase
+         cur%z = [p%x/c%s, p%lam/c%ls]
+      end associate
+      call evaluate(c, cur%z, cur%px, why, err)
+      if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'the period-doubling point: '//why, err_input)
+      if (allocated(err)) return
+      allocate (t_dir(n + 1), v(n), ipiv(n))
+      t_dir = 0.0_wp
+      t_dir(n + 1) = 1.0_wp
+      call linearise(c, cur, t_dir, err)
+      if (allocated(err) .and. allocated(cur%a)) deallocate (err)   ! (the bordered system is singular there)
+      if (allocated(err)) return
+      v = 1.0_wp/sqrt(real(n, wp))
+      do it = 1, 4   ! inverse iteration: the null vector of S^-1 (M^2 - I) S
+         b = cur%a(:, 1:n)
+         do i = 1, n
+            b(i, i) = b(i, i) + 1.0e-9_wp
+         end do
+         call dgesv(n, 1, b, n, ipiv, v, n, info)
+         if (info /= 0) exit
+         v = v/norm2(v)
+      end do
+      cur%t = [v, 0.0_wp]
+      call store(br2, c, cur, 0.0_wp, 'period-doubling')
+      ds = opt%ds
+      do
+         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
+         if (len(why) == 0) then
+            call linearise(c, nxt, cur%t, err)
+            if (allocated(err)) then
+               why = err%message
+               deallocate (err)
+            end if
+         end if
+         if (len(why) == 0) exit
+         if (ds <= opt%ds_min) then
+            br2%status = branch_no_start
+            br2%message = 'no period-doubled orbit found next to lambda = '//str(br%pts(ipd)%lam, 10)//': '//why
+            br2%maps = c%maps
+            return
+         end if
+         ds = max(0.5_wp*ds, opt%ds_min)
+      end do
+      call store(br2, c, nxt, ds, '')
+      cur = nxt
+      stored = 0
+      call follow(c, br2, cur, ds, opt, stored, err, hook)
+   end subroutine switch_period_doubling
 
    !> The continuation loop from the accepted point cur (stored) with the step ds:
    !> predictor, corrector (chord, then full Newton: the non-smooth corrector),

@@ -1,5 +1,5 @@
 !> The steps of trainsim_arclength's continuation (its submodule; docs/periodic.md
-!> "Continuation", "Through contact-sequence changes"; D-108, D-109 ns27): the map
+!> "Continuation", "Through contact-sequence changes"; D-108, D-110 ns27): the map
 !> set up at a parameter value, a point's linearisation, the corrector (chord or full
 !> Newton), a point stored; and the non-smooth part: the forcing phase moved when a
 !> memory contact drifts onto t0, a contact-sequence change (grazing) located and
@@ -11,10 +11,7 @@ submodule(trainsim_arclength) trainsim_arclength_events
 contains
 
    !> The period map set up at lambda (the deck rebuilt there; t0 = t_start + phase T).
-   module subroutine at(c, lam, err)
-      type(ctx_t), intent(inout) :: c
-      real(wp), intent(in) :: lam
-      type(error_t), allocatable, intent(out) :: err
+   module procedure at
       type(model_t) :: m
       real(wp) :: period
       if (lam == c%lam) return
@@ -28,15 +25,10 @@ contains
       call c%pm%setup(m, period, c%k, err)
       if (allocated(err)) return
       c%lam = lam
-   end subroutine at
+   end procedure at
 
    !> px = P(x; lambda) for the scaled z = (x/s, lambda/l). why: the integration failed.
-   module subroutine evaluate(c, z, px, why, err)
-      type(ctx_t), intent(inout) :: c
-      real(wp), intent(in) :: z(:)
-      real(wp), allocatable, intent(out) :: px(:)
-      character(len=:), allocatable, intent(out) :: why
-      type(error_t), allocatable, intent(out) :: err
+   module procedure evaluate
       type(error_t), allocatable :: e
       why = ''
       allocate (px(c%n))
@@ -45,14 +37,10 @@ contains
       call c%pm%map(z(1:c%n)*c%s, px, e)
       c%maps = c%maps + 1
       if (allocated(e)) why = 'the period map failed: '//e%message
-   end subroutine evaluate
+   end procedure evaluate
 
    !> The point's monodromy, multipliers, scaled Jacobian A and tangent (oriented along t_prev).
-   module subroutine linearise(c, p, t_prev, err)
-      type(ctx_t), intent(inout) :: c
-      type(node_t), intent(inout) :: p
-      real(wp), intent(in) :: t_prev(:)
-      type(error_t), allocatable, intent(out) :: err
+   module procedure linearise
       real(wp) :: x(c%n), lam, h, pp(c%n), pq(c%n)
       real(wp), allocatable :: b(:, :), rhs(:)
       character(len=:), allocatable :: why
@@ -116,7 +104,7 @@ contains
             call fatal_error(err, 'dP/dlambda: the period map failed at lambda = '//str(l)//': '//why, err_input)
          end if
       end subroutine map_at
-   end subroutine linearise
+   end procedure linearise
 
    !> [A; t'] of A (n x n+1) and t (n+1).
    function bordered(a, t) result(b)
@@ -129,16 +117,9 @@ contains
    !> The corrector from z_pred on [G(z)/s; t'(z - z_pred)] = 0, t = p's tangent:
    !> chord Newton with the bordered matrix [A; t'] of the point `p`, or with
    !> `full` Newton with the Jacobian A(z) of each iterate (the one-sided Jacobian
-   !> of its own contact sequence: the non-smooth corrector, D-109 ns27). why = ''
+   !> of its own contact sequence: the non-smooth corrector, D-110 ns27). why = ''
    !> if it converged.
-   module subroutine correct(c, p, z_pred, opt, q, why, full)
-      type(ctx_t), intent(inout) :: c
-      type(node_t), intent(in) :: p
-      real(wp), intent(in) :: z_pred(:)
-      type(branch_options_t), intent(in) :: opt
-      type(node_t), intent(out) :: q
-      character(len=:), allocatable, intent(out) :: why
-      logical, intent(in), optional :: full
+   module procedure correct
       type(error_t), allocatable :: err
       real(wp), allocatable :: b(:, :), rhs(:), px(:)
       real(wp) :: r, r_old, lam
@@ -190,16 +171,10 @@ contains
       end do
       why = 'the corrector spent its '//str(opt%max_corrector)//' steps at lambda = '//str(lam, 10)// &
             ' (residual '//str(r, 3)//', tolerance '//str(opt%tol, 3)//')'
-   end subroutine correct
+   end procedure correct
 
    !> Append the point p (with its kind: '' or a bifurcation) to the branch.
-   module subroutine store(br, c, p, ds, kind, border, segment)
-      type(branch_t), intent(inout) :: br
-      type(ctx_t), intent(inout) :: c
-      type(node_t), intent(in) :: p
-      real(wp), intent(in) :: ds, border(:)
-      character(len=*), intent(in) :: kind
-      integer, intent(in) :: segment
+   module procedure store
       type(branch_point_t) :: bp
       type(error_t), allocatable :: err
       bp%lam = p%z(c%n + 1)*c%ls
@@ -222,18 +197,10 @@ contains
       bp%message = ''
       br%pts = [br%pts, bp]
       br%maps = c%maps
-   end subroutine store
+   end procedure store
 
    !> The first point of a resumed branch: its last stored point.
-   module subroutine start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
-      type(ctx_t), intent(inout) :: c
-      type(branch_t), intent(in) :: resume
-      type(branch_options_t), intent(in) :: opt
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(out) :: cur
-      real(wp), allocatable, intent(out) :: t_prev(:)
-      real(wp), intent(out) :: ds
-      type(error_t), allocatable, intent(out) :: err
+   module procedure start_resumed
       integer :: last
       last = size(resume%pts)
       do while (last > 0)
@@ -281,7 +248,7 @@ contains
          ds = min(max(p%ds_next, opt%ds_min), opt%ds_max)
          if (.not. p%ds_next > 0.0_wp) ds = opt%ds
       end associate
-   end subroutine start_resumed
+   end procedure start_resumed
 
    !> Move the forcing phase t0 of the accepted point cur to the middle of the
    !> longest stretch of its orbit with every memory contact open (as shooting
@@ -289,12 +256,7 @@ contains
    !> t0 makes the map wrong (its impact's damping is not in the state). cur's x
    !> becomes its state at the new t0, its Jacobian and tangent (oriented by the
    !> old one's lambda-component) are taken again. moved: whether t0 moved.
-   module subroutine rephase_point(c, br, cur, moved, err)
-      type(ctx_t), intent(inout) :: c
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(inout) :: cur
-      logical, intent(out) :: moved
-      type(error_t), allocatable, intent(out) :: err
+   module procedure rephase_point
       real(wp) :: x(c%n), t_dir(c%n + 1), t0_old
       character(len=:), allocatable :: why
       moved = .false.
@@ -315,16 +277,13 @@ contains
       call evaluate(c, cur%z, cur%px, why, err)
       if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'moving t0: '//why, err_input)
       if (.not. allocated(err)) call linearise(c, cur, t_dir, err)
-   end subroutine rephase_point
+   end procedure rephase_point
 
    !> Whether a fold stored after index `before` repeats an earlier fold (lambda
    !> to 1e-7 of |lambda_0|, the state to 1e-6 of its scale, or where t0 moved in
    !> between the multipliers' moduli to 1e-4): a closed branch, which the
    !> continuation would go round again.
-   module logical function closed_loop(br, before, c) result(closed)
-      type(branch_t), intent(in) :: br
-      integer, intent(in) :: before
-      type(ctx_t), intent(in) :: c
+   module procedure closed_loop
       integer :: i, j
       closed = .false.
       do i = before + 1, size(br%pts)
@@ -340,14 +299,13 @@ contains
             closed = .true.
          end do
       end do
-   end function closed_loop
+   end procedure closed_loop
 
    !> Whether two points' flows met the same contact sequence: as many events,
    !> events where f jumps, and impacts over the orbit.
-   module logical function same_sequence(a, b)
-      type(monodromy_stats_t), intent(in) :: a, b
+   module procedure same_sequence
       same_sequence = a%events == b%events .and. a%jumps == b%jumps .and. a%impacts == b%impacts
-   end function same_sequence
+   end procedure same_sequence
 
    !> A contact-sequence change between the accepted p and q (q = p + ds along p's
    !> tangent, corrected, its sequence another): the grazing orbit located by
@@ -356,14 +314,8 @@ contains
    !> last point of p's sequence stored as kind 'grazing' (after the bifurcations
    !> between p and it), and q's tangent oriented along the secant from it: the
    !> multipliers and the tangent jump there (the map's derivative is
-   !> discontinuous), and the branch goes on in q's sequence (D-109 ns27).
-   module subroutine cross_grazing(c, br, p, q, ds, opt)
-      type(ctx_t), intent(inout) :: c
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(in) :: p
-      type(node_t), intent(inout) :: q
-      real(wp), intent(in) :: ds
-      type(branch_options_t), intent(in) :: opt
+   !> discontinuous), and the branch goes on in q's sequence (D-110 ns27).
+   module procedure cross_grazing
       type(node_t) :: a, r
       type(error_t), allocatable :: err
       character(len=:), allocatable :: why
@@ -392,22 +344,17 @@ contains
          call store(br, c, p, 0.0_wp, 'grazing', p%t, br%pts(size(br%pts))%segment)
       end if
       if (dot_product(q%t, q%z - a%z) < 0.0_wp) q%t = -q%t
-   end subroutine cross_grazing
+   end procedure cross_grazing
 
    !> The bifurcations between the accepted points p and q (q = p + ds along p's
    !> tangent, corrected), each located and stored before q.
-   module subroutine detect(c, br, p, q, ds, opt)
-      type(ctx_t), intent(inout) :: c
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(in) :: p, q
-      real(wp), intent(in) :: ds
-      type(branch_options_t), intent(in) :: opt
+   module procedure detect
       integer :: j
       character(len=*), parameter :: kinds(3) = [character(len=15) :: 'fold', 'period-doubling', 'neimark-sacker']
       do j = 1, 3
          if (test_fn(j, p, c%n) * test_fn(j, q, c%n) < 0.0_wp) call locate(c, br, p, q, ds, opt, j, trim(kinds(j)))
       end do
-   end subroutine detect
+   end procedure detect
 
    !> Test function j at a point: 1 fold (the tangent's lambda-component), 2
    !> period-doubling (det(M + I) = prod(1 + mu)), 3 Neimark-Sacker (|mu| - 1 of

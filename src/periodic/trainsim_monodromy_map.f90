@@ -1,6 +1,6 @@
 !> The monodromy matrix of a period map (trainsim_period_map) from the
 !> variational equations with saltation matrices (trainsim_monodromy, D-102),
-!> and the choice between it and central differences (issue 27; D-109 ns27).
+!> and the choice between it and central differences (issue 27; D-110 ns27).
 !>
 !> At t0 the reduced state is the state (D-99) and the reduced angles differ from
 !> the absolute ones by W (t - t0), which does not depend on x(t0): dP/dx is the
