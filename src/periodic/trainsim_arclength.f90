@@ -345,7 +345,7 @@ contains
       integer, allocatable :: ipiv(:)
       character(len=:), allocatable :: why
       real(wp) :: ds
-      integer :: n, it, info, stored, i
+      integer :: n, it, info, stored, i, restarts
       allocate (c%prob, source=prob)
       allocate (br2%pts(0))
       c%sig = opt%nonsmooth
@@ -390,7 +390,7 @@ contains
          v = v/norm2(v)
       end do
       cur%t = [v, 0.0_wp]
-      call store(br2, c, cur, 0.0_wp, 'period-doubling')
+      call store(br2, c, cur, 0.0_wp, 'period-doubling', cur%t, 1)
       ds = opt%ds
       do
          call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
@@ -410,10 +410,12 @@ contains
          end if
          ds = max(0.5_wp*ds, opt%ds_min)
       end do
-      call store(br2, c, nxt, ds, '')
+      call store(br2, c, nxt, ds, '', cur%t, 1)
       cur = nxt
+      br2%pts(size(br2%pts))%ds_next = ds
       stored = 0
-      call follow(c, br2, cur, ds, opt, stored, err, hook)
+      restarts = 0
+      call follow(c, br2, cur, ds, opt, stored, restarts, err, hook)
    end subroutine switch_period_doubling
 
    !> The continuation loop from the accepted point cur (stored) with the step ds:
