@@ -238,7 +238,7 @@ module trainsim_arclength
       end subroutine store
    end interface
 
-   !> Restarts past a failure and failed points (trainsim_arclength_restart.f90, fig27, D-111)
+   !> Restarts past a failure and failed points (trainsim_arclength_restart.f90, fig27, D-113)
    interface
       module logical function at_fold(p, n)
          type(node_t), intent(in) :: p

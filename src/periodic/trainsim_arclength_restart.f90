@@ -1,4 +1,4 @@
-!> Restarts of a branch past a failure (fig27, D-111; docs/periodic.md "Restarts: the
+!> Restarts of a branch past a failure (fig27, D-113; docs/periodic.md "Restarts: the
 !> sweep goes on"): a failed point stored with its reason, the orbit shot again further
 !> on in lambda from the last orbit's state, the branch going on as a new segment.
 submodule(trainsim_arclength) trainsim_arclength_restart

@@ -1,4 +1,4 @@
-!> The branch file of `trainsim continue` (docs/periodic.md "The branch file"; D-111):
+!> The branch file of `trainsim continue` (docs/periodic.md "The branch file"; D-113):
 !> a periodic-orbit branch in the sweep file's HDF5 layout, one slot per point.
 !>
 !> As in a sweep file (trainsim_sweep_file) every dataset is made at the start with
