@@ -5,19 +5,24 @@
 !> point) as it grows, so that a killed run continues with --resume.
 module trainsim_cmd_continue
    use, intrinsic :: iso_fortran_env, only: output_unit, error_unit
+   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
    use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t, fatal_error, err_io, err_input
-   use trainsim_strings, only: str, string_t
+   use trainsim_error, only: error_t
+   use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
-   use trainsim_observer, only: run_result_t
-   use trainsim_sink, only: null_sink_t
+   use trainsim_observer, only: run_result_t, make_meta
+   use trainsim_sink, only: null_sink_t, run_meta_t
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_orbit, only: orbit_run
    use trainsim_arclength, only: branch_problem_t, branch_options_t, branch_point_t, branch_t, continue_branch, &
                                  branch_done, switch_period_doubling
+   use trainsim_branch_file, only: branch_file_t
+   use trainsim_sweep_layout, only: sweep_layout_t, element_metric_names
+   use trainsim_sweep, only: fingerprint, element_record
+   use trainsim_version, only: version_full
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: continue_usage
    use trainsim_monodromy_map, only: monodromy_code
@@ -36,11 +41,12 @@ module trainsim_cmd_continue
       procedure :: model_at => deck_model_at
    end type deck_problem_t
 
-   character(len=*), parameter :: kinds(0:4) = [character(len=15) :: '', 'fold', 'period-doubling', 'neimark-sacker', &
-                                                 'grazing']
-
    type(deck_problem_t), save :: prob
+   type(branch_file_t), save :: bfile
+   type(sweep_layout_t), save :: blay     !< the branch file's layout (also for --switch-pd's)
+   integer, save :: bn = 0                 !< its states
    character(len=:), allocatable, save :: out_path
+   integer, save :: kperiods = 1
 
 contains
 
@@ -62,10 +68,11 @@ contains
       type(branch_t) :: br, old
       type(error_t), allocatable :: err
       type(deck_group_t), allocatable :: sweeps(:)
+      type(sweep_layout_t) :: lay
       character(len=:), allocatable :: param
       real(wp) :: lam0, lam1
       logical :: resume, switch_pd
-      integer :: i
+      integer :: i, n, n_failed
       deck_path = ''
       switch_pd = .false.
       out_path = ''
@@ -92,6 +99,9 @@ contains
          case ('--ds-max')
             opt%ds_max = positive(i)
             i = i + 1
+         case ('--ds-min')
+            opt%ds_min = positive(i)
+            i = i + 1
          case ('--points')
             opt%max_points = nint(positive(i))
             i = i + 1
@@ -100,6 +110,22 @@ contains
             i = i + 1
          case ('--transient')
             opt%shoot%transient = nint(real_value(i))
+            i = i + 1
+         case ('--restarts')
+            opt%restarts = nint(real_value(i))
+            if (opt%restarts < 0) call refuse('option --restarts needs a count >= 0, got '//arg(i + 1))
+            i = i + 1
+         case ('--restart-step')
+            opt%restart_step = positive(i)
+            i = i + 1
+         case ('--newton')
+            opt%shoot%max_newton = nint(positive(i))
+            i = i + 1
+         case ('--retries')
+            opt%shoot%retries = nint(real_value(i))
+            i = i + 1
+         case ('--corrector')
+            opt%max_corrector = nint(positive(i))
             i = i + 1
          case ('--monodromy')
             opt%monodromy = monodromy_code(text_value(i))
@@ -126,15 +152,23 @@ contains
       opt%lam_min = min(lam0, lam1)
       opt%lam_max = max(lam0, lam1)
       opt%direction = merge(1, -1, lam1 >= lam0)
+      kperiods = opt%k
       call read_deck(deck_path, prob%deck, err)
       if (allocated(err)) call fail(err)
       call split_sweep_groups(prob%deck, sweeps)
       prob%ovs = sets
       write (output_unit, '(a)') 'trainsim continue: '//deck_path//', '//prob%key//' from '//str(lam0)//' to '//str(lam1)
       write (output_unit, '(a)') '      lambda            period        max|mu|     stability  corrector  bifurcation'
-      if (resume) then
-         call read_branch(out_path, old, err)
+      if (len(out_path) > 0) then
+         call branch_layout(prob%deck, lam0, opt, param, lay, n, err)
+         if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err)
+         blay = lay
+         bn = n
          if (allocated(err)) call fail(err)
+      end if
+      if (resume) then
+         call bfile%read(old, err)
+         if (allocated(err)) call close_fail(err)
          write (output_unit, '(a)') 'resumed after '//str(size(old%pts))//' stored points'
          call continue_branch(prob, lam0, opt, br, err, resume=old, hook=on_point)
       else if (len(out_path) > 0) then
@@ -142,9 +176,11 @@ contains
       else
          call continue_branch(prob, lam0, opt, br, err, hook=print_point)
       end if
-      if (allocated(err)) call fail(err)
-      write (output_unit, '(a)') str(size(br%pts))//' points, '//str(br%maps)//' period maps, '//str(br%rejected)// &
-         ' steps refused, '//str(br%passes)//' variational passes'
+      if (allocated(err)) call close_fail(err)
+      call bfile%close()
+      n_failed = count(br%pts%status /= branch_done)
+      write (output_unit, '(a)') str(size(br%pts))//' points ('//str(n_failed)//' failed), '//str(br%maps)// &
+         ' period maps, '//str(br%rejected)//' steps refused, '//str(br%passes)//' variational passes'
       if (br%status == branch_done .and. allocated(br%message)) then
          if (len(br%message) > 0) write (output_unit, '(a)') br%message
       end if
@@ -153,8 +189,18 @@ contains
          write (error_unit, '(a)') 'trainsim: continue: the branch stopped early (status '//str(br%status)//'): '// &
             br%message
          call quit(1)
+      else if (n_failed > 0) then
+         write (error_unit, '(a)') 'trainsim: continue: the branch reached the end of its range, with '// &
+            str(n_failed)//' failed points (their reasons above and in the branch file)'
+         call quit(1)
       end if
    end subroutine do_continue
+
+   subroutine close_fail(err)
+      type(error_t), intent(in) :: err
+      call bfile%close()
+      call fail(err)
+   end subroutine close_fail
 
    !> --switch-pd: the period-doubled branch from the branch's first period-doubling
    !> point, printed and (with -o FILE) written to FILE with '.pd2' before its
@@ -178,7 +224,11 @@ contains
          dot = index(out_path, '.', back=.true.)
          if (dot <= index(out_path, '/', back=.true.)) dot = len(out_path) + 1
          out_path = out_path(1:dot - 1)//'.pd2'//out_path(dot:)
+         kperiods = 2*opt%k
+         call bfile%open(out_path, blay, bn, prob%key, .false., err)
+         if (allocated(err)) call fail(err)
          call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=on_point)
+         call bfile%close()
       else
          call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=print_point)
       end if
@@ -227,168 +277,96 @@ contains
       integer, intent(in) :: i
       type(error_t), allocatable, intent(out) :: err
       if (i == 0) return
+      if (br%pts(i)%status /= branch_done) then
+         write (output_unit, '(es22.14,2x,a)') br%pts(i)%lam, 'failed (reason '//str(br%pts(i)%status)//'): '// &
+            br%pts(i)%message
+         return
+      end if
       associate (p => br%pts(i))
          write (output_unit, '(es22.14,es14.6,es12.4,2x,a10,i6,5x,a)') p%lam, p%period, maxval(abs(p%mu)), &
             p%stability, p%corrector, p%kind
       end associate
    end subroutine print_point
 
-   !> One point printed and appended to the branch file (created with its header at
-   !> point 1); i = 0: the branch's status as the last line.
+   !> One point printed and written to the branch file with its orbit's metrics (a
+   !> failed point: its reason); i = 0: the branch's end status.
    subroutine on_point(br, i, err)
       type(branch_t), intent(in) :: br
       integer, intent(in) :: i
       type(error_t), allocatable, intent(out) :: err
-      integer :: u, ios, j
-      real(wp), allocatable :: dmin(:), dmax(:)
-      type(string_t), allocatable :: ids(:)
+      real(wp), allocatable :: el(:, :)
       call print_point(br, i, err)
-      if (i == 1) then
-         call element_ids(ids, err)
-         if (allocated(err)) return
-         open (newunit=u, file=out_path, status='replace', action='write', iostat=ios)
-         if (ios /= 0) then
-            call fatal_error(err, "cannot write the branch file '"//out_path//"'", err_io)
-            return
-         end if
-         write (u, '(a)') '# trainsim continue branch: '//deck_path//', parameter '//prob%key
-         write (u, '(a,es25.17)') '# lam_scale', br%lam_scale
-         write (u, '(a,es25.17)') '# phase', br%phase
-         write (u, '(a,i0)') '# states ', size(br%scale)
-         write (u, '(a,*(es25.17))') '# scale', br%scale
-         write (u, '(a,i0,*(1x,a))') '# elements ', size(ids), (ids(j)%s, j=1, size(ids))
-         write (u, '(a)') 'lambda,period,t0,kind,stable,max_abs_mu,corrector,maps,ds,residual,'// &
-            'disp_min(element)...,disp_max(element)...,x...,tangent...,mu_re...,mu_im...'
-      else
-         open (newunit=u, file=out_path, status='old', position='append', action='write', iostat=ios)
-         if (ios /= 0) then
-            call fatal_error(err, "cannot append to the branch file '"//out_path//"'", err_io)
-            return
-         end if
-      end if
       if (i == 0) then
-         write (u, '(a)') '# status '//str(br%status)//' '//br%message
-      else
-         associate (p => br%pts(i))
-            call orbit_extremes(p, dmin, dmax, err)
-            if (allocated(err)) then
-               close (u)
-               return
-            end if
-            write (u, '(es25.17,2(",",es25.17),2(",",i0),5(",",es25.17))', &
-                   advance='no') p%lam, p%period, p%t0, kind_code(p%kind), &
-               merge(1, 0, p%stability == 'stable'), maxval(abs(p%mu)), real(p%corrector, wp), real(p%maps, wp), &
-               p%ds, p%residual
-            write (u, '(*(",",es25.17))') dmin, dmax, p%x, p%tangent, (real(p%mu(j)), j=1, size(p%mu)), &
-               (aimag(p%mu(j)), j=1, size(p%mu))
-         end associate
+         call bfile%write_end(br, err)
+         return
       end if
-      close (u)
+      allocate (el(size(element_metric_names), bfile%ne))
+      el = ieee_value(1.0_wp, ieee_quiet_nan)
+      if (br%pts(i)%status == branch_done) call orbit_metrics(br%pts(i), el, err)
+      if (.not. allocated(err)) call bfile%write_point(br, i, el, err)
    end subroutine on_point
 
-   !> 0 a regular point, 1 fold, 2 period-doubling, 3 Neimark-Sacker, 4 grazing (a contact-sequence change).
-   integer function kind_code(kind) result(k)
-      character(len=*), intent(in) :: kind
-      do k = 4, 1, -1
-         if (kind == trim(kinds(k))) return
-      end do
-   end function kind_code
-
-   !> The deck's element ids (the columns of the extremes).
-   subroutine element_ids(ids, err)
-      type(string_t), allocatable, intent(out) :: ids(:)
-      type(error_t), allocatable, intent(out) :: err
-      type(model_t) :: m
-      integer :: e
-      call prob%model_at(prob%lam_first, m, err)
-      if (allocated(err)) return
-      allocate (ids(size(m%elements)))
-      do e = 1, size(m%elements)
-         ids(e)%s = m%elements(e)%e%id
-      end do
-   end subroutine element_ids
-
-   !> Every element's displacement extremes over the orbit of point p (its run).
-   subroutine orbit_extremes(p, dmin, dmax, err)
+   !> Every element metric over the orbit of point p (its run, as `trainsim periodic` reports it).
+   subroutine orbit_metrics(p, el, err)
       type(branch_point_t), intent(in) :: p
-      real(wp), allocatable, intent(out) :: dmin(:), dmax(:)
+      real(wp), intent(inout) :: el(:, :)
       type(error_t), allocatable, intent(out) :: err
       type(model_t) :: m
       type(period_map_t) :: pm
       type(run_result_t) :: run
       type(null_sink_t) :: none
       real(wp) :: period
-      integer :: e
       call prob%model_at(p%lam, m, err)
       if (.not. allocated(err)) call forcing_period(m, period, err)
       if (allocated(err)) return
       m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
-      call pm%setup(m, period, 1, err)
+      call pm%setup(m, period, kperiods, err)
       if (.not. allocated(err)) call orbit_run(m, pm, p%x, none, run, err)
       call pm%finish()
-      if (allocated(err)) return
-      allocate (dmin(size(run%el)), dmax(size(run%el)))
-      do e = 1, size(run%el)
-         dmin(e) = run%el(e)%disp_min
-         dmax(e) = run%el(e)%disp_max
-      end do
-   end subroutine orbit_extremes
+      if (.not. allocated(err)) el = element_record(run)
+   end subroutine orbit_metrics
 
-   !> The branch stored in a branch file (for --resume).
-   subroutine read_branch(path, br, err)
-      character(len=*), intent(in) :: path
-      type(branch_t), intent(out) :: br
+   !> What the branch file describes: the deck at the first parameter value, and a
+   !> fingerprint of everything that decides the branch (deck, tables, --set, --param,
+   !> the options, the version).
+   subroutine branch_layout(deck, lam0, opt, param, lay, n, err)
+      type(deck_t), intent(in) :: deck
+      real(wp), intent(in) :: lam0
+      type(branch_options_t), intent(in) :: opt
+      character(len=*), intent(in) :: param
+      type(sweep_layout_t), intent(out) :: lay
+      integer, intent(out) :: n
       type(error_t), allocatable, intent(out) :: err
-      character(len=20000) :: line
-      type(branch_point_t) :: p
-      real(wp), allocatable :: row(:)
-      integer :: u, ios, n, kind, st, ne
-      allocate (br%pts(0))
-      n = -1
-      ne = -1
-      open (newunit=u, file=path, status='old', action='read', iostat=ios)
-      if (ios /= 0) then
-         call fatal_error(err, "cannot read the branch file '"//path//"' to resume", err_io)
-         return
-      end if
-      do
-         read (u, '(a)', iostat=ios) line
-         if (ios /= 0) exit
-         if (index(line, '# lam_scale') == 1) read (line(12:), *) br%lam_scale
-         if (index(line, '# phase') == 1) read (line(8:), *) br%phase
-         if (index(line, '# states') == 1) then
-            read (line(9:), *) n
-            allocate (br%scale(n))
-         end if
-         if (index(line, '# scale') == 1) read (line(8:), *) br%scale
-         if (index(line, '# elements') == 1) then
-            read (line(11:), *) ne
-            allocate (row(10 + 2*ne + 4*n + 1))
-         end if
-         if (line(1:1) == '#' .or. line(1:6) == 'lambda' .or. n < 0 .or. ne < 0) cycle
-         read (line, *, iostat=ios) row
-         if (ios /= 0) exit   ! a row cut by a kill: the points before it
-         p%lam = row(1)
-         p%period = row(2)
-         p%t0 = row(3)
-         kind = nint(row(4))
-         st = nint(row(5))
-         p%kind = trim(kinds(kind))
-         p%stability = merge('stable  ', 'unstable', st == 1)
-         p%corrector = nint(row(7))
-         p%maps = nint(row(8))
-         p%ds = row(9)
-         p%residual = row(10)
-         associate (o => 10 + 2*ne)
-            p%x = row(o + 1:o + n)
-            p%tangent = row(o + n + 1:o + 2*n + 1)
-            p%mu = cmplx(row(o + 2*n + 2:o + 3*n + 1), row(o + 3*n + 2:o + 4*n + 1), kind=wp)
-         end associate
-         br%pts = [br%pts, p]
-         br%maps = p%maps
+      type(model_t) :: model
+      type(run_meta_t) :: meta
+      character(len=400) :: buf
+      integer :: k
+      call prob%model_at(lam0, model, err)
+      if (allocated(err)) return
+      n = model%n_states
+      lay%version = version_full()
+      lay%deck_file = deck_path
+      lay%deck_text = deck%text
+      meta = make_meta(model)
+      call move_alloc(meta%input_keys, lay%input_keys)
+      call move_alloc(meta%input_files, lay%input_files)
+      call move_alloc(meta%input_texts, lay%input_texts)
+      lay%title = model%title
+      lay%units = model%units%name
+      write (buf, '(a,5es25.17,5(1x,i0),4es25.17)') ' --param '//param, opt%ds, opt%ds_min, opt%ds_max, opt%tol, &
+         opt%restart_step, opt%max_points, opt%k, opt%shoot%transient, opt%restarts, opt%max_corrector, &
+         opt%fd_lam, opt%lam_tol, opt%shoot%tol, opt%shoot%fd_step
+      lay%overrides = ''
+      do k = 1, size(sets)
+         lay%overrides = lay%overrides//sets(k)%origin//' '
       end do
-      close (u)
-      if (size(br%pts) == 0) call fatal_error(err, "the branch file '"//path//"' holds no point to resume from", &
-                                              err_input)
-   end subroutine read_branch
+      lay%overrides = lay%overrides//trim(buf)
+      lay%fingerprint = fingerprint(deck, lay)
+      lay%n_runs = opt%max_points
+      allocate (lay%element_ids(size(model%elements)), lay%element_types(size(model%elements)))
+      do k = 1, size(model%elements)
+         lay%element_ids(k)%s = model%elements(k)%e%id
+         lay%element_types(k)%s = model%elements(k)%e%type_name
+      end do
+   end subroutine branch_layout
 end module trainsim_cmd_continue

@@ -227,14 +227,21 @@ contains
          '                         [--period-count K] [--transient N] [--set ...] [-o FILE [--resume]]', '', &
          'The periodic orbit followed from FROM towards TO by pseudo-arclength continuation, through folds', &
          '(docs/periodic.md "Continuation"): each point''s parameter, period, largest |mu|, stability and any', &
-         'fold / period-doubling / Neimark-Sacker point located on the way. With -o the branch is written', &
-         'as it grows (one row a point), and --resume continues a killed run from its last stored point.', '', &
+         'fold / period-doubling / Neimark-Sacker point located on the way. With -o FILE.h5 the branch is', &
+         'written as it grows (HDF5, the sweep file''s layout: docs/periodic.md "The branch file"); --resume', &
+         'goes on from its last committed point, ending as an uninterrupted run would, bit for bit.', '', &
          '  --ds DS, --ds-max DS  first and largest step (scaled arclength; defaults 0.005, 0.05)', &
-         '  --points N            at most N points (default 400)', &
+         '  --points N            at most N points (default 400; the file''s slots)', &
+         '  --ds-min DS           smallest step (default 1e-6); --corrector N  chord steps (default 8)', &
+         '  --restarts N          where the corrector fails (or no orbit is found), store a failed point with', &
+         '                        its reason and shoot the orbit again further on: the sweep goes on (default 0)', &
+         '  --restart-step R      how much further, of |FROM| (default 0.01)', &
+         '  --transient N, --newton N, --retries N  the shooting of the first orbit (and of a restart)', &
          '  --monodromy HOW       auto (saltation where the deck allows), saltation, fd (central differences)', &
          '  --smooth              no non-smooth corrector: stop at a contact-sequence change (grazing)', &
          '  --switch-pd           at the first period-doubling point, continue the doubled branch (2T)', &
          '  -h, --help            this text', '', &
-         'exit status: 0 the branch left the range, 1 it stopped early (the reason printed), 2 bad input'
+         'exit status: 0 the branch left the range, 1 it stopped early or a stretch failed (the reasons', &
+         'printed and in the file), 2 bad input'
    end subroutine continue_usage
 end module trainsim_cmd_help

@@ -21,7 +21,7 @@ program test_continuation
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_arclength, only: branch_options_t, branch_t, continue_branch, branch_done, &
-                                 branch_step_min, branch_no_start, branch_budget
+                                 branch_step_min, branch_no_start, branch_budget, branch_fold
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check, check_close
    use trainsim_test_support, only: load_model_text, nl
    use trainsim_test_oscillator, only: oscillator_t
@@ -51,6 +51,7 @@ program test_continuation
    call test_folds_against_closed_form()
    call test_stability_along_the_branch()
    call test_failures_stop_with_a_reason()
+   call test_reasons_and_restarts()
    call suite_end()
 
 contains
@@ -163,7 +164,9 @@ contains
       call continue_branch(prob, w_start, opt, br, err)
       call check('no error, a status ('//msg(br)//')', .not. allocated(err) .and. br%status == branch_step_min)
       call check('the reason: the corrector''s budget', index(br%message, 'corrector spent its 1 steps') > 0)
-      call check('the start point is kept', size(br%pts) == 1)
+      call check('the start point is kept, then the failure as a point with its reason', size(br%pts) == 2)
+      if (size(br%pts) == 2) call check('the failed point: status step_min, the message', &
+                                        br%pts(2)%status == branch_step_min .and. br%pts(2)%message == br%message)
       opt = options()
       opt%shoot%max_newton = 1
       opt%shoot%retries = 0
@@ -172,6 +175,59 @@ contains
       call check('no start orbit: a status ('//msg(br)//')', .not. allocated(err) .and. br%status == branch_no_start)
       call check('the reason: the shooting''s', index(br%message, 'no periodic orbit at the start') > 0)
    end subroutine test_failures_stop_with_a_reason
+
+   !> Each reason a branch stops for, constructed, and with restarts the branch going on
+   !> past a failure: a chord corrector of 4 steps (no full-Newton retry) at a smallest step of 0.04 cannot turn
+   !> the jump-down fold (the chord Newton needs more steps near a fold, whose curvature
+   !> the step cannot follow): status fold, within 0.05 rad/s of the closed-form fold;
+   !> with one restart the orbit is shot again 1 % further up in W, beyond the fold,
+   !> and the branch goes on along the lower (non-contact) branch to
+   !> w_end (status done, one failed point, its reason kept); a start with no orbit,
+   !> given 2 restarts, is tried at three frequencies and stops with three failed points.
+   subroutine test_reasons_and_restarts()
+      type(branch_options_t) :: opt
+      type(branch_t) :: br
+      type(error_t), allocatable :: err
+      integer :: i, nf
+      call test_begin('reasons_and_restarts')
+      opt = options()
+      opt%nonsmooth = .false.     ! (the chord corrector alone: no full-Newton retry)
+      opt%max_corrector = 4
+      opt%ds_min = 0.04_wp
+      call continue_branch(prob, w_start, opt, br, err)
+      write (*, '(a)') '    '//msg(br)
+      call check('a fold it could not turn: status fold ('//msg(br)//')', .not. allocated(err) .and. &
+                 br%status == branch_fold)
+      if (size(br%pts) > 0) call check('... near the jump-down fold (within 0.05 rad/s)', &
+                                       abs(br%pts(size(br%pts))%lam - w_fold(1)) < 0.05_wp)
+      opt%restarts = 1
+      opt%restart_step = 0.01_wp
+      call continue_branch(prob, w_start, opt, br, err)
+      nf = count(br%pts%status /= branch_done)
+      write (*, '(a,i0,a,i0,a,f10.5)') '    with a restart: ', size(br%pts), ' points, ', nf, ' failed, last at ', &
+         br%pts(size(br%pts))%lam
+      call check('with a restart the branch reaches its end ('//msg(br)//')', .not. allocated(err) .and. &
+                 br%status == branch_done .and. br%pts(size(br%pts))%lam > w_end)
+      call check('one failed point, reason fold, then segment 2', nf == 1)
+      do i = 1, size(br%pts)
+         if (br%pts(i)%status == branch_done) cycle
+         call check('the failed point keeps its reason', br%pts(i)%status == branch_fold .and. &
+                    index(br%pts(i)%message, 'fold') > 0)
+         if (i < size(br%pts)) call check('the next point is a new segment, beyond the fold, stable', &
+                                          br%pts(i + 1)%segment == 2 .and. br%pts(i + 1)%lam > w_fold(1) .and. &
+                                          br%pts(i + 1)%stability == 'stable')
+      end do
+      opt = options()
+      opt%shoot%max_newton = 1
+      opt%shoot%retries = 0
+      opt%shoot%transient = 1
+      opt%restarts = 2
+      call continue_branch(prob, w_start, opt, br, err)
+      call check('no orbit at three starts: status no_start, three failed points ('//msg(br)//')', &
+                 .not. allocated(err) .and. br%status == branch_no_start .and. size(br%pts) == 3)
+      if (size(br%pts) == 3) call check('... at w, w + 1 %, w + 2 %', all(abs(br%pts%lam - w_start*[1.0_wp, 1.01_wp, &
+                                        1.02_wp]) < 1.0e-12_wp) .and. all(br%pts%status == branch_no_start))
+   end subroutine test_reasons_and_restarts
 
    function msg(br) result(s)
       type(branch_t), intent(in) :: br

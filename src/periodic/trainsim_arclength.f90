@@ -36,11 +36,15 @@ module trainsim_arclength
 
    public :: branch_problem_t, point_hook_i, branch_options_t, branch_point_t, branch_t, continue_branch
    public :: switch_period_doubling
-   public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed
+   public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed, branch_fold
 
-   !> branch_t%status
+   !> branch_t%status, and a failed point's status (branch_point_t%status): why it stopped
+   !> (or, with restarts, why a stretch of the branch ended): 1 no periodic orbit near the
+   !> start, 2 the corrector failed at the smallest step (not at a fold), 3 the point
+   !> budget spent, 4 an error, 5 the corrector failed at the smallest step at a fold (a
+   !> multiplier near +1: a fold it could not turn).
    integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
-                         branch_failed = 4
+                         branch_failed = 4, branch_fold = 5
 
    !> The deck at a parameter value: extend and give `model_at`.
    type, abstract :: branch_problem_t
@@ -75,6 +79,12 @@ module trainsim_arclength
       !> the non-smooth corrector: a change of the contact sequence (grazing) located,
       !> stored as a point of kind 'grazing' and crossed with full Newton (D-115)
       logical :: nonsmooth = .true.
+      !> restarts: where the corrector fails at the smallest step (or no orbit is found at a
+      !> restart), a failed point is stored with its reason and the orbit is shot again
+      !> restart_step |lambda_0| further on in lambda (from the last orbit's state, through a
+      !> transient: where a brute-force sweep would jump), up to `restarts` times
+      integer :: restarts = 0
+      real(wp) :: restart_step = 0.01_wp
    end type branch_options_t
 
    type :: branch_point_t
@@ -85,6 +95,13 @@ module trainsim_arclength
       character(len=:), allocatable :: kind        !< '' (a regular point), fold, period-doubling, neimark-sacker
       real(wp) :: residual = 0.0_wp, ds = 0.0_wp
       integer :: corrector = 0, maps = 0           !< corrector steps; period maps up to this point
+      !> for an exact resume: the scaled unknowns z, the vector that bordered the Jacobian
+      !> when the tangent was computed, the step after this point, the phase of t0
+      real(wp), allocatable :: z(:), border(:)
+      real(wp) :: ds_next = 0.0_wp, phase = 0.0_wp
+      integer :: segment = 1                       !< 1 + the restarts before it
+      integer :: status = branch_done              !< a failed point (restarts): its reason, lam where
+      character(len=:), allocatable :: message     !< it failed, no orbit
    end type branch_point_t
 
    type :: branch_t
@@ -211,13 +228,37 @@ module trainsim_arclength
          character(len=:), allocatable, intent(out) :: why
          logical, intent(in), optional :: full
       end subroutine correct
-      module subroutine store(br, c, p, ds, kind)
+      module subroutine store(br, c, p, ds, kind, border, segment)
          type(branch_t), intent(inout) :: br
          type(ctx_t), intent(inout) :: c
          type(node_t), intent(in) :: p
-         real(wp), intent(in) :: ds
+         real(wp), intent(in) :: ds, border(:)
          character(len=*), intent(in) :: kind
+         integer, intent(in) :: segment
       end subroutine store
+   end interface
+
+   !> Restarts past a failure and failed points (trainsim_arclength_restart.f90, D-119)
+   interface
+      module logical function at_fold(p, n)
+         type(node_t), intent(in) :: p
+         integer, intent(in) :: n
+      end function at_fold
+      module subroutine restart(c, opt, br, cur, ds, restarts, err)
+         type(ctx_t), intent(inout) :: c
+         type(branch_options_t), intent(in) :: opt
+         type(branch_t), intent(inout) :: br
+         type(node_t), intent(inout) :: cur
+         real(wp), intent(inout) :: ds
+         integer, intent(inout) :: restarts
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine restart
+      module subroutine failed_point(br, lam, status, message)
+         type(branch_t), intent(inout) :: br
+         real(wp), intent(in) :: lam
+         integer, intent(in) :: status
+         character(len=*), intent(in) :: message
+      end subroutine failed_point
    end interface
 
 contains
@@ -235,30 +276,52 @@ contains
       type(branch_t), intent(in), optional :: resume
       procedure(point_hook_i), optional :: hook
       type(ctx_t) :: c
-      integer :: stored
+      integer :: stored, restarts
       type(node_t) :: cur
       real(wp), allocatable :: t_prev(:)
-      real(wp) :: ds
+      real(wp) :: ds, lam
       character(len=:), allocatable :: why
       allocate (c%prob, source=prob)
       c%sig = opt%nonsmooth
       c%k = opt%k
       c%fd = opt%fd_lam
       allocate (br%pts(0))
+      restarts = 0
       if (present(resume)) then
          call start_resumed(c, resume, opt, br, cur, t_prev, ds, err)
+         restarts = br%pts(size(br%pts))%segment - 1
       else
-         call start_shot(c, lam0, opt, br, cur, t_prev, ds, err)
+         lam = lam0
+         call start_shot(c, lam, opt, br, cur, t_prev, ds, err)
+         do while (br%status == branch_no_start .and. restarts < opt%restarts .and. .not. allocated(err))
+            call failed_point(br, lam, branch_no_start, br%message)
+            restarts = restarts + 1
+            lam = lam + opt%restart_step*abs(lam0)*sign(1, opt%direction)
+            if (lam > opt%lam_max .or. lam < opt%lam_min) lam = huge(1.0_wp)
+            if (lam == huge(1.0_wp)) exit
+            call start_shot(c, lam, opt, br, cur, t_prev, ds, err)
+         end do
       end if
-      if (allocated(err) .or. br%status == branch_no_start) return
+      stored = 0
+      if (present(resume)) stored = size(br%pts)
+      if (allocated(err)) return
+      if (br%status == branch_no_start) then
+         if (lam < huge(1.0_wp)) call failed_point(br, lam, branch_no_start, br%message)
+         call report_points(br, stored, err, hook)
+         if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
+         return
+      end if
       call evaluate(c, cur%z, cur%px, why, err)
       if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'the start point: '//why, err_input)
       if (.not. allocated(err)) call linearise(c, cur, t_prev, err)
       if (allocated(err)) return
-      if (size(br%pts) == 0) call store(br, c, cur, 0.0_wp, '')
-      stored = 0
-      if (present(resume)) stored = size(resume%pts)
-      call follow(c, br, cur, ds, opt, stored, err, hook)
+      if (present(resume)) then
+         c%maps = br%maps   ! (the resumed point's linearisation is counted once, as uninterrupted)
+      else
+         call store(br, c, cur, 0.0_wp, '', t_prev, restarts + 1)
+         br%pts(size(br%pts))%ds_next = ds
+      end if
+      call follow(c, br, cur, ds, opt, stored, restarts, err, hook)
    end subroutine continue_branch
 
    !> Branch switching at the period-doubling point br%pts(ipd): the doubled branch
@@ -282,7 +345,7 @@ contains
       integer, allocatable :: ipiv(:)
       character(len=:), allocatable :: why
       real(wp) :: ds
-      integer :: n, it, info, stored, i
+      integer :: n, it, info, stored, i, restarts
       allocate (c%prob, source=prob)
       allocate (br2%pts(0))
       c%sig = opt%nonsmooth
@@ -327,7 +390,7 @@ contains
          v = v/norm2(v)
       end do
       cur%t = [v, 0.0_wp]
-      call store(br2, c, cur, 0.0_wp, 'period-doubling')
+      call store(br2, c, cur, 0.0_wp, 'period-doubling', cur%t, 1)
       ds = opt%ds
       do
          call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
@@ -347,23 +410,25 @@ contains
          end if
          ds = max(0.5_wp*ds, opt%ds_min)
       end do
-      call store(br2, c, nxt, ds, '')
+      call store(br2, c, nxt, ds, '', cur%t, 1)
       cur = nxt
+      br2%pts(size(br2%pts))%ds_next = ds
       stored = 0
-      call follow(c, br2, cur, ds, opt, stored, err, hook)
+      restarts = 0
+      call follow(c, br2, cur, ds, opt, stored, restarts, err, hook)
    end subroutine switch_period_doubling
 
    !> The continuation loop from the accepted point cur (stored) with the step ds:
    !> predictor, corrector (chord, then full Newton: the non-smooth corrector),
    !> grazing crossed, bifurcations detected, step control, until the branch leaves
    !> [lam_min, lam_max] or stops. stored: the points already given to `hook`.
-   subroutine follow(c, br, cur, ds, opt, stored, err, hook)
+   subroutine follow(c, br, cur, ds, opt, stored, restarts, err, hook)
       type(ctx_t), intent(inout) :: c
       type(branch_t), intent(inout) :: br
       type(node_t), intent(inout) :: cur
       real(wp), intent(inout) :: ds
       type(branch_options_t), intent(in) :: opt
-      integer, intent(inout) :: stored
+      integer, intent(inout) :: stored, restarts   !< restarts: made so far (opt%restarts)
       type(error_t), allocatable, intent(out) :: err
       procedure(point_hook_i), optional :: hook
       type(node_t) :: nxt
@@ -373,7 +438,7 @@ contains
       integer :: before
       rephased = .false.
       do
-         call report_points()
+         call report_points(br, stored, err, hook)
          if (allocated(err)) return
          if (size(br%pts) >= opt%max_points) then
             br%status = branch_budget
@@ -411,9 +476,18 @@ contains
             br%rejected = br%rejected + 1
             if (ds <= opt%ds_min) then
                br%status = branch_step_min
+               if (at_fold(cur, c%n)) br%status = branch_fold
                br%message = 'the step reached its minimum '//str(opt%ds_min, 3)//' at lambda = '// &
-                            str(cur%z(c%n + 1)*c%ls, 10)//' and the corrector still failed: '//why
-               exit
+                            str(cur%z(c%n + 1)*c%ls, 10)//trim(merge(' (a fold: a multiplier near +1)', ' (not at a fold)               ', &
+                            br%status == branch_fold))//' and the corrector still failed: '//why
+               if (restarts >= opt%restarts) then
+                  call failed_point(br, cur%z(c%n + 1)*c%ls, br%status, br%message)
+                  exit
+               end if
+               call restart(c, opt, br, cur, ds, restarts, err)
+               if (allocated(err)) return
+               if (br%status /= branch_failed) exit
+               cycle
             end if
             ds = max(0.5_wp*ds, opt%ds_min)
             cycle
@@ -426,10 +500,11 @@ contains
                          str(br%pts(size(br%pts))%lam, 10)//' was met before'
             exit
          end if
-         call store(br, c, nxt, ds, '')
+         call store(br, c, nxt, ds, '', cur%t, restarts + 1)
          cur = nxt
          rephased = .false.
          if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
+         br%pts(size(br%pts))%ds_next = ds
          lam = cur%z(c%n + 1)*c%ls
          if (lam > opt%lam_max .or. lam < opt%lam_min) then
             br%status = branch_done
@@ -440,18 +515,23 @@ contains
       br%maps = c%maps
       br%passes = c%passes
       call c%pm%finish()
-      call report_points()
+      call report_points(br, stored, err, hook)
       if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
-   contains
-      subroutine report_points()
-         if (.not. present(hook)) return
-         do while (stored < size(br%pts))
-            stored = stored + 1
-            call hook(br, stored, err)
-            if (allocated(err)) return
-         end do
-      end subroutine report_points
    end subroutine follow
+
+   !> The points of br after `stored` given to `hook` (if present), in order.
+   subroutine report_points(br, stored, err, hook)
+      type(branch_t), intent(in) :: br
+      integer, intent(inout) :: stored
+      type(error_t), allocatable, intent(inout) :: err
+      procedure(point_hook_i), optional :: hook
+      if (.not. present(hook)) return
+      do while (stored < size(br%pts))
+         stored = stored + 1
+         call hook(br, stored, err)
+         if (allocated(err)) return
+      end do
+   end subroutine report_points
 
    !> The first point: the orbit shot at lam0; t0 there (moved by shooting to an
    !> instant with no memory contact in progress) kept as a phase of the period.
@@ -466,6 +546,8 @@ contains
       type(error_t), allocatable, intent(out) :: err
       type(shoot_result_t) :: res
       c%ls = max(abs(lam0), tiny(1.0_wp))
+      if (size(br%pts) > 0) c%ls = max(abs(br%pts(1)%lam), tiny(1.0_wp))
+      c%lam = huge(1.0_wp)
       call at(c, lam0, err)
       if (allocated(err)) return
       call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
@@ -488,6 +570,7 @@ contains
          br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//res%message
          return
       end if
+      br%status = branch_failed
       c%n = c%pm%n
       c%phase = (c%pm%t0 - c%t_start)/c%pm%period
       c%s = res%scale

@@ -190,6 +190,11 @@ contains
       bp%ds = ds
       bp%corrector = p%corrector
       bp%maps = c%maps
+      bp%z = p%z
+      bp%border = border
+      bp%phase = c%phase
+      bp%segment = segment
+      bp%message = ''
       br%pts = [br%pts, bp]
       br%maps = c%maps
    end procedure store
@@ -198,14 +203,22 @@ contains
    module procedure start_resumed
       integer :: last
       last = size(resume%pts)
+      do while (last > 0)
+         if (resume%pts(last)%status == branch_done .and. len(resume%pts(last)%kind) == 0) exit
+         last = last - 1
+      end do
       if (last == 0) then
          call fatal_error(err, 'the branch to resume has no point', err_input)
          return
       end if
       br = resume
-      c%phase = br%phase
+      br%pts = resume%pts(1:last)
+      br%status = branch_failed
+      c%phase = br%pts(last)%phase
+      br%phase = c%phase
       c%s = br%scale
       c%ls = br%lam_scale
+      br%maps = br%pts(last)%maps
       c%maps = br%maps
       call at(c, br%pts(last)%lam, err)
       if (allocated(err)) return
@@ -223,10 +236,18 @@ contains
          call fatal_error(err, 'the branch to resume has '//str(size(c%s))//' states, the deck '//str(c%n), err_input)
          return
       end if
-      cur%z = [br%pts(last)%x/c%s, br%pts(last)%lam/c%ls]
-      t_prev = br%pts(last)%tangent
-      ds = min(max(br%pts(last)%ds, opt%ds_min), opt%ds_max)
-      if (last == 1) ds = opt%ds
+      associate (p => br%pts(last))
+         cur%z = [p%x/c%s, p%lam/c%ls]
+         if (allocated(p%z)) then
+            if (size(p%z) == c%n + 1) cur%z = p%z
+         end if
+         t_prev = p%tangent
+         if (allocated(p%border)) then
+            if (size(p%border) == c%n + 1) t_prev = p%border
+         end if
+         ds = min(max(p%ds_next, opt%ds_min), opt%ds_max)
+         if (.not. p%ds_next > 0.0_wp) ds = opt%ds
+      end associate
    end procedure start_resumed
 
    !> Move the forcing phase t0 of the accepted point cur to the middle of the
@@ -318,9 +339,9 @@ contains
       end do
       if (sa > 0.0_wp) then
          call detect(c, br, p, a, sa, opt)
-         call store(br, c, a, sa, 'grazing')
+         call store(br, c, a, sa, 'grazing', a%t, br%pts(size(br%pts))%segment)
       else
-         call store(br, c, p, 0.0_wp, 'grazing')
+         call store(br, c, p, 0.0_wp, 'grazing', p%t, br%pts(size(br%pts))%segment)
       end if
       if (dot_product(q%t, q%z - a%z) < 0.0_wp) q%t = -q%t
    end procedure cross_grazing
@@ -405,6 +426,6 @@ contains
          if (j == 1 .and. abs(fm) < 1.0e-9_wp) exit
          if (j /= 1 .and. abs(la - lb) < opt%lam_tol) exit
       end do
-      call store(br, c, best, sm, kind)
+      call store(br, c, best, sm, kind, p%t, br%pts(size(br%pts))%segment)
    end subroutine locate
 end submodule trainsim_arclength_events

@@ -41,6 +41,7 @@ module trainsim_sweep
    private
 
    public :: sweep_options_t, sweep_summary_t, run_sweep, finish_sweep, default_sweep_path
+   public :: fingerprint, element_record
 
    !> What `trainsim sweep` was asked to do.
    type :: sweep_options_t
@@ -507,7 +508,7 @@ contains
       type(error_t), allocatable :: err
       type(override_t), allocatable :: ovs(:)
       integer(i8) :: c0, c1, rate
-      integer :: k, ne, nn
+      integer :: ne, nn
       real(wp) :: nan
 
       call system_clock(c0, rate)
@@ -560,16 +561,7 @@ contains
       else
          rec%status = status_ok
          rec%message = ''
-         do k = 1, ne
-            associate (e => res%el(k))
-               rec%el(:, k) = [e%force_min, e%force_max, e%torque_min, e%torque_max, e%disp_min, e%disp_max, &
-                               real(e%impacts, wp), real(e%separations, wp), real(e%zone_changes, wp), &
-                               e%max_approach_velocity, e%max_peak_force, e%time_out_of_contact, e%p2p_range, &
-                               e%p2p_mean, real(e%p2p_swings, wp), e%load_sharing, e%kv, e%static_force, &
-                               e%static_te_mean, e%static_te_p2p, e%force_mean, e%te_order, e%force_order, &
-                               e%rattle_impacts, e%rattle_open]
-            end associate
-         end do
+         rec%el = element_record(res)
          if (allocated(sink%wmin)) then
             rec%node(1, :) = sink%wmin
             rec%node(2, :) = sink%wmax
@@ -595,4 +587,20 @@ contains
       rec%wall = real(c1 - c0, wp)/real(rate, wp)
    end subroutine run_one
 
+   !> A run's element metrics in the sweep file's order (element_metric_names, element).
+   function element_record(res) result(el)
+      type(run_result_t), intent(in) :: res
+      real(wp) :: el(size(element_metric_names), size(res%el))
+      integer :: k
+      do k = 1, size(res%el)
+         associate (e => res%el(k))
+            el(:, k) = [e%force_min, e%force_max, e%torque_min, e%torque_max, e%disp_min, e%disp_max, &
+                        real(e%impacts, wp), real(e%separations, wp), real(e%zone_changes, wp), &
+                        e%max_approach_velocity, e%max_peak_force, e%time_out_of_contact, e%p2p_range, &
+                        e%p2p_mean, real(e%p2p_swings, wp), e%load_sharing, e%kv, e%static_force, &
+                        e%static_te_mean, e%static_te_p2p, e%force_mean, e%te_order, e%force_order, &
+                        e%rattle_impacts, e%rattle_open]
+         end associate
+      end do
+   end function element_record
 end module trainsim_sweep

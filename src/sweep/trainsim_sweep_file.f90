@@ -47,7 +47,7 @@ module trainsim_sweep_file
    implicit none
    private
 
-   public :: sweep_file_t
+   public :: sweep_file_t, clean_slot_messages, finish_message_move
    !> (the layout, re-exported: what a sweep file holds)
    public :: sweep_layout_t, sweep_record_t, element_metric_names, node_metric_names
    public :: status_pending, status_ok, status_failed, record_size, format_version, status_names
@@ -320,12 +320,7 @@ contains
       end if
       self%ne = size(lay%element_ids); self%nn = size(lay%node_ids); self%n_runs = lay%n_runs
       hs = 0
-      ! a rebuild of /runs/message (below) killed between its delete and its move
-      call link_exists(self%file, 'runs/message', ok, h)
-      if (h >= 0 .and. .not. ok) then
-         call link_exists(self%file, 'runs/message.new', ok, h)
-         if (h >= 0 .and. ok) call link_move(self%file, 'runs/message.new', 'runs/message', h)
-      end if
+      call finish_message_move(self%file, 'runs')
       call open_dset(self%file, 'runs/status', self%d_status, h); hs = min(hs, h)
       call open_dset(self%file, 'runs/rank', self%d_rank, h); hs = min(hs, h)
       call open_dset(self%file, 'runs/wall_time', self%d_wall, h); hs = min(hs, h)
@@ -376,51 +371,76 @@ contains
    subroutine clean_messages(self, err)
       type(sweep_file_t), intent(inout) :: self
       type(error_t), allocatable, intent(out) :: err
+      call clean_slot_messages(self%file, 'runs', self%d_message, self%t_message, self%status /= status_pending, &
+                               self%path, err)
+   end subroutine clean_messages
+
+   !> A rebuild of GROUP/message (clean_slot_messages) killed between its delete and its move: complete it.
+   subroutine finish_message_move(file, group)
+      integer(hid_t), intent(in) :: file
+      character(len=*), intent(in) :: group
+      integer :: h
+      logical :: ok
+      call link_exists(file, group//'/message', ok, h)
+      if (h >= 0 .and. .not. ok) then
+         call link_exists(file, group//'/message.new', ok, h)
+         if (h >= 0 .and. ok) call link_move(file, group//'/message.new', group//'/message', h)
+      end if
+   end subroutine finish_message_move
+
+   !> clean_messages for the text slots `d` (GROUP/message of `file`, string type `stype`)
+   !> of any slot file: the slots not `committed` must hold no message.
+   subroutine clean_slot_messages(file, group, d, stype, committed, path, err)
+      integer(hid_t), intent(in) :: file, stype
+      character(len=*), intent(in) :: group, path
+      integer(hid_t), intent(inout) :: d
+      logical, intent(in) :: committed(:)
+      type(error_t), allocatable, intent(out) :: err
       type(string_t), allocatable :: msgs(:)
       character(len=:), allocatable :: m
-      integer(hid_t) :: g, d
-      integer :: h, hs, k
+      integer(hid_t) :: g, dn
+      integer :: h, hs, k, n
       logical :: ok, stale
       stale = .false.
-      do k = 1, self%n_runs         ! (nothing kept per run: memory stays flat in the runs)
-         call get_slot_text(self%d_message, self%t_message, k, m, ok)
-         if (self%status(k) == status_pending) then
+      n = size(committed)
+      do k = 1, n         ! (nothing kept per run: memory stays flat in the runs)
+         call get_slot_text(d, stype, k, m, ok)
+         if (.not. committed(k)) then
             if (.not. ok .or. len(m) > 0) stale = .true.
          else if (.not. ok) then
-            call fatal_error(err, "cannot read the message of run "//str(k)//" of sweep file '"//self%path// &
-                             "' (damaged): delete it, or write this sweep to another file with -o", err_io)
+            call fatal_error(err, "cannot read the message of run "//str(k)//" of '"//path// &
+                             "' (damaged): delete it, or write to another file with -o", err_io)
             return
          end if
       end do
       if (.not. stale) return
-      allocate (msgs(self%n_runs))
-      do k = 1, self%n_runs
+      allocate (msgs(n))
+      do k = 1, n
          msgs(k)%s = ''
-         if (self%status(k) == status_pending) cycle
-         call get_slot_text(self%d_message, self%t_message, k, m, ok)
+         if (.not. committed(k)) cycle
+         call get_slot_text(d, stype, k, m, ok)
          msgs(k)%s = m
       end do
       hs = 0
-      call open_group(self%file, 'runs', g, h); hs = min(hs, h)
+      call open_group(file, group, g, h); hs = min(hs, h)
       if (hs == 0) then
-         call new_slots(g, 'message.new', [self%n_runs], h5_text, d, hs)
+         call new_slots(g, 'message.new', [n], h5_text, dn, hs)
          if (hs == 0) then
-            call close_dset(self%d_message)
-            self%d_message = d
-            do k = 1, self%n_runs
+            call close_dset(d)
+            d = dn
+            do k = 1, n
                if (len(msgs(k)%s) == 0) cycle
-               call put_slot_text(self%d_message, self%t_message, k, msgs(k)%s, h); hs = min(hs, h)
+               call put_slot_text(d, stype, k, msgs(k)%s, h); hs = min(hs, h)
             end do
-            call flush_file(self%file, h); hs = min(hs, h)
+            call flush_file(file, h); hs = min(hs, h)
          end if
          if (hs == 0) call link_delete(g, 'message', h); hs = min(hs, h)
          if (hs == 0) call link_move(g, 'message.new', 'message', h); hs = min(hs, h)
-         if (hs == 0) call flush_file(self%file, h); hs = min(hs, h)
+         if (hs == 0) call flush_file(file, h); hs = min(hs, h)
          call end_group(g)
       end if
-      if (hs < 0) call fatal_error(err, "cannot rewrite the run messages of sweep file '"//self%path//"'"// &
-                                   io_reason(self%path), err_io)
-   end subroutine clean_messages
+      if (hs < 0) call fatal_error(err, "cannot rewrite the run messages of '"//path//"'"//io_reason(path), err_io)
+   end subroutine clean_slot_messages
 
    !> Record a finished run: its slot, flush, then its status, flush.
    subroutine file_write_run(self, rec, err)
