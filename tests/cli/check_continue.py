@@ -26,15 +26,9 @@ import tempfile
 import h5py
 import numpy as np
 
+from clicheck import check, failures, finish
+
 exe = os.path.abspath(sys.argv[1])
-failed = 0
-
-
-def check(what, ok, detail=""):
-    global failed
-    print(("ok   " if ok else "FAIL ") + what + ("" if ok else f"  [{detail}]"))
-    if not ok:
-        failed += 1
 
 
 rig = os.path.abspath("inputs/gregory_harris_munro.nml")
@@ -122,4 +116,4 @@ with tempfile.TemporaryDirectory() as tmp:
     r = run("continue", rig, "--param", "mesh.mesh_frequency=385:645", "--resume")
     check("--resume without -o: exit 2", r.returncode == 2 and "--resume needs -o" in r.stderr, r.stderr)
 
-sys.exit(1 if failed else 0)
+finish()

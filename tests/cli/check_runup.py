@@ -39,15 +39,9 @@ import tempfile
 import h5py
 import numpy as np
 
+from clicheck import check, failures, finish
+
 exe = os.path.abspath(sys.argv[1])
-failed = 0
-
-
-def check(what, ok, detail=""):
-    global failed
-    print(("ok   " if ok else "FAIL ") + what + ("" if ok else f"  [{detail}]"))
-    if not ok:
-        failed += 1
 
 
 def runup(*args):
@@ -221,5 +215,5 @@ with tempfile.TemporaryDirectory() as tmp:
                            capture_output=True, text=True)
         check("(d) plot_sweep.py --te-spectrum of a run-up file", p.returncode == 0, p.stderr[-300:])
 
-print("FAILED: %d check(s)" % failed if failed else "all checks passed")
-sys.exit(1 if failed else 0)
+print("FAILED: %d check(s)" % len(failures) if failures else "all checks passed")
+finish()

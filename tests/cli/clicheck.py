@@ -2,7 +2,7 @@
 
     from clicheck import check, run, failures, finish
 
-- `check(what, ok)` prints "ok   WHAT" or "FAIL WHAT" and keeps the failures;
+- `check(what, ok, detail='')` prints "ok   WHAT" or "FAIL WHAT  [detail]" and keeps the failures;
 - `run(args)` runs the trainsim named by the script's first argument (sys.argv[1]) with
   `args`, capturing its output as text (`timeout` seconds at the most, 300 by default);
 - `finish()` ends the script: exit 1 when a check failed, else 0.
@@ -17,8 +17,8 @@ EXE = sys.argv[1] if len(sys.argv) > 1 else None
 failures = []
 
 
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
+def check(what, ok, detail=''):
+    print(('ok   ' if ok else 'FAIL ') + what + ('' if ok or not detail else f'  [{detail}]'))
     if not ok:
         failures.append(what)
 
