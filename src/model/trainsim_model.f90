@@ -33,11 +33,15 @@ module trainsim_model
    !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
    !> block, column `col` is written by `rhs_step_end` of a simple model (col =
    !> 0 outside a block: no column written); the workspace (el_disp, el_force,
-   !> el_torque, ws_stored, ws_elastic) is written as always, so it holds the
-   !> last step's end.
+   !> el_torque, theta, torque) too unless `ws` is cleared (then the integrator
+   !> writes it after the block, so that it holds the last step's end).
    type, public :: step_block_t
       integer :: cap = 1          !< columns
       integer :: col = 0          !< the column the next `rhs_step_end` writes (0: none)
+      !> with col > 0: whether that step end also writes the workspace (an
+      !> integrator clears it inside a block and writes the workspace of the
+      !> block's last step after the block: the step end again, the same values)
+      logical :: ws = .true.
       integer :: n = 0            !< steps in the block just taken
       real(wp), allocatable :: t(:)                      !< (step) its end time
       !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end

@@ -243,7 +243,22 @@ contains
       self%ws_energy = step_end .and. track .and. self%n_cold == 0
       c = max(self%blk%col, 1)
       associate (b => self%blk)
-         if (track) then
+         if (b%col > 0 .and. .not. b%ws) then
+            ! a step of a block: its column only, not the workspace
+            if (track) then
+               call column_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, &
+                                  self%el_torque, self%theta, self%omega, self%fam%pw, &
+                                  self%torque, self%el_disp, self%el_force, self%el_pe, b%disp(:, c), b%force(:, c), &
+                                  b%torque(:, c), b%omega(:, c), .true., self%ws_energy, self%ws_stored, &
+                                  self%ws_elastic)
+            else
+               call column_plain(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, &
+                                 self%el_torque, self%theta, self%omega, &
+                                 self%torque, self%el_disp, self%el_force, self%el_pe, b%disp(:, c), b%force(:, c), &
+                                 b%torque(:, c), b%omega(:, c), .true., self%ws_energy, self%ws_stored, &
+                                 self%ws_elastic)
+            end if
+         else if (track) then
             call step_end_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, &
                                  self%el_torque, self%theta, self%omega, self%fam%pw, &
                                  self%torque, self%el_disp, self%el_force, self%el_pe, b%disp(:, c), b%force(:, c), &
@@ -276,6 +291,19 @@ contains
 #undef KERNEL
 #undef ENERGY
 #define KERNEL step_end_energy
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+      ! the same for a block's step before its last: the column, not the workspace
+#define KERNEL column_plain
+#define ENERGY 0
+#define STEP_END 2
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#define KERNEL column_energy
 #define ENERGY 1
 #include "trainsim_model_stage.inc"
 #undef KERNEL
