@@ -427,7 +427,9 @@ contains
       ok = .true.
       model%blk%ws = .false.   ! each step's column only; the workspace after the block
       do j = 1, model%blk%cap
-         t_grid = next_grid(self, t)
+         ! next_grid, written out (after the block's first step t is on the grid)
+         t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
+         if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
          if (t_grid > t_goal) exit
          if (self%stop_is_breakpoint .and. t_grid >= self%t_stop - self%tiny_t) exit
          h = t_grid - t
