@@ -38,16 +38,12 @@ module trainsim_model
    type, public :: step_block_t
       integer :: cap = 1          !< columns
       integer :: col = 0          !< the column the next `rhs_step_end` writes (0: none)
-      !> with col > 0: whether that step end also writes the workspace (an
-      !> integrator clears it inside a block and writes the workspace of the
-      !> block's last step after the block: the step end again, the same values)
-      logical :: ws = .true.
+      logical :: ws = .true.      !< with col > 0: the workspace too (see above, D-109)
       integer :: n = 0            !< steps in the block just taken
       real(wp), allocatable :: t(:)                      !< (step) its end time
       !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end
       real(wp), allocatable :: disp(:, :), force(:, :), torque(:, :)
-      !> (node, step): omega at the step's end
-      real(wp), allocatable :: omega(:, :)
+      real(wp), allocatable :: omega(:, :)               !< (node, step): omega at the step's end
       !> (step): ws_stored, ws_elastic (if ws_energy); (2, step): the energy
       !> states y(n_states + 1 : n_states + 2) (if energy tracking)
       real(wp), allocatable :: stored(:), elastic(:), work(:, :)
