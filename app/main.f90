@@ -13,6 +13,7 @@ program trainsim_main
    use trainsim_cmd_fmu, only: do_fmu
    use trainsim_cmd_periodic, only: do_periodic
    use trainsim_cmd_continue, only: do_continue
+   use trainsim_cmd_runup, only: do_runup
    implicit none
 
    nargs = command_argument_count()
@@ -55,6 +56,8 @@ program trainsim_main
       call do_periodic()
    case ('continue')
       call do_continue()
+   case ('runup')
+      call do_runup()
    case default
       write (error_unit, '(a)') "trainsim: error: unknown command '"//cmd//"' (try trainsim --help)"
       call quit(2)

@@ -135,7 +135,11 @@ contains
       integer :: i
       call read_deck(path, deck, err)
       if (allocated(err)) call fail(err)
-      call split_sweep_groups(deck, sweeps)
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name == 'runup') write (error_unit, '(a)') 'trainsim: note: '//path// &
+            ' has a &runup group; '//cmd//' ignores it (trainsim runup runs the run-up)'
+      end do
+      call split_sweep_groups(deck, sweeps)   ! (and drops the &runup group)
       if (size(sweeps) > 0) write (error_unit, '(a)') 'trainsim: note: '//path//' has '//str(size(sweeps))// &
          ' &sweep group(s); '//cmd//' ignores them and uses the deck''s own values (trainsim sweep runs the sweep)'
       call prepare_model_in_place(deck, sets, model, err, preload)   ! the deck is dropped here

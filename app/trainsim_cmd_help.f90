@@ -26,6 +26,9 @@ contains
          '                                mpirun -np N) into one HDF5 sweep file (default DECK_sweep.h5);', &
          '                                re-running it (or --resume) completes a sweep that was stopped;', &
          '                                progress on stderr every S seconds (default 5; 0: every run)', &
+         '  trainsim runup DECK [--from F1 --to F2 --rate R] [--mesh ID] [--cycles M] [-o FILE]', &
+         '                                a speed ramp from F1 to F2 teeth/s (or the deck''s &runup), the', &
+         '                                mesh''s TE and force in mesh orders per M cycles, as a sweep file', &
          '  trainsim modes DECK [--closed] [--zone single|two-pair|initial] [--stiffest] [--preload]', &
          '                                natural frequencies and mode shapes of the linearised train,', &
          '                                and its RK4 step limit. Linearised as the run starts, or:', &

@@ -4,6 +4,7 @@
     /usr/bin/python3 scripts/plot_sweep.py SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean \
         [--x mesh.mesh_frequency] [--label TEXT ...] [--out fig.png] [--fig5-11] [--data d.npz]
     /usr/bin/python3 scripts/plot_sweep.py SWEEP.h5 --te-spectrum mesh [--force] [--out fig.png]
+    /usr/bin/python3 scripts/plot_sweep.py RUNUP.h5 SWEEP.h5 --metric mesh.te_order_1   (a run-up over a sweep)
     trainsim plot SWEEP.h5 [MORE.h5 ...] --metric mesh.p2p_mean -o fig.png   (the same)
 
 --te-spectrum ID   the transmission error of gear mesh ID at mesh orders 1..4 (elements/te_order_K,
@@ -28,6 +29,9 @@ their budget (&run settle_tol; runs/settled = 0) are ringed in orange: their fig
 transient, not a steady state. A continuation sweep (runs/branch
 1 up, 2 down) draws each branch as its own curve: up with triangles pointing right, down
 with triangles pointing left, in the order the runs were made.
+A run-up file (trainsim runup, D-109) has the sweep file's layout with one "run" per tracked
+block (its mesh frequency as the parameter): it is drawn as a line (dots where the block had
+impacts), so a run-up and a sweep given together share the axes.
 """
 
 import argparse
@@ -50,6 +54,11 @@ matplotlib.rcParams["svg.fonttype"] = "none"     # text stays text in an SVG
 
 def strings(ds):
     return [s.decode() if isinstance(s, bytes) else str(s) for s in ds[:]]
+
+
+def text_attr(f, name):
+    v = f.attrs.get(name, "")
+    return v.decode() if isinstance(v, bytes) else str(v)
 
 
 def target_type(f, target):
@@ -110,6 +119,10 @@ def read(path, metric, xname):
         # 1 settled, 0 not settled within the budget, -1 not asked (older files: none)
         settled = f["runs/settled"][:] if "settled" in f["runs"] else -np.ones(len(status))
         p_units = {n: parameter_unit(f, n, units) for n in names}
+        # a run-up file (trainsim runup, D-109): its blocks are the "runs", drawn as one line
+        runup = None
+        if text_attr(f, "kind") == "runup":
+            runup = {k: text_attr(f, k) for k in ("from", "to", "rate", "block_cycles")}
     y_unit = metric_unit(key, units, etype if group == "elements" else None)
     if etype in ("spur_gear", "helical_gear", "ideal_gear"):
         words = METRIC_WORDS.get(key, key).replace("displacement", "transmission error")
@@ -117,7 +130,7 @@ def read(path, metric, xname):
         words = METRIC_WORDS.get(key, key.replace("_", " "))
     return {"names": names, "xname": xname, "values": values, "x": values[:, names.index(xname)], "y": y,
             "status": status, "impacts": impacts, "label": label, "branch": branch, "settled": settled, "units": units,
-            "p_units": p_units, "y_unit": y_unit, "y_words": f"{metric}: {words}"}
+            "p_units": p_units, "y_unit": y_unit, "y_words": f"{metric}: {words}", "runup": runup}
 
 
 def param_text(name, value, unit):
@@ -201,6 +214,18 @@ def main(argv=None, prog=None):
     for i, (path, d) in enumerate(zip(a.files, files)):
         label = a.label[i] if a.label and i < len(a.label) else d["label"] or path
         groups = groups_of(d)
+        if d["runup"]:
+            r = d["runup"]
+            name = label if a.label and i < len(a.label) else \
+                f"run-up {float(r['from']):g} -> {float(r['to']):g} at {float(r['rate']):g} /s per s, " \
+                f"{r['block_cycles']} cycles a point"
+            ax.plot(d["x"] * kx, d["y"] * ky, "-", lw=1.4, color=f"C{curve % 10}", label=name, gid="curve")
+            if d["impacts"] is not None and (d["impacts"] > 0).any():
+                lost = d["impacts"] > 0
+                ax.plot(d["x"][lost] * kx, d["y"][lost] * ky, ".", color=f"C{curve % 10}", ms=4)
+            plotted[f"f{i}_runup_x"], plotted[f"f{i}_runup_y"] = d["x"], d["y"]
+            curve += 1
+            continue
         for g, (gtext, members) in enumerate(groups):
             for b in sorted(set(d["branch"][members].tolist())):
                 runs = members[d["branch"][members] == b]

@@ -53,6 +53,7 @@ program test_continuation
                                  branch_step_min, branch_no_start, branch_budget
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check, check_close
    use trainsim_test_support, only: load_model_text, nl
+   use trainsim_test_oscillator, only: oscillator_t
    implicit none
 
    real(wp), parameter :: pi = 3.14159265358979323846264338327950_wp
@@ -67,6 +68,7 @@ program test_continuation
    ! J th'' + c th' + k th + k2 dz_b(th) = t0 + a sin(W t)
    real(wp), parameter :: jj = 1.0_wp, c1 = 0.4_wp, k1 = 100.0_wp, k2 = 100.0_wp, tq0 = 300.0_wp, amp = 8.0_wp, &
                           b = 3.6_wp, w_start = 9.6_wp, w_end = 11.5_wp
+   type(oscillator_t), parameter :: osc = oscillator_t(jj, c1, amp)
 
    type(sine_problem_t) :: prob
    type(branch_t) :: full
@@ -207,38 +209,6 @@ contains
 
    ! ---- the closed form ------------------------------------------------------
 
-   !> exp(B tau) of B = [0 1; -kk/J -c/J] (underdamped).
-   function expb(kk, tau) result(e)
-      real(wp), intent(in) :: kk, tau
-      real(wp) :: e(2, 2)
-      real(wp) :: al, be, bb(2, 2)
-      al = -c1/(2.0_wp*jj)
-      be = sqrt(kk/jj - al**2)
-      bb = reshape([0.0_wp, -kk/jj, 1.0_wp, -c1/jj], [2, 2])
-      e = reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2])*cos(be*tau)
-      bb(1, 1) = bb(1, 1) - al
-      bb(2, 2) = bb(2, 2) - al
-      e = exp(al*tau)*(e + sin(be*tau)/be*bb)
-   end function expb
-
-   !> The steady state (angle, speed) at t of J th'' + c th' + kk th = f0 + a sin(W t).
-   function zp(kk, f0, w, t) result(v)
-      real(wp), intent(in) :: kk, f0, w, t
-      real(wp) :: v(2)
-      real(wp) :: d, e, p, q
-      d = kk - jj*w**2
-      e = c1*w
-      p = amp*d/(d**2 + e**2)
-      q = -amp*e/(d**2 + e**2)
-      v = [f0/kk + p*sin(w*t) + q*cos(w*t), w*(p*cos(w*t) - q*sin(w*t))]
-   end function zp
-
-   function flow(kk, f0, w, ts, z0, te) result(z)
-      real(wp), intent(in) :: kk, f0, w, ts, z0(2), te
-      real(wp) :: z(2)
-      z = matmul(expb(kk, te - ts), z0 - zp(kk, f0, w, ts)) + zp(kk, f0, w, te)
-   end function flow
-
    !> The matching conditions of the contact orbit, v = (phi, va, tb, vb, W): the
    !> entry at ta = phi/W with speed va, contact (k + k2, torque t0 + k2 b) to the
    !> exit (tb, b, vb), free (k) from there to (ta + T, b, va).
@@ -247,8 +217,8 @@ contains
       real(wp) :: g(4), ta, w
       w = v(5)
       ta = v(1)/w
-      g(1:2) = flow(k1 + k2, tq0 + k2*b, w, ta, [b, v(2)], v(3)) - [b, v(4)]
-      g(3:4) = flow(k1, tq0, w, v(3), [b, v(4)], ta + 2.0_wp*pi/w) - [b, v(2)]
+      g(1:2) = osc%flow(k1 + k2, tq0 + k2*b, w, ta, [b, v(2)], v(3)) - [b, v(4)]
+      g(3:4) = osc%flow(k1, tq0, w, v(3), [b, v(4)], ta + 2.0_wp*pi/w) - [b, v(2)]
       g = g/[b, 10.0_wp*b, b, 10.0_wp*b]
    end function matching
 

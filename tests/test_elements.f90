@@ -445,6 +445,28 @@ contains
       character(len=16) :: s
       write (s, '(es9.2)') x
    end function rstr
+
+   !> The seven-node serial train of the RHS-kernel tests (a to g: shafts, a damped shaft,
+   !> a spur gear with backlash, an ideal gear, a keyed joint), without loads; `b_keys`
+   !> is added to node b's group.
+   function kernel_train(b_keys) result(train)
+      character(len=*), intent(in) :: b_keys
+      character(len=:), allocatable :: train
+      train = "&node id='a', type='inertia', inertia=1.0 /"//nl// &
+              "&node id='b', type='inertia', inertia=0.3"//b_keys//" /"//nl// &
+              "&node id='c', type='inertia', inertia=0.7 /"//nl// &
+              "&node id='d', type='inertia', inertia=0.4 /"//nl// &
+              "&node id='e', type='inertia', inertia=1.5 /"//nl// &
+              "&node id='f', type='inertia', inertia=2.0 /"//nl// &
+              "&node id='g', type='inertia', inertia=0.9 /"//nl// &
+              "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
+              "&element type='shaft', stiffness=2e3, damping=0.1, left='b', right='c' /"//nl// &
+              "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
+              "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001, left='c', right='d' /"//nl// &
+              "&element type='ideal_gear', stiffness=2e4, rb_driver=0.7, rb_driven=1.1, left='d', right='e' /"//nl// &
+              "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, left='e', right='f' /"//nl// &
+              "&element type='shaft', stiffness=3e3, left='f', right='g' /"//nl
+   end function kernel_train
    !> The model's right-hand side (hot path for shafts, ideal gears and
    !> inertias; calls through the objects for the rest) equals what the
    !> element's `torques`, `dissipation_power` and the nodes' `derivatives` give,
@@ -501,20 +523,7 @@ contains
       call test_begin('chain_kernel_is_bit_for_bit_the_generic_rhs, track_energy = '//merge('on ', 'off', track)// &
                       ', head '//merge('held', 'free', held))
       run = "&run t_end = 1e-3, dt = 1e-6, track_energy = "//merge('.true. ', '.false.', track)//' /'//nl
-      train = "&node id='a', type='inertia', inertia=1.0 /"//nl// &
-              "&node id='b', type='inertia', inertia=0.3 /"//nl// &
-              "&node id='c', type='inertia', inertia=0.7 /"//nl// &
-              "&node id='d', type='inertia', inertia=0.4 /"//nl// &
-              "&node id='e', type='inertia', inertia=1.5 /"//nl// &
-              "&node id='f', type='inertia', inertia=2.0 /"//nl// &
-              "&node id='g', type='inertia', inertia=0.9 /"//nl// &
-              "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
-              "&element type='shaft', stiffness=2e3, damping=0.1, left='b', right='c' /"//nl// &
-              "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
-              "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001, left='c', right='d' /"//nl// &
-              "&element type='ideal_gear', stiffness=2e4, rb_driver=0.7, rb_driven=1.1, left='d', right='e' /"//nl// &
-              "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, left='e', right='f' /"//nl// &
-              "&element type='shaft', stiffness=3e3, left='f', right='g' /"//nl// &
+      train = kernel_train('')// &
               "&load node='c', value=0.5 /"//nl// &
               "&load node='a', value=1.25 /"//nl
       if (held) train = train//"&load node='a', quantity='speed', kind='constant', value=5.0 /"//nl
@@ -685,20 +694,7 @@ contains
       character(len=:), allocatable :: train
       call test_begin('simple_rhs_kernel_is_bit_for_bit_the_generic_rhs_and_fills_the_workspace, track_energy = '// &
                       merge('on ', 'off', track))
-      train = "&node id='a', type='inertia', inertia=1.0 /"//nl// &
-              "&node id='b', type='inertia', inertia=0.3, damping=0.2 /"//nl// &
-              "&node id='c', type='inertia', inertia=0.7 /"//nl// &
-              "&node id='d', type='inertia', inertia=0.4 /"//nl// &
-              "&node id='e', type='inertia', inertia=1.5 /"//nl// &
-              "&node id='f', type='inertia', inertia=2.0 /"//nl// &
-              "&node id='g', type='inertia', inertia=0.9 /"//nl// &
-              "&element type='shaft', stiffness=1e3, left='a', right='b' /"//nl// &
-              "&element type='shaft', stiffness=2e3, damping=0.1, left='b', right='c' /"//nl// &
-              "&element type='spur_gear', stiffness=1e5, rb_driver=1.0, rb_driven=1.5, teeth=20, "// &
-              "contact_ratio=1.5, approach_angle=0.1, half_backlash=0.001, left='c', right='d' /"//nl// &
-              "&element type='ideal_gear', stiffness=2e4, rb_driver=0.7, rb_driven=1.1, left='d', right='e' /"//nl// &
-              "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6, left='e', right='f' /"//nl// &
-              "&element type='shaft', stiffness=3e3, left='f', right='g' /"//nl// &
+      train = kernel_train(', damping=0.2')// &
               "&load node='a', quantity='speed', kind='constant', value=5.0 /"//nl// &
               "&load node='c', value=0.5 /"//nl
       call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = "//merge('.true. ', '.false.', track)//' /'// &

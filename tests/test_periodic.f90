@@ -19,11 +19,13 @@ program test_periodic
    use trainsim_sink, only: null_sink_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check, check_close
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
+   use trainsim_test_oscillator, only: oscillator_t
    implicit none
 
    real(wp), parameter :: pi = 3.14159265358979323846264338327950_wp
    ! the oscillator: J th'' + c th' + k th + k2 dz_b(th) = t0 + a sin(W t)
    real(wp), parameter :: jj = 1.0_wp, c1 = 2.0_wp, k1 = 100.0_wp, k2 = 100.0_wp, tq0 = 60.0_wp, amp = 50.0_wp
+   type(oscillator_t), parameter :: osc = oscillator_t(jj, c1, amp)
 
    call suite_begin('periodic orbits by shooting: closed forms and the Table 5.5 rig')
    call test_linear_oscillator_closed_form()
@@ -50,53 +52,12 @@ contains
                            ', frequency=1.2732395447351628 /', model)
    end subroutine oscillator
 
-   !> The steady state of J th'' + c th' + kk th = f0 + a sin(W t): f0/kk + p sin + q cos.
-   subroutine particular(kk, w, p, q)
-      real(wp), intent(in) :: kk, w
-      real(wp), intent(out) :: p, q
-      real(wp) :: d, e
-      d = kk - jj*w**2
-      e = c1*w
-      p = amp*d/(d**2 + e**2)
-      q = -amp*e/(d**2 + e**2)
-   end subroutine particular
-
-   !> exp(B tau) of B = [0 1; -kk/J -c/J] (underdamped), closed form.
-   function expb(kk, tau) result(e)
-      real(wp), intent(in) :: kk, tau
-      real(wp) :: e(2, 2)
-      real(wp) :: al, be, b(2, 2)
-      al = -c1/(2.0_wp*jj)
-      be = sqrt(kk/jj - al**2)
-      b = reshape([0.0_wp, -kk/jj, 1.0_wp, -c1/jj], [2, 2])
-      e = reshape([1.0_wp, 0.0_wp, 0.0_wp, 1.0_wp], [2, 2])*cos(be*tau)
-      b(1, 1) = b(1, 1) - al
-      b(2, 2) = b(2, 2) - al
-      e = exp(al*tau)*(e + sin(be*tau)/be*b)
-   end function expb
-
-   !> The exact flow of a linear segment (stiffness kk, constant torque f0) from (ts, z0) to te.
-   function flow(kk, f0, w, ts, z0, te) result(z)
-      real(wp), intent(in) :: kk, f0, w, ts, z0(2), te
-      real(wp) :: z(2)
-      z = matmul(expb(kk, te - ts), z0 - zp(kk, f0, w, ts)) + zp(kk, f0, w, te)
-   end function flow
-
-   !> The segment's steady state (angle, speed) at t.
-   function zp(kk, f0, w, t) result(v)
-      real(wp), intent(in) :: kk, f0, w, t
-      real(wp) :: v(2)
-      real(wp) :: p, q
-      call particular(kk, w, p, q)
-      v = [f0/kk + p*sin(w*t) + q*cos(w*t), w*(p*cos(w*t) - q*sin(w*t))]
-   end function zp
-
    !> The four matching conditions of the contact orbit, v = (ta, va, tb, vb).
    function matching(v, b, w, period) result(g)
       real(wp), intent(in) :: v(4), b, w, period
       real(wp) :: g(4)
-      g(1:2) = flow(k1 + k2, tq0 + k2*b, w, v(1), [b, v(2)], v(3)) - [b, v(4)]
-      g(3:4) = flow(k1, tq0, w, v(3), [b, v(4)], v(1) + period) - [b, v(2)]
+      g(1:2) = osc%flow(k1 + k2, tq0 + k2*b, w, v(1), [b, v(2)], v(3)) - [b, v(4)]
+      g(3:4) = osc%flow(k1, tq0, w, v(3), [b, v(4)], v(1) + period) - [b, v(2)]
    end function matching
 
    !> Shoot the oscillator's orbit (b the half clearance).
@@ -198,7 +159,7 @@ contains
       complex(wp), allocatable :: mu(:)
       real(wp) :: w, p, q, th_max, gap, b
       call test_begin('grazing_gap_closed_form')
-      call particular(k1, 8.0_wp, p, q)
+      call osc%particular(k1, 8.0_wp, p, q)
       th_max = tq0/k1 + hypot(p, q)
       b = th_max*(1.0_wp + 1.0e-5_wp)
       call shoot_oscillator(b, m, res, mu, w, grazing_gap=gap)
@@ -220,7 +181,7 @@ contains
       real(wp) :: w, p, q, period, s_th, s_w
       call test_begin('linear_oscillator_orbit_and_multipliers_closed_form')
       call shoot_oscillator(2.0_wp, m, res, mu, w)
-      call particular(k1, w, p, q)
+      call osc%particular(k1, w, p, q)
       period = 2.0_wp*pi/w
       s_w = res%scale(2)
       s_th = res%scale(1)
@@ -253,7 +214,7 @@ contains
       ! the guess: the crossings of th = b by the linear (no-contact) steady state
       block
          real(wp) :: p, q, rr, psi, s
-         call particular(k1, w, p, q)
+         call osc%particular(k1, w, p, q)
          rr = hypot(p, q)
          psi = atan2(q, p)
          s = asin((b - tq0/k1)/rr)
@@ -282,25 +243,25 @@ contains
       th_min = huge(1.0_wp)
       do j = 1, 999
          tt = u(3) + (u(1) + period - u(3))*real(j, wp)/1000.0_wp
-         z = flow(k1, tq0, w, u(3), [b, u(4)], tt)
+         z = osc%flow(k1, tq0, w, u(3), [b, u(4)], tt)
          th_min = min(th_min, b - abs(z(1)))
          tt = u(1) + (u(3) - u(1))*real(j, wp)/1000.0_wp
-         z = flow(k1 + k2, tq0 + k2*b, w, u(1), [b, u(2)], tt)
+         z = osc%flow(k1 + k2, tq0 + k2*b, w, u(1), [b, u(2)], tt)
          th_min = min(th_min, z(1) - b)
       end do
       call check('the reference orbit stays within its segments'' regions', th_min > 0.0_wp)
       ! its state at t0 = 0
       tt = u(1) + modulo(0.0_wp - u(1), period)
       if (tt < u(3)) then
-         z = flow(k1 + k2, tq0 + k2*b, w, u(1), [b, u(2)], tt)
+         z = osc%flow(k1 + k2, tq0 + k2*b, w, u(1), [b, u(2)], tt)
       else
-         z = flow(k1, tq0, w, u(3), [b, u(4)], tt)
+         z = osc%flow(k1, tq0, w, u(3), [b, u(4)], tt)
       end if
       s_th = res%scale(1)
       s_w = res%scale(2)
       call check_close('angle at t0 (of the angle scale)', res%x(1)/s_th, z(1)/s_th, abs_tol=1.0e-8_wp)
       call check_close('speed at t0 (of the speed scale)', res%x(2)/s_w, z(2)/s_w, abs_tol=1.0e-8_wp)
-      mm = matmul(expb(k1, u(1) + period - u(3)), expb(k1 + k2, u(3) - u(1)))
+      mm = matmul(osc%expb(k1, u(1) + period - u(3)), osc%expb(k1 + k2, u(3) - u(1)))
       tr = mm(1, 1) + mm(2, 2)
       det = mm(1, 1)*mm(2, 2) - mm(1, 2)*mm(2, 1)
       disc = sqrt(cmplx(tr**2 - 4.0_wp*det, 0.0_wp, kind=wp))

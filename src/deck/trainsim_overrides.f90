@@ -293,22 +293,24 @@ contains
       end do
    end subroutine localize_text
 
-   !> Move the &sweep groups out of `deck` into `sweeps` (the builder knows none of them).
+   !> Move the &sweep groups out of `deck` into `sweeps`, and drop its &runup group (read by
+   !> trainsim runup before this, D-109): the builder knows neither.
    subroutine split_sweep_groups(deck, sweeps)
       type(deck_t), intent(inout) :: deck
       type(deck_group_t), allocatable, intent(out) :: sweeps(:)
-      logical, allocatable :: is_sweep(:)
+      logical, allocatable :: is_sweep(:), other(:)
       integer :: i
-      allocate (is_sweep(size(deck%groups)))
+      allocate (is_sweep(size(deck%groups)), other(size(deck%groups)))
       do i = 1, size(deck%groups)
          is_sweep(i) = deck%groups(i)%name == 'sweep'
+         other(i) = deck%groups(i)%name == 'runup'   ! (trainsim runup's, D-109: read there, dropped here)
       end do
-      if (.not. any(is_sweep)) then   ! no copy of the deck's groups (D-74)
+      if (.not. any(is_sweep .or. other)) then   ! no copy of the deck's groups (D-74)
          allocate (sweeps(0))
          return
       end if
       sweeps = pack(deck%groups, is_sweep)
-      deck%groups = pack(deck%groups, .not. is_sweep)
+      deck%groups = pack(deck%groups, .not. (is_sweep .or. other))
    end subroutine split_sweep_groups
    !> The overrides as `--set` would write them, separated by blanks, e.g.
    !> "mesh.half_backlash=2e-4 run.integrator='cvode-bdf'" ('' for none): what a run

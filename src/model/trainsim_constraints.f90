@@ -429,40 +429,10 @@ contains
       end do
    end subroutine exact_clusters
 
-   !> lam = (G M^-1 G^T)^-1 b over the kept rows (dropped rows: lam = 0).
+   !> lam = (G M^-1 G^T)^-1 b over the kept rows (dropped rows: lam = 0), by the factor
+   !> in cn%chol: its Cholesky factor L (L L^T); for a lossy set (G M^-1 H^T, not
+   !> symmetric) `factor_lu`'s unit lower L and upper U (L U).
    subroutine chol_solve(cn)
-      type(constraint_set_t), intent(inout) :: cn
-      integer :: r, k
-      real(wp) :: s
-      if (cn%lossy) then
-         call lu_solve(cn)
-         return
-      end if
-      associate (x => cn%lam, b => cn%b, a => cn%chol)
-         do r = 1, cn%m
-            if (.not. cn%keep(r)) then
-               x(r) = 0.0_wp
-               cycle
-            end if
-            s = b(r)
-            do k = 1, r - 1
-               if (cn%keep(k)) s = s - a(r, k)*x(k)
-            end do
-            x(r) = s/a(r, r)
-         end do
-         do r = cn%m, 1, -1
-            if (.not. cn%keep(r)) cycle
-            s = x(r)
-            do k = r + 1, cn%m
-               if (cn%keep(k)) s = s - a(k, r)*x(k)
-            end do
-            x(r) = s/a(r, r)
-         end do
-      end associate
-   end subroutine chol_solve
-
-   !> lam = (G M^-1 H^T)^-1 b by `factor_lu`'s L and U (dropped rows: lam = 0).
-   subroutine lu_solve(cn)
       type(constraint_set_t), intent(inout) :: cn
       integer :: r, k
       real(wp) :: s
@@ -474,18 +444,25 @@ contains
             do k = 1, r - 1
                if (cn%keep(k)) s = s - a(r, k)*x(k)
             end do
+            if (.not. cn%lossy) s = s/a(r, r)
             x(r) = s
          end do
          do r = cn%m, 1, -1
             if (.not. cn%keep(r)) cycle
             s = x(r)
-            do k = r + 1, cn%m
-               if (cn%keep(k)) s = s - a(r, k)*x(k)
-            end do
+            if (cn%lossy) then       ! U's row r
+               do k = r + 1, cn%m
+                  if (cn%keep(k)) s = s - a(r, k)*x(k)
+               end do
+            else                     ! L^T's row r: L's column r
+               do k = r + 1, cn%m
+                  if (cn%keep(k)) s = s - a(k, r)*x(k)
+               end do
+            end if
             x(r) = s/a(r, r)
          end do
       end associate
-   end subroutine lu_solve
+   end subroutine chol_solve
 
    !> Speeds cn%w (per slot) made to satisfy the constraints: per exact cluster its
    !> held reference's times rho (locked: 0), a free cluster its momentum-

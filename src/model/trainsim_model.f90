@@ -38,7 +38,7 @@ module trainsim_model
    type, public :: step_block_t
       integer :: cap = 1          !< columns
       integer :: col = 0          !< the column the next `rhs_step_end` writes (0: none)
-      logical :: ws = .true.      !< with col > 0: the workspace too (see above, D-109)
+      logical :: ws = .true.      !< with col > 0: the workspace too (see above, D-113)
       integer :: n = 0            !< steps in the block just taken
       real(wp), allocatable :: t(:)                      !< (step) its end time
       !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end

@@ -14,7 +14,7 @@ module trainsim_signal
    implicit none
    private
 
-   public :: signal_t, signal_from_group, constant_signal, max_cycles, table_from_group
+   public :: signal_t, signal_from_group, constant_signal, ramp_signal, max_cycles, table_from_group
 
    !> Most cycles of a start-stop profile (a year of 30 s cycles); more is a typing error.
    integer, parameter :: max_cycles = 1000000
@@ -55,6 +55,14 @@ contains
       s%value0 = v
       s%label = 'constant'
    end function constant_signal
+
+   !> A ramp: v0 until t0, linear to v1 at t1 (> t0), then v1 (the deck's kind = 'ramp').
+   pure function ramp_signal(t0, t1, v0, v1) result(s)
+      real(wp), intent(in) :: t0, t1, v0, v1
+      type(signal_t) :: s
+      call set_table(s, [t0, t1], [v0, v1])
+      s%label = 'ramp'
+   end function ramp_signal
 
    !> Read a signal from a deck group: key `kind` selects the shape, the
    !> other keys give its parameters (see docs/deck.md, "Time functions").

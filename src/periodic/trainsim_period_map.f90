@@ -221,14 +221,17 @@ contains
    !> the largest |speed| of x (at least the largest |W|); one for every angle, that
    !> speed scale times T/(2 pi) (the angle a speed of that size turns per radian of
    !> the forcing phase; a harmonic motion's amplitude from its speed amplitude);
-   !> every other state its own magnitude (at least 1e-12 of the speed scale).
+   !> every other state its own magnitude (at least 1e-12 of the speed scale). At rest
+   !> (every speed of x and every W zero) the speed scale is 2 pi/(kT), so that the
+   !> angles' is one radian (a scale of zero would divide by zero).
    function pm_scale(self, x) result(sc)
       class(period_map_t), intent(in) :: self
       real(wp), intent(in) :: x(:)
       real(wp) :: sc(self%n)
       real(wp) :: sw
-      sw = tiny(1.0_wp)
-      if (size(self%spd) > 0) sw = max(sw, maxval(abs(x(self%spd))), maxval(abs(self%w)))
+      sw = 0.0_wp
+      if (size(self%spd) > 0) sw = max(maxval(abs(x(self%spd))), maxval(abs(self%w)))
+      if (.not. sw > 0.0_wp) sw = two_pi/(real(self%k, wp)*self%period)
       sc = max(abs(x), 1.0e-12_wp*sw, tiny(1.0_wp))
       sc(self%spd) = sw
       sc(self%ang) = sw*real(self%k, wp)*self%period/two_pi

@@ -5,7 +5,8 @@
 !> request, the longest estimated run first (steps = (t_end - t_start)/dt, so that the
 !> last runs handed out are short and the ranks finish together). Each worker sends the
 !> record of its finished run, which is also its request for the next index. Rank 0
-!> computes runs too; while it does, its sink looks for a worker's record (one MPI_Test
+!> answers every worker's first request before it takes a run of its own and takes
+!> one right after the last, then computes runs too; while it does, its sink looks for a worker's record (one MPI_Test
 !> of a receive posted in advance) every millisecond of wall time, so no worker waits
 !> for rank 0's run to end. Rank 0 alone writes the sweep file.
 !>
@@ -426,9 +427,16 @@ contains
       last = 0
       do
          if (m%n_ranks > 1) call m%service()
+         if (m%n_ready < m%n_ranks - 1) then
+            ! every worker's "ready" is answered before rank 0 takes a run of its own, and
+            ! rank 0 takes one right after the last (D-110)
+            rc = c_usleep(250_c_int)
+            cycle
+         end if
          irun = 0
          if (.not. allocated(m%err)) irun = m%take(last)
          if (irun > 0) then
+            m%own_taken = .true.
             call run_one(opt, deck, spec, lay, done, irun, 0, rec, st, m)
             if (rec%status == status_pending) then
                m%interrupted = .true.         ! stopped by a signal: not recorded, made again on resume

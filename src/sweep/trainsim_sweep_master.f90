@@ -25,6 +25,8 @@ module trainsim_sweep_master
       type(sweep_file_t) :: file
       integer, allocatable :: pending(:)
       integer :: next = 1, stopped = 0, n_ranks = 1, ne = 0, nn = 0
+      integer :: n_ready = 0                !< workers whose first request ("ready") was answered
+      logical :: own_taken = .false.       !< rank 0 has taken a run of its own
       integer :: n_now = 0, n_failed_now = 0, n_before = 0, n_runs = 0
       integer(i8) :: c0 = 0, rate = 1, last_line = 0
       integer :: last_done = -1             !< runs done at the last progress line
@@ -196,6 +198,7 @@ contains
          call comm_poll_record(buf, found, src, rec%message)
          if (.not. found) exit
          call rec%unpack(buf)
+         if (rec%irun == 0) self%n_ready = self%n_ready + 1
          if (rec%irun > 0 .and. rec%status == status_pending) then
             self%interrupted = .true.         ! the worker's run was stopped by a signal
          else if (rec%irun > 0) then
@@ -205,6 +208,8 @@ contains
          if (.not. allocated(self%err)) irun = self%take(rec%irun)
          call comm_send_index(src, irun)
          if (irun == 0) self%stopped = self%stopped + 1
+         ! the last worker's first request answered: rank 0 takes a run before any more (D-110)
+         if (rec%irun == 0 .and. self%n_ready == self%n_ranks - 1 .and. .not. self%own_taken) exit
       end do
    end subroutine master_service
 

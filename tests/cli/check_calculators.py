@@ -13,31 +13,19 @@ usage: check_calculators.py TRAINSIM_EXE
 """
 import os
 import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
+from clicheck import check, EXE, finish, run
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
 
 
 def fragment(out):
     lines = out.splitlines()
     start = next(i for i, l in enumerate(lines) if l.startswith('! deck fragment'))
     return '\n'.join(lines[start:]) + '\n'
-
-
-def run(args, **kw):
-    return subprocess.run([EXE] + args, capture_output=True, text=True, timeout=120, **kw)
 
 
 with tempfile.TemporaryDirectory() as tmp:
@@ -136,7 +124,7 @@ with tempfile.TemporaryDirectory() as tmp:
                 else:
                     args += [opt, v]
                 try:
-                    s = run(args)
+                    s = run(args, timeout=120)
                 except subprocess.TimeoutExpired:
                     bad.append(f'{opt} {v}: no end within 120 s')
                     continue
@@ -154,4 +142,4 @@ with tempfile.TemporaryDirectory() as tmp:
         rows = [ln for ln in s.stdout.splitlines() if ln.strip() and ln.split()[0][0].isdigit()]
         check(f'key --points {v}: exit 0 with {v} rows', s.returncode == 0 and len(rows) == int(v))
 
-sys.exit(1 if failures else 0)
+finish()

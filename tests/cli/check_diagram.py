@@ -22,14 +22,12 @@ import json
 import os
 import re
 import subprocess
-import sys
 import tempfile
 import xml.etree.ElementTree as ET
 
-EXE = sys.argv[1]
+from clicheck import check, EXE, finish
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SVG = "{http://www.w3.org/2000/svg}"
-failures = []
 
 TWO_PARTS = """! two trains in one deck
 &run title = 'two unconnected parts', t_end = 0.01, dt = 1e-5 /
@@ -48,12 +46,6 @@ TWO_PARTS = """! two trains in one deck
 &load node = 'pinion', quantity = 'speed', kind = 'constant', value = 10 /
 &load node = 'wheel', kind = 'ramp', value1 = -50, t1 = 0.01 /
 """
-
-
-def check(what, ok):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
 
 
 def trainsim(*args):
@@ -212,4 +204,4 @@ with tempfile.TemporaryDirectory() as tmp:
     left = [x for x in os.listdir(os.environ.get("TMPDIR", "/tmp")) if x.startswith(f"trainsim-diagram-")]
     check(f"no temporary description left in $TMPDIR ({left[:3]})", not left)
 
-sys.exit(1 if failures else 0)
+finish()

@@ -41,15 +41,8 @@ import re
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
+from clicheck import check, EXE, finish
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-failures = []
-
-
-def check(what, ok):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
 
 
 def trainsim(*args):
@@ -326,4 +319,4 @@ with tempfile.TemporaryDirectory() as tmp:
                   np.all(np.diff(d["f0_b1_x"]) > 0) and np.all(np.diff(d["f0_b2_x"]) < 0))
             check("a PNG is written", os.path.getsize(png) > 1000)
 
-sys.exit(1 if failures else 0)
+finish()

@@ -29,17 +29,10 @@ import h5py
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 import check_h5_layout  # noqa: E402
 
-EXE = sys.argv[1]
+from clicheck import check, EXE, finish  # noqa: E402
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 DECKS = ["inputs/start_stop_two_clearances.nml", "inputs/helical_pair.nml", "inputs/dc_motor_geared_load.nml",
          "inputs/loads_table_ramp.nml", "verification/table5_3/table5_3.nml"]
-failures = []
-
-
-def check(what, ok):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
 
 
 with tempfile.TemporaryDirectory() as tmp:
@@ -150,4 +143,4 @@ with tempfile.TemporaryDirectory() as tmp:
             check("the sweep file's version names the revision", "git" in f.attrs["trainsim_version"]
                   or git_revision() is None)
 
-sys.exit(1 if failures else 0)
+finish()

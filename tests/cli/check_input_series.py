@@ -11,20 +11,12 @@ usage: check_input_series.py TRAINSIM_EXE
 import math
 import os
 import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
+from clicheck import check, EXE, finish
 
 
 def start_stop(t, v, ta, tc, td, tw, t0, n):
@@ -123,7 +115,4 @@ with tempfile.TemporaryDirectory() as tmp:
             check(f"... and its /inputs has no columns {f['inputs'].shape}",
                   f['inputs'].shape == (len(f['time']), 0))
 
-if failures:
-    print(f'{len(failures)} check(s) failed')
-    sys.exit(1)
-print('all checks passed')
+finish(summary=True)

@@ -25,25 +25,12 @@ usage: check_lossy_worm.py TRAINSIM_EXE
 import math
 import os
 import re
-import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
-
-
-def run(args):
-    return subprocess.run([EXE] + args, capture_output=True, text=True, timeout=300)
+from clicheck import check, EXE, finish, run
 
 
 def value(out, label):
@@ -213,4 +200,4 @@ with tempfile.TemporaryDirectory() as tmp:
         check(f'{what}: exit 2 naming file:line, key and value ({msg[:160]})',
               r.returncode == 2 and 'bad.nml:4' in msg and key in msg and val in msg and 'Backtrace' not in msg)
 
-sys.exit(1 if failures else 0)
+finish()

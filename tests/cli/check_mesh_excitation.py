@@ -22,26 +22,13 @@ usage: check_mesh_excitation.py TRAINSIM_EXE
 import math
 import os
 import re
-import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
+from clicheck import check, EXE, failures, finish, run
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
-
-
-def run(args, cwd=None):
-    return subprocess.run([EXE] + args, capture_output=True, text=True, timeout=300, cwd=cwd)
 
 
 HEAD = ("&run t_end = 1e-3, dt = 1e-6 /\n&node id = 'a', type = 'inertia', inertia = 1.0 /\n"
@@ -190,4 +177,4 @@ with tempfile.TemporaryDirectory() as tmp:
         check('gear --plot writes the figure', r.returncode == 0 and os.path.getsize(png) > 1000)
 
 print(f'{len(failures)} failure(s)')
-sys.exit(1 if failures else 0)
+finish()

@@ -8,11 +8,14 @@
   within 1e-6 of the unit circle, two inside, the mesh period);
 - the Table 7.1 train (inputs/two_clearance.nml) converges, restarting Newton after a
   longer transient where needed;
+- from rest with --transient 0 (a zero state: the state scale's floor), a damped linear
+  oscillator's orbit and multipliers equal the closed form;
 - an accelerating free train has no periodic orbit: exit 1, the reason (M - I singular), no
   backtrace; no forcing period: exit 2 naming the deck; bad options: exit 2.
 
 Usage: check_periodic.py TRAINSIM
 """
+import math
 import os
 import re
 import subprocess
@@ -89,6 +92,32 @@ with tempfile.TemporaryDirectory() as tmp:
     r = run(nof)
     check("no forcing period: exit 2 naming the deck", r.returncode == 2 and "nof.nml" in r.stderr and
           "no forcing period" in r.stderr, r.stderr)
+    # from rest with no transient: a damped disk on a shaft to ground under 60 + 50 sin(8 t)
+    # (J = 1, c = 2, k = 100); the orbit at t0 = 0 is the steady state of the linear
+    # oscillator, angle f0/k + q and speed W p (p = a d/(d^2 + e^2), q = -a e/(d^2 + e^2),
+    # d = k - J W^2, e = c W), its two multipliers have |mu| = exp(-c T/(2 J)); RK4 at
+    # dt = 1e-4 (omega_n dt = 1e-3): to 1e-8
+    rest = os.path.join(tmp, "rest.nml")
+    with open(rest, "w") as fh:
+        fh.write("&run t_end = 1.0, dt = 1e-4, integrator = 'rk4', output_interval = 1e-4 /\n"
+                 "&node id = 'g', type = 'fixed' /\n&node id = 'm', type = 'inertia', inertia = 1.0 /\n"
+                 "&element id = 's', type = 'shaft', left = 'm', right = 'g', stiffness = 100.0, damping = 2.0 /\n"
+                 "&load node = 'm', kind = 'sine', offset = 60.0, amplitude = 50.0, frequency = 1.2732395447351628 /\n")
+    r = run(rest, "--transient", "0", "-o", os.path.join(tmp, "rest.h5"))
+    check("from rest, --transient 0: converges (exit 0), no trap", r.returncode == 0 and "Backtrace" not in r.stderr,
+          r.stderr[-300:])
+    if r.returncode == 0:
+        w, d, e = 8.0, 100.0 - 64.0, 2.0 * 8.0
+        p, q = 50.0 * d / (d * d + e * e), -50.0 * e / (d * d + e * e)
+        with h5py.File(os.path.join(tmp, "rest.h5")) as f:
+            g = f["periodic"]
+            x, sc, mod = g["state"][:], g["scale"][:], g["multipliers_abs"][:]
+        want = [60.0 / 100.0 + q, w * p]
+        check("... the orbit is the linear oscillator's steady state to 1e-8",
+              len(x) == 2 and max(abs(x - want)) <= 1e-8 * max(abs(v) for v in want), (list(x), want))
+        check("... a finite, positive scale", all(0 < v < 1e300 for v in sc), list(sc))
+        mu = math.exp(-2.0 * (2 * math.pi / w) / 2.0)
+        check(f"... |mu| = exp(-cT/2J) = {mu:.6f} to 1e-6", all(abs(m - mu) <= 1e-6 for m in mod), list(mod))
     for bad in (["--period-count", "0"], ["--bogus"], ["--tol", "2"], []):
         r = run(*([rig] if bad != [] else []), *bad)
         check(f"bad arguments {bad}: exit 2 with a message", r.returncode == 2 and "error" in r.stderr, r.stderr)

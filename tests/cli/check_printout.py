@@ -13,17 +13,9 @@ usage: check_printout.py TRAINSIM_EXE
 import os
 import re
 import subprocess
-import sys
 import tempfile
 
-EXE = sys.argv[1]
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
+from clicheck import check, EXE, finish
 
 
 LONG = 'motor_side_inertia_long_name'
@@ -78,7 +70,4 @@ with tempfile.TemporaryDirectory() as tmp:
         th = float(m.group(1))
         check(f'n2 preload angle {th:.10g} = T/k = 1e-3 rad (1e-9)', abs(th - 1.0e-3) <= 1e-9)
 
-if failures:
-    print(f'{len(failures)} check(s) failed')
-    sys.exit(1)
-print('all checks passed')
+finish(summary=True)

@@ -29,25 +29,12 @@ usage: check_rigid_lossy.py TRAINSIM_EXE
 """
 import math
 import os
-import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
-
-
-def run(args):
-    return subprocess.run([EXE] + args, capture_output=True, text=True, timeout=300)
+from clicheck import check, EXE, finish, run
 
 
 R1, R2, J1, J2, EF, EB = 0.02, 0.04, 0.01, 0.04, 0.8, 0.6
@@ -217,4 +204,4 @@ with tempfile.TemporaryDirectory() as tmp:
     check(f'efficiency_forward = 1.2: exit 2 naming file:line, key and value ({msg[:160]})',
           r.returncode == 2 and 'bad.nml:4' in msg and 'efficiency_forward' in msg and '1.2' in msg)
 
-sys.exit(1 if failures else 0)
+finish()

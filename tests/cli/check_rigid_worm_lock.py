@@ -28,25 +28,12 @@ usage: check_rigid_worm_lock.py TRAINSIM_EXE
 import math
 import os
 import re
-import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
-
-
-def run(args):
-    return subprocess.run([EXE] + args, capture_output=True, text=True, timeout=300)
+from clicheck import check, EXE, finish, run
 
 
 def simulate(tmp, name, element, ja, jb, loads, t_end, dt):
@@ -160,4 +147,4 @@ with tempfile.TemporaryDirectory() as tmp:
               f'(rel {rel(got, acc):.2e} <= 2/(omega_n t/2) = {4 / (omega_n * t_end):.2e})',
               acc > 0 and rel(got, acc) <= 4 / (omega_n * t_end))
 
-sys.exit(1 if failures else 0)
+finish()

@@ -28,18 +28,10 @@ import tempfile
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
+from clicheck import check, EXE, finish
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from trainsim_rainflow import rainflow, reversals  # noqa: E402
-
-failures = []
-
-
-def check(what, ok):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
 
 
 def trainsim(*args):
@@ -135,4 +127,4 @@ with tempfile.TemporaryDirectory() as tmp:
         check(f"{what}: exit 2 with a message ({r.stderr.strip()[:120]})",
               r.returncode == 2 and "error" in r.stderr and "Traceback" not in r.stderr)
 
-sys.exit(1 if failures else 0)
+finish()

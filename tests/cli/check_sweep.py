@@ -5,8 +5,10 @@
 
 cases:
   mpi_matches_serial  mpirun -np 2 gives metrics bit-identical to the serial sweep, and both
-                      ranks made runs (exit 77 = skipped when mpirun is missing or trainsim
-                      was built without MPI)
+                      ranks made runs (rank 0 answers the worker's first request with a run,
+                      then takes one of its own before it answers another: D-110, so this
+                      holds whatever the timing) (exit 77 = skipped when mpirun is missing
+                      or trainsim was built without MPI)
   resume_after_kill   kill -9 part-way, then the same command: every run present exactly
                       once (the runs done before the kill are not made again, the others
                       are made once), and the metrics equal an uninterrupted sweep's bits

@@ -29,20 +29,12 @@ usage: check_worm_rattle.py TRAINSIM_EXE
 """
 import os
 import subprocess
-import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-EXE = sys.argv[1]
-failures = []
-
-
-def check(what, ok):
-    print(('ok   ' if ok else 'FAIL ') + what)
-    if not ok:
-        failures.append(what)
+from clicheck import check, EXE, finish
 
 
 DECK = """&run title = 'worm rattle', units = 'si', t_end = 2.0, dt = {dt}, integrator = '{integ}', rtol = 1.0e-6,
@@ -114,7 +106,4 @@ with tempfile.TemporaryDirectory() as tmp:
     case(tmp, 'rk4_backlash', 'rk4', 1.0e-5, 1.0e-4, 1.0e-6)
     case(tmp, 'cvode_no_backlash', 'cvode-bdf', 1.0e-4, 0.0, 1.0e-4)
 
-if failures:
-    print(f'{len(failures)} check(s) failed')
-    sys.exit(1)
-print('all checks passed')
+finish(summary=True)
