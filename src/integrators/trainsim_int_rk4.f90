@@ -425,8 +425,11 @@ contains
       if (self%mr_on .or. self%pend .or. .not. self%takes_blocks) return
       n = 0
       ok = .true.
+      model%blk%ws = .false.   ! each step's column only; the workspace after the block
       do j = 1, model%blk%cap
-         t_grid = next_grid(self, t)
+         ! next_grid, written out (after the block's first step t is on the grid)
+         t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
+         if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
          if (t_grid > t_goal) exit
          if (self%stop_is_breakpoint .and. t_grid >= self%t_stop - self%tiny_t) exit
          h = t_grid - t
@@ -457,8 +460,12 @@ contains
          if (.not. ok .or. t_goal - t <= t_tol) exit
       end do
       model%blk%col = 0
+      model%blk%ws = .true.
       model%blk%n = n
       if (n == 0) return
+      ! the workspace of the block's last step: its step end again, the same
+      ! values (k1 bit for bit; not counted: the same evaluation)
+      call model%rhs_step_end(t, y, self%k1)
       ! the counters of n grid steps, and k1 of the last one for the next step
       self%stats%steps = self%stats%steps + n
       self%stats%block_steps = self%stats%block_steps + n

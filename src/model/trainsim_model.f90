@@ -33,17 +33,17 @@ module trainsim_model
    !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
    !> block, column `col` is written by `rhs_step_end` of a simple model (col =
    !> 0 outside a block: no column written); the workspace (el_disp, el_force,
-   !> el_torque, ws_stored, ws_elastic) is written as always, so it holds the
-   !> last step's end.
+   !> el_torque, theta, torque) too unless `ws` is cleared (then the integrator
+   !> writes it after the block, so that it holds the last step's end).
    type, public :: step_block_t
       integer :: cap = 1          !< columns
       integer :: col = 0          !< the column the next `rhs_step_end` writes (0: none)
+      logical :: ws = .true.      !< with col > 0: the workspace too (see above, D-120)
       integer :: n = 0            !< steps in the block just taken
       real(wp), allocatable :: t(:)                      !< (step) its end time
       !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end
       real(wp), allocatable :: disp(:, :), force(:, :), torque(:, :)
-      !> (node, step): omega at the step's end
-      real(wp), allocatable :: omega(:, :)
+      real(wp), allocatable :: omega(:, :)               !< (node, step): omega at the step's end
       !> (step): ws_stored, ws_elastic (if ws_energy); (2, step): the energy
       !> states y(n_states + 1 : n_states + 2) (if energy tracking)
       real(wp), allocatable :: stored(:), elastic(:), work(:, :)

@@ -245,12 +245,20 @@ contains
       c = max(self%blk%col, 1)
       associate (b => self%blk)
          ! (the kernel's arguments but the element powers, and the workspace's
-         ! and the column's; the column is written by the _col variants, D-38)
+         ! and the column's; the column is written by the _col variants, D-38,
+         ! without the workspace by the column_ variants inside a block, D-120)
 #define SE_HEAD self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, self%theta, self%omega
-#define SE_WS self%torque, self%el_disp, self%el_force, self%el_pe
+#define SE_WS self%torque, self%el_disp, self%el_force
 #define SE_COL b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c)
-#define SE_STORED self%ws_energy, self%ws_stored, self%ws_elastic
-         if (track .and. b%col > 0) then
+#define SE_STORED self%el_pe, self%ws_energy, self%ws_stored, self%ws_elastic
+         if (b%col > 0 .and. .not. b%ws) then
+            ! a block's step: its column only, not the workspace
+            if (track) then
+               call column_energy(SE_HEAD, self%fam%pw, SE_STORED, SE_COL)
+            else
+               call column_plain(SE_HEAD, SE_STORED, SE_COL)
+            end if
+         else if (track .and. b%col > 0) then
             call step_end_energy_col(SE_HEAD, self%fam%pw, SE_WS, SE_STORED, SE_COL)
          else if (track) then
             call step_end_energy(SE_HEAD, self%fam%pw, SE_WS, SE_STORED)
@@ -276,7 +284,8 @@ contains
       end associate
    contains
       ! the step-end kernel, energy off and on, without and with the block's
-      ! column (STEP_END 1, 2; internal: each inlined at its one call)
+      ! column (STEP_END 1, 2) and the column alone (3; internal: each inlined
+      ! at its one call)
 #define STEP_END 1
 #define KERNEL step_end_plain
 #define ENERGY 0
@@ -296,6 +305,19 @@ contains
 #undef KERNEL
 #undef ENERGY
 #define KERNEL step_end_energy_col
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+      ! a block's step before its last: the column, not the workspace (D-120)
+#define STEP_END 3
+#define KERNEL column_plain
+#define ENERGY 0
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#define KERNEL column_energy
 #define ENERGY 1
 #include "trainsim_model_stage.inc"
 #undef KERNEL

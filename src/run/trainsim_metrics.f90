@@ -259,32 +259,40 @@ contains
       type(p2p_detector_t), intent(inout) :: det(:)
       real(wp), intent(in) :: x(:, :)
       integer, intent(in) :: j0, n
-      integer :: i, j, nn, dir
+      integer :: i, j, js
       real(wp) :: xv, lo, hi, h, cand
       do i = 1, size(det)
          associate (d => det(i))
             ! push_one's usual sample (inside the range seen so far, on an edge
-            ! that confirms nothing) on the detector's state in registers; any
+            ! that confirms nothing) in a loop of its own per edge direction, on
+            ! the detector's state in registers (the count added after it); any
             ! other sample goes to push_one itself
-            nn = d%n; lo = d%xmin; hi = d%xmax; h = d%h; dir = d%s%dir; cand = d%s%cand
-            do j = j0, n
-               xv = x(i, j)
-               if (nn > 0 .and. xv >= lo .and. xv <= hi .and. h > 0.0_wp) then
-                  if (dir == 1 .and. xv > cand - h) then
-                     nn = nn + 1
-                     if (xv > cand) cand = xv
-                     cycle
-                  else if (dir == -1 .and. xv < cand + h) then
-                     nn = nn + 1
-                     if (xv < cand) cand = xv
-                     cycle
+            j = j0
+            do while (j <= n)
+               lo = d%xmin; hi = d%xmax; h = d%h; cand = d%s%cand
+               js = j
+               if (d%n > 0 .and. h > 0.0_wp) then
+                  if (d%s%dir == 1) then
+                     do while (j <= n)
+                        xv = x(i, j)
+                        if (.not. (xv >= lo .and. xv <= hi .and. xv > cand - h)) exit
+                        if (xv > cand) cand = xv
+                        j = j + 1
+                     end do
+                  else if (d%s%dir == -1) then
+                     do while (j <= n)
+                        xv = x(i, j)
+                        if (.not. (xv >= lo .and. xv <= hi .and. xv < cand + h)) exit
+                        if (xv < cand) cand = xv
+                        j = j + 1
+                     end do
                   end if
                end if
-               d%n = nn; d%s%cand = cand
-               call push_one(d, xv)
-               nn = d%n; lo = d%xmin; hi = d%xmax; h = d%h; dir = d%s%dir; cand = d%s%cand
+               d%n = d%n + (j - js); d%s%cand = cand
+               if (j > n) exit
+               call push_one(d, x(i, j))
+               j = j + 1
             end do
-            d%n = nn; d%s%cand = cand
          end associate
       end do
    end subroutine push_block
