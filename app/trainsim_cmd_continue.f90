@@ -20,8 +20,8 @@ module trainsim_cmd_continue
    use trainsim_arclength, only: branch_problem_t, branch_options_t, branch_point_t, branch_t, continue_branch, &
                                  branch_done, switch_period_doubling
    use trainsim_branch_file, only: branch_file_t
-   use trainsim_sweep_layout, only: sweep_layout_t, element_metric_names
-   use trainsim_sweep, only: fingerprint, element_record
+   use trainsim_sweep_layout, only: sweep_layout_t, element_metric_names, element_record
+   use trainsim_sweep, only: fingerprint
    use trainsim_version, only: version_full
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: continue_usage

@@ -28,6 +28,7 @@ module trainsim_sweep
    use trainsim_sweep_spec, only: sweep_spec_t, read_sweep_spec
    use trainsim_sweep_file, only: sweep_layout_t, sweep_record_t, element_metric_names, &
       node_metric_names, status_pending, status_ok, status_failed, record_size, status_names
+   use trainsim_sweep_layout, only: element_record
    use trainsim_sink, only: run_meta_t
    use trainsim_observer, only: run_result_t, make_meta
    use trainsim_simulate, only: simulate
@@ -41,7 +42,7 @@ module trainsim_sweep
    private
 
    public :: sweep_options_t, sweep_summary_t, run_sweep, finish_sweep, default_sweep_path
-   public :: fingerprint, element_record
+   public :: fingerprint
 
    !> What `trainsim sweep` was asked to do.
    type :: sweep_options_t
@@ -586,21 +587,4 @@ contains
       call system_clock(c1)
       rec%wall = real(c1 - c0, wp)/real(rate, wp)
    end subroutine run_one
-
-   !> A run's element metrics in the sweep file's order (element_metric_names, element).
-   function element_record(res) result(el)
-      type(run_result_t), intent(in) :: res
-      real(wp) :: el(size(element_metric_names), size(res%el))
-      integer :: k
-      do k = 1, size(res%el)
-         associate (e => res%el(k))
-            el(:, k) = [e%force_min, e%force_max, e%torque_min, e%torque_max, e%disp_min, e%disp_max, &
-                        real(e%impacts, wp), real(e%separations, wp), real(e%zone_changes, wp), &
-                        e%max_approach_velocity, e%max_peak_force, e%time_out_of_contact, e%p2p_range, &
-                        e%p2p_mean, real(e%p2p_swings, wp), e%load_sharing, e%kv, e%static_force, &
-                        e%static_te_mean, e%static_te_p2p, e%force_mean, e%te_order, e%force_order, &
-                        e%rattle_impacts, e%rattle_open]
-         end associate
-      end do
-   end function element_record
 end module trainsim_sweep

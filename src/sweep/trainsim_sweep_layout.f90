@@ -6,13 +6,14 @@
 module trainsim_sweep_layout
    use trainsim_kinds, only: wp
    use trainsim_strings, only: string_t, str
+   use trainsim_observer, only: run_result_t
    implicit none
    private
 
    public :: sweep_layout_t, sweep_record_t, element_metric_names, element_metric_is_int, node_metric_names
    public :: run_value_names, n_run_values
    public :: status_pending, status_ok, status_failed, record_size, format_version, status_names
-   public :: status_meaning, fingerprint_difference
+   public :: status_meaning, fingerprint_difference, element_record
 
    !> Run statuses: the value stored in /runs/status is the index into status_names
    !> (a new status is one more name here and one parameter); any other value in a
@@ -229,4 +230,21 @@ contains
          end if
       end do
    end subroutine split_lines
+
+   !> A run's element metrics in the sweep file's order (element_metric_names, element).
+   function element_record(res) result(el)
+      type(run_result_t), intent(in) :: res
+      real(wp) :: el(size(element_metric_names), size(res%el))
+      integer :: k
+      do k = 1, size(res%el)
+         associate (e => res%el(k))
+            el(:, k) = [e%force_min, e%force_max, e%torque_min, e%torque_max, e%disp_min, e%disp_max, &
+                        real(e%impacts, wp), real(e%separations, wp), real(e%zone_changes, wp), &
+                        e%max_approach_velocity, e%max_peak_force, e%time_out_of_contact, e%p2p_range, &
+                        e%p2p_mean, real(e%p2p_swings, wp), e%load_sharing, e%kv, e%static_force, &
+                        e%static_te_mean, e%static_te_p2p, e%force_mean, e%te_order, e%force_order, &
+                        e%rattle_impacts, e%rattle_open]
+         end associate
+      end do
+   end function element_record
 end module trainsim_sweep_layout
