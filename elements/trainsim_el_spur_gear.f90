@@ -373,10 +373,9 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
       real(wp) :: a, va
-      call self%shift(thl, 0.0_wp, a, va)
+      call self%shift(thl, wl, a, va)
       call self%cl%guards(a, thr, g(1:2))
-      associate (u1 => wl, u2 => wr)
-      end associate
+      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), a, va, thr, wr, g(1:2))   ! (D-121)
       ! a zone without lower bound: a constant positive guard (never crosses), as
       ! the faces not in play; a huge value defeats CVODE's root finding (D-26)
       if (self%lo_open) then
@@ -394,7 +393,7 @@ contains
       real(wp) :: a, va
       call self%set_zone(thl)
       call self%shift(thl, wl, a, va)
-      call self%cl%init(a, va, thr, wr)
+      call self%cl%init(a, va, thr, wr, self%factor(thl))
       if (self%fric%n_guards() > 0) call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
    end subroutine spur_init_mode
 
@@ -462,7 +461,7 @@ contains
       ! an excited mesh (issue 26): the torques stay with `torques` while the
       ! stiffness varies or the TE moves the faces (their guards too)
       if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none
-      if (self%ex%has_te) form%guards = hg_none
+      if (self%ex%has_te .or. self%cl%law%no_tension) form%guards = hg_none   ! (no_tension: D-121)
       if (self%fric%on()) then   ! friction: the general path (D-98)
          form%kind = hf_none
          form%guards = hg_none

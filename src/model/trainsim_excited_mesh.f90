@@ -264,10 +264,9 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
       real(wp) :: a, va
-      associate (u1 => wl, u2 => wr)
-      end associate
-      call self%shift(thl, 0.0_wp, a, va)
+      call self%shift(thl, wl, a, va)
       call self%cl%guards(a, thr, g(1:2))
+      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), a, va, thr, wr, g(1:2))   ! (D-121)
    end subroutine em_guards
 
    subroutine em_init_mode(self, thl, wl, thr, wr)
@@ -275,7 +274,7 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp) :: a, va
       call self%shift(thl, wl, a, va)
-      call self%cl%init(a, va, thr, wr)
+      call self%cl%init(a, va, thr, wr, self%factor(thl))
    end subroutine em_init_mode
 
    subroutine em_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)
