@@ -30,7 +30,7 @@ module trainsim_el_spur_gear
    use trainsim_clearance_element, only: clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hg_none, hf_none
    use trainsim_excited_mesh, only: excited_mesh_t, em_torques, em_torques_dissipation, em_dissipation, &
-      em_torque_jacobian, em_status, configure_mesh_excitation
+      em_torque_jacobian, em_status, em_guards, configure_mesh_excitation
    use trainsim_mesh_excitation, only: model_name
    use trainsim_tooth_friction, only: tooth_friction_t
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
@@ -372,10 +372,7 @@ contains
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
-      real(wp) :: a, va
-      call self%shift(thl, wl, a, va)
-      call self%cl%guards(a, thr, g(1:2))
-      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), a, va, thr, wr, g(1:2))   ! (D-121)
+      call em_guards(self, thl, wl, thr, wr, g(1:2))   ! the faces (with no_tension, the clip's: D-121)
       ! a zone without lower bound: a constant positive guard (never crosses), as
       ! the faces not in play; a huge value defeats CVODE's root finding (D-26)
       if (self%lo_open) then

@@ -29,7 +29,7 @@ program test_helical_mesh
    use trainsim_el_helical_gear, only: helical_contact_length, contact_lines, max_lines
    use trainsim_param_list, only: param_list_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error
+   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error, real_text
    implicit none
 
    real(wp), parameter :: rb1 = 1.4095_wp, rb2 = 2.819_wp, n1 = 24.0_wp, mp = 1.55_wp, face = 1.2_wp
@@ -367,12 +367,4 @@ contains
       call check('spur: frequencies equal to the bit', maxval(abs(d0%freq_hz - df%freq_hz)), 0.0_wp, abs_tol=0.0_wp)
       call check('a mesh mode found (> 0 Hz)', maxval(df%freq_hz) > 0.0_wp)
    end subroutine modes_ignore_friction
-
-   function real_text(x) result(s)
-      real(wp), intent(in) :: x
-      character(len=:), allocatable :: s
-      character(len=32) :: buf
-      write (buf, '(es24.16e3)') x
-      s = trim(adjustl(buf))
-   end function real_text
 end program test_helical_mesh

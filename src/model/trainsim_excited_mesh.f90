@@ -26,7 +26,7 @@ module trainsim_excited_mesh
 
    public :: excited_mesh_t, excited_input_power, configure_mesh_excitation
    ! the torques under names a concrete type's own `torques` can fall back on (tooth friction)
-   public :: em_torques, em_torques_dissipation, em_dissipation, em_torque_jacobian, em_status
+   public :: em_torques, em_torques_dissipation, em_dissipation, em_torque_jacobian, em_status, em_guards
 
    !> |driver angle| beyond which the roll is taken at this value (D-26).
    real(wp), parameter :: theta_cap = 1.0e250_wp
