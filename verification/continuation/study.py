@@ -137,6 +137,9 @@ def main(argv=None):
     ap.add_argument("--to", dest="lam1", type=float)
     ap.add_argument("--count", type=int)
     ap.add_argument("--start", type=float, help="continue from here to both ends of the range")
+    ap.add_argument("--also", type=float, action="append", default=[],
+                    help="a further start (repeatable): two more continuations from it, one to each end "
+                         "(a second branch: e.g. where settled sweep runs land on another orbit)")
     ap.add_argument("--damping", type=float)
     ap.add_argument("--settle-tol", type=float, default=1e-8)
     ap.add_argument("--metric", default="p2p_range")
@@ -166,6 +169,8 @@ def main(argv=None):
     if os.path.exists(os.path.join(out, "sweep.h5")):
         os.remove(os.path.join(out, "sweep.h5"))
     legs = [(lam0, lam1, "branch")] if start is None else [(start, lam1, "branch_a"), (start, lam0, "branch_b")]
+    for k, s2 in enumerate(a.also):
+        legs += [(s2, lam1, f"also{k + 1}_a"), (s2, lam0, f"also{k + 1}_b")]
     c_cpu, c_rc, brs = 0.0, 0, []
     for l0, l1, name in legs:
         branch = os.path.join(out, name + ".h5")
