@@ -161,7 +161,7 @@ contains
       write (output_unit, '(a)') '      lambda            period        max|mu|     stability  corrector  bifurcation'
       if (len(out_path) > 0) then
          call branch_layout(prob%deck, lam0, opt, param, lay, n, err)
-         if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err)
+         if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err, period_count=opt%k)
          blay = lay
          bn = n
          if (allocated(err)) call fail(err)
@@ -169,6 +169,8 @@ contains
       if (resume) then
          call bfile%read(old, err)
          if (allocated(err)) call close_fail(err)
+         opt%k = bfile%period_count   ! (a doubled branch's 2k, from its file: D-122)
+         kperiods = opt%k
          write (output_unit, '(a)') 'resumed after '//str(size(old%pts))//' stored points'
          call continue_branch(prob, lam0, opt, br, err, resume=old, hook=on_point)
       else if (len(out_path) > 0) then
@@ -204,7 +206,7 @@ contains
 
    !> --switch-pd: the period-doubled branch from the branch's first period-doubling
    !> point, printed and (with -o FILE) written to FILE with '.pd2' before its
-   !> extension (resume it with --period-count 2 times the first's).
+   !> extension (its period count in the file: resumed with the first's options, D-122).
    subroutine doubled_branch(br, opt)
       type(branch_t), intent(in) :: br
       type(branch_options_t), intent(in) :: opt
@@ -225,7 +227,7 @@ contains
          if (dot <= index(out_path, '/', back=.true.)) dot = len(out_path) + 1
          out_path = out_path(1:dot - 1)//'.pd2'//out_path(dot:)
          kperiods = 2*opt%k
-         call bfile%open(out_path, blay, bn, prob%key, .false., err)
+         call bfile%open(out_path, blay, bn, prob%key, .false., err, period_count=kperiods)
          if (allocated(err)) call fail(err)
          call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=on_point)
          call bfile%close()
