@@ -7,7 +7,7 @@
 submodule (trainsim_model) trainsim_model_rhs
    use trainsim_model_families, only: nk_other, nk_plain, nk_held, lf_open
    use trainsim_model_families, only: spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr
-   use trainsim_model_families, only: chain_ni, chain_nr, ch_spring, ch_damper, ch_open, ch_ys
+   use trainsim_model_families, only: chain_ni, chain_nr, ch_spring, ch_damper, ch_open, ch_ys, ch_unit
    use trainsim_model_kernels, only: spring, hot_torques
    use trainsim_ports, only: port_torques_at, general_torques
    use trainsim_element, only: max_ports
