@@ -119,7 +119,7 @@ module trainsim_model_families
    !> node, state offset: -1 for a held head), (J or theta0, w, constant load);
    !> a, b: the element's row in its family's table, law: which (ch_*; ch_unit:
    !> an undamped spring with unit lever arms, a shaft, whose row the kernel
-   !> reads without r1 = r2 = 1, D-121).
+   !> reads without r1 = r2 = 1, D-124).
    integer, parameter :: chain_ni = 6, chain_nr = 3
    integer, parameter :: ch_spring = 1, ch_damper = 2, ch_open = 3, ch_ys = 4, ch_lin = 5, ch_unit = 6
 

@@ -45,7 +45,7 @@ contains
       end if
       ! a block's step before its last: its column only, not the workspace
       ! (D-120), here rather than in rhs_simple_ws: a procedure of one kernel
-      ! variant, not six (D-121)
+      ! variant, not six (D-124)
       track = self%run%track_energy
       call ws_mark(self, t, .true., track)
       c = self%blk%col
