@@ -409,7 +409,7 @@ contains
    !> model%blk (`rhs_step_end`), model%blk%n = the steps taken. It stops after
    !> a step whose state has an entry beyond y_limit or NaN (the caller reports
    !> it; also, harmlessly, where the sum of the entries' magnitudes is beyond
-   !> y_limit but none is: the caller checks the state itself, D-121), and
+   !> y_limit but none is: the caller checks the state itself, D-126), and
    !> once t_goal - t <= t_tol (the caller's instant tolerance: a sliver of a
    !> step below it is no step). A step with a guard below zero at its end is
    !> not taken but kept (pend): the next `advance` from here takes it without
@@ -452,7 +452,7 @@ contains
             end if
          end if
          ! y = ynew; the sum of |y(i)| is at least each of them, and NaN or
-         ! infinite with one of them: within y_limit, so is each (D-121)
+         ! infinite with one of them: within y_limit, so is each (D-126)
          do i = 1, size(y)
             y(i) = self%ynew(i)
             s = s + abs(self%ynew(i))
