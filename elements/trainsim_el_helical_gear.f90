@@ -479,11 +479,14 @@ contains
                        'base_helix_angle_rad', 'transverse_base_pitch', &
                        'face_width', 'youngs_modulus', 'stiffness_per_length', &
                        'mean_mesh_stiffness', 'approach_angle', &
-                       'half_backlash', 'gear_ratio', 'total_contact_ratio'], &
+                       'half_backlash', 'gear_ratio', 'total_contact_ratio', 'mesh_period_angle'], &
                        [self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, &
                         self%face, self%youngs, self%cl%law%k, &
                         self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b, &
-                        guarded_ratio(self%cl%r2, self%cl%r1), self%mp + self%mf])
+                        guarded_ratio(self%cl%r2, self%cl%r1), self%mp + self%mf, guarded_ratio(two_pi, self%teeth)])
+      ! run-out: the static reference spans the hunting period (trainsim_quasi_static, D-118)
+      if (self%ex%hunting_period() > 1.0_wp) &
+         call append_params(p, [character(len=40) :: 'hunting_period'], [self%ex%hunting_period()])
       ! issue 26 (D-116): only when used (bundled decks: as before)
       if (self%iso) then
          call add_choice(p, 'stiffness_model', 3.0_wp, 'iso6336')
