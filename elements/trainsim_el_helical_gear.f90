@@ -17,7 +17,7 @@
 !> mean gap over the lines of contact (the loaded TE of lines that all carry
 !> load, as the spur gear's stiffness-weighted mean) and, unloaded, the least
 !> gap. Tooth friction spread over the lines of contact (trainsim_tooth_friction,
-!> add_lines; 'constant' only: it is continuous in the state without events).
+!> add_lines; 'constant' or 'speed' (D-122): continuous in the state, without events).
 module trainsim_el_helical_gear
    use trainsim_kinds, only: wp, pi, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -198,11 +198,7 @@ contains
       call self%fric%configure(grp, units, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%alpha_t, &
                                .false., err)
       if (allocated(err)) return
-      if (self%fric%on() .and. self%fric%speed) then
-         call fatal_error(err, grp%where('tooth_friction_model')//": error: a helical_gear takes tooth_friction_model"// &
-                          " = 'constant' only (its friction, spread over the lines of contact, is continuous "// &
-                          'without events)', err_input)
-      else if (self%fric%on() .and. .not. self%alpha <= two_pi*self%mp/self%teeth) then
+      if (self%fric%on() .and. .not. self%alpha <= two_pi*self%mp/self%teeth) then
          call fatal_error(err, grp%where('approach_angle')//': error: with tooth_friction the approach_angle places '// &
                           'the pitch point on the path of contact: it must be in [0, 2 pi m_p/N] = [0, '// &
                           str(two_pi*self%mp/self%teeth)//'] rad, got '//str(self%alpha), err_input)
@@ -497,6 +493,10 @@ contains
       if (self%fric%on()) then
          call append_params(p, [character(len=40) :: 'tooth_friction', 'transverse_pressure_angle_rad'], &
                             [self%fric%mu, self%alpha_t])
+         if (self%fric%speed) then   ! (D-122; 'constant': as before)
+            call append_params(p, [character(len=40) :: 'tooth_friction_velocity'], [self%fric%v_reg])
+            call add_choice(p, 'tooth_friction_speed', 1.0_wp, 'speed')
+         end if
       end if
    end function hel_params
 end module trainsim_el_helical_gear
