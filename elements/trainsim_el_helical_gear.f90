@@ -17,7 +17,7 @@
 !> mean gap over the lines of contact (the loaded TE of lines that all carry
 !> load, as the spur gear's stiffness-weighted mean) and, unloaded, the least
 !> gap. Tooth friction spread over the lines of contact (trainsim_tooth_friction,
-!> add_lines; 'constant' or 'speed' (D-122): continuous in the state, without events).
+!> add_lines; 'constant' or 'speed' (D-129): continuous in the state, without events).
 module trainsim_el_helical_gear
    use trainsim_kinds, only: wp, pi, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -462,7 +462,7 @@ contains
       if (self%fric%on()) then
          call append_params(p, [character(len=40) :: 'tooth_friction', 'transverse_pressure_angle_rad'], &
                             [self%fric%mu, self%alpha_t])
-         if (self%fric%speed) then   ! (D-122; 'constant': as before)
+         if (self%fric%speed) then   ! (D-129; 'constant': as before)
             call append_params(p, [character(len=40) :: 'tooth_friction_velocity'], [self%fric%v_reg])
             call add_choice(p, 'tooth_friction_speed', 1.0_wp, 'speed')
          end if

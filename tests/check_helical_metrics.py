@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The gear-rating metrics of a helical gear (issue 26 items 1 and 5; D-103 - D-105, D-121):
+"""The gear-rating metrics of a helical gear (issue 26 items 1 and 5; D-103 - D-105, D-128):
 its `mesh_period_angle` 2 pi / N gives it the spur gear's static reference, Kv, mesh orders
 and rattle indices. The Table 5.5 rig of check_gear_metrics.py with the spur mesh replaced by
 a helical one (linear contact law, mesh damping CM, shaft damping CS):

@@ -10,7 +10,7 @@
 !>    W / cos beta_b, friction mu W_n against the slide, arm rho1 = T1P + s - AP).
 !>    A narrow face (m_F = 0.02): the driver's friction torque changes sign as
 !>    the single line passes the pitch point (within the line's roll extent).
-!>    tooth_friction_model = 'speed' (D-122): the same quadrature with tanh(v_s/v_reg)
+!>    tooth_friction_model = 'speed' (D-129): the same quadrature with tanh(v_s/v_reg)
 !>    for sign(v_s), at speed and near rest (both branches of trainsim_slide_integrals).
 !> 3. Analytic Jacobian with friction against central differences ('constant', 'speed').
 !> 4. A loaded run with friction closes its energy ledger; friction dissipates.

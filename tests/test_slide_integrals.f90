@@ -1,5 +1,5 @@
 !> The speed-dependent tooth friction's integrals along a line of contact
-!> (trainsim_slide_integrals, D-122): J = int tanh((a_v + b_v s)/v_r) (a + b s) ds and
+!> (trainsim_slide_integrals, D-129): J = int tanh((a_v + b_v s)/v_r) (a + b s) ds and
 !> its partials in a_v and b_v, against composite Gauss-Legendre quadrature of the
 !> integrands themselves on panels narrower than 1/100 of the tanh's width
 !> (error ~ rounding), in both of the module's branches (the closed form, and
@@ -12,7 +12,7 @@ program test_slide_integrals
    implicit none
    real(wp), parameter :: thr = 0.1_wp*1.0e-2_wp/0.6_wp   !< b_v at the branches' threshold, v_r = 1e-2 over 0.6
 
-   call suite_begin('speed-dependent tooth friction: tanh integrals along a line of contact (D-122)')
+   call suite_begin('speed-dependent tooth friction: tanh integrals along a line of contact (D-129)')
    call dilogarithm()
    call against_quadrature('slide reverses inside, v_r = 0.1 (closed form)', 0.5_wp, 1.0_wp, -3.0_wp, 9.0_wp, &
                            0.1_wp, 0.1_wp, 0.7_wp)

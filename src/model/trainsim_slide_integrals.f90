@@ -1,5 +1,5 @@
 !> Integrals along a line of contact of the speed-dependent tooth friction
-!> coefficient (trainsim_tooth_friction, tooth_friction_model = 'speed'; D-122):
+!> coefficient (trainsim_tooth_friction, tooth_friction_model = 'speed'; D-129):
 !>   J = int_lo^hi tanh(v(s)/v_r) (a + b s) ds,   v(s) = a_v + b_v s,
 !> with its partials in a_v and b_v (the Jacobian's in the speeds):
 !>   dJ/da_v = int sech^2(x) (a + b s) ds / v_r,  dJ/db_v = int sech^2(x) s (a + b s) ds / v_r.

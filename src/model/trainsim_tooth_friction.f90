@@ -31,7 +31,7 @@
 !> path, at s* where v_s = 0 (the pitch point at matched speeds), so the
 !> integrals are closed-form and continuous in the state: no events. 'speed'
 !> takes tanh(v_s / v_reg) for sign(v_s) along the lines, integrated in closed
-!> form as well (trainsim_slide_integrals, D-122).
+!> form as well (trainsim_slide_integrals, D-129).
 !>
 !> 'constant' switches sign(v_s) by events: per pair a guard sigma_k v_s,k with
 !> the sign sigma_k held between events (RK4-events and CVODE locate it). Pure
