@@ -46,10 +46,13 @@ module trainsim_arclength
    integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
                          branch_failed = 4, branch_fold = 5
 
-   !> The deck at a parameter value: extend and give `model_at`.
+   !> The deck at a parameter value: extend and give `model_at`; `retune` (optional)
+   !> changes only the parameter's value in a model `model_at` built at another value,
+   !> so that the deck is not built again at every lambda (D-121).
    type, abstract :: branch_problem_t
    contains
       procedure(model_at_i), deferred :: model_at
+      procedure :: retune => problem_retune
    end type branch_problem_t
 
    abstract interface
@@ -140,6 +143,8 @@ module trainsim_arclength
       logical :: salt = .false.      !< the monodromy by saltation matrices (else differences)
       logical :: sig = .true.        !< take each point's contact-sequence signature
       integer :: passes = 0          !< variational (or signature) passes
+      type(model_t) :: base          !< the first model `model_at` built (retuned at each lambda)
+      logical :: has_base = .false., tried_base = .false.
    end type ctx_t
 
    !> an accepted point's data for the next step
@@ -262,6 +267,18 @@ module trainsim_arclength
    end interface
 
 contains
+
+   !> The default `retune`: not possible (done = .false.; the deck is built by `model_at`).
+   subroutine problem_retune(self, lam, model, done, err)
+      class(branch_problem_t), intent(in) :: self
+      real(wp), intent(in) :: lam
+      type(model_t), intent(inout) :: model
+      logical, intent(out) :: done
+      type(error_t), allocatable, intent(out) :: err
+      associate (unused => self, unused_lam => lam, unused_model => model)
+      end associate
+      done = .false.
+   end subroutine problem_retune
 
    !> Continue the periodic orbit of `prob` from lam0 (shot there from the deck's
    !> start), or from the last point of `resume` (a branch stored earlier: its

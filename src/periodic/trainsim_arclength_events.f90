@@ -10,14 +10,28 @@ submodule(trainsim_arclength) trainsim_arclength_events
 
 contains
 
-   !> The period map set up at lambda (the deck rebuilt there; t0 = t_start + phase T).
+   !> The period map set up at lambda (the first model retuned to lambda where the
+   !> problem can, D-121, else the deck rebuilt there; t0 = t_start + phase T).
    module procedure at
       type(model_t) :: m
       real(wp) :: period
+      logical :: done
       if (lam == c%lam) return
       c%lam = huge(1.0_wp)
-      call c%prob%model_at(lam, m, err)
-      if (allocated(err)) return
+      done = .false.
+      if (c%has_base) then
+         m = c%base
+         call c%prob%retune(lam, m, done, err)
+         if (allocated(err)) deallocate (err)   ! (built again below: its message names the deck)
+         c%has_base = done                      ! (else built at every lambda from now on)
+      end if
+      if (.not. done) then
+         call c%prob%model_at(lam, m, err)
+         if (allocated(err)) return
+         if (.not. c%tried_base) c%base = m
+         c%has_base = .not. c%tried_base
+         c%tried_base = .true.
+      end if
       call forcing_period(m, period, err)
       if (allocated(err)) return
       c%t_start = m%run%t_start
