@@ -144,18 +144,23 @@ def one_damping(exe, d, out, res, thr):
             n_on += 1
             worst = max(worst, rel)
         for i in jumps(lam, val, thr):
-            r = locate(exe, sets, out, g, direction, lam[i], lam[i + 1], thr, res, f"{direction}_{i}", cpu)
+            spent = []
+            r = locate(exe, sets, out, g, direction, lam[i], lam[i + 1], thr, res, f"{direction}_{i}", spent)
+            cpu += spent
             if r is None:
-                print(f"  {direction}: {lam[i]:.2f} -> {lam[i + 1]:.2f} smooth when refined")
+                print(f"  {direction}: {lam[i]:.2f} -> {lam[i + 1]:.2f} smooth when refined ({sum(spent):.2f} s)")
                 continue
             inside = [f for f in folds if r[0] - res <= f <= r[1] + res]
-            located.append((direction, r, inside))
-            print(f"  {direction} jump located in [{r[0]:.4f}, {r[1]:.4f}] teeth/s; the branch's fold there: "
-                  f"{inside if inside else 'NONE'}")
+            located.append((direction, r, inside, sum(spent)))
+            print(f"  {direction} jump located in [{r[0]:.4f}, {r[1]:.4f}] teeth/s ({len(spent)} sweeps, "
+                  f"{sum(spent):.2f} s); the branch's fold there: {inside if inside else 'NONE (not on the branch)'}")
     eq_cpu = sum(cpu)
     print(f"  up/down sweeps: {n_on} settled runs on the branch's stable stretches (largest rel. diff "
           f"{worst:.2e}), {n_off} not; {len(cpu)} sweeps, CPU {eq_cpu:.2f} s")
-    return dict(d=d, c=c_cpu, old=old_cpu, eq=eq_cpu, worst=worst, located=located, folds=folds,
+    # the part of it that gives the continuation's answers: the two sweeps and the refinement of
+    # the jumps that are the branch's folds (the others locate jumps the branch does not hold)
+    matched = eq_cpu - sum(c for _, _, inside, c in located if not inside)
+    return dict(d=d, c=c_cpu, old=old_cpu, eq=eq_cpu, matched=matched, worst=worst, located=located, folds=folds,
                 points=len(br["lam"]), maps=br["maps"])
 
 
@@ -173,12 +178,13 @@ def main():
         out = os.path.join(a.out or tempfile.mkdtemp(prefix="trainsim_cvs_"), f"d{d:g}")
         os.makedirs(out, exist_ok=True)
         rows.append(one_damping(exe, d, out, a.resolution, a.jump))
-    print(f"\n{'damping':>8} {'continue s':>11} {'old sweep s':>12} {'old ratio':>10} {'equal-answers s':>16} "
-          f"{'ratio':>7} {'jumps located / folds':>22}")
+    print(f"\n{'damping':>8} {'continue s':>11} {'old sweep s':>12} {'old ratio':>10} {'up/down+jumps s':>16} "
+          f"{'ratio':>7} {'of it for folds s':>20} {'ratio':>7} {'jumps at a fold / all':>22}")
     for r in rows:
-        ok = sum(1 for _, _, inside in r["located"] if inside)
+        ok = sum(1 for _, _, inside, _ in r["located"] if inside)
         print(f"{r['d']:8g} {r['c']:11.2f} {r['old']:12.2f} {r['old'] / r['c']:10.2f} {r['eq']:16.2f} "
-              f"{r['eq'] / r['c']:7.2f} {ok:>10d} / {len(r['folds'])}")
+              f"{r['eq'] / r['c']:7.2f} {r['matched']:20.2f} {r['matched'] / r['c']:7.2f} "
+              f"{ok:>12d} / {len(r['located'])}")
 
 
 if __name__ == "__main__":

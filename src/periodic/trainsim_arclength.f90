@@ -145,6 +145,9 @@ module trainsim_arclength
       integer :: passes = 0          !< variational (or signature) passes
       type(model_t) :: base          !< the first model `model_at` built (retuned at each lambda)
       logical :: has_base = .false., tried_base = .false.
+      !> the lambda of the last linearisation, its period and t0 (the point is stored
+      !> after the differences moved the map to lambda -+ h: not set up again there)
+      real(wp) :: lin_lam = huge(1.0_wp), lin_period = 0.0_wp, lin_t0 = 0.0_wp
    end type ctx_t
 
    !> an accepted point's data for the next step
