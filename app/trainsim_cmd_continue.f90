@@ -379,7 +379,16 @@ contains
       type(run_result_t) :: run
       type(null_sink_t) :: none
       real(wp) :: period
-      call prob%model_at(p%lam, m, err)
+      logical :: done
+      type(model_t), allocatable, save :: base   ! (the first point's model, retuned to the others: D-121)
+      done = .false.
+      if (allocated(base)) then
+         m = base
+         call prob%retune(p%lam, m, done, err)
+         if (allocated(err)) deallocate (err)
+      end if
+      if (.not. done) call prob%model_at(p%lam, m, err)
+      if (.not. allocated(err) .and. .not. allocated(base) .and. prob%retunes) base = m
       if (.not. allocated(err)) call forcing_period(m, period, err)
       if (allocated(err)) return
       m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
