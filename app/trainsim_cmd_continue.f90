@@ -39,7 +39,7 @@ module trainsim_cmd_continue
       character(len=:), allocatable :: key
       real(wp) :: lam_first = 0.0_wp
       !> the key is a mesh_frequency and no --set sets a derived key: a model is retuned
-      !> to another lambda without building the deck (D-121)
+      !> to another lambda without building the deck (D-124)
       logical :: retunes = .false.
       logical :: period_from_mesh = .false.   !< no settle_period in &run or --set: the mesh period's
    contains
@@ -79,7 +79,7 @@ contains
 
    !> A model of this deck at another mesh frequency, set to lam as prepare_model sets
    !> it (the derived parameter applied, the fast-path tables built again, the mesh
-   !> period as the settle period when the deck gives none): D-121.
+   !> period as the settle period when the deck gives none): D-124.
    subroutine deck_retune(self, lam, model, done, err)
       class(deck_problem_t), intent(in) :: self
       real(wp), intent(in) :: lam
@@ -224,7 +224,7 @@ contains
       write (output_unit, '(a)') '      lambda            period        max|mu|     stability  corrector  bifurcation'
       if (len(out_path) > 0) then
          call branch_layout(prob%deck, lam0, opt, param, lay, n, err)
-         if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err)
+         if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err, period_count=opt%k)
          blay = lay
          bn = n
          if (allocated(err)) call fail(err)
@@ -232,6 +232,8 @@ contains
       if (resume) then
          call bfile%read(old, err)
          if (allocated(err)) call close_fail(err)
+         opt%k = bfile%period_count   ! (a doubled branch's 2k, from its file: D-122)
+         kperiods = opt%k
          write (output_unit, '(a)') 'resumed after '//str(size(old%pts))//' stored points'
          call continue_branch(prob, lam0, opt, br, err, resume=old, hook=on_point)
       else if (len(out_path) > 0) then
@@ -267,7 +269,7 @@ contains
 
    !> --switch-pd: the period-doubled branch from the branch's first period-doubling
    !> point, printed and (with -o FILE) written to FILE with '.pd2' before its
-   !> extension (resume it with --period-count 2 times the first's).
+   !> extension (its period count in the file: resumed with the first's options, D-122).
    subroutine doubled_branch(br, opt)
       type(branch_t), intent(in) :: br
       type(branch_options_t), intent(in) :: opt
@@ -288,7 +290,7 @@ contains
          if (dot <= index(out_path, '/', back=.true.)) dot = len(out_path) + 1
          out_path = out_path(1:dot - 1)//'.pd2'//out_path(dot:)
          kperiods = 2*opt%k
-         call bfile%open(out_path, blay, bn, prob%key, .false., err)
+         call bfile%open(out_path, blay, bn, prob%key, .false., err, period_count=kperiods)
          if (allocated(err)) call fail(err)
          call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=on_point)
          call bfile%close()
@@ -380,7 +382,7 @@ contains
       type(null_sink_t) :: none
       real(wp) :: period
       logical :: done
-      type(model_t), allocatable, save :: base   ! (the first point's model, retuned to the others: D-121)
+      type(model_t), allocatable, save :: base   ! (the first point's model, retuned to the others: D-124)
       done = .false.
       if (allocated(base)) then
          m = base

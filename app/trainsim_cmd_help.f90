@@ -240,6 +240,7 @@ contains
          '  --monodromy HOW       auto (saltation where the deck allows), saltation, fd (central differences)', &
          '  --smooth              no non-smooth corrector: stop at a contact-sequence change (grazing)', &
          '  --switch-pd           at the first period-doubling point, continue the doubled branch (2T)', &
+         '                        (with -o FILE into FILE.pd2; resumed by -o FILE.pd2 --resume)', &
          '  -h, --help            this text', '', &
          'exit status: 0 the branch left the range, 1 it stopped early or a stretch failed (the reasons', &
          'printed and in the file), 2 bad input'

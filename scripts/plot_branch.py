@@ -7,7 +7,11 @@ where a stretch ended (a failed point: its reason in the file) a dotted line; wi
 --sweep FILE.h5 the settled brute-force sweep's points of the same metric overlaid
 (plot_sweep.py's reader).
 
-Usage: plot_branch.py BRANCH.h5 [--element ID] [--metric NAME|disp] [--sweep SWEEP.h5] [-o FIG]
+Several branch files (e.g. two continuations from one start, one to each end) are drawn
+together.
+
+Usage: plot_branch.py BRANCH.h5 [BRANCH2.h5 ...] [--element ID] [--metric NAME|disp]
+                      [--sweep SWEEP.h5] [-o FIG]
 """
 import argparse
 import os
@@ -43,9 +47,24 @@ def read_branch(path, metric):
     return d
 
 
+def read_branches(paths, metric):
+    """read_branch of each file, joined: points in sequence, segments numbered apart."""
+    d, off = None, 0
+    for path in paths:
+        r = read_branch(path, metric)
+        r["segment"] = r["segment"] + off
+        off = int(r["segment"].max()) + 1
+        if d is None:
+            d = r
+            continue
+        for k in ("lam", "kind", "stable", "segment", "status", "y"):
+            d[k] = np.concatenate([d[k], r[k]])
+    return d
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("branch")
+    ap.add_argument("branch", nargs="+")
     ap.add_argument("--element", help="element id (default: the last element with a nonzero swing)")
     ap.add_argument("--metric", default="p2p_range",
                     help="the element metric drawn (default p2p_range; disp: disp_min and disp_max)")
@@ -53,7 +72,7 @@ def main(argv=None):
     ap.add_argument("-o", "--output", default=None)
     a = ap.parse_args(argv)
     names = ["disp_max", "disp_min"] if a.metric == "disp" else [a.metric]
-    reads = [read_branch(a.branch, m) for m in names]
+    reads = [read_branches(a.branch, m) for m in names]
     d = reads[0]
     ids, lam, kind, stable = d["ids"], d["lam"], d["kind"], d["stable"]
     ok, seg, param = d["status"] == 1, d["segment"], d["param"]
@@ -96,7 +115,7 @@ def main(argv=None):
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    out = a.output or os.path.splitext(a.branch)[0] + ".png"
+    out = a.output or os.path.splitext(a.branch[0])[0] + ".png"
     fig.savefig(out, dpi=120)
     print(f"wrote {out}")
 

@@ -15,7 +15,9 @@
 !>    until periodic (settle_tol 1e-8, then the contraction's window) to 1e-6 of the state
 !>    scale. Brute force across each fold: a run started
 !>    on the stable orbit next to a fold, 0.1 % beyond it, leaves it (a jump) - so the
-!>    folds lie where the brute-force hysteresis band ends.
+!>    folds lie where the brute-force hysteresis band ends. The two stable stretches
+!>    join at a change of the contact sequence (per guard and order, D-121) near 394.28
+!>    teeth/s, located from each of them, where the branch closes on itself.
 module nonsmooth_rig_problem
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -166,7 +168,45 @@ contains
       call settled_equals_point(br%pts(i540))
       call jumps_beyond_fold(br, f(1), -1.0e-3_wp)
       call jumps_beyond_fold(br, f(2), 1.0e-3_wp)
+      call stretches_join_at_a_sequence_change(br, f(1))
    end subroutine test_rig_branch_through_grazing_to_the_folds
+
+   !> The two stable stretches (645 down to the fold f1 at 392.43, and back down from
+   !> the fold at 534.17) join where the contact sequence (guards and their order)
+   !> changes near 394.28 teeth/s: located on the first stretch with stable points on
+   !> both sides, and again, independently (bisection from the other stretch), where
+   !> the branch ends closed on itself: the same lambda to the location tolerance
+   !> (1e-7 |lambda_0|), the same orbit (the second visit's state carried onto the
+   !> first's orbit: 1e-5 of the scale, the orbit's change over that lambda
+   !> tolerance), and the fold f1 is not met twice.
+   subroutine stretches_join_at_a_sequence_change(br, f1)
+      type(branch_t), intent(in) :: br
+      integer, intent(in) :: f1
+      type(model_t) :: m
+      type(period_map_t) :: pm
+      real(wp) :: period, d
+      integer :: i, j, nl
+      j = 0
+      do i = 2, f1 - 1
+         if (br%pts(i)%kind == 'grazing' .and. br%pts(i)%lam < 400.0_wp) j = i
+      end do
+      call check('a contact-sequence change on the first stretch between the fold and 400 teeth/s', j > 0)
+      if (j == 0) return
+      nl = size(br%pts)
+      write (*, '(4x,a,2f16.9,a)') 'the stretches join at ', br%pts(j)%lam, br%pts(nl)%lam, ' teeth/s'
+      call check('stable on both sides of it', br%pts(j - 1)%stability == 'stable' .and. &
+                 br%pts(j + 1)%stability == 'stable')
+      call check('the branch ends at a grazing point', br%pts(nl)%kind == 'grazing' .and. nl > f1 + 3)
+      call check('closed on itself there', index(br%message, 'closed on itself') > 0)
+      call check('the same lambda (1e-7 of 645)', abs(br%pts(nl)%lam - br%pts(j)%lam) <= 1.0e-7_wp*645.0_wp)
+      call check('the fold at 392.43 met once', count([(br%pts(i)%kind == 'fold' .and. br%pts(i)%lam < 400.0_wp, &
+                                                         i=1, nl)]) == 1)
+      call map_at_point(br%pts(j), m, pm, period)
+      d = distance_to_orbit(pm, br%pts(j), br%pts(nl)%x, br%pts(nl)%t0)
+      write (*, '(4x,a,es9.2,a)') 'the second visit is ', d, ' of the scale from the first visit''s orbit'
+      call check('the same orbit (1e-5 of the scale)', d <= 1.0e-5_wp)
+      call pm%finish()
+   end subroutine stretches_join_at_a_sequence_change
 
    integer function nearest_point(pts, lam) result(k)
       type(branch_point_t), intent(in) :: pts(:)

@@ -3,7 +3,7 @@
 !>
 !> Unknowns z = (x, lambda): the reduced state x at the forcing phase t0 and the parameter.
 !> G(x, lambda) = P(x; lambda) - x, P the period map at lambda (the problem's model retuned or
-!> built there, D-121; its forcing period as shooting takes it). In the scaled variables
+!> built there, D-124; its forcing period as shooting takes it). In the scaled variables
 !> (x/s, lambda/l) A = [S^-1 (M - I) S, S^-1 dP/dlambda l], M by saltation matrices or
 !> differences (D-115), dP/dlambda by a central difference of the period map.
 !> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is
@@ -27,7 +27,7 @@ module trainsim_arclength
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_shooting, only: shoot_options_t, shoot_result_t, shoot, shoot_converged, monodromy_fd
    use trainsim_floquet, only: floquet_multipliers, stability_of
-   use trainsim_monodromy, only: monodromy_stats_t
+   use trainsim_contact_sequence, only: monodromy_stats_t, same_sequence
    use trainsim_monodromy_map, only: monodromy_map_stats, flow_signature, monodromy_choice, mono_auto, &
                                      monodromy_variational
    implicit none
@@ -46,7 +46,7 @@ module trainsim_arclength
                          branch_failed = 4, branch_fold = 5
 
    !> The deck at a parameter value: extend and give `model_at`; `retune` (optional) changes
-   !> only the parameter's value in a model built at another, not building the deck (D-121).
+   !> only the parameter's value in a model built at another, not building the deck (D-124).
    type, abstract :: branch_problem_t
    contains
       procedure(model_at_i), deferred :: model_at
@@ -93,7 +93,7 @@ module trainsim_arclength
       real(wp), allocatable :: x(:), tangent(:)   !< tangent: scaled (x/s, lambda/l), unit
       complex(wp), allocatable :: mu(:)
       character(len=:), allocatable :: stability   !< stable / marginal / unstable
-      character(len=:), allocatable :: kind        !< '' (a regular point), fold, period-doubling, neimark-sacker
+      character(len=:), allocatable :: kind        !< '' (a regular point), fold, period-doubling, neimark-sacker, grazing
       real(wp) :: residual = 0.0_wp, ds = 0.0_wp
       integer :: corrector = 0, maps = 0           !< corrector steps; period maps up to this point
       !> for an exact resume: the scaled unknowns z, the vector that bordered the Jacobian
@@ -177,9 +177,6 @@ module trainsim_arclength
          integer, intent(in) :: before
          type(ctx_t), intent(in) :: c
       end function closed_loop
-      module logical function same_sequence(a, b)
-         type(monodromy_stats_t), intent(in) :: a, b
-      end function same_sequence
       module subroutine cross_grazing(c, br, p, q, ds, opt)
          type(ctx_t), intent(inout) :: c
          type(branch_t), intent(inout) :: br
@@ -478,6 +475,7 @@ contains
                if (rephased) cycle
             end if
          end if
+         before = size(br%pts)
          if (len(why) == 0) then
             if (opt%nonsmooth .and. .not. same_sequence(cur%st, nxt%st)) then
                call cross_grazing(c, br, cur, nxt, ds, opt)
@@ -506,11 +504,10 @@ contains
             ds = max(0.5_wp*ds, opt%ds_min)
             cycle
          end if
-         before = size(br%pts)
          if (.not. crossed) call detect(c, br, cur, nxt, ds, opt)
          if (closed_loop(br, before, c)) then
             br%status = branch_done
-            br%message = 'the branch closed on itself: the fold at lambda = '// &
+            br%message = 'the branch closed on itself: the '//br%pts(size(br%pts))%kind//' point at lambda = '// &
                          str(br%pts(size(br%pts))%lam, 10)//' was met before'
             exit
          end if

@@ -11,7 +11,7 @@ submodule(trainsim_arclength) trainsim_arclength_events
 contains
 
    !> The period map set up at lambda (the first model retuned to lambda where the
-   !> problem can, D-121, else the deck rebuilt there; t0 = t_start + phase T).
+   !> problem can, D-124, else the deck rebuilt there; t0 = t_start + phase T).
    module procedure at
       type(model_t) :: m
       real(wp) :: period
@@ -57,7 +57,7 @@ contains
    !> The point's monodromy, multipliers, scaled Jacobian A and tangent (oriented along
    !> t_prev). The monodromy first, on the map as the corrector left it at lambda, then
    !> dP/dlambda by central differences; lambda's period and t0 kept for `store`, so
-   !> that the map is not set up at lambda again (D-122). (A forward difference from
+   !> that the map is not set up at lambda again (D-125). (A forward difference from
    !> p%px, one map fewer, moved the fold at 534.17 teeth/s by 4e-6: rejected.)
    module procedure linearise
       real(wp) :: x(c%n), lam, h, pp(c%n), pq(c%n)
@@ -306,17 +306,18 @@ contains
       if (.not. allocated(err)) call linearise(c, cur, t_dir, err)
    end procedure rephase_point
 
-   !> Whether a fold stored after index `before` repeats an earlier fold (lambda
-   !> to 1e-7 of |lambda_0|, the state to 1e-6 of its scale, or where t0 moved in
-   !> between the multipliers' moduli to 1e-4): a closed branch, which the
-   !> continuation would go round again.
+   !> Whether a fold or grazing point stored after index `before` repeats an earlier
+   !> one (lambda to 1e-7 of |lambda_0|, the state to 1e-6 of its scale, or where t0
+   !> moved in between the multipliers' moduli to 1e-4): a closed branch, which the
+   !> continuation would go round again. A grazing met again is where two stretches
+   !> of the branch join at a contact-sequence change (D-121).
    module procedure closed_loop
       integer :: i, j
       closed = .false.
       do i = before + 1, size(br%pts)
-         if (br%pts(i)%kind /= 'fold') cycle
+         if (.not. folded(br%pts(i)%kind)) cycle
          do j = 1, before
-            if (br%pts(j)%kind /= 'fold') cycle
+            if (.not. folded(br%pts(j)%kind)) cycle
             if (abs(br%pts(i)%lam - br%pts(j)%lam) > 1.0e-7_wp*c%ls) cycle
             if (abs(br%pts(i)%t0 - br%pts(j)%t0) <= 1.0e-9_wp*br%pts(i)%period) then
                if (maxval(abs(br%pts(i)%x - br%pts(j)%x)/c%s) > 1.0e-6_wp) cycle
@@ -326,13 +327,12 @@ contains
             closed = .true.
          end do
       end do
+   contains
+      logical function folded(kind)
+         character(len=*), intent(in) :: kind
+         folded = kind == 'fold' .or. kind == 'grazing'
+      end function folded
    end procedure closed_loop
-
-   !> Whether two points' flows met the same contact sequence: as many events,
-   !> events where f jumps, and impacts over the orbit.
-   module procedure same_sequence
-      same_sequence = a%events == b%events .and. a%jumps == b%jumps .and. a%impacts == b%impacts
-   end procedure same_sequence
 
    !> A contact-sequence change between the accepted p and q (q = p + ds along p's
    !> tangent, corrected, its sequence another): the grazing orbit located by
@@ -364,12 +364,8 @@ contains
             sb = sm
          end if
       end do
-      if (sa > 0.0_wp) then
-         call detect(c, br, p, a, sa, opt)
-         call store(br, c, a, sa, 'grazing', a%t, br%pts(size(br%pts))%segment)
-      else
-         call store(br, c, p, 0.0_wp, 'grazing', p%t, br%pts(size(br%pts))%segment)
-      end if
+      if (sa > 0.0_wp) call detect(c, br, p, a, sa, opt)
+      call store(br, c, a, sa, 'grazing', a%t, br%pts(size(br%pts))%segment)
       if (dot_product(q%t, q%z - a%z) < 0.0_wp) q%t = -q%t
    end procedure cross_grazing
 

@@ -18,23 +18,11 @@ module trainsim_monodromy
    use trainsim_event, only: event_t
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_contact, only: law_yang_sun, contact_law_t
+   use trainsim_contact_sequence, only: monodromy_stats_t, record_event
    implicit none
    private
 
    public :: monodromy_saltation, flow_events, monodromy_stats_t
-
-   !> What one pass over the window did.
-   type :: monodromy_stats_t
-      integer :: steps = 0          !< RK4 steps (including the parts of a step split at an event)
-      integer :: events = 0         !< events located (guards that fired)
-      integer :: jumps = 0          !< events where f jumps (|f+ - f-| > 1e-10 |f-|)
-      integer :: impacts = 0        !< contact onsets whose damping sensitivity was set
-      !> smallest rate at which a guard crossed, |n^T f- + dg/dt| / |n| (the
-      !> guard's units per second: a length or an angle), and that guard: a
-      !> near-grazing contact shows here (the saltation grows as 1 / rate)
-      real(wp) :: min_rate = huge(1.0_wp)
-      integer :: min_rate_guard = 0
-   end type monodromy_stats_t
 
    !> The work of one pass: the variational state and its scratch.
    type :: pass_t
@@ -364,7 +352,9 @@ contains
       call model%guards(t, x, w%g)
       fired = w%g <= 0.0_wp .and. w%g0 >= 0.0_wp
       fired(j_min) = .true.
-      w%st%events = w%st%events + count(fired)
+      do j = 1, size(fired)
+         if (fired(j)) call record_event(w%st, j, face_of(model, model%guard_element(j)))
+      end do
       if (w%var) then
          call model%rhs(t, x, fm)
          if (w%exact) fm = w%rl                         ! the step map's d x_e / d t_e in place of f-
@@ -410,11 +400,12 @@ contains
       end do
    end subroutine event_at
 
-   !> The face element e is in contact on (+1 / -1), 0 if open or not a clearance.
+   !> The face element e is in contact on (+1 / -1), 0 if open, not a clearance or e = 0.
    integer function face_of(model, e) result(face)
       type(model_t), intent(in) :: model
       integer, intent(in) :: e
       face = 0
+      if (e < 1) return
       select type (el => model%elements(e)%e)
       class is (clearance_element_t)
          face = el%cl%mode

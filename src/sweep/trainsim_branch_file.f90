@@ -55,6 +55,7 @@ module trainsim_branch_file
       integer(hid_t) :: d_el(size(element_metric_names)) = -1
       integer(hid_t) :: d_scale = -1, d_lam_scale = -1, d_end = -1, d_end_message = -1
       integer :: n = 0, ne = 0, n_slots = 0
+      integer :: period_count = 1   !< forcing periods per orbit (root attribute period_count; 1 if absent)
    contains
       procedure :: open => bf_open
       procedure :: write_point => bf_write_point
@@ -76,18 +77,23 @@ contains
    !> Open the branch file `path` (lay: the deck, its fingerprint with the options that
    !> decide the branch, the element ids; lay%n_runs: the point budget; n: the states;
    !> key: the parameter): with `resume` it must exist and hold this branch, else it is
-   !> made anew (an old one replaced). On error nothing is held.
-   subroutine bf_open(self, path, lay, n, key, resume, err)
+   !> made anew (an old one replaced). period_count: the forcing periods per orbit,
+   !> written in a new file (default 1); a resumed file's is read into self%period_count
+   !> (a doubled branch is resumed without --period-count, D-122). On error nothing is held.
+   subroutine bf_open(self, path, lay, n, key, resume, err, period_count)
       class(branch_file_t), intent(inout) :: self
       character(len=*), intent(in) :: path, key
       type(sweep_layout_t), intent(in) :: lay
       integer, intent(in) :: n
       logical, intent(in) :: resume
       type(error_t), allocatable, intent(out) :: err
+      integer, intent(in), optional :: period_count
       character(len=:), allocatable :: why, s
       integer :: info, h
       logical :: ok
       self%path = path
+      self%period_count = 1
+      if (present(period_count)) self%period_count = period_count
       self%n = n
       self%ne = size(lay%element_ids)
       self%n_slots = lay%n_runs
@@ -122,6 +128,10 @@ contains
             else
                call get_str_attr(self%file, 'fingerprint', s, ok)
                if (s /= lay%fingerprint) why = 'its deck, --set, --param or options differ'
+               call get_str_attr(self%file, 'period_count', s, ok)
+               self%period_count = 1
+               if (ok) read (s, *, iostat=info) self%period_count
+               if (ok .and. (info /= 0 .or. self%period_count < 1)) why = "its period_count '"//s//"' is not a count"
             end if
             if (len(why) > 0) call fatal_error(err, "branch file '"//path//"' holds another branch ("//why// &
                                                '): delete it, or run without --resume', err_input)
@@ -161,6 +171,7 @@ contains
       if (.not. allocated(err)) call put_str_attr(f, 'overrides', lay%overrides, err)
       if (.not. allocated(err)) call put_str_attr(f, 'fingerprint', lay%fingerprint, err)
       if (.not. allocated(err)) call put_str_attr(f, 'n_runs', str(np), err)
+      if (.not. allocated(err)) call put_str_attr(f, 'period_count', str(self%period_count), err)
       one(1)%s = lay%deck_text
       if (.not. allocated(err)) call put_column_s(f, 'deck_text', one, err)
       hs = 0

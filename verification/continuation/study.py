@@ -7,8 +7,8 @@ of each (issue 27 item 5 and its benchmark; README.md here, docs/benchmarks.md
 Both bundled decks are undamped but for the impacts, so their periodic orbits are
 marginal (end-inertia modes on the unit circle, docs/periodic.md): no orbit is isolated
 and no brute-force run settles to it. Both are studied with a small shaft damping, given
-by --damping (lb in s/rad, default 500 on the rig's two shafts, 50 on the Table 7.1
-train's five): the largest |mu| off the contact-loss band is then 0.997-0.998 (rig).
+by --damping (lb in s/rad, default 500 on the rig's two shafts and on the Table 7.1
+train's three): the largest |mu| off the contact-loss band is then 0.997-0.998 (rig).
 
 For each settled sweep run, the branch's value of the metric at that frequency is taken
 from the stable stretches of the branch that span it, by a cubic through the four nearest
@@ -24,9 +24,11 @@ unstable, folds located, metrics of every orbit) against the CPU time of the swe
 runs settle to the orbit to --settle-tol (default 1e-8: the state then within about
 tol / (1 - |mu|) = 4e-6 of the orbit at |mu| = 0.9975).
 
-Usage: study.py TRAINSIM [--case fig5_11|table7_1] [--from F --to T --count N] [--quick]
-                 [--out DIR] [--check TOL]
---quick: 645 to 600 teeth/s, 5 sweep runs (the CTest); --check TOL: exit 1 unless every
+Usage: study.py TRAINSIM [--case fig5_11|table7_1] [--from F --to T --count N] [--start S]
+                 [--quick] [--out DIR] [--check TOL]
+--start S: two continuations from S, one to each end of the range (the first orbit shot
+from the deck's start at S, as a brute-force run there starts), compared together;
+--quick: the case's cheap sub-range (the CTests); --check TOL: exit 1 unless every
 settled sweep run equals the branch to TOL + 10x the interpolation estimate.
 """
 import argparse
@@ -44,10 +46,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 CASES = {
     "fig5_11": dict(deck="inputs/sweep_ghm_mesh_frequency.nml", key="mesh.mesh_frequency", element="mesh",
-                    shafts=["shaft1", "shaft3"], damping=500.0, lam=(645.0, 385.0), count=27),
+                    shafts=["shaft1", "shaft3"], damping=500.0, lam=(645.0, 385.0), count=27,
+                    quick=dict(lam=(645.0, 600.0), count=5)),
     "table7_1": dict(deck="inputs/sweep_two_clearance.nml", key="mesh1.mesh_frequency", element="mesh1",
-                     shafts=["shaft1", "shaft3", "shaft5"], damping=50.0, lam=(640.0, 260.0), count=23,
-                     dt_out=2.5e-5, sweep_sets=["--set", "mesh1.settle_cycles=100", "--set", "mesh1.measure_cycles=60",
+                     shafts=["shaft1", "shaft3", "shaft5"], damping=500.0, lam=(640.0, 260.0), count=23,
+                     dt_out=2.5e-5, quick=dict(lam=(450.0, 484.5454545454545), count=3), sweep_sets=["--set", "mesh1.settle_cycles=100", "--set", "mesh1.measure_cycles=60",
                                  "--set", "mesh1.settle_max_cycles=40000"]),
 }
 
@@ -95,6 +98,19 @@ def branch_at(br, lam, element):
     return out
 
 
+def merge_branches(brs):
+    """Branches as one: their points in sequence, each branch's segments numbered apart."""
+    out, off = {}, 0
+    for br in brs:
+        seg = br["segment"] + off
+        off = int(seg.max()) + 1 if len(seg) else off
+        for k in ("lam", "ok", "stable", "kind", "reason", "y"):
+            out[k] = np.concatenate([out[k], br[k]]) if k in out else br[k]
+        out["segment"] = np.concatenate([out["segment"], seg]) if "segment" in out else seg
+    out.update(ids=brs[0]["ids"], end=max(b["end"] for b in brs), maps=sum(b["maps"] for b in brs))
+    return out
+
+
 def read_branch(path, metric):
     with h5py.File(path, "r") as f:
         st = f["runs/status"][:]
@@ -120,6 +136,10 @@ def main(argv=None):
     ap.add_argument("--from", dest="lam0", type=float)
     ap.add_argument("--to", dest="lam1", type=float)
     ap.add_argument("--count", type=int)
+    ap.add_argument("--start", type=float, help="continue from here to both ends of the range")
+    ap.add_argument("--also", type=float, action="append", default=[],
+                    help="a further start (repeatable): two more continuations from it, one to each end "
+                         "(a second branch: e.g. where settled sweep runs land on another orbit)")
     ap.add_argument("--damping", type=float)
     ap.add_argument("--settle-tol", type=float, default=1e-8)
     ap.add_argument("--metric", default="p2p_range")
@@ -133,8 +153,10 @@ def main(argv=None):
     case = CASES[a.case]
     lam0, lam1 = case["lam"]
     count = case["count"]
+    start = a.start
     if a.quick:
-        lam0, lam1, count = lam0, lam0 - 45.0, 5
+        (lam0, lam1), count = case["quick"]["lam"], case["quick"]["count"]
+        start = case["quick"].get("start", start)
     lam0 = a.lam0 if a.lam0 is not None else lam0
     lam1 = a.lam1 if a.lam1 is not None else lam1
     count = a.count or count
@@ -144,20 +166,30 @@ def main(argv=None):
     exe = os.path.abspath(a.trainsim)
     sets = [s for sh in case["shafts"] for s in ("--set", f"{sh}.damping={damping:g}")]
     deck = os.path.join(ROOT, case["deck"])
-    branch = os.path.join(out, "branch.h5")
-    for p in (branch, os.path.join(out, "sweep.h5")):
-        if os.path.exists(p):
-            os.remove(p)
-    c_cpu, c_rc = cpu_of([exe, "continue", deck, *sets, "--param", f"{case['key']}={lam0:g}:{lam1:g}",
-                          "--restarts", str(a.restarts), "--ds-max", a.ds_max, "-o", branch], os.path.join(out, "continue.log"))
+    if os.path.exists(os.path.join(out, "sweep.h5")):
+        os.remove(os.path.join(out, "sweep.h5"))
+    legs = [(lam0, lam1, "branch")] if start is None else [(start, lam1, "branch_a"), (start, lam0, "branch_b")]
+    for k, s2 in enumerate(a.also):
+        legs += [(s2, lam1, f"also{k + 1}_a"), (s2, lam0, f"also{k + 1}_b")]
+    c_cpu, c_rc, brs = 0.0, 0, []
+    for l0, l1, name in legs:
+        branch = os.path.join(out, name + ".h5")
+        if os.path.exists(branch):
+            os.remove(branch)
+        cpu, rc = cpu_of([exe, "continue", deck, *sets, "--param", f"{case['key']}={l0:g}:{l1:g}",
+                          "--restarts", str(a.restarts), "--ds-max", a.ds_max, "-o", branch],
+                         os.path.join(out, name + ".log"))
+        c_cpu, c_rc = c_cpu + cpu, max(c_rc, rc)
+        brs.append(read_branch(branch, a.metric))
+        print(f"  branch {l0:g} -> {l1:g}: {name}.h5, exit {rc}, end status {brs[-1]['end']}")
     s_cpu, s_rc = cpu_of([exe, "sweep", sweep_deck(case, lam0, lam1, count, a.settle_tol, out), *sets,
                           *case.get("sweep_sets", []),
                           "-o", os.path.join(out, "sweep.h5"), "--progress", "100000"], os.path.join(out, "sweep.log"))
-    br = read_branch(branch, a.metric)
+    br = merge_branches(brs)
     e = br["ids"].index(case["element"])
     lam, val, settled, steps = read_sweep(os.path.join(out, "sweep.h5"), case["key"], a.metric, case["element"])
     print(f"{a.case}: damping {damping:g} lb in s/rad on {', '.join(case['shafts'])}; {case['key']} "
-          f"{lam0:g} -> {lam1:g}")
+          f"{lam0:g} -> {lam1:g}" + (f" (continued from {start:g} to both ends)" if start is not None else ""))
     print(f"continuation: exit {c_rc}, end status {br['end']}, {len(br['lam'])} points "
           f"({int((~br['ok']).sum())} failed: reasons {sorted(set(br['reason'][~br['ok']].tolist()))}), "
           f"{br['maps']} period maps, CPU {c_cpu:.2f} s")
