@@ -39,7 +39,7 @@ module trainsim_cmd_continue
       character(len=:), allocatable :: key
       real(wp) :: lam_first = 0.0_wp
       !> the key is a mesh_frequency and no --set sets a derived key: a model is retuned
-      !> to another lambda without building the deck (D-124)
+      !> to another lambda without building the deck (D-131)
       logical :: retunes = .false.
       logical :: period_from_mesh = .false.   !< no settle_period in &run or --set: the mesh period's
    contains
@@ -79,7 +79,7 @@ contains
 
    !> A model of this deck at another mesh frequency, set to lam as prepare_model sets
    !> it (the derived parameter applied, the fast-path tables built again, the mesh
-   !> period as the settle period when the deck gives none): D-124.
+   !> period as the settle period when the deck gives none): D-131.
    subroutine deck_retune(self, lam, model, done, err)
       class(deck_problem_t), intent(in) :: self
       real(wp), intent(in) :: lam
@@ -382,7 +382,7 @@ contains
       type(null_sink_t) :: none
       real(wp) :: period
       logical :: done
-      type(model_t), allocatable, save :: base   ! (the first point's model, retuned to the others: D-124)
+      type(model_t), allocatable, save :: base   ! (the first point's model, retuned to the others: D-131)
       done = .false.
       if (allocated(base)) then
          m = base

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The cost of the Fig. 5.11 frequency response by continuation against the settled
 brute-force sweep at equal answers, as ratios measured in one run (docs/benchmarks.md
-"Continuation", D-126).
+"Continuation", D-133).
 
 For each shaft damping given (default 500 and 50 lb in s/rad on shaft1 and shaft3: the
 bundled rig is undamped and no brute-force run settles to its marginal orbits):

@@ -101,7 +101,7 @@ contains
       call check('the continuation ended beyond ' // str(w_end), full%pts(size(full%pts))%lam > w_end)
    end subroutine test_folds_against_closed_form
 
-   !> The branch with the model retuned to each lambda (D-124: the continuation keeps the
+   !> The branch with the model retuned to each lambda (D-131: the continuation keeps the
    !> first model and changes only the forcing frequency in it) against the closed
    !> form: both folds to 1e-8 rad/s as the branch built afresh at every lambda; the
    !> reuse taken at every lambda after the first (retunes counted), and the same

@@ -17,7 +17,7 @@ module trainsim_test_branch
    end type sine_problem_t
 
    !> the same, its models retuned to lambda (the frequency set in a model built at
-   !> another: D-124) instead of copied from `base` at every lambda
+   !> another: D-131) instead of copied from `base` at every lambda
    type, extends(sine_problem_t) :: sine_retuned_t
    contains
       procedure :: retune => sine_retune

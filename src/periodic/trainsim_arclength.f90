@@ -3,7 +3,7 @@
 !>
 !> Unknowns z = (x, lambda): the reduced state x at the forcing phase t0 and the parameter.
 !> G(x, lambda) = P(x; lambda) - x, P the period map at lambda (the problem's model retuned or
-!> built there, D-124; its forcing period as shooting takes it). In the scaled variables
+!> built there, D-131; its forcing period as shooting takes it). In the scaled variables
 !> (x/s, lambda/l) A = [S^-1 (M - I) S, S^-1 dP/dlambda l], M by saltation matrices or
 !> differences (D-115), dP/dlambda by a central difference of the period map.
 !> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is
@@ -46,7 +46,7 @@ module trainsim_arclength
                          branch_failed = 4, branch_fold = 5
 
    !> The deck at a parameter value: extend and give `model_at`; `retune` (optional) changes
-   !> only the parameter's value in a model built at another, not building the deck (D-124).
+   !> only the parameter's value in a model built at another, not building the deck (D-131).
    type, abstract :: branch_problem_t
    contains
       procedure(model_at_i), deferred :: model_at

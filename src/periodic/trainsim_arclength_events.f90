@@ -11,7 +11,7 @@ submodule(trainsim_arclength) trainsim_arclength_events
 contains
 
    !> The period map set up at lambda (the first model retuned to lambda where the
-   !> problem can, D-124, else the deck rebuilt there; t0 = t_start + phase T).
+   !> problem can, D-131, else the deck rebuilt there; t0 = t_start + phase T).
    module procedure at
       type(model_t) :: m
       real(wp) :: period
@@ -57,7 +57,7 @@ contains
    !> The point's monodromy, multipliers, scaled Jacobian A and tangent (oriented along
    !> t_prev). The monodromy first, on the map as the corrector left it at lambda, then
    !> dP/dlambda by central differences; lambda's period and t0 kept for `store`, so
-   !> that the map is not set up at lambda again (D-125). (A forward difference from
+   !> that the map is not set up at lambda again (D-132). (A forward difference from
    !> p%px, one map fewer, moved the fold at 534.17 teeth/s by 4e-6: rejected.)
    module procedure linearise
       real(wp) :: x(c%n), lam, h, pp(c%n), pq(c%n)

@@ -116,7 +116,7 @@ contains
       !> the inputs (`set_input`, `set_torque`)
       type(string_t), intent(in), optional :: inputs(:)
       !> .false.: no quasi-static reference (the run's Kv, mesh orders and rattle
-      !> indices then absent), for a caller that reads only states (the period map, D-124)
+      !> indices then absent), for a caller that reads only states (the period map, D-131)
       logical, intent(in), optional :: reference
       logical :: with_reference
       type(observer_t) :: fresh_obs
