@@ -56,6 +56,7 @@ METRIC_DIMENSION = {
     "kv": "1", "static_force": "force", "static_te_mean": "displacement", "static_te_p2p": "displacement",
     "force_mean": "force", **{f"te_order_{k}": "displacement" for k in range(1, 5)},
     **{f"force_order_{k}": "force" for k in range(1, 5)}, "rattle_impacts": "1", "rattle_open": "1",
+    "rattle_criterion": "1", "rattle_energy": "energy", "rattle_power": "energy/s",
     "speed_min": "rad/s", "speed_max": "rad/s", "end_speed": "rad/s", "start_speed": "rad/s", "end_angle": "rad",
     "wall_time": "s", "steps": "count", "rhs_evals": "count", "events": "count", "energy_residual": "1",
     "rank": "1", "branch": "1", "status": "1",
