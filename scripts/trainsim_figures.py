@@ -75,6 +75,8 @@ METRIC_WORDS = {
     "start_speed": "speed at the start", "end_angle": "angle at the end", "wall_time": "wall time",
     "steps": "steps", "rhs_evals": "RHS evaluations", "events": "events", "energy_residual": "energy residual",
     "mesh_frequency": "mesh frequency", "half_backlash": "half backlash", "half_clearance": "half clearance",
+    "rattle_criterion": "rattle criterion J alpha / T_drag", "rattle_energy": "impact energy per mesh cycle",
+    "rattle_power": "impact power",
 }
 GEAR_TYPES = ("spur_gear", "helical_gear", "ideal_gear")
 
