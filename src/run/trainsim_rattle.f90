@@ -29,7 +29,7 @@ module trainsim_rattle
    use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_quiet_nan
    use trainsim_kinds, only: wp
    use trainsim_model, only: model_t
-   use trainsim_param_list, only: param_list_t
+   use trainsim_param_list, only: param_list_t, param_of
    implicit none
    private
 
@@ -50,9 +50,11 @@ contains
       type(model_t), intent(in) :: model
       integer, intent(in) :: i
       type(rattle_mesh_t) :: c
+      type(param_list_t) :: p
       real(wp) :: j1
       integer :: l, r
-      c%r1 = param(model, i, 'rb_driver'); c%r2 = param(model, i, 'rb_driven')
+      p = model%elements(i)%e%params()
+      c%r1 = param_of(p, 'rb_driver', 0.0_wp); c%r2 = param_of(p, 'rb_driven', 0.0_wp)
       l = model%elements(i)%e%left; r = model%elements(i)%e%right
       j1 = own_inertia(model, l)
       c%j_loose = own_inertia(model, r)
@@ -94,19 +96,4 @@ contains
       if (model%is_held(n) .or. model%nodes(n)%n%is_fixed()) return
       j = max(0.0_wp, model%nodes(n)%n%inertia())
    end function own_inertia
-
-   !> Element i's parameter `name` (0 if it has none).
-   real(wp) function param(model, i, name) result(a)
-      type(model_t), intent(in) :: model
-      integer, intent(in) :: i
-      character(len=*), intent(in) :: name
-      type(param_list_t) :: p
-      integer :: k
-      a = 0.0_wp
-      p = model%elements(i)%e%params()
-      if (.not. allocated(p%names)) return
-      do k = 1, size(p%names)
-         if (p%names(k)%s == name) a = p%values(k)
-      end do
-   end function param
 end module trainsim_rattle
