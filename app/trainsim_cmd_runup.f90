@@ -124,7 +124,7 @@ contains
       flush (output_unit)
       call simulate(model, sink, res, err)
       if (allocated(err)) call fail(err)
-      call ramp_static_reference(model, sink)   ! Kv of each block at its own load (D-122 (rattle26))
+      call ramp_static_reference(model, sink)   ! Kv of each block at its own load (D-135)
 
       info%title = model%title
       info%deck_file = deck_path

@@ -172,7 +172,7 @@ contains
                if (t >= self%t_metrics) then
                   m%impacts = m%impacts + 1
                   m%max_approach_velocity = max(m%max_approach_velocity, abs(evs(k)%approach_velocity))
-                  ! (the sum of V_i^2 / 2 until finish makes it the impact energy, D-121 (rattle26))
+                  ! (the sum of V_i^2 / 2 until finish makes it the impact energy, D-134)
                   m%rattle_energy = m%rattle_energy + 0.5_wp*evs(k)%approach_velocity**2
                end if
             case (ev_separation)
@@ -342,7 +342,7 @@ contains
       end do
    end subroutine obs_feed_orders
 
-   !> The rattle indices from the literature of the gear mesh i (D-121 (rattle26),
+   !> The rattle indices from the literature of the gear mesh i (D-134,
    !> trainsim_rattle) into m: Brosey's criterion from the driver's largest acceleration
    !> between output samples (the tracker's, over its phase rate N omega_driver) and the
    !> mean mesh force; the impact energy from half_v2 (the window's sum of V_i^2 / 2) per

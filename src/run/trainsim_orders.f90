@@ -43,7 +43,7 @@ module trainsim_orders
       integer :: cycles_done = 0               !< whole cycles completed (the snapshot's)
       !> the largest |w_j - w_(j-1)| / (t_j - t_(j-1)) over successive samples: the phase
       !> rate's largest mean acceleration over a sample interval (a rattle criterion's
-      !> driver acceleration, N alpha_max; trainsim_rattle, D-121 (rattle26))
+      !> driver acceleration, N alpha_max; trainsim_rattle, D-134)
       real(wp) :: amax = 0.0_wp
       complex(wp) :: c_whole(0:n_orders, n_order_signals) = (0.0_wp, 0.0_wp)   !< c over those whole cycles
       !> the last sample's x e^(-i k phi), real and imaginary parts

@@ -1,4 +1,4 @@
-!> Rattle indices of a gear mesh from the literature (issue 26 item 5, D-121 (rattle26)),
+!> Rattle indices of a gear mesh from the literature (issue 26 item 5, D-134),
 !> beside D-105's impacts per mesh cycle and open fraction:
 !>
 !> * The inertial rattle criterion of Brosey, Seaman, Johnson & Hamilton (Int. J. Vehicle

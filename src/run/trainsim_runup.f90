@@ -57,7 +57,7 @@ module trainsim_runup
       !> the static mesh force at the block's midpoint (ramp_static_reference; 0 without one)
       real(wp), allocatable :: static_force(:)
       integer, allocatable :: impacts(:)                  !< contact onsets in the block
-      !> rattle indices (D-121 (rattle26), trainsim_rattle): Brosey's criterion from the
+      !> rattle indices (D-134, trainsim_rattle): Brosey's criterion from the
       !> driver's largest acceleration and the mean mesh force of the block, the impact
       !> energy 1/2 m_eq V_i^2 of the block's contact onsets per mesh cycle and per second
       real(wp), allocatable :: criterion(:), energy(:), power(:)
@@ -197,7 +197,7 @@ contains
       call model%build_fast_path()   ! (held speeds no longer constant)
    end subroutine prepare_runup
 
-   !> A run-up of a train with no prescribed speed is refused (D-122 (rattle26)): from, to and
+   !> A run-up of a train with no prescribed speed is refused (D-135): from, to and
    !> rate prescribe the mesh frequency against time, and a train driven by torque makes its
    !> speed a result of its loads and inertias. The message names the &load group that
    !> drives the train by torque (torque_at of a node of the train), else `where_from`.
@@ -315,7 +315,7 @@ contains
    end subroutine start_block
 
    !> A row of the event table: a contact onset of the mesh on the ramp adds its V_i^2 / 2
-   !> to the block open when it happens (the impact energy, D-121 (rattle26)).
+   !> to the block open when it happens (the impact energy, D-134).
    subroutine ru_event(self, row, ev, err)
       class(runup_sink_t), intent(inout) :: self
       integer, intent(in) :: row
@@ -339,7 +339,7 @@ contains
       end associate
    end subroutine ru_close
 
-   !> The static reference along the ramp (D-122 (rattle26)): for each block of `sink` the
+   !> The static reference along the ramp (D-135): for each block of `sink` the
    !> static reference of D-103 at the block's midpoint t_m = (t_0 + t_1)/2, i.e. with the
    !> run's start moved to t_m: the loads and the prescribed speeds' accelerations at t_m
    !> (the preload's steady rigid rotation, D-30: the ramp's J alpha on every inertia), every

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Rattle indices from the literature (D-121 (rattle26)): Brosey's inertial criterion and the
+"""Rattle indices from the literature (D-134): Brosey's inertial criterion and the
 impact energy of a gear mesh, against closed forms.
 
 (a) Brosey, Seaman, Johnson & Hamilton (1986): a loose gear (the wheel, inertia J2, a constant

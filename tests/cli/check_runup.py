@@ -26,13 +26,13 @@ against physics.
     an element that is not a gear mesh, a train without a prescribed speed, an unknown key:
     exit 2, the file, line and key (or the option) named, no backtrace.
 (d) plot_sweep.py draws a run-up file over a sweep file (same axes), and its order map.
-(e) The static reference along the ramp (D-122): the linear mesh of (a) with a fan load on the
+(e) The static reference along the ramp (D-135): the linear mesh of (a) with a fan load on the
     wheel, T = 400 (w/w_n)^2 opposing (w_n = 78.54 rad/s, the top of the range), beside its
     constant 440.72: each block's static mesh force is the preload's steady rigid rotation at
     the block's midpoint, (440.72 + 400 (w/w_n)^2 + J2 alpha)/rb, w = 2 pi f/32 and alpha =
     2 pi R/32 (exact: the quadratic law at the rigid speed; 1e-9 is the preload's Newton
     tolerance), and Kv = force_max / static_force (to rounding). The block's rattle criterion
-    (D-121) is J2 alpha / (force_mean rb) (r1 = r2): alpha is exact on a ramp, 1e-9 the
+    (D-134) is J2 alpha / (force_mean rb) (r1 = r2): alpha is exact on a ramp, 1e-9 the
     rounding of the speed differences; no impacts, so no impact energy.
 
 Usage: check_runup.py TRAINSIM   (cwd = repo root)
