@@ -61,7 +61,7 @@ with tempfile.TemporaryDirectory() as d:
     p = subprocess.run([EXE, "sweep", SWEEP, "-o", out], capture_output=True, text=True)
     check(p.returncode == 0, f"sweep of {os.path.basename(SWEEP)} exits 0 ({p.stderr.strip()[-200:]})")
     with h5py.File(out, "r") as f:
-        check(str(f.attrs["format_version"]) in ("4", "b'4'"), f"sweep format_version {f.attrs['format_version']} = 4")
+        check(str(f.attrs["format_version"]) in ("5", "b'5'"), f"sweep format_version {f.attrs['format_version']} = 5")
         e = f["elements"]
         j = ids(e).index("mesh")
         x = f["parameters/values"][:, 0]
