@@ -13,6 +13,7 @@ module trainsim_cmd_continue
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
    use trainsim_prepare, only: prepare_model
+   use trainsim_derived, only: apply_derived, default_settle_period
    use trainsim_observer, only: run_result_t, make_meta
    use trainsim_sink, only: null_sink_t, run_meta_t
    use trainsim_period_map, only: period_map_t, forcing_period
@@ -37,8 +38,13 @@ module trainsim_cmd_continue
       type(override_t), allocatable :: ovs(:)
       character(len=:), allocatable :: key
       real(wp) :: lam_first = 0.0_wp
+      !> the key is a mesh_frequency and no --set sets a derived key: a model is retuned
+      !> to another lambda without building the deck (D-131)
+      logical :: retunes = .false.
+      logical :: period_from_mesh = .false.   !< no settle_period in &run or --set: the mesh period's
    contains
       procedure :: model_at => deck_model_at
+      procedure :: retune => deck_retune
    end type deck_problem_t
 
    type(deck_problem_t), save :: prob
@@ -56,11 +62,67 @@ contains
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
       type(override_t) :: ov
+      call lam_override(self, lam, ov, err)
+      if (.not. allocated(err)) call prepare_model(self%deck, [self%ovs, ov], model, err)
+   end subroutine deck_model_at
+
+   !> The override key = lam.
+   subroutine lam_override(self, lam, ov, err)
+      class(deck_problem_t), intent(in) :: self
+      real(wp), intent(in) :: lam
+      type(override_t), intent(out) :: ov
+      type(error_t), allocatable, intent(out) :: err
       character(len=32) :: buf
       write (buf, '(es25.17)') lam
       call parse_set_argument(self%key//'='//trim(adjustl(buf)), ov, err)
-      if (.not. allocated(err)) call prepare_model(self%deck, [self%ovs, ov], model, err)
-   end subroutine deck_model_at
+   end subroutine lam_override
+
+   !> A model of this deck at another mesh frequency, set to lam as prepare_model sets
+   !> it (the derived parameter applied, the fast-path tables built again, the mesh
+   !> period as the settle period when the deck gives none): D-131.
+   subroutine deck_retune(self, lam, model, done, err)
+      class(deck_problem_t), intent(in) :: self
+      real(wp), intent(in) :: lam
+      type(model_t), intent(inout) :: model
+      logical, intent(out) :: done
+      type(error_t), allocatable, intent(out) :: err
+      type(override_t) :: ov
+      done = .false.
+      if (.not. self%retunes .or. model%run%preload) return
+      call lam_override(self, lam, ov, err)
+      if (.not. allocated(err)) call apply_derived(model, [ov], err)
+      if (allocated(err)) return
+      call model%build_fast_path()
+      if (self%period_from_mesh) then
+         model%run%settle_period = 0.0_wp
+         call default_settle_period(model, err)
+      end if
+      done = .not. allocated(err)
+   end subroutine deck_retune
+
+   !> Whether lambda can be retuned in a model (deck_retune): the key is a
+   !> mesh_frequency and no --set sets a derived key; and whether the deck gives a
+   !> settle period (&run or --set run.settle_period).
+   subroutine retune_setup(p)
+      type(deck_problem_t), intent(inout) :: p
+      type(override_t) :: ov
+      type(error_t), allocatable :: err
+      integer :: g, e
+      call lam_override(p, p%lam_first, ov, err)
+      if (allocated(err)) return
+      p%retunes = ov%derived .and. ov%key == 'mesh_frequency'
+      if (size(p%ovs) > 0) p%retunes = p%retunes .and. .not. any(p%ovs(:)%derived)
+      p%period_from_mesh = .true.
+      do g = 1, size(p%deck%groups)
+         if (p%deck%groups(g)%name /= 'run' .or. .not. allocated(p%deck%groups(g)%entries)) cycle
+         do e = 1, size(p%deck%groups(g)%entries)
+            if (p%deck%groups(g)%entries(e)%key == 'settle_period') p%period_from_mesh = .false.
+         end do
+      end do
+      do g = 1, size(p%ovs)
+         if (p%ovs(g)%key == 'settle_period') p%period_from_mesh = .false.
+      end do
+   end subroutine retune_setup
 
    !> trainsim continue DECK --param TARGET.KEY=FROM:TO [options] [-o FILE [--resume]]
    subroutine do_continue()
@@ -157,6 +219,7 @@ contains
       if (allocated(err)) call fail(err)
       call split_sweep_groups(prob%deck, sweeps)
       prob%ovs = sets
+      call retune_setup(prob)
       write (output_unit, '(a)') 'trainsim continue: '//deck_path//', '//prob%key//' from '//str(lam0)//' to '//str(lam1)
       write (output_unit, '(a)') '      lambda            period        max|mu|     stability  corrector  bifurcation'
       if (len(out_path) > 0) then
@@ -318,7 +381,16 @@ contains
       type(run_result_t) :: run
       type(null_sink_t) :: none
       real(wp) :: period
-      call prob%model_at(p%lam, m, err)
+      logical :: done
+      type(model_t), allocatable, save :: base   ! (the first point's model, retuned to the others: D-131)
+      done = .false.
+      if (allocated(base)) then
+         m = base
+         call prob%retune(p%lam, m, done, err)
+         if (allocated(err)) deallocate (err)
+      end if
+      if (.not. done) call prob%model_at(p%lam, m, err)
+      if (.not. allocated(err) .and. .not. allocated(base) .and. prob%retunes) base = m
       if (.not. allocated(err)) call forcing_period(m, period, err)
       if (allocated(err)) return
       m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)

@@ -6,7 +6,7 @@ module trainsim_cmd_runup
    use trainsim_kinds, only: wp, two_pi
    use trainsim_quasi_static, only: mesh_period_angle
    use trainsim_error, only: error_t, err_input
-   use trainsim_strings, only: str
+   use trainsim_strings, only: str, string_t, to_lower
    use trainsim_version, only: version_full
    use trainsim_deck, only: deck_t, deck_group_t, read_deck
    use trainsim_model, only: model_t
@@ -15,7 +15,8 @@ module trainsim_cmd_runup
    use trainsim_sweep, only: default_sweep_path
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
-   use trainsim_runup, only: runup_spec_t, runup_sink_t, prepare_runup, runup_mesh
+   use trainsim_runup, only: runup_spec_t, runup_sink_t, prepare_runup, runup_mesh, ramp_static_reference
+   use trainsim_rattle, only: rattle_mesh
    use trainsim_runup_file, only: runup_file_info_t, write_runup_file
    use trainsim_interrupt, only: install_interrupt_handlers
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
@@ -41,6 +42,7 @@ contains
       type(run_result_t) :: res
       type(runup_file_info_t) :: info
       type(error_t), allocatable :: err
+      type(string_t), allocatable :: torque_at(:)
       character(len=:), allocatable :: out
       logical :: given(6)
       character(len=256) :: text(4)   ! the options' values as given
@@ -92,7 +94,7 @@ contains
       if (len(out) == 0) out = default_path(deck_path)
       call install_interrupt_handlers()
 
-      call load_runup_deck(deck_path, model, spec, at)
+      call load_runup_deck(deck_path, model, spec, at, torque_at)
       if (len(at%from) == 0 .and. .not. all(given(1:3))) call refuse(deck_path//': error: a run-up needs its '// &
          'range: give --from, --to and --rate, or a &runup group (from, to, rate)')
       if (given(1)) then; spec%f_from = opt%f_from; at%from = 'option --from '//trim(text(1)); end if
@@ -103,7 +105,7 @@ contains
       if (given(6)) spec%block_cycles = opt%block_cycles
       call runup_mesh(model, spec%mesh, at%mesh, ie, err)
       if (allocated(err)) call fail_at(err)
-      call prepare_runup(model, ie, spec, at%from, at%to, at%rate, t_a, err)
+      call prepare_runup(model, ie, spec, at%from, at%to, at%rate, t_a, err, torque_at)
       if (allocated(err)) call fail_at(err)
 
       sink%el = ie
@@ -114,6 +116,7 @@ contains
       sink%dout = model%run%output_interval
       if (.not. sink%dout > 0.0_wp) sink%dout = model%run%dt
       sink%block_cycles = spec%block_cycles
+      sink%rc = rattle_mesh(model, ie)
       write (output_unit, '(a)') 'trainsim '//version_full()//': run-up of '//deck_path//" (mesh '"// &
          model%elements(ie)%e%id//"'): "//str(spec%f_from)//' to '//str(spec%f_to)//' teeth/s at '// &
          str(spec%rate)//' teeth/s^2 after '//str(spec%settle_cycles)//' cycles at '//str(spec%f_from)// &
@@ -121,6 +124,7 @@ contains
       flush (output_unit)
       call simulate(model, sink, res, err)
       if (allocated(err)) call fail(err)
+      call ramp_static_reference(model, sink)   ! Kv of each block at its own load (D-135)
 
       info%title = model%title
       info%deck_file = deck_path
@@ -156,12 +160,14 @@ contains
    end subroutine do_runup
 
    !> The deck with its &runup group (at most one) read into spec and taken out, its
-   !> &sweep groups ignored, the --set overrides applied, the model built.
-   subroutine load_runup_deck(path, model, spec, at)
+   !> &sweep groups ignored, the --set overrides applied, the model built. torque_at: per
+   !> node, where the deck drives it by a torque (its first such &load group; '' none).
+   subroutine load_runup_deck(path, model, spec, at, torque_at)
       character(len=*), intent(in) :: path
       type(model_t), intent(out) :: model
       type(runup_spec_t), intent(out) :: spec
       type(places_t), intent(out) :: at
+      type(string_t), allocatable, intent(out) :: torque_at(:)
       type(deck_t) :: deck
       type(deck_group_t), allocatable :: sweeps(:)
       type(error_t), allocatable :: err
@@ -192,7 +198,35 @@ contains
       do i = 1, size(model%warnings)
          write (error_unit, '(a)') 'trainsim: '//model%warnings(i)%s
       end do
+      call torque_loads(deck, model, torque_at)
    end subroutine load_runup_deck
+
+   !> Per node of the model, where a &load group of the deck drives it by a torque (quantity
+   !> 'torque', the default): its `quantity` key, given or not; '' for none.
+   subroutine torque_loads(deck, model, at)
+      type(deck_t), intent(inout) :: deck   !< (its groups' keys marked as read)
+      type(model_t), intent(in) :: model
+      type(string_t), allocatable, intent(out) :: at(:)
+      type(error_t), allocatable :: err
+      character(len=:), allocatable :: node, quantity
+      integer :: i, n
+      allocate (at(size(model%nodes)))
+      do n = 1, size(at)
+         at(n)%s = ''
+      end do
+      do i = 1, size(deck%groups)
+         if (deck%groups(i)%name /= 'load') cycle
+         call deck%groups(i)%get_string('node', node, err, default='')
+         if (.not. allocated(err)) call deck%groups(i)%get_string('quantity', quantity, err, default='torque')
+         if (allocated(err)) cycle
+         if (to_lower(quantity) /= 'torque') cycle
+         do n = 1, size(at)
+            if (model%nodes(n)%n%id /= node .or. len(at(n)%s) > 0) cycle
+            at(n)%s = deck%groups(i)%where('quantity')
+            if (.not. deck%groups(i)%has('quantity')) at(n)%s = at(n)%s//", key 'quantity' (not given: 'torque')"
+         end do
+      end do
+   end subroutine torque_loads
 
    !> &runup mesh = 'ID', from = F1, to = F2, rate = R, settle_cycles = N, block_cycles = M /
    subroutine read_runup_group(g, spec, at)

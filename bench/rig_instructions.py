@@ -5,11 +5,21 @@
 ones of bench_rk4_throughput (shaft - ideal or backlash gear pair - shaft,
 dt = 8e-6 s, node 1 held at 80 rad/s).
 
-    /usr/bin/python3 bench/rig_instructions.py TRAINSIM [ideal-off backlash-off ideal-on backlash-on]
+    /usr/bin/python3 bench/rig_instructions.py TRAINSIM [--keep DIR] [ideal-off backlash-off ideal-on backlash-on]
+
+--keep DIR: the decks and callgrind's outputs go to DIR (rig_CASE_TEND.nml,
+cg.CASE.TEND) and stay, for `callgrind_annotate` (per-step self costs: divide
+the 0.4 s run's by 50 000 steps).
 """
 import subprocess, sys, os, re, tempfile
-exe = sys.argv[1]
-cases = sys.argv[2:] or ['ideal-off', 'backlash-off', 'ideal-on', 'backlash-on']
+args = sys.argv[1:]
+keep = None
+if '--keep' in args:
+    k = args.index('--keep')
+    keep = args[k + 1]
+    del args[k:k + 2]
+exe = args[0]
+cases = args[1:] or ['ideal-off', 'backlash-off', 'ideal-on', 'backlash-on']
 def deck(t_end, track, backlash):
     s = ("&run title = 'bench: Table 5.5 rig', t_end = %s, dt = 8.0e-6, integrator = 'rk4', track_energy = %s /\n"
          % (t_end, '.true.' if track else '.false.'))
@@ -27,7 +37,8 @@ def deck(t_end, track, backlash):
           "&load node = 'n1', quantity = 'speed', kind = 'constant', value = 80.0 /\n"
           "&load node = 'n4', kind = 'constant', value = -798.8 /\n")
     return s
-d = tempfile.mkdtemp(prefix='ipstep')
+d = keep or tempfile.mkdtemp(prefix='ipstep')
+os.makedirs(d, exist_ok=True)
 for c in cases:
     bl = c.startswith('backlash'); tr = c.endswith('-on')
     tot = []

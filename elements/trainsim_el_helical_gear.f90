@@ -17,7 +17,7 @@
 !> mean gap over the lines of contact (the loaded TE of lines that all carry
 !> load, as the spur gear's stiffness-weighted mean) and, unloaded, the least
 !> gap. Tooth friction spread over the lines of contact (trainsim_tooth_friction,
-!> add_lines; 'constant' only: it is continuous in the state without events).
+!> add_lines; 'constant' or 'speed' (D-129): continuous in the state, without events).
 module trainsim_el_helical_gear
    use trainsim_kinds, only: wp, pi, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -28,11 +28,11 @@ module trainsim_el_helical_gear
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_hot_form
    use trainsim_element, only: element_t, accept_carrier, hot_form_t, hf_none, hg_none
-   use trainsim_excited_mesh, only: excited_mesh_t, excited_input_power, em_torques, em_torques_dissipation, em_dissipation, &
-      em_torque_jacobian
+   use trainsim_excited_mesh, only: excited_input_power, em_torques_dissipation
+   use trainsim_friction_mesh, only: friction_mesh_t
    use trainsim_el_spur_gear, only: tooth_phase, max_teeth
    use trainsim_mesh_excitation, only: iso_single_pair_stiffness
-   use trainsim_tooth_friction, only: tooth_friction_t, pressure_angle_of
+   use trainsim_tooth_friction, only: pressure_angle_of
    use trainsim_param_list, only: append_params, add_choice
    implicit none
    private
@@ -42,22 +42,20 @@ module trainsim_el_helical_gear
    !> Most lines of contact at once (m_p + m_F + 1); crowning and friction need m_p + m_F < max_lines - 1.
    integer, parameter :: max_lines = 64
 
-   !> teeth, alpha and the displacement excitation: excited_mesh_t.
-   type, extends(excited_mesh_t) :: helical_gear_t
+   !> teeth, alpha and the displacement excitation: excited_mesh_t; the tooth friction
+   !> (over the lines of contact, D-116): friction_mesh_t.
+   type, extends(friction_mesh_t) :: helical_gear_t
       real(wp) :: mp = 1.0_wp, mf = 0.0_wp, ptb = 0.0_wp, zeta = 0.0_wp, youngs = 0.0_wp, face = 0.0_wp
       real(wp) :: alpha_n = 0.0_wp, beta = 0.0_wp, alpha_t = 0.0_wp   !< normal pressure, reference helix, transverse pressure angles
       real(wp) :: crown = 0.0_wp          !< crowning C_c at either face end (length)
       logical :: iso = .false.            !< stiffness_model = 'iso6336'
       real(wp) :: cprime = 0.0_wp, cgamma = 0.0_wp   !< ISO c', c_gamma_alpha, N/(mm um)
-      type(tooth_friction_t) :: fric      !< tooth friction over the lines of contact (D-116)
    contains
       procedure :: excitation => hel_excitation
       procedure :: mesh_at_roll => hel_mesh_at_roll
       procedure :: stiffness_name => hel_stiffness_name
-      procedure :: torques => hel_torques
       procedure :: torques_dissipation => hel_torques_dissipation
-      procedure :: dissipation_power => hel_dissipation
-      procedure :: torque_jacobian => hel_torque_jacobian
+      procedure :: friction_jacobian => hel_friction_jacobian
       procedure :: configure => hel_configure
       procedure :: factor => hel_factor
       procedure :: linear_factor => hel_linear_factor
@@ -198,11 +196,7 @@ contains
       call self%fric%configure(grp, units, self%cl%r1, self%cl%r2, self%teeth, self%mp, self%alpha, self%alpha_t, &
                                .false., err)
       if (allocated(err)) return
-      if (self%fric%on() .and. self%fric%speed) then
-         call fatal_error(err, grp%where('tooth_friction_model')//": error: a helical_gear takes tooth_friction_model"// &
-                          " = 'constant' only (its friction, spread over the lines of contact, is continuous "// &
-                          'without events)', err_input)
-      else if (self%fric%on() .and. .not. self%alpha <= two_pi*self%mp/self%teeth) then
+      if (self%fric%on() .and. .not. self%alpha <= two_pi*self%mp/self%teeth) then
          call fatal_error(err, grp%where('approach_angle')//': error: with tooth_friction the approach_angle places '// &
                           'the pitch point on the path of contact: it must be in [0, 2 pi m_p/N] = [0, '// &
                           str(two_pi*self%mp/self%teeth)//'] rad, got '//str(self%alpha), err_input)
@@ -343,45 +337,16 @@ contains
       call self%fric%add_lines(lo(1:n), hi(1:n), self%zeta, self%cl%mode, self%cl%mode*fs, wl, wr, tl, tr, p)
    end subroutine hel_torques_dissipation
 
-   pure subroutine hel_torques(self, thl, wl, thr, wr, tl, tr)
+   !> The friction's partials over the lines (friction_mesh_t's torque_jacobian; tf_add_lines_jacobian).
+   pure subroutine hel_friction_jacobian(self, thl, wl, wr, w, dw, jt)
       class(helical_gear_t), intent(in) :: self
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp), intent(out) :: tl, tr
-      real(wp) :: p
-      if (self%fric%on()) then
-         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
-      else
-         call em_torques(self, thl, wl, thr, wr, tl, tr)
-      end if
-   end subroutine hel_torques
-
-   pure real(wp) function hel_dissipation(self, thl, wl, thr, wr) result(p)
-      class(helical_gear_t), intent(in) :: self
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp) :: tl, tr
-      if (self%fric%on()) then
-         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
-      else
-         p = em_dissipation(self, thl, wl, thr, wr)
-      end if
-   end function hel_dissipation
-
-   !> The excited mesh's Jacobian plus the friction's partials (tf_add_lines_jacobian).
-   pure subroutine hel_torque_jacobian(self, thl, wl, thr, wr, jt)
-      class(helical_gear_t), intent(in) :: self
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp), intent(out) :: jt(2, 4)
-      real(wp) :: fs, a, va, lo(max_lines), hi(max_lines), dlo(max_lines), dhi(max_lines)
+      real(wp), intent(in) :: thl, wl, wr, w, dw(4)
+      real(wp), intent(inout) :: jt(2, 4)
+      real(wp) :: lo(max_lines), hi(max_lines), dlo(max_lines), dhi(max_lines)
       integer :: n
-      call em_torque_jacobian(self, thl, wl, thr, wr, jt)
-      if (.not. self%fric%on()) return
-      call self%shift(thl, wl, a, va)
-      fs = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
-      if (.not. self%cl%mode*fs > 0.0_wp) return
       call lines_at(self, thl, lo, hi, dlo, dhi, n)
-      call self%fric%add_lines_jacobian(lo(1:n), hi(1:n), dlo(1:n), dhi(1:n), self%zeta, self%cl%mode, &
-                                        self%cl%mode*fs, self%cl%mode*jt(2, :)/self%cl%r2, wl, wr, jt)
-   end subroutine hel_torque_jacobian
+      call self%fric%add_lines_jacobian(lo(1:n), hi(1:n), dlo(1:n), dhi(1:n), self%zeta, self%cl%mode, w, dw, wl, wr, jt)
+   end subroutine hel_friction_jacobian
 
    !> floor(x) in real arithmetic (no default-integer overflow for any finite x).
    elemental real(wp) function real_floor(x) result(f)
@@ -479,11 +444,14 @@ contains
                        'base_helix_angle_rad', 'transverse_base_pitch', &
                        'face_width', 'youngs_modulus', 'stiffness_per_length', &
                        'mean_mesh_stiffness', 'approach_angle', &
-                       'half_backlash', 'gear_ratio', 'total_contact_ratio'], &
+                       'half_backlash', 'gear_ratio', 'total_contact_ratio', 'mesh_period_angle'], &
                        [self%cl%r1, self%cl%r2, self%teeth, self%mp, self%mf, self%zeta, self%ptb, &
                         self%face, self%youngs, self%cl%law%k, &
                         self%cl%law%k*self%mp*self%face/cos(self%zeta), self%alpha, self%cl%b, &
-                        guarded_ratio(self%cl%r2, self%cl%r1), self%mp + self%mf])
+                        guarded_ratio(self%cl%r2, self%cl%r1), self%mp + self%mf, guarded_ratio(two_pi, self%teeth)])
+      ! run-out: the static reference spans the hunting period (trainsim_quasi_static, D-118)
+      if (self%ex%hunting_period() > 1.0_wp) &
+         call append_params(p, [character(len=40) :: 'hunting_period'], [self%ex%hunting_period()])
       ! issue 26 (D-116): only when used (bundled decks: as before)
       if (self%iso) then
          call add_choice(p, 'stiffness_model', 3.0_wp, 'iso6336')
@@ -494,6 +462,10 @@ contains
       if (self%fric%on()) then
          call append_params(p, [character(len=40) :: 'tooth_friction', 'transverse_pressure_angle_rad'], &
                             [self%fric%mu, self%alpha_t])
+         if (self%fric%speed) then   ! (D-129; 'constant': as before)
+            call append_params(p, [character(len=40) :: 'tooth_friction_velocity'], [self%fric%v_reg])
+            call add_choice(p, 'tooth_friction_speed', 1.0_wp, 'speed')
+         end if
       end if
    end function hel_params
 end module trainsim_el_helical_gear

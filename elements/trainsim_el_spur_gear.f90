@@ -29,10 +29,9 @@ module trainsim_el_spur_gear
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hg_none, hf_none
-   use trainsim_excited_mesh, only: excited_mesh_t, em_torques, em_torques_dissipation, em_dissipation, &
-      em_torque_jacobian, em_status, em_guards, configure_mesh_excitation
+   use trainsim_excited_mesh, only: em_torques_dissipation, em_status, em_guards, configure_mesh_excitation
+   use trainsim_friction_mesh, only: friction_mesh_t
    use trainsim_mesh_excitation, only: model_name
-   use trainsim_tooth_friction, only: tooth_friction_t
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
    implicit none
    private
@@ -46,8 +45,9 @@ module trainsim_el_spur_gear
    !> arithmetic must not overflow on the way there.
    real(wp), parameter :: theta_cap = 1.0e250_wp
 
-   !> teeth, alpha, phase (mesh_phase), pairs (the zone) and the excitation: excited_mesh_t.
-   type, extends(excited_mesh_t) :: spur_gear_t
+   !> teeth, alpha, phase (mesh_phase), pairs (the zone) and the excitation: excited_mesh_t;
+   !> the tooth friction (eqs. 3.13-3.14, D-98; off at tooth_friction = 0): friction_mesh_t.
+   type, extends(friction_mesh_t) :: spur_gear_t
       real(wp) :: mp = 1.0_wp             !< contact ratio
       real(wp) :: c2 = 1.8_wp             !< stiffness factor in the two-pair zone
       logical :: truncate = .false.       !< zone_function = 'truncate'
@@ -56,7 +56,6 @@ module trainsim_el_spur_gear
       logical :: lo_open = .false.        !< the zone has no lower bound (truncate, u < 0)
       ! geometry (0 when given as TRAIN constants)
       real(wp) :: teeth2 = 0.0_wp, pitch_module = 0.0_wp, phi = 0.0_wp, face = 0.0_wp
-      type(tooth_friction_t) :: fric      !< tooth friction (eqs. 3.13-3.14, D-98): off at tooth_friction = 0
    contains
       procedure :: configure => spur_configure
       procedure :: n_guards => spur_n_guards
@@ -70,10 +69,8 @@ module trainsim_el_spur_gear
       procedure :: hot_form => spur_hot_form
       procedure, private :: set_zone
       ! tooth friction (D-98): with tooth_friction = 0 these are the excited mesh's
-      procedure :: torques => spur_torques
-      procedure :: dissipation_power => spur_dissipation
       procedure :: torques_dissipation => spur_torques_dissipation
-      procedure :: torque_jacobian => spur_torque_jacobian
+      procedure :: friction_jacobian => spur_friction_jacobian
       procedure, private :: roll
    end type spur_gear_t
 
@@ -497,43 +494,13 @@ contains
                                                        wl, wr, tl, tr, p)
    end subroutine spur_torques_dissipation
 
-   pure subroutine spur_torques(self, thl, wl, thr, wr, tl, tr)
+   !> The friction's partials (friction_mesh_t's torque_jacobian): the pairs at the roll.
+   pure subroutine spur_friction_jacobian(self, thl, wl, wr, w, dw, jt)
       class(spur_gear_t), intent(in) :: self
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp), intent(out) :: tl, tr
-      real(wp) :: p
-      if (self%fric%on()) then
-         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
-      else
-         call em_torques(self, thl, wl, thr, wr, tl, tr)
-      end if
-   end subroutine spur_torques
-
-   !> The excited mesh's Jacobian plus the friction's partials.
-   pure subroutine spur_torque_jacobian(self, thl, wl, thr, wr, jt)
-      class(spur_gear_t), intent(in) :: self
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp), intent(out) :: jt(2, 4)
-      real(wp) :: fs, a, va
-      call em_torque_jacobian(self, thl, wl, thr, wr, jt)
-      if (.not. self%fric%on()) return
-      call self%shift(thl, wl, a, va)
-      fs = self%cl%contact_force(self%factor(thl), a, va, thr, wr)
-      if (self%cl%mode*fs > 0.0_wp) call self%fric%add_jacobian(self%roll(thl), self%pairs, self%cl%mode, &
-                                                                self%cl%mode*fs, self%cl%mode*jt(2, :)/self%cl%r2, &
-                                                                wl, wr, self%cl%r1, jt)
-   end subroutine spur_torque_jacobian
-
-   pure real(wp) function spur_dissipation(self, thl, wl, thr, wr) result(p)
-      class(spur_gear_t), intent(in) :: self
-      real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp) :: tl, tr
-      if (self%fric%on()) then
-         call self%torques_dissipation(thl, wl, thr, wr, tl, tr, p)
-      else
-         p = em_dissipation(self, thl, wl, thr, wr)
-      end if
-   end function spur_dissipation
+      real(wp), intent(in) :: thl, wl, wr, w, dw(4)
+      real(wp), intent(inout) :: jt(2, 4)
+      call self%fric%add_jacobian(self%roll(thl), self%pairs, self%cl%mode, w, dw, wl, wr, self%cl%r1, jt)
+   end subroutine spur_friction_jacobian
 
    function spur_params(self) result(p)
       class(spur_gear_t), intent(in) :: self

@@ -56,6 +56,7 @@ METRIC_DIMENSION = {
     "kv": "1", "static_force": "force", "static_te_mean": "displacement", "static_te_p2p": "displacement",
     "force_mean": "force", **{f"te_order_{k}": "displacement" for k in range(1, 5)},
     **{f"force_order_{k}": "force" for k in range(1, 5)}, "rattle_impacts": "1", "rattle_open": "1",
+    "rattle_criterion": "1", "rattle_energy": "energy", "rattle_power": "energy/s",
     "speed_min": "rad/s", "speed_max": "rad/s", "end_speed": "rad/s", "start_speed": "rad/s", "end_angle": "rad",
     "wall_time": "s", "steps": "count", "rhs_evals": "count", "events": "count", "energy_residual": "1",
     "rank": "1", "branch": "1", "status": "1",
@@ -74,6 +75,8 @@ METRIC_WORDS = {
     "start_speed": "speed at the start", "end_angle": "angle at the end", "wall_time": "wall time",
     "steps": "steps", "rhs_evals": "RHS evaluations", "events": "events", "energy_residual": "energy residual",
     "mesh_frequency": "mesh frequency", "half_backlash": "half backlash", "half_clearance": "half clearance",
+    "rattle_criterion": "rattle criterion J alpha / T_drag", "rattle_energy": "impact energy per mesh cycle",
+    "rattle_power": "impact power",
 }
 GEAR_TYPES = ("spur_gear", "helical_gear", "ideal_gear")
 

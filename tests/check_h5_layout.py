@@ -24,7 +24,7 @@ METRICS = ["torque_min", "torque_max", "force_min", "force_max", "displacement_m
            "p2p_range", "p2p_mean", "p2p_swings", "impacts", "separations", "zone_changes",
            "max_approach_velocity", "max_peak_force", "time_out_of_contact", "load_sharing", "kv", "static_force",
            "static_te_mean", "static_te_p2p", "force_mean"] + [f"{s}_order_{k}" for s in ("te", "force") for k in range(1, 5)] + \
-    ["rattle_impacts", "rattle_open"]
+    ["rattle_impacts", "rattle_open", "rattle_criterion", "rattle_energy", "rattle_power"]
 STATS_REAL = ["wall_time", "t_final"]
 
 

@@ -15,7 +15,7 @@
 !> resumed from its last), a corrector that cannot converge and a start with no orbit stop
 !> the branch with their status and reason.
 program test_continuation
-   use trainsim_test_branch, only: sine_problem_t
+   use trainsim_test_branch, only: sine_problem_t, sine_retuned_t, retunes_done
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_strings, only: str
@@ -50,6 +50,7 @@ program test_continuation
    call reference_folds(w_fold)
    call test_folds_against_closed_form()
    call test_stability_along_the_branch()
+   call test_retuned_model_gives_the_same_branch()
    call test_failures_stop_with_a_reason()
    call test_reasons_and_restarts()
    call suite_end()
@@ -99,6 +100,41 @@ contains
       call check_close('the jump-up fold (smallest W of the middle branch)', lf(2), w_fold(2), abs_tol=1.0e-8_wp)
       call check('the continuation ended beyond ' // str(w_end), full%pts(size(full%pts))%lam > w_end)
    end subroutine test_folds_against_closed_form
+
+   !> The branch with the model retuned to each lambda (D-131: the continuation keeps the
+   !> first model and changes only the forcing frequency in it) against the closed
+   !> form: both folds to 1e-8 rad/s as the branch built afresh at every lambda; the
+   !> reuse taken at every lambda after the first (retunes counted), and the same
+   !> points as that branch (`full`, resumed bit for bit, D-119): lambda to 1e-9 (the
+   !> same models, so the same maps; 1e-9 leaves room for the corrector's 1e-10).
+   subroutine test_retuned_model_gives_the_same_branch()
+      type(sine_retuned_t) :: rprob
+      type(branch_t) :: br
+      type(error_t), allocatable :: err
+      integer :: i, nf
+      real(wp) :: lf(2)
+      call test_begin('retuned_model_gives_the_same_branch')
+      rprob%base = prob%base
+      retunes_done = 0
+      call continue_branch(rprob, w_start, options(), br, err)
+      call check('the continuation ran ('//msg(br)//')', .not. allocated(err) .and. br%status == branch_done)
+      call check('the model was retuned (not built) at the later lambdas: '//str(retunes_done), &
+                 retunes_done > size(br%pts))
+      nf = 0
+      do i = 1, size(br%pts)
+         if (br%pts(i)%kind /= 'fold') cycle
+         nf = nf + 1
+         if (nf <= 2) lf(nf) = br%pts(i)%lam
+      end do
+      call check('two folds found (got '//str(nf)//')', nf == 2)
+      if (nf /= 2) return
+      call check_close('the jump-down fold, retuned model', lf(1), w_fold(1), abs_tol=1.0e-8_wp)
+      call check_close('the jump-up fold, retuned model', lf(2), w_fold(2), abs_tol=1.0e-8_wp)
+      call check('the branch built at every lambda (folds_against_closed_form): as many points', &
+                 size(full%pts) == size(br%pts))
+      if (size(full%pts) == size(br%pts)) call check('... at the same lambda (1e-9)', &
+                                                     all(abs(full%pts%lam - br%pts%lam) <= 1.0e-9_wp*w_start))
+   end subroutine test_retuned_model_gives_the_same_branch
 
    !> Stable up to the first fold, a real multiplier > 1 between them, stable after.
    subroutine test_stability_along_the_branch()

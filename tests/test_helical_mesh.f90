@@ -10,7 +10,9 @@
 !>    W / cos beta_b, friction mu W_n against the slide, arm rho1 = T1P + s - AP).
 !>    A narrow face (m_F = 0.02): the driver's friction torque changes sign as
 !>    the single line passes the pitch point (within the line's roll extent).
-!> 3. Analytic Jacobian with friction against central differences.
+!>    tooth_friction_model = 'speed' (D-129): the same quadrature with tanh(v_s/v_reg)
+!>    for sign(v_s), at speed and near rest (both branches of trainsim_slide_integrals).
+!> 3. Analytic Jacobian with friction against central differences ('constant', 'speed').
 !> 4. A loaded run with friction closes its energy ledger; friction dissipates.
 !> 5. Crowning: the loaded TE (the mean gap over the lines) and the unloaded TE
 !>    (the least gap) against Simpson's rule along each line (exact for a
@@ -43,11 +45,17 @@ program test_helical_mesh
    call suite_begin('helical gear: friction over the lines of contact, crowning, ISO 6336 stiffness (D-116)')
    call hand_geometry()
    call lines_are_eq_6_1()
-   call friction_against_quadrature()
+   call friction_against_quadrature('', w1, 0.0_wp)
+   call friction_against_quadrature("tooth_friction_model = 'speed', tooth_friction_velocity = 1.0", w1, 1.0_wp)
+   call friction_against_quadrature("tooth_friction_model = 'speed', tooth_friction_velocity = 1.0", 1.0e-3_wp, 1.0_wp)
    call friction_reverses_at_the_pitch_point()
-   call jacobian_with_friction(0.0_wp)
-   call jacobian_with_friction(0.071_wp)
+   call jacobian_with_friction('', 0.0_wp, 60.0_wp)
+   call jacobian_with_friction('', 0.071_wp, 60.0_wp)
+   call jacobian_with_friction("tooth_friction_model = 'speed', tooth_friction_velocity = 20.0", 0.0_wp, 60.0_wp)
+   call jacobian_with_friction("tooth_friction_model = 'speed', tooth_friction_velocity = 20.0", 0.071_wp, 60.0_wp)
+   call jacobian_with_friction("tooth_friction_model = 'speed', tooth_friction_velocity = 1.0", 0.071_wp, 1.0e-3_wp)
    call ledger("tooth_friction = 0.08", .true.)
+   call ledger("tooth_friction = 0.08, tooth_friction_model = 'speed', tooth_friction_velocity = 0.5", .true.)
    call ledger("crowning = 4e-4", .false.)
    call crowning_against_simpson()
    call iso_stiffness_by_hand()
@@ -97,11 +105,11 @@ contains
 
    !> The friction torques by midpoint quadrature along the lines in z: the line of
    !> mesh coordinate c_j = e + j (base pitches) is at roll x = c_j - z tan(beta_b)/p_b.
-   subroutine hand_friction(th, wl, wr, w, f1, f2)
-      real(wp), intent(in) :: th, wl, wr, w
+   subroutine hand_friction(th, wl, wr, w, vr, f1, f2)
+      real(wp), intent(in) :: th, wl, wr, w, vr       !< vr > 0: tanh(v_s/vr) for sign(v_s) ('speed')
       real(wp), intent(out) :: f1, f2
       integer, parameter :: nz = 200000
-      real(wp) :: u, e, cj, z, x, s, rho1, rho2, v, g1, g2, lc, dz
+      real(wp) :: u, e, cj, z, x, s, rho1, rho2, v, g1, g2, lc, dz, sg
       integer :: j, i
       u = n1*(th + alpha)/two_pi
       e = u - floor(u)
@@ -116,8 +124,10 @@ contains
             s = x*pb
             rho1 = t1p + (s - ap); rho2 = t2p - (s - ap)
             v = wl*rho1 - wr*rho2
-            g1 = g1 + sign(1.0_wp, v)*rho1*dz/cos(zeta)
-            g2 = g2 + sign(1.0_wp, v)*rho2*dz/cos(zeta)
+            sg = sign(1.0_wp, v)
+            if (vr > 0.0_wp) sg = tanh(v/vr)
+            g1 = g1 + sg*rho1*dz/cos(zeta)
+            g2 = g2 + sg*rho2*dz/cos(zeta)
             lc = lc + dz/cos(zeta)
          end do
       end do
@@ -125,29 +135,39 @@ contains
       f2 = mu*(w/cos(zeta))*g2/lc
    end subroutine hand_friction
 
-   subroutine friction_against_quadrature()
+   !> The driver at wl, the driven at the matching speed; vr > 0: the 'speed' model.
+   subroutine friction_against_quadrature(model, wl, vr)
+      character(len=*), intent(in) :: model
+      real(wp), intent(in) :: wl, vr
       type(model_t) :: mf_, m0
-      real(wp) :: th, thr, tl, tr, tl0, tr0, h1, h2, w, worst, scale
-      integer :: i
-      call test_begin('friction torques over a mesh cycle = quadrature along the lines of contact')
-      call load_model_text(head//mesh//", face_width = 1.2, tooth_friction = 0.08 /", mf_)
+      real(wp) :: th, thr, tl, tr, tl0, tr0, h1, h2, w, worst, scale, big
+      integer :: i, np_
+      call test_begin('friction torques over a mesh cycle = quadrature along the lines of contact '// &
+                      trim(model)//' at '//real_text(wl)//' rad/s')
+      call load_model_text(head//mesh//", face_width = 1.2, tooth_friction = 0.08"//opt(model)//" /", mf_)
       call load_model_text(head//mesh//", face_width = 1.2 /", m0)
-      worst = 0.0_wp
+      worst = 0.0_wp; big = 0.0_wp
       scale = mu*(30.0e6_wp/17.6_wp)*pen*mp*face/cos(zeta)/cos(zeta)*t1p   ! mu W_n rho1 at the mean load
-      do i = 0, 99
-         th = (i + 0.5_wp)*(two_pi/n1)/100.0_wp
+      np_ = merge(100, 20, vr == 0.0_wp)   ! 'speed': 20 positions (the quadrature's 1.2e7 cells each)
+      do i = 0, np_ - 1
+         th = (i + 0.5_wp)*(two_pi/n1)/real(np_, wp)
          thr = driven_angle(th)
-         call mf_%elements(1)%e%init_mode(th, w1, thr, w1*rb1/rb2)
-         call m0%elements(1)%e%init_mode(th, w1, thr, w1*rb1/rb2)
-         call mf_%elements(1)%e%torques(th, w1, thr, w1*rb1/rb2, tl, tr)
-         call m0%elements(1)%e%torques(th, w1, thr, w1*rb1/rb2, tl0, tr0)
+         call mf_%elements(1)%e%init_mode(th, wl, thr, wl*rb1/rb2)
+         call m0%elements(1)%e%init_mode(th, wl, thr, wl*rb1/rb2)
+         call mf_%elements(1)%e%torques(th, wl, thr, wl*rb1/rb2, tl, tr)
+         call m0%elements(1)%e%torques(th, wl, thr, wl*rb1/rb2, tl0, tr0)
          w = tr0/rb2
-         call hand_friction(th, w1, w1*rb1/rb2, w, h1, h2)
-         worst = max(worst, abs(tl - tl0 - h1)/scale, abs(tr - tr0 - h2)/scale)
+         call hand_friction(th, wl, wl*rb1/rb2, w, vr, h1, h2)
+         worst = max(worst, abs(tl - tl0 - h1), abs(tr - tr0 - h2))
+         big = max(big, abs(h1), abs(h2))
       end do
+      ! near rest tanh(v_s/v_reg) ~ v_s/v_reg is small: the error against the torque's own size
+      if (vr > 0.0_wp .and. wl < 1.0_wp) scale = big
       ! midpoint rule, dz = 6e-6 in: the sign's jump costs at most one cell per line
-      ! (rho dz / L_c ~ 1e-5 of the torque), the smooth part O(dz^2)
-      call check('max |T_f - quadrature| / (mu W_n T1P)', worst, 0.0_wp, abs_tol=3.0e-5_wp)
+      ! (rho dz / L_c ~ 1e-5 of the torque; the lines' ends the same), the smooth part O(dz^2)
+      call check('max |T_f - quadrature| / (mu W_n T1P, or the largest T_f near rest)', worst/scale, 0.0_wp, &
+                 abs_tol=3.0e-5_wp)
+      call check('the friction torque is not negligible (largest / scale > 1e-3)', big/scale > 1.0e-3_wp)
    end subroutine friction_against_quadrature
 
    subroutine friction_reverses_at_the_pitch_point()
@@ -180,15 +200,18 @@ contains
       call check('recess: friction opposes the driver (T_f < 0 after the reversal)', prev < 0.0_wp)
    end subroutine friction_reverses_at_the_pitch_point
 
-   subroutine jacobian_with_friction(th)
-      real(wp), intent(in) :: th
+   subroutine jacobian_with_friction(model, th, wl)
+      character(len=*), intent(in) :: model
+      real(wp), intent(in) :: th, wl
       type(model_t) :: m
       real(wp) :: worst, scale
-      call test_begin('friction at theta = '//real_text(th)//': analytic Jacobian = central differences')
+      call test_begin('friction '//trim(model)//' at theta = '//real_text(th)//', '//real_text(wl)// &
+                      ' rad/s: analytic Jacobian = central differences')
       call load_model_text(head//mesh//", face_width = 1.2, tooth_friction = 0.08, crowning = 2e-4,"// &
-                           " initial_contact_velocity = 1.0 /"//nl// &
-                           "&initial node = 'a', angle = "//real_text(0.01_wp + th)//", speed = 60.0 /"//nl// &
-                           "&initial node = 'b', angle = "//real_text(driven_angle(0.01_wp + th))//", speed = 29.0 /", m)
+                           " initial_contact_velocity = 1.0"//opt(model)//" /"//nl// &
+                           "&initial node = 'a', angle = "//real_text(0.01_wp + th)//", speed = "//real_text(wl)// &
+                           " /"//nl//"&initial node = 'b', angle = "//real_text(driven_angle(0.01_wp + th))// &
+                           ", speed = "//real_text(wl*29.0_wp/60.0_wp)//" /", m)
       call jacobian_fd_error(m, 0.0_wp, worst, scale)
       ! central differences, steps 1e-6 relative: ~1e-8 of the scale; without the friction's
       ! partials the error is ~ mu rho1 / r_b1 ~ 4e-2
@@ -367,4 +390,12 @@ contains
       call check('spur: frequencies equal to the bit', maxval(abs(d0%freq_hz - df%freq_hz)), 0.0_wp, abs_tol=0.0_wp)
       call check('a mesh mode found (> 0 Hz)', maxval(df%freq_hz) > 0.0_wp)
    end subroutine modes_ignore_friction
+
+   !> ", key = value" for a non-empty model text.
+   function opt(model) result(s)
+      character(len=*), intent(in) :: model
+      character(len=:), allocatable :: s
+      s = ''
+      if (len_trim(model) > 0) s = ', '//trim(model)
+   end function opt
 end program test_helical_mesh

@@ -39,8 +39,8 @@ def cli_sweep(tmp_path_factory):
 
 def compare_sweeps(py, cli):
     common = [c for c in cli.columns if c in py.columns and c not in ("run.wall_time", "run.rank")]
-    # 4 params, status, message, 93 element (3 x 31), 20 node and 7 run figures (+ run.branch from a file)
-    assert len(common) == 126 + ("run.branch" in py.columns), common
+    # 4 params, status, message, 102 element (3 x 34), 20 node and 7 run figures (+ run.branch from a file)
+    assert len(common) == 135 + ("run.branch" in py.columns), common
     differ = [c for c in common if not same(py[c], cli[c])]
     assert not differ, f"columns differ from the CLI sweep file: {differ}"
     assert list(py["status"]) == [1] * 27

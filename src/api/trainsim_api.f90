@@ -61,7 +61,8 @@ module trainsim
       'impacts', 'separations', 'zone_changes', 'max_approach_velocity', 'max_peak_force', &
       'time_out_of_contact', 'p2p_range', 'p2p_mean', 'p2p_swings', 'load_sharing', 'kv', 'static_force', &
       'static_te_mean', 'static_te_p2p', 'force_mean', 'te_order_1', 'te_order_2', 'te_order_3', 'te_order_4', &
-      'force_order_1', 'force_order_2', 'force_order_3', 'force_order_4', 'rattle_impacts', 'rattle_open']
+      'force_order_1', 'force_order_2', 'force_order_3', 'force_order_4', 'rattle_impacts', 'rattle_open', 'rattle_criterion', &
+      'rattle_energy', 'rattle_power']
 
    !> A deck, the model built from it and the result of its last run.
    type :: simulation_t
@@ -403,6 +404,9 @@ contains
          value = m%force_order(index('1234', name(13:13)))
       case ('rattle_impacts'); value = m%rattle_impacts
       case ('rattle_open'); value = m%rattle_open
+      case ('rattle_criterion'); value = m%rattle_criterion
+      case ('rattle_energy'); value = m%rattle_energy
+      case ('rattle_power'); value = m%rattle_power
       case default
          call fatal_error(err, "metric: unknown metric '"//name//"'; valid: "//metric_names(), err_input)
       end select

@@ -64,6 +64,8 @@ contains
                call add(id, 21 + q, e%te_order(q), d); call add(id, 21 + n_orders + q, e%force_order(q), f)
             end do
             call add(id, 30, e%rattle_impacts, '1'); call add(id, 31, e%rattle_open, '1')
+            call add(id, 32, e%rattle_criterion, '1'); call add(id, 33, e%rattle_energy, tq)   ! (energy: the torque's unit)
+            call add(id, 34, e%rattle_power, tq//'/s')
          end associate
       end do
       do k = 1, nn

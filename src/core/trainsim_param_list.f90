@@ -6,7 +6,7 @@ module trainsim_param_list
    implicit none
    private
 
-   public :: param_list_t, guarded_product, guarded_ratio, make_param_list, append_params, add_choice
+   public :: param_list_t, guarded_product, guarded_ratio, make_param_list, append_params, add_choice, param_of
 
    !> Named real parameters of one element or node (derived values included).
    !> A choice key (a word in the deck) is stored by its code in `values` (the file's
@@ -33,6 +33,19 @@ contains
       end do
       p%values = values
    end function make_param_list
+
+   !> The value of parameter `name` in p (the last of that name), `default` if p has none.
+   pure real(wp) function param_of(p, name, default) result(a)
+      type(param_list_t), intent(in) :: p
+      character(len=*), intent(in) :: name
+      real(wp), intent(in) :: default
+      integer :: k
+      a = default
+      if (.not. allocated(p%names)) return
+      do k = 1, size(p%names)
+         if (p%names(k)%s == name) a = p%values(k)
+      end do
+   end function param_of
 
    !> Append `names` and `values` to p (as make_param_list; their words, if p has
    !> words, are empty).

@@ -408,30 +408,33 @@ contains
    !> its end, at most model%blk%cap; step j's end goes to column j of
    !> model%blk (`rhs_step_end`), model%blk%n = the steps taken. It stops after
    !> a step whose state has an entry beyond y_limit or NaN (the caller reports
-   !> it), and once t_goal - t <= t_tol (the caller's instant tolerance: a
-   !> sliver of a step below it is no step). A step with a guard below zero at
-   !> its end is not taken but kept (pend): the next `advance` from here takes
-   !> it without computing it again, so the steps, the RHS evaluations and the
-   !> results are those of `advance` step by step.
+   !> it; also, harmlessly, where the sum of the entries' magnitudes is beyond
+   !> y_limit but none is: the caller checks the state itself, D-126), and
+   !> once t_goal - t <= t_tol (the caller's instant tolerance: a sliver of a
+   !> step below it is no step). A step with a guard below zero at its end is
+   !> not taken but kept (pend): the next `advance` from here takes it without
+   !> computing it again, so the steps, the RHS evaluations and the results are
+   !> those of `advance` step by step.
    subroutine rk4_advance_block(self, model, t_goal, t_tol, y_limit, t, y)
       class(rk4_t), intent(inout), target :: self
       type(model_t), intent(inout), target :: model
       real(wp), intent(in) :: t_goal, t_tol, y_limit
-      real(wp), intent(inout) :: t, y(:)
-      real(wp) :: t_grid, h
+      real(wp), intent(inout) :: t
+      real(wp), intent(inout), contiguous :: y(:)
+      real(wp) :: t_grid, h, t_bp, s
       integer :: j, i, n
-      logical :: ok
       model%blk%n = 0
       if (self%mr_on .or. self%pend .or. .not. self%takes_blocks) return
       n = 0
-      ok = .true.
+      s = 0.0_wp
+      t_bp = huge(1.0_wp)   ! a step ending at or after t_bp ends on the stop's breakpoint
+      if (self%stop_is_breakpoint) t_bp = self%t_stop - self%tiny_t
       model%blk%ws = .false.   ! each step's column only; the workspace after the block
       do j = 1, model%blk%cap
          ! next_grid, written out (after the block's first step t is on the grid)
          t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
          if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
-         if (t_grid > t_goal) exit
-         if (self%stop_is_breakpoint .and. t_grid >= self%t_stop - self%tiny_t) exit
+         if (t_grid > t_goal .or. t_grid >= t_bp) exit
          h = t_grid - t
          ! k1 as `advance` takes it; after a step of the block it is that step's
          ! end-of-step RHS
@@ -448,16 +451,19 @@ contains
                exit
             end if
          end if
+         ! y = ynew; the sum of |y(i)| is at least each of them, and NaN or
+         ! infinite with one of them: within y_limit, so is each (D-126)
          do i = 1, size(y)
             y(i) = self%ynew(i)
-            if (.not. abs(y(i)) <= y_limit) ok = .false.   ! (also NaN)
+            s = s + abs(self%ynew(i))
          end do
          t = t_grid
          self%istep = self%istep + 1
          model%blk%col = j
          call model%rhs_step_end(t, y, self%k1)
          n = j
-         if (.not. ok .or. t_goal - t <= t_tol) exit
+         if (.not. s <= y_limit .or. t_goal - t <= t_tol) exit
+         s = 0.0_wp
       end do
       model%blk%col = 0
       model%blk%ws = .true.

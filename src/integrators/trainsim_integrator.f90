@@ -107,7 +107,8 @@ contains
       class(integrator_t), intent(inout), target :: self
       type(model_t), intent(inout), target :: model
       real(wp), intent(in) :: t_goal, t_tol, y_limit
-      real(wp), intent(inout) :: t, y(:)
+      real(wp), intent(inout) :: t
+      real(wp), intent(inout), contiguous :: y(:)
       associate (unused_s => self, unused_t => t_goal, unused_tol => t_tol, unused_l => y_limit, unused_tt => t, &
                  unused_y => y)
       end associate

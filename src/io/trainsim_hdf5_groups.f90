@@ -267,6 +267,11 @@ contains
       end do
       r = m%rattle_impacts; if (.not. allocated(err)) call put_column_r(grp, 'rattle_impacts', r, err, cnt)
       r = m%rattle_open; if (.not. allocated(err)) call put_column_r(grp, 'rattle_open', r, err, cnt)
+      r = m%rattle_criterion; if (.not. allocated(err)) call put_column_r(grp, 'rattle_criterion', r, err, cnt)
+      r = m%rattle_energy; if (.not. allocated(err)) &
+         call put_column_r(grp, 'rattle_energy', r, err, same_units(size(m), u%energy))
+      r = m%rattle_power; if (.not. allocated(err)) &
+         call put_column_r(grp, 'rattle_power', r, err, same_units(size(m), u%energy//'/s'))
       call close_group(grp, err)
    end subroutine write_metrics
 

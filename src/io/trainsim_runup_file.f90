@@ -10,7 +10,10 @@
 !>   /runs/t_start, t_end  the block's time span (s)
 !>   /elements/ids, types  the mesh; /elements/NAME (block, 1): te_order_0..4 (order 0 the
 !>                        mean), force_order_1..4, force_mean, disp_min, disp_max, p2p_range,
-!>                        force_min, force_max, kv, impacts, rattle_impacts
+!>                        force_min, force_max, static_force (at the block's midpoint), kv,
+!>                        impacts, rattle_impacts, rattle_criterion, rattle_energy, rattle_power
+!>                        (format_version 2; 1: no static_force, rattle_criterion, _energy, _power,
+!>                        and kv against the load as the run starts)
 !>   /nodes/ids, types
 module trainsim_runup_file
    use trainsim_kinds, only: wp
@@ -55,7 +58,7 @@ contains
       end if
       allocate (none(0))
       call put_str_attr(f, 'format', 'trainsim-runup', err)
-      if (.not. allocated(err)) call put_str_attr(f, 'format_version', '1', err)
+      if (.not. allocated(err)) call put_str_attr(f, 'format_version', '2', err)
       if (.not. allocated(err)) call put_str_attr(f, 'kind', 'runup', err)
       if (.not. allocated(err)) call put_str_attr(f, 'trainsim_version', info%version, err)
       if (.not. allocated(err)) call put_str_attr(f, 'title', info%title, err)
@@ -104,9 +107,13 @@ contains
             call col('p2p_range', b%te_max - b%te_min)
             call col('force_min', b%force_min)
             call col('force_max', b%force_max)
+            call col('static_force', b%static_force)
             call col('kv', b%kv)
             call col('impacts', real(b%impacts, wp))
             call col('rattle_impacts', real(b%impacts, wp)/real(spec%block_cycles, wp))
+            call col('rattle_criterion', b%criterion)
+            call col('rattle_energy', b%energy)
+            call col('rattle_power', b%power)
          end if
          call close_group(g, err)
       end if

@@ -91,6 +91,11 @@ module trainsim_sink
       !> gear meshes, rattle indices (D-105): impacts per mesh cycle of the window and the
       !> fraction of the window's time the mesh was out of contact
       real(wp) :: rattle_impacts = 0.0_wp, rattle_open = 0.0_wp
+      !> gear meshes, rattle indices from the literature (D-134, trainsim_rattle):
+      !> Brosey's inertial criterion J2 alpha1_max (r1/r2) / (|force_mean| r2) (rattle above
+      !> 1), the impact energy sum 1/2 m_eq V_i^2 of the window per mesh cycle and per
+      !> second; NaN where undefined (no drag, a held driven gear, both gears held)
+      real(wp) :: rattle_criterion = 0.0_wp, rattle_energy = 0.0_wp, rattle_power = 0.0_wp
       !> the online peak detector could confirm p2p_mean/p2p_swings are the
       !> whole-series figures (D-17); .false. if the range grew after a swing
       !> to over ten times that swing (memory only, not in the file)

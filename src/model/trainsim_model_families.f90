@@ -13,7 +13,7 @@ module trainsim_model_families
    public :: lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, lf_cl_linear
    public :: families_t, table_t, spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr, &
              load_ni, load_nr, row_ends, chain_ni, chain_nr, build_chain, chain_laws
-   public :: ch_spring, ch_damper, ch_open, ch_ys, ch_lin
+   public :: ch_spring, ch_damper, ch_open, ch_ys, ch_lin, ch_unit
 
    !> Kinds of node on the hot path.
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
@@ -117,9 +117,11 @@ module trainsim_model_families
    !> held, and every element a linear spring or a clearance. Row 0 is the
    !> head, row q element q and its right-hand node: (law, a, b, element,
    !> node, state offset: -1 for a held head), (J or theta0, w, constant load);
-   !> a, b: the element's row in its family's table, law: which (ch_*).
+   !> a, b: the element's row in its family's table, law: which (ch_*; ch_unit:
+   !> an undamped spring with unit lever arms, a shaft, whose row the kernel
+   !> reads without r1 = r2 = 1, D-124).
    integer, parameter :: chain_ni = 6, chain_nr = 3
-   integer, parameter :: ch_spring = 1, ch_damper = 2, ch_open = 3, ch_ys = 4, ch_lin = 5
+   integer, parameter :: ch_spring = 1, ch_damper = 2, ch_open = 3, ch_ys = 4, ch_lin = 5, ch_unit = 6
 
    !> The families of a simple model (every node a plain inertia or held at a
    !> constant speed, every load constant), which the stage and step-end kernels
@@ -189,7 +191,9 @@ contains
          f%rw(r0 + chain_nr*q + 1:r0 + chain_nr*q + 3) = [fn(nd)%j, 0.0_wp, fn(nd)%load0]
       end do
       do q = 1, f%springs%n
-         call link(f%springs, q, spring_ni, spring_nr, ch_spring)
+         associate (r1 => f%rw(f%springs%r0 + spring_nr*(q - 1) + 3), r2 => f%rw(f%springs%r0 + spring_nr*(q - 1) + 4))
+            call link(f%springs, q, spring_ni, spring_nr, merge(ch_unit, ch_spring, r1 == 1.0_wp .and. r2 == 1.0_wp))
+         end associate
       end do
       do q = 1, f%dampers%n
          call link(f%dampers, q, spring_ni, spring_nr, ch_damper)

@@ -7,7 +7,7 @@
 submodule (trainsim_model) trainsim_model_rhs
    use trainsim_model_families, only: nk_other, nk_plain, nk_held, lf_open
    use trainsim_model_families, only: spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr
-   use trainsim_model_families, only: chain_ni, chain_nr, ch_spring, ch_damper, ch_open, ch_ys
+   use trainsim_model_families, only: chain_ni, chain_nr, ch_spring, ch_damper, ch_open, ch_ys, ch_unit
    use trainsim_model_kernels, only: spring, hot_torques
    use trainsim_ports, only: port_torques_at, general_torques
    use trainsim_element, only: max_ports
@@ -17,23 +17,67 @@ submodule (trainsim_model) trainsim_model_rhs
 contains
 
    module procedure model_rhs
-      call rhs_fast(self, t, y, dydt, .false.)
+      if (self%simple) then
+         call rhs_simple_ws(self, t, y, dydt, .false.)
+      else
+         call rhs_fast(self, t, y, dydt)
+      end if
    end procedure model_rhs
 
+   ! (the step-end kernels' arguments but the element powers, and the
+   ! workspace's and the block column's, spelled once: D-113)
+#define SE_HEAD self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, self%theta, self%omega
+#define SE_WS self%torque, self%el_disp, self%el_force
+#define SE_COL b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c)
+#define SE_STORED self%el_pe, self%ws_energy, self%ws_stored, self%ws_elastic
+
    module procedure model_rhs_step_end
-      if (self%simple) then
+      integer :: c
+      logical :: track
+      if (.not. self%simple) then
+         call rhs_fast(self, t, y, dydt)
+         return
+      else if (self%blk%col == 0 .or. self%blk%ws) then
          ! straight to the kernel (every step of a block, D-38): no second layer
          ! of descriptors
          call rhs_simple_ws(self, t, y, dydt, .true.)
-      else
-         call rhs_fast(self, t, y, dydt, .true.)
+         return
       end if
+      ! a block's step before its last: its column only, not the workspace
+      ! (D-120), here rather than in rhs_simple_ws: a procedure of one kernel
+      ! variant, not six (D-124)
+      track = self%run%track_energy
+      call ws_mark(self, t, .true., track)
+      c = self%blk%col
+      associate (b => self%blk)
+         if (track) then
+            call column_energy(SE_HEAD, self%fam%pw, SE_STORED, SE_COL)
+         else
+            call column_plain(SE_HEAD, SE_STORED, SE_COL)
+         end if
+      end associate
+      call column_end(self, t, y, c, track)
+   contains
+      ! a block's step before its last: the column, not the workspace (D-120;
+      ! internal: each inlined at its one call)
+#define STEP_END 3
+#define KERNEL column_plain
+#define ENERGY 0
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#define KERNEL column_energy
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
    end procedure model_rhs_step_end
 
    module procedure model_rhs_stage
       self%ws_step_end = .false.
       if (.not. self%simple) then
-         call rhs_fast(self, t, y, dydt, .false.)
+         call rhs_fast(self, t, y, dydt)
       else if (self%run%track_energy) then
          call stage_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
                            self%fam%th, self%fam%w, self%fam%pw)
@@ -94,7 +138,7 @@ contains
          do i = 1, self%n_y
             ytmp(i) = y(i) + c*k(i)
          end do
-         call rhs_fast(self, ts, ytmp, dydt, .false.)
+         call rhs_fast(self, ts, ytmp, dydt)
       end subroutine stage_formed
       ! the stage kernel at y + c k, energy off and on (internal: inlined here)
 #define FROM 1
@@ -120,19 +164,14 @@ contains
       if (ok) ok = all(self%ws_status)
    end procedure model_block_ok
 
-   !> `model_rhs` without the dispatch.
-   subroutine rhs_fast(self, t, y, dydt, step_end)
+   !> `model_rhs` of a model that is not simple, without the dispatch.
+   subroutine rhs_fast(self, t, y, dydt)
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       real(wp), intent(out) :: dydt(:)
-      logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       integer :: i, l, r, s, o, nc
       real(wp) :: tl, tr, f, pdiss, pin
       logical :: track
-      if (self%simple) then
-         call rhs_simple_ws(self, t, y, dydt, step_end)
-         return
-      end if
       track = self%run%track_energy
       self%ws_step_end = .false.
       self%ws_t = t
@@ -239,26 +278,12 @@ contains
       integer :: c
       logical :: track
       track = self%run%track_energy
-      self%ws_step_end = .false.
-      self%ws_t = t
-      self%ws_energy = step_end .and. track .and. self%n_cold == 0
+      call ws_mark(self, t, step_end, track)
       c = max(self%blk%col, 1)
       associate (b => self%blk)
-         ! (the kernel's arguments but the element powers, and the workspace's
-         ! and the column's; the column is written by the _col variants, D-38,
-         ! without the workspace by the column_ variants inside a block, D-120)
-#define SE_HEAD self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, self%theta, self%omega
-#define SE_WS self%torque, self%el_disp, self%el_force
-#define SE_COL b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c)
-#define SE_STORED self%el_pe, self%ws_energy, self%ws_stored, self%ws_elastic
-         if (b%col > 0 .and. .not. b%ws) then
-            ! a block's step: its column only, not the workspace
-            if (track) then
-               call column_energy(SE_HEAD, self%fam%pw, SE_STORED, SE_COL)
-            else
-               call column_plain(SE_HEAD, SE_STORED, SE_COL)
-            end if
-         else if (track .and. b%col > 0) then
+         ! (the column is written by the _col variants, D-38; inside a block
+         ! without the workspace by `model_rhs_step_end`, D-120)
+         if (track .and. b%col > 0) then
             call step_end_energy_col(SE_HEAD, self%fam%pw, SE_WS, SE_STORED, SE_COL)
          else if (track) then
             call step_end_energy(SE_HEAD, self%fam%pw, SE_WS, SE_STORED)
@@ -267,21 +292,8 @@ contains
          else
             call step_end_plain(SE_HEAD, SE_WS, SE_STORED)
          end if
-#undef SE_HEAD
-#undef SE_WS
-#undef SE_COL
-#undef SE_STORED
-         if (step_end .and. b%col > 0) then
-            ! the step's end in the block's column (D-38)
-            b%t(c) = t
-            if (track) then
-               b%work(1, c) = y(self%n_states + 1)
-               b%work(2, c) = y(self%n_states + 2)
-               b%stored(c) = self%ws_stored
-               b%elastic(c) = self%ws_elastic
-            end if
-         end if
       end associate
+      if (step_end .and. self%blk%col > 0) call column_end(self, t, y, c, track)
    contains
       ! the step-end kernel, energy off and on, without and with the block's
       ! column (STEP_END 1, 2) and the column alone (3; internal: each inlined
@@ -310,20 +322,40 @@ contains
 #undef KERNEL
 #undef ENERGY
 #undef STEP_END
-      ! a block's step before its last: the column, not the workspace (D-120)
-#define STEP_END 3
-#define KERNEL column_plain
-#define ENERGY 0
-#include "trainsim_model_stage.inc"
-#undef KERNEL
-#undef ENERGY
-#define KERNEL column_energy
-#define ENERGY 1
-#include "trainsim_model_stage.inc"
-#undef KERNEL
-#undef ENERGY
-#undef STEP_END
    end procedure rhs_simple_ws
+#undef SE_HEAD
+#undef SE_WS
+#undef SE_COL
+#undef SE_STORED
+
+   !> The workspace's marks as a simple model's kernel leaves them at t (the
+   !> stored energy there if a step end's with energy tracking and no cold element).
+   subroutine ws_mark(self, t, step_end, track)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t
+      logical, intent(in) :: step_end, track
+      self%ws_step_end = .false.
+      self%ws_t = t
+      self%ws_energy = step_end .and. track .and. self%n_cold == 0
+   end subroutine ws_mark
+
+   !> A step's end in the block's column c (D-38): its time and, with energy
+   !> tracking, the energy states at y and the stored energy the kernel left.
+   subroutine column_end(self, t, y, c, track)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(*)
+      integer, intent(in) :: c
+      logical, intent(in) :: track
+      associate (b => self%blk)
+         b%t(c) = t
+         if (track) then
+            b%work(1, c) = y(self%n_states + 1)
+            b%work(2, c) = y(self%n_states + 2)
+            b%stored(c) = self%ws_stored
+            b%elastic(c) = self%ws_elastic
+         end if
+      end associate
+   end subroutine column_end
 
    !> Element i's torques (and the power it dissipates) at the kinematics in the
    !> workspace through its family's row (trainsim_model_kernels): a linear

@@ -29,7 +29,9 @@
 !>   S = sum_j (hi_j - lo_j) = L_c sin(zeta_b),
 !> [lo_j, hi_j] the roll extent of line j. sign(v_s) changes once along the
 !> path, at s* where v_s = 0 (the pitch point at matched speeds), so the
-!> integrals are closed-form and continuous in the state: no events.
+!> integrals are closed-form and continuous in the state: no events. 'speed'
+!> takes tanh(v_s / v_reg) for sign(v_s) along the lines, integrated in closed
+!> form as well (trainsim_slide_integrals, D-129).
 !>
 !> 'constant' switches sign(v_s) by events: per pair a guard sigma_k v_s,k with
 !> the sign sigma_k held between events (RK4-events and CVODE locate it). Pure
@@ -41,6 +43,7 @@ module trainsim_tooth_friction
    use trainsim_units, only: units_t
    use trainsim_deck, only: deck_group_t
    use trainsim_event, only: event_t, ev_slip_forward, ev_slip_backward
+   use trainsim_slide_integrals, only: tanh_integral, signed_integral
    implicit none
    private
 
@@ -255,30 +258,6 @@ contains
       end do
    end subroutine tf_set_signs
 
-   !> int_lo^hi sign(av + bv s) (a + b s) ds and its partial in s* = -av/bv
-   !> (0 when s* lies outside (lo, hi) or bv = 0).
-   pure subroutine signed_integral(a, b, av, bv, lo, hi, v, dv_ds)
-      real(wp), intent(in) :: a, b, av, bv, lo, hi
-      real(wp), intent(out) :: v, dv_ds
-      real(wp) :: sc, sg
-      dv_ds = 0.0_wp
-      if (bv == 0.0_wp) then
-         sg = 0.0_wp
-         if (av /= 0.0_wp) sg = sign(1.0_wp, av)
-         v = sg*(prim(hi) - prim(lo))
-         return
-      end if
-      sg = sign(1.0_wp, bv)
-      sc = max(lo, min(hi, -av/bv))
-      v = sg*(prim(hi) + prim(lo) - 2.0_wp*prim(sc))
-      if (sc > lo .and. sc < hi) dv_ds = -2.0_wp*sg*(a + b*sc)
-   contains
-      pure real(wp) function prim(s)
-         real(wp), intent(in) :: s
-         prim = s*(a + 0.5_wp*b*s)
-      end function prim
-   end subroutine signed_integral
-
    !> sign(v_s) at roll s (0 at rest).
    pure real(wp) function slide_sign(av, bv, s) result(sg)
       real(wp), intent(in) :: av, bv, s
@@ -305,15 +284,21 @@ contains
       real(wp), intent(in) :: lo(:), hi(:), zeta, w, wl, wr
       integer, intent(in) :: face
       real(wp), intent(inout) :: tl, tr, p
-      real(wp) :: a1, b1, a2, b2, av, bv, g1, g2, gv, x, d, sl
+      real(wp) :: a1, b1, a2, b2, av, bv, g1, g2, gv, x, d, d2, sl
       integer :: j
       call arm_lines(self, face, a1, b1, a2, b2)
       av = wl*a1 - wr*a2; bv = wl*b1 - wr*b2            ! v_s = av + bv s
       g1 = 0.0_wp; g2 = 0.0_wp; gv = 0.0_wp; sl = 0.0_wp
       do j = 1, size(lo)
-         call signed_integral(a1, b1, av, bv, lo(j), hi(j), x, d); g1 = g1 + x
-         call signed_integral(a2, b2, av, bv, lo(j), hi(j), x, d); g2 = g2 + x
-         call signed_integral(av, bv, av, bv, lo(j), hi(j), x, d); gv = gv + x   ! int |v_s|
+         if (self%speed) then   ! int tanh(v_s/v_reg) (.) ds
+            call tanh_integral(a1, b1, av, bv, self%v_reg, lo(j), hi(j), x, d, d2); g1 = g1 + x
+            call tanh_integral(a2, b2, av, bv, self%v_reg, lo(j), hi(j), x, d, d2); g2 = g2 + x
+            call tanh_integral(av, bv, av, bv, self%v_reg, lo(j), hi(j), x, d, d2); gv = gv + x
+         else
+            call signed_integral(a1, b1, av, bv, lo(j), hi(j), x, d); g1 = g1 + x
+            call signed_integral(a2, b2, av, bv, lo(j), hi(j), x, d); g2 = g2 + x
+            call signed_integral(av, bv, av, bv, lo(j), hi(j), x, d); gv = gv + x   ! int |v_s|
+         end if
          sl = sl + (hi(j) - lo(j))
       end do
       if (.not. sl > 0.0_wp) return
@@ -330,7 +315,7 @@ contains
       real(wp), intent(in) :: lo(:), hi(:), dlo(:), dhi(:), zeta, w, dw(4), wl, wr
       integer, intent(in) :: face
       real(wp), intent(inout) :: jt(2, 4)
-      real(wp) :: a1, b1, a2, b2, av, bv, g(2), dg(2, 4), x, d(2), sl, dsl, ds(2), q
+      real(wp) :: a1, b1, a2, b2, av, bv, g(2), dg(2, 4), x, d(2), e(2), sl, dsl, ds(2), q
       integer :: j
       call arm_lines(self, face, a1, b1, a2, b2)
       av = wl*a1 - wr*a2; bv = wl*b1 - wr*b2
@@ -338,12 +323,21 @@ contains
       if (bv /= 0.0_wp) ds = [-(a1*bv - av*b1), (a2*bv - av*b2)]/bv**2
       g = 0.0_wp; dg = 0.0_wp; sl = 0.0_wp; dsl = 0.0_wp
       do j = 1, size(lo)
-         call signed_integral(a1, b1, av, bv, lo(j), hi(j), x, d(1)); g(1) = g(1) + x
-         call signed_integral(a2, b2, av, bv, lo(j), hi(j), x, d(2)); g(2) = g(2) + x
-         dg(:, 1) = dg(:, 1) + slide_sign(av, bv, hi(j))*[a1 + b1*hi(j), a2 + b2*hi(j)]*dhi(j) &
-                    - slide_sign(av, bv, lo(j))*[a1 + b1*lo(j), a2 + b2*lo(j)]*dlo(j)
-         dg(:, 2) = dg(:, 2) + d*ds(1)
-         dg(:, 4) = dg(:, 4) + d*ds(2)
+         if (self%speed) then   ! partials in a_v, b_v, then in the speeds (a_v = wl a1 - wr a2, b_v likewise)
+            call tanh_integral(a1, b1, av, bv, self%v_reg, lo(j), hi(j), x, d(1), e(1)); g(1) = g(1) + x
+            call tanh_integral(a2, b2, av, bv, self%v_reg, lo(j), hi(j), x, d(2), e(2)); g(2) = g(2) + x
+            dg(:, 1) = dg(:, 1) + tanh((av + bv*hi(j))/self%v_reg)*[a1 + b1*hi(j), a2 + b2*hi(j)]*dhi(j) &
+                       - tanh((av + bv*lo(j))/self%v_reg)*[a1 + b1*lo(j), a2 + b2*lo(j)]*dlo(j)
+            dg(:, 2) = dg(:, 2) + a1*d + b1*e
+            dg(:, 4) = dg(:, 4) - a2*d - b2*e
+         else
+            call signed_integral(a1, b1, av, bv, lo(j), hi(j), x, d(1)); g(1) = g(1) + x
+            call signed_integral(a2, b2, av, bv, lo(j), hi(j), x, d(2)); g(2) = g(2) + x
+            dg(:, 1) = dg(:, 1) + slide_sign(av, bv, hi(j))*[a1 + b1*hi(j), a2 + b2*hi(j)]*dhi(j) &
+                       - slide_sign(av, bv, lo(j))*[a1 + b1*lo(j), a2 + b2*lo(j)]*dlo(j)
+            dg(:, 2) = dg(:, 2) + d*ds(1)
+            dg(:, 4) = dg(:, 4) + d*ds(2)
+         end if
          sl = sl + (hi(j) - lo(j)); dsl = dsl + (dhi(j) - dlo(j))
       end do
       if (.not. sl > 0.0_wp) return

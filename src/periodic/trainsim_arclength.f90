@@ -1,12 +1,11 @@
 !> Pseudo-arclength continuation of periodic orbits in a deck parameter lambda
 !> (issue 27 item 3; docs/periodic.md "Continuation"; D-108).
 !>
-!> Unknowns z = (x, lambda): the reduced state x at the forcing phase t0 and the
-!> parameter. G(x, lambda) = P(x; lambda) - x, P the period map at lambda (the
-!> deck rebuilt by the problem's `model_at`, its forcing period taken as shooting
-!> takes it). In the scaled variables (x/s, lambda/l) the Jacobian is
-!> A = [S^-1 (M - I) S, S^-1 dP/dlambda l], M by central differences
-!> (monodromy_fd), dP/dlambda by a central difference of the period map.
+!> Unknowns z = (x, lambda): the reduced state x at the forcing phase t0 and the parameter.
+!> G(x, lambda) = P(x; lambda) - x, P the period map at lambda (the problem's model retuned or
+!> built there, D-131; its forcing period as shooting takes it). In the scaled variables
+!> (x/s, lambda/l) A = [S^-1 (M - I) S, S^-1 dP/dlambda l], M by saltation matrices or
+!> differences (D-115), dP/dlambda by a central difference of the period map.
 !> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is
 !> z + ds t, the corrector chord Newton on [G; t'(z - z_pred)] with the bordered
 !> matrix of the last point. Step control: halve on failure (down to ds_min: the
@@ -46,10 +45,12 @@ module trainsim_arclength
    integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
                          branch_failed = 4, branch_fold = 5
 
-   !> The deck at a parameter value: extend and give `model_at`.
+   !> The deck at a parameter value: extend and give `model_at`; `retune` (optional) changes
+   !> only the parameter's value in a model built at another, not building the deck (D-131).
    type, abstract :: branch_problem_t
    contains
       procedure(model_at_i), deferred :: model_at
+      procedure :: retune => problem_retune
    end type branch_problem_t
 
    abstract interface
@@ -140,6 +141,9 @@ module trainsim_arclength
       logical :: salt = .false.      !< the monodromy by saltation matrices (else differences)
       logical :: sig = .true.        !< take each point's contact-sequence signature
       integer :: passes = 0          !< variational (or signature) passes
+      type(model_t) :: base          !< the first model `model_at` built (retuned at each lambda)
+      logical :: has_base = .false., tried_base = .false.
+      real(wp) :: lin_lam = huge(1.0_wp), lin_period = 0.0_wp, lin_t0 = 0.0_wp   !< the last linearisation's (`store`)
    end type ctx_t
 
    !> an accepted point's data for the next step
@@ -259,6 +263,16 @@ module trainsim_arclength
    end interface
 
 contains
+
+   subroutine problem_retune(self, lam, model, done, err)   !< the default: not done (`model_at` builds it)
+      class(branch_problem_t), intent(in) :: self
+      real(wp), intent(in) :: lam
+      type(model_t), intent(inout) :: model
+      logical, intent(out) :: done
+      type(error_t), allocatable, intent(out) :: err
+      associate (unused => self, unused_lam => lam, unused_model => model); end associate
+      done = .false.
+   end subroutine problem_retune
 
    !> Continue the periodic orbit of `prob` from lam0 (shot there from the deck's
    !> start), or from the last point of `resume` (a branch stored earlier: its
@@ -580,6 +594,4 @@ contains
       t_prev(c%n + 1) = real(sign(1, opt%direction), wp)
       ds = opt%ds
    end subroutine start_shot
-
-
 end module trainsim_arclength

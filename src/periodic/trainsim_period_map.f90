@@ -167,7 +167,7 @@ contains
       end if
       call m%initial_state(self%y0)
       allocate (self%s)
-      call self%s%start(m, err)
+      call self%s%start(m, err, reference=.false.)   ! (the map reads states only: no static reference, D-131)
       if (allocated(err)) return
       call self%s%save(self%p0, err)
    end subroutine pm_setup

@@ -490,17 +490,42 @@ contains
       type(model_t), intent(inout) :: model
       logical, intent(in) :: samples
       type(error_t), allocatable, intent(out) :: err
-      integer :: n, j, j0
+      integer :: n, j, j0, js, i, nh
+      real(wp) :: d1, d2
       n = model%blk%n
       if (n == 0) return
+      if (.not. allocated(self%turn_hits)) allocate (self%turn_hits(model%blk%cap))
+      if (size(self%turn_hits) < model%blk%cap) then
+         deallocate (self%turn_hits)
+         allocate (self%turn_hits(model%blk%cap))
+      end if
       associate (b => model%blk)
          j0 = 1   ! the first step at or after t_metrics (the metrics' start)
          do while (j0 <= n)
             if (b%t(j0) >= self%t_metrics) exit
             j0 = j0 + 1
          end do
-         call fold_cols(size(model%elements), b%cap, n, j0, self%t_prev, b%t, b%disp, b%force, b%torque, &
-                        model%el_contact, self%res%el, self%res%events, self%t_counted)
+         ! `track_turns` from js on: a block's steps end on the grid (D-38), all but
+         ! the first are whole steps, so only the first can be passed over for
+         ! turn_gap; a block of that one step alone takes no turn (js > n)
+         js = 1
+         if (.not. b%t(1) - self%turn_t1 >= self%turn_gap) js = 2
+         if (js > n) js = n + 1
+         do i = 1, size(model%elements)
+            d1 = self%turn_d1(i); d2 = self%turn_d2(i)
+            call fold_cols(size(model%elements), b%cap, i, n, j0, js, self%t_prev, b%t, b%disp, b%force, b%torque, &
+                           model%el_contact(i), self%res%el(i), self%res%events, self%t_counted(i), &
+                           self%turn_d1(i), self%turn_d2(i), self%turn_hits, nh)
+            if (js <= n) call el_turns(self, i, b%t, b%disp, n, j0, js, samples, d1, d2, nh)
+         end do
+         if (js <= n) then
+            if (n > js) then
+               self%turn_t2 = b%t(n - 1)
+            else
+               self%turn_t2 = self%turn_t1
+            end if
+            self%turn_t1 = b%t(n)
+         end if
          if (self%track) then
             do j = 1, n   ! the short way's energies (the stored energy from the kernel, D-36)
                self%s%energy(2) = b%elastic(j)
@@ -511,7 +536,6 @@ contains
                call fold_energy(self)
             end do
          end if
-         call block_turns(self, b%t, b%disp, n, j0, samples)
          if (samples .and. size(self%mesh_el) > 0) then   ! every step end an output sample (D-104)
             do j = j0, n
                call block_orders(self, model, b%t(j), b%disp(:, j), b%force(:, j), b%omega(:, j))
@@ -533,61 +557,38 @@ contains
       end associate
    end subroutine obs_fold_block
 
-   !> `track_turns` over the n steps of a block, element by element (the same
-   !> arithmetic on the same values: the block's columns are what `step` reads
-   !> step by step); with `samples`, each step's displacement (from step j0 on)
-   !> to the detector too, after the extreme found at that step, as `step` and
-   !> then `sample` push them. A block's steps end on the grid (D-38): all but
-   !> the first are whole steps, so only the first can be passed over for
-   !> turn_gap. The scan for turning points is a kernel of its own (turn_scan);
-   !> only its hits are worked on.
-   subroutine block_turns(self, tc, disp, n, j0, samples)
+   !> `track_turns` for element i over the n steps of a block, from the turning
+   !> points `fold_cols` found (turn_hits(1:nh)) and its last two points before
+   !> the block (d1 the later, d2); with `samples`, each step's displacement
+   !> (from step j0 on) to the detector too, after the extreme found at that
+   !> step, as `step` and then `sample` push them.
+   subroutine el_turns(self, i, tc, disp, n, j0, js, samples, d1, d2, nh)
       type(observer_t), intent(inout) :: self
-      real(wp), intent(in) :: tc(:), disp(:, :)
-      integer, intent(in) :: n, j0
+      real(wp), intent(in) :: tc(:), disp(:, :), d1, d2
+      integer, intent(in) :: i, n, j0, js, nh
       logical, intent(in) :: samples
-      integer :: i, j, jj, q, nh, js
-      real(wp) :: d1, d2, ta, tb, da, db, x, tx, t1, t2
-      if (.not. allocated(self%turn_hits)) allocate (self%turn_hits(size(tc)))
-      if (size(self%turn_hits) < n) then
-         deallocate (self%turn_hits)
-         allocate (self%turn_hits(size(tc)))
-      end if
-      t1 = self%turn_t1; t2 = self%turn_t2
-      js = 1   ! the first column taken
-      if (.not. tc(1) - t1 >= self%turn_gap) js = 2
-      if (js > n) return
-      do i = 1, size(self%turn_d1)
-         d1 = self%turn_d1(i); d2 = self%turn_d2(i)
-         call turn_scan(size(disp, 1), size(disp, 2), i, js, n, disp, self%turn_d1(i), self%turn_d2(i), &
-                        self%turn_hits, nh)
-         jj = j0   ! the next sample to push
-         do q = 1, nh
-            j = self%turn_hits(q)
-            ! the two points taken before step j's end: in the block, or the last ones before it
-            if (j - 2 >= js) then
-               ta = tc(j - 2); da = disp(i, j - 2); tb = tc(j - 1); db = disp(i, j - 1)
-            else if (j - 1 >= js) then
-               ta = t1; da = d1; tb = tc(j - 1); db = disp(i, j - 1)
-            else
-               ta = t2; da = d2; tb = t1; db = d1
-            end if
-            call turn_extreme(ta, tb, tc(j), da, db, disp(i, j), x, tx)
-            if (tx >= self%t_metrics) then
-               if (samples .and. jj < j) call push_block(self%turns(i:i), disp(i:i, :), jj, j - 1)
-               jj = max(jj, j)
-               call push_value(self%turns(i), x)
-            end if
-         end do
-         if (samples .and. jj <= n) call push_block(self%turns(i:i), disp(i:i, :), jj, n)
+      integer :: j, jj, q
+      real(wp) :: ta, tb, da, db, x, tx
+      jj = j0   ! the next sample to push
+      do q = 1, nh
+         j = self%turn_hits(q)
+         ! the two points taken before step j's end: in the block, or the last ones before it
+         if (j - 2 >= js) then
+            ta = tc(j - 2); da = disp(i, j - 2); tb = tc(j - 1); db = disp(i, j - 1)
+         else if (j - 1 >= js) then
+            ta = self%turn_t1; da = d1; tb = tc(j - 1); db = disp(i, j - 1)
+         else
+            ta = self%turn_t2; da = d2; tb = self%turn_t1; db = d1
+         end if
+         call turn_extreme(ta, tb, tc(j), da, db, disp(i, j), x, tx)
+         if (tx >= self%t_metrics) then
+            if (samples .and. jj < j) call push_block(self%turns(i:i), disp(i:i, :), jj, j - 1)
+            jj = max(jj, j)
+            call push_value(self%turns(i), x)
+         end if
       end do
-      if (n > js) then
-         self%turn_t2 = tc(n - 1)
-      else
-         self%turn_t2 = self%turn_t1
-      end if
-      self%turn_t1 = tc(n)
-   end subroutine block_turns
+      if (samples .and. jj <= n) call push_block(self%turns(i:i), disp(i:i, :), jj, n)
+   end subroutine el_turns
 
    !> One step end of a block, an output sample at t >= t_metrics, into the gear
    !> meshes' order trackers: the block's displacements, forces and node speeds (D-104).
@@ -604,20 +605,48 @@ contains
       end do
    end subroutine block_orders
 
-   !> The steps j = js .. n of a block (columns of disp, (element, step)) at
-   !> whose end element i's point before is a turning point (`track_turns`'
-   !> test), into hits(1:nh), from the element's last two points d1 (later),
-   !> d2, which are advanced to the block's last two.
-   pure subroutine turn_scan(ne, cap, i, js, n, disp, d1, d2, hits, nh)
-      integer, intent(in) :: ne, cap, i, js, n
-      real(wp), intent(in) :: disp(ne, cap)
+   !> `fold_ws` for element i over the n steps of a block (explicit-shape
+   !> arrays: the block's columns, (element, step)), and the scan for its
+   !> turning points in the same pass over its displacements: the steps j = js
+   !> .. n at whose end the point before is one (`track_turns`' test) into
+   !> hits(1:nh), from the element's last two points d1 (later), d2, which are
+   !> advanced to the block's last two. A contact's mode does not change inside
+   !> a block (events end blocks): contact holds for all its steps.
+   subroutine fold_cols(ne, cap, i, n, j0, js, t_prev, tc, disp, force, torque, contact, m, events, t_counted, &
+                        d1, d2, hits, nh)
+      integer, intent(in) :: ne, cap, i, n
+      integer, intent(in) :: j0   !< the first step at or after t_metrics
+      integer, intent(in) :: js   !< the first step taken for turning points
+      real(wp), intent(in) :: t_prev, tc(cap), disp(ne, cap), force(ne, cap), torque(ne, cap)
+      integer, intent(in) :: contact
+      type(element_metrics_t), intent(inout) :: m
+      type(event_t), intent(inout) :: events(:)
+      real(wp), intent(in) :: t_counted
       real(wp), intent(inout) :: d1, d2
       integer, intent(inout) :: hits(cap)
       integer, intent(out) :: nh
-      integer :: j
-      real(wp) :: a, b, d
+      integer :: j, k, jf
+      real(wp) :: pk, fmin, fmax, tmin, tmax, dmin, dmax, tp, t0, tout, a, b, d
+      k = m%open_event
+      if (k > 0) then
+         pk = events(k)%peak_force
+         do j = 1, n
+            pk = max(pk, abs(force(i, j)))
+         end do
+         events(k)%peak_force = pk
+      end if
+      fmin = m%force_min; fmax = m%force_max
+      tmin = m%torque_min; tmax = m%torque_max
+      dmin = m%disp_min; dmax = m%disp_max
       a = d1; b = d2; nh = 0
-      do j = js, n
+      jf = max(j0, js)   ! from jf on both; before it, one of them
+      ! (no internal procedures for these: the variables they would share stay in registers)
+      do j = j0, min(jf - 1, n)   ! the extremes alone (before js)
+         fmin = min(fmin, force(i, j)); fmax = max(fmax, force(i, j))
+         tmin = min(tmin, torque(i, j)); tmax = max(tmax, torque(i, j))
+         dmin = min(dmin, disp(i, j)); dmax = max(dmax, disp(i, j))
+      end do
+      do j = js, min(jf - 1, n)   ! the turning points alone (before j0)
          d = disp(i, j)
          if ((d - a)*(a - b) < 0.0_wp) then
             nh = nh + 1
@@ -625,57 +654,35 @@ contains
          end if
          b = a; a = d
       end do
-      d1 = a; d2 = b
-   end subroutine turn_scan
-
-   !> `fold_ws` over the n steps of a block, element by element (explicit-shape
-   !> arrays: the block's columns, (element, step)). A contact's mode does not
-   !> change inside a block (events end blocks): contact(i) holds for all its steps.
-   subroutine fold_cols(ne, cap, n, j0, t_prev, tc, disp, force, torque, contact, m, events, t_counted)
-      integer, intent(in) :: ne, cap, n
-      integer, intent(in) :: j0   !< the first step at or after t_metrics
-      real(wp), intent(in) :: t_prev, tc(cap), disp(ne, cap), force(ne, cap), torque(ne, cap)
-      integer, intent(in) :: contact(ne)
-      type(element_metrics_t), intent(inout) :: m(ne)
-      type(event_t), intent(inout) :: events(:)
-      real(wp), intent(in) :: t_counted(ne)
-      integer :: i, j, k
-      real(wp) :: pk, fmin, fmax, tmin, tmax, dmin, dmax, tp, t0, tout
-      do i = 1, ne
-         k = m(i)%open_event
-         if (k > 0) then
-            pk = events(k)%peak_force
-            do j = 1, n
-               pk = max(pk, abs(force(i, j)))
-            end do
-            events(k)%peak_force = pk
+      do j = jf, n
+         d = disp(i, j)
+         fmin = min(fmin, force(i, j))
+         fmax = max(fmax, force(i, j))
+         tmin = min(tmin, torque(i, j))
+         tmax = max(tmax, torque(i, j))
+         dmin = min(dmin, d)
+         dmax = max(dmax, d)
+         if ((d - a)*(a - b) < 0.0_wp) then
+            nh = nh + 1
+            hits(nh) = j
          end if
-         if (j0 > n) cycle
-         fmin = m(i)%force_min; fmax = m(i)%force_max
-         tmin = m(i)%torque_min; tmax = m(i)%torque_max
-         dmin = m(i)%disp_min; dmax = m(i)%disp_max
-         do j = j0, n
-            fmin = min(fmin, force(i, j))
-            fmax = max(fmax, force(i, j))
-            tmin = min(tmin, torque(i, j))
-            tmax = max(tmax, torque(i, j))
-            dmin = min(dmin, disp(i, j))
-            dmax = max(dmax, disp(i, j))
-         end do
-         m(i)%force_min = fmin; m(i)%force_max = fmax
-         m(i)%torque_min = tmin; m(i)%torque_max = tmax
-         m(i)%disp_min = dmin; m(i)%disp_max = dmax
-         if (contact(i) == 0) then
-            tout = m(i)%time_out_of_contact
-            do j = j0, n
-               tp = t_prev
-               if (j > 1) tp = tc(j - 1)
-               t0 = max(tp, t_counted(i))
-               if (tc(j) > t0) tout = tout + (tc(j) - t0)
-            end do
-            m(i)%time_out_of_contact = tout
-         end if
+         b = a; a = d
       end do
+      d1 = a; d2 = b
+      if (j0 > n) return
+      m%force_min = fmin; m%force_max = fmax
+      m%torque_min = tmin; m%torque_max = tmax
+      m%disp_min = dmin; m%disp_max = dmax
+      if (contact == 0) then
+         tout = m%time_out_of_contact
+         do j = j0, n
+            tp = t_prev
+            if (j > 1) tp = tc(j - 1)
+            t0 = max(tp, t_counted)
+            if (tc(j) > t0) tout = tout + (tc(j) - t0)
+         end do
+         m%time_out_of_contact = tout
+      end if
    end subroutine fold_cols
 
    !> `update_metrics` for the elements els only, at a local event instant:

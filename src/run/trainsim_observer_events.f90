@@ -4,6 +4,7 @@
 !> RK4 (`step_part`), and the metrics, statistics and last rows at the end (`finish`).
 submodule(trainsim_observer) trainsim_observer_events
    use trainsim_event, only: ev_zone
+   use trainsim_rattle, only: rattle_mesh_t, rattle_mesh, rattle_criterion, impact_energy
    implicit none
 
 contains
@@ -175,6 +176,8 @@ contains
                if (t >= self%t_metrics) then
                   m%impacts = m%impacts + 1
                   m%max_approach_velocity = max(m%max_approach_velocity, abs(evs(k)%approach_velocity))
+                  ! (the sum of V_i^2 / 2 until finish makes it the impact energy, D-134)
+                  m%rattle_energy = m%rattle_energy + 0.5_wp*evs(k)%approach_velocity**2
                end if
             case (ev_separation)
                if (m%open_event > 0) then
@@ -245,7 +248,7 @@ contains
       logical, intent(in), optional :: interrupted
       type(event_t) :: no_rows(0)
       integer :: i
-      real(wp) :: a(0:n_orders, 2)
+      real(wp) :: a(0:n_orders, 2), half_v2(size(model%elements))
       logical :: stopped
       stopped = .false.
       if (present(interrupted)) stopped = interrupted
@@ -284,6 +287,8 @@ contains
       end do
       call load_sharing(model%share_set, self%res%el)
       call dynamic_factor(self%qs, self%res%el)
+      half_v2 = self%res%el%rattle_energy   ! (the sums of V_i^2 / 2)
+      self%res%el%rattle_energy = 0.0_wp
       do i = 1, size(self%mesh_el)   ! the mesh orders of TE and force (D-104)
          call self%orders(i)%amplitudes(a)
          self%res%el(self%mesh_el(i))%te_order = a(1:, 1)
@@ -292,6 +297,8 @@ contains
          associate (m => self%res%el(self%mesh_el(i)))   ! rattle index: impacts a mesh cycle (D-105)
             if (self%orders(i)%cycles() > 0.0_wp) m%rattle_impacts = real(m%impacts, wp)/self%orders(i)%cycles()
          end associate
+         call rattle_figures(model, self%mesh_el(i), self%orders(i), self%mesh_rate(i), &
+                             half_v2(self%mesh_el(i)), t - self%t_metrics, self%res%el(self%mesh_el(i)))
       end do
       if (allocated(self%qs%mesh) .and. t > self%t_metrics) then   ! rattle index: the time out of contact
          where (self%qs%mesh) self%res%el%rattle_open = self%res%el%time_out_of_contact/(t - self%t_metrics)
@@ -338,6 +345,27 @@ contains
          call self%orders(q)%push(t_out, self%mesh_rate(q)*w, [self%s%displacement(i), f])
       end do
    end subroutine obs_feed_orders
+
+   !> The rattle indices from the literature of the gear mesh i (D-134,
+   !> trainsim_rattle) into m: Brosey's criterion from the driver's largest acceleration
+   !> between output samples (the tracker's, over its phase rate N omega_driver) and the
+   !> mean mesh force; the impact energy from half_v2 (the window's sum of V_i^2 / 2) per
+   !> mesh cycle and per second of the window. 0 without a mesh cycle (as rattle_impacts).
+   subroutine rattle_figures(model, i, ot, rate, half_v2, window, m)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: i
+      type(order_tracker_t), intent(in) :: ot
+      real(wp), intent(in) :: rate, half_v2, window
+      type(element_metrics_t), intent(inout) :: m
+      type(rattle_mesh_t) :: c
+      real(wp) :: e
+      if (.not. ot%cycles() > 0.0_wp) return
+      c = rattle_mesh(model, i)
+      m%rattle_criterion = rattle_criterion(c, ot%amax/rate, m%force_mean)
+      e = impact_energy(c, half_v2)
+      m%rattle_energy = e/ot%cycles()
+      if (window > 0.0_wp) m%rattle_power = e/window
+   end subroutine rattle_figures
 
    !> The load-sharing factor of each set of planet meshes (D-96): K = N max F_i / sum F_i
    !> over the set's N meshes, F_i = max(force_max, -force_min) (the largest mesh force

@@ -41,6 +41,10 @@ module trainsim_orders
       real(wp) :: span = 0.0_wp                !< phase advanced since the first sample
       real(wp) :: t0 = 0.0_wp                  !< the first sample's time
       integer :: cycles_done = 0               !< whole cycles completed (the snapshot's)
+      !> the largest |w_j - w_(j-1)| / (t_j - t_(j-1)) over successive samples: the phase
+      !> rate's largest mean acceleration over a sample interval (a rattle criterion's
+      !> driver acceleration, N alpha_max; trainsim_rattle, D-134)
+      real(wp) :: amax = 0.0_wp
       complex(wp) :: c_whole(0:n_orders, n_order_signals) = (0.0_wp, 0.0_wp)   !< c over those whole cycles
       !> the last sample's x e^(-i k phi), real and imaginary parts
       real(wp) :: gr(0:n_orders, n_order_signals) = 0.0_wp, gi(0:n_orders, n_order_signals) = 0.0_wp
@@ -64,6 +68,7 @@ contains
       integer :: j, k
       if (self%n > 0) then
          if (.not. t > self%t) return     ! (a repeated instant adds nothing)
+         self%amax = max(self%amax, abs(w - self%w)/(t - self%t))
          dphi = 0.5_wp*(self%w + w)*(t - self%t)
          self%phi = self%phi + dphi
          if (self%phi >= two_pi .or. self%phi < 0.0_wp) self%phi = modulo(self%phi, two_pi)

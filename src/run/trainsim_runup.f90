@@ -17,18 +17,21 @@
 module trainsim_runup
    use trainsim_kinds, only: wp, two_pi
    use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: str
+   use trainsim_strings, only: str, string_t
    use trainsim_model, only: model_t, rigid_speeds
    use trainsim_signal, only: ramp_signal
    use trainsim_derived, only: set_mesh_frequency
    use trainsim_builder, only: check_run_times
-   use trainsim_quasi_static, only: mesh_period_angle
+   use trainsim_quasi_static, only: mesh_period_angle, static_ref_t, static_reference
    use trainsim_orders, only: order_tracker_t, n_orders, n_order_signals
-   use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t
+   use trainsim_sink, only: sink_t, run_meta_t, sample_t, event_t, run_stats_t, element_metrics_t, &
+      ev_contact_front, ev_contact_rear
+   use trainsim_rattle, only: rattle_mesh_t, rattle_criterion, impact_energy
    implicit none
    private
 
    public :: runup_spec_t, runup_blocks_t, runup_sink_t, prepare_runup, runup_mesh, min_samples_per_cycle
+   public :: ramp_static_reference
 
    !> Output samples a mesh cycle the tracker needs at the top of the range: orders 1..4
    !> are exact below half the samples a cycle (D-104), so at least 2 x 4 + 2.
@@ -51,7 +54,13 @@ module trainsim_runup
       real(wp), allocatable :: te(:, :), force(:, :)
       real(wp), allocatable :: te_min(:), te_max(:), force_min(:), force_max(:)
       real(wp), allocatable :: kv(:)                      !< on the static load's face, 0 without a reference
+      !> the static mesh force at the block's midpoint (ramp_static_reference; 0 without one)
+      real(wp), allocatable :: static_force(:)
       integer, allocatable :: impacts(:)                  !< contact onsets in the block
+      !> rattle indices (D-134, trainsim_rattle): Brosey's criterion from the
+      !> driver's largest acceleration and the mean mesh force of the block, the impact
+      !> energy 1/2 m_eq V_i^2 of the block's contact onsets per mesh cycle and per second
+      real(wp), allocatable :: criterion(:), energy(:), power(:)
    end type runup_blocks_t
 
    !> The sink that tracks the mesh's orders block by block (output samples only: the
@@ -62,7 +71,9 @@ module trainsim_runup
       real(wp) :: t_track = 0.0_wp        !< the ramp's start: blocks begin there
       real(wp) :: t_grid = 0.0_wp, dout = 0.0_wp   !< the output grid t_grid + k dout
       integer :: block_cycles = 20
+      type(rattle_mesh_t) :: rc           !< the mesh's rattle constants (trainsim_rattle)
       type(order_tracker_t), private :: ot
+      real(wp), private :: half_v2 = 0.0_wp   !< the block's contact onsets: the sum of V_i^2 / 2
       real(wp), private :: dmin = huge(1.0_wp), dmax = -huge(1.0_wp), fmin = huge(1.0_wp), fmax = -huge(1.0_wp)
       integer, private :: hits = 0, contact_prev = 0
       type(runup_blocks_t) :: blocks
@@ -70,6 +81,7 @@ module trainsim_runup
       procedure :: open => ru_open
       procedure :: write_sample => ru_sample
       procedure :: close => ru_close
+      procedure :: write_event => ru_event
    end type runup_sink_t
 
 contains
@@ -107,13 +119,16 @@ contains
    !> settle_cycles / f_from to t_b = t_a + |f_to - f_from| / rate, t_end = t_b, no
    !> settling of the run's own (its /metrics are over the whole run). `where_from`,
    !> `where_to`, `where_rate`: what names each value in a message. On return t_a.
-   subroutine prepare_runup(model, ie, spec, where_from, where_to, where_rate, t_a, err)
+   subroutine prepare_runup(model, ie, spec, where_from, where_to, where_rate, t_a, err, torque_at)
       type(model_t), intent(inout) :: model
       integer, intent(in) :: ie
       type(runup_spec_t), intent(in) :: spec
       character(len=*), intent(in) :: where_from, where_to, where_rate
       real(wp), intent(out) :: t_a
       type(error_t), allocatable, intent(out) :: err
+      !> per node: where the deck drives it by a torque (its &load group, '' none), to name
+      !> in the refusal of a torque-driven train
+      type(string_t), intent(in), optional :: torque_at(:)
       real(wp), allocatable :: w(:)
       logical, allocatable :: known(:)
       character(len=:), allocatable :: blame
@@ -168,9 +183,7 @@ contains
          n_held = n_held + 1
       end do
       if (n_held == 0) then
-         call fatal_error(err, where_from//": error: no node of the train of '"//model%elements(ie)%e%id// &
-                          "' has a prescribed speed (&load quantity = 'speed'): a run-up drives its speed on a "// &
-                          'ramp; hold the driver at a constant speed in the deck', err_input)
+         call refuse_torque_driven(model, ie, known, where_from, err, torque_at)
          return
       end if
       model%run%t_end = t_b
@@ -184,6 +197,37 @@ contains
       call model%build_fast_path()   ! (held speeds no longer constant)
    end subroutine prepare_runup
 
+   !> A run-up of a train with no prescribed speed is refused (D-135): from, to and
+   !> rate prescribe the mesh frequency against time, and a train driven by torque makes its
+   !> speed a result of its loads and inertias. The message names the &load group that
+   !> drives the train by torque (torque_at of a node of the train), else `where_from`.
+   subroutine refuse_torque_driven(model, ie, known, where_from, err, torque_at)
+      type(model_t), intent(in) :: model
+      integer, intent(in) :: ie
+      logical, intent(in) :: known(:)
+      character(len=*), intent(in) :: where_from
+      type(error_t), allocatable, intent(out) :: err
+      type(string_t), intent(in), optional :: torque_at(:)
+      character(len=:), allocatable :: at, why
+      integer :: i
+      at = where_from
+      why = "no node of the train of '"//model%elements(ie)%e%id//"' has a prescribed speed"
+      if (present(torque_at)) then
+         do i = 1, min(size(known), size(torque_at))
+            if (known(i) .and. len(torque_at(i)%s) > 0) then
+               at = torque_at(i)%s
+               why = "the train of '"//model%elements(ie)%e%id//"' is driven by a torque here (node '"// &
+                     model%nodes(i)%n%id//"', quantity = 'torque'), and no node of it has a prescribed speed"
+               exit
+            end if
+         end do
+      end if
+      call fatal_error(err, at//': error: '//why//': a run-up prescribes the mesh frequency against time '// &
+                       '(from, to, rate), which a torque-driven train makes a result of its loads and inertias; '// &
+                       "hold the driver's speed for the run-up (&load quantity = 'speed', kind = 'constant'), or "// &
+                       "ramp its torque in trainsim run (&load kind = 'table')", err_input)
+   end subroutine refuse_torque_driven
+
    subroutine ru_open(self, meta, err)
       class(runup_sink_t), intent(inout) :: self
       type(run_meta_t), intent(in) :: meta
@@ -194,7 +238,8 @@ contains
       self%blocks = none
       allocate (self%blocks%f(0), self%blocks%t0(0), self%blocks%t1(0), self%blocks%te(n_orders + 1, 0), &
                 self%blocks%force(n_orders + 1, 0), self%blocks%te_min(0), self%blocks%te_max(0), &
-                self%blocks%force_min(0), self%blocks%force_max(0), self%blocks%kv(0), self%blocks%impacts(0))
+                self%blocks%force_min(0), self%blocks%force_max(0), self%blocks%kv(0), self%blocks%impacts(0), &
+                self%blocks%static_force(0), self%blocks%criterion(0), self%blocks%energy(0), self%blocks%power(0))
       call start_block(self)
       self%contact_prev = 0
    end subroutine ru_open
@@ -250,7 +295,11 @@ contains
          b%te_min = [b%te_min, self%dmin]; b%te_max = [b%te_max, self%dmax]
          b%force_min = [b%force_min, self%fmin]; b%force_max = [b%force_max, self%fmax]
          b%kv = [b%kv, 0.0_wp]
+         b%static_force = [b%static_force, 0.0_wp]
          b%impacts = [b%impacts, self%hits]
+         b%criterion = [b%criterion, rattle_criterion(self%rc, self%ot%amax/self%teeth, a(0, 2))]
+         b%energy = [b%energy, impact_energy(self%rc, self%half_v2)/real(m, wp)]
+         b%power = [b%power, impact_energy(self%rc, self%half_v2)/(t_cut - self%ot%t0)]
       end associate
       call start_block(self)
    end subroutine close_block
@@ -262,26 +311,92 @@ contains
       self%dmin = huge(1.0_wp); self%dmax = -huge(1.0_wp)
       self%fmin = huge(1.0_wp); self%fmax = -huge(1.0_wp)
       self%hits = 0
+      self%half_v2 = 0.0_wp
    end subroutine start_block
 
-   !> The end of the run: Kv of each block from the run's static reference (D-103, at
-   !> the loads as the run starts): the block's largest force on the face F_s presses
-   !> over |F_s|. The last, partial block is left out.
+   !> A row of the event table: a contact onset of the mesh on the ramp adds its V_i^2 / 2
+   !> to the block open when it happens (the impact energy, D-134).
+   subroutine ru_event(self, row, ev, err)
+      class(runup_sink_t), intent(inout) :: self
+      integer, intent(in) :: row
+      type(event_t), intent(in) :: ev
+      type(error_t), allocatable, intent(out) :: err
+      associate (u1 => row, u2 => err)
+      end associate
+      if (ev%element /= self%el .or. ev%t < self%t_track) return
+      if (ev%kind == ev_contact_front .or. ev%kind == ev_contact_rear) &
+         self%half_v2 = self%half_v2 + 0.5_wp*ev%approach_velocity**2
+   end subroutine ru_event
+
+   !> The end of the run (Kv along the ramp: ramp_static_reference, after the run).
    subroutine ru_close(self, events, stats, metrics, err)
       class(runup_sink_t), intent(inout) :: self
       type(event_t), intent(in) :: events(:)
       type(run_stats_t), intent(in) :: stats
       type(element_metrics_t), intent(in) :: metrics(:)
       type(error_t), allocatable, intent(out) :: err
-      real(wp) :: fs
-      associate (u1 => events, u2 => stats, u3 => err)
+      associate (u0 => self, u1 => events, u2 => stats, u3 => metrics, u4 => err)
       end associate
-      if (self%el < 1 .or. self%el > size(metrics)) return
-      fs = metrics(self%el)%static_force
-      if (fs > 0.0_wp) then
-         self%blocks%kv = self%blocks%force_max/fs
-      else if (fs < 0.0_wp) then
-         self%blocks%kv = -self%blocks%force_min/abs(fs)
-      end if
    end subroutine ru_close
+
+   !> The static reference along the ramp (D-135): for each block of `sink` the
+   !> static reference of D-103 at the block's midpoint t_m = (t_0 + t_1)/2, i.e. with the
+   !> run's start moved to t_m: the loads and the prescribed speeds' accelerations at t_m
+   !> (the preload's steady rigid rotation, D-30: the ramp's J alpha on every inertia), every
+   !> free node's initial speed the rigid train's at t_m (damping at that speed counts), a
+   !> held node at its deck angle at t_m.
+   !> Kv of the block = its largest force on the face F_s presses over |F_s|; 0 (and
+   !> static_force 0) where the static reference is not computed. The model's start and
+   !> initial speeds are restored.
+   subroutine ramp_static_reference(model, sink)
+      type(model_t), intent(inout) :: model
+      type(runup_sink_t), intent(inout) :: sink
+      type(static_ref_t) :: qs
+      real(wp), allocatable :: w0(:), th0(:), kappa(:)
+      logical, allocatable :: known(:)
+      real(wp) :: t_saved, tm, w_drv, fs
+      integer :: k, n, nn, held, loop_el
+      nn = size(model%nodes)
+      t_saved = model%run%t_start
+      w0 = [(model%nodes(n)%n%omega0, n=1, nn)]
+      th0 = [(model%nodes(n)%n%theta0, n=1, nn)]
+      call rigid_speeds(model, sink%drv, 1.0_wp, kappa, known, loop_el)
+      held = 0
+      do n = 1, nn
+         if (known(n) .and. model%is_held(n) .and. kappa(n) /= 0.0_wp) then
+            held = n
+            exit
+         end if
+      end do
+      associate (b => sink%blocks)
+         b%kv = 0.0_wp; b%static_force = 0.0_wp
+         if (held == 0) return
+         do k = 1, b%n
+            tm = 0.5_wp*(b%t0(k) + b%t1(k))
+            w_drv = model%speeds(model%speed_of(held))%value(tm)/kappa(held)
+            do n = 1, nn
+               if (known(n)) model%nodes(n)%n%omega0 = kappa(n)*w_drv
+               ! a held node at its starting angle at t_m (its angle at t_m is theta0 + the
+               ! motion's integral, hundreds of radians along a ramp: the preload's residual
+               ! would stall at their rounding); the positions span whole mesh cycles anyway
+               if (model%is_held(n)) model%nodes(n)%n%theta0 = th0(n) - model%speeds(model%speed_of(n))%integral(tm)
+            end do
+            model%run%t_start = tm
+            call static_reference(model, qs)
+            if (.not. qs%computed) cycle
+            fs = qs%force(sink%el)
+            b%static_force(k) = fs
+            if (fs > 0.0_wp) then
+               b%kv(k) = max(0.0_wp, b%force_max(k))/fs
+            else if (fs < 0.0_wp) then
+               b%kv(k) = max(0.0_wp, -b%force_min(k))/abs(fs)
+            end if
+         end do
+      end associate
+      model%run%t_start = t_saved
+      do n = 1, nn
+         model%nodes(n)%n%omega0 = w0(n)
+         model%nodes(n)%n%theta0 = th0(n)
+      end do
+   end subroutine ramp_static_reference
 end module trainsim_runup

@@ -109,12 +109,16 @@ contains
    !> `NODE.tau`, an external torque of 0 beside the deck's loads (the sums are
    !> unchanged: x + 0 = x); `NODE.speed`, `NODE.voltage`, the deck's prescribed
    !> speed or motor voltage there, held at its value at t_start.
-   subroutine session_start(self, model, err, inputs)
+   subroutine session_start(self, model, err, inputs, reference)
       class(session_t), intent(inout), target :: self
       type(model_t), intent(in) :: model
       type(error_t), allocatable, intent(out) :: err
       !> the inputs (`set_input`, `set_torque`)
       type(string_t), intent(in), optional :: inputs(:)
+      !> .false.: no quasi-static reference (the run's Kv, mesh orders and rattle
+      !> indices then absent), for a caller that reads only states (the period map, D-131)
+      logical, intent(in), optional :: reference
+      logical :: with_reference
       type(observer_t) :: fresh_obs
       type(run_stats_t) :: fresh_stats
       type(drive_t) :: fresh_d
@@ -139,7 +143,10 @@ contains
       self%stats = fresh_stats
       call check_fixed_step(self%model, err)
       if (allocated(err)) return
-      call static_reference(self%model, self%obs%qs)   ! Kv, mesh orders, rattle as a run's (D-103, D-118)
+      self%obs%qs = fresh_obs%qs
+      with_reference = .true.
+      if (present(reference)) with_reference = reference
+      if (with_reference) call static_reference(self%model, self%obs%qs)   ! Kv, mesh orders, rattle as a run's (D-103, D-118)
       self%t_end = self%model%run%t_end
       self%dout = self%model%run%output_interval
       if (.not. self%dout > 0.0_wp) self%dout = self%model%run%dt

@@ -22,20 +22,22 @@ module trainsim_sweep_layout
    character(len=*), parameter :: status_names(0:2) = [character(len=7) :: 'pending', 'ok', 'failed']
    !> Layout version (2: variable-length UTF-8 strings, nodes/start_speed; 3: elements/load_sharing;
    !> 4: elements/kv, static_force, static_te_mean, static_te_p2p, force_mean, te_order_1..4, force_order_1..4,
-   !> rattle_impacts, rattle_open).
-   character(len=*), parameter :: format_version = '4'
+   !> rattle_impacts, rattle_open; 5: elements/rattle_criterion, rattle_energy, rattle_power).
+   character(len=*), parameter :: format_version = '5'
 
    !> Per-element metrics (element_metrics_t), in record order; the integer counts are
    !> stored as integer datasets.
-   character(len=*), parameter :: element_metric_names(31) = [character(len=21) :: &
+   character(len=*), parameter :: element_metric_names(34) = [character(len=21) :: &
       'force_min', 'force_max', 'torque_min', 'torque_max', 'disp_min', 'disp_max', 'impacts', 'separations', &
       'zone_changes', 'max_approach_velocity', 'max_peak_force', 'time_out_of_contact', 'p2p_range', &
       'p2p_mean', 'p2p_swings', 'load_sharing', 'kv', 'static_force', 'static_te_mean', 'static_te_p2p', &
       'force_mean', 'te_order_1', 'te_order_2', 'te_order_3', 'te_order_4', 'force_order_1', 'force_order_2', &
-      'force_order_3', 'force_order_4', 'rattle_impacts', 'rattle_open']
-   logical, parameter :: element_metric_is_int(31) = [.false., .false., .false., .false., .false., .false., &
+      'force_order_3', 'force_order_4', 'rattle_impacts', 'rattle_open', 'rattle_criterion', 'rattle_energy', &
+      'rattle_power']
+   logical, parameter :: element_metric_is_int(34) = [.false., .false., .false., .false., .false., .false., &
       .true., .true., .true., .false., .false., .false., .false., .false., .true., .false., .false., .false., .false., &
-      .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false.]
+      .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., .false., &
+      .false., .false., .false.]
    !> Per-node metrics: the speed range after settle_time, the angle and speed at the
    !> end of the run, and the run's initial speed (what the next run of a continuation
    !> branch starts from, trainsim_continuation, also when a killed sweep is resumed).
@@ -243,7 +245,7 @@ contains
                         e%max_approach_velocity, e%max_peak_force, e%time_out_of_contact, e%p2p_range, &
                         e%p2p_mean, real(e%p2p_swings, wp), e%load_sharing, e%kv, e%static_force, &
                         e%static_te_mean, e%static_te_p2p, e%force_mean, e%te_order, e%force_order, &
-                        e%rattle_impacts, e%rattle_open]
+                        e%rattle_impacts, e%rattle_open, e%rattle_criterion, e%rattle_energy, e%rattle_power]
          end associate
       end do
    end function element_record

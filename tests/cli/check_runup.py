@@ -26,6 +26,14 @@ against physics.
     an element that is not a gear mesh, a train without a prescribed speed, an unknown key:
     exit 2, the file, line and key (or the option) named, no backtrace.
 (d) plot_sweep.py draws a run-up file over a sweep file (same axes), and its order map.
+(e) The static reference along the ramp (D-135): the linear mesh of (a) with a fan load on the
+    wheel, T = 400 (w/w_n)^2 opposing (w_n = 78.54 rad/s, the top of the range), beside its
+    constant 440.72: each block's static mesh force is the preload's steady rigid rotation at
+    the block's midpoint, (440.72 + 400 (w/w_n)^2 + J2 alpha)/rb, w = 2 pi f/32 and alpha =
+    2 pi R/32 (exact: the quadratic law at the rigid speed; 1e-9 is the preload's Newton
+    tolerance), and Kv = force_max / static_force (to rounding). The block's rattle criterion
+    (D-134) is J2 alpha / (force_mean rb) (r1 = r2): alpha is exact on a ramp, 1e-9 the
+    rounding of the speed differences; no impacts, so no impact energy.
 
 Usage: check_runup.py TRAINSIM   (cwd = repo root)
 """
@@ -194,8 +202,10 @@ with tempfile.TemporaryDirectory() as tmp:
             base + "&runup from = 300, to = 400, rates = 5 /\n")
     refused("two &runup groups", [], r"bad\.nml:\d+: &runup.*at most one",
             base + "&runup from = 300, to = 400, rate = 5 /\n&runup from = 300, to = 400, rate = 5 /\n")
-    refused("a torque-driven train (no prescribed speed)", ["--from", "300", "--to", "400", "--rate", "5"],
-            r"option --from 300: error: no node of the train of 'mesh' has a prescribed speed",
+    refused("a torque-driven train (no prescribed speed): the &load group that drives it named",
+            ["--from", "300", "--to", "400", "--rate", "5"],
+            r"bad\.nml:\d+: &load #1, key 'quantity' \(not given: 'torque'\): error: the train of 'mesh' is driven "
+            r"by a torque here \(node 'n1'.*a run-up prescribes the mesh frequency against time",
             base.replace("quantity = 'speed', kind = 'constant', value = 95.2286", "kind = 'constant', value = 798.8"))
     r = subprocess.run([exe, "run", os.path.join(tmp, "bad.nml"), "--no-output"], capture_output=True, text=True)
     open(os.path.join(tmp, "ok.nml"), "w").write(base + "&runup from = 300, to = 400, rate = 5 /\n")
@@ -214,6 +224,32 @@ with tempfile.TemporaryDirectory() as tmp:
         p = subprocess.run(["/usr/bin/python3", "scripts/plot_sweep.py", ru, "--te-spectrum", "mesh", "--out", png],
                            capture_output=True, text=True)
         check("(d) plot_sweep.py --te-spectrum of a run-up file", p.returncode == 0, p.stderr[-300:])
+
+    # (e) the static reference along the ramp: a speed-dependent load
+    WN, TN, T0, RATE = 2 * math.pi * 400 / 32, 400.0, 440.7193, 100.0
+    fan = LIN + f"&load node = 'wheel', speed_law = 'quadratic', w_nominal = {WN!r}, value = {-TN} /\n"
+    deck = os.path.join(tmp, "fan.nml")
+    open(deck, "w").write(fan)
+    out = os.path.join(tmp, "fan.h5")
+    r = runup(deck, "--rate", str(RATE), "-o", out)
+    check("(e) run-up with a fan load exits 0", r.returncode == 0, r.stderr[-300:])
+    if r.returncode == 0:
+        x, fs, kv, fmax, crit, fm, en, pw = blocks(out, "static_force", "kv", "force_max", "rattle_criterion",
+                                                   "force_mean", "rattle_energy", "rattle_power")
+        with h5py.File(out, "r") as f:
+            version = f.attrs["format_version"]
+        alpha = 2 * math.pi * RATE / 32
+        want = (T0 + TN * (2 * math.pi * x / 32 / WN) ** 2 + J2 * alpha) / RB
+        dev = np.max(np.abs(fs / want - 1))
+        print(f"     {len(x)} blocks {x[0]:.1f}..{x[-1]:.1f} teeth/s: static force {fs[0]:.4f}..{fs[-1]:.4f} lbf "
+              f"(closed form {want[0]:.4f}..{want[-1]:.4f}, largest rel. {dev:.1e})")
+        check(f"(e) static force of every block = (T0 + T(w) + J2 alpha)/rb to 1e-9 ({dev:.1e}); "
+              f"{fs[-1] / fs[0]:.3f} times the first block's at the last", dev < 1e-9 and fs[-1] / fs[0] > 1.4)
+        check("(e) Kv = force_max / static_force of the block", np.max(np.abs(kv * fs / fmax - 1)) < 1e-14)
+        dc = np.max(np.abs(crit / (J2 * alpha / (fm * RB)) - 1))
+        check(f"(e) rattle_criterion = J2 alpha / (force_mean rb) per block to 1e-9 ({dc:.1e}); no impact energy",
+              dc < 1e-9 and np.all(en == 0) and np.all(pw == 0))
+        check(f"(e) run-up format_version 2 ({version})", str(version) in ("2", "b'2'"))
 
 print("FAILED: %d check(s)" % len(failures) if failures else "all checks passed")
 finish()

@@ -508,10 +508,14 @@ CASES = [
     dict(name="helical iso6336 with youngs_modulus is refused (D-116)",
          deck=HELICAL + "half_backlash = 0.002, stiffness_model = 'iso6336', youngs_modulus = 3e7 /\n",
          exit=2, stderr=["deck.nml:6:", "'stiffness_model'", "no youngs_modulus"]),
-    dict(name="helical tooth_friction_model = 'speed' is refused (D-116)",
+    dict(name="helical 'speed' tooth friction with tooth_friction_velocity <= 0 is refused (D-129)",
          deck=HELICAL + "half_backlash = 0.002, approach_angle = 0.17, tooth_friction = 0.05,\n"
-         "         tooth_friction_model = 'speed' /\n",
-         exit=2, stderr=["deck.nml:7:", "'tooth_friction_model'", "'constant' only"]),
+         "         tooth_friction_model = 'speed', tooth_friction_velocity = -1.0 /\n",
+         exit=2, stderr=["deck.nml:7:", "&element", "tooth_friction_velocity must be > 0", "got -1"]),
+    dict(name="unknown helical tooth_friction_model is refused (D-129)",
+         deck=HELICAL + "half_backlash = 0.002, approach_angle = 0.17, tooth_friction = 0.05,\n"
+         "         tooth_friction_model = 'stribeck' /\n",
+         exit=2, stderr=["deck.nml:7:", "&element", "unknown tooth_friction_model 'stribeck'", "valid: constant, speed"]),
     dict(name="negative helical tooth_friction is refused (D-116)",
          deck=HELICAL + "half_backlash = 0.002, tooth_friction = -0.05 /\n",
          exit=2, stderr=["deck.nml:6:", "tooth_friction must be >= 0", "-0.05"]),
