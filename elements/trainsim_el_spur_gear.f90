@@ -369,7 +369,7 @@ contains
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
-      call em_guards(self, thl, wl, thr, wr, g(1:2))   ! the faces (with no_tension, the clip's: D-124)
+      call em_guards(self, thl, wl, thr, wr, g(1:2))   ! the faces (with no_tension, the clip's: D-136)
       ! a zone without lower bound: a constant positive guard (never crosses), as
       ! the faces not in play; a huge value defeats CVODE's root finding (D-26)
       if (self%lo_open) then
@@ -455,7 +455,7 @@ contains
       ! an excited mesh (issue 26): the torques stay with `torques` while the
       ! stiffness varies or the TE moves the faces (their guards too)
       if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none
-      if (self%ex%has_te .or. self%cl%law%no_tension) form%guards = hg_none   ! (no_tension: D-124)
+      if (self%ex%has_te .or. self%cl%law%no_tension) form%guards = hg_none   ! (no_tension: D-136)
       if (self%fric%on()) then   ! friction: the general path (D-98)
          form%kind = hf_none
          form%guards = hg_none

@@ -783,7 +783,7 @@ contains
       integer, parameter :: n_el = 9
       character(len=240) :: el(n_el)
       ! expected torque form when closed / when open, guard form (no_tension, 2 and 9: none,
-      ! the clip's guard reads the speeds, D-124)
+      ! the clip's guard reads the speeds, D-136)
       integer, parameter :: want_closed(n_el) = [hf_yang_sun, hf_yang_sun, hf_none, hf_yang_sun, hf_none, &
                                                  hf_linear, hf_yang_sun, hf_none, hf_linear]
       integer, parameter :: want_open(n_el) = [hf_open, hf_open, hf_none, hf_open, hf_none, hf_open, hf_open, &

@@ -1,13 +1,13 @@
 !> no_tension clips a contact force at zero: max(F, 0) has a kink where the
 !> unclipped force passes zero in contact, and event-located RK4 keeps its
-!> fourth order only if that kink is an event (D-124). A disk pressed into a
+!> fourth order only if that kink is an event (D-136). A disk pressed into a
 !> clearance coupling to ground (linear law, Kelvin-Voigt) is released from
 !> rest: the damping takes the force to zero while the penetration is still
 !> positive, after which the disk flies off at constant speed. The closed form
 !> is the damped oscillator up to the root t* of k x + c x' = 0, then a straight
 !> line. The observed order of the final state (the slope of log error against
 !> log h) is >= 3.5 with the clip's guard; the same coupling without it (a test
-!> plug-in: what the code did before D-124) falls to about 2 (a kink inside a
+!> plug-in: what the code did before D-136) falls to about 2 (a kink inside a
 !> step: local error O(h^2)).
 module coupling_no_clip_guard_plugin
    use trainsim_kinds, only: wp

@@ -23,7 +23,7 @@
 !> max_static_nodes nodes (the preload's dense Newton would cost more than the run
 !> is worth); the preload fails (an element with more than two ports, a train held by
 !> nothing). With a gear mesh, `kv_absent` gives that reason for the print-out's
-!> warning and the output file's attribute `kv_absent` (D-126 (tidy5)). Not the hot
+!> warning and the output file's attribute `kv_absent` (D-138). Not the hot
 !> path: called once before a run.
 module trainsim_quasi_static
    use trainsim_kinds, only: wp

@@ -42,7 +42,7 @@ module trainsim_sink
       !> and units (trainsim_input_series; unallocated: none).
       type(string_t), allocatable :: input_series_names(:), input_series_units(:)
       !> Why the gear meshes have no static reference, Kv or static TE (trainsim_quasi_static's
-      !> kv_absent; unallocated or '': computed, or no gear mesh; D-126 (tidy5))
+      !> kv_absent; unallocated or '': computed, or no gear mesh; D-138)
       character(len=:), allocatable :: kv_absent
    end type run_meta_t
 

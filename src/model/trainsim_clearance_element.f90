@@ -186,7 +186,7 @@ contains
    end function ce_n_guards
 
    !> Guards 1-2: the front and rear faces (with no_tension, the one not in play
-   !> the clip's: tension_guard, D-124).
+   !> the clip's: tension_guard, D-136).
    pure subroutine ce_guards(self, thl, wl, thr, wr, g)
       class(clearance_element_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
@@ -263,7 +263,7 @@ contains
       class(clearance_element_t), intent(in) :: self
       type(hot_form_t), intent(out) :: form
       form%guards = hg_faces
-      if (self%cl%law%no_tension) form%guards = hg_none   ! (the clip's guard reads the speeds, D-124)
+      if (self%cl%law%no_tension) form%guards = hg_none   ! (the clip's guard reads the speeds, D-136)
       form%mode = self%cl%mode
       form%s = real(self%cl%mode, wp)
       form%b = self%cl%b

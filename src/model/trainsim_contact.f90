@@ -23,7 +23,7 @@
 !> within a step before the event is located). With no_tension (yang_sun,
 !> linear) the clip max(F, 0) is a kink where the unclipped force passes zero
 !> in contact: the face guard not in play carries it (tension_guard) and a
-!> sub-mode `slack` (F clipped) flips there, without an event record (D-124).
+!> sub-mode `slack` (F clipped) flips there, without an event record (D-136).
 module trainsim_contact
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -91,7 +91,7 @@ module trainsim_contact
       type(contact_law_t) :: law
       integer :: mode = 0               !< +1 front face, 0 free, -1 rear face
       !> no_tension and in contact: the unclipped force is <= 0 (clipped to 0);
-      !> flips where it passes zero (tension_guard, D-124)
+      !> flips where it passes zero (tension_guard, D-136)
       logical :: slack = .false.
    contains
       procedure, non_overridable :: delta => cl_delta
@@ -404,7 +404,7 @@ contains
 
    !> no_tension in contact: the guard of the face not in play (1 in `guards`)
    !> becomes the unclipped force's sign `tension`, negated while slack, so
-   !> that it goes below zero where the clip starts or ends (D-124).
+   !> that it goes below zero where the clip starts or ends (D-136).
    pure subroutine cl_tension_guard(self, c, thl, wl, thr, wr, g)
       class(clearance_t), intent(in) :: self
       real(wp), intent(in) :: c, thl, wl, thr, wr
@@ -438,7 +438,7 @@ contains
    end subroutine cl_guards
 
    !> A face guard fired: contact begins or ends (appends 1 event), or with
-   !> no_tension the clip starts or ends (`slack` flips; no event, D-124).
+   !> no_tension the clip starts or ends (`slack` flips; no event, D-136).
    subroutine cl_update(self, wl, wr, fired, ev, nev)
       class(clearance_t), intent(inout) :: self
       real(wp), intent(in) :: wl, wr

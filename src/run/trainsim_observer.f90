@@ -46,7 +46,7 @@ module trainsim_observer
       real(wp) :: energy_scale = 0.0_wp         !< max of stored energy and work input
       real(wp), allocatable :: series_t(:), series_disp(:, :)   !< (element, sample) if keep_series
       real(wp), allocatable :: series_theta(:, :), series_omega(:, :)   !< (node, sample) if keep_series
-      !> why the gear meshes have no Kv or static TE ('': computed, or no gear mesh; D-126 (tidy5))
+      !> why the gear meshes have no Kv or static TE ('': computed, or no gear mesh; D-138)
       character(len=:), allocatable :: kv_absent
    end type run_result_t
 

@@ -65,7 +65,7 @@ contains
       allocate (self%orders(size(self%mesh_el)))
       self%mesh_drv = [(model%elements(self%mesh_el(i))%e%left, i=1, size(self%mesh_el))]
       self%mesh_rate = [(two_pi/self%qs%period(self%mesh_el(i)), i=1, size(self%mesh_el))]
-      self%res%kv_absent = kv_absent(self%qs)   ! (the print-out's warning, the file's attribute: D-126 (tidy5))
+      self%res%kv_absent = kv_absent(self%qs)   ! (the print-out's warning, the file's attribute: D-138)
       if (sink%needs_meta()) then
          meta = make_meta(model)
          meta%kv_absent = self%res%kv_absent

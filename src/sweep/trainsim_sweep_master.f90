@@ -28,7 +28,7 @@ module trainsim_sweep_master
       integer :: n_ready = 0                !< workers whose first request ("ready") was answered
       logical :: own_taken = .false.       !< rank 0 has taken a run of its own
       !> rank 0 has looked for a run of its own after every worker's first request;
-      !> until then a worker's later requests wait (D-125 (tidy5): every rank makes a run)
+      !> until then a worker's later requests wait (D-137: every rank makes a run)
       logical :: own_tried = .false.
       !> the workers whose request waits, and the run each reported (0: none)
       integer :: n_held = 0
@@ -220,7 +220,7 @@ contains
          if (rec%irun > 0 .and. .not. self%own_tried) then
             ! a fast worker's next request waits until every worker's first one has
             ! been answered and rank 0 has taken its run (else, on 3 ranks or more, it
-            ! could take every run before a slow worker's first request: D-125 (tidy5))
+            ! could take every run before a slow worker's first request: D-137)
             self%n_held = self%n_held + 1
             self%held_src(self%n_held) = src
             self%held_run(self%n_held) = rec%irun

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""A gear mesh whose static reference is not computed says so (D-126 (tidy5)).
+"""A gear mesh whose static reference is not computed says so (D-138).
 
     /usr/bin/python3 tests/cli/check_static_skip.py <trainsim>
 

@@ -7,7 +7,7 @@ cases:
   mpi_matches_serial  mpirun -np 2, 3 and 4 give metrics bit-identical to the serial sweep, and
                       every rank made runs (rank 0 answers each worker's first request with a
                       run, then takes one of its own before it answers another request: D-110,
-                      D-125 (tidy5), so this holds whatever the timing) (exit 77 = skipped when
+                      D-137, so this holds whatever the timing) (exit 77 = skipped when
                       mpirun is missing or trainsim was built without MPI)
   resume_after_kill   kill -9 part-way, then the same command: every run present exactly
                       once (the runs done before the kill are not made again, the others
