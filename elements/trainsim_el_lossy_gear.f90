@@ -230,6 +230,7 @@ contains
       real(wp), intent(out) :: g(:)
       real(wp) :: fs, sg
       call self%cl%guards(thl, thr, g(1:2))
+      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), thl, wl, thr, wr, g(1:2))   ! (D-136)
       g(3:4) = 1.0_wp
       if (self%cl%mode == 0) return   ! open: no force, no flow (the flow is chosen as a face closes)
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
@@ -256,7 +257,7 @@ contains
       class(lossy_gear_t), intent(inout) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp) :: fs
-      call self%cl%init(thl, wl, thr, wr)
+      call self%cl%init(thl, wl, thr, wr, self%factor(thl))
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)
       self%con%lam = 0.0_wp
       call self%set_flow(closed_flow(self, fs, wl), fs)

@@ -29,7 +29,7 @@ module trainsim_el_spur_gear
    use trainsim_element, only: lin_state_t, lin_zone_single, lin_zone_stiffest
    use trainsim_clearance_element, only: clearance_hot_form
    use trainsim_element, only: element_t, hot_form_t, hg_faces_zone, hg_none, hf_none
-   use trainsim_excited_mesh, only: em_torques_dissipation, em_status, configure_mesh_excitation
+   use trainsim_excited_mesh, only: em_torques_dissipation, em_status, em_guards, configure_mesh_excitation
    use trainsim_friction_mesh, only: friction_mesh_t
    use trainsim_mesh_excitation, only: model_name
    use trainsim_gear_mesh, only: accept_mesh, check_internal_radii, internal_contact_ratio
@@ -369,11 +369,7 @@ contains
       class(spur_gear_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
-      real(wp) :: a, va
-      call self%shift(thl, 0.0_wp, a, va)
-      call self%cl%guards(a, thr, g(1:2))
-      associate (u1 => wl, u2 => wr)
-      end associate
+      call em_guards(self, thl, wl, thr, wr, g(1:2))   ! the faces (with no_tension, the clip's: D-136)
       ! a zone without lower bound: a constant positive guard (never crosses), as
       ! the faces not in play; a huge value defeats CVODE's root finding (D-26)
       if (self%lo_open) then
@@ -391,7 +387,7 @@ contains
       real(wp) :: a, va
       call self%set_zone(thl)
       call self%shift(thl, wl, a, va)
-      call self%cl%init(a, va, thr, wr)
+      call self%cl%init(a, va, thr, wr, self%factor(thl))
       if (self%fric%n_guards() > 0) call self%fric%set_signs(self%roll(thl), self%pairs, self%cl%mode, wl, wr)
    end subroutine spur_init_mode
 
@@ -459,7 +455,7 @@ contains
       ! an excited mesh (issue 26): the torques stay with `torques` while the
       ! stiffness varies or the TE moves the faces (their guards too)
       if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none
-      if (self%ex%has_te) form%guards = hg_none
+      if (self%ex%has_te .or. self%cl%law%no_tension) form%guards = hg_none   ! (no_tension: D-136)
       if (self%fric%on()) then   ! friction: the general path (D-98)
          form%kind = hf_none
          form%guards = hg_none

@@ -6,13 +6,13 @@
 !> the path of contact, [0, 2 pi m_p / N] (App. E uses pi m_p / N).
 program test_gear_phase
    use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t, err_input
+   use trainsim_error, only: error_t
    use trainsim_deck, only: deck_t, parse_deck
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
    use trainsim_el_spur_gear, only: mesh_zone
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model_text, nl
+   use trainsim_test_support, only: load_model_text, nl, expect_build_error
    implicit none
 
    character(len=*), parameter :: head = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
@@ -103,15 +103,7 @@ contains
    !> Building the deck fails with an input error whose message names `key`.
    subroutine expect_error(text, key)
       character(len=*), intent(in) :: text, key
-      type(deck_t) :: deck
-      type(model_t) :: m
-      type(error_t), allocatable :: err
-      call parse_deck(text, 'inline.nml', deck, err)
-      if (.not. allocated(err)) call build_model(deck, m, err)
-      call check('rejected: '//text(index(text, '&element'):), allocated(err))
-      if (.not. allocated(err)) return
-      call check('  as bad input (exit 2)', err%code == err_input)
-      call check('  naming '//key//': '//err%message, index(err%message, key) > 0 .and. index(err%message, 'error') > 0)
+      call expect_build_error(text, key, where=.false.)
    end subroutine expect_error
 
    subroutine expect_ok(text)

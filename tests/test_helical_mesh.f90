@@ -31,7 +31,7 @@ program test_helical_mesh
    use trainsim_el_helical_gear, only: helical_contact_length, contact_lines, max_lines
    use trainsim_param_list, only: param_list_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error
+   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error, real_text
    implicit none
 
    real(wp), parameter :: rb1 = 1.4095_wp, rb2 = 2.819_wp, n1 = 24.0_wp, mp = 1.55_wp, face = 1.2_wp
@@ -398,12 +398,4 @@ contains
       s = ''
       if (len_trim(model) > 0) s = ', '//trim(model)
    end function opt
-
-   function real_text(x) result(s)
-      real(wp), intent(in) :: x
-      character(len=:), allocatable :: s
-      character(len=32) :: buf
-      write (buf, '(es24.16e3)') x
-      s = trim(adjustl(buf))
-   end function real_text
 end program test_helical_mesh

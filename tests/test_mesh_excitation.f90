@@ -7,15 +7,12 @@
 !> and a moving TE, the Jacobian against finite differences, bad input.
 program test_mesh_excitation
    use trainsim_kinds, only: wp, pi, two_pi
-   use trainsim_error, only: error_t, err_input
-   use trainsim_deck, only: deck_t, parse_deck
-   use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
    use trainsim_observer, only: run_result_t
    use trainsim_el_spur_gear, only: spur_gear_t
    use trainsim_mesh_excitation, only: iso_single_pair_stiffness
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error
+   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error, expect_build_error
    implicit none
 
    character(len=*), parameter :: head = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
@@ -355,16 +352,7 @@ contains
    !> Building the deck fails with an input error whose message names `key`, the file and the group.
    subroutine expect_error(text, key)
       character(len=*), intent(in) :: text, key
-      type(deck_t) :: deck
-      type(model_t) :: m
-      type(error_t), allocatable :: err
-      call parse_deck(text, 'inline.nml', deck, err)
-      if (.not. allocated(err)) call build_model(deck, m, err)
-      call check('rejected: '//text(index(text, '&element'):), allocated(err))
-      if (.not. allocated(err)) return
-      call check('  as bad input (exit 2)', err%code == err_input)
-      call check('  naming '//key//', file, group: '//err%message, index(err%message, key) > 0 .and. &
-                 index(err%message, 'inline.nml:') > 0 .and. index(err%message, '&element') > 0)
+      call expect_build_error(text, key, where=.true.)
    end subroutine expect_error
 
    function replace_rk4(s) result(r)

@@ -23,7 +23,7 @@ program test_tooth_friction
    use trainsim_event, only: ev_slip_forward, ev_slip_backward
    use trainsim_element, only: hot_form_t, hf_none
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error
+   use trainsim_test_support, only: load_model_text, run_model, nl, jacobian_fd_error, real_text
    implicit none
 
    real(wp), parameter :: mu = 0.06_wp, k = 1.0e7_wp, c2 = 1.8_wp, b = 0.002_wp, pen = 5.0e-4_wp
@@ -311,12 +311,4 @@ contains
       ! without the friction's partials the error is ~mu rho / r_b1 ~ 2e-2
       call check('max |J_analytic - J_fd| / max |J|', worst, 0.0_wp, abs_tol=1.0e-6_wp)
    end subroutine jacobian_with_friction
-
-   function real_text(x) result(s)
-      real(wp), intent(in) :: x
-      character(len=:), allocatable :: s
-      character(len=32) :: buf
-      write (buf, '(es24.16e3)') x
-      s = trim(adjustl(buf))
-   end function real_text
 end program test_tooth_friction

@@ -2,17 +2,19 @@
 !> it in memory. A setup failure is a test-harness failure (error stop).
 module trainsim_test_support
    use trainsim_kinds, only: wp
-   use trainsim_error, only: error_t
+   use trainsim_error, only: error_t, err_input
    use trainsim_deck, only: deck_t, read_deck, parse_deck
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: null_sink_t
+   use trainsim_testing, only: check
    implicit none
    private
 
    public :: load_model, load_model_text, run_model, nl, zero_crossings, jacobian_fd_error
+   public :: real_text, expect_build_error, loglog_slope
 
    character(len=1), parameter :: nl = new_line('a')
 
@@ -107,4 +109,45 @@ contains
          end if
       end do
    end subroutine zero_crossings
+
+   !> x written with every digit it has (a deck value that reads back to the same bits).
+   function real_text(x) result(s)
+      real(wp), intent(in) :: x
+      character(len=:), allocatable :: s
+      character(len=32) :: buf
+      write (buf, '(es24.16e3)') x
+      s = trim(adjustl(buf))
+   end function real_text
+
+   !> Checks that building the deck `text` (file name 'inline.nml') fails as bad input
+   !> (exit 2) with a message that names `key`, and the file and the group when `where`.
+   subroutine expect_build_error(text, key, where)
+      character(len=*), intent(in) :: text, key
+      logical, intent(in) :: where
+      type(deck_t) :: deck
+      type(model_t) :: m
+      type(error_t), allocatable :: err
+      logical :: named
+      call parse_deck(text, 'inline.nml', deck, err)
+      if (.not. allocated(err)) call build_model(deck, m, err)
+      call check('rejected: '//text(index(text, '&element'):), allocated(err))
+      if (.not. allocated(err)) return
+      call check('  as bad input (exit 2)', err%code == err_input)
+      if (where) then
+         named = index(err%message, key) > 0 .and. index(err%message, 'inline.nml:') > 0 .and. &
+                 index(err%message, '&element') > 0
+         call check('  naming '//key//', file, group: '//err%message, named)
+      else
+         call check('  naming '//key//': '//err%message, index(err%message, key) > 0 .and. index(err%message, 'error') > 0)
+      end if
+   end subroutine expect_build_error
+
+   !> The least-squares slope of log y against log x (an observed order of convergence
+   !> over several steps rather than one ratio).
+   pure real(wp) function loglog_slope(x, y) result(p)
+      real(wp), intent(in) :: x(:), y(:)
+      real(wp) :: lx(size(x)), ly(size(y))
+      lx = log(x); ly = log(y)
+      p = sum((lx - sum(lx)/size(lx))*(ly - sum(ly)/size(ly)))/sum((lx - sum(lx)/size(lx))**2)
+   end function loglog_slope
 end module trainsim_test_support

@@ -22,17 +22,21 @@
 !> Not computed (every figure 0, `note` says why): no gear mesh; more than
 !> max_static_nodes nodes (the preload's dense Newton would cost more than the run
 !> is worth); the preload fails (an element with more than two ports, a train held by
-!> nothing). Not the hot path: called once before a run.
+!> nothing). With a gear mesh, `kv_absent` gives that reason for the print-out's
+!> warning and the output file's attribute `kv_absent` (D-138). Not the hot
+!> path: called once before a run.
 module trainsim_quasi_static
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t, rigid_speeds
    use trainsim_preload, only: preload_info_t, apply_preload
    use trainsim_param_list, only: param_list_t
+   use trainsim_strings, only: str
    implicit none
    private
 
    public :: static_ref_t, static_reference, mesh_period_angle, static_positions, max_static_nodes, max_static_cycles
+   public :: kv_absent
 
    !> Driver positions per mesh cycle (a two-level stiffness has two static values;
    !> 24 places at least 7 in the shorter zone of any contact ratio in [1.3, 1.7]).
@@ -91,6 +95,16 @@ contains
       if (h >= 1.0_wp) nc = nint(min(h, real(max_static_cycles, wp)))
    end function static_cycles
 
+   !> Why the gear meshes of `ref` have no static reference, so no Kv or static TE
+   !> ('' when it was computed, or when there is no gear mesh).
+   function kv_absent(ref) result(why)
+      type(static_ref_t), intent(in) :: ref
+      character(len=:), allocatable :: why
+      why = ''
+      if (ref%computed .or. .not. allocated(ref%mesh) .or. .not. allocated(ref%note)) return
+      if (any(ref%mesh)) why = ref%note
+   end function kv_absent
+
    !> The static reference of every gear mesh of `model` (see the module note).
    subroutine static_reference(model, ref)
       type(model_t), intent(inout) :: model
@@ -114,7 +128,8 @@ contains
          return
       end if
       if (nn > max_static_nodes) then
-         ref%note = 'more than 400 nodes'
+         ref%note = 'the train has '//str(nn)//' nodes, more than '//str(max_static_nodes)// &
+                    ' (the static solve is dense: max_static_nodes)'
          return
       end if
       theta_saved = [(model%nodes(n)%n%theta0, n=1, nn)]

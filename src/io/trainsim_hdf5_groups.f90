@@ -86,7 +86,8 @@ contains
       end do
    end function state_units
 
-   !> Root attributes: what the run was (title, deck, units, version, integrator).
+   !> Root attributes: what the run was (title, deck, units, version, integrator), and
+   !> `kv_absent` when its gear meshes have no static reference (why; D-138).
    subroutine write_root_attributes(file, meta, err)
       integer(hid_t), intent(in) :: file
       type(run_meta_t), intent(in) :: meta
@@ -106,6 +107,8 @@ contains
       if (.not. allocated(err)) call put_str_attr(file, 'git_revision', git_revision(), err)
       if (.not. allocated(err)) call put_str_attr(file, 'integrator', opt_text(meta%integrator), err)
       if (.not. allocated(err)) call put_str_attr(file, 'created', iso_now(), err)
+      if (len(opt_text(meta%kv_absent)) > 0 .and. .not. allocated(err)) &   ! (only then: D-138)
+         call put_str_attr(file, 'kv_absent', meta%kv_absent, err)
       if (.not. allocated(err)) call write_deck_files(file, meta%input_keys, meta%input_files, &
                                                       meta%input_texts, err)
    end subroutine write_root_attributes

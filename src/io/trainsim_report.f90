@@ -211,6 +211,13 @@ contains
             call out%end_line()
          end do
       end if
+      if (allocated(res%kv_absent)) then   ! a gear mesh without its static reference (D-138)
+         if (len(res%kv_absent) > 0) then
+            call out%a('warning: no dynamic factor Kv or static TE: the static reference was not computed: '// &
+                       res%kv_absent, 0)
+            call out%end_line()
+         end if
+      end if
       call out%flush()
       wn = id_width(model, nodes=.true.)
       write (unit, '(a)') 'final state:'

@@ -41,6 +41,9 @@ module trainsim_sink
       !> The input series (loads, prescribed speeds, motor voltages) of /inputs: names
       !> and units (trainsim_input_series; unallocated: none).
       type(string_t), allocatable :: input_series_names(:), input_series_units(:)
+      !> Why the gear meshes have no static reference, Kv or static TE (trainsim_quasi_static's
+      !> kv_absent; unallocated or '': computed, or no gear mesh; D-138)
+      character(len=:), allocatable :: kv_absent
    end type run_meta_t
 
    !> One output sample (all arrays sized at run start; no allocation per sample).

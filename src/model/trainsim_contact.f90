@@ -20,7 +20,10 @@
 !>
 !> The discrete mode (face) changes only at events; inside a mode the force is
 !> a smooth function of the state (the penetration may go slightly negative
-!> within a step before the event is located).
+!> within a step before the event is located). With no_tension (yang_sun,
+!> linear) the clip max(F, 0) is a kink where the unclipped force passes zero
+!> in contact: the face guard not in play carries it (tension_guard) and a
+!> sub-mode `slack` (F clipped) flips there, without an event record (D-136).
 module trainsim_contact
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -87,10 +90,15 @@ module trainsim_contact
       real(wp) :: r1 = 1.0_wp, r2 = 1.0_wp, b = 0.0_wp
       type(contact_law_t) :: law
       integer :: mode = 0               !< +1 front face, 0 free, -1 rear face
+      !> no_tension and in contact: the unclipped force is <= 0 (clipped to 0);
+      !> flips where it passes zero (tension_guard, D-136)
+      logical :: slack = .false.
    contains
       procedure, non_overridable :: delta => cl_delta
       procedure :: init => cl_init
       procedure, non_overridable :: guards => cl_guards
+      procedure, non_overridable :: tension_guard => cl_tension_guard
+      procedure, non_overridable :: tension => cl_tension
       procedure :: update => cl_update
       procedure, non_overridable :: contact_force => cl_contact_force
       procedure, non_overridable :: torques => cl_torques
@@ -98,6 +106,28 @@ module trainsim_contact
       procedure, non_overridable :: dissipation => cl_dissipation
       procedure :: torque_jacobian => cl_torque_jacobian
    end type clearance_t
+
+   ! The linearised damping (modes, the dt bound) and the elastic energy (the energy
+   ! ledger): off the RHS's path, in the submodule trainsim_contact_linear.
+   interface
+      pure real(wp) module function law_lowest_restitution(self) result(e)
+         class(contact_law_t), intent(in) :: self
+      end function law_lowest_restitution
+      pure real(wp) module function law_linear_damping(self, c, m_eff, largest, scale, f_load) result(cd)
+         class(contact_law_t), intent(in) :: self
+         real(wp), intent(in) :: c, m_eff, scale
+         logical, intent(in) :: largest
+         real(wp), intent(in), optional :: f_load
+      end function law_linear_damping
+      pure real(wp) module function law_gentle_damping(self, f) result(cd)
+         class(contact_law_t), intent(in) :: self
+         real(wp), intent(in) :: f
+      end function law_gentle_damping
+      pure real(wp) module function law_elastic_energy(self, p) result(e)
+         class(contact_law_t), intent(in) :: self
+         real(wp), intent(in) :: p
+      end function law_elastic_energy
+   end interface
 
 contains
 
@@ -187,82 +217,6 @@ contains
       end select
       e = min(max(e, 0.0_wp), 1.0_wp)
    end function law_restitution
-
-   !> The smallest restitution the law gives for approach velocities from the
-   !> floor min_approach_velocity up to the largest plausible one,
-   !> v_plausible_ips (D-25). Both fits are monotone in V_i (goldsmith falls,
-   !> smith rises), so it is the smaller of the two ends; constant is constant.
-   pure real(wp) function law_lowest_restitution(self) result(e)
-      class(contact_law_t), intent(in) :: self
-      if (self%restitution_law == rest_constant) then
-         e = self%e_const
-      else
-         e = min(self%restitution(self%v_min), self%restitution(v_plausible_ips/self%v_to_ips))
-      end if
-   end function law_lowest_restitution
-
-   !> Linearised damping along the contact normal (force per unit rate) of a
-   !> closed contact with stiffness factor c and effective mass m_eff behind it
-   !> (D-25). yang_sun: the force c D p pdot linearises to c D p; at the largest
-   !> compression of an impact at V_i, p = V_i sqrt(m_eff/(c k)), and eq. (3.12)
-   !> gives D V_i = phi(e) k with phi(e) = 6(1-e)/((2e-1)^2+3) <= 3/2, so
-   !>   c D p = phi(e) sqrt(c k m_eff),
-   !> independent of V_i except through e. `largest`: e is the law's lowest
-   !> (any contact that may still begin), else the contact in progress's e.
-   !> `scale` multiplies it (0..1). linear, elasto_backlash: the viscous d.
-   !>
-   !> A contact that closes gently and then carries a load is not bounded by
-   !> that (D-55): at the static penetration p = F/(c k) its damping is
-   !> c D p = phi(e(V)) F / V, with V as slow as the floor min_approach_velocity
-   !> (or initial_contact_velocity, for a contact closed at t_start). With
-   !> `largest` and f_load > 0 (the largest force the loads can drive through
-   !> the contact), the larger of the two is taken; for the contact in progress
-   !> (not `largest`), its own D at that penetration, c D p = D F / k.
-   pure real(wp) function law_linear_damping(self, c, m_eff, largest, scale, f_load) result(cd)
-      class(contact_law_t), intent(in) :: self
-      real(wp), intent(in) :: c, m_eff, scale
-      logical, intent(in) :: largest
-      real(wp), intent(in), optional :: f_load
-      real(wp) :: e, phi
-      if (self%law == law_yang_sun) then
-         if (largest) then
-            e = self%lowest_restitution()
-         else
-            e = self%e
-         end if
-         phi = 6.0_wp*(1.0_wp - e)/((2.0_wp*e - 1.0_wp)**2 + 3.0_wp)    ! D V_i / k, eq. (3.12)
-         cd = scale*phi*sqrt(c*self%k*m_eff)
-         if (present(f_load)) then
-            if (largest) then
-               cd = max(cd, scale*self%gentle_damping(f_load))
-            else if (self%k > 0.0_wp) then
-               cd = max(cd, scale*self%d*f_load/self%k)    ! c D p at p = F/(c k): the contact in progress
-            end if
-         end if
-      else
-         cd = self%c
-      end if
-   end function law_linear_damping
-
-   !> yang_sun: damping c D p of a contact closed at the slowest approach the law
-   !> allows and carrying force f at its static penetration p = f/(c k):
-   !> phi(e(V)) f / V (eq. (3.12)), V the floor min_approach_velocity or a
-   !> smaller initial_contact_velocity (D-55). 0 for the other laws.
-   pure real(wp) function law_gentle_damping(self, f) result(cd)
-      class(contact_law_t), intent(in) :: self
-      real(wp), intent(in) :: f
-      cd = 0.0_wp
-      if (self%law /= law_yang_sun .or. .not. f > 0.0_wp) return
-      if (self%v_min > 0.0_wp) cd = phi_over_v(self%v_min)
-      if (self%v_initial > 0.0_wp) cd = max(cd, phi_over_v(self%v_initial))
-   contains
-      pure real(wp) function phi_over_v(v) result(r)
-         real(wp), intent(in) :: v
-         real(wp) :: e
-         e = self%restitution(v)
-         r = 6.0_wp*(1.0_wp - e)/((2.0_wp*e - 1.0_wp)**2 + 3.0_wp)*f/v
-      end function phi_over_v
-   end function law_gentle_damping
 
    !> A contact begins with approach velocity v_i: fix e and D for its duration.
    !> `initial` marks a contact already closed at t_start (MODEL-NOTES 11).
@@ -392,36 +346,6 @@ contains
       end if
    end subroutine law_force_partials
 
-   !> Elastic energy at penetration p (factor 1): k p^2/2, or the integral of the
-   !> load-dependent key force: exact below the 100 lbf floor of the fit (linear
-   !> there), 5-point Gauss-Legendre above it (smooth; the kink is the split point).
-   pure real(wp) function law_elastic_energy(self, p) result(e)
-      class(contact_law_t), intent(in) :: self
-      real(wp), intent(in) :: p
-      real(wp), parameter :: x(5) = [-0.9061798459386640_wp, -0.5384693101056831_wp, 0.0_wp, &
-                                     0.5384693101056831_wp, 0.9061798459386640_wp]
-      real(wp), parameter :: w(5) = [0.2369268850561891_wp, 0.4786286704993665_wp, 0.5688888888888889_wp, &
-                                     0.4786286704993665_wp, 0.2369268850561891_wp]
-      real(wp) :: k100, dk, klin, pk, a
-      integer :: i
-      if (self%fit == fit_none) then
-         e = 0.5_wp*self%k*p**2
-         return
-      end if
-      call key_lineal_stiffness(self%fit, 100.0_wp, k100, dk)
-      klin = k100*self%key_length_in*self%to_inch/self%to_lbf     ! force/length below 100 lbf
-      pk = (100.0_wp/self%to_lbf)/klin                             ! penetration at 100 lbf
-      if (abs(p) <= pk) then
-         e = 0.5_wp*klin*p**2
-         return
-      end if
-      a = sign(pk, p)
-      e = 0.5_wp*klin*pk**2
-      do i = 1, 5
-         e = e + 0.5_wp*(p - a)*w(i)*self%fit_elastic_force(a + 0.5_wp*(p - a)*(x(i) + 1.0_wp))
-      end do
-   end function law_elastic_energy
-
    !> Relative displacement along the line of action.
    pure real(wp) function cl_delta(self, thl, thr) result(d)
       class(clearance_t), intent(in) :: self
@@ -429,11 +353,13 @@ contains
       d = self%r1*thl - self%r2*thr
    end function cl_delta
 
-   !> Mode at t_start from the initial state.
-   subroutine cl_init(self, thl, wl, thr, wr)
+   !> Mode at t_start from the initial state (c: the stiffness factor there,
+   !> for the no_tension sub-mode; 1 if absent).
+   subroutine cl_init(self, thl, wl, thr, wr, c)
       class(clearance_t), intent(inout) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
-      real(wp) :: d, dd
+      real(wp), intent(in), optional :: c
+      real(wp) :: d, dd, cf
       d = self%delta(thl, thr)
       dd = self%r1*wl - self%r2*wr
       if (d >= self%b) then
@@ -445,7 +371,54 @@ contains
       else
          self%mode = 0
       end if
+      cf = 1.0_wp
+      if (present(c)) cf = c
+      self%slack = .false.
+      if (self%mode /= 0) self%slack = self%tension(cf, thl, wl, thr, wr) < 0.0_wp
    end subroutine cl_init
+
+   !> The sign of the unclipped contact force on the face in contact (a
+   !> positive multiple of it: yang_sun without a key fit k + D pdot, its
+   !> factor c p dropped so that it does not vanish with p at the separation;
+   !> else the force itself); 1 unless no_tension clips a yang_sun or linear
+   !> law in contact.
+   pure real(wp) function cl_tension(self, c, thl, wl, thr, wr) result(h)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, wl, thr, wr
+      real(wp) :: s, p, pdot
+      h = 1.0_wp
+      if (self%mode == 0 .or. .not. self%law%no_tension .or. self%law%law == law_elasto) return
+      s = real(self%mode, wp)
+      p = s*(self%r1*thl - self%r2*thr) - self%b
+      pdot = s*(self%r1*wl - self%r2*wr)
+      if (self%law%law == law_yang_sun) then
+         if (self%law%fit == fit_none) then
+            h = self%law%k + self%law%d*pdot
+         else
+            h = self%law%elastic_force(p) + self%law%d*p*pdot
+         end if
+      else
+         h = c*self%law%elastic_force(p) + self%law%c*pdot
+      end if
+   end function cl_tension
+
+   !> no_tension in contact: the guard of the face not in play (1 in `guards`)
+   !> becomes the unclipped force's sign `tension`, negated while slack, so
+   !> that it goes below zero where the clip starts or ends (D-136).
+   pure subroutine cl_tension_guard(self, c, thl, wl, thr, wr, g)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, wl, thr, wr
+      real(wp), intent(inout) :: g(2)
+      real(wp) :: h
+      if (self%mode == 0 .or. .not. self%law%no_tension .or. self%law%law == law_elasto) return
+      h = self%tension(c, thl, wl, thr, wr)
+      if (self%slack) h = -h
+      if (self%mode == 1) then
+         g(2) = h
+      else
+         g(1) = h
+      end if
+   end subroutine cl_tension_guard
 
    !> Guards: g(1) for the front face, g(2) for the rear face.
    pure subroutine cl_guards(self, thl, thr, g)
@@ -464,7 +437,8 @@ contains
       end select
    end subroutine cl_guards
 
-   !> A face guard fired: contact begins or ends. Appends 0 or 1 event.
+   !> A face guard fired: contact begins or ends (appends 1 event), or with
+   !> no_tension the clip starts or ends (`slack` flips; no event, D-136).
    subroutine cl_update(self, wl, wr, fired, ev, nev)
       class(clearance_t), intent(inout) :: self
       real(wp), intent(in) :: wl, wr
@@ -475,6 +449,7 @@ contains
       dd = self%r1*wl - self%r2*wr
       select case (self%mode)
       case (0)
+         self%slack = .false.
          if (fired(1)) then
             self%mode = 1
             call self%law%begin_contact(dd, .false.)
@@ -487,12 +462,18 @@ contains
       case (1)
          if (fired(1)) then
             self%mode = 0
+            self%slack = .false.
             call push(ev_separation, -dd)
+         else if (fired(2)) then                ! (no_tension: the clip starts or ends)
+            self%slack = .not. self%slack
          end if
       case (-1)
          if (fired(2)) then
             self%mode = 0
+            self%slack = .false.
             call push(ev_separation, dd)
+         else if (fired(1)) then
+            self%slack = .not. self%slack
          end if
       end select
    contains

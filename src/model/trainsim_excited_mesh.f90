@@ -26,7 +26,7 @@ module trainsim_excited_mesh
 
    public :: excited_mesh_t, excited_input_power, configure_mesh_excitation
    ! the torques under names a concrete type's own `torques` can fall back on (tooth friction)
-   public :: em_torques, em_torques_dissipation, em_dissipation, em_torque_jacobian, em_status
+   public :: em_torques, em_torques_dissipation, em_dissipation, em_torque_jacobian, em_status, em_guards
 
    !> |driver angle| beyond which the roll is taken at this value (D-26).
    real(wp), parameter :: theta_cap = 1.0e250_wp
@@ -264,10 +264,9 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
       real(wp) :: a, va
-      associate (u1 => wl, u2 => wr)
-      end associate
-      call self%shift(thl, 0.0_wp, a, va)
+      call self%shift(thl, wl, a, va)
       call self%cl%guards(a, thr, g(1:2))
+      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), a, va, thr, wr, g(1:2))   ! (D-136)
    end subroutine em_guards
 
    subroutine em_init_mode(self, thl, wl, thr, wr)
@@ -275,7 +274,7 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp) :: a, va
       call self%shift(thl, wl, a, va)
-      call self%cl%init(a, va, thr, wr)
+      call self%cl%init(a, va, thr, wr, self%factor(thl))
    end subroutine em_init_mode
 
    subroutine em_update_mode(self, t, thl, wl, thr, wr, fired, ev, nev)

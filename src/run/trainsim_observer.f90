@@ -20,7 +20,7 @@ module trainsim_observer
                             ev_contact_front, ev_contact_rear, ev_separation, run_meta_t
    use trainsim_run_meta, only: make_meta
    use trainsim_metrics, only: p2p_detector_t, push_samples, push_block, push_value, turn_extreme
-   use trainsim_quasi_static, only: static_ref_t
+   use trainsim_quasi_static, only: static_ref_t, kv_absent
    use trainsim_orders, only: order_tracker_t, n_orders
    implicit none
    private
@@ -46,6 +46,8 @@ module trainsim_observer
       real(wp) :: energy_scale = 0.0_wp         !< max of stored energy and work input
       real(wp), allocatable :: series_t(:), series_disp(:, :)   !< (element, sample) if keep_series
       real(wp), allocatable :: series_theta(:, :), series_omega(:, :)   !< (node, sample) if keep_series
+      !> why the gear meshes have no Kv or static TE ('': computed, or no gear mesh; D-138)
+      character(len=:), allocatable :: kv_absent
    end type run_result_t
 
    type :: observer_t

@@ -17,6 +17,7 @@ contains
       class(sink_t), intent(inout), target :: sink   !< kept by the observer until finish (events)
       type(error_t), allocatable, intent(out) :: err
       integer :: nn, ne, nmax, i
+      type(run_meta_t) :: meta
       nn = size(model%nodes); ne = size(model%elements)
       allocate (self%s%y(model%n_y), self%s%theta(nn), self%s%omega(nn))
       allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
@@ -64,8 +65,11 @@ contains
       allocate (self%orders(size(self%mesh_el)))
       self%mesh_drv = [(model%elements(self%mesh_el(i))%e%left, i=1, size(self%mesh_el))]
       self%mesh_rate = [(two_pi/self%qs%period(self%mesh_el(i)), i=1, size(self%mesh_el))]
+      self%res%kv_absent = kv_absent(self%qs)   ! (the print-out's warning, the file's attribute: D-138)
       if (sink%needs_meta()) then
-         call sink%open(make_meta(model), err)
+         meta = make_meta(model)
+         meta%kv_absent = self%res%kv_absent
+         call sink%open(meta, err)
       else
          call sink%open(run_meta_t(), err)
       end if

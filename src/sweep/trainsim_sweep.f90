@@ -437,6 +437,7 @@ contains
          end if
          irun = 0
          if (.not. allocated(m%err)) irun = m%take(last)
+         m%own_tried = .true.                 ! (the workers' waiting requests answered next: D-137)
          if (irun > 0) then
             m%own_taken = .true.
             call run_one(opt, deck, spec, lay, done, irun, 0, rec, st, m)

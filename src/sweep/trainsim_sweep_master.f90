@@ -27,6 +27,12 @@ module trainsim_sweep_master
       integer :: next = 1, stopped = 0, n_ranks = 1, ne = 0, nn = 0
       integer :: n_ready = 0                !< workers whose first request ("ready") was answered
       logical :: own_taken = .false.       !< rank 0 has taken a run of its own
+      !> rank 0 has looked for a run of its own after every worker's first request;
+      !> until then a worker's later requests wait (D-137: every rank makes a run)
+      logical :: own_tried = .false.
+      !> the workers whose request waits, and the run each reported (0: none)
+      integer :: n_held = 0
+      integer, allocatable :: held_src(:), held_run(:)
       integer :: n_now = 0, n_failed_now = 0, n_before = 0, n_runs = 0
       integer(i8) :: c0 = 0, rate = 1, last_line = 0
       integer :: last_done = -1             !< runs done at the last progress line
@@ -190,10 +196,17 @@ contains
       type(sweep_record_t) :: rec
       real(wp), allocatable :: buf(:)
       logical :: found
-      integer :: src, irun
+      integer :: src
       call system_clock(self%last_service)
       allocate (buf(record_size(self%ne, self%nn)), rec%el(size(element_metric_names), self%ne), &
                 rec%node(size(node_metric_names), self%nn))
+      if (.not. allocated(self%held_src)) allocate (self%held_src(self%n_ranks), self%held_run(self%n_ranks))
+      if (self%own_tried) then                ! the requests that waited for rank 0's first run
+         do while (self%n_held > 0)
+            call answer(self%held_src(self%n_held), self%held_run(self%n_held))
+            self%n_held = self%n_held - 1
+         end do
+      end if
       do
          call comm_poll_record(buf, found, src, rec%message)
          if (.not. found) exit
@@ -204,13 +217,29 @@ contains
          else if (rec%irun > 0) then
             call self%record(rec)
          end if
-         irun = 0
-         if (.not. allocated(self%err)) irun = self%take(rec%irun)
-         call comm_send_index(src, irun)
-         if (irun == 0) self%stopped = self%stopped + 1
+         if (rec%irun > 0 .and. .not. self%own_tried) then
+            ! a fast worker's next request waits until every worker's first one has
+            ! been answered and rank 0 has taken its run (else, on 3 ranks or more, it
+            ! could take every run before a slow worker's first request: D-137)
+            self%n_held = self%n_held + 1
+            self%held_src(self%n_held) = src
+            self%held_run(self%n_held) = rec%irun
+            cycle
+         end if
+         call answer(src, rec%irun)
          ! the last worker's first request answered: rank 0 takes a run before any more (D-110)
          if (rec%irun == 0 .and. self%n_ready == self%n_ranks - 1 .and. .not. self%own_taken) exit
       end do
+   contains
+      !> Answer worker src, which reported run `done` (0: its first request), with its next run.
+      subroutine answer(src, done)
+         integer, intent(in) :: src, done
+         integer :: irun
+         irun = 0
+         if (.not. allocated(self%err)) irun = self%take(done)
+         call comm_send_index(src, irun)
+         if (irun == 0) self%stopped = self%stopped + 1
+      end subroutine answer
    end subroutine master_service
 
    recursive subroutine master_record(self, rec)
@@ -317,6 +346,11 @@ contains
       integer :: src
       integer(c_int) :: rc
       if (m%n_ranks <= 1) return
+      do while (m%n_held > 0)                 ! (requests that waited for rank 0's first run)
+         call comm_send_index(m%held_src(m%n_held), 0)
+         m%stopped = m%stopped + 1
+         m%n_held = m%n_held - 1
+      end do
       allocate (buf(record_size(m%ne, m%nn)))
       do while (m%stopped < m%n_ranks - 1)
          call comm_poll_record(buf, found, src, rec%message)

@@ -4,11 +4,11 @@
     /usr/bin/python3 tests/cli/check_sweep.py <trainsim> <case>
 
 cases:
-  mpi_matches_serial  mpirun -np 2 gives metrics bit-identical to the serial sweep, and both
-                      ranks made runs (rank 0 answers the worker's first request with a run,
-                      then takes one of its own before it answers another: D-110, so this
-                      holds whatever the timing) (exit 77 = skipped when mpirun is missing
-                      or trainsim was built without MPI)
+  mpi_matches_serial  mpirun -np 2, 3 and 4 give metrics bit-identical to the serial sweep, and
+                      every rank made runs (rank 0 answers each worker's first request with a
+                      run, then takes one of its own before it answers another request: D-110,
+                      D-137, so this holds whatever the timing) (exit 77 = skipped when
+                      mpirun is missing or trainsim was built without MPI)
   resume_after_kill   kill -9 part-way, then the same command: every run present exactly
                       once (the runs done before the kill are not made again, the others
                       are made once), and the metrics equal an uninterrupted sweep's bits
@@ -144,18 +144,22 @@ def case_mpi_matches_serial(exe, tmp):
         f.write(GHM.format(t_end=0.03) + "&sweep parameter = 'mesh.mesh_frequency', from = 385, to = 645, count = 14 /\n")
     r = run([exe, "sweep", "ghm.nml", "-o", "serial.h5"], tmp)
     check("serial sweep exits 0", r.returncode == 0, r.stderr)
-    r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", "2", exe, "sweep", "ghm.nml", "-o", "mpi.h5"], tmp)
-    if "built without MPI" in r.stderr:
-        print("skipped: trainsim built without MPI")
-        return 77
-    check("mpirun -np 2 sweep exits 0", r.returncode == 0, r.stderr)
-    check("... and says it ran on 2 ranks", "on 2 rank(s)" in r.stderr, r.stderr)
-    a, b = metrics(os.path.join(tmp, "serial.h5")), metrics(os.path.join(tmp, "mpi.h5"))
-    ok, which = same_bits(a, b)
-    check("every metric of every run bit-identical to the serial sweep", ok, which)
-    with h5py.File(os.path.join(tmp, "mpi.h5"), "r") as f:
-        ranks = set(f["runs/rank"][:].tolist())
-    check("both ranks made runs (dynamic hand-out reached rank 1)", ranks == {0, 1}, str(ranks))
+    for n in (2, 3, 4):
+        out = f"mpi{n}.h5"
+        r = run([mpirun, "--allow-run-as-root", "--oversubscribe", "-np", str(n), exe, "sweep", "ghm.nml", "-o", out],
+                tmp)
+        if "built without MPI" in r.stderr:
+            print("skipped: trainsim built without MPI")
+            return 77
+        check(f"mpirun -np {n} sweep exits 0", r.returncode == 0, r.stderr)
+        check(f"... and says it ran on {n} ranks", f"on {n} rank(s)" in r.stderr, r.stderr)
+        a, b = metrics(os.path.join(tmp, "serial.h5")), metrics(os.path.join(tmp, out))
+        ok, which = same_bits(a, b)
+        check("... every metric of every run bit-identical to the serial sweep", ok, which)
+        with h5py.File(os.path.join(tmp, out), "r") as f:
+            ranks = set(f["runs/rank"][:].tolist())
+        check(f"... every one of the {n} ranks made runs (the dynamic hand-out reached each)",
+              ranks == set(range(n)), str(ranks))
     with open(os.path.join(tmp, "bad.nml"), "w") as f:
         f.write(GHM.format(t_end=0.01) + "&sweep parameter = 'mesh.half_backlash', values = 0.005, 0.004, -1.0 /\n")
     for n in ("2", "3"):

@@ -72,6 +72,9 @@ TABLE5_1 = (
 )
 
 
+# A helical pair's deck up to the keys of its last line (line 6: a case adds them and " /\n").
+HELICAL = (RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
+           "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         ")
 # A spur_gear in the geometry form; {units} goes into &run, {k1} on line 5, {k2} on line 6.
 GEOM = ("&run t_end = 0.01, dt = 1.0e-6{units} /\n" + NODES +
         "&element id = 'mesh', type = 'spur_gear', diametral_pitch = 8.0,\n"
@@ -497,30 +500,24 @@ CASES = [
                           k2="backlash = 0.004, tip_relief = 1e-3, tip_relief_start_roll = 5.0"),
          exit=2, stderr=["deck.nml:6:", "'tip_relief_start_roll'", "must lie between the roll angle of mid-path"]),
     dict(name="negative crowning of a helical_gear is refused (D-116)",
-         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
-         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         half_backlash = 0.002, crowning = -1e-4 /\n",
+         deck=HELICAL + "half_backlash = 0.002, crowning = -1e-4 /\n",
          exit=2, stderr=["deck.nml:6:", "&element", "crowning must be >= 0", "-0.0001"]),
     dict(name="unknown helical stiffness_model is refused (D-116)",
-         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
-         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         half_backlash = 0.002, stiffness_model = 'zones' /\n",
+         deck=HELICAL + "half_backlash = 0.002, stiffness_model = 'zones' /\n",
          exit=2, stderr=["deck.nml:6:", "unknown stiffness_model 'zones'", "valid: contact_lines, iso6336"]),
     dict(name="helical iso6336 with youngs_modulus is refused (D-116)",
-         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
-         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         half_backlash = 0.002, stiffness_model = 'iso6336', youngs_modulus = 3e7 /\n",
+         deck=HELICAL + "half_backlash = 0.002, stiffness_model = 'iso6336', youngs_modulus = 3e7 /\n",
          exit=2, stderr=["deck.nml:6:", "'stiffness_model'", "no youngs_modulus"]),
     dict(name="helical 'speed' tooth friction with tooth_friction_velocity <= 0 is refused (D-129)",
-         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
-         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         half_backlash = 0.002, approach_angle = 0.17, tooth_friction = 0.05,\n"
+         deck=HELICAL + "half_backlash = 0.002, approach_angle = 0.17, tooth_friction = 0.05,\n"
          "         tooth_friction_model = 'speed', tooth_friction_velocity = -1.0 /\n",
          exit=2, stderr=["deck.nml:7:", "&element", "tooth_friction_velocity must be > 0", "got -1"]),
     dict(name="unknown helical tooth_friction_model is refused (D-129)",
-         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
-         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         half_backlash = 0.002, approach_angle = 0.17, tooth_friction = 0.05,\n"
+         deck=HELICAL + "half_backlash = 0.002, approach_angle = 0.17, tooth_friction = 0.05,\n"
          "         tooth_friction_model = 'stribeck' /\n",
          exit=2, stderr=["deck.nml:7:", "&element", "unknown tooth_friction_model 'stribeck'", "valid: constant, speed"]),
     dict(name="negative helical tooth_friction is refused (D-116)",
-         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
-         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         half_backlash = 0.002, tooth_friction = -0.05 /\n",
+         deck=HELICAL + "half_backlash = 0.002, tooth_friction = -0.05 /\n",
          exit=2, stderr=["deck.nml:6:", "tooth_friction must be >= 0", "-0.05"]),
     dict(name="backlash in the spur_gear constants form is explained (SI)",
          deck="&run t_end = 0.01, dt = 1.0e-6, units = 'si' /\n" + NODES +
@@ -529,8 +526,7 @@ CASES = [
          exit=2, stderr=["deck.nml:6:", "'backlash'", "geometry form", "constants form", "'half_backlash' = backlash / 2",
                          "in m)"]),
     dict(name="backlash in a helical_gear is explained",
-         deck=RUN + NODES + "&element id = 'h', type = 'helical_gear', rb_driver = 1.6, rb_driven = 1.6, teeth = 28,\n"
-         "         profile_contact_ratio = 1.6, base_helix_angle = 20, face_width = 1.0,\n         backlash = 0.004 /\n",
+         deck=HELICAL + "backlash = 0.004 /\n",
          exit=2, stderr=["deck.nml:6:", "helical_gear takes 'half_backlash'", "half your value, in in"]),
     dict(name="negative backlash in an SI geometry deck names the unit m",
          deck=GEOM.format(units=", units = 'si'", k1="teeth_driver = 28, teeth_driven = 56", k2="backlash = -1.0e-4")
