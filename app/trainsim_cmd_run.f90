@@ -119,7 +119,9 @@ contains
       else
          write (output_unit, '(a)') 'note: '//no_file_reason(no_output)
       end if
-      flush (output_unit)
+      ! the run is the process's last work: it ends here, without taking the model
+      ! apart piece by piece on the way out (53 M instructions at 20 000 nodes, D-121)
+      call quit(0)
    end subroutine do_run
 
    !> Why a run wrote no history file.
