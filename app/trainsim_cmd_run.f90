@@ -120,8 +120,9 @@ contains
          write (output_unit, '(a)') 'note: '//no_file_reason(no_output)
       end if
       ! the run is the process's last work: it ends here, without taking the model
-      ! apart piece by piece on the way out (53 M instructions at 20 000 nodes, D-121)
-      call quit(0)
+      ! apart piece by piece on the way out (53 M instructions at 20 000 nodes, D-121),
+      ! silent as the program's own end (no note of IEEE flags)
+      call quit(0, silent=.true.)
    end subroutine do_run
 
    !> Why a run wrote no history file.
