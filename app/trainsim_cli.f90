@@ -76,7 +76,7 @@ contains
    !> End the program with exit status `code`, output flushed. When HDF5 holds a file
    !> it could not close (a full disk), its exit handler would crash: end without it.
    !> `silent`: as the program's own end, without gfortran's note of the IEEE flags
-   !> raised, which a `stop` prints (for a command ending early, D-121).
+   !> raised, which a `stop` prints (for a command ending early, D-139).
    subroutine quit(code, silent)
       integer, intent(in) :: code
       logical, intent(in), optional :: silent

@@ -70,7 +70,7 @@ contains
          ! in their stiffest mesh zone, impact damping anywhere up to the law's largest
          if (.not. warned) then
             if (model%n_states > dense_state_limit .and. .not. model%nport .and. stiffest(1) > 0.0_wp) then
-               ! what rk4_dt_limit gives there: the check's own O(n) bound (D-121)
+               ! what rk4_dt_limit gives there: the check's own O(n) bound (D-139)
                dt_safe = stiffest(1)
                om = stiffest(2)
                f = stiffest(3)
@@ -120,7 +120,7 @@ contains
          write (output_unit, '(a)') 'note: '//no_file_reason(no_output)
       end if
       ! the run is the process's last work: it ends here, without taking the model
-      ! apart piece by piece on the way out (53 M instructions at 20 000 nodes, D-121),
+      ! apart piece by piece on the way out (53 M instructions at 20 000 nodes, D-139),
       ! silent as the program's own end (no note of IEEE flags)
       call quit(0, silent=.true.)
    end subroutine do_run

@@ -18,7 +18,7 @@
 !> - nodes joined by a rigid_gear or rigid_join move as one body in the dense
 !>   advice (D-86): its step is 2 sqrt 2 / omega of the merged train's
 !>   closed-form frequency, and a run at 0.99 x that limit is stable, at 1.05 x not;
-!> - the bounds of several states at once (`rk4_dt_bounds`, start-up's, D-121) are
+!> - the bounds of several states at once (`rk4_dt_bounds`, start-up's, D-139) are
 !>   each state's bound alone, bit for bit (fails if a state takes another's bound).
 program test_dt_bound
    use trainsim_kinds, only: wp
@@ -57,7 +57,7 @@ program test_dt_bound
 contains
 
    !> `rk4_dt_bounds` (the states of start-up at once, a state's bound reused when its
-   !> element blocks equal the last one's: D-121) gives each state exactly what
+   !> element blocks equal the last one's: D-139) gives each state exactly what
    !> `rk4_dt_bound` gives it alone, on trains whose states differ (clearances, gear
    !> zones, impact damping) and on one whose states are the same matrix.
    subroutine test_bounds_at_once_as_one_by_one()

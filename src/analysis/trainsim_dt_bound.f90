@@ -147,7 +147,7 @@ contains
    !> `rk4_dt_bound` for each of `states` at the same y: the node blocks once, and
    !> the iterations only for a state whose element blocks differ from the last
    !> state's (a train without contacts or gears is the same train in every state:
-   !> its bound once, D-121).
+   !> its bound once, D-139).
    subroutine rk4_dt_bounds(model, states, y, dt_max, bound, omega_k, freq_hz)
       type(model_t), intent(inout) :: model
       type(lin_state_t), intent(in) :: states(:)

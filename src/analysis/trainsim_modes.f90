@@ -371,7 +371,7 @@ contains
 
    !> `rk4_dt_quick` for each of `states`, the modes initialised once and the
    !> bound computed once for states whose element blocks agree (`rk4_dt_bounds`,
-   !> D-121); `freq_hz` as `rk4_dt_limit` gives it above the dense limit.
+   !> D-139); `freq_hz` as `rk4_dt_limit` gives it above the dense limit.
    subroutine rk4_dt_quick_states(model, states, dt_max, bound, freq_hz)
       type(model_t), intent(inout) :: model
       type(lin_state_t), intent(in) :: states(:)

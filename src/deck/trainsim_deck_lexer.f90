@@ -88,7 +88,7 @@ contains
       n = len(text)
       ! room for a token every 4 characters (the densest decks written out, `&node
       ! id = 'n1', type = 'inertia', inertia = 1.0 /`): no growth, whose moves of
-      ! every text cost more than the room (D-122)
+      ! every text cost more than the room (D-140)
       nb = max(64, n/4)
       allocate (toks%kind(nb), toks%line(nb), toks%text(nb))
       line = 1

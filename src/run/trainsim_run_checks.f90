@@ -283,7 +283,7 @@ contains
    !> `lin_start`, RK4's own radius), 0 where the check did not compute it.
    !> `stiffest(3)`: dt, bound on |lambda| and frequency (Hz) of `rk4_dt_quick` of
    !> `lin_stiffest`, what `rk4_dt_limit` gives above the dense limit (computed
-   !> with the check's own bounds, D-121); 0 where the check did not compute it.
+   !> with the check's own bounds, D-139); 0 where the check did not compute it.
    subroutine check_fixed_step(model, err, start_bound, stiffest)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
