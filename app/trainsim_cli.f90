@@ -75,12 +75,18 @@ contains
 
    !> End the program with exit status `code`, output flushed. When HDF5 holds a file
    !> it could not close (a full disk), its exit handler would crash: end without it.
-   subroutine quit(code)
+   !> `silent`: as the program's own end, without gfortran's note of the IEEE flags
+   !> raised, which a `stop` prints (for a command ending early, D-139).
+   subroutine quit(code, silent)
       integer, intent(in) :: code
+      logical, intent(in), optional :: silent
       flush (output_unit)
       flush (error_unit)
       call finish_sweep()     ! after the outcome is out (a stopping mpirun never completes it)
       if (hdf5_library_stuck()) call c_exit_now(int(code, c_int))
+      if (present(silent)) then
+         if (silent) stop code, quiet=.true.
+      end if
       if (code == 0) stop
       stop code, quiet=.true.
    end subroutine quit

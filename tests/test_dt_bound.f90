@@ -17,7 +17,9 @@
 !>   the dense limit blows up (|R| = 1.9 per step on its top mode): the test can fail;
 !> - nodes joined by a rigid_gear or rigid_join move as one body in the dense
 !>   advice (D-86): its step is 2 sqrt 2 / omega of the merged train's
-!>   closed-form frequency, and a run at 0.99 x that limit is stable, at 1.05 x not.
+!>   closed-form frequency, and a run at 0.99 x that limit is stable, at 1.05 x not;
+!> - the bounds of several states at once (`rk4_dt_bounds`, start-up's, D-139) are
+!>   each state's bound alone, bit for bit (fails if a state takes another's bound).
 program test_dt_bound
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -25,6 +27,7 @@ program test_dt_bound
    use trainsim_model, only: model_t
    use trainsim_element, only: lin_state_t, lin_start, lin_stiffest
    use trainsim_modes, only: modes_t, compute_modes, rk4_dt_limit, rk4_dt_bound, dense_state_limit, with_loads
+   use trainsim_dt_bound, only: rk4_dt_bounds
    use trainsim_simulate, only: simulate
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: null_sink_t
@@ -48,9 +51,57 @@ program test_dt_bound
    call test_chain_runs_at_the_advised_step()
    call test_rigid_connections_merge_in_the_advice()
    call test_rigid_train_runs_at_the_merged_limit()
+   call test_bounds_at_once_as_one_by_one()
    call suite_end()
 
 contains
+
+   !> `rk4_dt_bounds` (the states of start-up at once, a state's bound reused when its
+   !> element blocks equal the last one's: D-139) gives each state exactly what
+   !> `rk4_dt_bound` gives it alone, on trains whose states differ (clearances, gear
+   !> zones, impact damping) and on one whose states are the same matrix.
+   subroutine test_bounds_at_once_as_one_by_one()
+      character(len=48), parameter :: cases(3) = [character(len=48) :: 'inputs/two_clearance.nml', &
+                                                   'inputs/start_stop_two_clearances.nml', 'inputs/helical_pair.nml']
+      type(model_t) :: m
+      type(lin_state_t) :: st(5)
+      real(wp), allocatable :: y(:)
+      real(wp) :: dt(5), bd(5), om(5), f(5), dt1, bd1, om1, f1
+      integer :: i, k
+      logical :: same, differ
+      call test_begin('bounds_at_once_as_one_by_one')
+      st = [lin_start, lin_stiffest, lin_stiffest, lin_start, lin_stiffest]
+      st(2)%impact_scale = 0.0_wp
+      st(3)%load_torque = -1.0_wp
+      do i = 1, size(cases) + 2   ! then a backlash chain, then a shaft chain (one matrix in every state)
+         if (i <= size(cases)) then
+            call load_model(trim(cases(min(i, size(cases)))), m)
+         else
+            call load_model_text(chain_deck(30, i == size(cases) + 1, 5.0e-3_wp, 5.0e-3_wp), m)
+         end if
+         call m%initial_state(y)
+         call m%init_modes(m%run%t_start, y, tables=.false.)
+         do k = 1, size(st)
+            st(k) = with_loads(m, st(k))
+         end do
+         call rk4_dt_bounds(m, st, y, dt, bd, om, f)
+         same = .true.
+         do k = 1, size(st)
+            call rk4_dt_bound(m, st(k), y, dt1, bd1, omega_k=om1, freq_hz=f1)
+            same = same .and. dt(k) == dt1 .and. bd(k) == bd1 .and. om(k) == om1 .and. f(k) == f1
+         end do
+         differ = dt(1) /= dt(5) .or. bd(1) /= bd(5)
+         call check('case '//str(i)//': every state as alone, bit for bit', same)
+         if (i <= size(cases) + 1) then
+            call check('case '//str(i)//': the start and the stiffest state differ', differ)
+         else
+            call check('shaft chain: one bound in every state', .not. differ .and. all(dt == dt(1)))
+         end if
+         st = [lin_start, lin_stiffest, lin_stiffest, lin_start, lin_stiffest]
+         st(2)%impact_scale = 0.0_wp
+         st(3)%load_torque = -1.0_wp
+      end do
+   end subroutine test_bounds_at_once_as_one_by_one
 
    !> Every bundled deck, as it starts and in its stiffest state.
    subroutine test_bound_is_above_dense_on_bundled_decks()

@@ -24,7 +24,7 @@ module trainsim_dt_bound
    implicit none
    private
 
-   public :: rk4_ray_radius, rk4_min_radius, rk4_dt_bound, inverse_inertias
+   public :: rk4_ray_radius, rk4_min_radius, rk4_dt_bound, rk4_dt_bounds, inverse_inertias
 
    !> Rays of RK4's region tabulated from the positive imaginary axis (psi = 0)
    !> to the negative real axis (psi = 90 deg): 0.5 deg apart.
@@ -136,16 +136,76 @@ contains
       real(wp), intent(in) :: y(:)
       real(wp), intent(out) :: dt_max, bound
       real(wp), intent(out), optional :: omega_k, freq_hz
-      real(wp), allocatable :: inv_j(:), p(:), own(:), tq(:), bk(:, :, :), bc(:, :, :), x(:), zk(:), zc(:), d(:), xk(:)
+      real(wp) :: dt1(1), bd1(1), om1(1), f1(1)
+      call rk4_dt_bounds(model, [state], y, dt1, bd1, om1, f1)
+      dt_max = dt1(1)
+      bound = bd1(1)
+      if (present(omega_k)) omega_k = om1(1)
+      if (present(freq_hz)) freq_hz = f1(1)
+   end subroutine rk4_dt_bound
+
+   !> `rk4_dt_bound` for each of `states` at the same y: the node blocks once, and
+   !> the iterations only for a state whose element blocks differ from the last
+   !> state's (a train without contacts or gears is the same train in every state:
+   !> its bound once, D-139).
+   subroutine rk4_dt_bounds(model, states, y, dt_max, bound, omega_k, freq_hz)
+      type(model_t), intent(inout) :: model
+      type(lin_state_t), intent(in) :: states(:)
+      real(wp), intent(in) :: y(:)
+      real(wp), intent(out) :: dt_max(:), bound(:), omega_k(:), freq_hz(:)
+      real(wp), allocatable :: inv_j(:), p(:), own(:), tq(:), bk(:, :, :), bc(:, :, :), bk0(:, :, :), bc0(:, :, :)
       integer, allocatable :: ends(:, :)
-      logical, allocatable :: states(:)
+      logical, allocatable :: has(:)
+      logical :: general_nodes, general, general0
+      integer :: s
+
+      call node_blocks(model, y, p, own, tq, has, general_nodes)
+      call inverse_inertias(model, inv_j)
+      general0 = .false.
+      do s = 1, size(states)
+         general = general_nodes
+         call element_blocks(model, states(s), inv_j, p, bk, bc, ends, general)
+         if (s > 1) then
+            if ((general .eqv. general0) .and. same_bits(bk, bk0) .and. same_bits(bc, bc0)) then
+               dt_max(s) = dt_max(s - 1)
+               bound(s) = bound(s - 1)
+               omega_k(s) = omega_k(s - 1)
+               freq_hz(s) = freq_hz(s - 1)
+               cycle
+            end if
+         end if
+         call bound_of_blocks(model, p, own, tq, has, general, bk, bc, ends, dt_max(s), bound(s), &
+                              omega_k(s), freq_hz(s))
+         call move_alloc(bk, bk0)
+         call move_alloc(bc, bc0)
+         general0 = general
+      end do
+   contains
+      !> a and b hold the same doubles, bit for bit (a NaN is never the same).
+      logical function same_bits(a, b) result(yes)
+         real(wp), intent(in) :: a(:, :, :), b(:, :, :)
+         yes = same_flat(size(a), a, b)
+      end function same_bits
+      pure logical function same_flat(n, a, b) result(yes)
+         integer, intent(in) :: n
+         real(wp), intent(in) :: a(n), b(n)
+         yes = all(a == b)
+         if (yes) yes = all(sign(1.0_wp, a) == sign(1.0_wp, b))   ! 0 and -0
+      end function same_flat
+   end subroutine rk4_dt_bounds
+
+   !> The bound of `rk4_dt_bound` from the node blocks (p, own, tq, has) and the
+   !> element blocks (bk, bc on ends) of one state.
+   subroutine bound_of_blocks(model, p, own, tq, states, general, bk, bc, ends, dt_max, bound, omega_k, freq_hz)
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: p(:), own(:), tq(:), bk(:, :, :), bc(:, :, :)
+      logical, intent(in) :: states(:), general
+      integer, intent(in) :: ends(:, :)
+      real(wp), intent(out) :: dt_max, bound, omega_k, freq_hz
+      real(wp), allocatable :: x(:), zk(:), zc(:), d(:), xk(:)
       real(wp) :: mu_k, mu_c, s_star, f_lim
-      logical :: general
       integer :: it
 
-      call node_blocks(model, y, p, own, tq, states, general)
-      call inverse_inertias(model, inv_j)
-      call element_blocks(model, state, inv_j, p, bk, bc, ends, general)
       ! stiffness: power iteration on |B|, each iterate an upper bound of mu_K;
       ! with a node block or element that is not symmetric, also of the
       ! general weighted norm s* (the same weights on every state of a node)
@@ -174,7 +234,7 @@ contains
          if (.not. mu_c > 0.0_wp) exit       ! undamped
          call normalise(zc, x)
       end do
-      if (present(omega_k)) omega_k = sqrt(mu_k)
+      omega_k = sqrt(mu_k)
 
       dt_max = huge(1.0_wp)
       f_lim = 0.0_wp
@@ -188,7 +248,7 @@ contains
          bound = max(sqrt(mu_k), mu_c)
          call region_step(mu_k, mu_c, real_extent(), dt_max, f_lim)
       end if
-      if (present(freq_hz)) freq_hz = f_lim/two_pi
+      freq_hz = f_lim/two_pi
 
    contains
 
@@ -263,7 +323,7 @@ contains
          if (.not. big > 0.0_wp) return
          where (states) w = max(z/big, weight_floor)
       end subroutine normalise
-   end subroutine rk4_dt_bound
+   end subroutine bound_of_blocks
 
    !> RK4's largest step for eigenvalues in {|lambda| <= sqrt(mu_k), |Re lambda|
    !> <= mu_c/2} and on [-r_real, 0]: the least, over the tabulated rays, of the

@@ -17,13 +17,13 @@ module trainsim_modes
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_element, only: element_t, lin_state_t, lin_start, lin_closed, lin_contact_closed, max_ports
-   use trainsim_dt_bound, only: rk4_ray_radius, rk4_dt_bound, inverse_inertias
+   use trainsim_dt_bound, only: rk4_ray_radius, rk4_dt_bound, rk4_dt_bounds, inverse_inertias
    use trainsim_merged, only: null_space, rigid_projection
    implicit none
    private
 
    public :: modes_t, compute_modes, rk4_stability_limit, rk4_dt_bound, rk4_dt_limit, rk4_ray_radius
-   public :: load_torque_bound, limiting_part, with_loads, rk4_dt_quick
+   public :: load_torque_bound, limiting_part, with_loads, rk4_dt_quick, rk4_dt_quick_states
 
    !> |lambda h| on the imaginary axis inside which classical RK4 is stable (2 sqrt 2).
    real(wp), parameter :: rk4_stability_limit = 2.0_wp*sqrt(2.0_wp)
@@ -368,6 +368,31 @@ contains
       call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-74)
       call rk4_dt_bound(model, with_loads(model, state_in), y, dt_max, bound)
    end subroutine rk4_dt_quick
+
+   !> `rk4_dt_quick` for each of `states`, the modes initialised once and the
+   !> bound computed once for states whose element blocks agree (`rk4_dt_bounds`,
+   !> D-139); `freq_hz` as `rk4_dt_limit` gives it above the dense limit.
+   subroutine rk4_dt_quick_states(model, states, dt_max, bound, freq_hz)
+      type(model_t), intent(inout) :: model
+      type(lin_state_t), intent(in) :: states(:)
+      real(wp), intent(out) :: dt_max(:), bound(:), freq_hz(:)
+      real(wp), allocatable :: y(:)
+      real(wp) :: omega_k(size(states))
+      type(lin_state_t) :: st(size(states))
+      integer :: k
+      if (model%nport) then   ! as rk4_dt_quick
+         dt_max = 0.0_wp
+         bound = huge(1.0_wp)
+         freq_hz = 0.0_wp
+         return
+      end if
+      call model%initial_state(y)
+      call model%init_modes(model%run%t_start, y, tables=.false.)   ! the elements' own procedures only (D-74)
+      do k = 1, size(states)
+         st(k) = with_loads(model, states(k))
+      end do
+      call rk4_dt_bounds(model, st, y, dt_max, bound, omega_k, freq_hz)
+   end subroutine rk4_dt_quick_states
 
    !> `state` gets the largest torque the loads can drive through one element
    !> (`load_torque_bound`), unless it has one (a negative one: leave the

@@ -85,8 +85,12 @@ contains
       integer :: i, j, k, n, line, nb
       logical :: doubled
 
-      allocate (toks%kind(64), toks%line(64), toks%text(64))
       n = len(text)
+      ! room for a token every 4 characters (the densest decks written out, `&node
+      ! id = 'n1', type = 'inertia', inertia = 1.0 /`): no growth, whose moves of
+      ! every text cost more than the room (D-140)
+      nb = max(64, n/4)
+      allocate (toks%kind(nb), toks%line(nb), toks%text(nb))
       line = 1
       i = 1
       do while (i <= n)

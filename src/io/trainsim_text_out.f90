@@ -51,13 +51,27 @@ contains
    subroutine reserve(self, m)
       class(text_out_t), intent(inout) :: self
       integer, intent(in) :: m
+      if (.not. fits(self, m)) call grow(self, m)
+   end subroutine reserve
+
+   !> The buffer holds m more characters.
+   pure logical function fits(self, m)
+      class(text_out_t), intent(in) :: self
+      integer, intent(in) :: m
+      fits = .false.
+      if (allocated(self%buf)) fits = self%n + m <= len(self%buf)
+   end function fits
+
+   subroutine grow(self, m)
+      class(text_out_t), intent(inout) :: self
+      integer, intent(in) :: m
       character(len=:), allocatable :: grown
       if (.not. allocated(self%buf)) allocate (character(len=max(2*block_chars, 2*m)) :: self%buf)
       if (self%n + m <= len(self%buf)) return
       allocate (character(len=max(2*len(self%buf), self%n + m)) :: grown)
       grown(1:self%n) = self%buf(1:self%n)
       call move_alloc(grown, self%buf)
-   end subroutine reserve
+   end subroutine grow
 
    !> Text s right-justified in w columns as Aw writes it (its first w characters
    !> if longer); w = 0: s as it is (A).
@@ -65,18 +79,20 @@ contains
       class(text_out_t), intent(inout) :: self
       character(len=*), intent(in) :: s
       integer, intent(in) :: w
-      integer :: m
+      integer :: m, n
+      n = self%n
       if (w <= 0) then
-         call reserve(self, len(s))
-         self%buf(self%n + 1:self%n + len(s)) = s
-         self%n = self%n + len(s)
+         m = len(s)
+         if (.not. fits(self, m)) call grow(self, m)
+         self%buf(n + 1:n + m) = s
+         self%n = n + m
          return
       end if
-      call reserve(self, w)
+      if (.not. fits(self, w)) call grow(self, w)
       m = min(len(s), w)
-      self%buf(self%n + 1:self%n + w - m) = ' '
-      self%buf(self%n + w - m + 1:self%n + w) = s(1:m)
-      self%n = self%n + w
+      if (m < w) self%buf(n + 1:n + w - m) = ' '
+      self%buf(n + w - m + 1:n + w) = s(1:m)
+      self%n = n + w
    end subroutine put_a
 
    !> n blanks (nX).
@@ -149,9 +165,17 @@ contains
       done = .false.
       if (d > 16 .or. d + 7 > w) return
       if (.not. ieee_is_finite(x)) return   ! (alone: a NaN in a comparison traps in Debug)
-      if (x == 0.0_wp) then
-         q = 0
-         ex = 0
+      if (x == 0.0_wp) then   ! 0.000E+00 (-0.000E+00 for -0) without the digit loop
+         n = 0
+         if (sign(1.0_wp, x) < 0.0_wp) then
+            n = 1
+            t(1:1) = '-'
+         end if
+         t(n + 1:n + d + 2) = '0.00000000000000000'   ! (truncated to d + 2 characters)
+         t(n + d + 3:n + d + 6) = 'E+00'
+         call self%a(t(1:n + d + 6), w)
+         done = .true.
+         return
       else
          if (abs(x) < tiny(x)) return
          m = int(scale(fraction(abs(x)), digits(x)), int64)   ! 2^52 <= m < 2^53

@@ -10,7 +10,7 @@ module trainsim_run_checks
    use trainsim_model, only: model_t
    use trainsim_integrator, only: integrator_t
    use trainsim_integrator_registry, only: integrator_registry, integrator_entry_t
-   use trainsim_modes, only: rk4_dt_limit, limiting_part, rk4_dt_quick, load_torque_bound
+   use trainsim_modes, only: rk4_dt_limit, limiting_part, rk4_dt_quick_states, load_torque_bound
    use trainsim_observer, only: observer_t
    use trainsim_element, only: lin_state_t, lin_stiffest, lin_start, lin_contact_closed
    implicit none
@@ -281,10 +281,13 @@ contains
    !> rk4-thesis steps dt/10 in contact; Euler's region reaches 2 on the real axis.
    !> `start_bound`: the O(n) bound of the train as it starts (`rk4_dt_quick` of
    !> `lin_start`, RK4's own radius), 0 where the check did not compute it.
-   subroutine check_fixed_step(model, err, start_bound)
+   !> `stiffest(3)`: dt, bound on |lambda| and frequency (Hz) of `rk4_dt_quick` of
+   !> `lin_stiffest`, what `rk4_dt_limit` gives above the dense limit (computed
+   !> with the check's own bounds, D-139); 0 where the check did not compute it.
+   subroutine check_fixed_step(model, err, start_bound, stiffest)
       type(model_t), intent(inout) :: model
       type(error_t), allocatable, intent(out) :: err
-      real(wp), intent(out), optional :: start_bound
+      real(wp), intent(out), optional :: start_bound, stiffest(3)
       type(integrator_entry_t), allocatable :: rows(:)
       type(lin_state_t) :: states(4)
       character(len=40), parameter :: state_text(4) = [character(len=40) :: 'the train as it starts', &
@@ -292,9 +295,10 @@ contains
                                                        'the stiffest state the run can reach']
       real(wp) :: dt_safe, omega, f_hz, zeta, h, rescale
       character(len=:), allocatable :: part, name, limit_name
-      real(wp) :: dt_start
+      real(wp) :: dt_start, q_dt(4), q_bound(4), q_freq(4)
       integer :: i, k
       if (present(start_bound)) start_bound = 0.0_wp
+      if (present(stiffest)) stiffest = 0.0_wp
       allocate (rows, source=integrator_registry())   ! not `rows = ...`: gfortran 12 false -Wuninitialized
       do i = 1, size(rows)
          if (rows(i)%name == model%run%integrator) exit
@@ -314,6 +318,12 @@ contains
       ! the contacts closed at t_start have their own D (states(3)), and what a
       ! run does reach is caught at the output times (check_physical)
       states(4)%load_torque = -1.0_wp
+      ! the O(n) bounds of states 1, 2 and 4 (3 is 1) and of lin_stiffest, at once:
+      ! the modes initialised once, a state as stiff as the last one computed once
+      ! (on the model itself, not a copy: the bound re-initialises its modes, as every
+      ! run and session does again before its first step, D-107, startup3)
+      call rk4_dt_quick_states(model, [states(1), states(2), states(4), lin_stiffest], q_dt, q_bound, q_freq)
+      if (present(stiffest)) stiffest = [q_dt(4), q_bound(4), q_freq(4)]
       dt_start = 0.0_wp
       do k = 1, 4
          h = model%run%dt
@@ -323,7 +333,7 @@ contains
          if (k == 3) then
             dt_safe = dt_start
          else
-            call quick_limit(states(k), dt_safe)
+            dt_safe = q_dt(min(k, 3))
          end if
          if (k == 1) dt_start = dt_safe
          if (k == 1 .and. present(start_bound)) start_bound = dt_safe
@@ -360,14 +370,6 @@ contains
          return
       end do
    contains
-      subroutine quick_limit(state, dt_lim)
-         type(lin_state_t), intent(in) :: state
-         real(wp), intent(out) :: dt_lim
-         real(wp) :: bound
-         ! on the model itself, not a copy: the bound re-initialises its modes, as every
-         ! run and session does again before its first step (D-107, startup3)
-         call rk4_dt_quick(model, state, dt_lim, bound)
-      end subroutine quick_limit
       subroutine limit_of(state, dt_lim, f, z)
          type(lin_state_t), intent(in) :: state
          real(wp), intent(out) :: dt_lim, f, z
