@@ -34,17 +34,10 @@ import tempfile
 import h5py
 import numpy as np
 
-from rig_response import harmonic_mesh_response
+from rig_response import check, finish, harmonic_mesh_response
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXE = sys.argv[1]
-fails = 0
-
-
-def check(ok, text):
-    global fails
-    print(("ok   " if ok else "FAIL ") + text)
-    fails += not ok
 
 
 def ids(group):
@@ -167,5 +160,4 @@ with tempfile.TemporaryDirectory() as d:
           f"orders 2..4 of the TE below 1e-3 of order 1 ({max(m['te_order_2'], m['te_order_3'], m['te_order_4']):.1e} in)")
     check(abs(m["force_mean"] / F_S - 1) < 5e-4, f"mean mesh force {m['force_mean']:.6f} = F_s to 5e-4")
 
-print("FAILED: %d check(s)" % fails if fails else "all checks passed")
-sys.exit(1 if fails else 0)
+finish()

@@ -39,16 +39,9 @@ import tempfile
 import h5py
 import numpy as np
 
-from rig_response import harmonic_mesh_response
+from rig_response import check, finish, harmonic_mesh_response
 
 EXE = sys.argv[1]
-fails = 0
-
-
-def check(ok, text):
-    global fails
-    print(("ok   " if ok else "FAIL ") + text)
-    fails += not ok
 
 
 B, RB, N, MP, T_LOAD = 0.005, 3.7588, 32, 1.6676, 798.8
@@ -174,5 +167,4 @@ with tempfile.TemporaryDirectory() as d:
     check(0 < want < 1 and abs(m.get("rattle_open", -1) - want) < 1e-6,
           f"rattle_open {m.get('rattle_open', -1):.6f} = time out of contact x f / 60 = {want:.6f}")
 
-print("FAILED: %d check(s)" % fails if fails else "all checks passed")
-sys.exit(1 if fails else 0)
+finish()

@@ -4,8 +4,27 @@ gear-metric checks (check_gear_metrics.py, check_helical_metrics.py).
 The driver's drive inertia held at a constant speed; the pinion J2, the gear J3 and the
 load J4 free, shafts K1 with damping CS either side of the mesh (stiffness k, damping c
 along the line of action, base radii rb both); a harmonic torque T1 on the gear at W rad/s.
+
+check(ok, text) and finish() are the two scripts' shared verdicts.
 """
+import sys
+
 import numpy as np
+
+_fails = 0
+
+
+def check(ok, text):
+    """Print "ok   TEXT" or "FAIL TEXT" and count the failures."""
+    global _fails
+    print(("ok   " if ok else "FAIL ") + text)
+    _fails += not ok
+
+
+def finish():
+    """Exit 1 when a check failed, else 0."""
+    print("FAILED: %d check(s)" % _fails if _fails else "all checks passed")
+    sys.exit(1 if _fails else 0)
 
 
 def harmonic_mesh_response(k, c, rb, w, t1, cs, k1=32000.0, inertias=(0.987, 0.987, 100.0)):
