@@ -34,7 +34,7 @@ module trainsim_branch_file
 
    public :: branch_file_t, branch_format_version, reason_meaning
 
-   character(len=*), parameter :: branch_format_version = '1'
+   character(len=*), parameter :: branch_format_version = '2'   ! (2: 34 element metrics, D-134)
    !> /runs: reals and integers per point (status and message apart)
    character(len=*), parameter :: run_r(7) = [character(len=18) :: 'period', 't0', 'phase', 'max_abs_multiplier', &
                                                'ds', 'ds_next', 'residual']
@@ -126,12 +126,19 @@ contains
             if (.not. ok .or. s /= 'trainsim-branch') then
                why = 'it is not a trainsim branch file'
             else
-               call get_str_attr(self%file, 'fingerprint', s, ok)
-               if (s /= lay%fingerprint) why = 'its deck, --set, --param or options differ'
+               call get_str_attr(self%file, 'format_version', s, ok)
+               if (.not. ok) s = '?'
+               if (s /= branch_format_version) then
+                  why = 'its layout is version '//s//', this trainsim writes '//branch_format_version
+               else
+                  call get_str_attr(self%file, 'fingerprint', s, ok)
+                  if (s /= lay%fingerprint) why = 'its deck, --set, --param or options differ'
+               end if
                call get_str_attr(self%file, 'period_count', s, ok)
                self%period_count = 1
                if (ok) read (s, *, iostat=info) self%period_count
-               if (ok .and. (info /= 0 .or. self%period_count < 1)) why = "its period_count '"//s//"' is not a count"
+               if (len(why) == 0 .and. ok .and. (info /= 0 .or. self%period_count < 1)) &
+                  why = "its period_count '"//s//"' is not a count"
             end if
             if (len(why) > 0) call fatal_error(err, "branch file '"//path//"' holds another branch ("//why// &
                                                '): delete it, or run without --resume', err_input)

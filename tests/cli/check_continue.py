@@ -13,7 +13,8 @@ undamped, marginal) from 645 down to 600 teeth/s:
 - the last point's state equals the orbit `trainsim periodic` finds at that frequency
   (to 1e-7 of the state scale: both converge to 1e-10 of it, the continuation by its
   corrector, the shooting by Newton);
-- bad --param, --resume without -o: exit 2 with the reason.
+- bad --param, --resume without -o, --resume of an older layout (format_version 1): exit 2
+  with the reason.
 
 Usage: check_continue.py TRAINSIM
 """
@@ -74,6 +75,14 @@ with tempfile.TemporaryDirectory() as tmp:
     r = run("continue", rig, *damped, "--param", "mesh.mesh_frequency=645:600", "-o", f, "--resume")
     check("resumed with other options: refused, exit 2", r.returncode == 2 and "holds another branch" in r.stderr,
           r.stderr)
+    old = os.path.join(tmp, "old_layout.h5")
+    with open(f, "rb") as src, open(old, "wb") as dst:
+        dst.write(src.read())
+    with h5py.File(old, "r+") as h:
+        h.attrs.modify("format_version", "1")   # (its type kept: a branch file of the layout before D-134)
+    r = run("continue", rig, *damped, "--param", "mesh.mesh_frequency=645:600", "--points", "4", "-o", old, "--resume")
+    check("an older layout: refused, exit 2, both versions named",
+          r.returncode == 2 and "layout is version 1, this trainsim writes 2" in r.stderr, r.stderr)
     full = os.path.join(tmp, "full.h5")
     r = run("continue", rig, *damped, "--param", "mesh.mesh_frequency=645:560", "-o", full)
     check("uninterrupted to 560: exit 0", r.returncode == 0, r.stderr)
