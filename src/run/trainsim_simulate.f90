@@ -1,17 +1,14 @@
-!> A run as a library call: model in, metrics and events out (in memory),
-!> histories to whatever sink the caller passes. No global state: any number
-!> of runs per process, on copies of one model.
-!>
-!> `simulate` holds the one driver loop every integrator runs in. The
-!> integrator (trainsim_integrator) only advances the state; the loop owns
-!> - the output grid: sample k at t_start + k*output_interval exactly (the
-!>   last at t_end), computed from k, never accumulated;
+!> A run as a library call: model in, metrics and events out (in memory), histories to
+!> whatever sink the caller passes. No global state: any number of runs per process, on
+!> copies of one model. `simulate` holds the one driver loop every integrator runs in.
+!> The integrator (trainsim_integrator) only advances the state; the loop owns
+!> - the output grid: sample k at t_start + k*output_interval (the last at t_end), from k;
 !> - the breakpoints of the inputs (load steps, table knots, duty cycles): the
 !>   integrator's stop times, with a restart after each;
-!> - the events: `settle_events` updates the modes at an instant until no
-!>   guard fires, then the integrator restarts;
-!> - the checks after every advance: a state that blew up, an interrupt, and
-!>   the event budget (an event flood ends the run instead of hanging it).
+!> - the events: `settle_events` updates the modes at an instant until no guard fires,
+!>   then the integrator restarts;
+!> - the checks after every advance: a state that blew up, an interrupt, and the
+!>   event budget (an event flood ends the run instead of hanging it).
 module trainsim_simulate
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_internal, err_numeric, err_interrupted
@@ -163,7 +160,8 @@ contains
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
       class(sink_t), intent(inout) :: sink
-      real(wp), intent(inout) :: t, y(:)
+      real(wp), intent(inout) :: t
+      real(wp), intent(inout), contiguous :: y(:)
       type(settle_t), intent(inout) :: st
       type(error_t), allocatable, intent(out) :: err
       type(progress_t), intent(inout), optional :: progress   !< polled per output time or block
@@ -319,7 +317,8 @@ contains
       type(drive_t), intent(in) :: d
       real(wp), intent(in) :: t_goal
       logical, intent(in) :: samples
-      real(wp), intent(inout) :: t, y(:)
+      real(wp), intent(inout) :: t
+      real(wp), intent(inout), contiguous :: y(:)
       logical, intent(out) :: folded
       type(error_t), allocatable, intent(out) :: err
       folded = .false.
@@ -344,7 +343,8 @@ contains
       type(observer_t), intent(inout) :: obs
       type(drive_t), intent(inout) :: d
       real(wp), intent(in) :: t_out, t_end
-      real(wp), intent(inout) :: t, y(:)
+      real(wp), intent(inout) :: t
+      real(wp), intent(inout), contiguous :: y(:)
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: t_goal
       integer :: status
