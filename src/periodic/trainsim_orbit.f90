@@ -14,7 +14,7 @@ module trainsim_orbit
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_model, only: model_t
-   use trainsim_sink, only: sink_t
+   use trainsim_sink, only: sink_t, null_sink_t
    use trainsim_observer, only: run_result_t
    use trainsim_simulate, only: simulate
    use trainsim_clearance_element, only: clearance_element_t
@@ -32,7 +32,8 @@ module trainsim_orbit
 contains
 
    !> Run `model` over pm's k periods from the reduced state x at t0 into `sink`: the
-   !> orbit's history, events and metrics (no settling).
+   !> orbit's history, events and metrics (no settling); p2p_range from a second run two
+   !> steps longer (the turning points at the seam, D-141).
    subroutine orbit_run(model, pm, x, sink, res, err)
       type(model_t), intent(in) :: model
       type(period_map_t), intent(in) :: pm
@@ -41,6 +42,8 @@ contains
       type(run_result_t), intent(out) :: res
       type(error_t), allocatable, intent(out) :: err
       type(model_t) :: m
+      type(null_sink_t) :: none
+      type(run_result_t) :: seam
       real(wp) :: y(size(pm%y0))
       integer :: i
       m = model
@@ -61,6 +64,17 @@ contains
       m%run%settle_tol = 0.0_wp
       m%run%settle_time = 0.0_wp
       call simulate(m, sink, res, err)
+      if (allocated(err)) return
+      ! p2p_range across the seam t0 = t0 + kT (D-141): a turning point in the first or
+      ! last step of the window has no step end on one side there and falls back to a
+      ! sample; the k periods and two steps beyond have each one inside. The range
+      ! only: every other metric is of the k periods.
+      m%run%t_end = m%run%t_end + 2.0_wp*m%run%dt
+      call simulate(m, none, seam, err)
+      if (allocated(err)) return
+      do i = 1, min(size(res%el), size(seam%el))
+         res%el(i)%p2p_range = max(res%el(i)%p2p_range, seam%el(i)%p2p_range)
+      end do
    end subroutine orbit_run
 
    !> The grazing check on the orbit's run `res`: per element, the gap (the closest
