@@ -211,17 +211,20 @@ contains
       type(error_t), allocatable :: err
       type(model_t) :: m
       real(wp), allocatable :: gap(:)
-      integer :: worst
+      integer :: worst, stale
       m = model
       if (len(out) > 0) then
          m%run%output = out
          h5%path = out
          h5%compression = m%run%compression
-         call orbit_run(m, pm, res%x, h5, run, err)
+         call orbit_run(m, pm, res%x, h5, run, err, stale)
       else
-         call orbit_run(m, pm, res%x, none, run, err)
+         call orbit_run(m, pm, res%x, none, run, err, stale)
       end if
       if (allocated(err)) call fail(err)
+      if (stale > 0) write (output_unit, '(a)') "WARNING: t0 lies in a contact of '"//m%elements(stale)%e%id// &
+         "' that came from an impact (no t0 has every striking clearance open): the map restarts it with the "// &
+         "contact law's start, not its impact's damping; this is not an orbit of the train (D-142)"
       write (output_unit, '(a)') 'the orbit''s run over '//str(pm%k)//' period(s) from t0:'
       call print_summary(m, run, output_unit)
       call orbit_grazing(m, run, gap, worst)

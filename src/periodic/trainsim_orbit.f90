@@ -34,13 +34,18 @@ contains
    !> Run `model` over pm's k periods from the reduced state x at t0 into `sink`: the
    !> orbit's history, events and metrics (no settling); p2p_range from a second run two
    !> steps longer (the turning points at the seam, D-141).
-   subroutine orbit_run(model, pm, x, sink, res, err)
+   subroutine orbit_run(model, pm, x, sink, res, err, stale)
       type(model_t), intent(in) :: model
       type(period_map_t), intent(in) :: pm
       real(wp), intent(in) :: x(:)
       class(sink_t), intent(inout), target :: sink
       type(run_result_t), intent(out) :: res
       type(error_t), allocatable, intent(out) :: err
+      !> the first clearance with a memory (pm%memory) that is in contact at t0 and
+      !> strikes on the orbit: that contact came from an impact whose damping the state
+      !> at t0 does not hold, and the map restarts it with the law's start (D-99, D-142):
+      !> not an orbit of the train. 0: none.
+      integer, intent(out), optional :: stale
       type(model_t) :: m
       type(null_sink_t) :: none
       type(run_result_t) :: seam
@@ -58,6 +63,7 @@ contains
          m%nodes(i)%n%theta0 = y(m%nodes(i)%n%offset + 1)
          m%nodes(i)%n%omega0 = y(m%nodes(i)%n%offset + 2)
       end do
+      if (present(stale)) stale = stale_contact(m, pm, y)
       m%run%preload = .false.
       m%run%t_start = pm%t0
       m%run%t_end = pm%t0 + real(pm%k, wp)*pm%period
@@ -75,7 +81,35 @@ contains
       do i = 1, min(size(res%el), size(seam%el))
          res%el(i)%p2p_range = max(res%el(i)%p2p_range, seam%el(i)%p2p_range)
       end do
+      if (present(stale)) then
+         if (stale > 0) then
+            if (.not. res%el(stale)%impacts > 0) stale = 0
+         end if
+      end if
    end subroutine orbit_run
+
+   !> The first clearance with a memory in contact in the full state y at t0 (0: none;
+   !> orbit_run keeps it only if it strikes on the orbit).
+   integer function stale_contact(m, pm, y) result(e)
+      type(model_t), intent(inout) :: m
+      type(period_map_t), intent(in) :: pm
+      real(wp), intent(in) :: y(:)
+      real(wp) :: d, f
+      integer :: i, c, p
+      e = 0
+      if (size(pm%memory) == 0) return
+      call m%kinematics(pm%t0, y)
+      do i = 1, size(pm%memory)
+         call m%elements(pm%memory(i))%e%status_at(m%theta, m%omega, d, f, c, p)   ! (d: delta; c is the mode's)
+         select type (el => m%elements(pm%memory(i))%e)
+         class is (clearance_element_t)
+            if (abs(d) >= el%cl%b) then
+               e = pm%memory(i)
+               return
+            end if
+         end select
+      end do
+   end function stale_contact
 
    !> The grazing check on the orbit's run `res`: per element, the gap (the closest
    !> extreme of delta to a face, over the half clearance b; huge for an element
