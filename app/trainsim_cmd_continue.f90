@@ -53,7 +53,7 @@ module trainsim_cmd_continue
    integer, save :: bn = 0                 !< its states
    character(len=:), allocatable, save :: out_path
    integer, save :: kperiods = 1
-   !> points whose t0 lies in a contact that came from an impact (orbit_run's `stale`, D-142)
+   !> points whose t0 lies in a contact that came from an impact (orbit_run's `stale`, D-144)
    integer, save :: n_stale = 0
    real(wp), save :: stale_lam(2) = 0.0_wp
    character(len=:), allocatable, save :: stale_id
@@ -370,7 +370,7 @@ contains
          if (n_stale > 0) write (error_unit, '(a)') 'trainsim: warning: '//str(n_stale)//' point(s) between '// &
             'lambda = '//str(stale_lam(1), 10)//' and '//str(stale_lam(2), 10)//" have t0 in a contact of '"// &
             stale_id//"' that came from an impact: the map restarts it with the contact law's start, not its "// &
-            "impact's damping, so they are not orbits of the train (D-142)"
+            "impact's damping, so they are not orbits of the train (D-144)"
          return
       end if
       allocate (el(size(element_metric_names), bfile%ne))

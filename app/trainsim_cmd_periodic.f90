@@ -224,7 +224,7 @@ contains
       if (allocated(err)) call fail(err)
       if (stale > 0) write (output_unit, '(a)') "WARNING: t0 lies in a contact of '"//m%elements(stale)%e%id// &
          "' that came from an impact (no t0 has every striking clearance open): the map restarts it with the "// &
-         "contact law's start, not its impact's damping; this is not an orbit of the train (D-142)"
+         "contact law's start, not its impact's damping; this is not an orbit of the train (D-144)"
       write (output_unit, '(a)') 'the orbit''s run over '//str(pm%k)//' period(s) from t0:'
       call print_summary(m, run, output_unit)
       call orbit_grazing(m, run, gap, worst)

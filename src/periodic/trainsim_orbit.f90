@@ -33,7 +33,7 @@ contains
 
    !> Run `model` over pm's k periods from the reduced state x at t0 into `sink`: the
    !> orbit's history, events and metrics (no settling); p2p_range from a second run two
-   !> steps longer (the turning points at the seam, D-141).
+   !> steps longer (the turning points at the seam, D-143).
    subroutine orbit_run(model, pm, x, sink, res, err, stale)
       type(model_t), intent(in) :: model
       type(period_map_t), intent(in) :: pm
@@ -43,7 +43,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       !> the first clearance with a memory (pm%memory) that is in contact at t0 and
       !> strikes on the orbit: that contact came from an impact whose damping the state
-      !> at t0 does not hold, and the map restarts it with the law's start (D-99, D-142):
+      !> at t0 does not hold, and the map restarts it with the law's start (D-99, D-144):
       !> not an orbit of the train. 0: none.
       integer, intent(out), optional :: stale
       type(model_t) :: m
@@ -71,7 +71,7 @@ contains
       m%run%settle_time = 0.0_wp
       call simulate(m, sink, res, err)
       if (allocated(err)) return
-      ! p2p_range across the seam t0 = t0 + kT (D-141): a turning point in the first or
+      ! p2p_range across the seam t0 = t0 + kT (D-143): a turning point in the first or
       ! last step of the window has no step end on one side there and falls back to a
       ! sample; the k periods and two steps beyond have each one inside. The range
       ! only: every other metric is of the k periods.

@@ -88,7 +88,7 @@ contains
 
    !> Rewrite /metrics/p2p_range of the orbit's run file `path` with p2p (per element):
    !> the range across the seam t0 = t0 + kT, which the run's own window cannot see
-   !> (orbit_run, D-141), so the file says what the printout and the branch file say.
+   !> (orbit_run, D-143), so the file says what the printout and the branch file say.
    subroutine write_orbit_p2p(path, p2p, err)
       character(len=*), intent(in) :: path
       real(wp), intent(in) :: p2p(:)

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """`trainsim periodic` says when its orbit's t0 lies in a contact that came from an impact
-(D-142): the Table 7.1 train with 500 lb in s/rad on its shafts at 430 teeth/s, where mesh1
+(D-144): the Table 7.1 train with 500 lb in s/rad on its shafts at 430 teeth/s, where mesh1
 strikes once a period and mesh2 never opens, so no t0 has every yang_sun clearance open and
 t0 stays inside mesh1's contact (its impact's damping not in the state): the WARNING
 naming mesh1. At 588.18 teeth/s neither mesh opens (the law's start is the orbit's), and on

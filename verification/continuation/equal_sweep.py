@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Issue 27, "Must show": on the Table 5.5 rig the stable branches equal the settled
 brute-force sweep (the same metric to 1e-6) wherever that sweep settles, and the folds
-lie inside the brute-force hysteresis band (README.md here, D-141).
+lie inside the brute-force hysteresis band (README.md here, D-143).
 
 1. `trainsim continue` follows the damped rig (500 lb in s/rad on shaft1 and shaft3, as
    study.py) over 645 -> 385 teeth/s: the contact-loss loop with its two folds.

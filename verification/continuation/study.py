@@ -14,7 +14,7 @@ For each settled sweep run, the branch's value of the metric at that frequency i
 from the stable stretches of the branch that span it, by a cubic through the four nearest
 points (its error estimated by the difference to the quadratic through three); the
 largest relative difference sweep - branch is reported with that estimate. The metric's
-extremes are the trajectory's turning points in both (D-48, D-141), not the samples; the
+extremes are the trajectory's turning points in both (D-48, D-143), not the samples; the
 "sampling" column, (2 pi f dt_out)^2 / 8, is the bound of sample extremes, kept in the
 check's tolerance as before. Comparison to 1e-6 at the branch's own points, the sweep
 settled to 1e-11: equal_sweep.py.
