@@ -53,6 +53,10 @@ module trainsim_cmd_continue
    integer, save :: bn = 0                 !< its states
    character(len=:), allocatable, save :: out_path
    integer, save :: kperiods = 1
+   !> points whose t0 lies in a contact that came from an impact (orbit_run's `stale`, D-144)
+   integer, save :: n_stale = 0
+   real(wp), save :: stale_lam(2) = 0.0_wp
+   character(len=:), allocatable, save :: stale_id
 
 contains
 
@@ -363,6 +367,10 @@ contains
       call print_point(br, i, err)
       if (i == 0) then
          call bfile%write_end(br, err)
+         if (n_stale > 0) write (error_unit, '(a)') 'trainsim: warning: '//str(n_stale)//' point(s) between '// &
+            'lambda = '//str(stale_lam(1), 10)//' and '//str(stale_lam(2), 10)//" have t0 in a contact of '"// &
+            stale_id//"' that came from an impact: the map restarts it with the contact law's start, not its "// &
+            "impact's damping, so they are not orbits of the train (D-144)"
          return
       end if
       allocate (el(size(element_metric_names), bfile%ne))
@@ -382,6 +390,7 @@ contains
       type(null_sink_t) :: none
       real(wp) :: period
       logical :: done
+      integer :: stale
       type(model_t), allocatable, save :: base   ! (the first point's model, retuned to the others: D-131)
       done = .false.
       if (allocated(base)) then
@@ -395,9 +404,16 @@ contains
       if (allocated(err)) return
       m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
       call pm%setup(m, period, kperiods, err)
-      if (.not. allocated(err)) call orbit_run(m, pm, p%x, none, run, err)
+      if (.not. allocated(err)) call orbit_run(m, pm, p%x, none, run, err, stale)
       call pm%finish()
       if (.not. allocated(err)) el = element_record(run)
+      if (allocated(err) .or. stale == 0) return
+      n_stale = n_stale + 1   ! (reported at the branch's end: stale_note)
+      if (n_stale == 1) then
+         stale_lam = [p%lam, p%lam]
+         stale_id = m%elements(stale)%e%id
+      end if
+      stale_lam = [min(stale_lam(1), p%lam), max(stale_lam(2), p%lam)]
    end subroutine orbit_metrics
 
    !> What the branch file describes: the deck at the first parameter value, and a

@@ -15,7 +15,7 @@ module trainsim_cmd_periodic
    use trainsim_shooting, only: shoot_options_t, shoot_result_t, shoot, shoot_converged
    use trainsim_floquet, only: floquet_multipliers, stability_of, neutral_tol
    use trainsim_orbit, only: orbit_run, orbit_grazing, graze_tol
-   use trainsim_periodic_file, only: write_periodic_group
+   use trainsim_periodic_file, only: write_periodic_group, write_orbit_p2p
    use trainsim_cli, only: nargs, arg, quit, fail, load, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: command_usage
    use trainsim_monodromy_map, only: monodromy_variational, monodromy_choice, monodromy_name, monodromy_code, &
@@ -211,17 +211,20 @@ contains
       type(error_t), allocatable :: err
       type(model_t) :: m
       real(wp), allocatable :: gap(:)
-      integer :: worst
+      integer :: worst, stale
       m = model
       if (len(out) > 0) then
          m%run%output = out
          h5%path = out
          h5%compression = m%run%compression
-         call orbit_run(m, pm, res%x, h5, run, err)
+         call orbit_run(m, pm, res%x, h5, run, err, stale)
       else
-         call orbit_run(m, pm, res%x, none, run, err)
+         call orbit_run(m, pm, res%x, none, run, err, stale)
       end if
       if (allocated(err)) call fail(err)
+      if (stale > 0) write (output_unit, '(a)') "WARNING: t0 lies in a contact of '"//m%elements(stale)%e%id// &
+         "' that came from an impact (no t0 has every striking clearance open): the map restarts it with the "// &
+         "contact law's start, not its impact's damping; this is not an orbit of the train (D-144)"
       write (output_unit, '(a)') 'the orbit''s run over '//str(pm%k)//' period(s) from t0:'
       call print_summary(m, run, output_unit)
       call orbit_grazing(m, run, gap, worst)
@@ -234,6 +237,8 @@ contains
          write (output_unit, '(a)') 'grazing check: no clearance in the train'
       end if
       if (len(out) == 0) return
+      call write_orbit_p2p(out, run%el%p2p_range, err)
+      if (allocated(err)) call fail(err)
       if (worst == 0) then
          call write_periodic_group(out, m, pm, res, mu, huge(1.0_wp), 0, err)
       else

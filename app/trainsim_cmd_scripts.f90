@@ -201,9 +201,11 @@ contains
       character(len=:), allocatable :: v
       integer :: n, st
       call get_environment_variable(name, length=n, status=st)
-      v = ''
-      if (st /= 0 .or. n == 0) return
-      allocate (character(len=n) :: v)
+      if (st /= 0 .or. n == 0) then
+         v = ''
+         return
+      end if
+      allocate (character(len=n) :: v)   ! (not after v = '': a set variable ended in a runtime error)
       call get_environment_variable(name, v)
    end function env_text
 

@@ -230,7 +230,7 @@ contains
       real(wp), intent(out) :: g(:)
       real(wp) :: fs, sg
       call self%cl%guards(thl, thr, g(1:2))
-      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), thl, wl, thr, wr, g(1:2))   ! (D-136)
+      if (self%cl%law%clip_guard()) call self%cl%tension_guard(self%factor(thl), thl, wl, thr, wr, g(1:2))   ! (D-136)
       g(3:4) = 1.0_wp
       if (self%cl%mode == 0) return   ! open: no force, no flow (the flow is chosen as a face closes)
       fs = self%cl%contact_force(self%factor(thl), thl, wl, thr, wr)

@@ -455,7 +455,7 @@ contains
       ! an excited mesh (issue 26): the torques stay with `torques` while the
       ! stiffness varies or the TE moves the faces (their guards too)
       if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none
-      if (self%ex%has_te .or. self%cl%law%no_tension) form%guards = hg_none   ! (no_tension: D-136)
+      if (self%ex%has_te .or. self%cl%law%clip_guard()) form%guards = hg_none   ! (the clip: D-136)
       if (self%fric%on()) then   ! friction: the general path (D-98)
          form%kind = hf_none
          form%guards = hg_none

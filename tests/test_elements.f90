@@ -782,14 +782,14 @@ contains
    subroutine test_hot_forms_are_the_elements_own_arithmetic()
       integer, parameter :: n_el = 9
       character(len=240) :: el(n_el)
-      ! expected torque form when closed / when open, guard form (no_tension, 2 and 9: none,
-      ! the clip's guard reads the speeds, D-136)
+      ! expected torque form when closed / when open, guard form (no_tension, 2 and 9, and
+      ! elasto_backlash, 8: none, the clip's guard reads the speeds, D-136, D-141)
       integer, parameter :: want_closed(n_el) = [hf_yang_sun, hf_yang_sun, hf_none, hf_yang_sun, hf_none, &
                                                  hf_linear, hf_yang_sun, hf_none, hf_linear]
       integer, parameter :: want_open(n_el) = [hf_open, hf_open, hf_none, hf_open, hf_none, hf_open, hf_open, &
                                                hf_open, hf_open]
       integer, parameter :: want_g(n_el) = [hg_faces_zone, hg_none, hg_faces, hg_faces, hg_faces, hg_faces, &
-                                            hg_faces, hg_faces, hg_none]
+                                            hg_faces, hg_none, hg_none]
       type(model_t) :: m
       real(wp), allocatable :: y(:), dydt(:), g(:)
       real(wp) :: ge(4), x(4), tl, tr, pw, sgn, b, disp, force, stored, elastic, gone

@@ -1,4 +1,4 @@
-!> The guard windows (`model_t%guard_windows`, docs/decisions.md D-141) with
+!> The guard windows (`model_t%guard_windows`, docs/decisions.md D-145) with
 !> which RK4's block of steps tests its guards: a guard row has a guard below
 !> zero exactly when d = r1 y(yl) - r2 y(yr) leaves [w3, w4] or y(yl) leaves
 !> [w5, w6]. That rewrites `guards_below`'s `d - b < 0` as `d < b` (and its
@@ -25,7 +25,7 @@ program test_guard_windows
    logical :: last, halt
    character(len=*), parameter :: nl = new_line('a')
 
-   call suite_begin('guard windows of RK4''s blocks (D-141)')
+   call suite_begin('guard windows of RK4''s blocks (D-145)')
    ! the gear pair alone between two free inertias (a train of one element)
    call load_model_text("&run t_end = 1.0e-3, dt = 8.0e-6, integrator = 'rk4' /"//nl// &
                         "&node id = 'pinion', type = 'inertia', inertia = 0.987 /"//nl// &

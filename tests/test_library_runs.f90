@@ -162,7 +162,7 @@ contains
    !> tracked, settle_time mid-run) advanced by RK4 side by side up to the first
    !> event, each step given to an observer. Observer A takes the short way
    !> (the model's workspace holds the RHS at the step's end, at a located event
-   !> too: D-142); for observer B
+   !> too: D-146); for observer B
    !> the mark is cleared first, so it fills the whole sample (recomputing the
    !> kinematics, torques and statuses) and folds it as before. The metrics and
    !> the energy balance figures are the same to the bit; so are, at every
@@ -218,7 +218,7 @@ contains
       if (allocated(err)) return
       write (*, '(a,i0,a,i0,a,i0,a)') '    ', n_steps, ' steps, ', n_short, ' the short way, ', n_events, ' events'
       call check('steps on both sides of settle_time and events among them; every step the short way for A, '// &
-                 'the located events too (D-142)', &
+                 'the located events too (D-146)', &
                  n_steps - n_events > nint(ma%run%settle_time/ma%run%dt) + 10 .and. n_events > 2 .and. &
                  n_short == n_steps)
       call check('the two copies step alike, to the bit', same_y)

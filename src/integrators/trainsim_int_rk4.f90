@@ -71,7 +71,7 @@ module trainsim_int_rk4
       integer :: ng = 0
       real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), ytmp(:), ynew(:), ys(:)
       real(wp), allocatable :: g0(:), g1(:), gs(:)
-      !> The guard test of a block's steps as windows (`guard_windows`, D-141)
+      !> The guard test of a block's steps as windows (`guard_windows`, D-145)
       integer, allocatable :: gw_i(:, :)
       real(wp), allocatable :: gw(:, :)
       real(wp), allocatable :: yb(:)   !< RK4 to the negative end of the bracket
@@ -434,7 +434,7 @@ contains
       s = 0.0_wp
       t_bp = huge(1.0_wp)   ! a step ending at or after t_bp ends on the stop's breakpoint
       if (self%stop_is_breakpoint) t_bp = self%t_stop - self%tiny_t
-      ! the guards' test of this block's modes (D-141); nw = -1: guards_below's
+      ! the guards' test of this block's modes (D-145); nw = -1: guards_below's
       nw = 0
       if (self%ng > 0) call model%guard_windows(nw, self%gw_i, self%gw)
       model%blk%ws = .false.   ! each step's column only; the workspace after the block
@@ -497,7 +497,7 @@ contains
    end subroutine rk4_advance_block
 
    !> Whether a guard is below zero at y, by the windows of `guard_windows`
-   !> (n rows; D-141): the same answer as `guards_below`, without the guards.
+   !> (n rows; D-145): the same answer as `guards_below`, without the guards.
    pure logical function windows_below(n, iw, w, y) result(below)
       integer, intent(in) :: n, iw(2, n)
       real(wp), intent(in) :: w(6, n), y(*)

@@ -18,7 +18,7 @@ module trainsim_h5_slots
    implicit none
    private
 
-   public :: new_slots, open_dset, put_slot_r, put_slot_i, put_slot_text, get_slot_r, get_slot_text, &
+   public :: new_slots, open_dset, open_dsets, put_slot_r, put_slot_i, put_slot_text, get_slot_r, get_slot_text, &
       put_matrix, get_matrix
 
 contains
@@ -64,15 +64,31 @@ contains
       if (kind == h5_text) call close_type(t)
    end subroutine new_slots
 
-   !> Open dataset `name` of `loc`; h < 0 on failure.
-   subroutine open_dset(loc, name, d, h)
+   !> Open dataset `name` of `loc` into d (-1 on failure); hs lowered to the
+   !> HDF5 status (< 0 on failure), so that a run of opens is checked once.
+   subroutine open_dset(loc, name, d, hs)
       integer(hid_t), intent(in) :: loc
       character(len=*), intent(in) :: name
       integer(hid_t), intent(out) :: d
-      integer, intent(out) :: h
+      integer, intent(inout) :: hs
+      integer :: h
       call h5dopen_f(loc, name, d, h)
       if (h < 0) d = -1
+      hs = min(hs, h)
    end subroutine open_dset
+
+   !> open_dset of group//'/'//names(k) into d(k) for every k.
+   subroutine open_dsets(loc, group, names, d, hs)
+      integer(hid_t), intent(in) :: loc
+      character(len=*), intent(in) :: group
+      character(len=*), intent(in) :: names(:)
+      integer(hid_t), intent(out) :: d(:)
+      integer, intent(inout) :: hs
+      integer :: k
+      do k = 1, size(names)
+         call open_dset(loc, group//'/'//trim(names(k)), d(k), hs)
+      end do
+   end subroutine open_dsets
 
    !> File and memory spaces for the slot of run irun (n values).
    subroutine select_slot(d, irun, n, fs, ms)

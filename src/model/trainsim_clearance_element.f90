@@ -6,7 +6,7 @@
 module trainsim_clearance_element
    use trainsim_kinds, only: wp
    use trainsim_event, only: event_t
-   use trainsim_contact, only: clearance_t, law_yang_sun, law_linear, fit_none, v_plausible_ips
+   use trainsim_contact, only: clearance_t, law_yang_sun, law_linear, fit_none, v_plausible_ips, ez_full
    use trainsim_element, only: element_t, lin_state_t, lin_contact_closed, hot_form_t, hf_none, hf_open, &
                                hf_yang_sun, hf_linear, hg_faces, hg_none
    implicit none
@@ -192,7 +192,7 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: g(:)
       call self%cl%guards(thl, thr, g(1:2))
-      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), thl, wl, thr, wr, g(1:2))
+      if (self%cl%law%clip_guard()) call self%cl%tension_guard(self%factor(thl), thl, wl, thr, wr, g(1:2))
    end subroutine ce_guards
 
    subroutine ce_init_mode(self, thl, wl, thr, wr)
@@ -210,7 +210,8 @@ contains
       real(wp), intent(in) :: thl, wl, thr, wr
       call self%init_mode(thl, wl, thr, wr)
       self%cl%mode = face
-      self%cl%slack = .false.   ! (at rest: the elastic force alone)
+      self%cl%slack = .false.   ! (at rest: the elastic force alone;
+      self%cl%ezone = ez_full   ! elasto_backlash: tc + td with td = 0)
       if (face /= 0) call self%cl%law%begin_contact(0.0_wp, .true.)
    end subroutine ce_preload_mode
 
@@ -263,7 +264,7 @@ contains
       class(clearance_element_t), intent(in) :: self
       type(hot_form_t), intent(out) :: form
       form%guards = hg_faces
-      if (self%cl%law%no_tension) form%guards = hg_none   ! (the clip's guard reads the speeds, D-136)
+      if (self%cl%law%clip_guard()) form%guards = hg_none   ! (the clip's guard reads the speeds, D-136)
       form%mode = self%cl%mode
       form%s = real(self%cl%mode, wp)
       form%b = self%cl%b

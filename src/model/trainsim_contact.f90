@@ -24,6 +24,8 @@
 !> linear) the clip max(F, 0) is a kink where the unclipped force passes zero
 !> in contact: the face guard not in play carries it (tension_guard) and a
 !> sub-mode `slack` (F clipped) flips there, without an event record (D-136).
+!> elasto_backlash's clip and min are located alike: that guard carries the
+!> distance to the branch's ends, the sub-mode `ezone` says which branch holds.
 module trainsim_contact
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -40,6 +42,8 @@ module trainsim_contact
    public :: law_yang_sun, law_linear, law_elasto, rest_goldsmith, rest_smith, rest_constant
 
    integer, parameter :: law_yang_sun = 1, law_linear = 2, law_elasto = 3
+   !> elasto_backlash's branches (clearance_t%ezone): F = tc + td, F = 0 (tc + td <= 0), F = 2 tc (tc < td)
+   integer, parameter, public :: ez_full = 0, ez_slack = 1, ez_double = 2
    public :: v_plausible_ips
    !> Largest approach velocity (in/s) the linearisation assumes a contact can
    !> see: 100 in/s (2.54 m/s), about five times the fastest impacts of the
@@ -78,6 +82,7 @@ module trainsim_contact
       procedure, non_overridable :: fit_stiffness_at => law_fit_stiffness_at
       procedure :: force_partials => law_force_partials
       procedure :: lowest_restitution => law_lowest_restitution
+      procedure, non_overridable :: clip_guard => law_clip_guard
       procedure :: linear_damping => law_linear_damping
       procedure :: gentle_damping => law_gentle_damping
    end type contact_law_t
@@ -93,12 +98,16 @@ module trainsim_contact
       !> no_tension and in contact: the unclipped force is <= 0 (clipped to 0);
       !> flips where it passes zero (tension_guard, D-136)
       logical :: slack = .false.
+      !> elasto_backlash in contact: the branch of its law that holds (ez_*);
+      !> changes where tc + td or tc - td passes zero (tension_guard)
+      integer :: ezone = ez_full
    contains
       procedure, non_overridable :: delta => cl_delta
       procedure :: init => cl_init
       procedure, non_overridable :: guards => cl_guards
       procedure, non_overridable :: tension_guard => cl_tension_guard
       procedure, non_overridable :: tension => cl_tension
+      procedure, non_overridable :: elasto_parts => cl_elasto_parts
       procedure :: update => cl_update
       procedure, non_overridable :: contact_force => cl_contact_force
       procedure, non_overridable :: torques => cl_torques
@@ -123,6 +132,16 @@ module trainsim_contact
          class(contact_law_t), intent(in) :: self
          real(wp), intent(in) :: f
       end function law_gentle_damping
+      !> Read the contact-law keys shared by all clearance elements (`v_scale`: the
+      !> element's approach velocity to a line speed in the deck's length unit).
+      module subroutine law_configure(self, grp, units, v_scale, default_law, err)
+         class(contact_law_t), intent(inout) :: self
+         type(deck_group_t), intent(inout) :: grp
+         type(units_t), intent(in) :: units
+         real(wp), intent(in) :: v_scale
+         character(len=*), intent(in) :: default_law
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine law_configure
       pure real(wp) module function law_elastic_energy(self, p) result(e)
          class(contact_law_t), intent(in) :: self
          real(wp), intent(in) :: p
@@ -130,76 +149,6 @@ module trainsim_contact
    end interface
 
 contains
-
-   !> Read the contact-law keys shared by all clearance elements.
-   !> `v_scale` converts the element's approach velocity to a line speed in the
-   !> deck's length unit (1 for gears and keys; a radius for an angular coupling).
-   subroutine law_configure(self, grp, units, v_scale, default_law, err)
-      class(contact_law_t), intent(inout) :: self
-      type(deck_group_t), intent(inout) :: grp
-      type(units_t), intent(in) :: units
-      real(wp), intent(in) :: v_scale
-      character(len=*), intent(in) :: default_law
-      type(error_t), allocatable, intent(out) :: err
-      character(len=:), allocatable :: name
-      real(wp) :: vmin_ips
-
-      call grp%get_string('contact_law', name, err, default=default_law); if (allocated(err)) return
-      select case (to_lower(name))
-      case ('yang_sun'); self%law = law_yang_sun
-      case ('linear'); self%law = law_linear
-      case ('elasto_backlash'); self%law = law_elasto
-      case default
-         call fatal_error(err, grp%where('contact_law')//": error: unknown contact_law '"//name// &
-                          "'; valid laws are: yang_sun, linear, elasto_backlash", err_input)
-         return
-      end select
-      if (self%law == law_yang_sun) then
-         call grp%get_string('restitution_law', name, err, default='goldsmith'); if (allocated(err)) return
-         select case (to_lower(name))
-         case ('goldsmith'); self%restitution_law = rest_goldsmith
-         case ('smith'); self%restitution_law = rest_smith
-         case ('constant')
-            self%restitution_law = rest_constant
-            call grp%get_real('restitution', self%e_const, err); if (allocated(err)) return
-            if (.not. (self%e_const > 0.0_wp .and. self%e_const <= 1.0_wp)) then
-               call fatal_error(err, grp%where('restitution')//': error: restitution must be in (0, 1], got '// &
-                                str(self%e_const), err_input)
-               return
-            end if
-         case default
-            call fatal_error(err, grp%where('restitution_law')//": error: unknown restitution_law '"//name// &
-                             "'; valid laws are: goldsmith, smith, constant", err_input)
-            return
-         end select
-         ! 1e-3 in/s: below it eq. (3.12) is evaluated at this floor (D stays finite)
-         call grp%get_real('min_approach_velocity', vmin_ips, err, default=1.0e-3_wp/(units%to_inch*v_scale))
-         if (allocated(err)) return
-         self%v_min = vmin_ips
-         if (.not. self%v_min > 0.0_wp) then
-            call fatal_error(err, grp%where('min_approach_velocity')//': error: must be > 0, got '// &
-                             str(self%v_min), err_input)
-            return
-         end if
-         call grp%get_real('initial_contact_velocity', self%v_initial, err, default=0.0_wp); if (allocated(err)) return
-         ! deck values in D-28's range (D of eq. 3.12 divides by them); no element lists them in params()
-         call check_magnitude(grp, 'min_approach_velocity', self%v_min, err)
-         call check_magnitude(grp, 'initial_contact_velocity', self%v_initial, err); if (allocated(err)) return
-         if (.not. self%v_initial >= 0.0_wp) then
-            call fatal_error(err, grp%where('initial_contact_velocity')//': error: must be >= 0, got '// &
-                             str(self%v_initial), err_input)
-            return
-         end if
-      else
-         call grp%get_real('contact_damping', self%c, err); if (allocated(err)) return
-         if (.not. self%c >= 0.0_wp) then
-            call fatal_error(err, grp%where('contact_damping')//': error: must be >= 0, got '//str(self%c), err_input)
-            return
-         end if
-      end if
-      call grp%get_logical('no_tension', self%no_tension, err, default=.false.); if (allocated(err)) return
-      self%v_to_ips = units%to_inch*v_scale
-   end subroutine law_configure
 
    !> Coefficient of restitution at approach velocity v (deck units).
    pure real(wp) function law_restitution(self, v) result(e)
@@ -278,6 +227,13 @@ contains
       real(wp), intent(in) :: p
       f = key_fit_force(self%fit, self%key_length_in*p*self%to_inch)/self%to_lbf   ! L p in in^2
    end function law_fit_elastic_force
+
+   !> The face guard not in play locates a kink of the force inside contact:
+   !> no_tension's clip (D-136), elasto_backlash's clip and min.
+   pure logical function law_clip_guard(self) result(g)
+      class(contact_law_t), intent(in) :: self
+      g = self%no_tension .or. self%law == law_elasto
+   end function law_clip_guard
 
    !> Elastic part of the contact force at penetration p (factor 1).
    pure real(wp) function law_elastic_force(self, p) result(f)
@@ -374,7 +330,13 @@ contains
       cf = 1.0_wp
       if (present(c)) cf = c
       self%slack = .false.
-      if (self%mode /= 0) self%slack = self%tension(cf, thl, wl, thr, wr) < 0.0_wp
+      self%ezone = ez_full
+      if (self%mode == 0) return
+      if (self%law%law == law_elasto) then
+         self%ezone = elasto_zone(self%elasto_parts(cf, thl, wl, thr, wr))
+      else
+         self%slack = self%tension(cf, thl, wl, thr, wr) < 0.0_wp
+      end if
    end subroutine cl_init
 
    !> The sign of the unclipped contact force on the face in contact (a
@@ -402,6 +364,29 @@ contains
       end if
    end function cl_tension
 
+   !> elasto_backlash's parts [tc, td] = [c k p, d pdot] on the face in contact.
+   pure function cl_elasto_parts(self, c, thl, wl, thr, wr) result(tt)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, wl, thr, wr
+      real(wp) :: tt(2), s
+      s = real(self%mode, wp)
+      tt(1) = c*self%law%elastic_force(s*(self%r1*thl - self%r2*thr) - self%b)
+      tt(2) = self%law%c*s*(self%r1*wl - self%r2*wr)
+   end function cl_elasto_parts
+
+   !> The branch of elasto_backlash's law that holds for tt = [tc, td], as
+   !> law_force_of chooses it (at the onset, tc = 0: 2 tc while td > 0).
+   pure integer function elasto_zone(tt) result(z)
+      real(wp), intent(in) :: tt(2)
+      z = ez_full
+      if (tt(1) + tt(2) <= 0.0_wp) then
+         z = ez_slack
+         if (tt(1) == 0.0_wp .and. tt(2) == 0.0_wp) z = ez_full
+      else if (tt(1) < tt(2)) then
+         z = ez_double
+      end if
+   end function elasto_zone
+
    !> no_tension in contact: the guard of the face not in play (1 in `guards`)
    !> becomes the unclipped force's sign `tension`, negated while slack, so
    !> that it goes below zero where the clip starts or ends (D-136).
@@ -409,10 +394,19 @@ contains
       class(clearance_t), intent(in) :: self
       real(wp), intent(in) :: c, thl, wl, thr, wr
       real(wp), intent(inout) :: g(2)
-      real(wp) :: h
-      if (self%mode == 0 .or. .not. self%law%no_tension .or. self%law%law == law_elasto) return
-      h = self%tension(c, thl, wl, thr, wr)
-      if (self%slack) h = -h
+      real(wp) :: h, tt(2)
+      if (self%mode == 0 .or. .not. self%law%clip_guard()) return
+      if (self%law%law == law_elasto) then
+         tt = self%elasto_parts(c, thl, wl, thr, wr)
+         select case (self%ezone)
+         case (ez_slack); h = -(tt(1) + tt(2))         ! ends where tc + td rises through 0
+         case (ez_double); h = tt(2) - tt(1)           ! ends where td falls to tc
+         case default; h = tt(1) - abs(tt(2))          ! ends at either (tc + td or tc - td through 0)
+         end select
+      else
+         h = self%tension(c, thl, wl, thr, wr)
+         if (self%slack) h = -h
+      end if
       if (self%mode == 1) then
          g(2) = h
       else
@@ -452,10 +446,12 @@ contains
          self%slack = .false.
          if (fired(1)) then
             self%mode = 1
+            self%ezone = elasto_zone([0.0_wp, self%law%c*dd])   ! (the onset: p = 0)
             call self%law%begin_contact(dd, .false.)
             call push(ev_contact_front, dd)
          else if (fired(2)) then
             self%mode = -1
+            self%ezone = elasto_zone([0.0_wp, -self%law%c*dd])
             call self%law%begin_contact(-dd, .false.)
             call push(ev_contact_rear, -dd)
          end if
@@ -465,7 +461,7 @@ contains
             self%slack = .false.
             call push(ev_separation, -dd)
          else if (fired(2)) then                ! (no_tension: the clip starts or ends)
-            self%slack = .not. self%slack
+            call sub_mode(dd)
          end if
       case (-1)
          if (fired(2)) then
@@ -473,10 +469,22 @@ contains
             self%slack = .false.
             call push(ev_separation, dd)
          else if (fired(1)) then
-            self%slack = .not. self%slack
+            call sub_mode(-dd)
          end if
       end select
    contains
+      !> The clip's sub-mode flips; elasto_backlash's branch leaves for the one
+      !> its guard led to (from the full branch: slack if td < 0, else 2 tc).
+      subroutine sub_mode(pdot)
+         real(wp), intent(in) :: pdot
+         if (self%law%law /= law_elasto) then
+            self%slack = .not. self%slack
+         else if (self%ezone /= ez_full) then
+            self%ezone = ez_full
+         else
+            self%ezone = merge(ez_slack, ez_double, pdot < 0.0_wp)
+         end if
+      end subroutine sub_mode
       subroutine push(kind, v)
          integer, intent(in) :: kind
          real(wp), intent(in) :: v

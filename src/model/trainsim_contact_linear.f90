@@ -1,10 +1,75 @@
-!> The contact law's linearised damping (modes, the dt bound: D-25, D-55) and its
-!> elastic energy (the energy ledger): trainsim_contact's procedures off the
-!> right-hand side's path, declared there.
+!> The contact law's deck keys, its linearised damping (modes, the dt bound: D-25,
+!> D-55) and its elastic energy (the energy ledger): trainsim_contact's procedures
+!> off the right-hand side's path, declared there.
 submodule (trainsim_contact) trainsim_contact_linear
    implicit none
 
 contains
+
+   !> Read the contact-law keys shared by all clearance elements (declared in
+   !> trainsim_contact). `v_scale` converts the element's approach velocity to a
+   !> line speed in the deck's length unit (1 for gears and keys; a radius for an
+   !> angular coupling).
+   module procedure law_configure
+      character(len=:), allocatable :: name
+      real(wp) :: vmin_ips
+
+      call grp%get_string('contact_law', name, err, default=default_law); if (allocated(err)) return
+      select case (to_lower(name))
+      case ('yang_sun'); self%law = law_yang_sun
+      case ('linear'); self%law = law_linear
+      case ('elasto_backlash'); self%law = law_elasto
+      case default
+         call fatal_error(err, grp%where('contact_law')//": error: unknown contact_law '"//name// &
+                          "'; valid laws are: yang_sun, linear, elasto_backlash", err_input)
+         return
+      end select
+      if (self%law == law_yang_sun) then
+         call grp%get_string('restitution_law', name, err, default='goldsmith'); if (allocated(err)) return
+         select case (to_lower(name))
+         case ('goldsmith'); self%restitution_law = rest_goldsmith
+         case ('smith'); self%restitution_law = rest_smith
+         case ('constant')
+            self%restitution_law = rest_constant
+            call grp%get_real('restitution', self%e_const, err); if (allocated(err)) return
+            if (.not. (self%e_const > 0.0_wp .and. self%e_const <= 1.0_wp)) then
+               call fatal_error(err, grp%where('restitution')//': error: restitution must be in (0, 1], got '// &
+                                str(self%e_const), err_input)
+               return
+            end if
+         case default
+            call fatal_error(err, grp%where('restitution_law')//": error: unknown restitution_law '"//name// &
+                             "'; valid laws are: goldsmith, smith, constant", err_input)
+            return
+         end select
+         ! 1e-3 in/s: below it eq. (3.12) is evaluated at this floor (D stays finite)
+         call grp%get_real('min_approach_velocity', vmin_ips, err, default=1.0e-3_wp/(units%to_inch*v_scale))
+         if (allocated(err)) return
+         self%v_min = vmin_ips
+         if (.not. self%v_min > 0.0_wp) then
+            call fatal_error(err, grp%where('min_approach_velocity')//': error: must be > 0, got '// &
+                             str(self%v_min), err_input)
+            return
+         end if
+         call grp%get_real('initial_contact_velocity', self%v_initial, err, default=0.0_wp); if (allocated(err)) return
+         ! deck values in D-28's range (D of eq. 3.12 divides by them); no element lists them in params()
+         call check_magnitude(grp, 'min_approach_velocity', self%v_min, err)
+         call check_magnitude(grp, 'initial_contact_velocity', self%v_initial, err); if (allocated(err)) return
+         if (.not. self%v_initial >= 0.0_wp) then
+            call fatal_error(err, grp%where('initial_contact_velocity')//': error: must be >= 0, got '// &
+                             str(self%v_initial), err_input)
+            return
+         end if
+      else
+         call grp%get_real('contact_damping', self%c, err); if (allocated(err)) return
+         if (.not. self%c >= 0.0_wp) then
+            call fatal_error(err, grp%where('contact_damping')//': error: must be >= 0, got '//str(self%c), err_input)
+            return
+         end if
+      end if
+      call grp%get_logical('no_tension', self%no_tension, err, default=.false.); if (allocated(err)) return
+      self%v_to_ips = units%to_inch*v_scale
+   end procedure law_configure
 
    !> The smallest restitution the law gives for approach velocities from the
    !> floor min_approach_velocity up to the largest plausible one,

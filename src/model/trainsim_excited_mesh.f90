@@ -266,7 +266,7 @@ contains
       real(wp) :: a, va
       call self%shift(thl, wl, a, va)
       call self%cl%guards(a, thr, g(1:2))
-      if (self%cl%law%no_tension) call self%cl%tension_guard(self%factor(thl), a, va, thr, wr, g(1:2))   ! (D-136)
+      if (self%cl%law%clip_guard()) call self%cl%tension_guard(self%factor(thl), a, va, thr, wr, g(1:2))   ! (D-136)
    end subroutine em_guards
 
    subroutine em_init_mode(self, thl, wl, thr, wr)

@@ -382,7 +382,7 @@ module trainsim_model
          real(wp), intent(inout) :: g(self%n_guards)
       end function model_guards_below
 
-      !> `guards_below`'s test as windows (D-141), valid until the modes change;
+      !> `guards_below`'s test as windows (D-145), valid until the modes change;
       !> n = -1 where an element has no guard row. See trainsim_model_guards.
       module subroutine model_guard_windows(self, n, iw, w)
          class(model_t), intent(in) :: self

@@ -81,7 +81,7 @@ contains
       end function guard_rows
    end procedure model_guards_below
 
-   !> `guards_below`'s test as windows (D-141): guard row k (in guard_els' order)
+   !> `guards_below`'s test as windows (D-145): guard row k (in guard_els' order)
    !> has a guard below zero exactly when d = w(1,k) y(iw(1,k)) - w(2,k) y(iw(2,k))
    !> is outside [w(3,k), w(4,k)] or y(iw(1,k)) is outside [w(5,k), w(6,k)]: the
    !> comparisons of guard_rows on the same d, rewritten (d - b < 0 exactly when

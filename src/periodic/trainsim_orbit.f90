@@ -14,7 +14,7 @@ module trainsim_orbit
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_model, only: model_t
-   use trainsim_sink, only: sink_t
+   use trainsim_sink, only: sink_t, null_sink_t
    use trainsim_observer, only: run_result_t
    use trainsim_simulate, only: simulate
    use trainsim_clearance_element, only: clearance_element_t
@@ -32,15 +32,23 @@ module trainsim_orbit
 contains
 
    !> Run `model` over pm's k periods from the reduced state x at t0 into `sink`: the
-   !> orbit's history, events and metrics (no settling).
-   subroutine orbit_run(model, pm, x, sink, res, err)
+   !> orbit's history, events and metrics (no settling); p2p_range from a second run two
+   !> steps longer (the turning points at the seam, D-143).
+   subroutine orbit_run(model, pm, x, sink, res, err, stale)
       type(model_t), intent(in) :: model
       type(period_map_t), intent(in) :: pm
       real(wp), intent(in) :: x(:)
       class(sink_t), intent(inout), target :: sink
       type(run_result_t), intent(out) :: res
       type(error_t), allocatable, intent(out) :: err
+      !> the first clearance with a memory (pm%memory) that is in contact at t0 and
+      !> strikes on the orbit: that contact came from an impact whose damping the state
+      !> at t0 does not hold, and the map restarts it with the law's start (D-99, D-144):
+      !> not an orbit of the train. 0: none.
+      integer, intent(out), optional :: stale
       type(model_t) :: m
+      type(null_sink_t) :: none
+      type(run_result_t) :: seam
       real(wp) :: y(size(pm%y0))
       integer :: i
       m = model
@@ -55,13 +63,53 @@ contains
          m%nodes(i)%n%theta0 = y(m%nodes(i)%n%offset + 1)
          m%nodes(i)%n%omega0 = y(m%nodes(i)%n%offset + 2)
       end do
+      if (present(stale)) stale = stale_contact(m, pm, y)
       m%run%preload = .false.
       m%run%t_start = pm%t0
       m%run%t_end = pm%t0 + real(pm%k, wp)*pm%period
       m%run%settle_tol = 0.0_wp
       m%run%settle_time = 0.0_wp
       call simulate(m, sink, res, err)
+      if (allocated(err)) return
+      ! p2p_range across the seam t0 = t0 + kT (D-143): a turning point in the first or
+      ! last step of the window has no step end on one side there and falls back to a
+      ! sample; the k periods and two steps beyond have each one inside. The range
+      ! only: every other metric is of the k periods.
+      m%run%t_end = m%run%t_end + 2.0_wp*m%run%dt
+      call simulate(m, none, seam, err)
+      if (allocated(err)) return
+      do i = 1, min(size(res%el), size(seam%el))
+         res%el(i)%p2p_range = max(res%el(i)%p2p_range, seam%el(i)%p2p_range)
+      end do
+      if (present(stale)) then
+         if (stale > 0) then
+            if (.not. res%el(stale)%impacts > 0) stale = 0
+         end if
+      end if
    end subroutine orbit_run
+
+   !> The first clearance with a memory in contact in the full state y at t0 (0: none;
+   !> orbit_run keeps it only if it strikes on the orbit).
+   integer function stale_contact(m, pm, y) result(e)
+      type(model_t), intent(inout) :: m
+      type(period_map_t), intent(in) :: pm
+      real(wp), intent(in) :: y(:)
+      real(wp) :: d, f
+      integer :: i, c, p
+      e = 0
+      if (size(pm%memory) == 0) return
+      call m%kinematics(pm%t0, y)
+      do i = 1, size(pm%memory)
+         call m%elements(pm%memory(i))%e%status_at(m%theta, m%omega, d, f, c, p)   ! (d: delta; c is the mode's)
+         select type (el => m%elements(pm%memory(i))%e)
+         class is (clearance_element_t)
+            if (abs(d) >= el%cl%b) then
+               e = pm%memory(i)
+               return
+            end if
+         end select
+      end do
+   end function stale_contact
 
    !> The grazing check on the orbit's run `res`: per element, the gap (the closest
    !> extreme of delta to a face, over the half clearance b; huge for an element

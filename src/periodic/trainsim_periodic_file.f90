@@ -16,14 +16,15 @@ module trainsim_periodic_file
    use trainsim_model, only: model_t
    use trainsim_h5, only: hid_t, open_file_rdwr, close_file, make_group, close_group, put_str_attr, put_real_attr, &
                           put_int_attr, put_list_attr
-   use trainsim_h5_dsets, only: put_column_r
+   use trainsim_h5_dsets, only: put_column_r, write_r_at
+   use hdf5, only: h5dopen_f, h5dclose_f
    use trainsim_period_map, only: period_map_t
    use trainsim_shooting, only: shoot_result_t, shoot_converged
    use trainsim_floquet, only: stability_of
    implicit none
    private
 
-   public :: write_periodic_group
+   public :: write_periodic_group, write_orbit_p2p
 
 contains
 
@@ -84,6 +85,35 @@ contains
       call close_file(file, ok)
       if (.not. ok .and. .not. allocated(err)) call fatal_error(err, "cannot close '"//path//"'", err_io)
    end subroutine write_periodic_group
+
+   !> Rewrite /metrics/p2p_range of the orbit's run file `path` with p2p (per element):
+   !> the range across the seam t0 = t0 + kT, which the run's own window cannot see
+   !> (orbit_run, D-143), so the file says what the printout and the branch file say.
+   subroutine write_orbit_p2p(path, p2p, err)
+      character(len=*), intent(in) :: path
+      real(wp), intent(in) :: p2p(:)
+      type(error_t), allocatable, intent(out) :: err
+      integer(hid_t) :: file, dset
+      integer :: h, i
+      logical :: ok
+      call open_file_rdwr(path, file, h)
+      if (h < 0) then
+         call fatal_error(err, "cannot open '"//path//"' to write the orbit's p2p_range", err_io)
+         return
+      end if
+      call h5dopen_f(file, 'metrics/p2p_range', dset, h)
+      if (h < 0) then
+         call fatal_error(err, "'"//path//"' has no dataset /metrics/p2p_range", err_io)
+      else
+         do i = 1, size(p2p)
+            call write_r_at(dset, p2p(i), i, "'"//path//"' /metrics/p2p_range", err)
+            if (allocated(err)) exit
+         end do
+         call h5dclose_f(dset, h)
+      end if
+      call close_file(file, ok)
+      if (.not. ok .and. .not. allocated(err)) call fatal_error(err, "cannot close '"//path//"'", err_io)
+   end subroutine write_orbit_p2p
 
    !> The state labels as the group's attribute `state_labels`.
    subroutine put_list_attr_of(grp, labels, err)

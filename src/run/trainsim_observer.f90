@@ -749,7 +749,7 @@ contains
       real(wp), intent(in) :: t
       real(wp), parameter :: gr = 0.6180339887498949_wp
       integer, parameter :: n_golden = 30
-      real(wp) :: h, fm, dm, a, b, c, d, fc, fd, f_best, d_best, tau_best
+      real(wp) :: h, fm, dm, tm, a, b, c, d, fc, fd, f_best, d_best, tau_best
       integer :: i, l, r, it, k, q
       h = t - self%t_prev
       if (.not. h > 0.0_wp) return
@@ -761,9 +761,12 @@ contains
          l = model%elements(i)%e%left
          r = model%elements(i)%e%right
          ! 1: |force| maximum, 2: displacement extreme on the contact side,
-         ! 3 and 4: maximum and minimum of the torque on the right node
+         ! 3 and 4: maximum and minimum of the torque on the right node; the
+         ! middle of the step, evaluated once, says which have an interior extreme
+         call at(0.5_wp, fm, dm)
+         q = 3
+         tm = merit(0.5_wp)
          do q = 1, 4
-            call at(0.5_wp, fm, dm)
             select case (q)
             case (1)
                if (.not. abs(fm) > max(abs(self%force_prev(i)), abs(self%s%force(i)))) cycle
@@ -771,9 +774,9 @@ contains
                if (.not. self%s%contact(i)*dm > max(self%s%contact(i)*self%disp_prev(i), &
                                                    self%s%contact(i)*self%s%displacement(i))) cycle
             case (3)
-               if (.not. merit(0.5_wp) > max(self%torque_prev(i), self%s%torque_right(i))) cycle
+               if (.not. tm > max(self%torque_prev(i), self%s%torque_right(i))) cycle
             case (4)
-               if (.not. merit(0.5_wp) > max(-self%torque_prev(i), -self%s%torque_right(i))) cycle
+               if (.not. -tm > max(-self%torque_prev(i), -self%s%torque_right(i))) cycle
             end select
             a = 0.0_wp; b = 1.0_wp
             c = b - gr*(b - a); d = a + gr*(b - a)

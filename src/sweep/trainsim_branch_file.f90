@@ -24,10 +24,11 @@ module trainsim_branch_file
    use trainsim_h5, only: hid_t, h5_real, h5_int, h5_text, h5_init, create_file_excl, open_file_rdwr, flush_file, &
       close_file, new_group, end_group, close_dset, close_type, make_string_type, put_str_attr, get_str_attr
    use trainsim_h5_dsets, only: put_column_s, read_i1
-   use trainsim_h5_slots, only: new_slots, open_dset, put_slot_r, put_slot_i, put_slot_text, get_slot_r, get_slot_text
+   use trainsim_h5_slots, only: new_slots, open_dset, open_dsets, put_slot_r, put_slot_i, put_slot_text, get_slot_r, &
+                                get_slot_text
    use trainsim_sweep_layout, only: sweep_layout_t, element_metric_names, status_pending, status_ok, status_failed, &
       status_meaning
-   use trainsim_sweep_file, only: clean_slot_messages, finish_message_move
+   use trainsim_sweep_file, only: clean_slot_messages, finish_message_move, put_file_head
    use trainsim_arclength, only: branch_t, branch_point_t, branch_done
    implicit none
    private
@@ -169,18 +170,8 @@ contains
          return
       end if
       np = self%n_slots
-      call put_str_attr(f, 'format', 'trainsim-branch', err)
-      if (.not. allocated(err)) call put_str_attr(f, 'format_version', branch_format_version, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'trainsim_version', lay%version, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'deck_file', lay%deck_file, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'title', lay%title, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'units', lay%units, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'overrides', lay%overrides, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'fingerprint', lay%fingerprint, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'n_runs', str(np), err)
+      call put_file_head(f, 'trainsim-branch', branch_format_version, lay, np, err)
       if (.not. allocated(err)) call put_str_attr(f, 'period_count', str(self%period_count), err)
-      one(1)%s = lay%deck_text
-      if (.not. allocated(err)) call put_column_s(f, 'deck_text', one, err)
       hs = 0
       call new_group(f, 'parameters', g, h); hs = min(hs, h)
       one(1)%s = key
@@ -252,31 +243,23 @@ contains
    subroutine open_sets(self, err)
       type(branch_file_t), intent(inout) :: self
       type(error_t), allocatable, intent(out) :: err
-      integer :: h, hs, k
+      integer :: hs
       integer, allocatable :: st(:)
       hs = 0
       call finish_message_move(self%file, 'runs')
-      call open_dset(self%file, 'runs/status', self%d_status, h); hs = min(hs, h)
-      call open_dset(self%file, 'runs/message', self%d_message, h); hs = min(hs, h)
-      call open_dset(self%file, 'parameters/values', self%d_lam, h); hs = min(hs, h)
-      do k = 1, size(run_r)
-         call open_dset(self%file, 'runs/'//trim(run_r(k)), self%d_r(k), h); hs = min(hs, h)
-      end do
-      do k = 1, size(run_i)
-         call open_dset(self%file, 'runs/'//trim(run_i(k)), self%d_i(k), h); hs = min(hs, h)
-      end do
+      call open_dset(self%file, 'runs/status', self%d_status, hs)
+      call open_dset(self%file, 'runs/message', self%d_message, hs)
+      call open_dset(self%file, 'parameters/values', self%d_lam, hs)
+      call open_dsets(self%file, 'runs', run_r, self%d_r, hs)
+      call open_dsets(self%file, 'runs', run_i, self%d_i, hs)
       if (self%ne > 0) then
-         do k = 1, size(element_metric_names)
-            call open_dset(self%file, 'elements/'//trim(element_metric_names(k)), self%d_el(k), h); hs = min(hs, h)
-         end do
+         call open_dsets(self%file, 'elements', element_metric_names, self%d_el, hs)
       end if
-      do k = 1, size(vec)
-         call open_dset(self%file, 'branch/'//trim(vec(k)), self%d_v(k), h); hs = min(hs, h)
-      end do
-      call open_dset(self%file, 'branch/scale', self%d_scale, h); hs = min(hs, h)
-      call open_dset(self%file, 'branch/lam_scale', self%d_lam_scale, h); hs = min(hs, h)
-      call open_dset(self%file, 'branch/status', self%d_end, h); hs = min(hs, h)
-      call open_dset(self%file, 'branch/message', self%d_end_message, h); hs = min(hs, h)
+      call open_dsets(self%file, 'branch', vec, self%d_v, hs)
+      call open_dset(self%file, 'branch/scale', self%d_scale, hs)
+      call open_dset(self%file, 'branch/lam_scale', self%d_lam_scale, hs)
+      call open_dset(self%file, 'branch/status', self%d_end, hs)
+      call open_dset(self%file, 'branch/message', self%d_end_message, hs)
       call make_string_type(self%t_message, err)
       if (allocated(err)) return
       allocate (st(self%n_slots))

@@ -38,7 +38,7 @@ module trainsim_sweep_file
       close_file, new_group, open_group, end_group, close_dset, close_type, link_exists, link_move, link_delete, &
       garbage_collect, make_string_type, put_str_attr, get_str_attr, attr_exists
    use trainsim_h5_dsets, only: put_column_s, read_i1
-   use trainsim_h5_slots, only: new_slots, open_dset, put_slot_r, put_slot_i, put_slot_text, get_slot_r, &
+   use trainsim_h5_slots, only: new_slots, open_dset, open_dsets, put_slot_r, put_slot_i, put_slot_text, get_slot_r, &
       get_slot_text, put_matrix, get_matrix
    use trainsim_hdf5_groups, only: write_deck_files
    use trainsim_sweep_layout, only: sweep_layout_t, sweep_record_t, element_metric_names, element_metric_is_int, &
@@ -47,7 +47,7 @@ module trainsim_sweep_file
    implicit none
    private
 
-   public :: sweep_file_t, clean_slot_messages, finish_message_move
+   public :: sweep_file_t, clean_slot_messages, finish_message_move, put_file_head
    !> (the layout, re-exported: what a sweep file holds)
    public :: sweep_layout_t, sweep_record_t, element_metric_names, node_metric_names
    public :: status_pending, status_ok, status_failed, record_size, format_version, status_names
@@ -140,7 +140,6 @@ contains
       integer :: h, hs
       logical :: ok
       character(len=:), allocatable :: part
-      type(string_t), allocatable :: text(:)
 
       ! under the lock a temporary of this pid is a crashed process's (pids are reused)
       part = path//'.'//str(process_id())//'.part'
@@ -152,18 +151,7 @@ contains
          call fatal_error(err, "cannot create sweep file '"//part//"'"//io_reason(part), err_io)
          return
       end if
-      call put_str_attr(f, 'format', 'trainsim-sweep', err)
-      if (.not. allocated(err)) call put_str_attr(f, 'format_version', format_version, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'trainsim_version', lay%version, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'deck_file', lay%deck_file, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'title', lay%title, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'units', lay%units, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'overrides', lay%overrides, err)
-      if (.not. allocated(err)) call put_str_attr(f, 'n_runs', str(lay%n_runs), err)
-      if (.not. allocated(err)) call put_str_attr(f, 'fingerprint', lay%fingerprint, err)
-      allocate (text(1))
-      text(1)%s = lay%deck_text       ! (an array constructor of string_t here trips gfortran 12)
-      if (.not. allocated(err)) call put_column_s(f, 'deck_text', text, err)
+      call put_file_head(f, 'trainsim-sweep', format_version, lay, lay%n_runs, err)
       if (.not. allocated(err)) call write_deck_files(f, lay%input_keys, lay%input_files, lay%input_texts, err)
       hs = 0
       call make_groups(self, f, lay, err, hs)
@@ -321,23 +309,17 @@ contains
       self%ne = size(lay%element_ids); self%nn = size(lay%node_ids); self%n_runs = lay%n_runs
       hs = 0
       call finish_message_move(self%file, 'runs')
-      call open_dset(self%file, 'runs/status', self%d_status, h); hs = min(hs, h)
-      call open_dset(self%file, 'runs/rank', self%d_rank, h); hs = min(hs, h)
-      call open_dset(self%file, 'runs/wall_time', self%d_wall, h); hs = min(hs, h)
-      call open_dset(self%file, 'runs/message', self%d_message, h); hs = min(hs, h)
+      call open_dset(self%file, 'runs/status', self%d_status, hs)
+      call open_dset(self%file, 'runs/rank', self%d_rank, hs)
+      call open_dset(self%file, 'runs/wall_time', self%d_wall, hs)
+      call open_dset(self%file, 'runs/message', self%d_message, hs)
       call make_string_type(self%t_message, err)
       if (allocated(err)) return
-      do k = 1, size(run_value_names)
-         call open_dset(self%file, 'runs/'//trim(run_value_names(k)), self%d_run(k), h); hs = min(hs, h)
-      end do
+      call open_dsets(self%file, 'runs', run_value_names, self%d_run, hs)
       if (self%ne > 0) then
-         do k = 1, size(element_metric_names)
-            call open_dset(self%file, 'elements/'//trim(element_metric_names(k)), self%d_el(k), h); hs = min(hs, h)
-         end do
+         call open_dsets(self%file, 'elements', element_metric_names, self%d_el, hs)
       end if
-      do k = 1, size(node_metric_names)
-         call open_dset(self%file, 'nodes/'//trim(node_metric_names(k)), self%d_node(k), h); hs = min(hs, h)
-      end do
+      call open_dsets(self%file, 'nodes', node_metric_names, self%d_node, hs)
       allocate (self%status(self%n_runs))
       h = 0
       if (hs == 0) call read_i1(self%d_status, self%status, h)
@@ -579,4 +561,28 @@ contains
       if (ieee_is_nan(x)) return        ! (an ordered compare of NaN traps in Debug)
       if (abs(x) < 2.0e9_wp) to_int = nint(x)
    end function to_int
+
+   !> The attributes a sweep file and a branch file share (format and its version, the
+   !> trainsim version, the deck's file, title, units, overrides and fingerprint, n_runs
+   !> slots) and the deck's text.
+   subroutine put_file_head(f, format, version, lay, n_runs, err)
+      integer(hid_t), intent(in) :: f
+      character(len=*), intent(in) :: format, version
+      type(sweep_layout_t), intent(in) :: lay
+      integer, intent(in) :: n_runs
+      type(error_t), allocatable, intent(out) :: err
+      type(string_t), allocatable :: text(:)
+      call put_str_attr(f, 'format', format, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'format_version', version, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'trainsim_version', lay%version, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'deck_file', lay%deck_file, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'title', lay%title, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'units', lay%units, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'overrides', lay%overrides, err)
+      if (.not. allocated(err)) call put_str_attr(f, 'n_runs', str(n_runs), err)
+      if (.not. allocated(err)) call put_str_attr(f, 'fingerprint', lay%fingerprint, err)
+      allocate (text(1))
+      text(1)%s = lay%deck_text       ! (an array constructor of string_t here trips gfortran 12)
+      if (.not. allocated(err)) call put_column_s(f, 'deck_text', text, err)
+   end subroutine put_file_head
 end module trainsim_sweep_file

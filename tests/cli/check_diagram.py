@@ -21,6 +21,7 @@ import glob
 import json
 import os
 import re
+import shutil
 import subprocess
 import tempfile
 import xml.etree.ElementTree as ET
@@ -48,8 +49,15 @@ TWO_PARTS = """! two trains in one deck
 """
 
 
+# trainsim's own temporary files go to a folder of this test's alone: the check that none
+# is left must not see those of another `trainsim diagram` running beside it (ctest -j,
+# other users of /tmp), which is how it once failed under load.
+PRIVATE_TMP = tempfile.mkdtemp(prefix="check_diagram-")
+
+
 def trainsim(*args):
-    return subprocess.run([EXE] + list(args), capture_output=True, text=True, timeout=300)
+    env = dict(os.environ, TMPDIR=PRIVATE_TMP)
+    return subprocess.run([EXE] + list(args), capture_output=True, text=True, timeout=300, env=env)
 
 
 def deck_groups(text):
@@ -201,7 +209,8 @@ with tempfile.TemporaryDirectory() as tmp:
         r = trainsim("diagram", deck, "-o", out)
         with open(out, "rb") as f:
             check(f"{ext} written", r.returncode == 0 and f.read(4) == magic)
-    left = [x for x in os.listdir(os.environ.get("TMPDIR", "/tmp")) if x.startswith(f"trainsim-diagram-")]
+    left = [x for x in os.listdir(PRIVATE_TMP) if x.startswith("trainsim-diagram-")]
     check(f"no temporary description left in $TMPDIR ({left[:3]})", not left)
+    shutil.rmtree(PRIVATE_TMP, ignore_errors=True)
 
 finish()
