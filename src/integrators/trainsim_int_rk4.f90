@@ -71,6 +71,9 @@ module trainsim_int_rk4
       integer :: ng = 0
       real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), ytmp(:), ynew(:), ys(:)
       real(wp), allocatable :: g0(:), g1(:), gs(:)
+      !> The guard test of a block's steps as windows (`guard_windows`, D-145)
+      integer, allocatable :: gw_i(:, :)
+      real(wp), allocatable :: gw(:, :)
       real(wp), allocatable :: yb(:)   !< RK4 to the negative end of the bracket
       ! event location: the stages of the step being located (its dense output),
       ! the dense-output state of one element's nodes, one element's guards
@@ -247,7 +250,7 @@ contains
       self%k1_next = .false.
       self%pend = .false.
       allocate (self%k1(n), self%k2(n), self%k3(n), self%k4(n), self%ytmp(n), self%ynew(n), self%ys(n))
-      allocate (self%g0(self%ng), self%g1(self%ng), self%gs(self%ng))
+      allocate (self%g0(self%ng), self%g1(self%ng), self%gs(self%ng), self%gw_i(2, self%ng), self%gw(6, self%ng))
       allocate (self%d2(n), self%d3(n), self%d4(n), self%yi(n), self%yb(n))
       self%yi = 0.0_wp
       ! who owns each guard, and which states each element's guards read
@@ -422,13 +425,18 @@ contains
       real(wp), intent(inout) :: t
       real(wp), intent(inout), contiguous :: y(:)
       real(wp) :: t_grid, h, t_bp, s
-      integer :: j, i, n
+      integer :: j, i, n, nw, ns
+      logical :: below
       model%blk%n = 0
       if (self%mr_on .or. self%pend .or. .not. self%takes_blocks) return
       n = 0
+      ns = 0   ! steps computed (taken, and one not taken)
       s = 0.0_wp
       t_bp = huge(1.0_wp)   ! a step ending at or after t_bp ends on the stop's breakpoint
       if (self%stop_is_breakpoint) t_bp = self%t_stop - self%tiny_t
+      ! the guards' test of this block's modes (D-145); nw = -1: guards_below's
+      nw = 0
+      if (self%ng > 0) call model%guard_windows(nw, self%gw_i, self%gw)
       model%blk%ws = .false.   ! each step's column only; the workspace after the block
       do j = 1, model%blk%cap
          ! next_grid, written out (after the block's first step t is on the grid)
@@ -442,9 +450,15 @@ contains
             call first_stage(self, model, t, y)
             self%k1_next = .false.
          end if
-         call rk4_step(self, model, t, y, h, self%ynew, .false.)
-         if (self%ng > 0) then
-            if (model%guards_below(t + h, self%ynew, self%g1)) then
+         ! rk4_step, written out (no breakpoint at the step's end: t4 = t + h)
+         call model%rk4_stages(t, h, t + h, y, self%k1, self%k2, self%k3, self%k4, self%ytmp, self%ynew)
+         ns = j
+         if (nw /= 0) then
+            below = .true.
+            if (nw > 0) below = windows_below(nw, self%gw_i, self%gw, self%ynew)
+            ! below zero: the guards' values into g1 (and guards_below's own answer)
+            if (below) below = model%guards_below(t + h, self%ynew, self%g1)
+            if (below) then
                self%pend = .true.
                self%t_pend = t
                self%h_pend = h
@@ -465,6 +479,7 @@ contains
          if (.not. s <= y_limit .or. t_goal - t <= t_tol) exit
          s = 0.0_wp
       end do
+      self%stats%rhs_evals = self%stats%rhs_evals + 3*ns
       model%blk%col = 0
       model%blk%ws = .true.
       model%blk%n = n
@@ -480,6 +495,21 @@ contains
       self%k1_next = .true.
       self%t_k1 = t
    end subroutine rk4_advance_block
+
+   !> Whether a guard is below zero at y, by the windows of `guard_windows`
+   !> (n rows; D-145): the same answer as `guards_below`, without the guards.
+   pure logical function windows_below(n, iw, w, y) result(below)
+      integer, intent(in) :: n, iw(2, n)
+      real(wp), intent(in) :: w(6, n), y(*)
+      integer :: k
+      real(wp) :: d, th
+      below = .false.
+      do k = 1, n
+         th = y(iw(1, k))
+         d = w(1, k)*th - w(2, k)*y(iw(2, k))
+         if (d < w(3, k) .or. d > w(4, k) .or. th < w(5, k) .or. th > w(6, k)) below = .true.
+      end do
+   end function windows_below
 
    ! The step maps of a local event step (L, one component of L). They stay in this
    ! module, not in a submodule: gfortran gives every procedure of a submodule an

@@ -209,6 +209,13 @@ contains
       t = t + s_ev
       y = self%ys
       self%stats%root_returns = self%stats%root_returns + 1
+      ! the RHS at the event's state in the modes before it, into the model's
+      ! workspace for the observer, which then folds the instant as a plain
+      ! step's end instead of evaluating the train itself (D-146; not counted:
+      ! it stands for the observer's evaluation). k1 is free (k1_next is off:
+      ! the next step's first stage is evaluated anew, in the new modes).
+      call model%rhs_step_end(t, y, self%k1)
+      model%ws_step_end = .true.
    end subroutine rk4_end_on_event
 
    !> Guard j at t_loc + s on the dense output of the step being located (the

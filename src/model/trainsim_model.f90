@@ -159,7 +159,7 @@ module trainsim_model
       procedure :: breakpoints => model_breakpoints
       procedure :: guards => model_guards
       procedure :: guards_below => model_guards_below
-      procedure, private :: guards_general => model_guards_general
+      procedure :: guard_windows => model_guard_windows
       procedure :: element_guards => model_element_guards
       procedure :: element_guard => model_element_guard
       procedure :: guard_angles => model_guard_angles
@@ -382,13 +382,13 @@ module trainsim_model
          real(wp), intent(inout) :: g(self%n_guards)
       end function model_guards_below
 
-      !> `model_guards` element by element: a guard row by row_guard, any other
-      !> element by guards_other (its nodes' kinematics, its hot form or `guards`).
-      module subroutine model_guards_general(self, t, y, g)
-         class(model_t), intent(inout) :: self
-         real(wp), intent(in) :: t, y(:)
-         real(wp), intent(inout) :: g(:)
-      end subroutine model_guards_general
+      !> `guards_below`'s test as windows (D-145), valid until the modes change;
+      !> n = -1 where an element has no guard row. See trainsim_model_guards.
+      module subroutine model_guard_windows(self, n, iw, w)
+         class(model_t), intent(in) :: self
+         integer, intent(out) :: n, iw(2, *)
+         real(wp), intent(out) :: w(6, *)
+      end subroutine model_guard_windows
 
       !> The guards of element i alone at (t, y), into g(1:n_guards of i): only the
       !> kinematics of its two nodes are evaluated (for event location, where one

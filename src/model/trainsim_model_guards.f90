@@ -7,6 +7,7 @@ submodule (trainsim_model) trainsim_model_guards
    use trainsim_event, only: max_update_events
    use trainsim_model_kernels, only: hot_guards
    use trainsim_ports, only: port_update_at
+   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_positive_inf
    implicit none
 
 contains
@@ -16,11 +17,11 @@ contains
       if (self%n_guards == 0) return
       ! only the elements with guards (a long train has few of them); when each
       ! has a guard row (the element's hot form on two plain inertias, D-39), on
-      ! plain arrays; else the general loop (through the binding: kept out of line)
+      ! plain arrays; else the general loop
       if (self%n_norow == 0 .and. is_contiguous(y) .and. is_contiguous(g)) then
          below = self%guards_below(t, y, g)   ! (guard_rows; whether one is below zero unused)
       else
-         call self%guards_general(t, y, g)
+         call guards_general(self, t, y, g)
       end if
    end procedure model_guards
 
@@ -32,7 +33,7 @@ contains
          below = guard_rows(size(self%guard_els), self%guard_els, self%gr, y, g)
          return
       end if
-      call self%guards_general(t, y, g)
+      call guards_general(self, t, y, g)
       do j = 1, self%n_guards
          if (g(j) < 0.0_wp) below = .true.
       end do
@@ -80,7 +81,48 @@ contains
       end function guard_rows
    end procedure model_guards_below
 
-   module procedure model_guards_general
+   !> `guards_below`'s test as windows (D-145): guard row k (in guard_els' order)
+   !> has a guard below zero exactly when d = w(1,k) y(iw(1,k)) - w(2,k) y(iw(2,k))
+   !> is outside [w(3,k), w(4,k)] or y(iw(1,k)) is outside [w(5,k), w(6,k)]: the
+   !> comparisons of guard_rows on the same d, rewritten (d - b < 0 exactly when
+   !> d < b: the difference of two finite numbers is zero only when they are
+   !> equal; a guard that is 1 or absent gets an infinite bound; NaN is inside).
+   !> n rows; n = -1 when an element has guards but no row (ask `guards_below`).
+   !> Valid until the modes change (`apply_events`, `init_modes`).
+   module procedure model_guard_windows
+      integer :: k
+      real(wp) :: inf
+      n = -1
+      if (self%n_norow > 0) return
+      n = size(self%guard_els)
+      inf = ieee_value(1.0_wp, ieee_positive_inf)
+      do k = 1, n
+         associate (q => self%gr(self%guard_els(k)))
+            iw(1, k) = q%yl; iw(2, k) = q%yr
+            w(1, k) = q%r1; w(2, k) = q%r2
+            select case (q%mode)
+            case (1)      ! g1 = d - b, g2 = 1
+               w(3, k) = q%b; w(4, k) = inf
+            case (-1)     ! g1 = 1, g2 = -d - b
+               w(3, k) = -inf; w(4, k) = -q%b
+            case default  ! g1 = b - d, g2 = d + b
+               w(3, k) = -q%b; w(4, k) = q%b
+            end select
+            w(5, k) = -inf; w(6, k) = inf
+            if (q%form == 2) then   ! g3 = y(yl) - th_lo (1 if lo_open), g4 = th_hi - y(yl)
+               if (.not. q%lo_open) w(5, k) = q%th_lo
+               w(6, k) = q%th_hi
+            end if
+         end associate
+      end do
+   end procedure model_guard_windows
+
+   !> `model_guards` element by element: a guard row by row_guard, any other
+   !> element by guards_other (its nodes' kinematics, its hot form or `guards`).
+   subroutine guards_general(self, t, y, g)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      real(wp), intent(inout) :: g(:)
       integer :: k, i, j
       if (self%cn%m > 0 .or. self%cn%acc_wanted) call constraints_at(self, t, y)   ! lam, acc at (t, y) (D-81)
       do k = 1, size(self%guard_els)
@@ -95,7 +137,7 @@ contains
             end associate
          end if
       end do
-   end procedure model_guards_general
+   end subroutine guards_general
 
    !> The guards of element i at (t, y) into g(o + 1 : o + ng) (`model_guards` for
    !> an element without a guard row, `element_guards`): the kinematics of its two

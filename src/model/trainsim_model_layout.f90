@@ -53,11 +53,11 @@ contains
       ! one element torque in the stage kernel's node rows, D-95)
       allocate (self%el_torque(2, ne + 1), self%el_disp(ne), self%el_force(ne), self%el_pe(ne))
       self%el_torque = 0.0_wp; self%el_disp = 0.0_wp; self%el_force = 0.0_wp; self%el_pe = 0.0_wp
-      ! a block of steps (D-38): at most 64, its columns 32 KiB at most (they
-      ! stay in the first-level cache; a long train gains little from blocks, its
-      ! steps are long already, and measured slower with columns beyond the cache)
+      ! a block of steps (D-38): at most 128 (D-147), its columns 32 KiB at most
+      ! (they stay in the first-level cache; a long train gains little from blocks,
+      ! its steps are long already, and measured slower with columns beyond the cache)
       associate (b => self%blk)
-         b%cap = max(1, min(64, 32768/(8*(3*ne + nn + 4))))
+         b%cap = max(1, min(128, 32768/(8*(3*ne + nn + 4))))
          b%col = 0
          b%n = 0
          if (allocated(b%t)) deallocate (b%t, b%disp, b%force, b%torque, b%omega, b%stored, b%elastic, b%work)

@@ -217,9 +217,9 @@ contains
             if (k_last >= k) call run_block(model, integ, obs, d, min(out_time(k_last), integ%t_stop), .true., t, y, folded, err)
             if (allocated(err)) return
             if (k_last >= k .and. folded) then
-               ! the block's steps ended on output times k, k + 1, ... (one grid)
+               ! the block's steps ended on output times k, k + 1, ... (out_time's, none the last)
                do j = 1, model%blk%n
-                  if (model%blk%t(j) /= out_time(k + j - 1)) then
+                  if (model%blk%t(j) /= t0 + real(k + j - 1, wp)*dout) then
                      call fatal_error(err, 'internal: a step of a block ended at t = '//str(model%blk%t(j))// &
                                       ' s, off the output time '//str(out_time(k + j - 1))//' s', err_internal)
                      return
