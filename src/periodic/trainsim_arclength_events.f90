@@ -347,7 +347,7 @@ contains
    !> the Jacobian of the nearest such trial (full Newton where the chord fails);
    !> the point kept is linearised once at the end, and if that pass fails or meets
    !> another sequence (an impact the flow does not count), the bisection is done
-   !> again with every trial by full Newton and linearised, as before (D-142).
+   !> again with every trial by full Newton and linearised, as before (D-149).
    module procedure cross_grazing
       type(node_t) :: a
       type(error_t), allocatable :: err

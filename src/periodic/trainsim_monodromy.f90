@@ -37,7 +37,7 @@ module trainsim_monodromy
       real(wp), allocatable :: tau(:)       !< (n) d t / d x(t0) of the current time (exact_step: after an event)
       real(wp), allocatable :: rl(:)        !< (ny) d R / d l of the last step to an event (exact_step)
       real(wp), allocatable :: g(:), g0(:), gw(:)
-      !> scratch of the steps (no allocation per step, D-141): the stages, a trial
+      !> scratch of the steps (no allocation per step, D-148): the stages, a trial
       !> state, and the variational stages
       real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), xs(:), xt(:), xg(:)
       real(wp), allocatable :: p1(:, :), p2(:, :), p3(:, :), p4(:, :), ps(:, :), b(:)
@@ -504,7 +504,7 @@ contains
       integer :: e, i, j, k, l, nz
       call model%jacobian(t, x, w%jac)
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
-      ! two nodes), each entry summed over k in order, as matmul does (D-141)
+      ! two nodes), each entry summed over k in order, as matmul does (D-148)
       nz = 0
       do k = 1, w%n
          do i = 1, w%n
