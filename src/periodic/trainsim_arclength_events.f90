@@ -342,32 +342,101 @@ contains
    !> between p and it), and q's tangent oriented along the secant from it: the
    !> multipliers and the tangent jump there (the map's derivative is
    !> discontinuous), and the branch goes on in q's sequence (D-115).
+   !> A trial's sequence is that of its flow alone (no variational pass), each trial
+   !> predicted from the last one in p's sequence and corrected by the chord with
+   !> the Jacobian of the nearest such trial (full Newton where the chord fails);
+   !> the point kept is linearised once at the end, and if that pass fails or meets
+   !> another sequence (an impact the flow does not count), the bisection is done
+   !> again with every trial by full Newton and linearised, as before (D-149).
    module procedure cross_grazing
-      type(node_t) :: a, r
+      type(node_t) :: a
       type(error_t), allocatable :: err
-      character(len=:), allocatable :: why
-      real(wp) :: sa, sb, sm
-      integer :: it
-      sa = 0.0_wp
-      sb = ds
+      type(monodromy_stats_t) :: sp
+      real(wp) :: sa
+      logical :: ok
+      ok = .false.
       a = p
-      do it = 1, 60
-         if (abs(sb - sa)*abs(p%t(c%n + 1)) <= opt%lam_tol .and. abs(sb - sa) <= 1.0e3_wp*opt%lam_tol) exit
-         sm = 0.5_wp*(sa + sb)
-         call correct(c, p, p%z + sm*p%t, opt, r, why, full=.true.)
-         if (len(why) == 0) call linearise(c, r, p%t, err)
-         if (allocated(err)) deallocate (err)
-         if (len(why) == 0 .and. same_sequence(r%st, p%st)) then
-            sa = sm
-            a = r
-         else
-            sb = sm
+      sa = 0.0_wp
+      call flow_sequence(c, p, sp, err)
+      if (.not. allocated(err)) then
+         call bisect(.true., a, sa)
+         ok = .true.
+         if (sa > 0.0_wp) then
+            call linearise(c, a, p%t, err)
+            ok = .not. allocated(err)
+            if (ok) ok = same_sequence(a%st, p%st)
          end if
-      end do
+      end if
+      if (allocated(err)) deallocate (err)
+      if (.not. ok) then
+         a = p
+         sa = 0.0_wp
+         call bisect(.false., a, sa)
+      end if
       if (sa > 0.0_wp) call detect(c, br, p, a, sa, opt)
       call store(br, c, a, sa, 'grazing', a%t, br%pts(size(br%pts))%segment)
       if (dot_product(q%t, q%z - a%z) < 0.0_wp) q%t = -q%t
+   contains
+      !> sa (from 0) and a (from p): the last trial in p's sequence; cheap: by the
+      !> trials' flow (a not linearised), else by their variational passes
+      subroutine bisect(cheap, a, sa)
+         logical, intent(in) :: cheap
+         type(node_t), intent(inout) :: a
+         real(wp), intent(inout) :: sa
+         type(node_t) :: r, pj
+         type(monodromy_stats_t) :: sr
+         type(error_t), allocatable :: e
+         character(len=:), allocatable :: why
+         real(wp) :: sb, sm
+         integer :: it
+         logical :: same
+         sb = ds
+         pj = p
+         do it = 1, 60
+            if (abs(sb - sa)*abs(p%t(c%n + 1)) <= opt%lam_tol .and. abs(sb - sa) <= 1.0e3_wp*opt%lam_tol) exit
+            sm = 0.5_wp*(sa + sb)
+            if (cheap) then
+               ! from the last trial in p's sequence, on the same hyperplane t_p'(z - z_p) = sm:
+               ! the chord with the Jacobian of that sequence's nearest trial, else full Newton
+               call correct(c, pj, a%z + (sm - sa)*p%t, opt, r, why)
+               if (len(why) > 0) call correct(c, p, a%z + (sm - sa)*p%t, opt, r, why, full=.true.)
+            else
+               call correct(c, p, p%z + sm*p%t, opt, r, why, full=.true.)
+            end if
+            same = .false.
+            if (len(why) == 0 .and. cheap) then
+               call flow_sequence(c, r, sr, e)
+               same = .not. allocated(e)
+               if (same) same = same_sequence(sr, sp)
+            else if (len(why) == 0) then
+               call linearise(c, r, p%t, e)
+               same = .not. allocated(e)
+               if (same) same = same_sequence(r%st, p%st)
+            end if
+            if (allocated(e)) deallocate (e)
+            if (same) then
+               sa = sm
+               a = r
+               if (allocated(r%a)) pj%a = r%a   ! (full Newton's last Jacobian, near r)
+            else
+               sb = sm
+            end if
+         end do
+      end subroutine bisect
    end procedure cross_grazing
+
+   !> The contact sequence of the flow over the orbit of point p (its events only:
+   !> no variational pass, no impacts counted).
+   subroutine flow_sequence(c, p, st, err)
+      type(ctx_t), intent(inout) :: c
+      type(node_t), intent(in) :: p
+      type(monodromy_stats_t), intent(out) :: st
+      type(error_t), allocatable, intent(out) :: err
+      call at(c, p%z(c%n + 1)*c%ls, err)
+      if (allocated(err)) return
+      call flow_signature(c%pm, p%z(1:c%n)*c%s, st, err)
+      c%passes = c%passes + 1
+   end subroutine flow_sequence
 
    !> The bifurcations between the accepted points p and q (q = p + ds along p's
    !> tangent, corrected), each located and stored before q.

@@ -19,6 +19,7 @@ module trainsim_monodromy
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_contact, only: law_yang_sun, contact_law_t
    use trainsim_contact_sequence, only: monodromy_stats_t, record_event
+   use trainsim_guard_geometry, only: face_of, guard_gradient, approach
    implicit none
    private
 
@@ -36,6 +37,13 @@ module trainsim_monodromy
       real(wp), allocatable :: tau(:)       !< (n) d t / d x(t0) of the current time (exact_step: after an event)
       real(wp), allocatable :: rl(:)        !< (ny) d R / d l of the last step to an event (exact_step)
       real(wp), allocatable :: g(:), g0(:), gw(:)
+      !> scratch of the steps (no allocation per step, D-148): the stages, a trial
+      !> state, and the variational stages
+      real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), xs(:), xt(:), xg(:)
+      real(wp), allocatable :: p1(:, :), p2(:, :), p3(:, :), p4(:, :), ps(:, :), b(:)
+      !> the Jacobian's nonzeros (row, column, value) in column order, for J Phi
+      integer, allocatable :: jr(:), jc(:)
+      real(wp), allocatable :: jv(:)
       type(event_t), allocatable :: events(:)
       type(monodromy_stats_t) :: st
    end type pass_t
@@ -130,7 +138,11 @@ contains
       w%n = model%n_states
       w%ny = model%n_y
       allocate (w%g(model%n_guards), w%g0(model%n_guards), w%gw(model%n_guards), w%events(16))
+      allocate (w%k1(model%n_y), w%k2(model%n_y), w%k3(model%n_y), w%k4(model%n_y), w%xs(model%n_y), &
+                w%xt(model%n_y), w%xg(model%n_y))
       if (w%var) then
+         allocate (w%p1(w%n, w%n), w%p2(w%n, w%n), w%p3(w%n, w%n), w%p4(w%n, w%n), w%ps(w%n, w%n), w%b(w%n))
+         allocate (w%jr(w%n*w%n), w%jc(w%n*w%n), w%jv(w%n*w%n))
          allocate (w%phi(w%n, w%n), w%q(w%n, size(model%elements)), w%jac(w%ny, w%ny))
          allocate (w%has_q(size(model%elements)), w%tau(w%n), w%rl(w%ny))
          w%tau = 0.0_wp
@@ -175,14 +187,14 @@ contains
       real(wp), intent(in) :: t_to
       type(pass_t), intent(inout) :: w
       type(error_t), allocatable, intent(inout) :: err
-      real(wp) :: hs, s, s_min, xt(size(x))
+      real(wp) :: hs, s, s_min
       integer :: j, j_min, pass
       do pass = 1, 1000
          hs = t_to - t
          if (hs <= 0.0_wp) return
          call model%guards(t, x, w%g0)
-         call rk4(model, t, hs, x, xt)
-         call model%guards(t + hs, xt, w%g)
+         call rk4(model, t, hs, x, w%xt, w)
+         call model%guards(t + hs, w%xt, w%g)
          j_min = 0
          s_min = hs
          do j = 1, size(w%g)
@@ -219,6 +231,7 @@ contains
       logical, intent(in) :: to_event
       real(wp) :: rt(size(x))
       logical :: moving
+      integer :: j
       moving = .false.
       if (w%var .and. w%exact) then
          moving = any(w%tau /= 0.0_wp)
@@ -226,7 +239,10 @@ contains
       end if
       call advance_state(model, t, hs, x, w)
       if (moving) then
-         w%phi = w%phi + spread(rt(1:w%n) - w%rl(1:w%n), 2, w%n)*spread(w%tau, 1, w%n)
+         rt(1:w%n) = rt(1:w%n) - w%rl(1:w%n)
+         do j = 1, w%n
+            w%phi(:, j) = w%phi(:, j) + rt(1:w%n)*w%tau(j)
+         end do
          w%tau = 0.0_wp
       end if
    end subroutine advance_exact
@@ -284,13 +300,12 @@ contains
       real(wp), intent(in) :: t, hs
       real(wp), intent(inout) :: x(:)
       type(pass_t), intent(inout) :: w
-      real(wp) :: xn(size(x))
       w%st%steps = w%st%steps + 1
       if (w%var) then
          call rk4_var(model, t, hs, x, w)
       else
-         call rk4(model, t, hs, x, xn)
-         x = xn
+         call rk4(model, t, hs, x, w%xt, w)
+         x = w%xt
       end if
    end subroutine advance_state
 
@@ -303,7 +318,7 @@ contains
       real(wp), intent(in) :: t, hs, x(:)
       integer, intent(in) :: j
       type(pass_t), intent(inout) :: w
-      real(wp) :: lo, hi, glo, ghi, gm, sm, xt(size(x))
+      real(wp) :: lo, hi, glo, ghi, gm, sm
       integer :: it, side
       lo = 0.0_wp
       hi = hs
@@ -318,8 +333,8 @@ contains
          else
             sm = 0.5_wp*(lo + hi)
          end if
-         call rk4(model, t, sm, x, xt)
-         call model%guards(t + sm, xt, w%gw)
+         call rk4(model, t, sm, x, w%xg, w)
+         call model%guards(t + sm, w%xg, w%gw)
          gm = w%gw(j)
          if (gm > 0.0_wp) then
             lo = sm; glo = gm
@@ -400,46 +415,6 @@ contains
       end do
    end subroutine event_at
 
-   !> The face element e is in contact on (+1 / -1), 0 if open, not a clearance or e = 0.
-   integer function face_of(model, e) result(face)
-      type(model_t), intent(in) :: model
-      integer, intent(in) :: e
-      face = 0
-      if (e < 1) return
-      select type (el => model%elements(e)%e)
-      class is (clearance_element_t)
-         face = el%cl%mode
-      end select
-   end function face_of
-
-   !> dg_j/dx (the physical states) and dg_j/dt at (t, x) by central
-   !> differences: a guard is affine in the angles within a mode, so the
-   !> differences are exact but for rounding (steps 1e-5 of each state's size).
-   subroutine guard_gradient(model, t, x, j, nv, gt)
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, x(:)
-      integer, intent(in) :: j
-      real(wp), intent(out) :: nv(:), gt
-      real(wp) :: xp(size(x)), g(model%n_guards), gp, hx, ht
-      integer :: k
-      xp = x
-      do k = 1, size(nv)
-         hx = 1.0e-5_wp*max(1.0_wp, abs(x(k)))
-         xp(k) = x(k) + hx
-         call model%guards(t, xp, g)
-         gp = g(j)
-         xp(k) = x(k) - hx
-         call model%guards(t, xp, g)
-         nv(k) = (gp - g(j))/(2.0_wp*hx)
-         xp(k) = x(k)
-      end do
-      ht = 1.0e-5_wp*max(1.0e-3_wp, abs(t))
-      call model%guards(t + ht, x, g)
-      gp = g(j)
-      call model%guards(t - ht, x, g)
-      gt = (gp - g(j))/(2.0_wp*ht)
-   end subroutine guard_gradient
-
    !> Element e (a clearance) closed at (t, x) with the damping D(V_i) of eq.
    !> (3.12), V_i its approach velocity there: q_e = dD/dV_i dV_i/dx dxe.
    !> Only the yang_sun law has a D that depends on V_i.
@@ -478,30 +453,20 @@ contains
       w%st%impacts = w%st%impacts + 1
    end subroutine impact_sensitivity
 
-   !> The approach velocity of clearance e on `face` at (t, x), as `cl_update` takes it.
-   real(wp) function approach(model, e, t, x, face) result(v)
-      type(model_t), intent(inout) :: model
-      integer, intent(in) :: e, face
-      real(wp), intent(in) :: t, x(:)
-      call model%kinematics(t, x)
-      v = 0.0_wp
-      select type (el => model%elements(e)%e)
-      class is (clearance_element_t)
-         v = face*(el%cl%r1*model%omega(el%left) - el%cl%r2*model%omega(el%right))
-      end select
-   end function approach
-
    !> One RK4 step of the state alone: x -> xn over hs from t.
-   subroutine rk4(model, t, hs, x, xn)
+   subroutine rk4(model, t, hs, x, xn, w)
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t, hs, x(:)
       real(wp), intent(out) :: xn(:)
-      real(wp) :: k1(size(x)), k2(size(x)), k3(size(x)), k4(size(x))
-      call model%rhs(t, x, k1)
-      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, k2)
-      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, k3)
-      call model%rhs(t + hs, x + hs*k3, k4)
-      xn = x + hs/6.0_wp*(k1 + 2.0_wp*(k2 + k3) + k4)
+      type(pass_t), intent(inout) :: w
+      call model%rhs(t, x, w%k1)
+      w%xs = x + 0.5_wp*hs*w%k1
+      call model%rhs(t + 0.5_wp*hs, w%xs, w%k2)
+      w%xs = x + 0.5_wp*hs*w%k2
+      call model%rhs(t + 0.5_wp*hs, w%xs, w%k3)
+      w%xs = x + hs*w%k3
+      call model%rhs(t + hs, w%xs, w%k4)
+      xn = x + hs/6.0_wp*(w%k1 + 2.0_wp*(w%k2 + w%k3) + w%k4)
    end subroutine rk4
 
    !> One RK4 step of the state and the variational equations together (the
@@ -511,21 +476,22 @@ contains
       real(wp), intent(in) :: t, hs
       real(wp), intent(inout) :: x(:)
       type(pass_t), intent(inout) :: w
-      real(wp) :: k1(size(x)), k2(size(x)), k3(size(x)), k4(size(x)), xs(size(x))
-      real(wp), dimension(w%n, w%n) :: p1, p2, p3, p4
-      call model%rhs(t, x, k1)
-      call var_rhs(model, t, x, w%phi, p1, w)
-      xs = x + 0.5_wp*hs*k1
-      call model%rhs(t + 0.5_wp*hs, xs, k2)
-      call var_rhs(model, t + 0.5_wp*hs, xs, w%phi + 0.5_wp*hs*p1, p2, w)
-      xs = x + 0.5_wp*hs*k2
-      call model%rhs(t + 0.5_wp*hs, xs, k3)
-      call var_rhs(model, t + 0.5_wp*hs, xs, w%phi + 0.5_wp*hs*p2, p3, w)
-      xs = x + hs*k3
-      call model%rhs(t + hs, xs, k4)
-      call var_rhs(model, t + hs, xs, w%phi + hs*p3, p4, w)
-      x = x + hs/6.0_wp*(k1 + 2.0_wp*(k2 + k3) + k4)
-      w%phi = w%phi + hs/6.0_wp*(p1 + 2.0_wp*(p2 + p3) + p4)
+      call model%rhs(t, x, w%k1)
+      call var_rhs(model, t, x, w%phi, w%p1, w)
+      w%xs = x + 0.5_wp*hs*w%k1
+      call model%rhs(t + 0.5_wp*hs, w%xs, w%k2)
+      w%ps = w%phi + 0.5_wp*hs*w%p1
+      call var_rhs(model, t + 0.5_wp*hs, w%xs, w%ps, w%p2, w)
+      w%xs = x + 0.5_wp*hs*w%k2
+      call model%rhs(t + 0.5_wp*hs, w%xs, w%k3)
+      w%ps = w%phi + 0.5_wp*hs*w%p2
+      call var_rhs(model, t + 0.5_wp*hs, w%xs, w%ps, w%p3, w)
+      w%xs = x + hs*w%k3
+      call model%rhs(t + hs, w%xs, w%k4)
+      w%ps = w%phi + hs*w%p3
+      call var_rhs(model, t + hs, w%xs, w%ps, w%p4, w)
+      x = x + hs/6.0_wp*(w%k1 + 2.0_wp*(w%k2 + w%k3) + w%k4)
+      w%phi = w%phi + hs/6.0_wp*(w%p1 + 2.0_wp*(w%p2 + w%p3) + w%p4)
    end subroutine rk4_var
 
    !> Phi' = J(t, x) Phi + sum over the closed contacts with a sensitive
@@ -535,14 +501,32 @@ contains
       real(wp), intent(in) :: t, x(:), phi(:, :)
       real(wp), intent(out) :: dphi(:, :)
       type(pass_t), intent(inout) :: w
-      real(wp) :: b(w%n)
-      integer :: e
+      integer :: e, i, j, k, l, nz
       call model%jacobian(t, x, w%jac)
-      dphi = matmul(w%jac(1:w%n, 1:w%n), phi)
+      ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
+      ! two nodes), each entry summed over k in order, as matmul does (D-148)
+      nz = 0
+      do k = 1, w%n
+         do i = 1, w%n
+            if (w%jac(i, k) == 0.0_wp) cycle
+            nz = nz + 1
+            w%jr(nz) = i
+            w%jc(nz) = k
+            w%jv(nz) = w%jac(i, k)
+         end do
+      end do
+      dphi = 0.0_wp
+      do j = 1, w%n
+         do l = 1, nz
+            dphi(w%jr(l), j) = dphi(w%jr(l), j) + w%jv(l)*phi(w%jc(l), j)
+         end do
+      end do
       do e = 1, size(w%has_q)
          if (.not. w%has_q(e)) cycle
-         call damping_column(model, e, t, x, b, w)
-         dphi = dphi + spread(b, 2, w%n)*spread(w%q(:, e), 1, w%n)
+         call damping_column(model, e, t, x, w%b, w)
+         do j = 1, w%n
+            dphi(:, j) = dphi(:, j) + w%b*w%q(j, e)
+         end do
       end do
    end subroutine var_rhs
 
