@@ -209,6 +209,8 @@ contains
          bp%t0 = c%pm%t0
       end if
       bp%x = p%z(1:c%n)*c%s
+      bp%mem = c%pm%mem
+      bp%kept = c%pm%kept
       bp%tangent = p%t
       bp%mu = p%mu
       bp%stability = stability_of(p%mu)

@@ -71,6 +71,7 @@ module trainsim_period_map
       !> is then moved into an open stretch, and a contact that drifts onto t0 along a
       !> branch starts as a run's does, D-99, until the next `rephase`)
       logical, allocatable :: kept(:)
+      logical :: lost = .false.   !< the last map changed a kept memory (`memory_lost`)
       !> multiple shooting (set_segments): the boundaries in s after t0 (0 and kT the
       !> ends), the session's point at each, and the flow's reduced states there
       real(wp), allocatable :: seg_tau(:)
@@ -91,6 +92,7 @@ module trainsim_period_map
       procedure :: segment => pm_segment
       procedure :: hold_memory => pm_hold_memory
       procedure :: memory_of => pm_memory_of
+      procedure :: memory_lost => pm_memory_lost
    end type period_map_t
 
 contains
@@ -203,7 +205,8 @@ contains
       if (allocated(self%mem) .and. keep) keep = size(self%mem) == size(self%memory_of(self%s%model))
       if (.not. keep) self%mem = self%memory_of(self%s%model)
       if (.not. keep .or. size(self%kept) /= size(self%memory)) self%kept = spread(.true., 1, size(self%memory))
-      self%mem_end = self%mem
+      if (.not. keep .or. size(self%mem_end) /= size(self%mem)) self%mem_end = self%mem
+      if (.not. keep) self%lost = .false.
    end subroutine pm_setup
 
    !> The deck's initial state, reduced (at t0: the state itself).
@@ -253,10 +256,20 @@ contains
          self%mem_end = self%memory_of(self%s%model)
          self%n_periods = self%n_periods + min(self%k, np - j + 1)
       end do
+      self%lost = changed(self)
       if (present(carry)) then
          if (carry) self%mem = self%mem_end
       end if
       self%n_evals = self%n_evals + 1
+   contains
+      logical function changed(pm)
+         class(period_map_t), intent(in) :: pm
+         integer :: i
+         changed = .false.
+         do i = 1, size(pm%memory)   ! (3 values an element: memory_size of yang_sun)
+            if (pm%kept(i)) changed = changed .or. any(pm%mem_end(3*i - 2:3*i) /= pm%mem(3*i - 2:3*i))
+         end do
+      end function changed
    end subroutine pm_map
 
    !> The scale of each component of the reduced state x (D-99): one for every speed,
@@ -313,6 +326,15 @@ contains
          end select
       end do
    end function pm_memory_of
+
+   !> Whether the last map ended with another memory than it held for a contact
+   !> taken to stay closed (`kept`): that contact opened and closed again within the
+   !> period (an impact set its D), so the orbit is no longer one of the family at
+   !> mem, and t0 must move into an open stretch (`rephase`, which then stops holding it).
+   logical function pm_memory_lost(self) result(lost)
+      class(period_map_t), intent(in) :: self
+      lost = self%lost
+   end function pm_memory_lost
 
    !> Hold `mem` (default the map's) on the elements of `model` that keep it (`kept`,
    !> set_memory): a contact closed when its modes are next chosen from a state goes
@@ -376,6 +398,7 @@ contains
       span = real(self%k, wp)*self%period
       call self%open_samples(x, open, err)
       if (allocated(err)) return
+      self%lost = .false.   ! (`kept` is the flow's from x now)
       n = size(open)
       open = [open, open]   ! the orbit repeats: a stretch may wrap around
       best = 0

@@ -145,6 +145,11 @@ contains
             call newton_segments(pm, opt, res, err)
          else
             call newton(pm, opt, x, res, err, monodromy)
+            if (.not. allocated(err) .and. res%status == shoot_converged .and. pm%memory_lost()) then
+               x = res%x   ! (a contact held closed opened: t0 into an open stretch, D-141)
+               call pm%rephase(x, err)
+               if (.not. allocated(err)) call newton(pm, opt, x, res, err, monodromy)
+            end if
          end if
          if (allocated(err)) return
          res%transient = total
