@@ -202,11 +202,14 @@ contains
       ! the memory: kept across a new t0 or parameter (rephase, a branch's next lambda), else the deck's start
       keep = .false.
       if (present(keep_memory)) keep = keep_memory
-      if (allocated(self%mem) .and. keep) keep = size(self%mem) == size(self%memory_of(self%s%model))
-      if (.not. keep) self%mem = self%memory_of(self%s%model)
-      if (.not. keep .or. size(self%kept) /= size(self%memory)) self%kept = spread(.true., 1, size(self%memory))
-      if (.not. keep .or. size(self%mem_end) /= size(self%mem)) self%mem_end = self%mem
-      if (.not. keep) self%lost = .false.
+      if (keep) keep = allocated(self%mem) .and. allocated(self%kept) .and. allocated(self%mem_end)
+      if (keep) keep = size(self%mem) == size(self%memory_of(self%s%model)) .and. size(self%kept) == size(self%memory)
+      if (.not. keep) then
+         self%mem = self%memory_of(self%s%model)
+         self%kept = spread(.true., 1, size(self%memory))
+         self%mem_end = self%mem
+         self%lost = .false.
+      end if
    end subroutine pm_setup
 
    !> The deck's initial state, reduced (at t0: the state itself).
