@@ -395,7 +395,7 @@ contains
       if (allocated(err)) return
       m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
       call pm%setup(m, period, kperiods, err)
-      if (allocated(p%mem)) then   ! (the point's memory: a contact closed at t0 keeps its D, D-141)
+      if (allocated(p%mem)) then   ! (the point's memory: a contact closed at t0 keeps its D, D-150)
          pm%mem = p%mem
          pm%kept = p%kept
       end if

@@ -1,4 +1,4 @@
-!> Element memory in the period map (issue 27, D-141): the yang_sun law's damping
+!> Element memory in the period map (issue 27, D-150): the yang_sun law's damping
 !> D is fixed by the impact that closed a contact and kept while it lasts, state
 !> outside y. A contact that never opens keeps the D of its transient's last
 !> impact, so a contact-keeping periodic orbit is one of a family (one per D) and
@@ -15,7 +15,7 @@
 !>    never opens and the memory repeats, and the run continued until the
 !>    contraction bound |mu|^N r0 is below 1e-8 equals that orbit to 1e-6 of the
 !>    state scale (measured 6.9e-9, 9.6e-9); the orbit from the same state with the
-!>    law's start (D = 0, what the map took before D-141) is another, more than 100
+!>    law's start (D = 0, what the map took before D-150) is another, more than 100
 !>    times that 1e-6 away (measured 2.1e-4, 4.9e-4): the memory matters, the check
 !>    can fail.
 !>
@@ -44,7 +44,7 @@ program test_periodic_memory
    type(error_t), allocatable :: err
    type(deck_group_t), allocatable :: sweeps(:)
 
-   call suite_begin('element memory in the period map (D-141)')
+   call suite_begin('element memory in the period map (D-150)')
    call test_held_memory_is_taken_by_a_closed_contact()
    call read_deck('inputs/sweep_ghm_mesh_frequency.nml', deck, err)
    if (allocated(err)) error stop 'cannot read inputs/sweep_ghm_mesh_frequency.nml'
@@ -166,7 +166,7 @@ contains
       write (*, '(a,es10.3,a,i0,a,es10.3,a,i0,a,f9.6,a)') '    run vs orbit: ', r0, ' after ', n0, ' periods, ', r, &
          ' after ', n0 + nper, ' (max |mu| ', mu_max, ')'
       call check('  the settled run equals the orbit of its memory to 1e-6 of the state scale', r <= 1.0e-6_wp)
-      ! the orbit from the same state with the law's start D = 0 (what the map took before D-141)
+      ! the orbit from the same state with the law's start D = 0 (what the map took before D-150)
       pm%mem = mem_start
       call shoot(pm, opt, res0, err, monodromy=monodromy_variational, x_start=x1)
       if (.not. allocated(err) .and. res0%status == shoot_converged) then

@@ -234,7 +234,7 @@ contains
       c = self%cl%mode /= 0
    end function ce_in_contact
 
-   !> The element's memory: state kept outside y that the motion depends on (D-141).
+   !> The element's memory: state kept outside y that the motion depends on (D-150).
    !> The yang_sun law's contact in progress (D, e, V_i): fixed at the impact that
    !> closed it (eq. 3.12), kept while the contact lasts. 0 for the other laws.
    pure integer function ce_memory_size(self) result(n)

@@ -66,7 +66,7 @@ module trainsim_contact
       ! the contact in progress
       real(wp) :: d = 0.0_wp, e = 1.0_wp, v_i = 0.0_wp
       !> held memory (D, e, V_i; `held`): what a contact found closed at a (re)start
-      !> begins with instead of the law's start (the period map's memory, D-141)
+      !> begins with instead of the law's start (the period map's memory, D-150)
       real(wp) :: held(3) = 0.0_wp
       logical :: has_held = .false.
    contains
@@ -232,7 +232,7 @@ contains
       real(wp) :: v
       self%v_i = v_i
       if (self%law /= law_yang_sun) return
-      if (initial .and. self%has_held) then   ! a memory given (D-141): the contact goes on with it
+      if (initial .and. self%has_held) then   ! a memory given (D-150): the contact goes on with it
          self%d = self%held(1); self%e = self%held(2); self%v_i = self%held(3)
          return
       end if

@@ -37,7 +37,7 @@ contains
       if (allocated(err)) return
       c%t_start = m%run%t_start
       m%run%t_start = m%run%t_start + c%phase*period
-      call c%pm%setup(m, period, c%k, err, keep_memory=allocated(c%pm%mem))   ! (the branch's memory, D-141)
+      call c%pm%setup(m, period, c%k, err, keep_memory=allocated(c%pm%mem))   ! (the branch's memory, D-150)
       if (allocated(err)) return
       c%lam = lam
    end procedure at

@@ -60,7 +60,7 @@ contains
       m%run%t_end = pm%t0 + real(pm%k, wp)*pm%period
       m%run%settle_tol = 0.0_wp
       m%run%settle_time = 0.0_wp
-      call pm%hold_memory(m)   ! (a contact closed at t0 goes on with the orbit's memory, D-141)
+      call pm%hold_memory(m)   ! (a contact closed at t0 goes on with the orbit's memory, D-150)
       call simulate(m, sink, res, err)
    end subroutine orbit_run
 

@@ -18,7 +18,7 @@
 !> orbit at t0; a gear's mesh position advances by a whole pitch per mesh
 !> period at the rigid speed, so the forcing it sees repeats.
 !>
-!> Element memory (D-141): the yang_sun law's damping D (with e and V_i) is
+!> Element memory (D-150): the yang_sun law's damping D (with e and V_i) is
 !> fixed by the impact that closed a contact and kept while it lasts: state
 !> outside y (`clearance_element_t%get_memory`). The map carries it as a
 !> parameter `mem` given with x at t0: every integration from a state at t0
@@ -63,7 +63,7 @@ module trainsim_period_map
       !> the clearances whose contact law remembers its impact (yang_sun: e and D
       !> from the approach velocity), which must be open at t0 (D-99)
       integer, allocatable :: memory(:)
-      !> their memory at t0 (D-141), element after element (`get_memory`'s layout),
+      !> their memory at t0 (D-150), element after element (`get_memory`'s layout),
       !> and at the end of the last map (the flow's own)
       real(wp), allocatable :: mem(:), mem_end(:)
       !> per element of `memory`: its memory is held at t0 (a contact that never opens,
@@ -128,7 +128,7 @@ contains
    !> Set the map up for `model` (prepared as for a run), forcing period `period`, k
    !> periods per map: the reduced state's layout, the rigid speeds, a session at t0;
    !> the memory the deck's start (the law's), or with `keep_memory` the map's own
-   !> (a new t0 or parameter of the same orbit or branch, D-141).
+   !> (a new t0 or parameter of the same orbit or branch, D-150).
    subroutine pm_setup(self, model, period, k, err, keep_memory)
       class(period_map_t), intent(inout) :: self
       type(model_t), intent(in) :: model
@@ -295,7 +295,7 @@ contains
       sc(self%ang) = sw*real(self%k, wp)*self%period/two_pi
    end function pm_scale
 
-   !> The elements with a memory (D-141): of the registry's elements only the
+   !> The elements with a memory (D-150): of the registry's elements only the
    !> clearance elements' yang_sun law keeps state outside y that the motion
    !> depends on (`memory_size` > 0); the other modes (faces, zones, stick or
    !> slip, a lossy gear's power flow) follow from the state at t0.
@@ -387,7 +387,7 @@ contains
    !> progress at t0 (its law's damping comes from its impact, which a state at t0
    !> does not hold; D-99). x and the memory become those at the new t0 and the map
    !> is set up there. Nothing changes without such clearances, or when they never
-   !> open (then a contact closed at t0 keeps the memory mem over the orbit, D-141).
+   !> open (then a contact closed at t0 keeps the memory mem over the orbit, D-150).
    subroutine pm_rephase(self, x, err)
       class(period_map_t), intent(inout) :: self
       real(wp), intent(inout) :: x(:)
@@ -429,7 +429,7 @@ contains
    !> Whether every clearance with a memory that opens at all is open at
    !> t0 + i kT/n, i = 0 .. n - 1 (open(i + 1)), on the flow from x at t0 with the
    !> map's memory; n = max(64, min(2048, kT/dt)). A contact closed at every
-   !> sample keeps its memory over the orbit (a parameter, D-141): it does not
+   !> sample keeps its memory over the orbit (a parameter, D-150): it does not
    !> count, and only such contacts' memory is held from now on (`kept`). All false
    !> when none opens.
    subroutine pm_open_samples(self, x, open, err)
@@ -458,7 +458,7 @@ contains
          closed(:, i + 1) = contact(self%memory) /= 0
       end do
       opens = .not. all(closed, dim=2)
-      self%kept = .not. opens   ! (the memory of a contact that never opens is held, D-141)
+      self%kept = .not. opens   ! (the memory of a contact that never opens is held, D-150)
       do i = 1, n
          open(i) = any(opens) .and. .not. any(closed(:, i) .and. opens)
       end do
