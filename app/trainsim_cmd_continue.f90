@@ -404,6 +404,10 @@ contains
       if (allocated(err)) return
       m%run%t_start = p%t0   ! (its own: t0 moves along a branch where a memory contact drifts onto it)
       call pm%setup(m, period, kperiods, err)
+      if (allocated(p%mem)) then   ! (the point's memory: a contact closed at t0 keeps its D, D-150)
+         pm%mem = p%mem
+         pm%kept = p%kept
+      end if
       if (.not. allocated(err)) call orbit_run(m, pm, p%x, none, run, err, stale)
       call pm%finish()
       if (.not. allocated(err)) el = element_record(run)

@@ -177,6 +177,11 @@ contains
             write (output_unit, '(4x,a,es22.14)') model%state_label(i)//': ', res%x(i)
          end if
       end do
+      do i = 1, size(pm%memory)   ! (D-150: the memory a contact closed at t0 goes on with)
+         if (.not. pm%kept(i)) cycle
+         write (output_unit, '(4x,a,3es15.7)') "memory of '"//model%elements(pm%memory(i))%e%id// &
+            "' (its contact never opens; yang_sun D, e, V_i): ", pm%mem(3*i - 2:3*i)
+      end do
    end subroutine print_state
 
    subroutine print_multipliers(mu)

@@ -3,7 +3,8 @@
 !> an impact-free linear oscillator (closed form, 1e-10), and central
 !> differences of the same event-located flow (Richardson-checked) on the
 !> Table 5.5 rig over one mesh period and on the two-clearance train over a
-!> window with contact changes (1e-6). Without the saltation matrices (or
+!> window with contact changes (1e-6), and on a coupling whose no_tension clip
+!> (D-136) acts before each separation (1e-6). Without the saltation matrices (or
 !> without the impact damping's sensitivity, where contacts close) the same
 !> check is shown to fail by orders of magnitude: the references can tell.
 program test_monodromy
@@ -22,6 +23,7 @@ program test_monodromy
    call test_gear_rig_monodromy_matches_flow_differences()
    call test_two_clearance_monodromy_matches_flow_differences()
    call test_linear_law_impacts_match_flow_differences()
+   call test_no_tension_clip_matches_flow_differences()
    call test_stick_slip_is_refused()
    call suite_end()
 
@@ -159,6 +161,42 @@ contains
                            "&initial node = 'n3', angle = 0.0, speed = -1.0 /", m0)
       call flow_difference_case(m0, 0.0_wp, 0.2_wp, .false., 1.0e-6_wp, 1.0_wp, 1.0e-6_wp, e_m)
    end subroutine test_linear_law_impacts_match_flow_differences
+
+   !> The same coupling with no_tension and more damping (F = max(k p + d pdot, 0)):
+   !> before each separation the unclipped force passes zero while the faces still
+   !> touch, the clip's guard fires (D-136: the sub-mode `slack`, no event record)
+   !> and the force is zero from there to the separation. The clip is a kink, not a
+   !> jump (the saltation there is the identity), but the vector field's Jacobian
+   !> changes: M against the differences to 1e-6 checks both. The window must hold
+   !> the clip's events: more guard crossings than the same deck without no_tension.
+   subroutine test_no_tension_clip_matches_flow_differences()
+      character(len=*), parameter :: deck = "&run t_end = 1.0, dt = 2.0e-5 /"//nl// &
+                                     "&node type = 'fixed' /"//nl//"&node type = 'inertia', inertia = 0.5 /"//nl// &
+                                     "&node type = 'inertia', inertia = 2.0 /"//nl// &
+                                     "&element type = 'shaft', stiffness = 100.0 /"//nl// &
+                                     "&element type = 'clearance_coupling', clearance = 0.02, stiffness = 1.0e4, "// &
+                                     "contact_law = 'linear', contact_damping = 25.0"
+      character(len=*), parameter :: tail = " /"//nl//"&initial node = 'n2', angle = 0.0, speed = 3.0 /"//nl// &
+                                     "&initial node = 'n3', angle = 0.0, speed = -1.0 /"
+      type(model_t) :: m0, m
+      real(wp), allocatable :: x(:)
+      type(monodromy_stats_t) :: st_clip, st_plain
+      type(error_t), allocatable :: err
+      real(wp) :: e_m
+      call test_begin('no_tension_clip_matches_flow_differences')
+      call load_model_text(deck//tail, m)
+      call start(m, x)
+      call flow_events(m, m%run%t_start, 0.2_wp, x, err, stats=st_plain)
+      call load_model_text(deck//", no_tension = .true."//tail, m)
+      call start(m, x)
+      call flow_events(m, m%run%t_start, 0.2_wp, x, err, stats=st_clip)
+      write (*, '(a,i0,a,i0)') '    events over the window: without no_tension ', st_plain%events, ', with ', &
+         st_clip%events
+      call check('the clip''s guard fires in the window (more events with no_tension)', &
+                 st_clip%events > st_plain%events)
+      call load_model_text(deck//", no_tension = .true."//tail, m0)
+      call flow_difference_case(m0, 0.0_wp, 0.2_wp, .false., 1.0e-6_wp, 1.0_wp, 1.0e-6_wp, e_m)
+   end subroutine test_no_tension_clip_matches_flow_differences
 
    !> Friction that sticks (a clutch) changes the state space at its events:
    !> refused with an error value, not a wrong matrix; so are a period of 0

@@ -40,6 +40,9 @@ module trainsim_clearance_element
       procedure :: status => ce_status
       procedure :: hot_form => ce_hot_form
       procedure :: displacement_bound => ce_displacement_bound
+      procedure, non_overridable :: memory_size => ce_memory_size
+      procedure, non_overridable :: get_memory => ce_get_memory
+      procedure, non_overridable :: set_memory => ce_set_memory
    end type clearance_element_t
 
 contains
@@ -231,6 +234,34 @@ contains
       class(clearance_element_t), intent(in) :: self
       c = self%cl%mode /= 0
    end function ce_in_contact
+
+   !> The element's memory: state kept outside y that the motion depends on (D-150).
+   !> The yang_sun law's contact in progress (D, e, V_i): fixed at the impact that
+   !> closed it (eq. 3.12), kept while the contact lasts. 0 for the other laws.
+   pure integer function ce_memory_size(self) result(n)
+      class(clearance_element_t), intent(in) :: self
+      n = merge(3, 0, self%cl%law%law == law_yang_sun)
+   end function ce_memory_size
+
+   !> mem(1:memory_size) = the memory now (D, e, V_i).
+   pure subroutine ce_get_memory(self, mem)
+      class(clearance_element_t), intent(in) :: self
+      real(wp), intent(out) :: mem(:)
+      if (self%memory_size() == 3) mem(1:3) = [self%cl%law%d, self%cl%law%e, self%cl%law%v_i]
+   end subroutine ce_get_memory
+
+   !> Hold mem as the memory: a contact found closed when the modes are next
+   !> chosen from a state (`init_mode`: the model's `init_modes`, a session's
+   !> `set_state`) begins with it instead of the law's start (D-13); a contact
+   !> that closes by an impact takes its own. Nothing changes before that
+   !> (the model's hot tables hold the mode's D until then).
+   pure subroutine ce_set_memory(self, mem)
+      class(clearance_element_t), intent(inout) :: self
+      real(wp), intent(in) :: mem(:)
+      if (self%memory_size() /= 3) return
+      self%cl%law%held = mem(1:3)
+      self%cl%law%has_held = .true.
+   end subroutine ce_set_memory
 
    !> displacement = delta, force = signed contact force, contact = face, pairs = 0.
    pure subroutine ce_status(self, thl, wl, thr, wr, disp, force, contact, pairs)

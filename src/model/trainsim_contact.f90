@@ -69,6 +69,10 @@ module trainsim_contact
       real(wp) :: to_inch = 1.0_wp, to_lbf = 1.0_wp
       ! the contact in progress
       real(wp) :: d = 0.0_wp, e = 1.0_wp, v_i = 0.0_wp
+      !> held memory (D, e, V_i; `held`): what a contact found closed at a (re)start
+      !> begins with instead of the law's start (the period map's memory, D-150)
+      real(wp) :: held(3) = 0.0_wp
+      logical :: has_held = .false.
    contains
       procedure :: configure => law_configure
       procedure :: begin_contact => law_begin_contact
@@ -168,7 +172,8 @@ contains
    end function law_restitution
 
    !> A contact begins with approach velocity v_i: fix e and D for its duration.
-   !> `initial` marks a contact already closed at t_start (MODEL-NOTES 11).
+   !> `initial` marks a contact already closed at t_start (MODEL-NOTES 11): it
+   !> takes the held memory if one was given (`has_held`), else the law's start.
    subroutine law_begin_contact(self, v_i, initial)
       class(contact_law_t), intent(inout) :: self
       real(wp), intent(in) :: v_i
@@ -176,6 +181,10 @@ contains
       real(wp) :: v
       self%v_i = v_i
       if (self%law /= law_yang_sun) return
+      if (initial .and. self%has_held) then   ! a memory given (D-150): the contact goes on with it
+         self%d = self%held(1); self%e = self%held(2); self%v_i = self%held(3)
+         return
+      end if
       if (initial) then
          ! no approach: undamped as the App. F listing (D = 0) unless a velocity is assumed
          if (self%v_initial <= 0.0_wp) then

@@ -91,6 +91,8 @@ module trainsim_arclength
    type :: branch_point_t
       real(wp) :: lam = 0.0_wp, period = 0.0_wp, t0 = 0.0_wp
       real(wp), allocatable :: x(:), tangent(:)   !< tangent: scaled (x/s, lambda/l), unit
+      real(wp), allocatable :: mem(:)             !< the map's memory at t0 and which it held
+      logical, allocatable :: kept(:)             !< (period_map_t's mem, kept: D-150)
       complex(wp), allocatable :: mu(:)
       character(len=:), allocatable :: stability   !< stable / marginal / unstable
       character(len=:), allocatable :: kind        !< '' (a regular point), fold, period-doubling, neimark-sacker, grazing

@@ -37,7 +37,7 @@ contains
       if (allocated(err)) return
       c%t_start = m%run%t_start
       m%run%t_start = m%run%t_start + c%phase*period
-      call c%pm%setup(m, period, c%k, err)
+      call c%pm%setup(m, period, c%k, err, keep_memory=allocated(c%pm%mem))   ! (the branch's memory, D-150)
       if (allocated(err)) return
       c%lam = lam
    end procedure at
@@ -209,6 +209,8 @@ contains
          bp%t0 = c%pm%t0
       end if
       bp%x = p%z(1:c%n)*c%s
+      bp%mem = c%pm%mem
+      bp%kept = c%pm%kept
       bp%tangent = p%t
       bp%mu = p%mu
       bp%stability = stability_of(p%mu)

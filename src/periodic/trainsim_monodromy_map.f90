@@ -54,6 +54,7 @@ contains
       real(wp), allocatable :: mv(:, :)
       mm = pm%model                     ! its t_start is t0 (moved by `rephase`)
       y = x                             ! at t0 the reduced state is the state (D-99)
+      call pm%hold_memory(mm)           ! (a contact closed at t0 keeps the map's memory, D-150)
       call mm%init_modes(pm%t0, pm%full_state(x))
       call monodromy_saltation(mm, pm%t0, real(pm%k, wp)*pm%period, y, mv, err, exact_step=.true., &
                                deck_grid=.true., stats=st)
@@ -71,6 +72,7 @@ contains
       real(wp) :: y(size(x))
       mm = pm%model
       y = x
+      call pm%hold_memory(mm)
       call mm%init_modes(pm%t0, pm%full_state(x))
       call flow_events(mm, pm%t0, real(pm%k, wp)*pm%period, y, err, deck_grid=.true., stats=st)
    end subroutine flow_signature

@@ -69,6 +69,7 @@ contains
       m%run%t_end = pm%t0 + real(pm%k, wp)*pm%period
       m%run%settle_tol = 0.0_wp
       m%run%settle_time = 0.0_wp
+      call pm%hold_memory(m)   ! (a contact closed at t0 goes on with the orbit's memory, D-150)
       call simulate(m, sink, res, err)
       if (allocated(err)) return
       ! p2p_range across the seam t0 = t0 + kT (D-143): a turning point in the first or

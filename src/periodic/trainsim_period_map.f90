@@ -17,6 +17,19 @@
 !> the state itself, so a fixed point x* of the map is a point of the periodic
 !> orbit at t0; a gear's mesh position advances by a whole pitch per mesh
 !> period at the rigid speed, so the forcing it sees repeats.
+!>
+!> Element memory (D-150): the yang_sun law's damping D (with e and V_i) is
+!> fixed by the impact that closed a contact and kept while it lasts: state
+!> outside y (`clearance_element_t%get_memory`). The map carries it as a
+!> parameter `mem` given with x at t0: every integration from a state at t0
+!> holds it on the session's model before the modes are chosen, so a contact
+!> closed at t0 goes on with it (not with the law's start, D-13). Where every
+!> such contact opens within the period, t0 is moved into an open stretch
+!> (`rephase`) and the map does not depend on mem; a contact that never opens
+!> keeps its D over the whole orbit, which is then one of a family of orbits
+!> (one per D, a multiplier at 1 if D were an unknown): mem is the family's
+!> parameter, taken from the start state (the transient's end: `map` with
+!> `carry` hands the memory on as a continuous run does).
 module trainsim_period_map
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
@@ -25,7 +38,6 @@ module trainsim_period_map
    use trainsim_session, only: session_t, session_state_t
    use trainsim_derived, only: mesh_frequency_of
    use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_contact, only: law_yang_sun
    implicit none
    private
 
@@ -51,11 +63,21 @@ module trainsim_period_map
       !> the clearances whose contact law remembers its impact (yang_sun: e and D
       !> from the approach velocity), which must be open at t0 (D-99)
       integer, allocatable :: memory(:)
+      !> their memory at t0 (D-150), element after element (`get_memory`'s layout),
+      !> and at the end of the last map (the flow's own)
+      real(wp), allocatable :: mem(:), mem_end(:)
+      !> per element of `memory`: its memory is held at t0 (a contact that never opens,
+      !> or not yet known: the transient); false for one that opens in the period (t0
+      !> is then moved into an open stretch, and a contact that drifts onto t0 along a
+      !> branch starts as a run's does, D-99, until the next `rephase`)
+      logical, allocatable :: kept(:)
+      logical :: lost = .false.   !< the last map changed a kept memory (`memory_lost`)
       !> multiple shooting (set_segments): the boundaries in s after t0 (0 and kT the
       !> ends), the session's point at each, and the flow's reduced states there
       real(wp), allocatable :: seg_tau(:)
       type(session_state_t), allocatable :: seg_p(:)
       real(wp), allocatable :: seg_x(:, :)
+      real(wp), allocatable :: seg_mem(:, :)   !< and the memory at each boundary
    contains
       procedure :: setup => pm_setup
       procedure :: map => pm_map
@@ -68,6 +90,9 @@ module trainsim_period_map
       procedure :: open_samples => pm_open_samples
       procedure :: set_segments => pm_set_segments
       procedure :: segment => pm_segment
+      procedure :: hold_memory => pm_hold_memory
+      procedure :: memory_of => pm_memory_of
+      procedure :: memory_lost => pm_memory_lost
    end type period_map_t
 
 contains
@@ -101,13 +126,17 @@ contains
    end subroutine forcing_period
 
    !> Set the map up for `model` (prepared as for a run), forcing period `period`, k
-   !> periods per map: the reduced state's layout, the rigid speeds, a session at t0.
-   subroutine pm_setup(self, model, period, k, err)
+   !> periods per map: the reduced state's layout, the rigid speeds, a session at t0;
+   !> the memory the deck's start (the law's), or with `keep_memory` the map's own
+   !> (a new t0 or parameter of the same orbit or branch, D-150).
+   subroutine pm_setup(self, model, period, k, err, keep_memory)
       class(period_map_t), intent(inout) :: self
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: period
       integer, intent(in) :: k
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: keep_memory
+      logical :: keep
       type(model_t) :: m
       real(wp), allocatable :: w(:)
       logical, allocatable :: known(:)
@@ -170,6 +199,17 @@ contains
       call self%s%start(m, err, reference=.false.)   ! (the map reads states only: no static reference, D-131)
       if (allocated(err)) return
       call self%s%save(self%p0, err)
+      ! the memory: kept across a new t0 or parameter (rephase, a branch's next lambda), else the deck's start
+      keep = .false.
+      if (present(keep_memory)) keep = keep_memory
+      if (keep) keep = allocated(self%mem) .and. allocated(self%kept) .and. allocated(self%mem_end)
+      if (keep) keep = size(self%mem) == size(self%memory_of(self%s%model)) .and. size(self%kept) == size(self%memory)
+      if (.not. keep) then
+         self%mem = self%memory_of(self%s%model)
+         self%kept = spread(.true., 1, size(self%memory))
+         self%mem_end = self%mem
+         self%lost = .false.
+      end if
    end subroutine pm_setup
 
    !> The deck's initial state, reduced (at t0: the state itself).
@@ -189,22 +229,26 @@ contains
    end function pm_full_state
 
    !> x1 = P^j(x0): the reduced state `periods` forcing periods (default k) after the
-   !> reduced state x0 at t0.
-   subroutine pm_map(self, x0, x1, err, periods)
+   !> reduced state x0 at t0 with the memory mem; mem_end the memory there. With
+   !> `carry` mem becomes mem_end (a transient: the memory goes on as in a run).
+   subroutine pm_map(self, x0, x1, err, periods, carry)
       class(period_map_t), intent(inout) :: self
       real(wp), intent(in) :: x0(:)
       real(wp), intent(out) :: x1(:)
       type(error_t), allocatable, intent(out) :: err
       integer, intent(in), optional :: periods
+      logical, intent(in), optional :: carry
       integer :: j, np
       real(wp) :: t1
       np = self%k
       if (present(periods)) np = periods
       x1 = x0
+      self%mem_end = self%mem
       do j = 1, np, self%k
          ! a chunk of k periods from t0 (the forcing repeats): restore, set, advance
          call self%s%restore(self%p0, err)
          if (allocated(err)) return
+         call self%hold_memory(self%s%model, self%mem_end)   ! (the memory the last chunk ended with)
          call self%s%set_state(self%full_state(x1), err)
          if (allocated(err)) return
          t1 = self%t0 + real(min(self%k, np - j + 1), wp)*self%period
@@ -212,9 +256,23 @@ contains
          if (allocated(err)) return
          x1 = self%s%y(1:self%n)
          x1(self%ang) = x1(self%ang) - self%w*(t1 - self%t0)
+         self%mem_end = self%memory_of(self%s%model)
          self%n_periods = self%n_periods + min(self%k, np - j + 1)
       end do
+      self%lost = changed(self)
+      if (present(carry)) then
+         if (carry) self%mem = self%mem_end
+      end if
       self%n_evals = self%n_evals + 1
+   contains
+      logical function changed(pm)
+         class(period_map_t), intent(in) :: pm
+         integer :: i
+         changed = .false.
+         do i = 1, size(pm%memory)   ! (3 values an element: memory_size of yang_sun)
+            if (pm%kept(i)) changed = changed .or. any(pm%mem_end(3*i - 2:3*i) /= pm%mem(3*i - 2:3*i))
+         end do
+      end function changed
    end subroutine pm_map
 
    !> The scale of each component of the reduced state x (D-99): one for every speed,
@@ -237,7 +295,10 @@ contains
       sc(self%ang) = sw*real(self%k, wp)*self%period/two_pi
    end function pm_scale
 
-   !> The clearance elements whose contact law carries a memory of the impact.
+   !> The elements with a memory (D-150): of the registry's elements only the
+   !> clearance elements' yang_sun law keeps state outside y that the motion
+   !> depends on (`memory_size` > 0); the other modes (faces, zones, stick or
+   !> slip, a lossy gear's power flow) follow from the state at t0.
    function memory_elements(model) result(list)
       type(model_t), intent(in) :: model
       integer, allocatable :: list(:)
@@ -246,10 +307,64 @@ contains
       do e = 1, size(model%elements)
          select type (el => model%elements(e)%e)
          class is (clearance_element_t)
-            if (el%cl%law%law == law_yang_sun) list = [list, e]
+            if (el%memory_size() > 0) list = [list, e]
          end select
       end do
    end function memory_elements
+
+   !> The memory of the elements `memory` of `model`, one after another.
+   function pm_memory_of(self, model) result(mem)
+      class(period_map_t), intent(in) :: self
+      type(model_t), intent(in) :: model
+      real(wp), allocatable :: mem(:)
+      real(wp) :: one(3)
+      integer :: i, n
+      allocate (mem(0))
+      do i = 1, size(self%memory)
+         select type (el => model%elements(self%memory(i))%e)
+         class is (clearance_element_t)
+            n = el%memory_size()
+            call el%get_memory(one(1:n))
+            mem = [mem, one(1:n)]
+         end select
+      end do
+   end function pm_memory_of
+
+   !> Whether the last map ended with another memory than it held for a contact
+   !> taken to stay closed (`kept`): that contact opened and closed again within the
+   !> period (an impact set its D), so the orbit is no longer one of the family at
+   !> mem, and t0 must move into an open stretch (`rephase`, which then stops holding it).
+   logical function pm_memory_lost(self) result(lost)
+      class(period_map_t), intent(in) :: self
+      lost = self%lost
+   end function pm_memory_lost
+
+   !> Hold `mem` (default the map's) on the elements of `model` that keep it (`kept`,
+   !> set_memory): a contact closed when its modes are next chosen from a state goes
+   !> on with it.
+   subroutine pm_hold_memory(self, model, mem)
+      class(period_map_t), intent(in) :: self
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in), optional :: mem(:)
+      integer :: i, n, at
+      at = 0
+      do i = 1, size(self%memory)
+         select type (el => model%elements(self%memory(i))%e)
+         class is (clearance_element_t)
+            n = el%memory_size()
+            if (.not. self%kept(i)) then
+               at = at + n
+               cycle
+            end if
+            if (present(mem)) then
+               call el%set_memory(mem(at + 1:at + n))
+            else
+               call el%set_memory(self%mem(at + 1:at + n))
+            end if
+            at = at + n
+         end select
+      end do
+   end subroutine pm_hold_memory
 
    !> The full state y at t0 + tau (0 <= tau <= k T) from the reduced state x at t0.
    subroutine pm_flow(self, x, tau, y, err)
@@ -259,6 +374,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       call self%s%restore(self%p0, err)
       if (allocated(err)) return
+      call self%hold_memory(self%s%model)
       call self%s%set_state(self%full_state(x), err)
       if (allocated(err)) return
       call self%s%advance(self%t0 + tau, err)
@@ -267,11 +383,11 @@ contains
 
    !> A new forcing phase t0 for the state x (the map restarts there): the middle of
    !> the longest stretch of the k periods from x in which every clearance with a
-   !> memory (`memory`) is open, so that no contact is in progress at t0 (its law's
-   !> damping comes from its impact, which a state at t0 does not hold; D-99). x
-   !> becomes the state at the new t0 and the map is set up there. Nothing changes
-   !> without such clearances, or when they never open (then a contact closed at t0
-   !> has the law's start, D-13).
+   !> memory (`memory`) that opens is open, so that no contact with a memory is in
+   !> progress at t0 (its law's damping comes from its impact, which a state at t0
+   !> does not hold; D-99). x and the memory become those at the new t0 and the map
+   !> is set up there. Nothing changes without such clearances, or when they never
+   !> open (then a contact closed at t0 keeps the memory mem over the orbit, D-150).
    subroutine pm_rephase(self, x, err)
       class(period_map_t), intent(inout) :: self
       real(wp), intent(inout) :: x(:)
@@ -285,6 +401,7 @@ contains
       span = real(self%k, wp)*self%period
       call self%open_samples(x, open, err)
       if (allocated(err)) return
+      self%lost = .false.   ! (`kept` is the flow's from x now)
       n = size(open)
       open = [open, open]   ! the orbit repeats: a stretch may wrap around
       best = 0
@@ -303,13 +420,18 @@ contains
       call self%flow(x, tau, y, err)
       if (allocated(err)) return
       x = y(1:self%n)
+      self%mem = self%memory_of(self%s%model)   ! (the memory moves with the state)
       m = self%model
       m%run%t_start = self%t0 + tau
-      call self%setup(m, self%period, self%k, err)
+      call self%setup(m, self%period, self%k, err, keep_memory=.true.)
    end subroutine pm_rephase
 
-   !> Whether every clearance with a memory is open at t0 + i kT/n, i = 0 .. n - 1
-   !> (open(i + 1)), on the flow from x at t0; n = max(64, min(2048, kT/dt)).
+   !> Whether every clearance with a memory that opens at all is open at
+   !> t0 + i kT/n, i = 0 .. n - 1 (open(i + 1)), on the flow from x at t0 with the
+   !> map's memory; n = max(64, min(2048, kT/dt)). A contact closed at every
+   !> sample keeps its memory over the orbit (a parameter, D-150): it does not
+   !> count, and only such contacts' memory is held from now on (`kept`). All false
+   !> when none opens.
    subroutine pm_open_samples(self, x, open, err)
       class(period_map_t), intent(inout) :: self
       real(wp), intent(in) :: x(:)
@@ -317,27 +439,35 @@ contains
       type(error_t), allocatable, intent(out) :: err
       real(wp), allocatable :: disp(:), force(:)
       integer, allocatable :: contact(:)
+      logical, allocatable :: closed(:, :), opens(:)
       integer :: n, i, ne
       real(wp) :: span
       span = real(self%k, wp)*self%period
       n = max(64, min(2048, nint(span/self%model%run%dt)))
       ne = size(self%model%elements)
-      allocate (disp(ne), force(ne), contact(ne), open(n))
+      allocate (disp(ne), force(ne), contact(ne), open(n), closed(size(self%memory), n))
       call self%s%restore(self%p0, err)
       if (allocated(err)) return
+      call self%hold_memory(self%s%model)
       call self%s%set_state(self%full_state(x), err)
       if (allocated(err)) return
       do i = 0, n - 1
          if (i > 0) call self%s%advance(self%t0 + span*real(i, wp)/real(n, wp), err)
          if (allocated(err)) return
          call self%s%element_status(disp, force, contact)
-         open(i + 1) = all(contact(self%memory) == 0)
+         closed(:, i + 1) = contact(self%memory) /= 0
+      end do
+      opens = .not. all(closed, dim=2)
+      self%kept = .not. opens   ! (the memory of a contact that never opens is held, D-150)
+      do i = 1, n
+         open(i) = any(opens) .and. .not. any(closed(:, i) .and. opens)
       end do
    end subroutine pm_open_samples
 
    !> Multiple shooting: up to m segments of the k periods, boundaries near t0 + j kT/m
    !> (j = 1 .. m - 1) moved to the nearest instant at which every clearance with a
-   !> memory is open on the flow from x (within kT/2m; else the boundary is dropped),
+   !> memory that opens is open on the flow from x (within kT/2m; else the boundary is
+   !> dropped; `open_samples`),
    !> and the session's point saved at each. seg_tau(0:ns) are the boundaries (0 and kT
    !> the ends), seg_x(:, j) the flow's reduced state at boundary j.
    subroutine pm_set_segments(self, m, x, err)
@@ -349,16 +479,19 @@ contains
       real(wp), allocatable :: tau(:)
       real(wp) :: span, best, t
       integer :: j, i, n
+      logical :: restricted
       span = real(self%k, wp)*self%period
       allocate (tau(0))
-      if (size(self%memory) > 0) then
+      restricted = size(self%memory) > 0
+      if (restricted) then
          call self%open_samples(x, open, err)
          if (allocated(err)) return
          n = size(open)
+         restricted = any(open)   ! (contacts that never open: their memory is constant, seg_mem)
       end if
       do j = 1, m - 1
          t = span*real(j, wp)/real(m, wp)
-         if (size(self%memory) > 0) then
+         if (restricted) then
             best = huge(1.0_wp)
             do i = 1, n
                if (open(i) .and. abs(span*real(i - 1, wp)/real(n, wp) - t) < abs(best - t)) &
@@ -380,12 +513,15 @@ contains
       self%seg_tau(0) = 0.0_wp
       self%seg_tau(1:size(tau)) = tau
       self%seg_tau(size(tau) + 1) = span
-      if (allocated(self%seg_p)) deallocate (self%seg_p, self%seg_x)
-      allocate (self%seg_p(0:size(self%seg_tau) - 2), self%seg_x(self%n, 0:size(self%seg_tau) - 2))
+      if (allocated(self%seg_p)) deallocate (self%seg_p, self%seg_x, self%seg_mem)
+      allocate (self%seg_p(0:size(self%seg_tau) - 2), self%seg_x(self%n, 0:size(self%seg_tau) - 2), &
+                self%seg_mem(size(self%mem), 0:size(self%seg_tau) - 2))
       self%seg_p(0) = self%p0
       self%seg_x(:, 0) = x
+      self%seg_mem(:, 0) = self%mem
       call self%s%restore(self%p0, err)
       if (allocated(err)) return
+      call self%hold_memory(self%s%model)
       call self%s%set_state(self%full_state(x), err)
       if (allocated(err)) return
       do j = 1, size(self%seg_tau) - 2
@@ -393,6 +529,7 @@ contains
          if (allocated(err)) return
          self%seg_x(:, j) = self%s%y(1:self%n)
          self%seg_x(self%ang, j) = self%seg_x(self%ang, j) - self%w*self%seg_tau(j)
+         self%seg_mem(:, j) = self%memory_of(self%s%model)
          call self%s%save(self%seg_p(j), err)
          if (allocated(err)) return
       end do
@@ -411,6 +548,7 @@ contains
       if (allocated(err)) return
       y = self%full_state(xj)
       y(self%ang) = y(self%ang) + self%w*self%seg_tau(j)
+      call self%hold_memory(self%s%model, self%seg_mem(:, j))
       call self%s%set_state(y, err)
       if (allocated(err)) return
       call self%s%advance(self%t0 + self%seg_tau(j + 1), err)

@@ -76,6 +76,7 @@ contains
          if (.not. allocated(err)) call put_column_r(grp, 'state', res%x, err, none)
          if (.not. allocated(err)) call put_list_attr_of(grp, labels, err)
          if (.not. allocated(err)) call put_column_r(grp, 'scale', res%scale, err, none)
+         if (.not. allocated(err) .and. size(pm%mem) > 0) call put_column_r(grp, 'memory', pm%mem, err, none)
          if (.not. allocated(err)) call put_column_r(grp, 'rigid_speed', w, err, [string_t('rad/s')])
          if (.not. allocated(err)) call put_column_r(grp, 'multipliers_re', real(mu), err, none)
          if (.not. allocated(err)) call put_column_r(grp, 'multipliers_im', aimag(mu), err, none)

@@ -106,8 +106,8 @@ contains
    end subroutine monodromy_fd_step
 
    !> The periodic orbit of pm's map near the end of a transient from the deck's
-   !> initial state (or from `x_start`): Newton on P(x) - x with `monodromy`
-   !> (default monodromy_fd). res%status says whether it converged and, if
+   !> initial state (or from `x_start`), the memory pm%mem carried through it
+   !> (D-150): Newton on P(x) - x with `monodromy` (default monodromy_fd). res%status says whether it converged and, if
    !> not, res%message why. When Newton finds no orbit near the start or spends
    !> its budget, the transient goes on (to three times its length so far) and
    !> Newton starts again, opt%retries times. err: the integration itself failed
@@ -132,7 +132,7 @@ contains
       total = 0
       do attempt = 0, opt%retries
          if (periods > 0) then
-            call pm%map(x, xt, err, periods=periods)
+            call pm%map(x, xt, err, periods=periods, carry=.true.)   ! (the memory goes on, D-150)
             if (allocated(err)) return
             x = xt
             total = total + periods
@@ -145,6 +145,11 @@ contains
             call newton_segments(pm, opt, res, err)
          else
             call newton(pm, opt, x, res, err, monodromy)
+            if (.not. allocated(err) .and. res%status == shoot_converged .and. pm%memory_lost()) then
+               x = res%x   ! (a contact held closed opened: t0 into an open stretch, D-150)
+               call pm%rephase(x, err)
+               if (.not. allocated(err)) call newton(pm, opt, x, res, err, monodromy)
+            end if
          end if
          if (allocated(err)) return
          res%transient = total
