@@ -31,7 +31,7 @@ module trainsim_cli
    logical :: strict = .false.                ! --strict: plausibility warnings are errors
    !> The groups of the deck `load` read, kept until the process ends: each command loads
    !> once and quits after its print-out (D-140), and freeing them, ~16 allocations a
-   !> node or element, cost 5 % of a shaft chain's start-up (D-141).
+   !> node or element, cost 5 % of a shaft chain's start-up (D-151).
    type(deck_group_t), allocatable :: loaded_groups(:)
 
    interface

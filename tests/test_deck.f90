@@ -440,7 +440,7 @@ contains
       call check('truncated 4-byte sequence rejected', allocated(err))
    end subroutine test_text_must_be_utf8_without_nul
 
-   !> The check skips a run of plain ASCII eight bytes at a time (D-141): a NUL or a
+   !> The check skips a run of plain ASCII eight bytes at a time (D-151): a NUL or a
    !> byte >= 128 is found at every position of a word and past it, and a valid
    !> sequence across a word's end is accepted.
    subroutine test_utf8_check_at_every_position()
@@ -467,7 +467,7 @@ contains
    end subroutine test_utf8_check_at_every_position
 
    !> `named` is the exact lower-case group name; a key of another length is found
-   !> only when the asked key is padded with blanks (D-141); all_used after every read.
+   !> only when the asked key is padded with blanks (D-151); all_used after every read.
    subroutine test_group_named_and_key_lengths()
       type(deck_t) :: deck
       type(error_t), allocatable :: err

@@ -169,7 +169,7 @@ contains
    end subroutine group_require_nonnegative
 
    !> The group is `&name` (`name` in lower case), compared by character codes: a
-   !> string comparison is a library call, and every reader walks all the groups (D-141).
+   !> string comparison is a library call, and every reader walks all the groups (D-151).
    pure logical function group_named(self, name) result(yes)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in) :: name
@@ -184,7 +184,7 @@ contains
    end function group_named
 
    !> Every entry was read by a getter (check_unused has nothing to say; its
-   !> context, built by the caller, is then not needed: D-141).
+   !> context, built by the caller, is then not needed: D-151).
    pure logical function group_all_used(self) result(yes)
       class(deck_group_t), intent(in) :: self
       yes = .true.
@@ -534,7 +534,7 @@ contains
 
    !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
    !> without a lowered copy of `key` (an allocation a look-up, D-90). By character
-   !> codes: gfortran compares a character with a blank through len_trim (D-141).
+   !> codes: gfortran compares a character with a blank through len_trim (D-151).
    pure logical function same_key(stored, key) result(yes)
       character(len=*), intent(in) :: stored, key
       integer :: i, c, n
