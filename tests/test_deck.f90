@@ -2,7 +2,7 @@
 program test_deck
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, err_input, err_io
-   use trainsim_strings, only: string_t, str
+   use trainsim_strings, only: string_t, str, invalid_text_byte
    use trainsim_deck, only: deck_t, deck_group_t, read_deck, parse_deck, parse_real
    use trainsim_testing, only: suite_begin, test_begin, check, suite_end
    implicit none
@@ -28,6 +28,8 @@ program test_deck
    call test_read_deck_file()
    call test_read_deck_large_file_line_ends()
    call test_text_must_be_utf8_without_nul()
+   call test_utf8_check_at_every_position()
+   call test_group_named_and_key_lengths()
    call test_getter_missing_and_default()
    call test_getter_wrong_type()
    call test_getter_two_values_and_quoted()
@@ -437,6 +439,60 @@ contains
       call parse_deck("&run title = '"//char(240)//char(159)//char(154)//"' /", 'x.nml', deck, err)
       call check('truncated 4-byte sequence rejected', allocated(err))
    end subroutine test_text_must_be_utf8_without_nul
+
+   !> The check skips a run of plain ASCII eight bytes at a time (D-151): a NUL or a
+   !> byte >= 128 is found at every position of a word and past it, and a valid
+   !> sequence across a word's end is accepted.
+   subroutine test_utf8_check_at_every_position()
+      character(len=:), allocatable :: t
+      integer :: p
+      logical :: ok_nul, ok_high, ok_seq, ok_low
+      call test_begin('deck text: the UTF-8 check finds a NUL or a bad byte at every position 1..24')
+      ok_nul = .true.; ok_high = .true.; ok_seq = .true.; ok_low = .true.
+      do p = 1, 24
+         t = repeat('a', p - 1)//achar(0)//repeat('b', 9)
+         ok_nul = ok_nul .and. invalid_text_byte(t) == p
+         t = repeat('a', p - 1)//char(252)//repeat('b', 9)
+         ok_high = ok_high .and. invalid_text_byte(t) == p
+         t = repeat('a', p - 1)//char(195)//char(188)//repeat('b', 9)   ! u-umlaut, valid
+         ok_seq = ok_seq .and. invalid_text_byte(t) == 0
+         t = repeat('a', p - 1)//achar(1)//achar(127)//repeat('b', 9)   ! lowest and highest ASCII
+         ok_low = ok_low .and. invalid_text_byte(t) == 0
+      end do
+      call check('NUL at its position', ok_nul)
+      call check('byte 0xFC at its position', ok_high)
+      call check('a 2-byte sequence anywhere accepted', ok_seq)
+      call check('bytes 1 and 127 accepted', ok_low)
+      call check('empty text valid', invalid_text_byte('') == 0)
+   end subroutine test_utf8_check_at_every_position
+
+   !> `named` is the exact lower-case group name; a key of another length is found
+   !> only when the asked key is padded with blanks (D-151); all_used after every read.
+   subroutine test_group_named_and_key_lengths()
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      real(wp) :: x
+      call test_begin('deck group: named(), keys of other lengths, padded and upper-case keys, all_used')
+      call parse_deck("&Run t_end = 1.0, dt = 0.5 /", 'x.nml', deck, err)
+      call check('parsed', .not. allocated(err))
+      if (allocated(err)) return
+      associate (g => deck%groups(1))
+         call check('named run', g%named('run'))
+         call check('not named ru', .not. g%named('ru'))
+         call check('not named runs', .not. g%named('runs'))
+         call check('not named Run (names are lower case)', .not. g%named('Run'))
+         call check('has T_END (upper case)', g%has('T_END'))
+         call check('has padded t_end', g%has('t_end   '))
+         call check('has no t_en', .not. g%has('t_en'))
+         call check('has no t_end_', .not. g%has('t_end_'))
+         call check('not all used before reading', .not. g%all_used())
+         call g%get_real('t_end', x, err)
+         call check('t_end read', .not. allocated(err) .and. x == 1.0_wp)
+         call check('not all used with dt unread', .not. g%all_used())
+         call g%get_real('dt', x, err)
+         call check('all used', g%all_used())
+      end associate
+   end subroutine test_group_named_and_key_lengths
 
    subroutine test_getter_missing_and_default()
       type(deck_t) :: deck

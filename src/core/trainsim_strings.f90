@@ -25,6 +25,13 @@ module trainsim_strings
          integer(c_int), value :: c
          integer(c_size_t), value :: n
       end function c_memchr
+      !> Leading bytes of s(1:n) in 1..127 (trainsim_textfmt.c): the UTF-8 check's
+      !> walk starts after them (~1 instruction a byte against ~9).
+      pure integer(c_size_t) function c_ascii_prefix(s, n) bind(c, name='trainsim_ascii_prefix')
+         import :: c_char, c_size_t
+         character(kind=c_char), intent(in) :: s(*)
+         integer(c_size_t), value :: n
+      end function c_ascii_prefix
    end interface
 
 contains
@@ -127,8 +134,9 @@ contains
       integer :: pos
       integer :: i, n, b, b2, nfollow, k
       n = len(text)
-      i = 1
       pos = 0
+      i = 1
+      if (n > 0) i = 1 + int(c_ascii_prefix(text, int(n, c_size_t)))
       do while (i <= n)
          b = iachar(text(i:i))
          if (b < 128) then

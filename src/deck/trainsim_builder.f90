@@ -72,9 +72,9 @@ contains
       call link_controllers(model)   ! (the sensors' state offsets: finalize's)
       do i = 1, size(deck%groups)
          associate (g => deck%groups(i))
-            if (g%name == 'run') call g%check_unused(err, 'the &run group')
-            if (g%name == 'load') call g%check_unused(err, 'a &load group')
-            if (g%name == 'initial') call g%check_unused(err, 'an &initial group')
+            if (g%named('run')) call g%check_unused(err, 'the &run group')
+            if (g%named('load')) call g%check_unused(err, 'a &load group')
+            if (g%named('initial')) call g%check_unused(err, 'an &initial group')
          end associate
          if (allocated(err)) return
       end do
@@ -96,7 +96,7 @@ contains
          return
       end if
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name == 'run') exit
+         if (deck%groups(i)%named('run')) exit
       end do
       associate (g => deck%groups(i), r => model%run)
          call g%get_string('title', model%title, err, default=''); if (allocated(err)) return
@@ -322,7 +322,7 @@ contains
       integer :: i, k, j
       character(len=:), allocatable :: id, tname
 
-      allocate (model%nodes(deck%count_groups('node')), np(deck%count_groups('node')))
+      allocate (model%nodes(deck%count_groups('node'))); allocate (np(size(model%nodes)))
       if (size(model%nodes) == 0) then
          call fatal_error(err, deck%file//': error: the deck has no &node group (a train needs at least one node)', &
                           err_input)
@@ -331,7 +331,7 @@ contains
       call node_ids%reserve(size(model%nodes))
       k = 0
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'node') cycle
+         if (.not. deck%groups(i)%named('node')) cycle
          k = k + 1
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default=''); if (allocated(err)) return
@@ -354,7 +354,7 @@ contains
             call model%nodes(k)%n%configure(g, model%units, err); if (allocated(err)) return
             np(k) = model%nodes(k)%n%params()
             call check_params(g, np(k), err); if (allocated(err)) return
-            call g%check_unused(err, "node type '"//model%nodes(k)%n%type_name//"'"); if (allocated(err)) return
+            if (.not. g%all_used()) call g%check_unused(err, "node type '"//model%nodes(k)%n%type_name//"'"); if (allocated(err)) return
          end associate
       end do
    end subroutine read_nodes
@@ -369,12 +369,12 @@ contains
       character(len=:), allocatable :: id, tname, lid, rid, dl, dr
       type(id_table_t) :: element_ids
 
-      allocate (model%elements(deck%count_groups('element')), ep(deck%count_groups('element')))
+      allocate (model%elements(deck%count_groups('element'))); allocate (ep(size(model%elements)))
       nn = size(model%nodes)
       call element_ids%reserve(size(model%elements))
       k = 0
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'element') cycle
+         if (.not. deck%groups(i)%named('element')) cycle
          k = k + 1
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default=''); if (allocated(err)) return
@@ -423,7 +423,7 @@ contains
                call read_ports(g, e, node_ids, err); if (allocated(err)) return
                ep(k) = e%params()
                call check_params(g, ep(k), err); if (allocated(err)) return
-               call g%check_unused(err, "element type '"//e%type_name//"'"); if (allocated(err)) return
+               if (.not. g%all_used()) call g%check_unused(err, "element type '"//e%type_name//"'"); if (allocated(err)) return
             end associate
          end associate
       end do
@@ -493,7 +493,7 @@ contains
       nspeeds = 0
       model%speed_of = 0
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'load') cycle
+         if (.not. deck%groups(i)%named('load')) cycle
          associate (g => deck%groups(i))
             call g%get_string('node', nid, err); if (allocated(err)) return
             inode = node_ids%get(nid)
@@ -555,7 +555,7 @@ contains
       seen = .false.
       ! 'all' groups first, so that per-node groups override them
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'initial') cycle
+         if (.not. deck%groups(i)%named('initial')) cycle
          associate (g => deck%groups(i))
             call g%get_string('node', nid, err); if (allocated(err)) return
             if (to_lower(nid) /= 'all') cycle
@@ -567,7 +567,7 @@ contains
          end associate
       end do
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'initial') cycle
+         if (.not. deck%groups(i)%named('initial')) cycle
          associate (g => deck%groups(i))
             call g%get_string('node', nid, err); if (allocated(err)) return
             if (to_lower(nid) == 'all') cycle

@@ -37,7 +37,7 @@ contains
 
       k = 0
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'controller') cycle
+         if (.not. deck%groups(i)%named('controller')) cycle
          k = k + 1
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default='c'//str(k)); if (allocated(err)) return

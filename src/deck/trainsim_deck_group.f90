@@ -6,7 +6,7 @@ module trainsim_deck_group
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: string_t, to_lower, str, join, edit_distance
-   use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place
+   use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place, digits
    implicit none
    private
 
@@ -45,6 +45,8 @@ module trainsim_deck_group
       procedure :: where => group_where
       procedure :: label => group_label
       procedure :: check_unused => group_check_unused
+      procedure :: all_used => group_all_used
+      procedure :: named => group_named
       procedure :: require_positive => group_require_positive
       procedure :: require_nonnegative => group_require_nonnegative
    end type deck_group_t
@@ -130,28 +132,6 @@ contains
       end subroutine put
    end function group_where
 
-   !> Decimal digits of i (a line or ordinal; as str(i) writes them, -1 too) in buf(1:n).
-   pure subroutine digits(i, buf, n)
-      integer, intent(in) :: i
-      character(len=12), intent(out) :: buf
-      integer, intent(out) :: n
-      integer :: v, m
-      v = abs(i)
-      m = 12
-      do
-         buf(m:m) = achar(iachar('0') + mod(v, 10))
-         v = v/10
-         if (v == 0) exit
-         m = m - 1
-      end do
-      if (i < 0) then
-         m = m - 1
-         buf(m:m) = '-'
-      end if
-      n = 13 - m
-      buf(1:n) = buf(m:12)
-   end subroutine digits
-
    !> "&element #2 (id 'g1')" if the group has an 'id' entry, else "&element #2".
    function group_label(self) result(s)
       class(deck_group_t), intent(in) :: self
@@ -187,6 +167,29 @@ contains
       if (.not. value >= 0.0_wp) call fatal_error(err, self%where(key)//': error: '//key//' must be >= 0, got '// &
                                                   str(value), err_input)
    end subroutine group_require_nonnegative
+
+   !> The group is `&name` (`name` in lower case), compared by character codes: a
+   !> string comparison is a library call, and every reader walks all the groups (D-151).
+   pure logical function group_named(self, name) result(yes)
+      class(deck_group_t), intent(in) :: self
+      character(len=*), intent(in) :: name
+      integer :: i
+      yes = .false.
+      if (.not. allocated(self%name)) return
+      if (len(self%name) /= len(name)) return
+      do i = 1, len(name)
+         if (iachar(self%name(i:i)) /= iachar(name(i:i))) return
+      end do
+      yes = .true.
+   end function group_named
+
+   !> Every entry was read by a getter (check_unused has nothing to say; its
+   !> context, built by the caller, is then not needed: D-151).
+   pure logical function group_all_used(self) result(yes)
+      class(deck_group_t), intent(in) :: self
+      yes = .true.
+      if (allocated(self%entries)) yes = all(self%entries(:)%used)
+   end function group_all_used
 
    subroutine group_check_unused(self, err, context)
       class(deck_group_t), intent(in) :: self
@@ -420,13 +423,20 @@ contains
    end subroutine fail
 
    !> Index of entry `key` (case-insensitive), 0 if absent.
+   !> A stored key never ends in a blank, so one of another length matches only a
+   !> `key` padded with blanks: the others are passed over without a comparison.
    integer function find(self, key) result(k)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in) :: key
-      integer :: j
+      integer :: j, n
+      logical :: padded
       k = 0
       if (.not. allocated(self%entries)) return
+      n = len(key)
+      padded = .false.
+      if (n > 0) padded = iachar(key(n:n)) == 32
       do j = 1, size(self%entries)
+         if (len(self%entries(j)%key) /= n .and. .not. padded) cycle
          if (same_key(self%entries(j)%key, key)) then
             k = j
             return
@@ -523,20 +533,23 @@ contains
    end function was_queried
 
    !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
-   !> without a lowered copy of `key` (an allocation a look-up, D-90).
+   !> without a lowered copy of `key` (an allocation a look-up, D-90). By character
+   !> codes: gfortran compares a character with a blank through len_trim (D-151).
    pure logical function same_key(stored, key) result(yes)
       character(len=*), intent(in) :: stored, key
-      character(len=1) :: a, b
-      integer :: i, c
+      integer :: i, c, n
       yes = .false.
-      do i = 1, max(len(stored), len(key))
-         a = ' '
-         b = ' '
-         if (i <= len(stored)) a = stored(i:i)
-         if (i <= len(key)) b = key(i:i)
-         c = iachar(b)
-         if (c >= iachar('A') .and. c <= iachar('Z')) b = achar(c + 32)
-         if (a /= b) return
+      n = min(len(stored), len(key))
+      do i = 1, n
+         c = iachar(key(i:i))
+         if (c >= 65 .and. c <= 90) c = c + 32
+         if (iachar(stored(i:i)) /= c) return
+      end do
+      do i = n + 1, len(stored)   ! the longer one's rest: blanks
+         if (iachar(stored(i:i)) /= 32) return
+      end do
+      do i = n + 1, len(key)
+         if (iachar(key(i:i)) /= 32) return
       end do
       yes = .true.
    end function same_key

@@ -6,12 +6,12 @@ module trainsim_deck_lexer
    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: string_t, to_lower, str, invalid_text_byte
+   use trainsim_strings, only: string_t, str, invalid_text_byte
    implicit none
    private
 
    public :: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string
-   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key, lower_in_place
+   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key, lower_in_place, digits
 
    ! Token kinds produced by the lexer.
    integer, parameter :: tk_group = 1   ! '&name' (text = lower-case name)
@@ -130,7 +130,7 @@ contains
                                 text(i + 1:j - 1)//"' (it must start with a letter)", err_input)
                return
             end if
-            if (to_lower(text(i + 1:j - 1)) == 'end') then
+            if (is_end(text(i + 1:j - 1))) then
                call push(toks, tk_end, '&end', line)
             else
                call push(toks, tk_group, text(i + 1:j - 1), line)
@@ -417,10 +417,49 @@ contains
       end do
    end subroutine lower_in_place
 
+   !> (by code, not `c == ' '`: gfortran compares with a blank through len_trim, a
+   !> library call a character of the deck)
    pure logical function is_blank(c)
       character(len=1), intent(in) :: c
-      is_blank = c == ' ' .or. c == achar(9) .or. c == achar(13)
+      integer :: b
+      b = iachar(c)
+      is_blank = b == 32 .or. b == 9 .or. b == 13
    end function is_blank
+
+   !> Decimal digits of i (a line or ordinal; as str(i) writes them, -1 too) in buf(1:n).
+   pure subroutine digits(i, buf, n)
+      integer, intent(in) :: i
+      character(len=12), intent(out) :: buf
+      integer, intent(out) :: n
+      integer :: v, m
+      v = abs(i)
+      m = 12
+      do
+         buf(m:m) = achar(iachar('0') + mod(v, 10))
+         v = v/10
+         if (v == 0) exit
+         m = m - 1
+      end do
+      if (i < 0) then
+         m = m - 1
+         buf(m:m) = '-'
+      end if
+      n = 13 - m
+      buf(1:n) = buf(m:12)
+   end subroutine digits
+
+   !> The group name `t` is 'end' in any case (without a lowered copy: D-90).
+   pure logical function is_end(t)
+      character(len=*), intent(in) :: t
+      integer :: b
+      is_end = .false.
+      if (len(t) /= 3) return
+      b = ior(iachar(t(1:1)), 32)
+      if (b /= iachar('e')) return
+      b = ior(iachar(t(2:2)), 32)
+      if (b /= iachar('n')) return
+      is_end = ior(iachar(t(3:3)), 32) == iachar('d')
+   end function is_end
 
    pure logical function ends_word(c)
       character(len=1), intent(in) :: c

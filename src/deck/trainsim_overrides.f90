@@ -168,7 +168,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       call resolve_target(deck, ov, ig, err)
       if (allocated(err)) return
-      if (ov%derived .and. deck%groups(ig)%name /= 'element') then
+      if (ov%derived .and. .not. deck%groups(ig)%named('element')) then
          call fatal_error(err, ov%origin//": error: '"//ov%key//"' is a parameter of a gear "// &
                           "element, and '"//ov%target//"' is a &"//deck%groups(ig)%name//' group', err_input)
       end if
@@ -211,7 +211,7 @@ contains
          n_match = 0
          do i = 1, size(deck%groups)
             associate (g => deck%groups(i))
-               if (g%name /= 'node' .and. g%name /= 'element') cycle
+               if (.not. g%named('node') .and. .not. g%named('element')) cycle
                gid = group_id(g)
                if (gid == tgt) then
                   n_match = n_match + 1
@@ -227,8 +227,8 @@ contains
                              join(ids, ', ')//"; or use 'run' or GROUP#K (e.g. load#1)", err_input)
          else
             call fatal_error(err, ov%origin//": error: '"//tgt//"' is the id of a "// &
-                             trim(kinds(merge(1, 2, deck%groups(ord(1))%name == 'node')))//' and of an '// &
-                             trim(kinds(merge(1, 2, deck%groups(ord(2))%name == 'node')))// &
+                             trim(kinds(merge(1, 2, deck%groups(ord(1))%named('node'))))//' and of an '// &
+                             trim(kinds(merge(1, 2, deck%groups(ord(2))%named('node'))))// &
                              '; name the group as node#K or element#K', err_input)
          end if
          ig = 0
@@ -302,8 +302,8 @@ contains
       integer :: i
       allocate (is_sweep(size(deck%groups)), other(size(deck%groups)))
       do i = 1, size(deck%groups)
-         is_sweep(i) = deck%groups(i)%name == 'sweep'
-         other(i) = deck%groups(i)%name == 'runup'   ! (trainsim runup's, D-109: read there, dropped here)
+         is_sweep(i) = deck%groups(i)%named('sweep')
+         other(i) = deck%groups(i)%named('runup')   ! (trainsim runup's, D-109: read there, dropped here)
       end do
       if (.not. any(is_sweep .or. other)) then   ! no copy of the deck's groups (D-74)
          allocate (sweeps(0))

@@ -68,7 +68,7 @@ contains
       text = ''
       allocate (role(0), owner(0))
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'planetary') cycle
+         if (.not. deck%groups(i)%named('planetary')) cycle
          call read_stage(deck%groups(i), units, st, err); if (allocated(err)) return
          call deck%groups(i)%check_unused(err, 'the &planetary group'); if (allocated(err)) return
          call stage_text(st, text, role, owner, i)
@@ -113,7 +113,7 @@ contains
       allocate (model%share_set(size(model%elements)), source=0)
       s = 0
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= 'planetary') cycle
+         if (.not. deck%groups(i)%named('planetary')) cycle
          associate (g => deck%groups(i))
             call g%get_string('id', id, err, default='planetary'//str(g%ordinal)); if (allocated(err)) return
             call g%get_string('mesh', mesh, err, default='spur'); if (allocated(err)) return

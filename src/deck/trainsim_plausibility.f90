@@ -466,7 +466,7 @@ contains
          call node_ids%insert(model%nodes(k)%n%id, k, jp)
       end do
       do ig = 1, size(deck%groups)   ! voltages (and any other &load) name their node
-         if (deck%groups(ig)%name /= 'load') cycle
+         if (.not. deck%groups(ig)%named('load')) cycle
          call deck%groups(ig)%get_string('node', nid, e)
          if (allocated(e)) return
          k = node_ids%get(nid)
@@ -532,7 +532,7 @@ contains
       idx = 1
       k = 0
       do i = 1, size(deck%groups)
-         if (deck%groups(i)%name /= name) cycle
+         if (.not. deck%groups(i)%named(name)) cycle
          k = k + 1
          if (k <= n) idx(k) = i
       end do

@@ -6,7 +6,7 @@ module trainsim_report
    use trainsim_modes, only: modes_t
    use trainsim_sink, only: param_list_t
    use trainsim_element, only: element_t
-   use trainsim_strings, only: str
+   use trainsim_strings, only: str, string_t
    use trainsim_text_out, only: text_out_t
    implicit none
    private
@@ -121,6 +121,7 @@ contains
       character(len=:), allocatable :: we, wt
       logical :: motors
       type(text_out_t) :: out
+      type(string_t), allocatable :: du(:)   ! each element's displacement unit, asked once
       w = id_width(model, nodes=.false.)
       we = str(w)
       ns = 12   ! the type column
@@ -155,8 +156,10 @@ contains
       write (unit, '(a'//we//',1x,a'//wt//',4a15,a7,a9,a13,a15,a8)') 'element', 'type', 'torque min', 'torque max', &
          'disp min', 'disp max', 'unit', 'impacts', 'max V_i', 'max peak F', 'open %'
       out%unit = unit
+      allocate (du(size(model%elements)))
       do i = 1, size(model%elements)   ! '(aWE,1x,aWT,4es15.6,a7,i9,es13.4,es15.6,f8.2)'
          associate (e => model%elements(i)%e, m => res%el(i))
+            du(i)%s = disp_unit(model, e)
             call out%a(e%id, w)
             call out%x(1)
             call out%a(e%type_name, ns)
@@ -164,7 +167,7 @@ contains
             call out%es(m%torque_max, 15, 6)
             call out%es(m%disp_min, 15, 6)
             call out%es(m%disp_max, 15, 6)
-            call out%a(disp_unit(model, e), 7)
+            call out%a(du(i)%s, 7)
             call out%i(m%impacts, 9)
             call out%es(m%max_approach_velocity, 13, 4)
             call out%es(m%max_peak_force, 15, 6)
@@ -179,7 +182,9 @@ contains
             call out%a(e%id, w)
             call out%es(m%p2p_range, 15, 6)
             call out%es(m%p2p_mean, 15, 6)
-            call out%a(' '//disp_unit(model, e)//'  (', 0)
+            call out%x(1)   ! (piece by piece: no concatenated temporary a line)
+            call out%a(du(i)%s, 0)
+            call out%a('  (', 0)
             call out%i(m%p2p_swings, 0)
             call out%a(' swings)', 0)
             call out%end_line()
@@ -207,7 +212,8 @@ contains
             call out%es(res%el(i)%static_force, 15, 6)
             call out%es(res%el(i)%static_te_mean, 15, 6)
             call out%es(res%el(i)%static_te_p2p, 15, 6)
-            call out%a(' '//disp_unit(model, model%elements(i)%e), 0)
+            call out%x(1)
+            call out%a(du(i)%s, 0)
             call out%end_line()
          end do
       end if

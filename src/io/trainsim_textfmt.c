@@ -35,3 +35,24 @@ double trainsim_strtod(const char *s, int n, int *ok)
     *ok = 1;
     return strtod(buf, NULL);
 }
+
+/* Number of leading bytes of the n bytes at s that are ASCII and not NUL (1..127):
+ * the deck's UTF-8 check (invalid_text_byte) starts its byte-by-byte walk there. Eight
+ * bytes a step: a word has a byte >= 128 if (w & 0x80..80) is not 0, and a zero byte if
+ * ((w - 0x01..01) & ~w & 0x80..80) is not 0. */
+#include <stdint.h>
+
+size_t trainsim_ascii_prefix(const char *s, size_t n)
+{
+    const uint64_t ones = 0x0101010101010101u, highs = 0x8080808080808080u;
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+        uint64_t w;
+        memcpy(&w, s + i, 8);
+        if ((w & highs) != 0 || ((w - ones) & ~w & highs) != 0)
+            break;
+    }
+    while (i < n && (unsigned char)s[i] >= 1 && (unsigned char)s[i] < 128)
+        i++;
+    return i;
+}
