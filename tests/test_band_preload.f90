@@ -1,0 +1,177 @@
+!> The static preload's banded solve (D-141 (static6)) against the dense LU it replaced:
+!> a reverse Cuthill-McKee-numbered band solve of a branched train's stiffness against
+!> LAPACK's dgesv, and the whole preload (Newton, contact faces, mesh zones) of a
+!> random-ish branched train with gears and clearances, held and free, banded against
+!> dense. Both solve the same equations by LU with partial pivoting; they differ by the
+!> order of the eliminations only, so by round-off: a few eps times the condition number
+!> (< 1e4 here), below 1e-12 relative.
+program test_band_preload
+   use trainsim_kinds, only: wp
+   use trainsim_error, only: error_t
+   use trainsim_deck, only: deck_t, parse_deck
+   use trainsim_model, only: model_t
+   use trainsim_overrides, only: override_t
+   use trainsim_prepare, only: prepare_model
+   use trainsim_preload, only: preload_info_t, apply_preload
+   use trainsim_band_solve, only: band_plan_t, band_plan, band_zero, band_add, band_solve
+   use trainsim_strings, only: str
+   use trainsim_testing, only: suite_begin, suite_end, test_begin, check
+   implicit none
+
+   interface
+      subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
+         import :: wp
+         integer, intent(in) :: n, nrhs, lda, ldb
+         real(wp), intent(inout) :: a(lda, *), b(ldb, *)
+         integer, intent(out) :: ipiv(*), info
+      end subroutine dgesv
+   end interface
+
+   !> Round-off of two LU orders on a matrix of condition number < 1e4: 1e4 * 100 eps.
+   real(wp), parameter :: lu_tol = 1.0e-12_wp
+   integer :: seed = 12345
+
+   call suite_begin('banded static solve against the dense one (D-141)')
+   call test_band_solve_equals_dgesv_on_a_tree()
+   call test_preload_banded_equals_dense_held_train()
+   call test_preload_banded_equals_dense_free_train()
+   call suite_end()
+
+contains
+
+   !> A number in [0, 1) from a fixed linear congruential sequence (the same train each run).
+   real(wp) function uniform()
+      seed = modulo(seed*1103515245 + 12345, 2147483647)
+      uniform = real(seed, wp)/2147483647.0_wp
+   end function uniform
+
+   !> Parent of node k (>= 2) in a random tree: one of the last 6 nodes, so the tree has
+   !> branches of every length.
+   integer function parent_of(k)
+      integer, intent(in) :: k
+      parent_of = max(1, k - 1 - int(6.0_wp*uniform()))
+   end function parent_of
+
+   subroutine test_band_solve_equals_dgesv_on_a_tree()
+      integer, parameter :: n = 80
+      type(band_plan_t) :: plan
+      integer :: ea(n - 1), eb(n - 1), k, info, ipiv(n)
+      real(wp) :: a(n, n), b(n, 1), x(n, 1), kk
+      call test_begin('band_solve_equals_dgesv_on_a_tree')
+      a = 0.0_wp
+      do k = 2, n   ! stiffness of a tree of springs, node 1 tied to ground
+         ea(k - 1) = parent_of(k); eb(k - 1) = k
+         kk = 10.0_wp**(2.0_wp + 2.0_wp*uniform())
+         a(k, k) = a(k, k) + kk; a(ea(k - 1), ea(k - 1)) = a(ea(k - 1), ea(k - 1)) + kk
+         a(k, ea(k - 1)) = a(k, ea(k - 1)) - kk; a(ea(k - 1), k) = a(ea(k - 1), k) - kk
+      end do
+      a(1, 1) = a(1, 1) + 1.0e3_wp
+      call band_plan(n, ea, eb, plan)
+      call check('the tree is banded (bandwidth '//str(plan%kl)//' < n / 4)', plan%kl < n/4)
+      call band_zero(plan)
+      do k = 1, n
+         call band_diag_and_edges(k)
+         b(k, 1) = uniform() - 0.5_wp
+      end do
+      x = b
+      call band_solve(plan, x, info)
+      call check('band_solve info 0', info == 0)
+      call dgesv(n, 1, a, n, ipiv, b, n, info)
+      call check('dgesv info 0', info == 0)
+      call check('banded = dense solution (max |dx| / max |x|)', maxval(abs(x - b))/maxval(abs(b)), 0.0_wp, &
+                 abs_tol=lu_tol)
+   contains
+      subroutine band_diag_and_edges(i)
+         integer, intent(in) :: i
+         call band_add(plan, i, i, a(i, i))
+         if (i > 1) then
+            call band_add(plan, eb(i - 1), ea(i - 1), a(eb(i - 1), ea(i - 1)))
+            call band_add(plan, ea(i - 1), eb(i - 1), a(ea(i - 1), eb(i - 1)))
+         end if
+      end subroutine band_diag_and_edges
+   end subroutine test_band_solve_equals_dgesv_on_a_tree
+
+   !> A random-ish branched train of n nodes: shafts, and every 5th element a spur gear with
+   !> backlash and a random ratio; torque loads on a few nodes; `held`: node 1 at a speed.
+   function branched_deck(n, held) result(text)
+      integer, intent(in) :: n
+      logical, intent(in) :: held
+      character(len=:), allocatable :: text
+      character(len=*), parameter :: nl = achar(10)
+      integer :: k
+      character(len=32) :: a, b
+      text = "&run t_end = 1e-3, dt = 1e-5, integrator = 'rk4' /"//nl
+      do k = 1, n
+         write (a, '(es12.5)') 0.5_wp + uniform()
+         text = text//"&node id = 'n"//str(k)//"', type = 'inertia', inertia = "//trim(a)//" /"//nl
+      end do
+      do k = 2, n
+         write (a, '(es12.5)') 10.0_wp**(3.0_wp + 2.0_wp*uniform())
+         if (modulo(k, 5) == 0) then
+            write (b, '(es12.5)') 0.5_wp + uniform()
+            text = text//"&element id = 'e"//str(k)//"', type = 'spur_gear', left = 'n"//str(parent_of(k))// &
+                   "', right = 'n"//str(k)//"', stiffness = "//trim(a)//", rb_driver = 1.0, rb_driven = "// &
+                   trim(b)//", teeth = 30, contact_ratio = 1.6, approach_angle = 0.1, half_backlash = 1e-3 /"//nl
+         else
+            text = text//"&element id = 'e"//str(k)//"', type = 'shaft', left = 'n"//str(parent_of(k))// &
+                   "', right = 'n"//str(k)//"', stiffness = "//trim(a)//" /"//nl
+         end if
+      end do
+      do k = 3, n, 7
+         write (a, '(f8.3)') 200.0_wp*(uniform() - 0.3_wp)
+         text = text//"&load node = 'n"//str(k)//"', value = "//trim(a)//" /"//nl
+      end do
+      if (held) text = text//"&load node = 'n1', kind = 'constant', quantity = 'speed', value = 1.0 /"//nl
+      text = text//"&initial node = 'n1', speed = 1.0 /"//nl
+   end function branched_deck
+
+   !> The preload of `text` banded and dense: the wind-ups (and a free train's
+   !> acceleration) agree to lu_tol of the largest.
+   subroutine compare_preloads(text, what)
+      character(len=*), intent(in) :: text, what
+      type(model_t) :: mb, md
+      type(preload_info_t) :: ib, id
+      real(wp), allocatable :: wb(:), wd(:)
+      type(error_t), allocatable :: eb, ed
+      integer :: i
+      call build(text, mb); call build(text, md)
+      call apply_preload(mb, ib, eb)
+      call apply_preload(md, id, ed, dense=.true.)
+      call check(what//': both preloads solve', .not. (allocated(eb) .or. allocated(ed)))
+      if (allocated(eb) .or. allocated(ed)) return
+      wb = [(mb%nodes(i)%n%theta0 - ib%theta_deck(i), i=1, size(mb%nodes))]
+      wd = [(md%nodes(i)%n%theta0 - id%theta_deck(i), i=1, size(md%nodes))]
+      call check(what//': the train winds up (max |wind-up| > 1e-4 rad)', maxval(abs(wd)) > 1.0e-4_wp)
+      call check(what//': same mode passes', ib%passes == id%passes)
+      call check(what//': banded = dense wind-up (max diff / max wind-up)', maxval(abs(wb - wd))/maxval(abs(wd)), &
+                 0.0_wp, abs_tol=lu_tol)
+      call check(what//': banded = dense acceleration', abs(ib%acceleration - id%acceleration), 0.0_wp, &
+                 abs_tol=lu_tol*max(1.0_wp, abs(id%acceleration)))
+      call check(what//': banded residual within Newton tolerance', ib%residual <= 1.0e-11_wp*ib%torque_scale)
+   end subroutine compare_preloads
+
+   subroutine build(text, model)
+      character(len=*), intent(in) :: text
+      type(model_t), intent(out) :: model
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      type(override_t) :: ovs(0)
+      call parse_deck(text, 'branched.nml', deck, err)
+      if (.not. allocated(err)) call prepare_model(deck, ovs, model, err)
+      if (allocated(err)) then
+         write (*, '(a)') 'test setup failed: '//err%message
+         error stop 2
+      end if
+      model%run%output = ''
+   end subroutine build
+
+   subroutine test_preload_banded_equals_dense_held_train()
+      call test_begin('preload_banded_equals_dense_held_train')
+      call compare_preloads(branched_deck(120, .true.), 'held at node 1')
+   end subroutine test_preload_banded_equals_dense_held_train
+
+   subroutine test_preload_banded_equals_dense_free_train()
+      call test_begin('preload_banded_equals_dense_free_train')
+      call compare_preloads(branched_deck(120, .false.), 'free train')
+   end subroutine test_preload_banded_equals_dense_free_train
+end program test_band_preload
