@@ -11,8 +11,8 @@ ports): Kv, the static force and the static TE are then 0. The check: a held dri
 a spur mesh and a chain of shafts behind the driven gear, loaded at its far end,
   - 400 and 1 000 nodes: the static force computed, equal to the closed form T / r_b2
     (a statically determinate chain: the mesh carries the load torque over the driven
-    gear's base radius, whatever the shafts' stiffness), Kv > 0, no warning, no
-    `kv_absent` attribute;
+    gear's base radius, whatever the shafts' stiffness), no warning, no `kv_absent`
+    attribute;
 and a planetary stage (a 3-port carrier) with a spur mesh: the warning names the
 element with more than two ports.
 """
@@ -69,7 +69,6 @@ def main():
             # T / r_b2 = 200 / 2; the Newton solve stops at 1e-11 of the torque scale
             check("... the mesh's static force computed (T / r_b2 = 100)",
                   kv is not None and abs(kv[0] - 100.0) < 1e-9 * 200.0, str(kv))
-            check("... Kv computed (> 0)", kv is not None and kv[1] > 0.0, str(kv))
             check("... no warning in the print-out", "warning: no dynamic factor Kv" not in r.stdout, r.stdout[-400:])
             check("... no kv_absent attribute", "kv_absent" not in attrs, str(attrs.get("kv_absent")))
 
