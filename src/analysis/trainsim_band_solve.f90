@@ -4,6 +4,10 @@
 !> LAPACK's band storage and solved by dgbsv (LU with partial pivoting inside the band),
 !> O(n bw^2) instead of the dense O(n^3).
 !>
+!> A numbering as narrow as the reverse Cuthill-McKee one is kept (a chain in deck order):
+!> LU with partial pivoting then meets the same pivots as the dense LU, and the band's
+!> sums differ from the dense ones by exact zeros only.
+!>
 !> Use: `band_plan` once per pattern, then per matrix `band_zero`, `band_add` per
 !> entry (in the unknowns' own numbering), `band_solve` (factors, solves, keeps nothing).
 module trainsim_band_solve
@@ -41,7 +45,7 @@ contains
       type(band_plan_t), intent(out) :: plan
       integer, allocatable :: first(:), adj(:), deg(:), order(:), fill(:)
       logical, allocatable :: seen(:)
-      integer :: k, i, head, tail, start, v
+      integer :: k, i, head, tail, start, v, natural
       plan%n = n
       allocate (first(n + 1), deg(n), order(n), seen(n), plan%new(n))
       deg = 0
@@ -84,9 +88,16 @@ contains
          plan%new(order(i)) = n + 1 - i
       end do
       plan%kl = 0
+      natural = 0
       do k = 1, size(ea)
-         if (joins(k)) plan%kl = max(plan%kl, abs(plan%new(ea(k)) - plan%new(eb(k))))
+         if (.not. joins(k)) cycle
+         plan%kl = max(plan%kl, abs(plan%new(ea(k)) - plan%new(eb(k))))
+         natural = max(natural, abs(ea(k) - eb(k)))
       end do
+      if (natural <= plan%kl) then   ! the given numbering is as narrow: kept (a chain in order)
+         plan%new = [(i, i=1, n)]
+         plan%kl = natural
+      end if
       allocate (plan%ab(3*plan%kl + 1, n))
    contains
       logical function joins(k)
