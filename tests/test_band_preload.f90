@@ -1,6 +1,6 @@
 !> The static preload's banded solve (D-141 (static6)) against the dense LU it replaced:
 !> a reverse Cuthill-McKee-numbered band solve of a branched train's stiffness against
-!> LAPACK's dgesv, and the whole preload (Newton, contact faces, mesh zones) of a
+!> a dense Gaussian elimination, and the whole preload (Newton, contact faces, mesh zones) of a
 !> random-ish branched train with gears and clearances, held and free, banded against
 !> dense. Both solve the same equations by LU with partial pivoting; they differ by the
 !> order of the eliminations only, so by round-off: a few eps times the condition number
@@ -9,32 +9,22 @@
 program test_band_preload
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
-   use trainsim_deck, only: deck_t, parse_deck
    use trainsim_model, only: model_t
-   use trainsim_overrides, only: override_t
-   use trainsim_prepare, only: prepare_model
    use trainsim_preload, only: preload_info_t, apply_preload
    use trainsim_band_solve, only: band_plan_t, band_plan, band_zero, band_add, band_solve
    use trainsim_strings, only: str
    use trainsim_quasi_static, only: static_ref_t, static_reference
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
+   use trainsim_test_support, only: load_model_text
    implicit none
 
-   interface
-      subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
-         import :: wp
-         integer, intent(in) :: n, nrhs, lda, ldb
-         real(wp), intent(inout) :: a(lda, *), b(ldb, *)
-         integer, intent(out) :: ipiv(*), info
-      end subroutine dgesv
-   end interface
 
    !> Round-off of two LU orders on a matrix of condition number < 1e4: 1e4 * 100 eps.
    real(wp), parameter :: lu_tol = 1.0e-12_wp
    integer :: seed = 12345
 
    call suite_begin('banded static solve against the dense one (D-141)')
-   call test_band_solve_equals_dgesv_on_a_tree()
+   call test_band_solve_equals_dense_on_a_tree()
    call test_preload_banded_equals_dense_held_train()
    call test_preload_banded_equals_dense_free_train()
    call test_static_force_of_every_mesh_of_a_long_chain()
@@ -55,12 +45,32 @@ contains
       parent_of = min(k - 1, 1 + int(real(k - 1, wp)*uniform()))
    end function parent_of
 
-   subroutine test_band_solve_equals_dgesv_on_a_tree()
+   !> x of a x = b by Gaussian elimination with partial pivoting on the full matrix (the
+   !> dense reference, written here; a and b overwritten, x in b).
+   subroutine gauss(a, b)
+      real(wp), intent(inout) :: a(:, :), b(:)
+      integer :: k, p, i, n
+      real(wp) :: f
+      n = size(b)
+      do k = 1, n
+         p = k - 1 + maxloc(abs(a(k:n, k)), 1)
+         a([k, p], :) = a([p, k], :); b([k, p]) = b([p, k])
+         do i = k + 1, n
+            f = a(i, k)/a(k, k)
+            a(i, k:n) = a(i, k:n) - f*a(k, k:n); b(i) = b(i) - f*b(k)
+         end do
+      end do
+      do k = n, 1, -1
+         b(k) = (b(k) - dot_product(a(k, k + 1:n), b(k + 1:n)))/a(k, k)
+      end do
+   end subroutine gauss
+
+   subroutine test_band_solve_equals_dense_on_a_tree()
       integer, parameter :: n = 80
       type(band_plan_t) :: plan
-      integer :: ea(n - 1), eb(n - 1), k, info, ipiv(n)
+      integer :: ea(n - 1), eb(n - 1), k, info
       real(wp) :: a(n, n), b(n, 1), x(n, 1), kk
-      call test_begin('band_solve_equals_dgesv_on_a_tree')
+      call test_begin('band_solve_equals_dense_on_a_tree')
       a = 0.0_wp
       do k = 2, n   ! stiffness of a tree of springs, node 1 tied to ground
          ea(k - 1) = parent_of(k); eb(k - 1) = k
@@ -84,11 +94,10 @@ contains
       x = b
       call band_solve(plan, x, info)
       call check('band_solve info 0', info == 0)
-      call dgesv(n, 1, a, n, ipiv, b, n, info)
-      call check('dgesv info 0', info == 0)
+      call gauss(a, b(:, 1))
       call check('banded = dense solution (max |dx| / max |x|)', maxval(abs(x - b))/maxval(abs(b)), 0.0_wp, &
                  abs_tol=lu_tol)
-   end subroutine test_band_solve_equals_dgesv_on_a_tree
+   end subroutine test_band_solve_equals_dense_on_a_tree
 
    !> A random-ish branched train of n nodes: shafts, and every 5th element a spur gear with
    !> backlash and a random ratio; torque loads on a few nodes; `held`: node 1 at a speed.
@@ -133,7 +142,7 @@ contains
       real(wp), allocatable :: wb(:), wd(:)
       type(error_t), allocatable :: eb, ed
       integer :: i
-      call build(text, mb); call build(text, md)
+      call load_model_text(text, mb); call load_model_text(text, md)
       call apply_preload(mb, ib, eb)
       call apply_preload(md, id, ed, dense=.true.)
       call check(what//': both preloads solve', .not. (allocated(eb) .or. allocated(ed)))
@@ -148,21 +157,6 @@ contains
                  abs_tol=lu_tol*max(1.0_wp, abs(id%acceleration)))
       call check(what//': banded residual within Newton tolerance', ib%residual <= 1.0e-11_wp*ib%torque_scale)
    end subroutine compare_preloads
-
-   subroutine build(text, model)
-      character(len=*), intent(in) :: text
-      type(model_t), intent(out) :: model
-      type(deck_t) :: deck
-      type(error_t), allocatable :: err
-      type(override_t) :: ovs(0)
-      call parse_deck(text, 'branched.nml', deck, err)
-      if (.not. allocated(err)) call prepare_model(deck, ovs, model, err)
-      if (allocated(err)) then
-         write (*, '(a)') 'test setup failed: '//err%message
-         error stop 2
-      end if
-      model%run%output = ''
-   end subroutine build
 
    subroutine test_preload_banded_equals_dense_held_train()
       call test_begin('preload_banded_equals_dense_held_train')
@@ -204,7 +198,7 @@ contains
       end do
       text = text//"&load node = 'n1', kind = 'constant', quantity = 'speed', value = 1.0 /"//nl// &
              "&load node = 'n"//str(n)//"', value = -100.0 /"//nl//"&initial node = 'n1', speed = 1.0 /"//nl
-      call build(text, m)
+      call load_model_text(text, m)
       call static_reference(m, ref)
       call check('computed (no 400-node limit): '//ref%note, ref%computed)
       if (.not. ref%computed) return

@@ -1,6 +1,8 @@
 !> A banded linear solve for the sparse stiffness of a train (D-141 (static6)): the
-!> unknowns renumbered by reverse Cuthill-McKee from the graph of the elements that join
-!> them (a chain keeps bandwidth 1, a tree its widest level), the matrix assembled in
+!> unknowns renumbered by reverse Cuthill-McKee (a breadth-first sweep from a node of
+!> least degree, reversed; neighbours in element order, without the degree sort, which
+!> a train's few branches hardly need) over the graph of the elements that join them (a
+!> chain keeps bandwidth 1, a tree about its widest level), the matrix assembled in
 !> LAPACK's band storage and solved by dgbsv (LU with partial pivoting inside the band),
 !> O(n bw^2) instead of the dense O(n^3).
 !>
@@ -38,8 +40,8 @@ contains
 
    !> The reverse Cuthill-McKee numbering of unknowns 1..n joined by the edges
    !> (ea(k), eb(k)) (an edge with an end 0 or both ends equal joins nothing), its
-   !> bandwidth, and the band storage allocated. O(n + edges) (neighbour lists sorted
-   !> by degree by insertion, short for a train).
+   !> bandwidth, and the band storage allocated. O(n + edges), and O(n) more for each part
+   !> of the graph not joined to the others.
    subroutine band_plan(n, ea, eb, plan)
       integer, intent(in) :: n, ea(:), eb(:)
       type(band_plan_t), intent(out) :: plan
@@ -80,7 +82,11 @@ contains
          head = tail
          do while (head <= tail)
             v = order(head)
-            call add_neighbours(v)
+            do k = first(v), first(v + 1) - 1
+               if (seen(adj(k))) cycle
+               seen(adj(k)) = .true.
+               tail = tail + 1; order(tail) = adj(k)
+            end do
             head = head + 1
          end do
       end do
@@ -105,35 +111,6 @@ contains
          joins = ea(k) > 0 .and. eb(k) > 0 .and. ea(k) /= eb(k)
       end function joins
 
-      !> Append v's unseen neighbours to the queue, by increasing degree.
-      subroutine add_neighbours(v)
-         integer, intent(in) :: v
-         integer :: m, j, w
-         m = tail
-         do j = first(v), first(v + 1) - 1
-            w = adj(j)
-            if (seen(w)) cycle
-            seen(w) = .true.
-            tail = tail + 1
-            order(tail) = w
-         end do
-         call sort_by_degree(order(m + 1:tail))
-      end subroutine add_neighbours
-
-      subroutine sort_by_degree(a)
-         integer, intent(inout) :: a(:)
-         integer :: p, q, x
-         do p = 2, size(a)
-            x = a(p)
-            q = p - 1
-            do while (q >= 1)
-               if (deg(a(q)) <= deg(x)) exit
-               a(q + 1) = a(q)
-               q = q - 1
-            end do
-            a(q + 1) = x
-         end do
-      end subroutine sort_by_degree
    end subroutine band_plan
 
    !> Clear the plan's matrix.

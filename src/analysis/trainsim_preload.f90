@@ -359,8 +359,8 @@ contains
       logical, intent(in), optional :: rounding_floor, dense
       real(wp) :: r_floor, jmax
       real(wp), allocatable :: res(:), step(:)
-      real(wp) :: scale, rmax
-      integer :: it, i, info_la, n
+      real(wp) :: scale, rmax, rprev, r_stall
+      integer :: it, i, info_la, n, stalls
       logical :: use_dense
       use_dense = .false.
       if (present(dense)) use_dense = dense
@@ -373,18 +373,31 @@ contains
       if (n == 0) return
       allocate (step(n))
       r_floor = 0.0_wp
+      rprev = huge(1.0_wp); stalls = 0; jmax = 0.0_wp
       do it = 0, max_newton
          call node_residuals(model, y, plan%kappa, info%acceleration, res, scale)
          rmax = maxval(abs(res))
          if (rmax <= max(tol_residual*max(scale, tiny(1.0_wp)), r_floor)) return
          if (it == max_newton) exit
+         ! stalled: twice no smaller, and at the angles' rounding (a train that carries no
+         ! torque: its torques at the solution are round-off, never 1e-11 of themselves)
+         r_stall = 16.0_wp*epsilon(1.0_wp)*maxval(abs(model%theta))*jmax
+         stalls = merge(stalls + 1, 0, rmax >= rprev .and. rmax <= r_stall)
+         rprev = rmax
+         if (stalls == 2) then
+            call fatal_error(err, 'static preload: Newton stalled after '//str(it)//' iterations (residual '// &
+                             str(rmax)//' against a torque scale '//str(scale)//', within the rounding of the '// &
+                             'angles, 16 eps max|theta| max|J| = '//str(r_stall)//')', err_numeric)
+            return
+         end if
          info%iterations = info%iterations + 1
          call model%kinematics(model%run%t_start, y)
          if (use_dense) then
-            call dense_step(model, plan, res, step, jmax, rounding_floor, r_floor, info_la)
+            call dense_step(model, plan, res, step, jmax, info_la)
          else
-            call band_step(model, plan, res, step, jmax, rounding_floor, r_floor, info_la)
+            call band_step(model, plan, res, step, jmax, info_la)
          end if
+         call set_floor(model, jmax, rounding_floor, r_floor)
          if (info_la /= 0) then
             call fatal_error(err, 'static preload: the stiffness matrix is singular (a part of the train is held '// &
                              'by nothing: no element, load or fixed node ties it; LAPACK info = '// &
@@ -446,13 +459,11 @@ contains
    end subroutine set_floor
 
    !> Newton's step from the dense Jacobian (LAPACK dgesv, O(n^3)): the reference solve.
-   subroutine dense_step(model, plan, res, step, jmax, rounding_floor, r_floor, info_la)
+   subroutine dense_step(model, plan, res, step, jmax, info_la)
       type(model_t), intent(inout) :: model
       type(preload_plan_t), intent(inout) :: plan
       real(wp), intent(in) :: res(:)
-      real(wp), intent(out) :: step(:), jmax
-      logical, intent(in), optional :: rounding_floor
-      real(wp), intent(inout) :: r_floor
+      real(wp), intent(out) :: step(:), jmax   !< Newton's step; the largest |entry| of the Jacobian
       integer, intent(out) :: info_la
       real(wp), allocatable :: jac(:, :), rhs(:, :), d(:)
       integer, allocatable :: ipiv(:)
@@ -467,7 +478,6 @@ contains
          end do
       end if
       jmax = maxval(abs(jac))
-      call set_floor(model, jmax, rounding_floor, r_floor)
       rhs(:, 1) = -res
       call dgesv(n, 1, jac, n, ipiv, rhs, n, info_la)
       step = rhs(:, 1)
@@ -476,13 +486,11 @@ contains
    !> Newton's step from the banded Jacobian (D-141 (static6)): the angles' block B by
    !> band_solve; a free train's a by bordering, with its reference row d and the column c
    !> of a: B y = r1, B z = c, a = (r2 - d.y) / (e - d.z), angles y - a z.
-   subroutine band_step(model, plan, res, step, jmax, rounding_floor, r_floor, info_la)
+   subroutine band_step(model, plan, res, step, jmax, info_la)
       type(model_t), intent(inout) :: model
       type(preload_plan_t), intent(inout) :: plan
       real(wp), intent(in) :: res(:)
-      real(wp), intent(out) :: step(:), jmax
-      logical, intent(in), optional :: rounding_floor
-      real(wp), intent(inout) :: r_floor
+      real(wp), intent(out) :: step(:), jmax   !< Newton's step; the largest |entry| of the Jacobian
       integer, intent(out) :: info_la
       real(wp), allocatable :: jac(:, :), b(:, :), d(:)
       real(wp) :: e, r2, den
@@ -503,7 +511,6 @@ contains
       end do
       jmax = max(maxval([0.0_wp, abs(plan%band%ab)]), maxval([0.0_wp, abs(d), abs(e)]))
       if (plan%free_train) jmax = max(jmax, maxval([0.0_wp, abs(b(:, 2))]))
-      call set_floor(model, jmax, rounding_floor, r_floor)
       call band_solve(plan%band, b, info_la)
       if (info_la /= 0) return
       if (.not. plan%free_train) then
