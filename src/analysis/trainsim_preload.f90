@@ -393,7 +393,7 @@ contains
          info%iterations = info%iterations + 1
          call model%kinematics(model%run%t_start, y)
          if (use_dense) then
-            call dense_step(model, plan, res, step, jmax, info_la)
+            info_la = dense_step(model, plan, res, step, jmax)
          else
             call band_step(model, plan, res, step, jmax, info_la)
          end if
@@ -459,12 +459,12 @@ contains
    end subroutine set_floor
 
    !> Newton's step from the dense Jacobian (LAPACK dgesv, O(n^3)): the reference solve.
-   subroutine dense_step(model, plan, res, step, jmax, info_la)
+   !> LAPACK's info returned.
+   integer function dense_step(model, plan, res, step, jmax) result(info_la)
       type(model_t), intent(inout) :: model
       type(preload_plan_t), intent(inout) :: plan
       real(wp), intent(in) :: res(:)
       real(wp), intent(out) :: step(:), jmax   !< Newton's step; the largest |entry| of the Jacobian
-      integer, intent(out) :: info_la
       real(wp), allocatable :: jac(:, :), rhs(:, :), d(:)
       integer, allocatable :: ipiv(:)
       integer :: i, n
@@ -481,7 +481,7 @@ contains
       rhs(:, 1) = -res
       call dgesv(n, 1, jac, n, ipiv, rhs, n, info_la)
       step = rhs(:, 1)
-   end subroutine dense_step
+   end function dense_step
 
    !> Newton's step from the banded Jacobian (D-141 (static6)): the angles' block B by
    !> band_solve; a free train's a by bordering, with its reference row d and the column c
