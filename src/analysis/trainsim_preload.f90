@@ -383,6 +383,7 @@ contains
          ! torque: its torques at the solution are round-off, never 1e-11 of themselves)
          r_stall = 16.0_wp*epsilon(1.0_wp)*maxval(abs(model%theta))*jmax
          stalls = merge(stalls + 1, 0, rmax >= rprev .and. rmax <= r_stall)
+         if (it >= 1 .and. scale <= r_stall) stalls = 2   ! every torque round-off after a step: nothing to converge to
          rprev = rmax
          if (stalls == 2) then
             call fatal_error(err, 'static preload: Newton stalled after '//str(it)//' iterations (residual '// &
