@@ -69,15 +69,7 @@ contains
       seen = .false.
       tail = 0
       do while (tail < n)   ! one breadth-first sweep per part, from a node of least degree
-         start = 0
-         do i = 1, n
-            if (seen(i)) cycle
-            if (start == 0) then
-               start = i
-            else if (deg(i) < deg(start)) then
-               start = i
-            end if
-         end do
+         start = minloc(deg, 1, mask=.not. seen)
          tail = tail + 1; order(tail) = start; seen(start) = .true.
          head = tail
          do while (head <= tail)
