@@ -1,4 +1,4 @@
-!> The static preload's banded solve (D-141 (static6)) against the dense LU it replaced:
+!> The static preload's banded solve (D-152) against the dense LU it replaced:
 !> a reverse Cuthill-McKee-numbered band solve of a branched train's stiffness against
 !> a dense Gaussian elimination, and the whole preload (Newton, contact faces, mesh zones) of a
 !> random-ish branched train with gears and clearances, held and free, banded against
@@ -23,7 +23,7 @@ program test_band_preload
    real(wp), parameter :: lu_tol = 1.0e-12_wp
    integer :: seed = 12345
 
-   call suite_begin('banded static solve against the dense one (D-141)')
+   call suite_begin('banded static solve against the dense one (D-152)')
    call test_band_solve_equals_dense_on_a_tree()
    call test_preload_banded_equals_dense_held_train()
    call test_preload_banded_equals_dense_free_train()
@@ -170,10 +170,10 @@ contains
 
    !> A 1 000-node chain held at one end and loaded at the other, every 100th element a spur
    !> gear of equal wheels with backlash (9 meshes, whose positions share two sets of static
-   !> solves: D-141): each mesh carries the load torque over the base radius, T / r_b = 100,
+   !> solves: D-152): each mesh carries the load torque over the base radius, T / r_b = 100,
    !> whatever the shafts' stiffness (a statically determinate chain); the Newton solve stops
    !> at 1e-11 of the torque scale. (Each mesh's wind-up moves the next one's zone, so the
-   !> preload needs about one mode pass per mesh in series: at most 20, D-141.)
+   !> preload needs about one mode pass per mesh in series: at most 20, D-152.)
    subroutine test_static_force_of_every_mesh_of_a_long_chain()
       integer, parameter :: n = 1000
       character(len=*), parameter :: nl = achar(10)

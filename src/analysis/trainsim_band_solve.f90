@@ -1,4 +1,4 @@
-!> A banded linear solve for the sparse stiffness of a train (D-141 (static6)): the
+!> A banded linear solve for the sparse stiffness of a train (D-152): the
 !> unknowns renumbered by reverse Cuthill-McKee (a breadth-first sweep from a node of
 !> least degree, reversed; neighbours in element order, without the degree sort, which
 !> a train's few branches hardly need) over the graph of the elements that join them (a

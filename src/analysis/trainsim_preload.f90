@@ -91,7 +91,7 @@ contains
    end subroutine apply_preload
 
    !> What the preload of `model` needs that its angles do not change: the reference,
-   !> the kinematic ratios, the unknowns and the banded solve's numbering (D-141 (static6)).
+   !> the kinematic ratios, the unknowns and the banded solve's numbering (D-152).
    subroutine preload_prepare(model, plan, err)
       type(model_t), intent(inout) :: model
       type(preload_plan_t), intent(out) :: plan
@@ -484,7 +484,7 @@ contains
       step = rhs(:, 1)
    end function dense_step
 
-   !> Newton's step from the banded Jacobian (D-141 (static6)): the angles' block B by
+   !> Newton's step from the banded Jacobian (D-152): the angles' block B by
    !> band_solve; a free train's a by bordering, with its reference row d and the column c
    !> of a: B y = r1, B z = c, a = (r2 - d.y) / (e - d.z), angles y - a z.
    subroutine band_step(model, plan, res, step, jmax, info_la)

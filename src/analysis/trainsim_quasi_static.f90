@@ -19,7 +19,7 @@
 !> model's initial angles are restored afterwards (the run's `init_modes` then sets
 !> every mode afresh), so the run itself is unchanged.
 !>
-!> The solves are linear in the train's size (D-141 (static6)): the preload's plan (its
+!> The solves are linear in the train's size (D-152): the preload's plan (its
 !> unknowns and banded numbering) is made once, its Newton steps are banded solves, and
 !> meshes whose positions turn the train alike share the solves (a chain of equal gears:
 !> two sets of positions, one per sense of rotation, for any number of meshes).
@@ -96,7 +96,7 @@ contains
 
    !> The static reference of every gear mesh of `model` (see the module note). Meshes whose
    !> positions turn the train alike (the same driver angle per cycle, seen from the first
-   !> mesh's driver, and as many positions) share their static solves (D-141 (static6)).
+   !> mesh's driver, and as many positions) share their static solves (D-152).
    subroutine static_reference(model, ref)
       type(model_t), intent(inout) :: model
       type(static_ref_t), intent(out) :: ref

@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """A gear mesh whose static reference is not computed says so (D-138); a large train
-gets it (D-141 (static6)).
+gets it (D-152).
 
     /usr/bin/python3 tests/cli/check_static_skip.py <trainsim>
 
 The quasi-static reference (D-103, D-118) was skipped above 400 nodes while its Newton
-solve was dense; its solve is banded now (D-141) and has no size limit. It is still
+solve was dense; its solve is banded now (D-152) and has no size limit. It is still
 skipped when the static preload refuses the train (an element with more than two
 ports): Kv, the static force and the static TE are then 0. The check: a held driver,
 a spur mesh and a chain of shafts behind the driven gear, loaded at its far end,
