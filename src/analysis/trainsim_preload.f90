@@ -26,10 +26,11 @@ module trainsim_preload
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
    use trainsim_strings, only: str
    use trainsim_model, only: model_t, rigid_speeds
+   use trainsim_band_solve, only: band_plan_t, band_plan, band_zero, band_add, band_solve
    implicit none
    private
 
-   public :: preload_info_t, apply_preload, preload_residual
+   public :: preload_info_t, apply_preload, preload_residual, preload_plan_t, preload_prepare, preload_solve
 
    !> How the preload was found.
    type :: preload_info_t
@@ -44,6 +45,18 @@ module trainsim_preload
       real(wp), allocatable :: theta_deck(:)   !< per node: the initial angle before the preload
       real(wp) :: deck_residual = 0.0_wp  !< max |R_i| at the deck's angles (modes from those angles)
    end type preload_info_t
+
+   !> What a preload needs that the initial angles do not change (preload_prepare).
+   type :: preload_plan_t
+      integer :: reference = 0
+      logical :: free_train = .false.
+      real(wp) :: acceleration = 0.0_wp
+      real(wp), allocatable :: kappa(:)   !< kinematic ratios from the reference
+      integer, allocatable :: dof(:)      !< per node: its unknown (0: none)
+      integer, allocatable :: row(:)      !< per node: its residual row (0: none)
+      integer :: n = 0                    !< unknowns (a free train's a the last)
+      type(band_plan_t) :: band           !< the angles' banded solve (a free train: its reference held)
+   end type preload_plan_t
 
    integer, parameter :: max_newton = 50, max_passes = 20
    !> Newton stops when max |R| <= tol_residual * torque scale (round-off of the
@@ -63,18 +76,29 @@ contains
 
    !> Replace the initial angles of the free nodes of `model` by the static preload
    !> (held and fixed nodes, the reference of a free train, all speeds kept).
-   subroutine apply_preload(model, info, err, rounding_floor)
+   subroutine apply_preload(model, info, err, rounding_floor, dense)
       type(model_t), intent(inout) :: model
       type(preload_info_t), intent(out) :: info
       type(error_t), allocatable, intent(out) :: err
       !> accept a residual at the angles' rounding, 16 eps max|theta| max|J| (angles of many
       !> turns: the quasi-static reference over a hunting period, D-118); default off
       logical, intent(in), optional :: rounding_floor
-      real(wp), allocatable :: kappa(:), y(:)
-      integer, allocatable :: dof(:)
-      integer :: n, i, pass, ne
-      logical :: changed
+      !> solve Newton's steps with the dense LU (dgesv) instead of the banded one (tests)
+      logical, intent(in), optional :: dense
+      type(preload_plan_t) :: plan
+      call preload_prepare(model, plan, err); if (allocated(err)) return
+      call preload_solve(model, plan, info, err, rounding_floor, dense)
+   end subroutine apply_preload
 
+   !> What the preload of `model` needs that its angles do not change: the reference,
+   !> the kinematic ratios, the unknowns and the banded solve's numbering (D-152).
+   subroutine preload_prepare(model, plan, err)
+      type(model_t), intent(inout) :: model
+      type(preload_plan_t), intent(out) :: plan
+      type(error_t), allocatable, intent(out) :: err
+      type(preload_info_t) :: info
+      integer, allocatable :: ea(:), eb(:)
+      integer :: n, k, i, ne
       ne = size(model%elements)
       do i = 1, ne
          if (model%elements(i)%e%n_ports() == 2) cycle
@@ -89,27 +113,54 @@ contains
                           'a fixed angle to refer the wind-up to', err_input)
          return
       end if
-      call kinematic_ratios(model, info%reference, kappa, err); if (allocated(err)) return
-      info%theta_deck = [(model%nodes(i)%n%theta0, i=1, size(model%nodes))]
-      call preload_residual(model, info%deck_residual, info%torque_scale, info%acceleration, kappa, info%reference)
-      ! unknowns: the angles of the free nodes (not the reference of a free train), then a
-      allocate (dof(size(model%nodes)))
-      dof = 0
-      n = 0
+      plan%reference = info%reference; plan%free_train = info%free_train; plan%acceleration = info%acceleration
+      call kinematic_ratios(model, info%reference, plan%kappa, err); if (allocated(err)) return
+      ! unknowns: the angles of the free nodes (not the reference of a free train), then a;
+      ! residual rows: every free node (the reference of a free train too)
+      allocate (plan%dof(size(model%nodes)), plan%row(size(model%nodes)))
+      plan%dof = 0; plan%row = 0
+      n = 0; k = 0
       do i = 1, size(model%nodes)
          if (.not. is_free(model, i)) cycle
+         k = k + 1
+         plan%row(i) = k
          if (info%free_train .and. i == info%reference) cycle
          n = n + 1
-         dof(i) = n
+         plan%dof(i) = n
       end do
-      if (info%free_train) n = n + 1
+      plan%n = n
+      if (info%free_train) plan%n = n + 1
+      allocate (ea(ne), eb(ne))
+      do i = 1, ne
+         ea(i) = plan%dof(model%elements(i)%e%left); eb(i) = plan%dof(model%elements(i)%e%right)
+      end do
+      call band_plan(n, ea, eb, plan%band)
+   end subroutine preload_prepare
+
+   !> The preload of `model` from its present initial angles, with a plan of preload_prepare.
+   !> tables = .false.: the model's fast-path tables are not rebuilt when the modes are set
+   !> from the angles (init_modes; they hold the held nodes' angles: the caller rebuilds
+   !> them when it turns a held node; the quasi-static reference's many solves).
+   subroutine preload_solve(model, plan, info, err, rounding_floor, dense, tables)
+      type(model_t), intent(inout) :: model
+      type(preload_plan_t), intent(inout) :: plan
+      type(preload_info_t), intent(out) :: info
+      type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: rounding_floor, dense, tables
+      real(wp), allocatable :: y(:)
+      integer :: i, pass
+      logical :: changed
+      info%reference = plan%reference; info%free_train = plan%free_train; info%acceleration = plan%acceleration
+      info%theta_deck = [(model%nodes(i)%n%theta0, i=1, size(model%nodes))]
+      call preload_residual(model, info%deck_residual, info%torque_scale, info%acceleration, plan%kappa, &
+                            info%reference, tables)
       call model%initial_state(y)
-      allocate (info%face(ne))
+      allocate (info%face(size(model%elements)))
       info%face = 1
       do pass = 1, max_passes
          info%passes = pass
          call set_modes(model, y, info%face)
-         call newton(model, y, dof, n, kappa, info, err, rounding_floor); if (allocated(err)) return
+         call newton(model, y, plan, info, err, rounding_floor, dense); if (allocated(err)) return
          call check_modes(model, y, info%face, changed)
          if (.not. changed) exit
          if (pass == max_passes) then
@@ -119,27 +170,29 @@ contains
          end if
       end do
       do i = 1, size(model%nodes)
-         if (dof(i) > 0) model%nodes(i)%n%theta0 = y(model%nodes(i)%n%offset + 1)
+         if (plan%dof(i) > 0) model%nodes(i)%n%theta0 = y(model%nodes(i)%n%offset + 1)
       end do
-      call preload_residual(model, info%residual, info%torque_scale, info%acceleration, kappa, info%reference)
-   end subroutine apply_preload
+      call preload_residual(model, info%residual, info%torque_scale, info%acceleration, plan%kappa, info%reference, &
+                            tables)
+   end subroutine preload_solve
 
    !> Max |J_i (dw_i/dt - kappa_i a)| over the free nodes at the model's initial state
    !> (its modes as `init_modes` sets them), and the torque scale (the largest load or
    !> element torque). `kappa`/`ref` default to the train's own kinematic ratios from
    !> the reference node; `a` to the reference's own acceleration.
-   subroutine preload_residual(model, residual, scale, a, kappa, ref)
+   subroutine preload_residual(model, residual, scale, a, kappa, ref, tables)
       type(model_t), intent(inout) :: model
       real(wp), intent(out) :: residual, scale
       real(wp), intent(in), optional :: a
       real(wp), intent(in), optional :: kappa(:)
       integer, intent(in), optional :: ref
+      logical, intent(in), optional :: tables   !< rebuild the fast-path tables (default)
       real(wp), allocatable :: y(:), k(:), r(:)
       type(preload_info_t) :: info
       type(error_t), allocatable :: err
       real(wp) :: acc
       call model%initial_state(y)
-      call model%init_modes(model%run%t_start, y)
+      call model%init_modes(model%run%t_start, y, tables)
       if (present(kappa)) then
          k = kappa
          info%reference = ref
@@ -269,103 +322,208 @@ contains
       real(wp), intent(out) :: scale
       real(wp), allocatable :: dydt(:)
       real(wp) :: tl, tr
-      integer :: i, j, l, r
-      allocate (dydt(size(y)), res(0))
+      integer :: i, j, l, r, k
+      allocate (dydt(size(y)))
       dydt = 0.0_wp
       scale = 0.0_wp
       call model%apply_loads(model%run%t_start)
       scale = maxval([0.0_wp, abs(model%torque)])
+      call model%kinematics(model%run%t_start, y)   ! (once: the elements' torques change no angle)
       do j = 1, size(model%elements)
          l = model%elements(j)%e%left
          r = model%elements(j)%e%right
-         call model%kinematics(model%run%t_start, y)
          call model%elements(j)%e%torques(model%theta(l), model%omega(l), model%theta(r), model%omega(r), tl, tr)
          scale = max(scale, abs(tl), abs(tr))
       end do
       call model%rhs(model%run%t_start, y, dydt)
+      k = 0
       do i = 1, size(model%nodes)
-         if (.not. is_free(model, i)) cycle
-         res = [res, model%nodes(i)%n%inertia()*(dydt(model%nodes(i)%n%offset + 2) - kappa(i)*a)]
+         if (is_free(model, i)) k = k + 1
       end do
-   end subroutine node_residuals
-
-   !> Newton's method on R(theta, a) = 0 in the current modes.
-   subroutine newton(model, y, dof, n, kappa, info, err, rounding_floor)
-      type(model_t), intent(inout) :: model
-      real(wp), intent(inout) :: y(:)
-      integer, intent(in) :: dof(:), n
-      real(wp), intent(in) :: kappa(:)
-      type(preload_info_t), intent(inout) :: info
-      type(error_t), allocatable, intent(out) :: err
-      logical, intent(in), optional :: rounding_floor
-      real(wp) :: r_floor
-      real(wp), allocatable :: jac(:, :), rhs(:, :), res(:), ra(:)
-      integer, allocatable :: ipiv(:), row(:)
-      real(wp) :: scale, jt(2, 4), rmax
-      integer :: it, i, j, a, b, na, nb, info_la, ends(2), k
-      allocate (jac(n, n), rhs(n, 1), ipiv(n), row(size(model%nodes)))
-      ! residual rows: every free node (the reference of a free train too)
-      row = 0
+      allocate (res(k))
       k = 0
       do i = 1, size(model%nodes)
          if (.not. is_free(model, i)) cycle
          k = k + 1
-         row(i) = k
+         res(k) = model%nodes(i)%n%inertia()*(dydt(model%nodes(i)%n%offset + 2) - kappa(i)*a)
       end do
-      if (k /= n) then
-         call fatal_error(err, 'static preload: internal error: '//str(k)//' equations for '//str(n)//' unknowns', &
-                          err_numeric)
+   end subroutine node_residuals
+
+   !> Newton's method on R(theta, a) = 0 in the current modes.
+   subroutine newton(model, y, plan, info, err, rounding_floor, dense)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(inout) :: y(:)
+      type(preload_plan_t), intent(inout) :: plan
+      type(preload_info_t), intent(inout) :: info
+      type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: rounding_floor, dense
+      real(wp) :: r_floor, jmax
+      real(wp), allocatable :: res(:), step(:)
+      real(wp) :: scale, rmax, rprev, r_stall
+      integer :: it, i, info_la, n, stalls
+      logical :: use_dense
+      use_dense = .false.
+      if (present(dense)) use_dense = dense
+      n = plan%n
+      if (count(plan%row > 0) /= n) then
+         call fatal_error(err, 'static preload: internal error: '//str(count(plan%row > 0))//' equations for '// &
+                          str(n)//' unknowns', err_numeric)
          return
       end if
       if (n == 0) return
+      allocate (step(n))
       r_floor = 0.0_wp
+      rprev = huge(1.0_wp); stalls = 0; jmax = 0.0_wp
       do it = 0, max_newton
-         call node_residuals(model, y, kappa, info%acceleration, ra, scale)
-         res = ra
+         call node_residuals(model, y, plan%kappa, info%acceleration, res, scale)
          rmax = maxval(abs(res))
          if (rmax <= max(tol_residual*max(scale, tiny(1.0_wp)), r_floor)) return
          if (it == max_newton) exit
+         ! stalled: twice no smaller, and at the angles' rounding (a train that carries no
+         ! torque: its torques at the solution are round-off, never 1e-11 of themselves)
+         r_stall = 16.0_wp*epsilon(1.0_wp)*maxval(abs(model%theta))*jmax
+         stalls = merge(stalls + 1, 0, rmax >= rprev .and. rmax <= r_stall)
+         if (it >= 1 .and. scale <= r_stall) stalls = 2   ! every torque round-off after a step: nothing to converge to
+         rprev = rmax
+         if (stalls == 2) then
+            call fatal_error(err, 'static preload: Newton stalled after '//str(it)//' iterations (residual '// &
+                             str(rmax)//' against a torque scale '//str(scale)//', within the rounding of the '// &
+                             'angles, 16 eps max|theta| max|J| = '//str(r_stall)//')', err_numeric)
+            return
+         end if
          info%iterations = info%iterations + 1
-         jac = 0.0_wp
          call model%kinematics(model%run%t_start, y)
-         do j = 1, size(model%elements)
-            associate (e => model%elements(j)%e)
-               ends = [e%left, e%right]
-               call e%torque_jacobian(model%theta(e%left), model%omega(e%left), model%theta(e%right), &
-                                      model%omega(e%right), jt)
-            end associate
-            do a = 1, 2
-               na = ends(a)
-               if (row(na) == 0) cycle
-               do b = 1, 2
-                  nb = ends(b)
-                  if (dof(nb) == 0) cycle
-                  jac(row(na), dof(nb)) = jac(row(na), dof(nb)) + jt(a, 2*b - 1)
-               end do
-            end do
-         end do
-         if (info%free_train) then
-            do i = 1, size(model%nodes)
-               if (row(i) > 0) jac(row(i), n) = -model%nodes(i)%n%inertia()*kappa(i)
-            end do
+         if (use_dense) then
+            info_la = dense_step(model, plan, res, step, jmax)
+         else
+            call band_step(model, plan, res, step, jmax, info_la)
          end if
-         if (present(rounding_floor)) then
-            if (rounding_floor) r_floor = 16.0_wp*epsilon(1.0_wp)*maxval(abs(model%theta))*maxval(abs(jac))
-         end if
-         rhs(:, 1) = -res
-         call dgesv(n, 1, jac, n, ipiv, rhs, n, info_la)
+         call set_floor(model, jmax, rounding_floor, r_floor)
          if (info_la /= 0) then
             call fatal_error(err, 'static preload: the stiffness matrix is singular (a part of the train is held '// &
-                             'by nothing: no element, load or fixed node ties it; LAPACK dgesv info = '// &
+                             'by nothing: no element, load or fixed node ties it; LAPACK info = '// &
                              str(info_la)//')', err_numeric)
             return
          end if
          do i = 1, size(model%nodes)
-            if (dof(i) > 0) y(model%nodes(i)%n%offset + 1) = y(model%nodes(i)%n%offset + 1) + rhs(dof(i), 1)
+            if (plan%dof(i) > 0) y(model%nodes(i)%n%offset + 1) = y(model%nodes(i)%n%offset + 1) + step(plan%dof(i))
          end do
-         if (info%free_train) info%acceleration = info%acceleration + rhs(n, 1)
+         if (info%free_train) info%acceleration = info%acceleration + step(n)
       end do
       call fatal_error(err, 'static preload: Newton did not converge in '//str(max_newton)//' iterations '// &
                        '(residual '//str(rmax)//' against a torque scale '//str(scale)//')', err_numeric)
    end subroutine newton
+
+   !> The elements' stiffness -dR/dtheta into the dense jac (rows: residual rows) or into the
+   !> plan's band (rows: unknowns; a free train's reference row into d), in the same order
+   !> of sums, so either matrix holds the same entries.
+   subroutine assemble(model, plan, use_dense, jac, d)
+      type(model_t), intent(inout) :: model
+      type(preload_plan_t), intent(inout) :: plan
+      logical, intent(in) :: use_dense
+      real(wp), intent(inout) :: jac(:, :), d(:)
+      real(wp) :: jt(2, 4)
+      integer :: j, a, b, na, nb, ends(2)
+      do j = 1, size(model%elements)
+         associate (e => model%elements(j)%e)
+            ends = [e%left, e%right]
+            call e%torque_jacobian(model%theta(e%left), model%omega(e%left), model%theta(e%right), &
+                                   model%omega(e%right), jt)
+         end associate
+         do a = 1, 2
+            na = ends(a)
+            if (plan%row(na) == 0) cycle
+            do b = 1, 2
+               nb = ends(b)
+               if (plan%dof(nb) == 0) cycle
+               if (use_dense) then
+                  jac(plan%row(na), plan%dof(nb)) = jac(plan%row(na), plan%dof(nb)) + jt(a, 2*b - 1)
+               else if (plan%dof(na) == 0) then
+                  d(plan%dof(nb)) = d(plan%dof(nb)) + jt(a, 2*b - 1)
+               else
+                  call band_add(plan%band, plan%dof(na), plan%dof(nb), jt(a, 2*b - 1))
+               end if
+            end do
+         end do
+      end do
+   end subroutine assemble
+
+   !> The rounding floor of the residual (see apply_preload) from the largest stiffness jmax.
+   subroutine set_floor(model, jmax, rounding_floor, r_floor)
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: jmax
+      logical, intent(in), optional :: rounding_floor
+      real(wp), intent(inout) :: r_floor
+      if (present(rounding_floor)) then
+         if (rounding_floor) r_floor = 16.0_wp*epsilon(1.0_wp)*maxval(abs(model%theta))*jmax
+      end if
+   end subroutine set_floor
+
+   !> Newton's step from the dense Jacobian (LAPACK dgesv, O(n^3)): the reference solve.
+   !> LAPACK's info returned.
+   integer function dense_step(model, plan, res, step, jmax) result(info_la)
+      type(model_t), intent(inout) :: model
+      type(preload_plan_t), intent(inout) :: plan
+      real(wp), intent(in) :: res(:)
+      real(wp), intent(out) :: step(:), jmax   !< Newton's step; the largest |entry| of the Jacobian
+      real(wp), allocatable :: jac(:, :), rhs(:, :), d(:)
+      integer, allocatable :: ipiv(:)
+      integer :: i, n
+      n = plan%n
+      allocate (jac(n, n), rhs(n, 1), ipiv(n), d(0))
+      jac = 0.0_wp
+      call assemble(model, plan, .true., jac, d)
+      if (plan%free_train) then
+         do i = 1, size(model%nodes)
+            if (plan%row(i) > 0) jac(plan%row(i), n) = -model%nodes(i)%n%inertia()*plan%kappa(i)
+         end do
+      end if
+      jmax = maxval(abs(jac))
+      rhs(:, 1) = -res
+      call dgesv(n, 1, jac, n, ipiv, rhs, n, info_la)
+      step = rhs(:, 1)
+   end function dense_step
+
+   !> Newton's step from the banded Jacobian (D-152): the angles' block B by
+   !> band_solve; a free train's a by bordering, with its reference row d and the column c
+   !> of a: B y = r1, B z = c, a = (r2 - d.y) / (e - d.z), angles y - a z.
+   subroutine band_step(model, plan, res, step, jmax, info_la)
+      type(model_t), intent(inout) :: model
+      type(preload_plan_t), intent(inout) :: plan
+      real(wp), intent(in) :: res(:)
+      real(wp), intent(out) :: step(:), jmax   !< Newton's step; the largest |entry| of the Jacobian
+      integer, intent(out) :: info_la
+      real(wp), allocatable :: jac(:, :), b(:, :), d(:)
+      real(wp) :: e, r2, den
+      integer :: i, m
+      m = plan%band%n
+      allocate (jac(0, 0), b(m, merge(2, 1, plan%free_train)), d(m))
+      d = 0.0_wp; b = 0.0_wp; e = 0.0_wp; r2 = 0.0_wp
+      call band_zero(plan%band)
+      call assemble(model, plan, .false., jac, d)
+      do i = 1, size(model%nodes)
+         if (plan%row(i) == 0) cycle
+         if (plan%dof(i) > 0) then
+            b(plan%dof(i), 1) = -res(plan%row(i))
+            if (plan%free_train) b(plan%dof(i), 2) = -model%nodes(i)%n%inertia()*plan%kappa(i)
+         else
+            r2 = -res(plan%row(i)); e = -model%nodes(i)%n%inertia()*plan%kappa(i)
+         end if
+      end do
+      jmax = max(maxval([0.0_wp, abs(plan%band%ab)]), maxval([0.0_wp, abs(d), abs(e)]))
+      if (plan%free_train) jmax = max(jmax, maxval([0.0_wp, abs(b(:, 2))]))
+      call band_solve(plan%band, b, info_la)
+      if (info_la /= 0) return
+      if (.not. plan%free_train) then
+         step = b(:, 1)
+         return
+      end if
+      den = e - dot_product(d, b(:, 2))
+      if (den == 0.0_wp) then
+         info_la = plan%n
+         return
+      end if
+      step(plan%n) = (r2 - dot_product(d, b(:, 1)))/den
+      step(1:m) = b(:, 1) - step(plan%n)*b(:, 2)
+   end subroutine band_step
 end module trainsim_preload
