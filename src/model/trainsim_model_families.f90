@@ -118,7 +118,7 @@ module trainsim_model_families
    !> head, row q element q and its right-hand node: (law, a, b, element,
    !> node, state offset: -1 for a held head), (J or theta0, w, constant load);
    !> the head's law: 1 if the loads' power is summed in the links, its load
-   !> then the second real of a link's row (`chain_loads`, D-141 (perf6));
+   !> then the second real of a link's row (`chain_loads`, D-153);
    !> a, b: the element's row in its family's table, law: which (ch_*; ch_unit:
    !> an undamped spring with unit lever arms, a shaft, whose row the kernel
    !> reads without r1 = r2 = 1, D-124).
@@ -214,7 +214,7 @@ contains
       end subroutine link
    end subroutine build_chain
 
-   !> The chain's loads in its links (D-141 (perf6)) when the loads'
+   !> The chain's loads in its links (D-153) when the loads'
    !> power loop adds the same products in the same order: each load on a link's
    !> node (not the head's), the links in load order, one load a node; a link
    !> without a load adds a zero product, which leaves the sum as it is. Then

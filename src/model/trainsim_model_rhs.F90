@@ -148,7 +148,7 @@ contains
    end procedure model_rk4_stages
 
    !> `model_rk4_stages`' inner stages with energy tracking, a procedure of their
-   !> own: the energy-off stages keep their registers (D-141 (perf6)).
+   !> own: the energy-off stages keep their registers (D-153).
    subroutine rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
       type(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, h, t4
