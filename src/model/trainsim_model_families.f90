@@ -117,6 +117,8 @@ module trainsim_model_families
    !> held, and every element a linear spring or a clearance. Row 0 is the
    !> head, row q element q and its right-hand node: (law, a, b, element,
    !> node, state offset: -1 for a held head), (J or theta0, w, constant load);
+   !> the head's law: 1 if the loads' power is summed in the links, its load
+   !> then the second real of a link's row (`chain_loads`, D-153);
    !> a, b: the element's row in its family's table, law: which (ch_*; ch_unit:
    !> an undamped spring with unit lever arms, a shaft, whose row the kernel
    !> reads without r1 = r2 = 1, D-124).
@@ -200,6 +202,7 @@ contains
       end do
       call chain_laws(f)
       f%mixed = .false.   ! (the chain sums each row's power straight, in element order)
+      call chain_loads(f, fe, size(fn))
    contains
       !> Row q of table tab as its element's link, with law
       subroutine link(tab, q, ni, nr, law)
@@ -210,6 +213,32 @@ contains
          f%iw(i0 + chain_ni*f%iw(a + 1) + 1:i0 + chain_ni*f%iw(a + 1) + 3) = [law, a, tab%r0 + nr*(q - 1)]
       end subroutine link
    end subroutine build_chain
+
+   !> The chain's loads in its links (D-153) when the loads'
+   !> power loop adds the same products in the same order: each load on a link's
+   !> node (not the head's), the links in load order, one load a node; a link
+   !> without a load adds a zero product, which leaves the sum as it is. Then
+   !> the head's row has 1 as its law (else 0) and row q's second real (else
+   !> unused) holds its node's load (0 without one).
+   subroutine chain_loads(f, fe, nn)
+      type(families_t), intent(inout) :: f
+      type(fast_element_t), intent(in) :: fe(:)
+      integer, intent(in) :: nn
+      integer :: q, last, row(nn)
+      row = 0
+      do q = 1, size(fe)
+         row(fe(q)%r) = q
+      end do
+      last = 0
+      do q = 1, f%loads%n
+         if (row(f%iw(f%loads%i0 + q)) <= last) return
+         last = row(f%iw(f%loads%i0 + q))
+      end do
+      do q = 1, f%loads%n
+         f%rw(f%chain%r0 + chain_nr*row(f%iw(f%loads%i0 + q)) + 2) = f%rw(f%loads%r0 + q)
+      end do
+      f%iw(f%chain%i0 + 1) = 1
+   end subroutine chain_loads
 
    !> The links of the chain's clearances to their rows and laws (a row moves
    !> between the law's tables when its element changes mode, by swaps at the

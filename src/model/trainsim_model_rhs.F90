@@ -53,7 +53,7 @@ contains
          if (track) then
             call column_energy(SE_HEAD, self%fam%pw, SE_STORED, SE_COL)
          else
-            call column_plain(SE_HEAD, SE_STORED, SE_COL)
+            call column_plain(SE_HEAD, SE_COL)
          end if
       end associate
       call column_end(self, t, y, c, track)
@@ -111,12 +111,7 @@ contains
          call stage_formed(t + hh, hh, k2, k3)
          call stage_formed(t4, h, k3, k4)
       else if (self%run%track_energy) then
-         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
-                              self%fam%th, self%fam%w, hh, k1, self%fam%pw)
-         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
-                              self%fam%th, self%fam%w, hh, k2, self%fam%pw)
-         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
-                              self%fam%th, self%fam%w, h, k3, self%fam%pw)
+         call rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
       else
          call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
                              self%fam%th, self%fam%w, hh, k1)
@@ -148,6 +143,29 @@ contains
 #include "trainsim_model_stage.inc"
 #undef KERNEL
 #undef ENERGY
+#undef STEP_END
+#undef FROM
+   end procedure model_rk4_stages
+
+   !> `model_rk4_stages`' inner stages with energy tracking, a procedure of their
+   !> own: the energy-off stages keep their registers (D-153).
+   subroutine rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
+      type(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, h, t4
+      real(wp), intent(in) :: y(self%n_y), k1(self%n_y)
+      real(wp), intent(out) :: k2(self%n_y), k3(self%n_y), k4(self%n_y)
+      real(wp) :: hh
+      hh = 0.5_wp*h
+      call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
+                           self%fam%th, self%fam%w, hh, k1, self%fam%pw)
+      call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
+                           self%fam%th, self%fam%w, hh, k2, self%fam%pw)
+      call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
+                           self%fam%th, self%fam%w, h, k3, self%fam%pw)
+   contains
+      ! the stage kernel at y + c k with energy tracking (internal: inlined here)
+#define FROM 1
+#define STEP_END 0
 #define KERNEL stage_energy_at
 #define ENERGY 1
 #include "trainsim_model_stage.inc"
@@ -155,7 +173,7 @@ contains
 #undef ENERGY
 #undef STEP_END
 #undef FROM
-   end procedure model_rk4_stages
+   end subroutine rk4_stages_energy
 
    module procedure model_block_ok
       ok = self%simple .and. self%blk%cap >= 4
@@ -288,9 +306,9 @@ contains
          else if (track) then
             call step_end_energy(SE_HEAD, self%fam%pw, SE_WS, SE_STORED)
          else if (b%col > 0) then
-            call step_end_plain_col(SE_HEAD, SE_WS, SE_STORED, SE_COL)
+            call step_end_plain_col(SE_HEAD, SE_WS, SE_COL)
          else
-            call step_end_plain(SE_HEAD, SE_WS, SE_STORED)
+            call step_end_plain(SE_HEAD, SE_WS)
          end if
       end associate
       if (step_end .and. self%blk%col > 0) call column_end(self, t, y, c, track)
