@@ -23,9 +23,8 @@ module nonsmooth_rig_problem
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_deck, only: deck_t
-   use trainsim_overrides, only: override_t, parse_set_argument
-   use trainsim_prepare, only: prepare_model
    use trainsim_arclength, only: branch_problem_t
+   use trainsim_test_support, only: damped_rig_model
    implicit none
    private
    public :: rig_problem_t
@@ -44,13 +43,7 @@ contains
       real(wp), intent(in) :: lam
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
-      type(override_t) :: ov(3)
-      character(len=32) :: buf
-      write (buf, '(es25.17)') lam
-      call parse_set_argument('shaft1.damping=500', ov(1), err)
-      if (.not. allocated(err)) call parse_set_argument('shaft3.damping=500', ov(2), err)
-      if (.not. allocated(err)) call parse_set_argument('mesh.mesh_frequency='//trim(adjustl(buf)), ov(3), err)
-      if (.not. allocated(err)) call prepare_model(self%deck, ov, model, err)
+      call damped_rig_model(self%deck, lam, model, err)
    end subroutine rig_model_at
 end module nonsmooth_rig_problem
 

@@ -27,9 +27,8 @@ program test_periodic_memory
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_deck, only: deck_t, read_deck
-   use trainsim_overrides, only: override_t, parse_set_argument, split_sweep_groups
+   use trainsim_overrides, only: split_sweep_groups
    use trainsim_deck, only: deck_group_t
-   use trainsim_prepare, only: prepare_model
    use trainsim_session, only: session_t
    use trainsim_clearance_element, only: clearance_element_t
    use trainsim_period_map, only: period_map_t, forcing_period
@@ -37,7 +36,7 @@ program test_periodic_memory
    use trainsim_monodromy_map, only: monodromy_variational
    use trainsim_floquet, only: floquet_multipliers
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
-   use trainsim_test_support, only: load_model_text, nl
+   use trainsim_test_support, only: load_model_text, nl, damped_rig_model
    implicit none
 
    type(deck_t) :: deck
@@ -98,13 +97,7 @@ contains
    subroutine rig_at(lam, m)
       real(wp), intent(in) :: lam
       type(model_t), intent(out) :: m
-      type(override_t) :: ov(3)
-      character(len=32) :: buf
-      write (buf, '(es25.17)') lam
-      call parse_set_argument('shaft1.damping=500', ov(1), err)
-      if (.not. allocated(err)) call parse_set_argument('shaft3.damping=500', ov(2), err)
-      if (.not. allocated(err)) call parse_set_argument('mesh.mesh_frequency='//trim(adjustl(buf)), ov(3), err)
-      if (.not. allocated(err)) call prepare_model(deck, ov, m, err)
+      call damped_rig_model(deck, lam, m, err)
       if (allocated(err)) error stop 'the damped rig: '//err%message
    end subroutine rig_at
 

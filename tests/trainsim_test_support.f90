@@ -10,11 +10,13 @@ module trainsim_test_support
    use trainsim_observer, only: run_result_t
    use trainsim_sink, only: null_sink_t
    use trainsim_testing, only: check
+   use trainsim_overrides, only: override_t, parse_set_argument
+   use trainsim_prepare, only: prepare_model
    implicit none
    private
 
    public :: load_model, load_model_text, run_model, nl, zero_crossings, jacobian_fd_error
-   public :: real_text, expect_build_error, loglog_slope
+   public :: real_text, expect_build_error, loglog_slope, damped_rig_model
 
    character(len=1), parameter :: nl = new_line('a')
 
@@ -150,4 +152,20 @@ contains
       lx = log(x); ly = log(y)
       p = sum((lx - sum(lx)/size(lx))*(ly - sum(ly)/size(ly)))/sum((lx - sum(lx)/size(lx))**2)
    end function loglog_slope
+   !> The Fig. 5.11 rig of `deck` (the sweep deck's run) with shafts 1 and 3 damped by
+   !> 500 lb in s/rad, at lam teeth/s: the continuation tests' damped rig.
+   subroutine damped_rig_model(deck, lam, model, err)
+      type(deck_t), intent(in) :: deck
+      real(wp), intent(in) :: lam
+      type(model_t), intent(out) :: model
+      type(error_t), allocatable, intent(out) :: err
+      type(override_t) :: ov(3)
+      character(len=32) :: buf
+      write (buf, '(es25.17)') lam
+      call parse_set_argument('shaft1.damping=500', ov(1), err)
+      if (.not. allocated(err)) call parse_set_argument('shaft3.damping=500', ov(2), err)
+      if (.not. allocated(err)) call parse_set_argument('mesh.mesh_frequency='//trim(adjustl(buf)), ov(3), err)
+      if (.not. allocated(err)) call prepare_model(deck, ov, model, err)
+   end subroutine damped_rig_model
+
 end module trainsim_test_support
