@@ -424,12 +424,13 @@ contains
       real(wp), intent(in) :: t_goal, t_tol, y_limit
       real(wp), intent(inout) :: t
       real(wp), intent(inout), contiguous :: y(:)
-      real(wp) :: t_grid, h, t_bp, s
-      integer :: j, i, n, nw, ns
+      real(wp) :: t_grid, h, t_bp, s, v1, v2
+      integer :: j, i, n, nw, ns, n2
       logical :: below
       model%blk%n = 0
       if (self%mr_on .or. self%pend .or. .not. self%takes_blocks) return
       n = 0
+      n2 = size(y) - mod(size(y), 2)
       ns = 0   ! steps computed (taken, and one not taken)
       s = 0.0_wp
       t_bp = huge(1.0_wp)   ! a step ending at or after t_bp ends on the stop's breakpoint
@@ -466,11 +467,20 @@ contains
             end if
          end if
          ! y = ynew; the sum of |y(i)| is at least each of them, and NaN or
-         ! infinite with one of them: within y_limit, so is each (D-126)
-         do i = 1, size(y)
-            y(i) = self%ynew(i)
-            s = s + abs(self%ynew(i))
+         ! infinite with one of them: within y_limit, so is each (D-126). Two
+         ! entries a pass, summed in order (D-154)
+         do i = 1, n2, 2
+            v1 = self%ynew(i)
+            v2 = self%ynew(i + 1)
+            y(i) = v1
+            y(i + 1) = v2
+            s = s + abs(v1)
+            s = s + abs(v2)
          end do
+         if (n2 < size(y)) then
+            y(n2 + 1) = self%ynew(n2 + 1)
+            s = s + abs(self%ynew(n2 + 1))
+         end if
          t = t_grid
          self%istep = self%istep + 1
          model%blk%col = j

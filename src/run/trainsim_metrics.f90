@@ -271,12 +271,28 @@ contains
             do while (j <= n)
                lo = d%xmin; hi = d%xmax; h = d%h; cand = d%s%cand
                js = j
+               ! (where cand - h >= lo, xv > cand - h is xv >= lo too, and stays so:
+               ! cand only grows on a rising edge; cand + h <= hi likewise; D-154)
                if (d%n > 0 .and. h > 0.0_wp) then
-                  if (d%s%dir == 1) then
+                  if (d%s%dir == 1 .and. cand - h >= lo) then
+                     do while (j <= n)
+                        xv = x(i, j)
+                        if (.not. (xv <= hi .and. xv > cand - h)) exit
+                        if (xv > cand) cand = xv
+                        j = j + 1
+                     end do
+                  else if (d%s%dir == 1) then
                      do while (j <= n)
                         xv = x(i, j)
                         if (.not. (xv >= lo .and. xv <= hi .and. xv > cand - h)) exit
                         if (xv > cand) cand = xv
+                        j = j + 1
+                     end do
+                  else if (d%s%dir == -1 .and. cand + h <= hi) then
+                     do while (j <= n)
+                        xv = x(i, j)
+                        if (.not. (xv >= lo .and. xv < cand + h)) exit
+                        if (xv < cand) cand = xv
                         j = j + 1
                      end do
                   else if (d%s%dir == -1) then

@@ -626,7 +626,7 @@ contains
       integer, intent(inout) :: hits(cap)
       integer, intent(out) :: nh
       integer :: j, k, jf
-      real(wp) :: pk, fmin, fmax, tmin, tmax, dmin, dmax, tp, t0, tout, a, b, d
+      real(wp) :: pk, fmin, fmax, tmin, tmax, dmin, dmax, tp, t0, tout, a, b, d, da, ab
       k = m%open_event
       if (k > 0) then
          pk = events(k)%peak_force
@@ -646,12 +646,16 @@ contains
          tmin = min(tmin, torque(i, j)); tmax = max(tmax, torque(i, j))
          dmin = min(dmin, disp(i, j)); dmax = max(dmax, disp(i, j))
       end do
+      ! (the test (d - a)*(a - b) < 0 with a - b carried: the last point's d - a, D-154)
+      ab = a - b
       do j = js, min(jf - 1, n)   ! the turning points alone (before j0)
          d = disp(i, j)
-         if ((d - a)*(a - b) < 0.0_wp) then
+         da = d - a
+         if (da*ab < 0.0_wp) then
             nh = nh + 1
             hits(nh) = j
          end if
+         ab = da
          b = a; a = d
       end do
       do j = jf, n
@@ -662,10 +666,12 @@ contains
          tmax = max(tmax, torque(i, j))
          dmin = min(dmin, d)
          dmax = max(dmax, d)
-         if ((d - a)*(a - b) < 0.0_wp) then
+         da = d - a
+         if (da*ab < 0.0_wp) then
             nh = nh + 1
             hits(nh) = j
          end if
+         ab = da
          b = a; a = d
       end do
       d1 = a; d2 = b
