@@ -6,13 +6,13 @@
 !> 2e-6), and cvode-bdf, which reports every internal step, gives it too at any
 !> output interval (before, 25-30 % low at a 0.1 ms interval on the SI tracker).
 program test_peaks
-   use trainsim_kinds, only: wp
+   use trainsim_kinds, only: wp, i8
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
    use trainsim_observer, only: run_result_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model, load_model_text, run_model
-   use trainsim_metrics, only: peak_to_peak
+   use trainsim_metrics, only: peak_to_peak, p2p_detector_t, push_samples, push_block
    use trainsim_observer, only: p2p_hysteresis
    use trainsim_deck, only: deck_t, read_deck
    use trainsim_error, only: error_t
@@ -29,6 +29,7 @@ program test_peaks
    call test_adaptive_methods_see_an_impact_between_output_times()
    call test_oscillator_p2p_is_closed_form_at_coarse_output()
    call test_ghm_380_p2p_independent_of_output_interval()
+   call test_push_block_is_push_samples()
    call suite_end()
 
 contains
@@ -215,4 +216,54 @@ contains
       if (allocated(err)) error stop 'test setup: '//err%message
       m%run%output = ''
    end subroutine ghm_at
+   !> The detectors fed a block's samples at once (`push_block`, the observer's
+   !> block fold, D-38; its edge loops without the range test that the edge's
+   !> own test implies, D-154) are the detectors fed sample by sample
+   !> (`push_samples`, the step-by-step observer): the same state and figures to
+   !> the bit, on series whose range grows (a sample beyond it leaves the short
+   !> way), drifts and settles, in blocks of 1 to 40 samples.
+   subroutine test_push_block_is_push_samples()
+      integer, parameter :: ns = 6000
+      real(wp) :: x(3, ns), ra, ma, rb, mb
+      type(p2p_detector_t) :: a(3), b(3)
+      integer :: j, j0, n, k, na, nb
+      integer(i8) :: seed
+      logical :: same
+      call test_begin('push_block_is_push_samples')
+      seed = 12345
+      do j = 1, ns
+         x(1, j) = (1.0_wp + 2.0e-3_wp*j)*sin(0.05_wp*j) + 0.3_wp*sin(0.7_wp*j)
+         x(2, j) = exp(-1.0e-3_wp*j)*cos(0.031_wp*j) + 1.0e-4_wp*j + 0.05_wp*rnd(seed)
+         x(3, j) = sin(0.02_wp*j) + 0.2_wp*rnd(seed)
+      end do
+      do j = 1, ns
+         call push_samples(a, x(:, j))
+      end do
+      j0 = 1
+      do while (j0 <= ns)
+         n = min(1 + int(40.0_wp*rnd(seed)), ns - j0 + 1)
+         call push_block(b, x, j0, j0 + n - 1)
+         j0 = j0 + n
+      end do
+      same = .true.
+      do k = 1, 3
+         call a(k)%figures(ra, ma, na)
+         call b(k)%figures(rb, mb, nb)
+         same = same .and. ra == rb .and. ma == mb .and. na == nb .and. a(k)%n == b(k)%n .and. &
+                a(k)%xmin == b(k)%xmin .and. a(k)%xmax == b(k)%xmax .and. a(k)%h == b(k)%h .and. &
+                a(k)%s%dir == b(k)%s%dir .and. a(k)%s%cand == b(k)%s%cand .and. &
+                a(k)%s%last_ext == b(k)%s%last_ext .and. a(k)%s%total == b(k)%s%total .and. &
+                a(k)%s%n_swings == b(k)%s%n_swings
+         call check('series '//str(k)//': swings counted ('//str(na)//')', na > 5)
+      end do
+      call check('the same detectors and figures in blocks as sample by sample', same)
+   end subroutine test_push_block_is_push_samples
+
+   !> A uniform number in [0, 1) from seed (a fixed LCG: the same series every run).
+   real(wp) function rnd(seed)
+      integer(i8), intent(inout) :: seed
+      seed = modulo(1103515245_i8*seed + 12345_i8, 2147483648_i8)
+      rnd = real(seed, wp)/2147483648.0_wp
+   end function rnd
+
 end program test_peaks
