@@ -366,7 +366,7 @@ contains
       type(param_list_t), allocatable, intent(out) :: ep(:)
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j, nn
-      character(len=:), allocatable :: id, tname, lid, rid, dl, dr
+      character(len=:), allocatable :: id, tname, lid, rid
       type(id_table_t) :: element_ids
 
       allocate (model%elements(deck%count_groups('element'))); allocate (ep(size(model%elements)))
@@ -395,13 +395,11 @@ contains
                e%id = id
                e%origin = g%where()
                ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1
-               dl = ''; dr = ''
-               if (k <= nn) dl = model%nodes(k)%n%id
-               if (k + 1 <= nn) dr = model%nodes(k + 1)%n%id
-               call g%get_string('left', lid, err, default=dl); if (allocated(err)) return
-               call g%get_string('right', rid, err, default=dr); if (allocated(err)) return
-               e%left = node_ids%get(lid)
-               e%right = node_ids%get(rid)
+               ! (node k by its index, not by a copy of its id looked up again: startup7b)
+               call g%get_string('left', lid, err, default=''); if (allocated(err)) return
+               call g%get_string('right', rid, err, default=''); if (allocated(err)) return
+               e%left = default_node(k, 'left', lid)
+               e%right = default_node(k + 1, 'right', rid)
                if (e%left == 0) then
                   call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
                                    "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
@@ -415,6 +413,7 @@ contains
                   return
                end if
                if (e%left == e%right) then
+                  if (.not. g%holds('left')) lid = model%nodes(e%left)%n%id   ! (the default, named)
                   call fatal_error(err, g%where('right')//": error: element '"//id//"' joins node '"//lid// &
                                    "' to itself", err_input)
                   return
@@ -427,6 +426,19 @@ contains
             end associate
          end associate
       end do
+   contains
+      !> The node a port key names (`given`), or, without the key, node n of the serial
+      !> chain (0 beyond the last node: the message then names '' as before).
+      integer function default_node(n, key, given) result(node)
+         integer, intent(in) :: n
+         character(len=*), intent(in) :: key, given
+         if (deck%groups(i)%holds(key)) then
+            node = node_ids%get(given)
+         else
+            node = 0
+            if (n <= nn) node = n
+         end if
+      end function default_node
    end subroutine read_elements
 
    !> The further ports an n-port element named in `configure` (its port_keys,
@@ -439,7 +451,9 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: pid
       integer :: k, j
-      if (.not. allocated(e%port_keys)) allocate (e%port_keys(0))
+      ! none declared: two ports (n_ports), and no empty lists allocated (two
+      ! allocations an element; startup7b)
+      if (.not. allocated(e%port_keys)) return
       if (size(e%port_keys) > max_ports - 2) error stop 'read_ports: an element type declares more than max_ports ports'
       if (allocated(e%more_ports)) deallocate (e%more_ports)
       allocate (e%more_ports(size(e%port_keys)))
