@@ -394,12 +394,13 @@ contains
             associate (e => model%elements(k)%e)
                e%id = id
                e%origin = g%where()
-               ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1
-               ! (node k by its index, not by a copy of its id looked up again: startup7b)
+               ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1,
+               ! taken by index (0 beyond the last node: the message names '' as before; D-154)
                call g%get_string('left', lid, err, default=''); if (allocated(err)) return
                call g%get_string('right', rid, err, default=''); if (allocated(err)) return
-               e%left = default_node(k, 'left', lid)
-               e%right = default_node(k + 1, 'right', rid)
+               e%left = merge(k, 0, k <= nn); e%right = merge(k + 1, 0, k + 1 <= nn)
+               if (g%holds('left')) e%left = node_ids%get(lid)
+               if (g%holds('right')) e%right = node_ids%get(rid)
                if (e%left == 0) then
                   call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
                                    "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
@@ -426,19 +427,6 @@ contains
             end associate
          end associate
       end do
-   contains
-      !> The node a port key names (`given`), or, without the key, node n of the serial
-      !> chain (0 beyond the last node: the message then names '' as before).
-      integer function default_node(n, key, given) result(node)
-         integer, intent(in) :: n
-         character(len=*), intent(in) :: key, given
-         if (deck%groups(i)%holds(key)) then
-            node = node_ids%get(given)
-         else
-            node = 0
-            if (n <= nn) node = n
-         end if
-      end function default_node
    end subroutine read_elements
 
    !> The further ports an n-port element named in `configure` (its port_keys,
@@ -451,9 +439,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: pid
       integer :: k, j
-      ! none declared: two ports (n_ports), and no empty lists allocated (two
-      ! allocations an element; startup7b)
-      if (.not. allocated(e%port_keys)) return
+      if (.not. allocated(e%port_keys)) return   ! two ports (n_ports): no empty lists (D-154)
       if (size(e%port_keys) > max_ports - 2) error stop 'read_ports: an element type declares more than max_ports ports'
       if (allocated(e%more_ports)) deallocate (e%more_ports)
       allocate (e%more_ports(size(e%port_keys)))

@@ -160,7 +160,7 @@ contains
       allocate (du(size(model%elements)), units(0))
       do i = 1, size(model%elements)   ! '(aWE,1x,aWT,4es15.6,a7,i9,es13.4,es15.6,f8.2)'
          associate (e => model%elements(i)%e, m => res%el(i))
-            du(i) = unit_index(disp_unit(model, e))
+            du(i) = unit_index(units, disp_unit(model, e))
             call out%a(e%id, w)
             call out%x(1)
             call out%a(e%type_name, ns)
@@ -258,26 +258,27 @@ contains
          end associate
       end do
       call out%flush()
-   contains
-      !> u's index in units, appended if new (a string per element cost three
-      !> allocations an element: startup7b).
-      integer function unit_index(u) result(k)
-         character(len=*), intent(in) :: u
-         type(string_t), allocatable :: grown(:)
-         do k = size(units), 1, -1   ! (the last one met first: elements of a kind come in runs)
-            if (len(units(k)%s) == len(u)) then
-               if (units(k)%s == u) return
-            end if
-         end do
-         allocate (grown(size(units) + 1))
-         do k = 1, size(units)
-            call move_alloc(units(k)%s, grown(k)%s)
-         end do
-         k = size(grown)
-         grown(k)%s = u
-         call move_alloc(grown, units)
-      end function unit_index
    end subroutine print_summary
+
+   !> u's index in units, appended if new (a string per element cost three
+   !> allocations an element: startup7b).
+   integer function unit_index(units, u) result(k)
+      type(string_t), allocatable, intent(inout) :: units(:)
+      character(len=*), intent(in) :: u
+      type(string_t), allocatable :: grown(:)
+      do k = size(units), 1, -1   ! (the last one met first: elements of a kind come in runs)
+         if (len(units(k)%s) == len(u)) then
+            if (units(k)%s == u) return
+         end if
+      end do
+      allocate (grown(size(units) + 1))
+      do k = 1, size(units)
+         call move_alloc(units(k)%s, grown(k)%s)
+      end do
+      k = size(grown)
+      grown(k)%s = u
+      call move_alloc(grown, units)
+   end function unit_index
 
    !> Natural frequencies and mode shapes.
    subroutine print_modes(model, modes, unit)
