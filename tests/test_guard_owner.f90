@@ -1,4 +1,4 @@
-!> The element that owns each guard (`model_t%guard_element`, D-154), which
+!> The element that owns each guard (`model_t%guard_element`, D-157), which
 !> RK4's set-up asks for every guard: found by bisection over the elements
 !> with guards. Checked against the definition, element by element: guard j
 !> belongs to element i when guard_offset(i) < j <= guard_offset(i) + n_guards()
@@ -19,7 +19,7 @@ program test_guard_owner
    character(len=*), parameter :: kinds = 'gsscgggsscsssgcgc'   ! g gear, s shaft, c coupling
    integer :: i, j, n, owner, wrong, n_owned
 
-   call suite_begin('owner of each guard (D-154)')
+   call suite_begin('owner of each guard (D-157)')
    n = len(kinds)
    text = "&run t_end = 1.0e-3, dt = 1.0e-5, integrator = 'rk4' /"//nl
    do i = 1, n + 1

@@ -147,7 +147,7 @@ contains
       ! The tables hold held nodes' angles: rebuilt when a solve turned one. Otherwise the
       ! run's init_modes refreshes every element's mode-dependent row as it does after a
       ! rebuild, unless constraints may have engaged in the solves (80 M instructions at
-      ! 20 000 nodes; startup7b, D-155).
+      ! 20 000 nodes; startup7b, D-158).
       if (turned .or. model%n_cand > 0) call model%build_fast_path()
       ref%computed = len(ref%note) == 0
       if (.not. ref%computed) then

@@ -395,7 +395,7 @@ contains
                e%id = id
                e%origin = g%where()
                ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1,
-               ! taken by index (0 beyond the last node: the message names '' as before; D-154)
+               ! taken by index (0 beyond the last node: the message names '' as before; D-157)
                call g%get_string('left', lid, err, default=''); if (allocated(err)) return
                call g%get_string('right', rid, err, default=''); if (allocated(err)) return
                e%left = merge(k, 0, k <= nn); e%right = merge(k + 1, 0, k + 1 <= nn)
@@ -439,7 +439,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: pid
       integer :: k, j
-      if (.not. allocated(e%port_keys)) return   ! two ports (n_ports): no empty lists (D-154)
+      if (.not. allocated(e%port_keys)) return   ! two ports (n_ports): no empty lists (D-157)
       if (size(e%port_keys) > max_ports - 2) error stop 'read_ports: an element type declares more than max_ports ports'
       if (allocated(e%more_ports)) deallocate (e%more_ports)
       allocate (e%more_ports(size(e%port_keys)))

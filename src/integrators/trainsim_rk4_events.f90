@@ -66,7 +66,7 @@ contains
          integer, allocatable :: all(:)
          integer :: a, q, m
          ! (sized first, filled in place: growing by concatenation cost ~14 000
-         ! instructions a gear at 20 000 nodes; startup7b, D-154)
+         ! instructions a gear at 20 000 nodes; startup7b, D-157)
          m = 0
          do a = 1, size(d)
             m = m + first(d(a) + 1) - first(d(a))

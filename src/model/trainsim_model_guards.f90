@@ -268,7 +268,7 @@ contains
 
    !> By bisection: guard_els is in element order and guard_offset grows with it, so the
    !> owner is the last element in guard_els whose first guard is at most j (a scan of
-   !> guard_els made RK4's set-up O(guards x elements with guards): startup7b, D-154).
+   !> guard_els made RK4's set-up O(guards x elements with guards): startup7b, D-157).
    module procedure model_guard_element
       integer :: lo, hi, mid, i
       owner = 0
