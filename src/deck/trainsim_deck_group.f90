@@ -478,7 +478,7 @@ contains
    integer function find(self, key) result(k)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in) :: key
-      integer :: j, n
+      integer :: j, n, i, c, at
       logical :: padded
       k = 0
       if (.not. allocated(self%entries)) return
@@ -486,9 +486,21 @@ contains
       padded = .false.
       if (n > 0) padded = iachar(key(n:n)) == 32
       do j = 1, size(self%entries)
-         if (self%entries(j)%key_len /= n .and. .not. padded) cycle
-         if (same_key(self%pool(self%entries(j)%key_at:self%entries(j)%key_at + self%entries(j)%key_len - 1), &
-                      key)) then
+         at = self%entries(j)%key_at
+         if (self%entries(j)%key_len /= n) then
+            if (.not. padded) cycle
+            if (same_key(self%pool(at:at + self%entries(j)%key_len - 1), key)) then
+               k = j
+               return
+            end if
+            cycle
+         end if
+         do i = 1, n   ! the same length: by codes, `key` folded to lower case (same_key inline)
+            c = iachar(key(i:i))
+            if (c >= 65 .and. c <= 90) c = c + 32
+            if (iachar(self%pool(at + i - 1:at + i - 1)) /= c) exit
+         end do
+         if (i > n) then
             k = j
             return
          end if
