@@ -6,10 +6,7 @@ submodule (trainsim_deck_group) trainsim_deck_group_keys
 
 contains
 
-   module subroutine group_check_unused(self, err, context)
-      class(deck_group_t), intent(in) :: self
-      type(error_t), allocatable, intent(out) :: err
-      character(len=*), intent(in), optional :: context
+   module procedure group_check_unused
       character(len=:), allocatable :: msg
       type(string_t), allocatable :: queried(:)
       integer :: k, best
@@ -31,16 +28,11 @@ contains
          call fail(self, err, self%entries(k)%line, msg)
          return
       end do
-   end subroutine group_check_unused
+   end procedure group_check_unused
 
    !> Set `key` (lower case) to `values` (quoted where `quoted`), given on `line`: the
    !> entry of that key is replaced, else one is added (an override, a generated group).
-   module subroutine group_set_entry(self, key, values, quoted, line)
-      class(deck_group_t), intent(inout) :: self
-      character(len=*), intent(in) :: key
-      type(string_t), intent(in) :: values(:)
-      logical, intent(in) :: quoted(:)
-      integer, intent(in) :: line
+   module procedure group_set_entry
       type(deck_entry_t), allocatable :: grown(:)
       character(len=:), allocatable :: pool
       integer, allocatable :: vals(:, :)
@@ -91,13 +83,11 @@ contains
          self%pool(self%pool_len + 1:self%pool_len + len(t)) = t
          self%pool_len = self%pool_len + len(t)
       end subroutine put
-   end subroutine group_set_entry
+   end procedure group_set_entry
 
    !> Index of the entry not yet read whose key is a likely misspelling of `key` (0: none):
    !> the closest by edit distance within the threshold of `is_near`, not itself a queried key.
-   module integer function near_miss(self, key) result(best)
-      class(deck_group_t), intent(in) :: self
-      character(len=*), intent(in) :: key
+   module procedure near_miss
       integer :: j, d, dbest
       logical :: asked
       best = 0
@@ -113,7 +103,7 @@ contains
             dbest = d
          end if
       end do
-   end function near_miss
+   end procedure near_miss
 
    !> Index in `keys` of the closest key to `word` within the threshold of `is_near` (0: none).
    integer function closest_key(word, keys) result(best)
@@ -194,12 +184,8 @@ contains
    end function queried_keys
 
    !> "file:LINE: error: LABEL: text"
-   module subroutine fail(self, err, line, text)
-      class(deck_group_t), intent(in) :: self
-      type(error_t), allocatable, intent(out) :: err
-      integer, intent(in) :: line
-      character(len=*), intent(in) :: text
+   module procedure fail
       call fatal_error(err, self%file//':'//str(line)//': error: '//self%label()//': '//text, err_input)
-   end subroutine fail
+   end procedure fail
 
 end submodule trainsim_deck_group_keys
