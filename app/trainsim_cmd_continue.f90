@@ -120,9 +120,9 @@ contains
       if (size(p%ovs) > 0) p%retunes = p%retunes .and. .not. any(p%ovs(:)%derived)
       p%period_from_mesh = .true.
       do g = 1, size(p%deck%groups)
-         if (p%deck%groups(g)%name /= 'run' .or. .not. allocated(p%deck%groups(g)%entries)) cycle
-         do e = 1, size(p%deck%groups(g)%entries)
-            if (p%deck%groups(g)%entries(e)%key == 'settle_period') p%period_from_mesh = .false.
+         if (p%deck%groups(g)%name /= 'run') cycle
+         do e = 1, p%deck%groups(g)%nentries()
+            if (p%deck%groups(g)%key_of(e) == 'settle_period') p%period_from_mesh = .false.
          end do
       end do
       do g = 1, size(p%ovs)

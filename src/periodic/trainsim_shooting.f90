@@ -134,7 +134,7 @@ contains
       total = 0
       do attempt = 0, opt%retries
          if (periods > 0) then
-            pm%kept = .true.   ! (a transient runs on as a run does: every memory held, D-154)
+            pm%kept = .true.   ! (a transient runs on as a run does: every memory held, D-156)
             call pm%map(x, xt, err, periods=periods, carry=.true.)   ! (the memory goes on, D-150)
             if (allocated(err)) return
             x = xt

@@ -11,7 +11,7 @@ mesh opens, and on the damped rig at 485 teeth/s t0 moves into the open stretch:
 The WARNING itself (t0 in a striking contact whose impact's damping the state does not hold)
 is for two striking clearances whose open stretches do not overlap: tests/decks/
 two_struck_clearances.nml (two walls, each yang_sun coupling open 38 % of the period, half a
-period apart; D-154). There `periodic` still converges and prints its orbit, stability and
+period apart; D-155). There `periodic` still converges and prints its orbit, stability and
 run, with the WARNING; the orbit is the fixed point of a map that restarts c1's contact at
 t0 with D = 0, and a plain run of 20 periods from the deck's start (contracting as 0.2 a
 period: settled to ~1e-14) ends 2.4 % of the speed scale away from it (asserted > 0.5 %: the
