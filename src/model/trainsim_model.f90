@@ -257,6 +257,17 @@ module trainsim_model
          logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       end subroutine rhs_simple_ws
 
+      !> `model_rhs_step_end` of a simple model with energy tracking at a block's
+      !> step before its last (D-120): its column and stored energy, not the
+      !> workspace; a procedure of its own, so that the energy-off step end keeps
+      !> its registers (D-154, trainsim_model_energy_kernels.F90).
+      module subroutine column_energy_end(self, t, y, dydt)
+         type(model_t), intent(inout) :: self
+         real(wp), intent(in) :: t
+         real(wp), intent(in) :: y(self%n_y)
+         real(wp), intent(out) :: dydt(self%n_y)
+      end subroutine column_energy_end
+
       !> `model_rhs` at the end of an integrator's step, where the observer reads
       !> the workspace (RK4, D-33): a simple model with energy tracking also leaves
       !> the stored energy there (D-36). Every other RHS (CVODE's, the stages, the
