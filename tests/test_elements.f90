@@ -515,7 +515,7 @@ contains
    !> bit, at the step end, an inner stage and RK4's inner stages at y + c k.
    !> `shuffled`: the head's node declared last, so the chain does not pass the
    !> nodes in node order (the step end's kinetic energy summed by the node
-   !> loop, not in the links: D-157).
+   !> loop, not in the links: D-160).
    subroutine test_chain_kernel_is_the_generic_rhs(track, held, shuffled)
       logical, intent(in) :: track, held
       logical, intent(in), optional :: shuffled
@@ -578,7 +578,7 @@ contains
       end if
       if (mixed .and. track) then
          ! every angle zero, the clearances open: the stored energy is the kinetic
-         ! sum alone, which the node loop adds in node order (D-157; the chain's
+         ! sum alone, which the node loop adds in node order (D-160; the chain's
          ! order, head first, gives another last bit here)
          y2 = y
          y2(1:size(y) - 2:2) = 0.0_wp

@@ -253,7 +253,7 @@ module trainsim_model
          logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       end subroutine rhs_simple_ws
 
-      !> `model_rhs_step_end` with energy tracking inside a block (D-120), a procedure of its own (D-157).
+      !> `model_rhs_step_end` with energy tracking inside a block (D-120), a procedure of its own (D-160).
       module subroutine column_energy_end(self, t, y, dydt)
          type(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(self%n_y)
@@ -544,7 +544,7 @@ module trainsim_model
          real(wp), intent(in) :: t, y(:)
       end function model_stored_energy
 
-      !> Stored energy (the kinetic sum + the elastic sum, D-157) and the elastic part alone at the kinematics
+      !> Stored energy (the kinetic sum + the elastic sum, D-160) and the elastic part alone at the kinematics
       !> in the workspace and y (nodes with states of their own); bit for bit `stored_energy`'s.
       module subroutine model_workspace_energy(self, y, e, pot)
          class(model_t), intent(in) :: self

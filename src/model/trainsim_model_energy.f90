@@ -109,6 +109,6 @@ contains
          end if
          pot = pot + pe
       end do
-      e = e + pot   ! (the kinetic sum, then the elastic: the kernels' order, D-157)
+      e = e + pot   ! (the kinetic sum, then the elastic: the kernels' order, D-160)
    end procedure model_workspace_energy
 end submodule trainsim_model_energy

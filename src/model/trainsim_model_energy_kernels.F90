@@ -1,7 +1,7 @@
 !> The energy-tracking step end of a block's step before its last (D-120): the
 !> stage kernel (trainsim_model_stage.inc, ENERGY 1, STEP_END 3) in a procedure
 !> of its own, so that the energy-off step end (`model_rhs_step_end`) is
-!> compiled without it (D-157). Its `module procedure` is declared, with its
+!> compiled without it (D-160). Its `module procedure` is declared, with its
 !> arguments and their docs, in trainsim_model.
 submodule (trainsim_model) trainsim_model_energy_kernels
    use trainsim_model_families, only: spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr

@@ -42,7 +42,7 @@ contains
          call rhs_simple_ws(self, t, y, dydt, .true.)
          return
       else if (self%run%track_energy) then
-         call column_energy_end(self, t, y, dydt)   ! (a procedure of its own, D-157)
+         call column_energy_end(self, t, y, dydt)   ! (a procedure of its own, D-160)
          return
       end if
       ! a block's step before its last: its column only, not the workspace
