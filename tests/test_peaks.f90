@@ -218,7 +218,7 @@ contains
    end subroutine ghm_at
    !> The detectors fed a block's samples at once (`push_block`, the observer's
    !> block fold, D-38; its edge loops without the range test that the edge's
-   !> own test implies, D-154) are the detectors fed sample by sample
+   !> own test implies, D-161) are the detectors fed sample by sample
    !> (`push_samples`, the step-by-step observer): the same state and figures to
    !> the bit, on series whose range grows (a sample beyond it leaves the short
    !> way), drifts and settles, in blocks of 1 to 40 samples.

@@ -468,7 +468,7 @@ contains
          end if
          ! y = ynew; the sum of |y(i)| is at least each of them, and NaN or
          ! infinite with one of them: within y_limit, so is each (D-126). Two
-         ! entries a pass, summed in order (D-154)
+         ! entries a pass, summed in order (D-161)
          do i = 1, n2, 2
             v1 = self%ynew(i)
             v2 = self%ynew(i + 1)

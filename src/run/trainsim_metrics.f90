@@ -272,7 +272,7 @@ contains
                lo = d%xmin; hi = d%xmax; h = d%h; cand = d%s%cand
                js = j
                ! (where cand - h >= lo, xv > cand - h is xv >= lo too, and stays so:
-               ! cand only grows on a rising edge; cand + h <= hi likewise; D-154)
+               ! cand only grows on a rising edge; cand + h <= hi likewise; D-161)
                if (d%n > 0 .and. h > 0.0_wp) then
                   if (d%s%dir == 1 .and. cand - h >= lo) then
                      do while (j <= n)

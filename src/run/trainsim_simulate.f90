@@ -217,7 +217,7 @@ contains
             if (k_last >= k) call run_block(model, integ, obs, d, min(out_time(k_last), integ%t_stop), .true., t, y, folded, err)
             if (allocated(err)) return
             if (k_last >= k .and. folded) then
-               ! steps on output times k, k + 1, ... (none the last): the first and last checked (D-154)
+               ! steps on output times k, k + 1, ... (none the last): the first and last checked (D-161)
                do j = 1, model%blk%n, max(model%blk%n - 1, 1)
                   if (model%blk%t(j) /= t0 + real(k + j - 1, wp)*dout) then
                      call fatal_error(err, 'internal: a step of a block ended at t = '//str(model%blk%t(j))// &
