@@ -7,7 +7,7 @@
 !> (D-136) acts before each separation (1e-6). Without the saltation matrices (or
 !> without the impact damping's sensitivity, where contacts close) the same
 !> check is shown to fail by orders of magnitude: the references can tell.
-!> The modes' tangent maps (D-154: Phi <- S Phi where the Jacobian is constant
+!> The modes' tangent maps (D-162: Phi <- S Phi where the Jacobian is constant
 !> between events) give the general pass's M to 1e-12 in every case, are used
 !> where the train is linear in its mode and not where an element is not.
 program test_monodromy
@@ -232,7 +232,7 @@ contains
       call check('a state of the wrong size: an error', allocated(err))
    end subroutine test_stick_slip_is_refused
 
-   !> D-154: the model says its Jacobian is constant between events only where
+   !> D-162: the model says its Jacobian is constant between events only where
    !> every element is linear in its mode. The linear-law coupling on a shaft is
    !> (open, or closed with the linear law): nearly every step of the pass is
    !> S Phi, and M is the general pass's; a load with a speed law (its slope reads
@@ -344,7 +344,7 @@ contains
       m = m0
       x = x0
       call monodromy_saltation(m, t0, period, x, m_gen, err, stats=st_gen, tangent_cache=.false.)
-      write (*, '(a,i0,a,i0,a,i0,a,es9.2)') '    tangent maps (D-154): ', st%tangent_steps, ' of ', st%steps, &
+      write (*, '(a,i0,a,i0,a,i0,a,es9.2)') '    tangent maps (D-162): ', st%tangent_steps, ' of ', st%steps, &
          ' steps, ', st%tangent_maps, ' maps; |M - M_general| / max|M| ', &
          maxval(abs(mm - m_gen))/maxval(abs(m_gen))
       ! (the same RK4 steps, S Phi summed in another order: a few ulps a step,

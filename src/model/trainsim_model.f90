@@ -356,7 +356,7 @@ module trainsim_model
       end subroutine model_apply_loads
 
       !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes (the energy states' rows zero: they feed
-      !> nothing back); constant: whether it stays constant until the next event (D-154, trainsim_model_linear).
+      !> nothing back); constant: whether it stays constant until the next event (D-162, trainsim_model_linear).
       module subroutine model_jacobian(self, t, y, jac, constant)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)

@@ -75,7 +75,7 @@ contains
    end procedure model_jacobian
 
    !> Whether the Jacobian is constant between events in the current modes
-   !> (D-154): every node with states a plain inertia (or held), no load with
+   !> (D-162): every node with states a plain inertia (or held), no load with
    !> a speed law, no kinematic constraint, no n-port element, and every
    !> element a checked linear spring or in a checked hot form that is linear
    !> in its mode (a clearance open, or closed with the linear law, its

@@ -13,7 +13,7 @@
 !> Where the model's Jacobian J is constant between events (the model says so
 !> and the four stage Jacobians of the mode's first full step agree bit for
 !> bit), the RK4 step's tangent map is the mode's constant S = I + hJ + (hJ)^2/2
-!> + (hJ)^3/6 + (hJ)^4/24, built once; every further full step is Phi <- S Phi (D-154).
+!> + (hJ)^3/6 + (hJ)^4/24, built once; every further full step is Phi <- S Phi (D-162).
 module trainsim_monodromy
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
@@ -35,7 +35,7 @@ module trainsim_monodromy
       logical :: var = .false., salt = .true., memory = .true.
       logical :: exact = .false.            !< the step map's own derivative (`exact_step`)
       integer :: n = 0, ny = 0
-      !> the tangent map of the current mode (D-154): lin, the model's Jacobian is
+      !> the tangent map of the current mode (D-162): lin, the model's Jacobian is
       !> constant between events in it; s_ok, smat holds S for steps of length
       !> ~h_grid (the grid's step; a step split at an event stays general)
       logical :: cache = .true., lin = .false., s_ok = .false.
@@ -90,7 +90,7 @@ contains
       logical, intent(in), optional :: deck_grid
       type(monodromy_stats_t), intent(out), optional :: stats
       !> .false.: every step through the stage Jacobians (the general pass), no
-      !> mode's tangent map (D-154; for checking that they agree)
+      !> mode's tangent map (D-162; for checking that they agree)
       logical, intent(in), optional :: tangent_cache
       type(pass_t) :: w
       w%var = .true.

@@ -1,7 +1,7 @@
 !> The RK4 step's derivatives for the variational pass (trainsim_monodromy):
 !> its partials in its length and start time (exact_step), J Phi over J's
 !> nonzeros, and the tangent map S of a step in a mode whose Jacobian J is
-!> constant between events (D-154). Plain loops over explicit shapes.
+!> constant between events (D-162). Plain loops over explicit shapes.
 module trainsim_step_tangent
    use trainsim_kinds, only: wp
    use trainsim_model, only: model_t
