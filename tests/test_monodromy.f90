@@ -7,6 +7,9 @@
 !> (D-136) acts before each separation (1e-6). Without the saltation matrices (or
 !> without the impact damping's sensitivity, where contacts close) the same
 !> check is shown to fail by orders of magnitude: the references can tell.
+!> The modes' tangent maps (D-162: Phi <- S Phi where the Jacobian is constant
+!> between events) give the general pass's M to 1e-12 in every case, are used
+!> where the train is linear in its mode and not where an element is not.
 program test_monodromy
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
@@ -25,6 +28,7 @@ program test_monodromy
    call test_linear_law_impacts_match_flow_differences()
    call test_no_tension_clip_matches_flow_differences()
    call test_stick_slip_is_refused()
+   call test_tangent_map_where_linear_in_the_mode()
    call suite_end()
 
 contains
@@ -228,6 +232,63 @@ contains
       call check('a state of the wrong size: an error', allocated(err))
    end subroutine test_stick_slip_is_refused
 
+   !> D-162: the model says its Jacobian is constant between events only where
+   !> every element is linear in its mode. The linear-law coupling on a shaft is
+   !> (open, or closed with the linear law): nearly every step of the pass is
+   !> S Phi, and M is the general pass's; a load with a speed law (its slope reads
+   !> the speed) makes every step general; the Table 5.5 rig's yang_sun mesh in
+   !> contact (F = c (k p + D p pdot)) is not linear in its mode.
+   subroutine test_tangent_map_where_linear_in_the_mode()
+      character(len=*), parameter :: deck = "&run t_end = 1.0, dt = 2.0e-5 /"//nl// &
+                                     "&node type = 'fixed' /"//nl//"&node type = 'inertia', inertia = 0.5 /"//nl// &
+                                     "&node type = 'inertia', inertia = 2.0 /"//nl// &
+                                     "&element type = 'shaft', stiffness = 100.0 /"//nl// &
+                                     "&element type = 'clearance_coupling', clearance = 0.02, stiffness = 1.0e4, "// &
+                                     "contact_law = 'linear', contact_damping = 3.0 /"//nl// &
+                                     "&initial node = 'n2', angle = 0.0, speed = 3.0 /"//nl// &
+                                     "&initial node = 'n3', angle = 0.0, speed = -1.0 /"
+      type(model_t) :: m
+      real(wp), allocatable :: x(:), x1(:), mm(:, :), mg(:, :), jac(:, :)
+      type(monodromy_stats_t) :: st, sg
+      logical :: const
+      type(error_t), allocatable :: err
+      call test_begin('tangent_map_where_linear_in_the_mode')
+      call load_model_text(deck, m)
+      call start(m, x)
+      allocate (jac(m%n_y, m%n_y))
+      call m%jacobian(m%run%t_start, x, jac, constant=const)
+      call check('shaft and open linear-law coupling: the Jacobian is constant in the mode', const)
+      x1 = x
+      call monodromy_saltation(m, m%run%t_start, 0.2_wp, x1, mm, err, stats=st)
+      call check('no error', .not. allocated(err))
+      write (*, '(a,i0,a,i0,a,i0,a,i0)') '    linear coupling: ', st%tangent_steps, ' of ', st%steps, &
+         ' steps by S, ', st%tangent_maps, ' maps, events ', st%events
+      call check('it met contact (events in the window)', st%events >= 4)
+      ! every step but the mode's first full one and the two parts of a step split at an event
+      call check('every full step but each mode''s first is S Phi', &
+                 st%tangent_steps >= st%steps - st%tangent_maps - 2*st%events)
+      call load_model_text(deck, m)
+      call start(m, x)
+      call monodromy_saltation(m, m%run%t_start, 0.2_wp, x, mg, err, stats=sg, tangent_cache=.false.)
+      call check('the same M as the general pass (4 eps a step of max |M|)', maxval(abs(mm - mg))/maxval(abs(mg)), &
+                 0.0_wp, abs_tol=4.0_wp*epsilon(1.0_wp)*st%steps)
+      call check('the same flow, bit for bit', all(x == x1))
+      call load_model_text(deck//nl//"&load node = 'n3', speed_law = 'linear', w_nominal = 10.0, value = -4.0 /", m)
+      call start(m, x)
+      call m%jacobian(m%run%t_start, x, jac, constant=const)
+      call check('a load with a speed law: not constant', .not. const)
+      call monodromy_saltation(m, m%run%t_start, 0.2_wp, x, mm, err, stats=st)
+      call check('no error (speed law)', .not. allocated(err))
+      call check('a load with a speed law: every step general', st%tangent_steps == 0 .and. st%tangent_maps == 0)
+      call load_model('inputs/gregory_harris_munro.nml', m)
+      call start(m, x)
+      call check('the rig starts with its yang_sun mesh in contact', m%any_contact())
+      deallocate (jac)
+      allocate (jac(m%n_y, m%n_y))
+      call m%jacobian(m%run%t_start, x, jac, constant=const)
+      call check('a yang_sun mesh in contact: not constant', .not. const)
+   end subroutine test_tangent_map_where_linear_in_the_mode
+
    !> The model at its initial state and modes (energy states off).
    subroutine start(m, x)
       type(model_t), intent(inout) :: m
@@ -250,6 +311,8 @@ contains
       real(wp), intent(in) :: h, dt_factor, tol
       real(wp), intent(out) :: e_m
       type(model_t) :: m
+      real(wp), allocatable :: m_gen(:, :)
+      type(monodromy_stats_t) :: st_gen
       real(wp), allocatable :: x0(:), x(:), mm(:, :), m_nosalt(:, :), m_nomem(:, :), m_exact(:, :), d1(:, :), d2(:, :), dr(:, :), sc(:)
       type(error_t), allocatable :: err
       type(monodromy_stats_t) :: st
@@ -278,6 +341,17 @@ contains
          ' s; dt ', m0%run%dt, ', steps ', st%steps, ', events ', st%events, ', jumps ', &
          st%jumps, ', impacts ', st%impacts, ', min guard rate ', st%min_rate
       call check('the window has events where the vector field jumps', st%jumps > 0)
+      m = m0
+      x = x0
+      call monodromy_saltation(m, t0, period, x, m_gen, err, stats=st_gen, tangent_cache=.false.)
+      write (*, '(a,i0,a,i0,a,i0,a,es9.2)') '    tangent maps (D-162): ', st%tangent_steps, ' of ', st%steps, &
+         ' steps, ', st%tangent_maps, ' maps; |M - M_general| / max|M| ', &
+         maxval(abs(mm - m_gen))/maxval(abs(m_gen))
+      ! (the same RK4 steps, S Phi summed in another order: a few ulps a step,
+      ! accumulated at most linearly over the steps: 4 eps a step)
+      call check('M with the modes'' tangent maps = the general pass''s (4 eps a step of max |M|)', &
+                 maxval(abs(mm - m_gen))/maxval(abs(m_gen)), 0.0_wp, abs_tol=4.0_wp*epsilon(1.0_wp)*st%steps)
+      call check('the general pass takes no tangent map', st_gen%tangent_steps == 0 .and. st_gen%tangent_maps == 0)
       if (impacts) call check('the window closes a contact (impact damping from V_i)', st%impacts > 0)
       allocate (sc(n))
       do k = 1, n

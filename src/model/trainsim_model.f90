@@ -357,14 +357,13 @@ module trainsim_model
          real(wp), intent(in) :: t
       end subroutine model_apply_loads
 
-      !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes, assembled from
-      !> the nodes' own blocks and the elements' torque partials. The rows of the
-      !> energy-accounting states are left zero: those states feed nothing back,
-      !> so Newton's iteration stays exact for every other state.
-      module subroutine model_jacobian(self, t, y, jac)
+      !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes (the energy states' rows zero: they feed
+      !> nothing back); constant: whether it stays constant until the next event (D-162, trainsim_model_linear).
+      module subroutine model_jacobian(self, t, y, jac, constant)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
          real(wp), intent(out) :: jac(:, :)
+         logical, intent(out), optional :: constant
       end subroutine model_jacobian
 
       !> All elements' guards at (t, y) (a mode is valid while every guard is >= 0).

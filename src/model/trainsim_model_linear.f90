@@ -5,6 +5,8 @@
 submodule (trainsim_model) trainsim_model_linear
    use trainsim_element, only: lin_closed, max_ports
    use trainsim_ports, only: port_kinematics
+   use trainsim_element, only: hf_open, hf_linear
+   use trainsim_model_families, only: nk_plain
    implicit none
 
 contains
@@ -69,7 +71,40 @@ contains
          if (self%cn%inv_j(k) == 0.0_wp .or. self%cn%m == 0) cycle
          jac(self%nodes(self%cn%node(k))%n%offset + 2, :) = 0.0_wp
       end do
+      if (present(constant)) constant = jacobian_constant(self)
    end procedure model_jacobian
+
+   !> Whether the Jacobian is constant between events in the current modes
+   !> (D-162): every node with states a plain inertia (or held), no load with
+   !> a speed law, no kinematic constraint, no n-port element, and every
+   !> element a checked linear spring or in a checked hot form that is linear
+   !> in its mode (a clearance open, or closed with the linear law, its
+   !> stiffness factor constant until the next event, no no_tension clip).
+   !> Anything else (yang_sun, a varying mesh stiffness, tooth friction, an
+   !> element without a hot form) says .false.
+   pure logical function jacobian_constant(self) result(const)
+      class(model_t), intent(in) :: self
+      integer :: i
+      const = .false.
+      if (self%nport .or. .not. (allocated(self%fn) .and. allocated(self%fe) .and. allocated(self%fh))) return
+      if (allocated(self%spd_loads)) then
+         if (size(self%spd_loads) > 0) return
+      end if
+      if (allocated(self%cn)) then
+         if (self%cn%nc > 0 .or. size(self%cn%cand) > 0) return
+      end if
+      do i = 1, size(self%nodes)
+         if (self%speed_of(i) /= 0) cycle
+         if (self%fn(i)%kind /= nk_plain .and. self%nodes(i)%n%nstates() > 0) return
+      end do
+      do i = 1, size(self%elements)
+         if (self%fe(i)%linear) cycle
+         if (self%fh(i)%kind == hf_open) cycle
+         if (self%fh(i)%kind == hf_linear .and. .not. self%fh(i)%no_tension) cycle
+         return
+      end do
+      const = .true.
+   end function jacobian_constant
 
    module procedure closed_speed_ratio
       real(wp) :: k(2, 2), c(2, 2)

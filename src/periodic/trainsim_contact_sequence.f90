@@ -20,6 +20,9 @@ module trainsim_contact_sequence
       integer :: events = 0         !< events located (guards that fired)
       integer :: jumps = 0          !< events where f jumps (|f+ - f-| > 1e-10 |f-|)
       integer :: impacts = 0        !< contact onsets whose damping sensitivity was set
+      !> steps whose variational part was their mode's tangent map (Phi <- S Phi),
+      !> and the tangent maps built (one per mode stretch whose Jacobian is constant, D-162)
+      integer :: tangent_steps = 0, tangent_maps = 0
       !> smallest rate at which a guard crossed, |n^T f- + dg/dt| / |n| (the
       !> guard's units per second: a length or an angle), and that guard: a
       !> near-grazing contact shows here (the saltation grows as 1 / rate)

@@ -10,6 +10,10 @@
 !> until it opens: D's sensitivity to x(t0) is carried as a frozen state's.
 !> The modes at t0 (faces, zones, a closed contact's D) are held. Friction
 !> stick/slip (kinematic constraints, D-81) is refused.
+!> Where the model's Jacobian J is constant between events (the model says so
+!> and the four stage Jacobians of the mode's first full step agree bit for
+!> bit), the RK4 step's tangent map is the mode's constant S = I + hJ + (hJ)^2/2
+!> + (hJ)^3/6 + (hJ)^4/24, built once; every further full step is Phi <- S Phi (D-162).
 module trainsim_monodromy
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
@@ -20,6 +24,7 @@ module trainsim_monodromy
    use trainsim_contact, only: law_yang_sun, contact_law_t
    use trainsim_contact_sequence, only: monodromy_stats_t, record_event
    use trainsim_guard_geometry, only: face_of, guard_gradient, approach
+   use trainsim_step_tangent, only: step_partials, nonzeros, sparse_product, dense_product, tangent_map
    implicit none
    private
 
@@ -30,6 +35,16 @@ module trainsim_monodromy
       logical :: var = .false., salt = .true., memory = .true.
       logical :: exact = .false.            !< the step map's own derivative (`exact_step`)
       integer :: n = 0, ny = 0
+      !> the tangent map of the current mode (D-162): lin, the model's Jacobian is
+      !> constant between events in it; s_ok, smat holds S for steps of length
+      !> ~h_grid (the grid's step; a step split at an event stays general)
+      logical :: cache = .true., lin = .false., s_ok = .false.
+      !> while the mode's first full step runs: its stage Jacobians, compared with
+      !> the first (jac0); same_j, all agree so far
+      logical :: watch = .false., same_j = .false.
+      integer :: stage = 0
+      real(wp) :: h_grid = 0.0_wp
+      real(wp), allocatable :: smat(:, :), jac0(:, :)
       real(wp), allocatable :: phi(:, :)    !< (n, n) d x / d x(t0)
       real(wp), allocatable :: q(:, :)      !< (n, elements) d D_e / d x(t0), rows where has_q
       logical, allocatable :: has_q(:)      !< element e's impact damping depends on x(t0)
@@ -57,7 +72,8 @@ contains
    !> modes go along. dt: the step (default the deck's dt).
    !> saltation = .false. / memory = .false. leave out the jumps / the impact
    !> damping's sensitivity (for checking that they matter).
-   subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, exact_step, deck_grid, stats)
+   subroutine monodromy_saltation(model, t0, period, x, m, err, dt, saltation, memory, exact_step, deck_grid, stats, &
+                                  tangent_cache)
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: t0, period
       real(wp), intent(inout) :: x(:)
@@ -73,8 +89,12 @@ contains
       !> session's grid, which a period map restarted at t0 takes); default: T / ceil(T / dt)
       logical, intent(in), optional :: deck_grid
       type(monodromy_stats_t), intent(out), optional :: stats
+      !> .false.: every step through the stage Jacobians (the general pass), no
+      !> mode's tangent map (D-162; for checking that they agree)
+      logical, intent(in), optional :: tangent_cache
       type(pass_t) :: w
       w%var = .true.
+      if (present(tangent_cache)) w%cache = tangent_cache
       if (present(saltation)) w%salt = saltation
       if (present(memory)) w%memory = memory
       if (present(exact_step)) w%exact = exact_step
@@ -144,6 +164,7 @@ contains
          allocate (w%p1(w%n, w%n), w%p2(w%n, w%n), w%p3(w%n, w%n), w%p4(w%n, w%n), w%ps(w%n, w%n), w%b(w%n))
          allocate (w%jr(w%n*w%n), w%jc(w%n*w%n), w%jv(w%n*w%n))
          allocate (w%phi(w%n, w%n), w%q(w%n, size(model%elements)), w%jac(w%ny, w%ny))
+         allocate (w%smat(w%n, w%n), w%jac0(w%n, w%n))
          allocate (w%has_q(size(model%elements)), w%tau(w%n), w%rl(w%ny))
          w%tau = 0.0_wp
          w%phi = 0.0_wp
@@ -157,6 +178,8 @@ contains
       grid = .false.
       if (present(deck_grid)) grid = deck_grid
       if (.not. grid) h = period/nsteps
+      w%h_grid = h
+      w%lin = w%var .and. w%cache                      ! (the model is asked at the mode's first full step)
       call model%breakpoints(t0, t0 + period, bp)
       allocate (y(model%n_y), source=0.0_wp)              ! (energy integrals from 0 if x has none)
       y(1:size(x)) = x
@@ -235,7 +258,7 @@ contains
       moving = .false.
       if (w%var .and. w%exact) then
          moving = any(w%tau /= 0.0_wp)
-         if (moving .or. to_event) call step_partials(model, t, hs, x, w, w%rl, rt)
+         if (moving .or. to_event) call step_partials(model, t, hs, x, w%jac, w%rl, rt)
       end if
       call advance_state(model, t, hs, x, w)
       if (moving) then
@@ -246,53 +269,6 @@ contains
          w%tau = 0.0_wp
       end if
    end subroutine advance_exact
-
-   !> The RK4 step map R(t, x, l)'s partials in its length l and its start
-   !> time t at (t, x, hs), through its stages: dk/dl and dk/dt from the
-   !> model's Jacobian at each stage and df/dt (central differences in t:
-   !> 0 exactly for a model whose RHS does not read t).
-   subroutine step_partials(model, t, hs, x, w, rl, rt)
-      type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, hs, x(:)
-      type(pass_t), intent(inout) :: w
-      real(wp), intent(out) :: rl(:), rt(:)
-      real(wp), dimension(size(x)) :: k1, k2, k3, k4, l2, l3, l4, d2, d3, d4, f1
-      call model%rhs(t, x, k1)
-      f1 = f_t(t, x)
-      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, k2)
-      call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k1, w%jac)
-      l2 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k1)
-      d2 = 2.0_wp*l2 + jv(w%jac, 0.5_wp*hs*f1)
-      l2 = l2 + jv(w%jac, 0.5_wp*k1)
-      call model%rhs(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, k3)
-      call model%jacobian(t + 0.5_wp*hs, x + 0.5_wp*hs*k2, w%jac)
-      l3 = 0.5_wp*f_t(t + 0.5_wp*hs, x + 0.5_wp*hs*k2)
-      d3 = 2.0_wp*l3 + jv(w%jac, 0.5_wp*hs*d2)
-      l3 = l3 + jv(w%jac, 0.5_wp*k2 + 0.5_wp*hs*l2)
-      call model%rhs(t + hs, x + hs*k3, k4)
-      call model%jacobian(t + hs, x + hs*k3, w%jac)
-      l4 = f_t(t + hs, x + hs*k3)
-      d4 = l4 + jv(w%jac, hs*d3)
-      l4 = l4 + jv(w%jac, k3 + hs*l3)
-      rl = (k1 + 2.0_wp*(k2 + k3) + k4)/6.0_wp + hs/6.0_wp*(2.0_wp*(l2 + l3) + l4)
-      rt = hs/6.0_wp*(f1 + 2.0_wp*(d2 + d3) + d4)
-   contains
-      !> a v (gfortran 12 -O2 warns of an inline matmul on an expression's temporary)
-      pure function jv(a, v) result(r)
-         real(wp), intent(in) :: a(:, :), v(:)
-         real(wp) :: r(size(a, 1))
-         r = matmul(a, v)
-      end function jv
-
-      function f_t(ts, xs) result(ft)
-         real(wp), intent(in) :: ts, xs(:)
-         real(wp) :: ft(size(xs)), fp(size(xs)), fm(size(xs)), dt
-         dt = 1.0e-6_wp*max(abs(ts), abs(hs), 1.0e-9_wp)
-         call model%rhs(ts + dt, xs, fp)
-         call model%rhs(ts - dt, xs, fm)
-         ft = (fp - fm)/(2.0_wp*dt)
-      end function f_t
-   end subroutine step_partials
 
    !> x (and Phi) advanced by one RK4 step of length hs from t.
    subroutine advance_state(model, t, hs, x, w)
@@ -394,6 +370,8 @@ contains
       nev = 0
       call model%apply_events(t, x, fired, w%events, nev)
       if (.not. w%var) return
+      w%s_ok = .false.                                ! a new mode: its own tangent map, if any
+      w%lin = w%cache
       call model%rhs(t, x, fp)
       row = matmul(nv, w%phi)/den                     ! n^T Phi- / (n^T f- + dg/dt) = -d t_e / d x(t0)
       ! the event state's sensitivity, d x_e / d x(t0) = Phi- - f- n^T Phi- / den
@@ -476,6 +454,17 @@ contains
       real(wp), intent(in) :: t, hs
       real(wp), intent(inout) :: x(:)
       type(pass_t), intent(inout) :: w
+      logical :: full
+      ! a full step of the grid (its length differs from h_grid by the rounding of t)
+      full = abs(hs - w%h_grid) <= 8.0_wp*spacing(abs(t) + abs(hs))
+      if (w%s_ok .and. full) then
+         call rk4(model, t, hs, x, w%xt, w)
+         x = w%xt
+         call tangent_step(w)
+         return
+      end if
+      w%watch = w%lin .and. full .and. .not. any(w%has_q)
+      w%stage = 0
       call model%rhs(t, x, w%k1)
       call var_rhs(model, t, x, w%phi, w%p1, w)
       w%xs = x + 0.5_wp*hs*w%k1
@@ -492,35 +481,58 @@ contains
       call var_rhs(model, t + hs, w%xs, w%ps, w%p4, w)
       x = x + hs/6.0_wp*(w%k1 + 2.0_wp*(w%k2 + w%k3) + w%k4)
       w%phi = w%phi + hs/6.0_wp*(w%p1 + 2.0_wp*(w%p2 + w%p3) + w%p4)
+      if (w%watch) then
+         w%watch = .false.
+         if (w%same_j) then
+            call build_tangent(w, hs)
+         else
+            w%lin = .false.          ! the model's claim did not hold: general until the next event
+         end if
+      end if
    end subroutine rk4_var
+
+   !> S of the mode from its constant Jacobian (jac0) and the step hs.
+   subroutine build_tangent(w, hs)
+      type(pass_t), intent(inout) :: w
+      real(wp), intent(in) :: hs
+      call tangent_map(w%n, w%jac0, hs, w%smat)
+      w%s_ok = .true.
+      w%st%tangent_maps = w%st%tangent_maps + 1
+   end subroutine build_tangent
+
+   !> Phi <- S Phi: the variational part of a full step in a mode with S.
+   subroutine tangent_step(w)
+      type(pass_t), intent(inout) :: w
+      call dense_product(w%n, w%smat, w%phi, w%p1)
+      w%phi = w%p1
+      w%st%tangent_steps = w%st%tangent_steps + 1
+   end subroutine tangent_step
 
    !> Phi' = J(t, x) Phi + sum over the closed contacts with a sensitive
    !> damping of (df/dD_e) q_e^T.
    subroutine var_rhs(model, t, x, phi, dphi, w)
       type(model_t), intent(inout) :: model
-      real(wp), intent(in) :: t, x(:), phi(:, :)
-      real(wp), intent(out) :: dphi(:, :)
+      real(wp), intent(in) :: t, x(:)
+      real(wp), intent(in), contiguous :: phi(:, :)
+      real(wp), intent(out), contiguous :: dphi(:, :)
       type(pass_t), intent(inout) :: w
-      integer :: e, i, j, k, l, nz
-      call model%jacobian(t, x, w%jac)
+      integer :: e, j, nz
+      if (.not. w%watch) then
+         call model%jacobian(t, x, w%jac)
+      else                              ! the mode's first full step: constant, and its stage Jacobians one?
+         w%stage = w%stage + 1
+         if (w%stage == 1) then
+            call model%jacobian(t, x, w%jac, constant=w%same_j)
+            w%jac0 = w%jac(1:w%n, 1:w%n)
+         else
+            call model%jacobian(t, x, w%jac)
+            if (w%same_j) w%same_j = all(w%jac(1:w%n, 1:w%n) == w%jac0)
+         end if
+      end if
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
       ! two nodes), each entry summed over k in order, as matmul does (D-148)
-      nz = 0
-      do k = 1, w%n
-         do i = 1, w%n
-            if (w%jac(i, k) == 0.0_wp) cycle
-            nz = nz + 1
-            w%jr(nz) = i
-            w%jc(nz) = k
-            w%jv(nz) = w%jac(i, k)
-         end do
-      end do
-      dphi = 0.0_wp
-      do j = 1, w%n
-         do l = 1, nz
-            dphi(w%jr(l), j) = dphi(w%jr(l), j) + w%jv(l)*phi(w%jc(l), j)
-         end do
-      end do
+      call nonzeros(w%n, w%ny, w%jac, nz, w%jr, w%jc, w%jv)
+      call sparse_product(w%n, nz, w%jr, w%jc, w%jv, phi, dphi)
       do e = 1, size(w%has_q)
          if (.not. w%has_q(e)) cycle
          call damping_column(model, e, t, x, w%b, w)
