@@ -14,7 +14,7 @@ contains
    !> problem can, D-131, else the deck rebuilt there; t0 = t_start + phase T).
    !> A retuned model's session skips the fixed-step check when every load is a
    !> constant: the first model's set-up made it, and a retune changes nothing it
-   !> reads but the deck's start, from which the map never integrates (D-154).
+   !> reads but the deck's start, from which the map never integrates (D-157).
    module procedure at
       type(model_t) :: m
       real(wp) :: period
@@ -270,6 +270,13 @@ contains
       call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
       if (allocated(err)) return
       c%n = c%pm%n
+      if (allocated(br%pts(last)%mem)) then   ! (the point's memory, not the deck's start: D-154)
+         if (size(br%pts(last)%mem) == size(c%pm%mem) .and. size(br%pts(last)%kept) == size(c%pm%kept)) then
+            c%pm%mem = br%pts(last)%mem
+            c%pm%mem_end = c%pm%mem
+            c%pm%kept = br%pts(last)%kept
+         end if
+      end if
       if (size(c%s) /= c%n .or. size(br%pts(last)%tangent) /= c%n + 1) then
          call fatal_error(err, 'the branch to resume has '//str(size(c%s))//' states, the deck '//str(c%n), err_input)
          return
