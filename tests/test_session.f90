@@ -438,7 +438,7 @@ contains
       s = trim(adjustl(b))
    end function ftoa
 
-   !> `step_checked` (D-157): the caller vouches for the fixed-step check, so a start
+   !> `step_checked` (D-163): the caller vouches for the fixed-step check, so a start
    !> with a dt 1000 times the RK4 limit (refused without it) goes ahead; the period
    !> map passes it at a branch's later mesh frequencies only.
    subroutine test_step_checked()

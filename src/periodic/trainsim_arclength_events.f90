@@ -14,7 +14,7 @@ contains
    !> problem can, D-131, else the deck rebuilt there; t0 = t_start + phase T).
    !> A retuned model's session skips the fixed-step check when every load is a
    !> constant: the first model's set-up made it, and a retune changes nothing it
-   !> reads but the deck's start, from which the map never integrates (D-157).
+   !> reads but the deck's start, from which the map never integrates (D-163).
    module procedure at
       type(model_t) :: m
       real(wp) :: period

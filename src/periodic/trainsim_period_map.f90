@@ -130,7 +130,7 @@ contains
    !> the memory the deck's start (the law's), or with `keep_memory` the map's own
    !> (a new t0 or parameter of the same orbit or branch, D-150). `step_checked`: the
    !> caller vouches that the fixed-step check passed on a model that differs from
-   !> this one in nothing it reads (D-157); the session then skips it.
+   !> this one in nothing it reads (D-163); the session then skips it.
    subroutine pm_setup(self, model, period, k, err, keep_memory, step_checked)
       class(period_map_t), intent(inout) :: self
       type(model_t), intent(in) :: model
@@ -156,7 +156,7 @@ contains
       self%model = model
       self%memory = memory_elements(model)
       ! the session's run: to t0 + kT, nothing kept (set on the map's own copy while the
-      ! session starts, then the deck's run back: one model copy fewer a set-up, D-157)
+      ! session starts, then the deck's run back: one model copy fewer a set-up, D-163)
       associate (m => self%model)
       deck_run = m%run
       self%t0 = m%run%t_start

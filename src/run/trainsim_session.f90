@@ -120,7 +120,7 @@ contains
       logical, intent(in), optional :: reference
       !> .true.: the caller vouches that `check_fixed_step` passed on a model that
       !> differs from this one in nothing it reads (the period map at another
-      !> mesh frequency of a branch, D-157); as `simulate`'s step_checked (D-82)
+      !> mesh frequency of a branch, D-163); as `simulate`'s step_checked (D-82)
       logical, intent(in), optional :: step_checked
       logical :: with_reference, checked
       type(observer_t) :: fresh_obs
