@@ -29,6 +29,7 @@ program test_session
    call test_input_speed()
    call test_input_voltage()
    call test_sequence_restored()
+   call test_step_checked()
    call suite_end()
 
 contains
@@ -436,5 +437,26 @@ contains
       write (b, '(es10.3)') x
       s = trim(adjustl(b))
    end function ftoa
+
+   !> `step_checked` (D-163): the caller vouches for the fixed-step check, so a start
+   !> with a dt 1000 times the RK4 limit (refused without it) goes ahead; the period
+   !> map passes it at a branch's later mesh frequencies only.
+   subroutine test_step_checked()
+      type(model_t) :: m
+      type(session_t), target :: s
+      type(error_t), allocatable :: err
+      call test_begin('step_checked')
+      call rig('rk4', m)
+      m%run%dt = 2.0_wp   ! (the rig's RK4 limit as it starts is 1.09e-3 s: the check refuses 1000 times it)
+      m%run%output_interval = 2.0_wp
+      m%run%t_end = 4.0_wp
+      call s%start(m, err)
+      call check('a dt 1000 times the RK4 limit is refused at the start', allocated(err))
+      if (allocated(err)) call check('   as bad input', err%code == err_input)
+      if (allocated(err)) deallocate (err)
+      call s%start(m, err, step_checked=.true.)
+      call check('with step_checked the session starts (the check is the caller''s)', .not. allocated(err))
+      call s%finish()
+   end subroutine test_step_checked
 
 end program test_session

@@ -12,10 +12,14 @@ contains
 
    !> The period map set up at lambda (the first model retuned to lambda where the
    !> problem can, D-131, else the deck rebuilt there; t0 = t_start + phase T).
+   !> A retuned model's session skips the fixed-step check when every load is a
+   !> constant: the first model's set-up made it, and a retune changes nothing it
+   !> reads but the deck's start, from which the map never integrates (D-163).
    module procedure at
       type(model_t) :: m
       real(wp) :: period
       logical :: done
+      integer :: l
       if (lam == c%lam) return
       if (c%lam == huge(1.0_wp)) c%lin_lam = huge(1.0_wp)   ! (a set-up forced again: e.g. a new phase)
       c%lam = huge(1.0_wp)
@@ -37,7 +41,12 @@ contains
       if (allocated(err)) return
       c%t_start = m%run%t_start
       m%run%t_start = m%run%t_start + c%phase*period
-      call c%pm%setup(m, period, c%k, err, keep_memory=allocated(c%pm%mem))   ! (the branch's memory, D-150)
+      if (done .and. allocated(m%loads)) then
+         do l = 1, size(m%loads)
+            done = done .and. m%loads(l)%torque%is_constant()
+         end do
+      end if
+      call c%pm%setup(m, period, c%k, err, keep_memory=allocated(c%pm%mem), step_checked=done)   ! (memory: D-150)
       if (allocated(err)) return
       c%lam = lam
    end procedure at

@@ -34,7 +34,7 @@ module trainsim_period_map
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: str
-   use trainsim_model, only: model_t, rigid_speeds
+   use trainsim_model, only: model_t, rigid_speeds, run_settings_t
    use trainsim_session, only: session_t, session_state_t
    use trainsim_derived, only: mesh_frequency_of
    use trainsim_clearance_element, only: clearance_element_t
@@ -128,16 +128,18 @@ contains
    !> Set the map up for `model` (prepared as for a run), forcing period `period`, k
    !> periods per map: the reduced state's layout, the rigid speeds, a session at t0;
    !> the memory the deck's start (the law's), or with `keep_memory` the map's own
-   !> (a new t0 or parameter of the same orbit or branch, D-150).
-   subroutine pm_setup(self, model, period, k, err, keep_memory)
+   !> (a new t0 or parameter of the same orbit or branch, D-150). `step_checked`: the
+   !> caller vouches that the fixed-step check passed on a model that differs from
+   !> this one in nothing it reads (D-163); the session then skips it.
+   subroutine pm_setup(self, model, period, k, err, keep_memory, step_checked)
       class(period_map_t), intent(inout) :: self
       type(model_t), intent(in) :: model
       real(wp), intent(in) :: period
       integer, intent(in) :: k
       type(error_t), allocatable, intent(out) :: err
-      logical, intent(in), optional :: keep_memory
+      logical, intent(in), optional :: keep_memory, step_checked
       logical :: keep
-      type(model_t) :: m
+      type(run_settings_t) :: deck_run
       real(wp), allocatable :: w(:)
       logical, allocatable :: known(:)
       integer :: i, na, loop_el, ref, s
@@ -153,7 +155,10 @@ contains
       if (allocated(self%ang)) deallocate (self%ang, self%spd, self%ang_node, self%w)
       self%model = model
       self%memory = memory_elements(model)
-      m = model
+      ! the session's run: to t0 + kT, nothing kept (set on the map's own copy while the
+      ! session starts, then the deck's run back: one model copy fewer a set-up, D-163)
+      associate (m => self%model)
+      deck_run = m%run
       self%t0 = m%run%t_start
       m%run%t_end = self%t0 + real(k, wp)*period*(1.0_wp + 1.0e-9_wp)
       m%run%keep_events = .false.
@@ -196,7 +201,10 @@ contains
       end if
       call m%initial_state(self%y0)
       allocate (self%s)
-      call self%s%start(m, err, reference=.false.)   ! (the map reads states only: no static reference, D-131)
+      ! (the map reads states only: no static reference, D-131)
+      call self%s%start(m, err, reference=.false., step_checked=step_checked)
+      m%run = deck_run
+      end associate
       if (allocated(err)) return
       call self%s%save(self%p0, err)
       ! the memory: kept across a new t0 or parameter (rephase, a branch's next lambda), else the deck's start

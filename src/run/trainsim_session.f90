@@ -109,7 +109,7 @@ contains
    !> `NODE.tau`, an external torque of 0 beside the deck's loads (the sums are
    !> unchanged: x + 0 = x); `NODE.speed`, `NODE.voltage`, the deck's prescribed
    !> speed or motor voltage there, held at its value at t_start.
-   subroutine session_start(self, model, err, inputs, reference)
+   subroutine session_start(self, model, err, inputs, reference, step_checked)
       class(session_t), intent(inout), target :: self
       type(model_t), intent(in) :: model
       type(error_t), allocatable, intent(out) :: err
@@ -118,7 +118,11 @@ contains
       !> .false.: no quasi-static reference (the run's Kv, mesh orders and rattle
       !> indices then absent), for a caller that reads only states (the period map, D-131)
       logical, intent(in), optional :: reference
-      logical :: with_reference
+      !> .true.: the caller vouches that `check_fixed_step` passed on a model that
+      !> differs from this one in nothing it reads (the period map at another
+      !> mesh frequency of a branch, D-163); as `simulate`'s step_checked (D-82)
+      logical, intent(in), optional :: step_checked
+      logical :: with_reference, checked
       type(observer_t) :: fresh_obs
       type(run_stats_t) :: fresh_stats
       type(drive_t) :: fresh_d
@@ -141,7 +145,9 @@ contains
          if (allocated(err)) return
       end if
       self%stats = fresh_stats
-      call check_fixed_step(self%model, err)
+      checked = .false.
+      if (present(step_checked)) checked = step_checked
+      if (.not. checked) call check_fixed_step(self%model, err)
       if (allocated(err)) return
       self%obs%qs = fresh_obs%qs
       with_reference = .true.
