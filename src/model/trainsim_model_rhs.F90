@@ -52,6 +52,8 @@ contains
       associate (b => self%blk)
          if (track) then
             call column_energy(SE_HEAD, self%fam%pw, SE_STORED, SE_COL)
+         else if (self%fam%chain%n > 0) then
+            call column_chain(SE_HEAD, SE_COL)
          else
             call column_plain(SE_HEAD, SE_COL)
          end if
@@ -64,6 +66,11 @@ contains
 #define KERNEL column_plain
 #define ENERGY 0
 #include "trainsim_model_stage.inc"
+#undef KERNEL
+#define KERNEL column_chain
+#define CHAIN_ONLY 1
+#include "trainsim_model_stage.inc"
+#undef CHAIN_ONLY
 #undef KERNEL
 #undef ENERGY
 #define KERNEL column_energy
@@ -112,6 +119,13 @@ contains
          call stage_formed(t4, h, k3, k4)
       else if (self%run%track_energy) then
          call rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
+      else if (self%fam%chain%n > 0) then
+         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
+                             self%fam%th, self%fam%w, hh, k1)
+         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
+                             self%fam%th, self%fam%w, hh, k2)
+         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
+                             self%fam%th, self%fam%w, h, k3)
       else
          call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
                              self%fam%th, self%fam%w, hh, k1)
@@ -141,6 +155,11 @@ contains
 #define ENERGY 0
 #define STEP_END 0
 #include "trainsim_model_stage.inc"
+#undef KERNEL
+#define KERNEL chain_plain_at
+#define CHAIN_ONLY 1
+#include "trainsim_model_stage.inc"
+#undef CHAIN_ONLY
 #undef KERNEL
 #undef ENERGY
 #undef STEP_END
