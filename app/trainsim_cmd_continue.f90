@@ -27,6 +27,7 @@ module trainsim_cmd_continue
    use trainsim_cli, only: nargs, arg, quit, fail, add_set, real_value, text_value, deck_path, sets
    use trainsim_cmd_help, only: continue_usage
    use trainsim_monodromy_map, only: monodromy_code
+   use trainsim_clearance_element, only: clearance_element_t
    implicit none
    private
 
@@ -51,6 +52,7 @@ module trainsim_cmd_continue
    type(branch_file_t), save :: bfile
    type(sweep_layout_t), save :: blay     !< the branch file's layout (also for --switch-pd's)
    integer, save :: bn = 0                 !< its states
+   integer, save :: n_memory(2) = 0        !< its memory values and elements (yang_sun's D, e, V_i: D-150)
    character(len=:), allocatable, save :: out_path
    integer, save :: kperiods = 1
    !> points whose t0 lies in a contact that came from an impact (orbit_run's `stale`, D-144)
@@ -118,9 +120,9 @@ contains
       if (size(p%ovs) > 0) p%retunes = p%retunes .and. .not. any(p%ovs(:)%derived)
       p%period_from_mesh = .true.
       do g = 1, size(p%deck%groups)
-         if (p%deck%groups(g)%name /= 'run' .or. .not. allocated(p%deck%groups(g)%entries)) cycle
-         do e = 1, size(p%deck%groups(g)%entries)
-            if (p%deck%groups(g)%entries(e)%key == 'settle_period') p%period_from_mesh = .false.
+         if (p%deck%groups(g)%name /= 'run') cycle
+         do e = 1, p%deck%groups(g)%nentries()
+            if (p%deck%groups(g)%key_of(e) == 'settle_period') p%period_from_mesh = .false.
          end do
       end do
       do g = 1, size(p%ovs)
@@ -228,7 +230,8 @@ contains
       write (output_unit, '(a)') '      lambda            period        max|mu|     stability  corrector  bifurcation'
       if (len(out_path) > 0) then
          call branch_layout(prob%deck, lam0, opt, param, lay, n, err)
-         if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err, period_count=opt%k)
+         if (.not. allocated(err)) call bfile%open(out_path, lay, n, prob%key, resume, err, period_count=opt%k, &
+                                                   memory=n_memory)
          blay = lay
          bn = n
          if (allocated(err)) call fail(err)
@@ -294,7 +297,7 @@ contains
          if (dot <= index(out_path, '/', back=.true.)) dot = len(out_path) + 1
          out_path = out_path(1:dot - 1)//'.pd2'//out_path(dot:)
          kperiods = 2*opt%k
-         call bfile%open(out_path, blay, bn, prob%key, .false., err, period_count=kperiods)
+         call bfile%open(out_path, blay, bn, prob%key, .false., err, period_count=kperiods, memory=n_memory)
          if (allocated(err)) call fail(err)
          call switch_period_doubling(prob, br, ipd, opt, br2, err, hook=on_point)
          call bfile%close()
@@ -438,6 +441,13 @@ contains
       call prob%model_at(lam0, model, err)
       if (allocated(err)) return
       n = model%n_states
+      n_memory = 0
+      do k = 1, size(model%elements)   ! (as period_map_t's memory: the clearances whose law keeps one)
+         select type (el => model%elements(k)%e)
+         class is (clearance_element_t)
+            if (el%memory_size() > 0) n_memory = n_memory + [el%memory_size(), 1]
+         end select
+      end do
       lay%version = version_full()
       lay%deck_file = deck_path
       lay%deck_text = deck%text

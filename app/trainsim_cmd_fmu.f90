@@ -133,14 +133,14 @@ contains
                write (error_unit, '(a)') g%file//':'//str(g%line)//": error: &fmu: a deck has one &fmu group"
                call quit(2)
             end if
-            do j = 1, size(g%entries)
-               if (g%entries(j)%key /= 'inputs') then
+            do j = 1, g%nentries()
+               if (g%key_of(j) /= 'inputs') then
                   write (error_unit, '(a)') g%file//':'//str(g%entries(j)%line)//": error: &fmu: unknown key '"// &
-                     g%entries(j)%key//"'; the keys of &fmu are: inputs"
+                     g%key_of(j)//"'; the keys of &fmu are: inputs"
                   call quit(2)
                end if
-               do k = 1, size(g%entries(j)%values)
-                  if (.not. listed(inputs, g%entries(j)%values(k)%s)) call append(inputs, g%entries(j)%values(k)%s)
+               do k = 1, g%nvalues(j)
+                  if (.not. listed(inputs, g%value_of(j, k))) call append(inputs, g%value_of(j, k))
                end do
             end do
          end associate
@@ -198,7 +198,7 @@ contains
       character(len=*), intent(in) :: deck_file
       type(string_t), intent(in) :: inputs(:)
       integer :: i, j, n_load, kind, n
-      character(len=:), allocatable :: sep, group, key, node
+      character(len=:), allocatable :: sep, group, key, node, text
       real(wp) :: v
       integer :: st
       write (u, '(a)') '{"version": '//js(version_full())//', "deck_file": '//js(deck_file)//', "title": '// &
@@ -237,8 +237,8 @@ contains
             group = ''
             select case (g%name)
             case ('node', 'element')
-               do j = 1, size(g%entries)
-                  if (g%entries(j)%key == 'id') group = g%entries(j)%values(1)%s
+               do j = 1, g%nentries()
+                  if (g%key_of(j) == 'id') group = g%value_of(j, 1)
                end do
             case ('load')
                n_load = n_load + 1
@@ -247,24 +247,23 @@ contains
                group = 'run'
             end select
             if (len(group) == 0) cycle
-            do j = 1, size(g%entries)
-               key = g%entries(j)%key
-               if (size(g%entries(j)%values) /= 1) cycle
+            do j = 1, g%nentries()
+               key = g%key_of(j)
+               if (g%nvalues(j) /= 1) cycle
                if (group == 'run' .and. any(not_parameters == key)) cycle
-               associate (text => g%entries(j)%values(1)%s)
-                  if (g%entries(j)%quoted(1)) then
-                     if (any(not_text_parameters == key) .or. index(key, '_file') > 0 .or. index(text, "'") > 0) cycle
-                     write (u, '(a)') sep//'{"path": '//js(group//'.'//key)//', "type": "string", "value": '//js(text)//'}'
-                  else if (is_int32(text, n)) then
-                     write (u, '(a)') sep//'{"path": '//js(group//'.'//key)//', "type": "integer", "value": '// &
-                        str(n)//'}'
-                  else
-                     call parse_real(text, v, st)
-                     if (st /= 0) cycle
-                     write (u, '(a, es24.16e3, a)') sep//'{"path": '//js(group//'.'//key)//', "type": "real", "value": ', &
-                        v, '}'
-                  end if
-               end associate
+               text = g%value_of(j, 1)
+               if (g%quoted(j, 1)) then
+                  if (any(not_text_parameters == key) .or. index(key, '_file') > 0 .or. index(text, "'") > 0) cycle
+                  write (u, '(a)') sep//'{"path": '//js(group//'.'//key)//', "type": "string", "value": '//js(text)//'}'
+               else if (is_int32(text, n)) then
+                  write (u, '(a)') sep//'{"path": '//js(group//'.'//key)//', "type": "integer", "value": '// &
+                     str(n)//'}'
+               else
+                  call parse_real(text, v, st)
+                  if (st /= 0) cycle
+                  write (u, '(a, es24.16e3, a)') sep//'{"path": '//js(group//'.'//key)//', "type": "real", "value": ', &
+                     v, '}'
+               end if
                sep = ', '
             end do
          end associate
@@ -273,9 +272,9 @@ contains
       write (u, '(a)', advance='no') ' "table_files": ['
       sep = ''
       do i = 1, size(deck%groups)
-         do j = 1, size(deck%groups(i)%entries)
-            if (deck%groups(i)%entries(j)%key /= 'table_file') cycle
-            write (u, '(a)', advance='no') sep//js(deck%groups(i)%entries(j)%values(1)%s)
+         do j = 1, deck%groups(i)%nentries()
+            if (deck%groups(i)%key_of(j) /= 'table_file') cycle
+            write (u, '(a)', advance='no') sep//js(deck%groups(i)%value_of(j, 1))
             sep = ', '
          end do
       end do

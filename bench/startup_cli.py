@@ -4,8 +4,9 @@
 Writes the chains of bench/bench_startup.f90 (unit inertias, shafts k = 1e4; with
 backlash a spur gear, half backlash 1e-3, as every 10th element; t_end = dt =
 5e-3 s: one step) to a scratch directory and runs each TRAINSIM given on them,
-timing the child's CPU time (user + system, from getrusage: a loaded machine
-inflates wall time, not this much). The figure is the best of --rep runs; a
+timing the child's CPU time (user + system, from its own rusage by wait4: a
+loaded machine inflates wall time, not this much) and its peak RSS. The figure
+is the best of --rep runs at every size (the least RSS beside it); a
 case is skipped for a binary once it has taken more than --cap seconds at a
 smaller size (an O(n^2) start-up at 20 000 nodes takes minutes).
 
@@ -14,7 +15,6 @@ Usage (repository root, Release builds):
 """
 import argparse
 import os
-import resource
 import subprocess
 import tempfile
 
@@ -33,10 +33,13 @@ def chain(n, backlash, dt=5e-3):
 
 
 def cpu_of(exe, deck):
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run([exe, "run", deck, "--no-output"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    """CPU seconds (user + system) and peak RSS (MB) of one run, from the child's own rusage."""
+    proc = subprocess.Popen([exe, "run", deck, "--no-output"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _, status, ru = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode != 0:
+        raise subprocess.CalledProcessError(proc.returncode, [exe, "run", deck])
+    return ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0
 
 
 def main():
@@ -47,7 +50,7 @@ def main():
     a = ap.parse_args()
     cases = [(200, True), (1000, False), (5000, False), (20000, False), (1000, True), (5000, True), (20000, True)]
     tmp = tempfile.mkdtemp(prefix="trainsim_startup_")
-    print("CPU seconds of `trainsim run DECK --no-output` (one step), best of", a.rep)
+    print("CPU seconds of `trainsim run DECK --no-output` (one step), best of", a.rep, "(every size), and peak RSS")
     print(f"{'chain':>18}" + "".join(f"{os.path.basename(os.path.dirname(os.path.dirname(os.path.abspath(e)))) + ':' + os.path.basename(e):>28}" for e in a.trainsim))
     slow = {e: set() for e in a.trainsim}
     prev = {}
@@ -60,14 +63,16 @@ def main():
             if b in slow[e]:
                 row += f"{'skipped':>28}"
                 continue
-            t = min(cpu_of(e, deck) for _ in range(a.rep if n < 20000 else 1))
+            runs = [cpu_of(e, deck) for _ in range(a.rep)]
+            t = min(r[0] for r in runs)
+            rss = min(r[1] for r in runs)
             if t > a.cap:
                 slow[e].add(b)
             ratio = ""
             if (e, b) in prev and n > 200:
                 ratio = f" (x{t / prev[(e, b)]:.1f})"
             prev[(e, b)] = t
-            row += f"{f'{t:.3f}{ratio}':>28}"
+            row += f"{f'{t:.3f}{ratio} {rss:.0f} MB':>28}"
         print(row, flush=True)
         os.remove(deck)
     os.rmdir(tmp)

@@ -17,7 +17,7 @@ module test_conformance_checks
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_strings, only: string_t, str
-   use trainsim_deck, only: deck_t, parse_deck, deck_entry_t
+   use trainsim_deck, only: deck_t, parse_deck, deck_group_t
    use trainsim_builder, only: build_model
    use trainsim_model, only: model_t
    use trainsim_element, only: element_t
@@ -741,35 +741,36 @@ contains
       type(error_t), allocatable :: err
       integer :: k, n_rejected, n_cases
       logical :: listed_ok
+      character(len=:), allocatable :: key, value
       call parse_deck('&example '//example//' /', 'example', frag, err)
       call check('the example fragment parses'//message_of(err), .not. allocated(err))
       if (allocated(err)) return
-      if (.not. allocated(frag%groups(1)%entries)) then
+      if (frag%groups(1)%nentries() == 0) then
          write (*, '(a)') '    (the example has no keys: nothing to corrupt)'
          return
       end if
       listed_ok = .true.
       do k = 1, size(positive)
-         listed_ok = listed_ok .and. entry_index(frag%groups(1)%entries, positive(k)%s) > 0
+         listed_ok = listed_ok .and. entry_index(frag%groups(1), positive(k)%s) > 0
       end do
       do k = 1, size(nonnegative)
-         listed_ok = listed_ok .and. entry_index(frag%groups(1)%entries, nonnegative(k)%s) > 0
+         listed_ok = listed_ok .and. entry_index(frag%groups(1), nonnegative(k)%s) > 0
       end do
       call check('the row''s > 0 and >= 0 keys are keys of its example', listed_ok)
       n_rejected = 0
       n_cases = 0
-      do k = 1, size(frag%groups(1)%entries)
-         associate (ent => frag%groups(1)%entries(k))
-            call expect_rejected(ent%key, 'nan')
-            if (in_list(ent%key, positive)) then
-               call expect_rejected(ent%key, '0.0')
-               call expect_rejected(ent%key, negated(ent%values(1)%s))
-            end if
-            if (in_list(ent%key, nonnegative)) then
-               call expect_rejected(ent%key, negated(ent%values(1)%s))
-               call expect_accepted(ent%key, '0.0')
-            end if
-         end associate
+      do k = 1, frag%groups(1)%nentries()
+         key = frag%groups(1)%key_of(k)
+         value = frag%groups(1)%value_of(k, 1)
+         call expect_rejected(key, 'nan')
+         if (in_list(key, positive)) then
+            call expect_rejected(key, '0.0')
+            call expect_rejected(key, negated(value))
+         end if
+         if (in_list(key, nonnegative)) then
+            call expect_rejected(key, negated(value))
+            call expect_accepted(key, '0.0')
+         end if
       end do
       write (*, '(a,i0,a,i0,a)') '    ', n_rejected, ' of ', n_cases, ' bad values rejected naming their key'
       call check('every bad value is rejected with its key named', n_rejected == n_cases)
@@ -779,7 +780,7 @@ contains
          type(model_t) :: m
          type(error_t), allocatable :: e
          n_cases = n_cases + 1
-         call try_build(deck_of(kind, name, with_value(frag%groups(1)%entries, key, bad)), m, e)
+         call try_build(deck_of(kind, name, with_value(frag%groups(1), key, bad)), m, e)
          if (.not. allocated(e)) then
             write (*, '(a)') '    accepted: '//key//' = '//bad
          else if (index(e%message, "key '"//key//"'") == 0) then
@@ -792,7 +793,7 @@ contains
          character(len=*), intent(in) :: key, good
          type(model_t) :: m
          type(error_t), allocatable :: e
-         call try_build(deck_of(kind, name, with_value(frag%groups(1)%entries, key, good)), m, e)
+         call try_build(deck_of(kind, name, with_value(frag%groups(1), key, good)), m, e)
          call check(key//' = '//good//' (the rule''s boundary) is accepted'//message_of(e), .not. allocated(e))
       end subroutine expect_accepted
    end subroutine check_bad_values
@@ -809,28 +810,28 @@ contains
 
    !> The fragment again, with `key`'s value replaced by the token `value`
    !> (quoted if the example's value was a quoted string).
-   function with_value(entries, key, value) result(text)
-      type(deck_entry_t), intent(in) :: entries(:)
+   function with_value(g, key, value) result(text)
+      type(deck_group_t), intent(in) :: g
       character(len=*), intent(in) :: key, value
       character(len=:), allocatable :: text, tok
       integer :: k
       text = ''
-      do k = 1, size(entries)
-         tok = entries(k)%values(1)%s
-         if (entries(k)%key == key) tok = value
-         if (entries(k)%quoted(1)) tok = "'"//tok//"'"
+      do k = 1, g%nentries()
+         tok = g%value_of(k, 1)
+         if (g%key_of(k) == key) tok = value
+         if (g%quoted(k, 1)) tok = "'"//tok//"'"
          if (k > 1) text = text//', '
-         text = text//entries(k)%key//' = '//tok
+         text = text//g%key_of(k)//' = '//tok
       end do
    end function with_value
 
-   integer function entry_index(entries, key) result(idx)
-      type(deck_entry_t), intent(in) :: entries(:)
+   integer function entry_index(g, key) result(idx)
+      type(deck_group_t), intent(in) :: g
       character(len=*), intent(in) :: key
       integer :: k
       idx = 0
-      do k = 1, size(entries)
-         if (entries(k)%key == key) idx = k
+      do k = 1, g%nentries()
+         if (g%key_of(k) == key) idx = k
       end do
    end function entry_index
 

@@ -116,13 +116,13 @@ contains
       call check('count_groups node', deck%count_groups('node') == 2)
       call check('count_groups is case-insensitive', deck%count_groups('NODE') == 2)
       call check('count_groups absent', deck%count_groups('gear') == 0)
-      call check('run has 5 entries', size(deck%groups(1)%entries) == 5)
-      call check('element has 5 entries', size(deck%groups(4)%entries) == 5)
+      call check('run has 5 entries', deck%groups(1)%nentries() == 5)
+      call check('element has 5 entries', deck%groups(4)%nentries() == 5)
       call check('line of t_end', deck%groups(1)%entries(2)%line == 3)
       call check('line of output', deck%groups(1)%entries(5)%line == 4)
-      call check('line of stiffness', deck%groups(4)%entries(5)%key == 'stiffness' .and. &
+      call check('line of stiffness', deck%groups(4)%key_of(5) == 'stiffness' .and. &
                  deck%groups(4)%entries(5)%line == 8)
-      call check('line of values', deck%groups(5)%entries(4)%key == 'values' .and. &
+      call check('line of values', deck%groups(5)%key_of(4) == 'values' .and. &
                  deck%groups(5)%entries(4)%line == 10)
       call check('where with key', deck%groups(4)%where('stiffness') == "g.nml:8: &element #1, key 'stiffness'")
       call check('where without key', deck%groups(3)%where() == 'g.nml:6: &node #2')
@@ -138,21 +138,21 @@ contains
       if (.not. allocated(deck%groups)) return
       if (size(deck%groups) /= 6) return
       associate (run => deck%groups(1), n2 => deck%groups(3), ld => deck%groups(5), r2 => deck%groups(6))
-         call check('title key', run%entries(1)%key == 'title')
-         call check('title unquoted with comma inside', run%entries(1)%values(1)%s == 'Table 5.1, three disks')
-         call check('title quoted flag', run%entries(1)%quoted(1))
-         call check('t_end raw', run%entries(2)%values(1)%s == '0.0508')
-         call check('t_end not quoted', .not. run%entries(2)%quoted(1))
-         call check('double-quoted integrator', run%entries(4)%values(1)%s == 'rk4' .and. &
-                    run%entries(4)%quoted(1))
-         call check('whitespace-separated items', size(n2%entries) == 4 .and. n2%entries(4)%key == 'damping')
-         call check('times: 3 comma-separated values', size(ld%entries(3)%values) == 3)
-         call check('times raw', ld%entries(3)%values(2)%s == '0.1')
-         call check('values: 3 blank-separated values', size(ld%entries(4)%values) == 3)
-         call check('values raw', ld%entries(4)%values(3)%s == '100.0')
-         call check('d-exponent token kept raw', r2%entries(3)%values(1)%s == '1.0d-3')
-         call check('logical token raw', r2%entries(1)%values(1)%s == '.true.' .and. &
-                    r2%entries(2)%values(1)%s == 'T')
+         call check('title key', run%key_of(1) == 'title')
+         call check('title unquoted with comma inside', run%value_of(1, 1) == 'Table 5.1, three disks')
+         call check('title quoted flag', run%quoted(1, 1))
+         call check('t_end raw', run%value_of(2, 1) == '0.0508')
+         call check('t_end not quoted', .not. run%quoted(2, 1))
+         call check('double-quoted integrator', run%value_of(4, 1) == 'rk4' .and. &
+                    run%quoted(4, 1))
+         call check('whitespace-separated items', n2%nentries() == 4 .and. n2%key_of(4) == 'damping')
+         call check('times: 3 comma-separated values', ld%nvalues(3) == 3)
+         call check('times raw', ld%value_of(3, 2) == '0.1')
+         call check('values: 3 blank-separated values', ld%nvalues(4) == 3)
+         call check('values raw', ld%value_of(4, 3) == '100.0')
+         call check('d-exponent token kept raw', r2%value_of(3, 1) == '1.0d-3')
+         call check('logical token raw', r2%value_of(1, 1) == '.true.' .and. &
+                    r2%value_of(2, 1) == 'T')
          call check('entries start unused', .not. any(r2%entries(:)%used))
       end associate
    end subroutine test_example_values
@@ -197,23 +197,23 @@ contains
       call check('3 groups', size(deck%groups) == 3)
       if (size(deck%groups) /= 3) return
       call check('upper-case group and key lowered', deck%groups(1)%name == 'run' .and. &
-                 deck%groups(1)%entries(1)%key == 't_end')
-      call check('CR is white space', deck%groups(1)%entries(1)%values(1)%s == '1.0')
+                 deck%groups(1)%key_of(1) == 't_end')
+      call check('CR is white space', deck%groups(1)%value_of(1, 1) == '1.0')
       call check('tab-separated dt on line 2', deck%groups(1)%entries(2)%line == 2)
-      call check('empty group has 0 entries', size(deck%groups(2)%entries) == 0)
+      call check('empty group has 0 entries', deck%groups(2)%nentries() == 0)
       call check('second run ordinal 2', deck%groups(2)%ordinal == 2)
-      call check('&Node/ ok', deck%groups(3)%name == 'node' .and. size(deck%groups(3)%entries) == 0)
+      call check('&Node/ ok', deck%groups(3)%name == 'node' .and. deck%groups(3)%nentries() == 0)
       call parse_ok('&list names = shaft gear shaft, flags = 1 T /', deck)
       if (size(deck%groups) == 1) call check('list of bare names allowed', &
-                                             size(deck%groups(1)%entries(1)%values) == 3 .and. &
-                                             size(deck%groups(1)%entries(2)%values) == 2)
+                                             deck%groups(1)%nvalues(1) == 3 .and. &
+                                             deck%groups(1)%nvalues(2) == 2)
       call parse_ok(nl//'! only a comment'//nl, deck)
       call check('empty deck has 0 groups', size(deck%groups) == 0)
       call parse_ok("&s a = 'it''s', b = ""say """"hi"""""", c = '!' /", deck)
       if (size(deck%groups) == 1) then
-         call check('doubled single quote', deck%groups(1)%entries(1)%values(1)%s == "it's")
-         call check('doubled double quote', deck%groups(1)%entries(2)%values(1)%s == 'say "hi"')
-         call check('! inside quotes is text', deck%groups(1)%entries(3)%values(1)%s == '!')
+         call check('doubled single quote', deck%groups(1)%value_of(1, 1) == "it's")
+         call check('doubled double quote', deck%groups(1)%value_of(2, 1) == 'say "hi"')
+         call check('! inside quotes is text', deck%groups(1)%value_of(3, 1) == '!')
       end if
    end subroutine test_amp_end_and_empty_group
 

@@ -78,7 +78,7 @@ contains
       pa = a%elements(1)%e%params(); pb = b%elements(1)%e%params()
       call check('shaft stiffness as edited', all(pa%values == pb%values) .and. pa%values(1) == 2.0e5_wp)
       call check('load value as edited', a%loads(1)%torque%value(0.0_wp) == 4.0_wp)
-      call check('the deck itself is unchanged', deck%groups(1)%entries(1)%values(1)%s == '0.1')
+      call check('the deck itself is unchanged', deck%groups(1)%value_of(1, 1) == '0.1')
    end subroutine test_set_equals_editing_the_deck
 
    subroutine test_set_errors_name_the_argument()

@@ -366,7 +366,7 @@ contains
       type(param_list_t), allocatable, intent(out) :: ep(:)
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j, nn
-      character(len=:), allocatable :: id, tname, lid, rid, dl, dr
+      character(len=:), allocatable :: id, tname, lid, rid
       type(id_table_t) :: element_ids
 
       allocate (model%elements(deck%count_groups('element'))); allocate (ep(size(model%elements)))
@@ -394,14 +394,13 @@ contains
             associate (e => model%elements(k)%e)
                e%id = id
                e%origin = g%where()
-               ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1
-               dl = ''; dr = ''
-               if (k <= nn) dl = model%nodes(k)%n%id
-               if (k + 1 <= nn) dr = model%nodes(k + 1)%n%id
-               call g%get_string('left', lid, err, default=dl); if (allocated(err)) return
-               call g%get_string('right', rid, err, default=dr); if (allocated(err)) return
-               e%left = node_ids%get(lid)
-               e%right = node_ids%get(rid)
+               ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1,
+               ! taken by index (0 beyond the last node: the message names '' as before; D-157)
+               call g%get_string('left', lid, err, default=''); if (allocated(err)) return
+               call g%get_string('right', rid, err, default=''); if (allocated(err)) return
+               e%left = merge(k, 0, k <= nn); e%right = merge(k + 1, 0, k + 1 <= nn)
+               if (g%holds('left')) e%left = node_ids%get(lid)
+               if (g%holds('right')) e%right = node_ids%get(rid)
                if (e%left == 0) then
                   call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
                                    "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
@@ -415,6 +414,7 @@ contains
                   return
                end if
                if (e%left == e%right) then
+                  if (.not. g%holds('left')) lid = model%nodes(e%left)%n%id   ! (the default, named)
                   call fatal_error(err, g%where('right')//": error: element '"//id//"' joins node '"//lid// &
                                    "' to itself", err_input)
                   return
@@ -439,7 +439,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       character(len=:), allocatable :: pid
       integer :: k, j
-      if (.not. allocated(e%port_keys)) allocate (e%port_keys(0))
+      if (.not. allocated(e%port_keys)) return   ! two ports (n_ports): no empty lists (D-157)
       if (size(e%port_keys) > max_ports - 2) error stop 'read_ports: an element type declares more than max_ports ports'
       if (allocated(e%more_ports)) deallocate (e%more_ports)
       allocate (e%more_ports(size(e%port_keys)))

@@ -9,8 +9,8 @@ module trainsim_deck
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
    use trainsim_strings, only: string_t, to_lower, str, join, has_cr
    use trainsim_deck_lexer, only: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string, &
-                                  check_text, tokenize, display, parse_real, is_repeat, is_key, &
-                                  lower_in_place
+                                  check_text, tokenize, display, unquote_into, parse_real, is_repeat, &
+                                  is_key, lower_in_place
    use trainsim_deck_group, only: deck_group_t, deck_entry_t, same_key
    implicit none
    private
@@ -195,6 +195,7 @@ contains
       type(deck_group_t), allocatable :: groups(:)
       type(string_t), allocatable :: names(:)   ! distinct group names so far ...
       integer, allocatable :: counts(:)         ! ... and how many groups of each
+      character(len=:), allocatable :: name
       integer :: ngroups, i, k
 
       deck%file = file
@@ -212,15 +213,17 @@ contains
          select case (toks%kind(i))
          case (tk_group)
             ngroups = ngroups + 1
+            name = deck%text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
+            call lower_in_place(name)
             do k = 1, size(names)
-               if (names(k)%s == toks%text(i)%s) exit
+               if (same_key(names(k)%s, name)) exit
             end do
-            if (k > size(names)) call add_name(toks%text(i)%s)
+            if (k > size(names)) call add_name(name)
             counts(k) = counts(k) + 1
-            call parse_group(toks, i, file, counts(k), groups(ngroups), err)
+            call parse_group(deck%text, toks, i, file, counts(k), name, groups(ngroups), err)
             if (allocated(err)) return
          case (tk_end)
-            if (.not. allocated(toks%text(i)%s)) then   ! '/' (the lexer keeps only '&end''s text)
+            if (toks%nc(i) == 0) then   ! '/' (nc = 4: '&end')
                call fatal_error(err, file//':'//str(toks%line(i))//": error: text outside a group: '/' "// &
                                 "(a group is closed twice, or a value holds an unquoted '/')", err_input)
             else
@@ -230,7 +233,7 @@ contains
             return
          case default
             call fatal_error(err, file//':'//str(toks%line(i))//": error: text outside a group: '"// &
-                             display(toks, i)//"' (groups start with '&name')", err_input)
+                             display(deck%text, toks, i)//"' (groups start with '&name')", err_input)
             return
          end select
       end do
@@ -257,23 +260,28 @@ contains
 
    end subroutine parse_into
 
-   !> Parse one group starting at token `i` (a tk_group token); on return `i` is past its end.
-   !> The texts of its tokens are moved into the group (no copy, D-90); the entries and
-   !> values are counted first and allocated once.
-   subroutine parse_group(toks, i, file, ordinal, g, err)
-      type(token_list_t), intent(inout) :: toks
+   !> Parse one group starting at token `i` (a tk_group token, its name `name` in lower
+   !> case, moved into the group); on return `i` is past its end. Its keys and values are
+   !> copied into the group's pool, whose room and the entries are counted first and
+   !> allocated once: three allocations a group, none a key or value (D-159).
+   subroutine parse_group(text, toks, i, file, ordinal, name, g, err)
+      character(len=*), intent(in) :: text
+      type(token_list_t), intent(in) :: toks
       integer, intent(inout) :: i
       character(len=*), intent(in) :: file
       integer, intent(in) :: ordinal   !< 1 for the first group of its name, 2 for the second...
+      character(len=:), allocatable, intent(inout) :: name
       type(deck_group_t), intent(inout) :: g
       type(error_t), allocatable, intent(out) :: err
-      integer :: nent, k
+      integer :: nent, k, nkeys, nchars, nvals
 
-      call move_alloc(toks%text(i)%s, g%name)
+      call move_alloc(name, g%name)
       g%file = file
       g%line = toks%line(i)
       g%ordinal = ordinal
-      allocate (g%entries(count_keys(toks, i + 1)))
+      call count_room(toks, i + 1, nkeys, nchars, nvals)
+      allocate (g%entries(nkeys), g%vals(3, nvals))
+      allocate (character(len=nchars) :: g%pool)
       nent = 0
       i = i + 1
 
@@ -288,89 +296,88 @@ contains
             i = i + 1
             exit
          case (tk_group)
-            call group_error(g, nent, file, toks%line(i), "group not closed before '&"//toks%text(i)%s// &
+            call group_error(g, nent, file, toks%line(i), "group not closed before '"//display(text, toks, i)// &
                              "' (missing '/' or '&end'; the group starts on line "//str(g%line)//')', err)
             return
          case (tk_comma)
             i = i + 1
             cycle
          case (tk_word)
-            if (.not. is_key(toks%text(i)%s)) then
+            if (.not. is_key(text(toks%at(i):toks%at(i) + toks%nc(i) - 1))) then
                call group_error(g, nent, file, toks%line(i), "expected a key name, got '"// &
-                                display(toks, i)//"'", err)
+                                display(text, toks, i)//"'", err)
                return
             end if
             if (.not. next_is_eq(toks, i)) then
                call group_error(g, nent, file, toks%line(i), "missing '=' after key '"// &
-                                to_lower(toks%text(i)%s)//"'", err)
+                                to_lower(text(toks%at(i):toks%at(i) + toks%nc(i) - 1))//"'", err)
                return
             end if
          case default
             call group_error(g, nent, file, toks%line(i), "expected a key name, got '"// &
-                             display(toks, i)//"'", err)
+                             display(text, toks, i)//"'", err)
             return
          end select
 
          ! toks(i) is a key, toks(i+1) is '='.
          nent = nent + 1
          associate (e => g%entries(nent))
-            call lower_in_place(toks%text(i)%s)
-            call move_alloc(toks%text(i)%s, e%key)
+            e%key_at = g%pool_len + 1
+            e%key_len = toks%nc(i)
+            g%pool(e%key_at:e%key_at + e%key_len - 1) = text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
+            call lower_in_place(g%pool(e%key_at:e%key_at + e%key_len - 1))
+            g%pool_len = g%pool_len + e%key_len
             e%line = toks%line(i)
+            e%first = g%nvals + 1
             do k = 1, nent - 1
-               if (g%entries(k)%key == e%key) then
-                  call group_error(g, nent, file, e%line, "duplicate key '"//e%key// &
+               if (g%entries(k)%key_len /= e%key_len) cycle
+               if (same_key(g%pool(g%entries(k)%key_at:g%entries(k)%key_at + e%key_len - 1), &
+                            g%pool(e%key_at:e%key_at + e%key_len - 1))) then
+                  call group_error(g, nent, file, e%line, "duplicate key '"//g%key_of(nent)// &
                                    "' (first given on line "//str(g%entries(k)%line)//')', err)
                   return
                end if
             end do
          end associate
          i = i + 2
-         call parse_values(toks, i, file, g, nent, err)
+         call parse_values(text, toks, i, file, g, nent, err)
          if (allocated(err)) return
       end do
    end subroutine parse_group
 
-   !> Number of keys (words followed by '=') from token `j` to the group's end: the
-   !> entries parse_group can make, exactly as many when the group is well formed.
-   integer function count_keys(toks, j) result(n)
+   !> From token `j` to the group's end: the keys (words followed by '='), the characters
+   !> of keys and values and the values: the room parse_group needs, exactly or more.
+   subroutine count_room(toks, j, nkeys, nchars, nvals)
       type(token_list_t), intent(in) :: toks
       integer, intent(in) :: j
+      integer, intent(out) :: nkeys, nchars, nvals
       integer :: k
-      n = 0
-      do k = j, toks%n
-         if (toks%kind(k) == tk_end .or. toks%kind(k) == tk_group) exit
-         if (toks%kind(k) == tk_word) then
-            if (next_is_eq(toks, k)) n = n + 1
-         end if
-      end do
-   end function count_keys
-
-   !> Number of values parse_values takes from token `j` when they are well formed.
-   integer function count_values(toks, j) result(n)
-      type(token_list_t), intent(in) :: toks
-      integer, intent(in) :: j
-      integer :: k
-      n = 0
+      nkeys = 0
+      nchars = 0
+      nvals = 0
       do k = j, toks%n
          select case (toks%kind(k))
-         case (tk_comma)
-            cycle
-         case (tk_word)
-            if (next_is_eq(toks, k)) exit
-            n = n + 1
-         case (tk_string)
-            n = n + 1
-         case default
+         case (tk_end, tk_group)
             exit
+         case (tk_word)
+            nchars = nchars + toks%nc(k)
+            if (next_is_eq(toks, k)) then
+               nkeys = nkeys + 1
+            else
+               nvals = nvals + 1
+            end if
+         case (tk_string)
+            nchars = nchars + toks%nc(k)
+            nvals = nvals + 1
          end select
       end do
-   end function count_values
+   end subroutine count_room
 
    !> The values of entry `nent` (its key and '=' read), from token `i` to the next key, the
    !> group's end or a token that cannot be a value; on return `i` is at that token.
-   subroutine parse_values(toks, i, file, g, nent, err)
-      type(token_list_t), intent(inout) :: toks
+   subroutine parse_values(text, toks, i, file, g, nent, err)
+      character(len=*), intent(in) :: text
+      type(token_list_t), intent(in) :: toks
       integer, intent(inout) :: i
       character(len=*), intent(in) :: file
       type(deck_group_t), intent(inout) :: g
@@ -379,8 +386,6 @@ contains
       integer :: nval
       logical :: after_sep, prev_name_like
 
-      nval = count_values(toks, i)
-      allocate (g%entries(nent)%values(nval), g%entries(nent)%quoted(nval))
       associate (e => g%entries(nent))
          nval = 0
          prev_name_like = .false.
@@ -390,9 +395,9 @@ contains
             case (tk_comma)
                if (after_sep) then
                   if (nval == 0) then
-                     call fail(e%line, "key '"//e%key//"' has no value")
+                     call fail(e%line, "key '"//g%key_of(nent)//"' has no value")
                   else
-                     call fail(toks%line(i), "key '"//e%key//"': empty value between commas "// &
+                     call fail(toks%line(i), "key '"//g%key_of(nent)//"': empty value between commas "// &
                                '(null values are not supported)')
                   end if
                   return
@@ -400,14 +405,14 @@ contains
                after_sep = .true.
             case (tk_word)
                if (next_is_eq(toks, i)) exit values
-               if (is_repeat(toks%text(i)%s)) then
-                  call fail(toks%line(i), "key '"//e%key//"': repeat counts are not supported "// &
-                            "(got '"//toks%text(i)%s//"'); write the values out")
+               if (is_repeat(text(toks%at(i):toks%at(i) + toks%nc(i) - 1))) then
+                  call fail(toks%line(i), "key '"//g%key_of(nent)//"': repeat counts are not supported "// &
+                            "(got '"//word(i)//"'); write the values out")
                   return
                end if
                if (looks_like_lost_key(i)) then
-                  call fail(toks%line(i), "missing '=' after key '"//to_lower(toks%text(i)%s)// &
-                            "' (if '"//toks%text(i)%s//"' is a value, quote it)")
+                  call fail(toks%line(i), "missing '=' after key '"//to_lower(word(i))// &
+                            "' (if '"//word(i)//"' is a value, quote it)")
                   return
                end if
                prev_name_like = name_like(i)
@@ -416,7 +421,7 @@ contains
                prev_name_like = .false.
                call add_value(.true.)
             case (tk_eq)
-               call fail(toks%line(i), "key '"//e%key//"': unexpected '=' after a value")
+               call fail(toks%line(i), "key '"//g%key_of(nent)//"': unexpected '=' after a value")
                return
             case default
                exit values
@@ -424,12 +429,19 @@ contains
             i = i + 1
          end do values
          if (nval == 0) then
-            call fail(e%line, "key '"//e%key//"' has no value")
+            call fail(e%line, "key '"//g%key_of(nent)//"' has no value")
             return
          end if
       end associate
 
    contains
+
+      !> A bare word's text.
+      function word(j) result(w)
+         integer, intent(in) :: j
+         character(len=toks%nc(j)) :: w
+         w = text(toks%at(j):toks%at(j) + toks%nc(j) - 1)
+      end function word
 
       !> A name-like bare value next to a number or quoted string, as in `id = 'n1' inertia 5.0`,
       !> is almost surely a key whose '=' was forgotten. Lists of bare names stay allowed.
@@ -455,22 +467,32 @@ contains
          integer, intent(in) :: j
          name_like = .false.
          if (toks%kind(j) /= tk_word) return
-         if (.not. is_key(toks%text(j)%s)) return
-         select case (to_lower(toks%text(j)%s))
+         if (.not. is_key(text(toks%at(j):toks%at(j) + toks%nc(j) - 1))) return
+         select case (to_lower(text(toks%at(j):toks%at(j) + toks%nc(j) - 1)))
          case ('t', 'f', 'true', 'false')
             return
          end select
          name_like = .true.
       end function name_like
 
-      !> Token i's text moved into the entry: values counted exactly (count_values).
+      !> Token i's text copied into the group's pool (a string unquoted) as the entry's
+      !> next value: the entry's values are the group's last ones.
       subroutine add_value(is_quoted)
          logical, intent(in) :: is_quoted
-         associate (e => g%entries(nent))
-            nval = nval + 1
-            call move_alloc(toks%text(i)%s, e%values(nval)%s)
-            e%quoted(nval) = is_quoted
-         end associate
+         integer :: p0
+         p0 = g%pool_len
+         if (is_quoted) then
+            call unquote_into(text, toks%at(i), toks%nc(i), g%pool, g%pool_len)
+         else
+            g%pool(p0 + 1:p0 + toks%nc(i)) = text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
+            g%pool_len = p0 + toks%nc(i)
+         end if
+         g%nvals = g%nvals + 1
+         g%vals(1, g%nvals) = p0 + 1
+         g%vals(2, g%nvals) = g%pool_len - p0
+         g%vals(3, g%nvals) = merge(1, 0, is_quoted)
+         nval = nval + 1
+         g%entries(nent)%n = nval
          after_sep = .false.
       end subroutine add_value
 
@@ -478,12 +500,6 @@ contains
       subroutine fail(line, text)
          integer, value :: line   ! by value: e%line may be passed, and the entries shrink
          character(len=*), intent(in) :: text
-         associate (e => g%entries(nent))
-            if (nval < size(e%values)) then
-               e%values = e%values(1:nval)
-               e%quoted = e%quoted(1:nval)
-            end if
-         end associate
          call group_error(g, nent, file, line, text, err)
       end subroutine fail
 
@@ -562,19 +578,17 @@ contains
       do g = 1, size(deck%groups)
          associate (grp => deck%groups(g))
             t = t//'&'//grp%name
-            if (allocated(grp%entries)) then
-               do e = 1, size(grp%entries)
-                  t = t//' '//grp%entries(e)%key//'='
-                  do v = 1, size(grp%entries(e)%values)
-                     if (v > 1) t = t//','
-                     if (grp%entries(e)%quoted(v)) then
-                        t = t//"'"//grp%entries(e)%values(v)%s//"'"
-                     else
-                        t = t//grp%entries(e)%values(v)%s
-                     end if
-                  end do
+            do e = 1, grp%nentries()
+               t = t//' '//grp%key_of(e)//'='
+               do v = 1, grp%nvalues(e)
+                  if (v > 1) t = t//','
+                  if (grp%quoted(e, v)) then
+                     t = t//"'"//grp%value_of(e, v)//"'"
+                  else
+                     t = t//grp%value_of(e, v)
+                  end if
                end do
-            end if
+            end do
             t = t//' /'//new_line('a')
          end associate
       end do

@@ -6,17 +6,19 @@ module trainsim_deck_group
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: string_t, to_lower, str, join, edit_distance
-   use trainsim_deck_lexer, only: parse_real, parse_int, lower_in_place, digits
+   use trainsim_deck_lexer, only: parse_real, parse_int, digits
    implicit none
    private
 
    public :: deck_group_t, deck_entry_t, same_key
 
-   !> One `key = value[, value ...]` item of a group.
+   !> One `key = value[, value ...]` item of a group. Its key and values are places in
+   !> the group's `pool`, not a heap string each (D-159): read them through
+   !> the group, `g%key_of(k)`, `g%nvalues(k)`, `g%value_of(k, j)`, `g%quoted(k, j)`.
    type :: deck_entry_t
-      character(len=:), allocatable :: key          !< lower case
-      type(string_t), allocatable :: values(:)      !< raw tokens; strings unquoted
-      logical, allocatable :: quoted(:)             !< .true. where the token was a quoted string
+      integer :: key_at = 0, key_len = 0            !< key = pool(key_at:key_at+key_len-1), lower case
+      integer :: first = 0                          !< its values are the group's vals(:, first:first+n-1)
+      integer :: n = 0                              !< number of values
       integer :: line = 0                           !< line of the key
       logical :: used = .false.                     !< set by the getters
    end type deck_entry_t
@@ -28,6 +30,13 @@ module trainsim_deck_group
       integer :: line = 0                           !< line of '&name'
       integer :: ordinal = 0                        !< 1 for the first group of this name, 2 for the second...
       type(deck_entry_t), allocatable :: entries(:) !< in file order
+      !> The entries' keys and values end to end (raw tokens; strings unquoted), and
+      !> each value's place in it: vals(1, v) its start, vals(2, v) its length,
+      !> vals(3, v) 1 where it was a quoted string. Filled by the parser and `set_entry`.
+      character(len=:), allocatable :: pool
+      integer :: pool_len = 0
+      integer, allocatable :: vals(:, :)
+      integer :: nvals = 0
       !> Keys asked for through has/get_*/count_values, in order of first query, each
       !> followed by ',' in one text (one allocation a group, not one a key: D-90).
       character(len=:), allocatable, private :: queried
@@ -47,9 +56,49 @@ module trainsim_deck_group
       procedure :: check_unused => group_check_unused
       procedure :: all_used => group_all_used
       procedure :: named => group_named
+      procedure :: nentries => group_nentries
+      procedure :: key_of => group_key_of
+      procedure :: nvalues => group_nvalues
+      procedure :: value_of => group_value_of
+      procedure :: quoted => group_quoted
+      procedure :: set_entry => group_set_entry
       procedure :: require_positive => group_require_positive
       procedure :: require_nonnegative => group_require_nonnegative
    end type deck_group_t
+
+   interface
+      !> Error naming the first entry not read by a getter, listing the keys that were queried.
+      !> `context` (e.g. "element type 'shaft'") says what the keys were checked against.
+      module subroutine group_check_unused(self, err, context)
+         class(deck_group_t), intent(in) :: self
+         type(error_t), allocatable, intent(out) :: err
+         character(len=*), intent(in), optional :: context
+      end subroutine group_check_unused
+
+      !> Set `key` (lower case) to `values` (quoted where `quoted`), given on `line`: the
+      !> entry of that key is replaced, else one is added (an override, a generated group).
+      module subroutine group_set_entry(self, key, values, quoted, line)
+         class(deck_group_t), intent(inout) :: self
+         character(len=*), intent(in) :: key
+         type(string_t), intent(in) :: values(:)
+         logical, intent(in) :: quoted(:)
+         integer, intent(in) :: line
+      end subroutine group_set_entry
+
+      !> Index of the entry not yet read whose key is a likely misspelling of `key` (0: none).
+      module integer function near_miss(self, key) result(best)
+         class(deck_group_t), intent(in) :: self
+         character(len=*), intent(in) :: key
+      end function near_miss
+
+      !> "file:LINE: error: LABEL: text"
+      module subroutine fail(self, err, line, text)
+         class(deck_group_t), intent(in) :: self
+         type(error_t), allocatable, intent(out) :: err
+         integer, intent(in) :: line
+         character(len=*), intent(in) :: text
+      end subroutine fail
+   end interface
 
 contains
 
@@ -88,7 +137,7 @@ contains
       call record_query(self, key)
       k = find(self, key)
       n = 0
-      if (k > 0) n = size(self%entries(k)%values)
+      if (k > 0) n = self%entries(k)%n
    end function group_count_values
 
    !> Location for messages: "file:LINE: &name #ordinal", plus ", key 'k'" (and the key's line)
@@ -109,27 +158,26 @@ contains
       end if
       call digits(self%ordinal, ot, no)
       n = len(self%file) + nl + len(self%name) + no + 6
-      if (k > 0) n = n + len(self%entries(k)%key) + 8
-      allocate (character(len=n) :: s)
-      p = 0
-      call put(self%file)
-      call put(':')
-      call put(lt(1:nl))
-      call put(': &')
-      call put(self%name)
-      call put(' #')
-      call put(ot(1:no))
+      if (k > 0) n = n + self%entries(k)%key_len + 8
+      allocate (character(len=n) :: s)   ! (pieces placed in turn: an internal `put` was a call each)
+      p = len(self%file)
+      s(1:p) = self%file
+      s(p + 1:p + 1) = ':'
+      s(p + 2:p + 1 + nl) = lt(1:nl)
+      p = p + 1 + nl
+      s(p + 1:p + 3) = ': &'
+      s(p + 4:p + 3 + len(self%name)) = self%name
+      p = p + 3 + len(self%name)
+      s(p + 1:p + 2) = ' #'
+      s(p + 3:p + 2 + no) = ot(1:no)
+      p = p + 2 + no
       if (k > 0) then
-         call put(", key '")
-         call put(self%entries(k)%key)
-         call put("'")
+         associate (e => self%entries(k))
+            s(p + 1:p + 7) = ", key '"
+            s(p + 8:p + 7 + e%key_len) = self%pool(e%key_at:e%key_at + e%key_len - 1)
+            s(p + 8 + e%key_len:p + 8 + e%key_len) = "'"
+         end associate
       end if
-   contains
-      subroutine put(t)
-         character(len=*), intent(in) :: t
-         s(p + 1:p + len(t)) = t
-         p = p + len(t)
-      end subroutine put
    end function group_where
 
    !> "&element #2 (id 'g1')" if the group has an 'id' entry, else "&element #2".
@@ -140,12 +188,10 @@ contains
       s = '&'//self%name//' #'//str(self%ordinal)
       k = find(self, 'id')
       if (k > 0) then
-         if (size(self%entries(k)%values) > 0) s = s//" (id '"//self%entries(k)%values(1)%s//"')"
+         if (self%entries(k)%n > 0) s = s//" (id '"//self%value_of(k, 1)//"')"
       end if
    end function group_label
 
-   !> Error naming the first entry not read by a getter, listing the keys that were queried.
-   !> `context` (e.g. "element type 'shaft'") says what the keys were checked against.
    !> Error naming the key and its value unless value > 0 (NaN fails too).
    subroutine group_require_positive(self, key, value, err)
       class(deck_group_t), intent(in) :: self
@@ -167,6 +213,45 @@ contains
       if (.not. value >= 0.0_wp) call fatal_error(err, self%where(key)//': error: '//key//' must be >= 0, got '// &
                                                   str(value), err_input)
    end subroutine group_require_nonnegative
+
+   !> Number of entries (0 before the group is parsed).
+   pure integer function group_nentries(self) result(n)
+      class(deck_group_t), intent(in) :: self
+      n = 0
+      if (allocated(self%entries)) n = size(self%entries)
+   end function group_nentries
+
+   !> Key of entry k, lower case.
+   function group_key_of(self, k) result(s)
+      class(deck_group_t), intent(in) :: self
+      integer, intent(in) :: k
+      character(len=:), allocatable :: s
+      s = self%pool(self%entries(k)%key_at:self%entries(k)%key_at + self%entries(k)%key_len - 1)
+   end function group_key_of
+
+   !> Number of values of entry k.
+   pure integer function group_nvalues(self, k) result(n)
+      class(deck_group_t), intent(in) :: self
+      integer, intent(in) :: k
+      n = self%entries(k)%n
+   end function group_nvalues
+
+   !> Value j of entry k as written (a string's contents without its quotes).
+   function group_value_of(self, k, j) result(s)
+      class(deck_group_t), intent(in) :: self
+      integer, intent(in) :: k, j
+      character(len=:), allocatable :: s
+      associate (v => self%vals(:, self%entries(k)%first + j - 1))
+         s = self%pool(v(1):v(1) + v(2) - 1)
+      end associate
+   end function group_value_of
+
+   !> Value j of entry k was a quoted string.
+   pure logical function group_quoted(self, k, j) result(yes)
+      class(deck_group_t), intent(in) :: self
+      integer, intent(in) :: k, j
+      yes = self%vals(3, self%entries(k)%first + j - 1) /= 0
+   end function group_quoted
 
    !> The group is `&name` (`name` in lower case), compared by character codes: a
    !> string comparison is a library call, and every reader walks all the groups (D-151).
@@ -191,33 +276,6 @@ contains
       if (allocated(self%entries)) yes = all(self%entries(:)%used)
    end function group_all_used
 
-   subroutine group_check_unused(self, err, context)
-      class(deck_group_t), intent(in) :: self
-      type(error_t), allocatable, intent(out) :: err
-      character(len=*), intent(in), optional :: context
-      character(len=:), allocatable :: msg
-      type(string_t), allocatable :: queried(:)
-      integer :: k, best
-      if (.not. allocated(self%entries)) return
-      do k = 1, size(self%entries)
-         if (self%entries(k)%used) cycle
-         msg = "unknown key '"//self%entries(k)%key//"'"
-         if (present(context)) then
-            if (len_trim(context) > 0) msg = msg//' for '//trim(context)
-         end if
-         queried = queried_keys(self)
-         best = closest_key(self%entries(k)%key, queried)
-         if (best > 0) msg = msg//"; did you mean '"//queried(best)%s//"'?"
-         if (size(queried) > 0) then
-            msg = msg//'; valid keys are: '//join(queried, ', ')
-         else
-            msg = msg//'; this group takes no keys'
-         end if
-         call fail(self, err, self%entries(k)%line, msg)
-         return
-      end do
-   end subroutine group_check_unused
-
    !> Real value of `key`. If absent: `default` if given, else an error. Exactly one unquoted
    !> value is required; d/D exponents are accepted, nan/inf and trailing text are not.
    subroutine group_get_real(self, key, val, err, default)
@@ -235,12 +293,12 @@ contains
          if (present(default)) val = default
          return
       end if
-      associate (e => self%entries(k))
-         call check_unquoted(self, e, 1, 'a real number', err)
-         if (allocated(err)) return
-         call parse_real(e%values(1)%s, val, stat)
-         if (stat /= 0) call bad_value(self, e, 1, 'a real number', err, stat == 2)
+      call check_unquoted(self, k, 1, 'a real number', err)
+      if (allocated(err)) return
+      associate (v => self%vals(:, self%entries(k)%first))
+         call parse_real(self%pool(v(1):v(1) + v(2) - 1), val, stat)
       end associate
+      if (stat /= 0) call bad_value(self, k, 1, 'a real number', err, stat == 2)
    end subroutine group_get_real
 
    !> Integer value of `key` (same rules as get_real; `1.5` and `1.0` are rejected).
@@ -258,12 +316,12 @@ contains
          if (present(default)) val = default
          return
       end if
-      associate (e => self%entries(k))
-         call check_unquoted(self, e, 1, 'an integer', err)
-         if (allocated(err)) return
-         call parse_int(e%values(1)%s, val, stat)
-         if (stat /= 0) call bad_value(self, e, 1, 'an integer', err, stat == 2)
+      call check_unquoted(self, k, 1, 'an integer', err)
+      if (allocated(err)) return
+      associate (v => self%vals(:, self%entries(k)%first))
+         call parse_int(self%pool(v(1):v(1) + v(2) - 1), val, stat)
       end associate
+      if (stat /= 0) call bad_value(self, k, 1, 'an integer', err, stat == 2)
    end subroutine group_get_int
 
    !> Logical value of `key`: .true./.false./T/F/.t./.f./true/false, any case, unquoted.
@@ -282,20 +340,18 @@ contains
          if (present(default)) val = default
          return
       end if
-      associate (e => self%entries(k))
-         call check_unquoted(self, e, 1, 'a logical (.true. or .false.)', err)
-         if (allocated(err)) return
-         ok = .true.
-         select case (to_lower(e%values(1)%s))
-         case ('.true.', '.t.', 't', 'true')
-            val = .true.
-         case ('.false.', '.f.', 'f', 'false')
-            val = .false.
-         case default
-            ok = .false.
-         end select
-         if (.not. ok) call bad_value(self, e, 1, 'a logical (.true. or .false.)', err)
-      end associate
+      call check_unquoted(self, k, 1, 'a logical (.true. or .false.)', err)
+      if (allocated(err)) return
+      ok = .true.
+      select case (to_lower(self%value_of(k, 1)))
+      case ('.true.', '.t.', 't', 'true')
+         val = .true.
+      case ('.false.', '.f.', 'f', 'false')
+         val = .false.
+      case default
+         ok = .false.
+      end select
+      if (.not. ok) call bad_value(self, k, 1, 'a logical (.true. or .false.)', err)
    end subroutine group_get_logical
 
    !> String value of `key`, quoted or bare, as written (no case change).
@@ -308,11 +364,16 @@ contains
       integer :: k
       call scalar_entry(self, key, 'a string', present(default), k, err)
       if (k == 0 .or. allocated(err)) then   ! (val allocated once: '' or the default)
-         val = ''
-         if (present(default) .and. .not. allocated(err)) val = default
+         if (present(default) .and. .not. allocated(err)) then
+            val = default
+         else
+            val = ''
+         end if
          return
       end if
-      val = self%entries(k)%values(1)%s
+      associate (v => self%vals(:, self%entries(k)%first))
+         val = self%pool(v(1):v(1) + v(2) - 1)
+      end associate
    end subroutine group_get_string
 
    !> All values of `key` as reals. An absent key gives a size-0 array and no error.
@@ -328,20 +389,20 @@ contains
          allocate (vals(0))
          return
       end if
-      associate (e => self%entries(k))
-         e%used = .true.
-         allocate (vals(size(e%values)))
-         vals = 0.0_wp
-         do j = 1, size(e%values)
-            call check_unquoted(self, e, j, 'a real number', err)
-            if (allocated(err)) return
-            call parse_real(e%values(j)%s, vals(j), stat)
-            if (stat /= 0) then
-               call bad_value(self, e, j, 'a real number', err, stat == 2)
-               return
-            end if
-         end do
-      end associate
+      self%entries(k)%used = .true.
+      allocate (vals(self%entries(k)%n))
+      vals = 0.0_wp
+      do j = 1, size(vals)
+         call check_unquoted(self, k, j, 'a real number', err)
+         if (allocated(err)) return
+         associate (v => self%vals(:, self%entries(k)%first + j - 1))
+            call parse_real(self%pool(v(1):v(1) + v(2) - 1), vals(j), stat)
+         end associate
+         if (stat /= 0) then
+            call bad_value(self, k, j, 'a real number', err, stat == 2)
+            return
+         end if
+      end do
    end subroutine group_get_real_array
 
    !> Common part of the scalar getters: record the query, find the entry (k = 0 if absent),
@@ -360,7 +421,7 @@ contains
             ! a misspelt key is reported on its own line, before the key it stands for (D-62)
             j = near_miss(self, key)
             if (j > 0) then
-               call fail(self, err, self%entries(j)%line, "unknown key '"//self%entries(j)%key// &
+               call fail(self, err, self%entries(j)%line, "unknown key '"//self%key_of(j)// &
                          "'; did you mean '"//to_lower(key)//"'? (the required key '"//to_lower(key)// &
                          "' ("//what//') is missing)')
             else
@@ -370,28 +431,26 @@ contains
          return
       end if
       self%entries(k)%used = .true.
-      if (size(self%entries(k)%values) /= 1) then
-         call fail(self, err, self%entries(k)%line, "key '"//self%entries(k)%key// &
-                   "': expected one value, got "//str(size(self%entries(k)%values)))
+      if (self%entries(k)%n /= 1) then
+         call fail(self, err, self%entries(k)%line, "key '"//self%key_of(k)// &
+                   "': expected one value, got "//str(self%entries(k)%n))
       end if
    end subroutine scalar_entry
 
-   subroutine check_unquoted(self, e, j, what, err)
+   subroutine check_unquoted(self, k, j, what, err)
       class(deck_group_t), intent(in) :: self
-      type(deck_entry_t), intent(in) :: e
-      integer, intent(in) :: j
+      integer, intent(in) :: k, j
       character(len=*), intent(in) :: what
       type(error_t), allocatable, intent(out) :: err
-      if (e%quoted(j)) then
-         call fail(self, err, e%line, "key '"//e%key//"'"//value_no(e, j)//': expected '//what// &
-                   ", got the quoted string '"//e%values(j)%s//"' (remove the quotes)")
+      if (self%vals(3, self%entries(k)%first + j - 1) /= 0) then
+         call fail(self, err, self%entries(k)%line, "key '"//self%key_of(k)//"'"//value_no(self, k, j)// &
+                   ': expected '//what//", got the quoted string '"//self%value_of(k, j)//"' (remove the quotes)")
       end if
    end subroutine check_unquoted
 
-   subroutine bad_value(self, e, j, what, err, out_of_range)
+   subroutine bad_value(self, k, j, what, err, out_of_range)
       class(deck_group_t), intent(in) :: self
-      type(deck_entry_t), intent(in) :: e
-      integer, intent(in) :: j
+      integer, intent(in) :: k, j
       character(len=*), intent(in) :: what
       type(error_t), allocatable, intent(out) :: err
       logical, intent(in), optional :: out_of_range
@@ -400,27 +459,18 @@ contains
       if (present(out_of_range)) then
          if (out_of_range) note = ' (out of range)'
       end if
-      call fail(self, err, e%line, "key '"//e%key//"'"//value_no(e, j)//': expected '//what// &
-                ", got '"//e%values(j)%s//"'"//note)
+      call fail(self, err, self%entries(k)%line, "key '"//self%key_of(k)//"'"//value_no(self, k, j)// &
+                ': expected '//what//", got '"//self%value_of(k, j)//"'"//note)
    end subroutine bad_value
 
    !> ", value J" when the entry has several values, else ''.
-   function value_no(e, j) result(s)
-      type(deck_entry_t), intent(in) :: e
-      integer, intent(in) :: j
+   function value_no(self, k, j) result(s)
+      class(deck_group_t), intent(in) :: self
+      integer, intent(in) :: k, j
       character(len=:), allocatable :: s
       s = ''
-      if (size(e%values) > 1) s = ' (value '//str(j)//')'
+      if (self%entries(k)%n > 1) s = ' (value '//str(j)//')'
    end function value_no
-
-   !> "file:LINE: error: LABEL: text"
-   subroutine fail(self, err, line, text)
-      class(deck_group_t), intent(in) :: self
-      type(error_t), allocatable, intent(out) :: err
-      integer, intent(in) :: line
-      character(len=*), intent(in) :: text
-      call fatal_error(err, self%file//':'//str(line)//': error: '//self%label()//': '//text, err_input)
-   end subroutine fail
 
    !> Index of entry `key` (case-insensitive), 0 if absent.
    !> A stored key never ends in a blank, so one of another length matches only a
@@ -428,7 +478,7 @@ contains
    integer function find(self, key) result(k)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in) :: key
-      integer :: j, n
+      integer :: j, n, i, c, at
       logical :: padded
       k = 0
       if (.not. allocated(self%entries)) return
@@ -436,59 +486,26 @@ contains
       padded = .false.
       if (n > 0) padded = iachar(key(n:n)) == 32
       do j = 1, size(self%entries)
-         if (len(self%entries(j)%key) /= n .and. .not. padded) cycle
-         if (same_key(self%entries(j)%key, key)) then
+         at = self%entries(j)%key_at
+         if (self%entries(j)%key_len /= n) then
+            if (.not. padded) cycle
+            if (same_key(self%pool(at:at + self%entries(j)%key_len - 1), key)) then
+               k = j
+               return
+            end if
+            cycle
+         end if
+         do i = 1, n   ! the same length: by codes, `key` folded to lower case (same_key inline)
+            c = iachar(key(i:i))
+            if (c >= 65 .and. c <= 90) c = c + 32
+            if (iachar(self%pool(at + i - 1:at + i - 1)) /= c) exit
+         end do
+         if (i > n) then
             k = j
             return
          end if
       end do
    end function find
-
-   !> Index of the entry not yet read whose key is a likely misspelling of `key` (0: none):
-   !> the closest by edit distance within the threshold of `is_near`, not itself a queried key.
-   integer function near_miss(self, key) result(best)
-      class(deck_group_t), intent(in) :: self
-      character(len=*), intent(in) :: key
-      integer :: j, d, dbest
-      logical :: asked
-      best = 0
-      dbest = huge(1)
-      if (.not. allocated(self%entries)) return
-      do j = 1, size(self%entries)
-         if (self%entries(j)%used) cycle
-         asked = was_queried(self, self%entries(j)%key)
-         if (asked) cycle
-         d = edit_distance(self%entries(j)%key, to_lower(key))
-         if (is_near(d, to_lower(key)) .and. d < dbest) then
-            best = j
-            dbest = d
-         end if
-      end do
-   end function near_miss
-
-   !> Index in `keys` of the closest key to `word` within the threshold of `is_near` (0: none).
-   integer function closest_key(word, keys) result(best)
-      character(len=*), intent(in) :: word
-      type(string_t), intent(in) :: keys(:)
-      integer :: j, d, dbest
-      best = 0
-      dbest = huge(1)
-      do j = 1, size(keys)
-         d = edit_distance(word, keys(j)%s)
-         if (is_near(d, keys(j)%s) .and. d < dbest) then
-            best = j
-            dbest = d
-         end if
-      end do
-   end function closest_key
-
-   !> A distance `d` to `key` counts as a misspelling: 1 <= d <= 2 and d <= len(key)/3
-   !> (so 'dt' does not suggest 't_end', but 'teeth_drivn' suggests 'teeth_driven').
-   logical function is_near(d, key) result(yes)
-      integer, intent(in) :: d
-      character(len=*), intent(in) :: key
-      yes = d >= 1 .and. d <= min(2, max(1, len(key)/3))
-   end function is_near
 
    !> Add `key` (lower case) to the group's list of queried keys. Appended without
    !> a look for it first (that look was O(keys) a query: D-107); `queried_keys`
@@ -497,7 +514,7 @@ contains
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
       character(len=:), allocatable :: tmp
-      integer :: n
+      integer :: n, i, c
       n = self%queried_len + len(key) + 1
       if (.not. allocated(self%queried)) then
          allocate (character(len=max(64, n)) :: self%queried)
@@ -506,31 +523,14 @@ contains
          tmp(1:self%queried_len) = self%queried(1:self%queried_len)
          call move_alloc(tmp, self%queried)
       end if
-      self%queried(self%queried_len + 1:n - 1) = key
-      call lower_in_place(self%queried(self%queried_len + 1:n - 1))   ! to_lower's result is a temporary
+      do i = 1, len(key)   ! copied in lower case (to_lower's result is a temporary)
+         c = iachar(key(i:i))
+         if (c >= 65 .and. c <= 90) c = c + 32
+         self%queried(self%queried_len + i:self%queried_len + i) = achar(c)
+      end do
       self%queried(n:n) = ','
       self%queried_len = n
    end subroutine record_query
-
-   !> `key` (any case) is one of the queried keys.
-   logical function was_queried(self, key) result(yes)
-      class(deck_group_t), intent(in) :: self
-      character(len=*), intent(in) :: key
-      integer :: p, q
-      yes = .false.
-      p = 1
-      do while (p <= self%queried_len)
-         q = p   ! the key is queried(p:q-1), queried(q:q) its ','
-         do while (self%queried(q:q) /= ',')
-            q = q + 1
-         end do
-         if (same_key(self%queried(p:q - 1), key)) then
-            yes = .true.
-            return
-         end if
-         p = q + 1
-      end do
-   end function was_queried
 
    !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
    !> without a lowered copy of `key` (an allocation a look-up, D-90). By character
@@ -553,39 +553,5 @@ contains
       end do
       yes = .true.
    end function same_key
-
-   !> The queried keys as a list, each once, in order of first query (for messages).
-   function queried_keys(self) result(keys)
-      class(deck_group_t), intent(in) :: self
-      type(string_t), allocatable :: keys(:), all(:)
-      integer :: p, q, n, j
-      logical :: seen
-      n = 0
-      if (self%queried_len > 0) n = count_commas(self%queried(1:self%queried_len))
-      allocate (all(n))
-      p = 1
-      do n = 1, size(all)
-         q = p + index(self%queried(p:self%queried_len), ',') - 2
-         all(n)%s = self%queried(p:q)
-         p = q + 2
-      end do
-      allocate (keys(0))
-      do n = 1, size(all)
-         seen = .false.
-         do j = 1, size(keys)
-            if (keys(j)%s == all(n)%s) seen = .true.
-         end do
-         if (.not. seen) keys = [keys, all(n)]
-      end do
-   contains
-      pure integer function count_commas(t) result(c)
-         character(len=*), intent(in) :: t
-         integer :: k
-         c = 0
-         do k = 1, len(t)
-            if (t(k:k) == ',') c = c + 1
-         end do
-      end function count_commas
-   end function queried_keys
 
 end module trainsim_deck_group

@@ -6,12 +6,12 @@ module trainsim_deck_lexer
    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
-   use trainsim_strings, only: string_t, str, invalid_text_byte
+   use trainsim_strings, only: str, invalid_text_byte
    implicit none
    private
 
    public :: token_list_t, tk_group, tk_end, tk_eq, tk_comma, tk_word, tk_string
-   public :: check_text, tokenize, display, parse_real, parse_int, is_repeat, is_key, lower_in_place, digits
+   public :: check_text, tokenize, display, token_text, unquote_into, parse_real, parse_int, is_repeat, is_key, lower_in_place, digits
 
    ! Token kinds produced by the lexer.
    integer, parameter :: tk_group = 1   ! '&name' (text = lower-case name)
@@ -21,13 +21,13 @@ module trainsim_deck_lexer
    integer, parameter :: tk_word = 5    ! bare token
    integer, parameter :: tk_string = 6  ! quoted string (text = contents, unquoted)
 
-   !> The tokens of a deck text, in order: kind (tk_*), line and text of each. Only group
-   !> names, words, strings and '&end' carry a text: '=', ',' and '/' are their kind alone
-   !> (no allocation a token, D-90); the parser moves the texts into the deck's entries.
+   !> The tokens of a deck text, in order: kind (tk_*), line and place of each in the text:
+   !> text(at:at+nc-1) is a group's name (after '&'), a word, or a quoted string's inside
+   !> (its doubled quotes still doubled: `token_text` gives the string); nc = 0 for '=',
+   !> ',' and '/', nc = 4 for '&end'. No allocation a token (D-159).
    type :: token_list_t
       integer :: n = 0
-      integer, allocatable :: kind(:), line(:)
-      type(string_t), allocatable :: text(:)
+      integer, allocatable :: kind(:), line(:), at(:), nc(:)
    end type token_list_t
 
    interface
@@ -80,21 +80,19 @@ contains
       character(len=*), intent(in) :: file
       type(token_list_t), intent(out) :: toks
       type(error_t), allocatable, intent(out) :: err
-      character(len=:), allocatable :: buf
       character(len=1) :: c, q
-      integer :: i, j, k, n, line, nb
-      logical :: doubled
+      integer :: i, j, n, line, nt, kind, at, nc
 
       n = len(text)
-      ! room for a token every 4 characters (the densest decks written out, `&node
-      ! id = 'n1', type = 'inertia', inertia = 1.0 /`): no growth, whose moves of
-      ! every text cost more than the room (D-140)
-      nb = max(64, n/4)
-      allocate (toks%kind(nb), toks%line(nb), toks%text(nb))
+      ! room for the most tokens a text can hold, one a character: never grown, and the
+      ! pages not written are never touched (D-159)
+      allocate (toks%kind(max(1, n)), toks%line(max(1, n)), toks%at(max(1, n)), toks%nc(max(1, n)))
+      nt = 0
       line = 1
       i = 1
       do while (i <= n)
          c = text(i:i)
+         kind = 0   ! a token found: its kind, at and nc, appended below
          if (c == new_line('a')) then
             line = line + 1
             i = i + 1
@@ -105,14 +103,12 @@ contains
                if (text(i:i) == new_line('a')) exit
                i = i + 1
             end do
-         else if (c == '=') then
-            call push_mark(toks, tk_eq, line)
-            i = i + 1
-         else if (c == ',') then
-            call push_mark(toks, tk_comma, line)
-            i = i + 1
-         else if (c == '/') then
-            call push_mark(toks, tk_end, line)
+         else if (c == '=' .or. c == ',' .or. c == '/') then
+            kind = tk_end
+            if (c == '=') kind = tk_eq
+            if (c == ',') kind = tk_comma
+            at = i
+            nc = 0
             i = i + 1
          else if (c == '&') then
             j = i + 1
@@ -131,16 +127,18 @@ contains
                return
             end if
             if (is_end(text(i + 1:j - 1))) then
-               call push(toks, tk_end, '&end', line)
+               kind = tk_end
+               at = i
+               nc = 4
             else
-               call push(toks, tk_group, text(i + 1:j - 1), line)
-               call lower_in_place(toks%text(toks%n)%s)
+               kind = tk_group
+               at = i + 1
+               nc = j - i - 1
             end if
             i = j
          else if (c == "'" .or. c == '"') then
-            ! Find the closing quote; a doubled quote stands for one.
+            ! Find the closing quote; a doubled quote stands for one (kept doubled here).
             q = c
-            doubled = .false.
             j = i + 1
             do
                if (j > n) exit
@@ -148,7 +146,6 @@ contains
                if (text(j:j) == q) then
                   if (j < n) then
                      if (text(j + 1:j + 1) == q) then
-                        doubled = .true.
                         j = j + 2
                         cycle
                      end if
@@ -164,21 +161,9 @@ contains
                call unterminated(text(i:j - 1))
                return
             end if
-            if (doubled) then
-               allocate (character(len=j - i - 1) :: buf)
-               nb = 0
-               k = i + 1
-               do while (k < j)
-                  nb = nb + 1
-                  buf(nb:nb) = text(k:k)
-                  if (text(k:k) == q) k = k + 1
-                  k = k + 1
-               end do
-               call push(toks, tk_string, buf(1:nb), line)
-               deallocate (buf)
-            else
-               call push(toks, tk_string, text(i + 1:j - 1), line)
-            end if
+            kind = tk_string
+            at = i + 1
+            nc = j - i - 1
             i = j + 1
          else
             j = i
@@ -186,10 +171,20 @@ contains
                if (ends_word(text(j:j))) exit
                j = j + 1
             end do
-            call push(toks, tk_word, text(i:j - 1), line)
+            kind = tk_word
+            at = i
+            nc = j - i
             i = j
          end if
+         if (kind /= 0) then
+            nt = nt + 1
+            toks%kind(nt) = kind
+            toks%line(nt) = line
+            toks%at(nt) = at
+            toks%nc(nt) = nc
+         end if
       end do
+      toks%n = nt
 
    contains
 
@@ -201,72 +196,66 @@ contains
 
    end subroutine tokenize
 
-   !> Token text as written (strings re-quoted), for messages.
-   function display(toks, i) result(s)
+   !> Token i's text: a string's contents (doubled quotes as one), a group's name as
+   !> written, a word.
+   function token_text(text, toks, i) result(s)
+      character(len=*), intent(in) :: text
       type(token_list_t), intent(in) :: toks
       integer, intent(in) :: i
       character(len=:), allocatable :: s
-      if (.not. allocated(toks%text(i)%s)) then
-         select case (toks%kind(i))
-         case (tk_eq)
-            s = '='
-         case (tk_comma)
-            s = ','
-         case default
-            s = '/'
-         end select
-      else if (toks%kind(i) == tk_string) then
-         s = '"'//toks%text(i)%s//'"'
-      else if (toks%kind(i) == tk_group) then
-         s = '&'//toks%text(i)%s
-      else
-         s = toks%text(i)%s
-      end if
-   end function display
-
-   !> A token without text ('=', ',', '/').
-   subroutine push_mark(toks, kind, line)
-      type(token_list_t), intent(inout) :: toks
-      integer, intent(in) :: kind, line
-      if (toks%n == size(toks%kind)) call grow(toks)
-      toks%n = toks%n + 1
-      toks%kind(toks%n) = kind
-      toks%line(toks%n) = line
-   end subroutine push_mark
-
-   subroutine push(toks, kind, text, line)
-      type(token_list_t), intent(inout) :: toks
-      integer, intent(in) :: kind, line
-      character(len=*), intent(in) :: text
       integer :: n
-      n = toks%n
-      if (n == size(toks%kind)) call grow(toks)
-      n = n + 1
-      toks%kind(n) = kind
-      toks%line(n) = line
-      toks%text(n)%s = text
-      toks%n = n
-   end subroutine push
+      allocate (character(len=toks%nc(i)) :: s)
+      n = 0
+      if (toks%kind(i) == tk_string) then
+         call unquote_into(text, toks%at(i), toks%nc(i), s, n)
+         s = s(1:n)
+      else
+         s = text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
+      end if
+   end function token_text
 
-   !> Double the capacity of the token list, moving (not copying) its texts.
-   subroutine grow(toks)
-      type(token_list_t), intent(inout) :: toks
-      integer, allocatable :: ti(:)
-      type(string_t), allocatable :: ts(:)
-      integer :: n, k
-      n = toks%n
-      allocate (ti(2*n))
-      ti(1:n) = toks%kind
-      call move_alloc(ti, toks%kind)
-      allocate (ti(2*n))
-      ti(1:n) = toks%line
-      call move_alloc(ti, toks%line)
-      allocate (ts(2*n))
-      do k = 1, n   ! the strings moved, not copied
-         if (allocated(toks%text(k)%s)) call move_alloc(toks%text(k)%s, ts(k)%s)
+   !> A quoted string's inside text(at:at+nc-1) (its quote is text(at-1:at-1)) appended
+   !> to buf after buf(1:n), each doubled quote as one; n is then the end of buf's text.
+   pure subroutine unquote_into(text, at, nc, buf, n)
+      character(len=*), intent(in) :: text
+      integer, intent(in) :: at, nc
+      character(len=*), intent(inout) :: buf
+      integer, intent(inout) :: n
+      integer :: k, q
+      if (nc == 0) return
+      q = iachar(text(at - 1:at - 1))
+      k = at
+      do while (k < at + nc)   ! (by codes, no index(): a library call a value)
+         n = n + 1
+         buf(n:n) = text(k:k)
+         if (iachar(text(k:k)) == q) k = k + 1
+         k = k + 1
       end do
-      call move_alloc(ts, toks%text)
-   end subroutine grow
+   end subroutine unquote_into
+
+   !> Token text as written (strings re-quoted), for messages.
+   function display(text, toks, i) result(s)
+      character(len=*), intent(in) :: text
+      type(token_list_t), intent(in) :: toks
+      integer, intent(in) :: i
+      character(len=:), allocatable :: s
+      select case (toks%kind(i))
+      case (tk_eq)
+         s = '='
+      case (tk_comma)
+         s = ','
+      case (tk_end)
+         s = '/'
+         if (toks%nc(i) > 0) s = '&end'
+      case (tk_string)
+         s = '"'//token_text(text, toks, i)//'"'
+      case (tk_group)
+         s = '&'//token_text(text, toks, i)
+         call lower_in_place(s)
+      case default
+         s = token_text(text, toks, i)
+      end select
+   end function display
 
    !> Strict real syntax: [sign] digits [. digits] [(e|d) [sign] digits], at least one mantissa
    !> digit. Values beyond the range of real(wp) are rejected before conversion, so no FP trap

@@ -14,7 +14,7 @@
 module trainsim_overrides
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: string_t, to_lower, str, join
-   use trainsim_deck, only: deck_t, deck_group_t, deck_entry_t, parse_deck
+   use trainsim_deck, only: deck_t, deck_group_t, parse_deck
    implicit none
    private
 
@@ -76,7 +76,7 @@ contains
       type(override_t), intent(out) :: ov
       type(error_t), allocatable, intent(out) :: err
       type(deck_t) :: tmp
-      integer :: pdot, p
+      integer :: pdot, p, v
       character(len=:), allocatable :: msg
 
       ov%origin = origin
@@ -107,18 +107,21 @@ contains
          call fatal_error(err, origin//": error: the value holds an unquoted '/' (quote it)", err_input)
          return
       end if
-      if (size(tmp%groups(1)%entries) /= 1) then
-         call fatal_error(err, origin//": error: expected one key, got "//str(size(tmp%groups(1)%entries))// &
+      if (tmp%groups(1)%nentries() /= 1) then
+         call fatal_error(err, origin//": error: expected one key, got "//str(tmp%groups(1)%nentries())// &
                           " (give one --set per key)", err_input)
          return
       end if
-      if (tmp%groups(1)%entries(1)%key /= ov%key) then
+      if (tmp%groups(1)%key_of(1) /= ov%key) then
          call fatal_error(err, origin//": error: '"//ov%key//"' is not a key name (a letter, then letters, "// &
                           "digits and '_')", err_input)
          return
       end if
-      ov%values = tmp%groups(1)%entries(1)%values
-      ov%quoted = tmp%groups(1)%entries(1)%quoted
+      allocate (ov%values(tmp%groups(1)%nvalues(1)), ov%quoted(tmp%groups(1)%nvalues(1)))
+      do v = 1, size(ov%values)
+         ov%values(v)%s = tmp%groups(1)%value_of(1, v)
+         ov%quoted(v) = tmp%groups(1)%quoted(1, v)
+      end do
       ov%derived = is_derived_key(ov%key)
    end subroutine make_override
 
@@ -128,33 +131,13 @@ contains
       type(deck_t), intent(inout) :: deck
       type(override_t), intent(in) :: ovs(:)
       type(error_t), allocatable, intent(out) :: err
-      integer :: k, ig, j
-      type(deck_entry_t) :: e
-      type(deck_entry_t), allocatable :: grown(:)
+      integer :: k, ig
 
       do k = 1, size(ovs)
          call check_override(deck, ovs(k), ig, err)
          if (allocated(err)) return
          if (ovs(k)%derived) cycle
-         e%key = ovs(k)%key
-         e%values = ovs(k)%values
-         e%quoted = ovs(k)%quoted
-         e%line = -k
-         e%used = .false.
-         associate (g => deck%groups(ig))
-            if (.not. allocated(g%entries)) allocate (g%entries(0))
-            do j = 1, size(g%entries)
-               if (g%entries(j)%key == e%key) exit
-            end do
-            if (j <= size(g%entries)) then
-               g%entries(j) = e
-            else
-               allocate (grown(size(g%entries) + 1))
-               grown(1:size(g%entries)) = g%entries
-               grown(size(grown)) = e
-               call move_alloc(grown, g%entries)
-            end if
-         end associate
+         call deck%groups(ig)%set_entry(ovs(k)%key, ovs(k)%values, ovs(k)%quoted, -k)
       end do
    end subroutine apply_overrides
 
@@ -260,10 +243,10 @@ contains
       type(deck_group_t), intent(in) :: g
       character(len=:), allocatable :: id
       integer :: j
-      do j = 1, size(g%entries)
-         if (g%entries(j)%key == 'id') then
-            if (size(g%entries(j)%values) > 0) then
-               id = g%entries(j)%values(1)%s
+      do j = 1, g%nentries()
+         if (g%key_of(j) == 'id') then
+            if (g%nvalues(j) > 0) then
+               id = g%value_of(j, 1)
                return
             end if
          end if

@@ -84,8 +84,8 @@ contains
             g%file = deck%file
             g%line = p%line
             g%ordinal = g%ordinal + deck%count_groups(g%name)
-            do i = 1, size(g%entries)
-               g%entries(i)%line = key_line(p, source_key(g%entries(i)%key, role(j)%s))
+            do i = 1, g%nentries()
+               g%entries(i)%line = key_line(p, source_key(g%key_of(i), role(j)%s))
             end do
          end associate
       end do
@@ -486,8 +486,8 @@ contains
       character(len=*), intent(in) :: key
       integer :: j
       line = g%line
-      do j = 1, size(g%entries)
-         if (g%entries(j)%key == key) line = g%entries(j)%line
+      do j = 1, g%nentries()
+         if (g%key_of(j) == key) line = g%entries(j)%line
       end do
    end function key_line
 

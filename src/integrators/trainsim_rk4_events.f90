@@ -63,19 +63,33 @@ contains
       subroutine grow(d, els, k)
          integer, intent(in) :: d(:)
          integer, allocatable, intent(out) :: els(:), k(:)
-         integer :: a, q
-         allocate (els(0), k(0))
+         integer, allocatable :: all(:)
+         integer :: a, q, m
+         ! (sized first, filled in place: growing by concatenation cost ~14 000
+         ! instructions a gear at 20 000 nodes; startup7b, D-157)
+         m = 0
+         do a = 1, size(d)
+            m = m + first(d(a) + 1) - first(d(a))
+         end do
+         allocate (all(m))
+         m = 0
          do a = 1, size(d)
             do q = first(d(a)), first(d(a) + 1) - 1
-               els = [els, list(q)]
+               m = m + 1
+               all(m) = list(q)
             end do
          end do
-         els = unique(els)
-         k = d
+         els = unique(all)
+         deallocate (all)
+         allocate (all(size(d) + 2*size(els)))
+         all(1:size(d)) = d
+         m = size(d)
          do a = 1, size(els)
-            k = [k, model%elements(els(a))%e%left, model%elements(els(a))%e%right]
+            all(m + 1) = model%elements(els(a))%e%left
+            all(m + 2) = model%elements(els(a))%e%right
+            m = m + 2
          end do
-         k = unique(k)
+         k = unique(all)
       end subroutine grow
 
       !> Sorted, without repeats. An insertion sort of the few indices, not a
@@ -108,12 +122,21 @@ contains
       function states_of(nodes) result(st)
          integer, intent(in) :: nodes(:)
          integer, allocatable :: st(:)
-         integer :: a, o, q
-         allocate (st(0))
+         integer :: a, o, q, m
+         m = 0
+         do a = 1, size(nodes)
+            if (model%is_held(nodes(a))) cycle
+            m = m + model%nodes(nodes(a))%n%nstates()
+         end do
+         allocate (st(m))
+         m = 0
          do a = 1, size(nodes)
             if (model%is_held(nodes(a))) cycle
             o = model%nodes(nodes(a))%n%offset
-            st = [st, (o + q, q=1, model%nodes(nodes(a))%n%nstates())]
+            do q = 1, model%nodes(nodes(a))%n%nstates()
+               m = m + 1
+               st(m) = o + q
+            end do
          end do
       end function states_of
    end subroutine build_parts

@@ -4,7 +4,7 @@
 !> the block diagram from it; nothing here knows how it is drawn.
 module trainsim_describe
    use trainsim_kinds, only: wp
-   use trainsim_deck, only: deck_t
+   use trainsim_deck, only: deck_t, deck_group_t
    use trainsim_model, only: model_t
    use trainsim_element, only: element_t
    use trainsim_param_list, only: param_list_t
@@ -70,18 +70,16 @@ contains
             quantity = 'torque'
             kind = 'constant'
             keys = ''
-            do j = 1, size(g%entries)
-               associate (en => g%entries(j))
-                  if (size(en%values) == 0) cycle
-                  select case (en%key)
-                  case ('node'); node = en%values(1)%s
-                  case ('quantity'); quantity = to_lower(en%values(1)%s)
-                  case ('kind'); kind = to_lower(en%values(1)%s)
-                  case default
-                     if (len(keys) > 0) keys = keys//', '
-                     keys = keys//jstr(en%key)//': '//jstr(tokens(en%values))
-                  end select
-               end associate
+            do j = 1, g%nentries()
+               if (g%nvalues(j) == 0) cycle
+               select case (g%key_of(j))
+               case ('node'); node = g%value_of(j, 1)
+               case ('quantity'); quantity = to_lower(g%value_of(j, 1))
+               case ('kind'); kind = to_lower(g%value_of(j, 1))
+               case default
+                  if (len(keys) > 0) keys = keys//', '
+                  keys = keys//jstr(g%key_of(j))//': '//jstr(tokens(g, j))
+               end select
             end do
             sep = merge(',', ' ', k < n)
             write (unit, '(a)') '  {"node": '//jstr(node)//', "quantity": '//jstr(quantity)//', "kind": '// &
@@ -109,16 +107,17 @@ contains
       s = ', "ports": {'//s//'}'
    end function more_ports
 
-   function tokens(values) result(s)
-      type(string_t), intent(in) :: values(:)
+   function tokens(g, j) result(s)
+      type(deck_group_t), intent(in) :: g
+      integer, intent(in) :: j
       character(len=:), allocatable :: s
       integer :: k
       s = ''
-      do k = 1, min(size(values), 6)
+      do k = 1, min(g%nvalues(j), 6)
          if (k > 1) s = s//', '
-         s = s//values(k)%s
+         s = s//g%value_of(j, k)
       end do
-      if (size(values) > 6) s = s//', ... ('//str(size(values))//' values)'
+      if (g%nvalues(j) > 6) s = s//', ... ('//str(g%nvalues(j))//' values)'
    end function tokens
 
    !> {"name": value, ...} of a parameter list (a value that is not finite: null).

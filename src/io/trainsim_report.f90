@@ -121,7 +121,8 @@ contains
       character(len=:), allocatable :: we, wt
       logical :: motors
       type(text_out_t) :: out
-      type(string_t), allocatable :: du(:)   ! each element's displacement unit, asked once
+      type(string_t), allocatable :: units(:)   ! the distinct displacement units, in order met
+      integer, allocatable :: du(:)   ! each element's, asked once: its index in units
       w = id_width(model, nodes=.false.)
       we = str(w)
       ns = 12   ! the type column
@@ -156,10 +157,10 @@ contains
       write (unit, '(a'//we//',1x,a'//wt//',4a15,a7,a9,a13,a15,a8)') 'element', 'type', 'torque min', 'torque max', &
          'disp min', 'disp max', 'unit', 'impacts', 'max V_i', 'max peak F', 'open %'
       out%unit = unit
-      allocate (du(size(model%elements)))
+      allocate (du(size(model%elements)), units(0))
       do i = 1, size(model%elements)   ! '(aWE,1x,aWT,4es15.6,a7,i9,es13.4,es15.6,f8.2)'
          associate (e => model%elements(i)%e, m => res%el(i))
-            du(i)%s = disp_unit(model, e)
+            du(i) = unit_index(units, disp_unit(model, e))
             call out%a(e%id, w)
             call out%x(1)
             call out%a(e%type_name, ns)
@@ -167,7 +168,7 @@ contains
             call out%es(m%torque_max, 15, 6)
             call out%es(m%disp_min, 15, 6)
             call out%es(m%disp_max, 15, 6)
-            call out%a(du(i)%s, 7)
+            call out%a(units(du(i))%s, 7)
             call out%i(m%impacts, 9)
             call out%es(m%max_approach_velocity, 13, 4)
             call out%es(m%max_peak_force, 15, 6)
@@ -183,7 +184,7 @@ contains
             call out%es(m%p2p_range, 15, 6)
             call out%es(m%p2p_mean, 15, 6)
             call out%x(1)   ! (piece by piece: no concatenated temporary a line)
-            call out%a(du(i)%s, 0)
+            call out%a(units(du(i))%s, 0)
             call out%a('  (', 0)
             call out%i(m%p2p_swings, 0)
             call out%a(' swings)', 0)
@@ -213,7 +214,7 @@ contains
             call out%es(res%el(i)%static_te_mean, 15, 6)
             call out%es(res%el(i)%static_te_p2p, 15, 6)
             call out%x(1)
-            call out%a(du(i)%s, 0)
+            call out%a(units(du(i))%s, 0)
             call out%end_line()
          end do
       end if
@@ -258,6 +259,26 @@ contains
       end do
       call out%flush()
    end subroutine print_summary
+
+   !> u's index in units, appended if new (a string per element cost three
+   !> allocations an element: startup7b).
+   integer function unit_index(units, u) result(k)
+      type(string_t), allocatable, intent(inout) :: units(:)
+      character(len=*), intent(in) :: u
+      type(string_t), allocatable :: grown(:)
+      do k = size(units), 1, -1   ! (the last one met first: elements of a kind come in runs)
+         if (len(units(k)%s) == len(u)) then
+            if (units(k)%s == u) return
+         end if
+      end do
+      allocate (grown(size(units) + 1))
+      do k = 1, size(units)
+         call move_alloc(units(k)%s, grown(k)%s)
+      end do
+      k = size(grown)
+      grown(k)%s = u
+      call move_alloc(grown, units)
+   end function unit_index
 
    !> Natural frequencies and mode shapes.
    subroutine print_modes(model, modes, unit)

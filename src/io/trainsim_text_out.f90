@@ -20,6 +20,11 @@ module trainsim_text_out
       integer :: unit = 6
       character(len=:), allocatable :: buf
       integer :: n = 0                         !< characters in buf
+      !> the last ESw.d digits es_exact wrote: x's bits, d, the text (a table repeats
+      !> its values: each costs ~500 instructions; startup7b)
+      integer(int64) :: memo_bits = 0
+      integer :: memo_d = -1, memo_n = 0
+      character(len=32) :: memo_t = ''
    contains
       procedure :: a => put_a
       procedure :: i => put_i
@@ -178,6 +183,11 @@ contains
          return
       else
          if (abs(x) < tiny(x)) return
+         if (d == self%memo_d .and. transfer(x, 0_int64) == self%memo_bits) then
+            call self%a(self%memo_t(1:self%memo_n), w)
+            done = .true.
+            return
+         end if
          m = int(scale(fraction(abs(x)), digits(x)), int64)   ! 2^52 <= m < 2^53
          e2 = exponent(x) - digits(x)
          ex = floor(log10(abs(x)))
@@ -216,6 +226,10 @@ contains
       t(k + 3:k + 3) = achar(48 + abs(ex)/10)
       t(k + 4:k + 4) = achar(48 + mod(abs(ex), 10))
       call self%a(t(1:n), w)
+      self%memo_bits = transfer(x, 0_int64)
+      self%memo_d = d
+      self%memo_n = n
+      self%memo_t(1:n) = t(1:n)
       done = .true.
    end function es_exact
 

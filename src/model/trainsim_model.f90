@@ -44,9 +44,7 @@ module trainsim_model
       !> (element, step): el_disp, el_force and el_torque(2, :) at the step's end
       real(wp), allocatable :: disp(:, :), force(:, :), torque(:, :)
       real(wp), allocatable :: omega(:, :)               !< (node, step): omega at the step's end
-      !> (step): ws_stored, ws_elastic (if ws_energy); (2, step): the energy
-      !> states y(n_states + 1 : n_states + 2) (if energy tracking)
-      real(wp), allocatable :: stored(:), elastic(:), work(:, :)
+      real(wp), allocatable :: stored(:), elastic(:), work(:, :)   !< (step); (2, step): the work states
    end type step_block_t
 
    type :: model_t
@@ -88,11 +86,9 @@ module trainsim_model
       !> `refresh_hot`). The pairs of their status are not in the workspace.
       logical, allocatable :: ws_status(:)
       integer, allocatable :: el_contact(:)
-      !> The stored energy (kinetic + elastic) and its elastic part at the last
-      !> full RHS if that was `rhs_step_end`, bit for bit `workspace_energy`'s
-      !> there, if ws_energy (D-36:
-      !> a simple model with energy tracking whose elements are all linear
-      !> springs or hot forms with agreeing elastic energy, n_cold = 0).
+      !> The stored energy (kinetic + elastic) and its elastic part at the last full RHS if that was
+      !> `rhs_step_end`, `workspace_energy`'s to the bit, if ws_energy (D-36: a simple model with energy
+      !> tracking whose elements are all linear springs or hot forms with agreeing elastic energy).
       real(wp) :: ws_stored = 0.0_wp, ws_elastic = 0.0_wp
       logical :: ws_energy = .false.
       !> The workspace (theta, omega, torque, el_torque) holds the full RHS at
@@ -257,6 +253,13 @@ module trainsim_model
          logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       end subroutine rhs_simple_ws
 
+      !> `model_rhs_step_end` with energy tracking inside a block (D-120), a procedure of its own (D-160).
+      module subroutine column_energy_end(self, t, y, dydt)
+         type(model_t), intent(inout) :: self
+         real(wp), intent(in) :: t, y(self%n_y)
+         real(wp), intent(out) :: dydt(self%n_y)
+      end subroutine column_energy_end
+
       !> `model_rhs` at the end of an integrator's step, where the observer reads
       !> the workspace (RK4, D-33): a simple model with energy tracking also leaves
       !> the stored energy there (D-36). Every other RHS (CVODE's, the stages, the
@@ -335,11 +338,10 @@ module trainsim_model
          integer, intent(in) :: kin(:), els(:), der(:)
       end subroutine model_rhs_part
 
-      !> The energy rates of a part of the train at the kinematics and torques
-      !> `rhs_part` just left in the workspace (same t, kin, els, der): pdiss and pin
-      !> of the elements els, of the nodes der (in_der: the same set as a mask over
-      !> the nodes) and of the loads on them; the terms are those of `rhs`, so the
-      !> rates of a partition of the train add up to the whole train's.
+      !> The energy rates of a part of the train at the kinematics and torques `rhs_part` just left in
+      !> the workspace (same t, kin, els, der): pdiss and pin of the elements els, of the nodes der (in_der:
+      !> the same set as a mask over the nodes) and of the loads on them; the terms are those of `rhs`, so
+      !> the rates of a partition of the train add up to the whole train's.
       module subroutine model_part_power(self, t, y, els, der, in_der, pdiss, pin)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
@@ -514,9 +516,8 @@ module trainsim_model
       !> Update the modes of the elements whose guards fired; the events that
       !> result are appended to events(nev+1:) (with the time and the element
       !> index filled in; the array grows when full, so no event is dropped).
-      !> A mode change that changes the stored energy (a mesh-stiffness switch
-      !> while teeth are loaded) is work done on the train: it is booked to the
-      !> work-input state, so that the energy balance keeps closing.
+      !> A mode change that changes the stored energy (a mesh-stiffness switch while teeth are loaded) is
+      !> work done on the train, booked to the work-input state: the energy balance keeps closing.
       !> With `els` (a local event instant, D-32: the elements with guards of the
       !> region, whose nodes are integration points there), only those elements are
       !> looked at (fired is read only at their guards), only their nodes'
@@ -543,9 +544,8 @@ module trainsim_model
          real(wp), intent(in) :: t, y(:)
       end function model_stored_energy
 
-      !> Stored energy (kinetic + elastic (+ magnetic)) and the elastic part alone,
-      !> at the kinematics in the workspace and the state y (for nodes with states
-      !> of their own); the stored energy is bit for bit `stored_energy`'s.
+      !> Stored energy (the kinetic sum + the elastic sum, D-160) and the elastic part alone at the kinematics
+      !> in the workspace and y (nodes with states of their own); bit for bit `stored_energy`'s.
       module subroutine model_workspace_energy(self, y, e, pot)
          class(model_t), intent(in) :: self
          real(wp), intent(in) :: y(:)

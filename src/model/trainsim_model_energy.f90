@@ -107,8 +107,8 @@ contains
          else
             pe = self%elements(i)%e%potential_energy(self%theta(l), self%theta(r))
          end if
-         e = e + pe
          pot = pot + pe
       end do
+      e = e + pot   ! (the kinetic sum, then the elastic: the kernels' order, D-160)
    end procedure model_workspace_energy
 end submodule trainsim_model_energy

@@ -118,7 +118,9 @@ module trainsim_model_families
    !> head, row q element q and its right-hand node: (law, a, b, element,
    !> node, state offset: -1 for a held head), (J or theta0, w, constant load);
    !> the head's law: 1 if the loads' power is summed in the links, its load
-   !> then the second real of a link's row (`chain_loads`, D-153);
+   !> then the second real of a link's row (`chain_loads`, D-153); the head's
+   !> a: 1 if the chain passes the nodes in node order (head node 1, row q's
+   !> node q + 1: the step end sums the kinetic energies in the links, D-160);
    !> a, b: the element's row in its family's table, law: which (ch_*; ch_unit:
    !> an undamped spring with unit lever arms, a shaft, whose row the kernel
    !> reads without r1 = r2 = 1, D-124).
@@ -192,6 +194,7 @@ contains
          f%iw(i0 + chain_ni*q + 4:i0 + chain_ni*q + 6) = [q, nd, fn(nd)%off]
          f%rw(r0 + chain_nr*q + 1:r0 + chain_nr*q + 3) = [fn(nd)%j, 0.0_wp, fn(nd)%load0]
       end do
+      if (fe(1)%l == 1 .and. all(fe(:)%r == [(q + 1, q=1, ne)])) f%iw(i0 + 2) = 1   ! (in node order, D-160)
       do q = 1, f%springs%n
          associate (r1 => f%rw(f%springs%r0 + spring_nr*(q - 1) + 3), r2 => f%rw(f%springs%r0 + spring_nr*(q - 1) + 4))
             call link(f%springs, q, spring_ni, spring_nr, merge(ch_unit, ch_spring, r1 == 1.0_wp .and. r2 == 1.0_wp))

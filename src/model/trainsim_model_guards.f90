@@ -266,16 +266,25 @@ contains
       end select
    end function row_guard
 
+   !> By bisection: guard_els is in element order and guard_offset grows with it, so the
+   !> owner is the last element in guard_els whose first guard is at most j (a scan of
+   !> guard_els made RK4's set-up O(guards x elements with guards): startup7b, D-157).
    module procedure model_guard_element
-      integer :: k, i
+      integer :: lo, hi, mid, i
       owner = 0
-      do k = 1, size(self%guard_els)
-         i = self%guard_els(k)
-         if (j > self%guard_offset(i) .and. j <= self%guard_offset(i) + self%fe(i)%ng) then
-            owner = i
-            return
+      lo = 0   ! guard_offset(guard_els(lo)) < j (lo = 0: none yet)
+      hi = size(self%guard_els) + 1   ! guard_offset(guard_els(hi)) >= j
+      do while (hi - lo > 1)
+         mid = (lo + hi)/2
+         if (self%guard_offset(self%guard_els(mid)) < j) then
+            lo = mid
+         else
+            hi = mid
          end if
       end do
+      if (lo == 0) return
+      i = self%guard_els(lo)
+      if (j <= self%guard_offset(i) + self%fe(i)%ng) owner = i
    end procedure model_guard_element
 
    module procedure model_apply_events

@@ -33,7 +33,6 @@ contains
 
    module procedure model_rhs_step_end
       integer :: c
-      logical :: track
       if (.not. self%simple) then
          call rhs_fast(self, t, y, dydt)
          return
@@ -42,26 +41,26 @@ contains
          ! of descriptors
          call rhs_simple_ws(self, t, y, dydt, .true.)
          return
+      else if (self%run%track_energy) then
+         call column_energy_end(self, t, y, dydt)   ! (a procedure of its own, D-160)
+         return
       end if
       ! a block's step before its last: its column only, not the workspace
       ! (D-120), here rather than in rhs_simple_ws: a procedure of one kernel
       ! variant, not six (D-124)
-      track = self%run%track_energy
-      call ws_mark(self, t, .true., track)
+      call ws_mark(self, t, .true., .false.)
       c = self%blk%col
       associate (b => self%blk)
-         if (track) then
-            call column_energy(SE_HEAD, self%fam%pw, SE_STORED, SE_COL)
-         else if (self%fam%chain%n > 0) then
+         if (self%fam%chain%n > 0) then
             call column_chain(SE_HEAD, SE_COL)
          else
             call column_plain(SE_HEAD, SE_COL)
          end if
       end associate
-      call column_end(self, t, y, c, track)
+      call column_end(self, t, y, c, .false.)
    contains
       ! a block's step before its last: the column, not the workspace (D-120;
-      ! internal: each inlined at its one call)
+      ! internal: inlined at its one call)
 #define STEP_END 3
 #define KERNEL column_plain
 #define ENERGY 0
@@ -71,11 +70,6 @@ contains
 #define CHAIN_ONLY 1
 #include "trainsim_model_stage.inc"
 #undef CHAIN_ONLY
-#undef KERNEL
-#undef ENERGY
-#define KERNEL column_energy
-#define ENERGY 1
-#include "trainsim_model_stage.inc"
 #undef KERNEL
 #undef ENERGY
 #undef STEP_END

@@ -261,6 +261,13 @@ contains
       call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
       if (allocated(err)) return
       c%n = c%pm%n
+      if (allocated(br%pts(last)%mem)) then   ! (the point's memory, not the deck's start: D-154)
+         if (size(br%pts(last)%mem) == size(c%pm%mem) .and. size(br%pts(last)%kept) == size(c%pm%kept)) then
+            c%pm%mem = br%pts(last)%mem
+            c%pm%mem_end = c%pm%mem
+            c%pm%kept = br%pts(last)%kept
+         end if
+      end if
       if (size(c%s) /= c%n .or. size(br%pts(last)%tangent) /= c%n + 1) then
          call fatal_error(err, 'the branch to resume has '//str(size(c%s))//' states, the deck '//str(c%n), err_input)
          return

@@ -120,6 +120,8 @@ contains
       procedure(monodromy_i), optional :: monodromy
       real(wp), intent(in), optional :: x_start(:)
       real(wp), allocatable :: x(:), xt(:)
+      logical, allocatable :: kept(:), open(:)
+      logical :: lost
       integer :: attempt, periods, total, n0
       n0 = pm%n_evals
       if (present(x_start)) then
@@ -132,6 +134,7 @@ contains
       total = 0
       do attempt = 0, opt%retries
          if (periods > 0) then
+            pm%kept = .true.   ! (a transient runs on as a run does: every memory held, D-156)
             call pm%map(x, xt, err, periods=periods, carry=.true.)   ! (the memory goes on, D-150)
             if (allocated(err)) return
             x = xt
@@ -145,10 +148,17 @@ contains
             call newton_segments(pm, opt, res, err)
          else
             call newton(pm, opt, x, res, err, monodromy)
-            if (.not. allocated(err) .and. res%status == shoot_converged .and. pm%memory_lost()) then
-               x = res%x   ! (a contact held closed opened: t0 into an open stretch, D-150)
-               call pm%rephase(x, err)
-               if (.not. allocated(err)) call newton(pm, opt, x, res, err, monodromy)
+            if (.not. allocated(err) .and. res%status == shoot_converged .and. size(pm%memory) > 0) then
+               ! a contact held closed opened, or the orbit's memory contacts open otherwise than
+               ! the transient's end did: t0 into an open stretch (D-150, D-156)
+               kept = pm%kept
+               lost = pm%memory_lost()
+               call pm%open_samples(res%x, open, err)
+               if (.not. allocated(err) .and. (lost .or. any(pm%kept .neqv. kept))) then
+                  x = res%x
+                  call pm%rephase(x, err)
+                  if (.not. allocated(err)) call newton(pm, opt, x, res, err, monodromy)
+               end if
             end if
          end if
          if (allocated(err)) return

@@ -15,7 +15,7 @@ module trainsim_observer
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_element, only: element_slot_t
-   use trainsim_input_series, only: input_series_count, input_drivers, input_series_values
+   use trainsim_input_series, only: input_drivers, input_series_values
    use trainsim_sink, only: sink_t, sample_t, event_t, run_stats_t, element_metrics_t, &
                             ev_contact_front, ev_contact_rear, ev_separation, run_meta_t
    use trainsim_run_meta, only: make_meta

@@ -23,7 +23,9 @@ contains
       allocate (self%s%torque_left(ne), self%s%torque_right(ne), self%s%displacement(ne), self%s%force(ne))
       allocate (self%s%contact(ne), self%s%pairs(ne))
       self%drivers = input_drivers(model)
-      allocate (self%s%inputs(input_series_count(model)))
+      ! (input_series_count from the drivers just found: one pass over the nodes'
+      ! driving inputs, not two; startup7b)
+      allocate (self%s%inputs(size(model%loads) + count(model%speed_of /= 0) + size(self%drivers)))
       allocate (self%res%el(ne), self%res%events(ne), self%open_row(ne))
       self%open_row = 0
       self%out => sink

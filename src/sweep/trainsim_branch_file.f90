@@ -8,7 +8,8 @@
 !> continued key, its value per point), /runs (status 0 pending, 1 ok, 2 failed, the
 !> reason and message of a failed point, period, t0, kind, stability, ...), /elements
 !> (every element metric of the orbit's run, per point) and /branch (state, scaled
-!> unknowns, tangent, multipliers, the scales; the branch's end status and message).
+!> unknowns, tangent, multipliers, the scales; the branch's end status and message; with
+!> element memory, the map's memory at t0 and which of it is held, D-154).
 !> A point is written into its slot, the file flushed, then its status written and
 !> flushed again: after a `kill -9` the file opens and every point with a non-zero
 !> status is complete. `open` takes the writer lock (FILE.lock) and makes a new file
@@ -35,7 +36,7 @@ module trainsim_branch_file
 
    public :: branch_file_t, branch_format_version, reason_meaning
 
-   character(len=*), parameter :: branch_format_version = '2'   ! (2: 34 element metrics, D-134)
+   character(len=*), parameter :: branch_format_version = '3'   ! (2: 34 element metrics, D-134; 3: memory, D-154)
    !> /runs: reals and integers per point (status and message apart)
    character(len=*), parameter :: run_r(7) = [character(len=18) :: 'period', 't0', 'phase', 'max_abs_multiplier', &
                                                'ds', 'ds_next', 'residual']
@@ -55,7 +56,9 @@ module trainsim_branch_file
       integer(hid_t) :: d_r(size(run_r)) = -1, d_i(size(run_i)) = -1, d_v(size(vec)) = -1
       integer(hid_t) :: d_el(size(element_metric_names)) = -1
       integer(hid_t) :: d_scale = -1, d_lam_scale = -1, d_end = -1, d_end_message = -1
+      integer(hid_t) :: d_mem = -1, d_kept = -1   !< /branch/memory, memory_held (nm > 0 only)
       integer :: n = 0, ne = 0, n_slots = 0
+      integer :: nm = 0, nk = 0   !< the map's memory values and the elements holding them (D-150)
       integer :: period_count = 1   !< forcing periods per orbit (root attribute period_count; 1 if absent)
    contains
       procedure :: open => bf_open
@@ -80,15 +83,17 @@ contains
    !> key: the parameter): with `resume` it must exist and hold this branch, else it is
    !> made anew (an old one replaced). period_count: the forcing periods per orbit,
    !> written in a new file (default 1); a resumed file's is read into self%period_count
-   !> (a doubled branch is resumed without --period-count, D-122). On error nothing is held.
-   subroutine bf_open(self, path, lay, n, key, resume, err, period_count)
+   !> (a doubled branch is resumed without --period-count, D-122). memory: the map's memory
+   !> values and the elements holding them (period_map_t's mem and kept; default none).
+   !> On error nothing is held.
+   subroutine bf_open(self, path, lay, n, key, resume, err, period_count, memory)
       class(branch_file_t), intent(inout) :: self
       character(len=*), intent(in) :: path, key
       type(sweep_layout_t), intent(in) :: lay
       integer, intent(in) :: n
       logical, intent(in) :: resume
       type(error_t), allocatable, intent(out) :: err
-      integer, intent(in), optional :: period_count
+      integer, intent(in), optional :: period_count, memory(2)
       character(len=:), allocatable :: why, s
       integer :: info, h
       logical :: ok
@@ -96,6 +101,10 @@ contains
       self%period_count = 1
       if (present(period_count)) self%period_count = period_count
       self%n = n
+      if (present(memory)) then
+         self%nm = memory(1)
+         self%nk = memory(2)
+      end if
       self%ne = size(lay%element_ids)
       self%n_slots = lay%n_runs
       why = path_refusal(path, ': a branch is recorded and resumed in a file')
@@ -209,6 +218,10 @@ contains
       do k = 1, size(vec)
          call new_slots(g, trim(vec(k)), [vec_size(self, k), np], h5_real, d, hs); call close_dset(d)
       end do
+      if (self%nm > 0) then   ! (the map's memory at t0, D-150, and which elements hold it: 1/0)
+         call new_slots(g, 'memory', [self%nm, np], h5_real, d, hs); call close_dset(d)
+         call new_slots(g, 'memory_held', [self%nk, np], h5_int, d, hs, ifill=-1); call close_dset(d)
+      end if
       call new_slots(g, 'scale', [self%n, 1], h5_real, d, hs); call close_dset(d)
       call new_slots(g, 'lam_scale', [1], h5_real, d, hs); call close_dset(d)
       call new_slots(g, 'status', [1], h5_int, d, hs, ifill=-1)
@@ -256,6 +269,10 @@ contains
          call open_dsets(self%file, 'elements', element_metric_names, self%d_el, hs)
       end if
       call open_dsets(self%file, 'branch', vec, self%d_v, hs)
+      if (self%nm > 0) then
+         call open_dset(self%file, 'branch/memory', self%d_mem, hs)
+         call open_dset(self%file, 'branch/memory_held', self%d_kept, hs)
+      end if
       call open_dset(self%file, 'branch/scale', self%d_scale, hs)
       call open_dset(self%file, 'branch/lam_scale', self%d_lam_scale, hs)
       call open_dset(self%file, 'branch/status', self%d_end, hs)
@@ -322,6 +339,7 @@ contains
             call put_slot_r(self%d_v(6), i, v(1:self%n), h); hs = min(hs, h)
             v(1:self%n) = abs(p%mu)
             call put_slot_r(self%d_v(7), i, v(1:self%n), h); hs = min(hs, h)
+            if (self%nm > 0) call put_memory(self, i, p, hs)
             if (self%ne > 0) then
                do k = 1, size(element_metric_names)
                   v(1:self%ne) = el(k, :)
@@ -337,6 +355,22 @@ contains
       if (hs < 0) call fatal_error(err, "cannot write point "//str(i)//" to branch file '"//self%path//"'"// &
                                    io_reason(self%path), err_io)
    end subroutine bf_write_point
+
+   !> Point p's memory and which of it is held (its map's, D-150) into slot i.
+   subroutine put_memory(self, i, p, hs)
+      type(branch_file_t), intent(in) :: self
+      integer, intent(in) :: i
+      type(branch_point_t), intent(in) :: p
+      integer, intent(inout) :: hs
+      integer :: h
+      if (.not. allocated(p%mem) .or. .not. allocated(p%kept)) return
+      if (size(p%mem) /= self%nm .or. size(p%kept) /= self%nk) then
+         hs = -1
+         return
+      end if
+      call put_slot_r(self%d_mem, i, p%mem, h); hs = min(hs, h)
+      call put_slot_i(self%d_kept, i, merge(1, 0, p%kept), h); hs = min(hs, h)
+   end subroutine put_memory
 
    integer function code(word, words)
       character(len=*), intent(in) :: word, words(0:)
@@ -369,8 +403,8 @@ contains
       type(branch_t), intent(out) :: br
       type(error_t), allocatable, intent(out) :: err
       integer, allocatable :: st(:)
-      type(branch_point_t) :: p
-      real(wp) :: r(size(run_r)), ri(size(run_i)), one(1), v(self%n + 1), w(self%n)
+      type(branch_point_t) :: p, fresh
+      real(wp) :: r(size(run_r)), ri(size(run_i)), one(1), v(self%n + 1), w(self%n), held(self%nk), mem(self%nm)
       integer :: i, k, h, hs
       logical :: ok
       allocate (st(self%n_slots), br%pts(0), br%scale(self%n))
@@ -381,6 +415,7 @@ contains
       br%lam_scale = one(1)
       do i = 1, self%n_slots
          if (st(i) == status_pending .or. hs < 0) exit
+         p = fresh   ! (a failed point after a regular one: nothing allocated)
          call get_slot_r(self%d_lam, i, one, h); hs = min(hs, h)
          p%lam = one(1)
          do k = 1, size(run_r)
@@ -410,6 +445,12 @@ contains
             call get_slot_r(self%d_v(5), i, w, h); hs = min(hs, h)
             call get_slot_r(self%d_v(6), i, v(1:self%n), h); hs = min(hs, h)
             p%mu = cmplx(w, v(1:self%n), kind=wp)
+            if (self%nm > 0) then
+               call get_slot_r(self%d_mem, i, mem, h); hs = min(hs, h)
+               call get_slot_r(self%d_kept, i, held, h); hs = min(hs, h)
+               p%mem = mem
+               p%kept = held > 0.5_wp
+            end if
             br%phase = p%phase
          else
             p%kind = ''
@@ -441,6 +482,7 @@ contains
             call close_dset(self%d_el(k))
          end do
          call close_dset(self%d_scale); call close_dset(self%d_lam_scale)
+         call close_dset(self%d_mem); call close_dset(self%d_kept)
          call close_dset(self%d_end); call close_dset(self%d_end_message)
          call close_file(self%file, ok)
          self%file = -1

@@ -82,7 +82,7 @@ with tempfile.TemporaryDirectory() as tmp:
         h.attrs.modify("format_version", "1")   # (its type kept: a branch file of the layout before D-134)
     r = run("continue", rig, *damped, "--param", "mesh.mesh_frequency=645:600", "--points", "4", "-o", old, "--resume")
     check("an older layout: refused, exit 2, both versions named",
-          r.returncode == 2 and "layout is version 1, this trainsim writes 2" in r.stderr, r.stderr)
+          r.returncode == 2 and "layout is version 1, this trainsim writes 3" in r.stderr, r.stderr)
     full = os.path.join(tmp, "full.h5")
     r = run("continue", rig, *damped, "--param", "mesh.mesh_frequency=645:560", "-o", full)
     check("uninterrupted to 560: exit 0", r.returncode == 0, r.stderr)

@@ -1,0 +1,41 @@
+!> The energy-tracking step end of a block's step before its last (D-120): the
+!> stage kernel (trainsim_model_stage.inc, ENERGY 1, STEP_END 3) in a procedure
+!> of its own, so that the energy-off step end (`model_rhs_step_end`) is
+!> compiled without it (D-160). Its `module procedure` is declared, with its
+!> arguments and their docs, in trainsim_model.
+submodule (trainsim_model) trainsim_model_energy_kernels
+   use trainsim_model_families, only: spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr
+   use trainsim_model_families, only: chain_ni, chain_nr, ch_spring, ch_damper, ch_open, ch_ys, ch_unit
+   use trainsim_kinds, only: i8
+   implicit none
+
+contains
+
+   module procedure column_energy_end
+      integer :: c
+      ! (the workspace's marks as `ws_mark` leaves them at a step's end with
+      ! energy tracking; its stored energy is not written here, only the
+      ! column's: the block's last step end writes the workspace, D-120)
+      self%ws_step_end = .false.
+      self%ws_t = t
+      self%ws_energy = self%n_cold == 0
+      c = self%blk%col
+      associate (b => self%blk)
+         call column_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
+                            self%theta, self%omega, self%fam%pw, self%el_pe, self%ws_energy, b%stored(c), &
+                            b%elastic(c), b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c))
+         b%t(c) = t
+         b%work(1, c) = y(self%n_states + 1)
+         b%work(2, c) = y(self%n_states + 2)
+      end associate
+   contains
+      ! (internal: inlined at its one call)
+#define STEP_END 3
+#define KERNEL column_energy
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+   end procedure column_energy_end
+end submodule trainsim_model_energy_kernels
