@@ -51,7 +51,11 @@ contains
       call ws_mark(self, t, .true., .false.)
       c = self%blk%col
       associate (b => self%blk)
-         call column_plain(SE_HEAD, SE_COL)
+         if (self%fam%chain%n > 0) then
+            call column_chain(SE_HEAD, SE_COL)
+         else
+            call column_plain(SE_HEAD, SE_COL)
+         end if
       end associate
       call column_end(self, t, y, c, .false.)
    contains
@@ -61,6 +65,11 @@ contains
 #define KERNEL column_plain
 #define ENERGY 0
 #include "trainsim_model_stage.inc"
+#undef KERNEL
+#define KERNEL column_chain
+#define CHAIN_ONLY 1
+#include "trainsim_model_stage.inc"
+#undef CHAIN_ONLY
 #undef KERNEL
 #undef ENERGY
 #undef STEP_END
@@ -104,6 +113,13 @@ contains
          call stage_formed(t4, h, k3, k4)
       else if (self%run%track_energy) then
          call rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
+      else if (self%fam%chain%n > 0) then
+         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
+                             self%fam%th, self%fam%w, hh, k1)
+         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
+                             self%fam%th, self%fam%w, hh, k2)
+         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
+                             self%fam%th, self%fam%w, h, k3)
       else
          call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
                              self%fam%th, self%fam%w, hh, k1)
@@ -133,6 +149,11 @@ contains
 #define ENERGY 0
 #define STEP_END 0
 #include "trainsim_model_stage.inc"
+#undef KERNEL
+#define KERNEL chain_plain_at
+#define CHAIN_ONLY 1
+#include "trainsim_model_stage.inc"
+#undef CHAIN_ONLY
 #undef KERNEL
 #undef ENERGY
 #undef STEP_END
