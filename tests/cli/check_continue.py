@@ -27,7 +27,7 @@ import tempfile
 import h5py
 import numpy as np
 
-from clicheck import check, failures, finish
+from clicheck import check, failures, datasets, finish
 
 exe = os.path.abspath(sys.argv[1])
 
@@ -49,13 +49,6 @@ def rows(path):
         out = [[float(lam[i]), int(f["runs/stable"][i]), float(f["runs/max_abs_multiplier"][i]),
                 list(f["branch/state"][i])] for i in range(n)]
         return out, list(f["branch/scale"][0]), st
-
-
-def datasets(path):
-    d = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda k, v: d.__setitem__(k, v[()]) if isinstance(v, h5py.Dataset) else None)
-    return d
 
 
 with tempfile.TemporaryDirectory() as tmp:

@@ -27,7 +27,7 @@ import tempfile
 import h5py
 import numpy as np
 
-from clicheck import check, finish
+from clicheck import check, datasets, finish
 
 exe = os.path.abspath(sys.argv[1])
 RUN = "&run t_end = 1.0, dt = 2e-4, integrator = 'rk4', output_interval = 2e-4 /"
@@ -43,13 +43,6 @@ OPTS = ["--param", "load#1.frequency=8:9.5", "--ds-max", "0.2"]
 
 def run(*args):
     return subprocess.run([exe, *args], capture_output=True, text=True, timeout=300)
-
-
-def datasets(path):
-    d = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda k, v: d.__setitem__(k, v[()]) if isinstance(v, h5py.Dataset) else None)
-    return d
 
 
 def returns(tmp, deck, lam, t0, period, x):

@@ -22,18 +22,11 @@ import tempfile
 import h5py
 import numpy as np
 
-from clicheck import check, finish, run
+from clicheck import check, datasets, finish, run
 
 rig = os.path.abspath("inputs/gregory_harris_munro.nml")
 args = ["continue", rig, "--set", "shaft1.damping=500", "--set", "shaft3.damping=500",
         "--param", "mesh.mesh_frequency=405:385", "--ds-max", "0.01"]
-
-
-def datasets(path):
-    d = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda k, v: d.__setitem__(k, v[()]) if isinstance(v, h5py.Dataset) else None)
-    return d
 
 
 with tempfile.TemporaryDirectory() as tmp:

@@ -5,7 +5,8 @@
 - `check(what, ok, detail='')` prints "ok   WHAT" or "FAIL WHAT  [detail]" and keeps the failures;
 - `run(args)` runs the trainsim named by the script's first argument (sys.argv[1]) with
   `args`, capturing its output as text (`timeout` seconds at the most, 300 by default);
-- `finish()` ends the script: exit 1 when a check failed, else 0.
+- `finish()` ends the script: exit 1 when a check failed, else 0;
+- `datasets(path)` reads every dataset of an HDF5 file into a dict {path: value}.
 
 A script run as `python3 tests/cli/check_X.py` finds this module beside it (the script's
 folder is the first entry of sys.path).
@@ -32,3 +33,12 @@ def finish(summary=False):
     if failures and summary:
         print(f'{len(failures)} check(s) failed')
     sys.exit(1 if failures else 0)
+
+
+def datasets(path):
+    """Every dataset of the HDF5 file at path, as {its path in the file: its values}."""
+    import h5py
+    d = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda k, v: d.__setitem__(k, v[()]) if isinstance(v, h5py.Dataset) else None)
+    return d
