@@ -203,9 +203,10 @@ contains
    !> element blocks (bk, bc on ends) of one state.
    subroutine bound_of_blocks(model, p, own, tq, states, general, bk, bc, ends, dt_max, bound, omega_k, freq_hz)
       type(model_t), intent(in) :: model
-      real(wp), intent(in) :: p(:), own(:), tq(:), bk(:, :, :), bc(:, :, :)
+      real(wp), intent(in) :: p(:), own(:), tq(:)
+      real(wp), intent(in), contiguous :: bk(:, :, :), bc(:, :, :)
       logical, intent(in) :: states(:), general
-      integer, intent(in) :: ends(:, :)
+      integer, intent(in), contiguous :: ends(:, :)
       real(wp), intent(out) :: dt_max, bound, omega_k, freq_hz
       real(wp), allocatable :: x(:), zk(:), zc(:), d(:), xk(:)
       real(wp) :: mu_k, mu_c, s_star, f_lim
@@ -327,9 +328,15 @@ contains
          real(wp), intent(in), contiguous :: z(:)
          real(wp), intent(inout), contiguous :: w(:)
          real(wp) :: big
-         big = maxval(z, mask=states)
+         integer :: i
+         big = -huge(1.0_wp)   ! (maxval(z, mask=states) and a where, as loops: the same values)
+         do i = 1, size(z)
+            if (states(i) .and. z(i) > big) big = z(i)
+         end do
          if (.not. big > 0.0_wp) return
-         where (states) w = max(z/big, weight_floor)
+         do i = 1, size(w)
+            if (states(i)) w(i) = max(z(i)/big, weight_floor)
+         end do
       end subroutine normalise
    end subroutine bound_of_blocks
 
