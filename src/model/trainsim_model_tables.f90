@@ -368,7 +368,7 @@ contains
       integer :: p, contact, pairs
       ok = .true.
       do p = 1, 2
-         x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]*real(p, wp)**[1, -1, 2, 1]
+         x = [0.37_wp*p, -1.3_wp/p, -0.52_wp*p*p, 2.1_wp*p]   ! (times p**[1, -1, 2, 1]: p = 1, 2 scale exactly)
          call e%status(x(1), x(2), x(3), x(4), disp, force, contact, pairs)
          select case (q%form)
          case (lf_unit)
@@ -422,7 +422,7 @@ contains
       ok = e%n_guards() == 0 .and. .not. e%needs_loads .and. .not. e%supplies_power
       do p = 1, 2
          if (.not. ok) return
-         x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]*real(p, wp)**[1, -1, 2, 1]
+         x = [0.37_wp*p, -1.3_wp/p, -0.52_wp*p*p, 2.1_wp*p]   ! (times p**[1, -1, 2, 1]: p = 1, 2 scale exactly)
          call e%torques(x(1), x(2), x(3), x(4), tl, tr)
          dl = rr1*x(1) - rr2*x(3)
          dv = rr1*x(2) - rr2*x(4)
