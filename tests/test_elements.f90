@@ -972,13 +972,7 @@ contains
       real(wp) :: tl, tr
       integer :: nev, kind, gk
       call test_begin('hot_form_follows_mode_changes')
-      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
-                           "&node type='inertia', inertia=1.3 /"//nl//"&node type='inertia', inertia=0.7 /"//nl// &
-                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, m)
-      call m%initial_state(y)
-      allocate (dydt(size(y)), g(m%n_guards), fired(m%n_guards), events(4))
-      y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
-      call m%init_modes(0.0_wp, y)
+      call open_keyed_joint(m, y, dydt, g, fired, events)
       call m%hot_kinds(1, kind, gk)
       call check('init_modes: open', kind == hf_open .and. gk == hg_faces)
       ! the key has closed on the front face: delta = r (thl - thr) = 0.0015 > b
@@ -1011,6 +1005,33 @@ contains
       call check('init_modes refreshes it again', tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1))
    end subroutine test_hot_form_follows_mode_changes
 
+   !> Two disks on a keyed joint, inside its clearance (open), modes set; with
+   !> `lying` present the joint is a rear_lying_joint_t that vouches if lying.
+   subroutine open_keyed_joint(m, y, dydt, g, fired, events, lying)
+      type(model_t), intent(inout) :: m
+      real(wp), allocatable, intent(inout) :: y(:), dydt(:), g(:)
+      logical, allocatable, intent(inout) :: fired(:)
+      type(event_t), allocatable, intent(inout) :: events(:)
+      logical, intent(in), optional :: lying
+      type(rear_lying_joint_t) :: lj
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
+                           "&node type='inertia', inertia=1.3 /"//nl//"&node type='inertia', inertia=0.7 /"//nl// &
+                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, m)
+      if (present(lying)) then
+         select type (e => m%elements(1)%e)
+         type is (keyed_joint_t)
+            lj%keyed_joint_t = e
+         end select
+         lj%vouch = lying
+         deallocate (m%elements(1)%e)
+         allocate (m%elements(1)%e, source=lj)
+      end if
+      call m%initial_state(y)
+      allocate (dydt(size(y)), g(m%n_guards), fired(m%n_guards), events(4))
+      y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
+      call m%init_modes(0.0_wp, y)
+   end subroutine open_keyed_joint
+
    !> D-169: a mode change probes the element's record (its hot form) against
    !> its own procedures again, unless the record vouches for itself in every
    !> mode (hot_form_t%exact, the house's spur gear) and passed the probes
@@ -1022,27 +1043,13 @@ contains
    subroutine test_hot_form_probed_again_unless_it_vouches(vouch)
       logical, intent(in) :: vouch
       type(model_t) :: m
-      type(rear_lying_joint_t) :: lj
       real(wp), allocatable :: y(:), dydt(:), g(:)
       type(event_t), allocatable :: events(:)
       logical, allocatable :: fired(:)
       real(wp) :: tl, tr
       integer :: nev, kind, gk
       call test_begin('hot_form_probed_again_unless_it_vouches ('//merge('vouching    ', 'not vouching', vouch)//')')
-      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
-                           "&node type='inertia', inertia=1.3 /"//nl//"&node type='inertia', inertia=0.7 /"//nl// &
-                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, m)
-      select type (e => m%elements(1)%e)
-      type is (keyed_joint_t)
-         lj%keyed_joint_t = e
-      end select
-      lj%vouch = vouch
-      deallocate (m%elements(1)%e)
-      allocate (m%elements(1)%e, source=lj)
-      call m%initial_state(y)
-      allocate (dydt(size(y)), g(m%n_guards), fired(m%n_guards), events(4))
-      y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
-      call m%init_modes(0.0_wp, y)
+      call open_keyed_joint(m, y, dydt, g, fired, events, lying=vouch)
       call m%hot_kinds(1, kind, gk)
       call check('init_modes: open, in its hot form (the probes pass: open, no torque)', kind == hf_open)
       ! the key has closed on the rear face: delta = r (thl - thr) = -0.0015 < -b
