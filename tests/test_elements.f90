@@ -123,6 +123,15 @@ program test_elements
                                     rear_lying_joint_t
    implicit none
 
+   !> Two disks on a keyed joint with the state, rates, guards and events of
+   !> the hot-form mode tests (`open_keyed_joint`).
+   type :: joint_case_t
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), dydt(:), g(:)
+      type(event_t), allocatable :: events(:)
+      logical, allocatable :: fired(:)
+   end type joint_case_t
+
    character(len=*), parameter :: two_disks = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
                                               "&node type='inertia', inertia=1.0 /"//nl// &
                                               "&node type='inertia', inertia=2.0 /"//nl
@@ -965,24 +974,15 @@ contains
    !> element behind the model's back is not seen (the contract the test
    !> relies on: without the refresh the kernel's torques would be stale).
    subroutine test_hot_form_follows_mode_changes()
-      type(model_t) :: m
-      real(wp), allocatable :: y(:), dydt(:), g(:)
-      type(event_t), allocatable :: events(:)
-      logical, allocatable :: fired(:)
+      type(joint_case_t), target :: jc
       real(wp) :: tl, tr
       integer :: nev, kind, gk
       call test_begin('hot_form_follows_mode_changes')
-      call open_keyed_joint(m, y, dydt, g, fired, events)
+      call open_keyed_joint(jc)
+      associate (m => jc%m, y => jc%y, dydt => jc%dydt, g => jc%g, fired => jc%fired)
       call m%hot_kinds(1, kind, gk)
       call check('init_modes: open', kind == hf_open .and. gk == hg_faces)
-      ! the key has closed on the front face: delta = r (thl - thr) = 0.0015 > b
-      y(1:4) = [0.0015_wp, 1.0_wp, 0.0_wp, -1.0_wp]
-      call m%guards(0.0_wp, y, g)
-      call check('the front-face guard has crossed', g(1) < 0.0_wp)
-      fired = [.true., .false.]
-      nev = 0
-      call m%apply_events(0.0_wp, y, fired, events, nev)
-      call m%hot_kinds(1, kind, gk)
+      call close_on_face(jc, 1, nev, kind, gk)
       call check('apply_events: an impact, the form now closed (yang_sun)', nev == 1 .and. kind == hf_yang_sun)
       call m%rhs_stage(0.0_wp, y, dydt)
       call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
@@ -1003,34 +1003,51 @@ contains
       call m%rhs_stage(0.0_wp, y, dydt)
       call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
       call check('init_modes refreshes it again', tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1))
+      end associate
    end subroutine test_hot_form_follows_mode_changes
 
    !> Two disks on a keyed joint, inside its clearance (open), modes set; with
    !> `lying` present the joint is a rear_lying_joint_t that vouches if lying.
-   subroutine open_keyed_joint(m, y, dydt, g, fired, events, lying)
-      type(model_t), intent(inout) :: m
-      real(wp), allocatable, intent(inout) :: y(:), dydt(:), g(:)
-      logical, allocatable, intent(inout) :: fired(:)
-      type(event_t), allocatable, intent(inout) :: events(:)
+   subroutine open_keyed_joint(jc, lying)
+      type(joint_case_t), intent(inout) :: jc
       logical, intent(in), optional :: lying
       type(rear_lying_joint_t) :: lj
       call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
                            "&node type='inertia', inertia=1.3 /"//nl//"&node type='inertia', inertia=0.7 /"//nl// &
-                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, m)
+                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, jc%m)
       if (present(lying)) then
-         select type (e => m%elements(1)%e)
+         select type (e => jc%m%elements(1)%e)
          type is (keyed_joint_t)
             lj%keyed_joint_t = e
          end select
          lj%vouch = lying
-         deallocate (m%elements(1)%e)
-         allocate (m%elements(1)%e, source=lj)
+         deallocate (jc%m%elements(1)%e)
+         allocate (jc%m%elements(1)%e, source=lj)
       end if
-      call m%initial_state(y)
-      allocate (dydt(size(y)), g(m%n_guards), fired(m%n_guards), events(4))
-      y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
-      call m%init_modes(0.0_wp, y)
+      call jc%m%initial_state(jc%y)
+      allocate (jc%dydt(size(jc%y)), jc%g(jc%m%n_guards), jc%fired(jc%m%n_guards), jc%events(4))
+      jc%y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
+      call jc%m%init_modes(0.0_wp, jc%y)
    end subroutine open_keyed_joint
+
+   !> The key of `open_keyed_joint` closed on a face (1 front, -1 rear: delta =
+   !> r (thl - thr) = +-0.0015, beyond b), that face's guard checked below zero
+   !> and its event applied: nev events, the hot kinds after.
+   subroutine close_on_face(jc, face, nev, kind, gk)
+      type(joint_case_t), intent(inout) :: jc
+      integer, intent(in) :: face
+      integer, intent(out) :: nev, kind, gk
+      integer :: k
+      k = merge(1, 2, face == 1)
+      jc%y(1:4) = face*[0.0015_wp, 1.0_wp, 0.0_wp, -1.0_wp]
+      call jc%m%guards(0.0_wp, jc%y, jc%g)
+      call check('the '//merge('front', 'rear ', face == 1)//'-face guard has crossed', jc%g(k) < 0.0_wp)
+      jc%fired = .false.
+      jc%fired(k) = .true.
+      nev = 0
+      call jc%m%apply_events(0.0_wp, jc%y, jc%fired, jc%events, nev)
+      call jc%m%hot_kinds(1, kind, gk)
+   end subroutine close_on_face
 
    !> D-169: a mode change probes the element's record (its hot form) against
    !> its own procedures again, unless the record vouches for itself in every
@@ -1042,24 +1059,15 @@ contains
    !> `init_modes` probes it again.
    subroutine test_hot_form_probed_again_unless_it_vouches(vouch)
       logical, intent(in) :: vouch
-      type(model_t) :: m
-      real(wp), allocatable :: y(:), dydt(:), g(:)
-      type(event_t), allocatable :: events(:)
-      logical, allocatable :: fired(:)
+      type(joint_case_t), target :: jc
       real(wp) :: tl, tr
       integer :: nev, kind, gk
       call test_begin('hot_form_probed_again_unless_it_vouches ('//merge('vouching    ', 'not vouching', vouch)//')')
-      call open_keyed_joint(m, y, dydt, g, fired, events, lying=vouch)
+      call open_keyed_joint(jc, lying=vouch)
+      associate (m => jc%m, y => jc%y, dydt => jc%dydt, g => jc%g, fired => jc%fired)
       call m%hot_kinds(1, kind, gk)
       call check('init_modes: open, in its hot form (the probes pass: open, no torque)', kind == hf_open)
-      ! the key has closed on the rear face: delta = r (thl - thr) = -0.0015 < -b
-      y(1:4) = [-0.0015_wp, -1.0_wp, 0.0_wp, 1.0_wp]
-      call m%guards(0.0_wp, y, g)
-      call check('the rear-face guard has crossed', g(2) < 0.0_wp)
-      fired = [.false., .true.]
-      nev = 0
-      call m%apply_events(0.0_wp, y, fired, events, nev)
-      call m%hot_kinds(1, kind, gk)
+      call close_on_face(jc, -1, nev, kind, gk)
       call m%rhs_stage(0.0_wp, y, dydt)
       call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
       if (vouch) then
@@ -1075,6 +1083,7 @@ contains
       call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
       call check('init_modes probes it again: demoted, the element''s torques', &
                  kind == hf_none .and. m%el_torque(1, 1) == tl .and. tl /= 0.0_wp)
+      end associate
    end subroutine test_hot_form_probed_again_unless_it_vouches
 
    !> The inner-stage kernel with energy tracking (`rhs_stage_energy`) sums the
