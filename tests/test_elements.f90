@@ -39,7 +39,7 @@ module test_elements_doubles
 
    !> A keyed joint whose torques on the rear face are twice its hot form's (a
    !> careless plug-in's record, true in some modes only), that vouches for
-   !> its record (hot_form_t%exact, D-169) when `vouch` is set.
+   !> its record (hot_form_t%exact, D-167) when `vouch` is set.
    type, extends(keyed_joint_t) :: rear_lying_joint_t
       logical :: vouch = .false.
    contains
@@ -1049,7 +1049,7 @@ contains
       call jc%m%hot_kinds(1, kind, gk)
    end subroutine close_on_face
 
-   !> D-169: a mode change probes the element's record (its hot form) against
+   !> D-167: a mode change probes the element's record (its hot form) against
    !> its own procedures again, unless the record vouches for itself in every
    !> mode (hot_form_t%exact, the house's spur gear) and passed the probes
    !> since the last `init_modes`. A keyed joint that lies about its rear face

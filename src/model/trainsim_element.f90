@@ -64,7 +64,7 @@ module trainsim_element
       !> The element vouches that this record is its own procedures' arithmetic
       !> in every mode (a house element whose torques, guards, energy and status
       !> are the record's by construction; the conformance suite checks it): the
-      !> model then probes it once, not at every mode change (D-169).
+      !> model then probes it once, not at every mode change (D-167).
       logical :: exact = .false.
    end type hot_form_t
 

@@ -50,7 +50,7 @@ module trainsim_model_families
       !> form's (counted in n_cold: `rhs_simple` then leaves no energy).
       logical :: cold = .true.
       !> Its hot form vouches for itself (hot_form_t%exact) and passed
-      !> `hot_probe` since the last `init_modes`: not probed again (D-169).
+      !> `hot_probe` since the last `init_modes`: not probed again (D-167).
       logical :: vouched = .false.
    end type fast_element_t
 

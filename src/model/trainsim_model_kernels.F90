@@ -132,7 +132,7 @@ contains
    !> only if pe_ok on entry) and st_ok (its status) false where those do
    !> (D-36). vouched: h vouches for itself (h%exact) and passed every probe,
    !> torques and guards both in a hot form (`refresh_hot` then skips the probes
-   !> until the next `init_modes`, D-169).
+   !> until the next `init_modes`, D-167).
    subroutine hot_probe(e, h, ng, pe_ok, st_ok, vouched)
       class(element_t), intent(in) :: e
       type(hot_form_t), intent(inout) :: h

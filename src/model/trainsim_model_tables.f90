@@ -448,7 +448,7 @@ contains
       rebuild = .true.
       if (present(tables)) rebuild = tables
       if (rebuild) call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
-      self%fe(:)%vouched = .false.   ! (each element's record probed again: D-169)
+      self%fe(:)%vouched = .false.   ! (each element's record probed again: D-167)
       call self%kinematics(t, y)
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left
@@ -500,7 +500,7 @@ contains
          if (.not. ((h%guards == hg_faces .and. ng == 2) .or. (h%guards == hg_faces_zone .and. ng == 4))) &
             h%guards = hg_none
          ! the element's procedures against its record at three probe states, unless
-         ! it vouches for its record in every mode and passed them before (D-169)
+         ! it vouches for its record in every mode and passed them before (D-167)
          if (h%exact .and. q%vouched .and. h%kind /= hf_none .and. h%guards /= hg_none) then
             st_ok = .true.
          else
