@@ -452,6 +452,7 @@ contains
       form%lo_open = self%lo_open
       form%th_lo = self%th_lo
       form%th_hi = self%th_hi
+      form%exact = .true.   ! (its torques, guards, energy and status are the record's in every mode: D-167)
       ! an excited mesh (issue 26): the torques stay with `torques` while the
       ! stiffness varies or the TE moves the faces (their guards too)
       if (self%ex%varies .or. self%ex%has_te) form%kind = hf_none

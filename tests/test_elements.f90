@@ -5,9 +5,11 @@ module test_elements_doubles
    use trainsim_kinds, only: wp
    use trainsim_el_shaft, only: shaft_t
    use trainsim_node_inertia, only: inertia_node_t
+   use trainsim_el_keyed_joint, only: keyed_joint_t
+   use trainsim_element, only: hot_form_t
    implicit none
    private
-   public :: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t, powered_shaft_t
+   public :: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t, powered_shaft_t, rear_lying_joint_t
 
    !> A shaft whose torque grows with the cube of the twist.
    type, extends(shaft_t) :: stiffening_shaft_t
@@ -35,7 +37,35 @@ module test_elements_doubles
       procedure :: derivatives => pushed_derivatives
    end type pushed_inertia_t
 
+   !> A keyed joint whose torques on the rear face are twice its hot form's (a
+   !> careless plug-in's record, true in some modes only), that vouches for
+   !> its record (hot_form_t%exact, D-167) when `vouch` is set.
+   type, extends(keyed_joint_t) :: rear_lying_joint_t
+      logical :: vouch = .false.
+   contains
+      procedure :: torques => rear_lying_torques
+      procedure :: hot_form => rear_lying_hot_form
+   end type rear_lying_joint_t
+
 contains
+
+   pure subroutine rear_lying_torques(self, thl, wl, thr, wr, tl, tr)
+      class(rear_lying_joint_t), intent(in) :: self
+      real(wp), intent(in) :: thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr
+      call self%keyed_joint_t%torques(thl, wl, thr, wr, tl, tr)
+      if (self%cl%mode == -1) then
+         tl = 2.0_wp*tl
+         tr = 2.0_wp*tr
+      end if
+   end subroutine rear_lying_torques
+
+   pure subroutine rear_lying_hot_form(self, form)
+      class(rear_lying_joint_t), intent(in) :: self
+      type(hot_form_t), intent(out) :: form
+      call self%keyed_joint_t%hot_form(form)
+      form%exact = self%vouch
+   end subroutine rear_lying_hot_form
 
    pure subroutine stiffening_torques(self, thl, wl, thr, wr, tl, tr)
       class(stiffening_shaft_t), intent(in) :: self
@@ -89,8 +119,18 @@ program test_elements
    use trainsim_test_support, only: load_model, load_model_text, run_model, nl
    use trainsim_el_shaft, only: shaft_t
    use trainsim_node_inertia, only: inertia_node_t
-   use test_elements_doubles, only: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t, powered_shaft_t
+   use test_elements_doubles, only: stiffening_shaft_t, pushed_inertia_t, recording_shaft_t, powered_shaft_t, &
+                                    rear_lying_joint_t
    implicit none
+
+   !> Two disks on a keyed joint with the state, rates, guards and events of
+   !> the hot-form mode tests (`open_keyed_joint`).
+   type :: joint_case_t
+      type(model_t) :: m
+      real(wp), allocatable :: y(:), dydt(:), g(:)
+      type(event_t), allocatable :: events(:)
+      logical, allocatable :: fired(:)
+   end type joint_case_t
 
    character(len=*), parameter :: two_disks = "&run t_end = 1e-3, dt = 1e-6 /"//nl// &
                                               "&node type='inertia', inertia=1.0 /"//nl// &
@@ -124,6 +164,8 @@ program test_elements
    call test_stage_energy_rates_are_the_full_rhs_own()
    call test_hot_forms_are_the_elements_own_arithmetic()
    call test_hot_form_follows_mode_changes()
+   call test_hot_form_probed_again_unless_it_vouches(.false.)
+   call test_hot_form_probed_again_unless_it_vouches(.true.)
    call test_guards_next_to_a_held_node_are_the_elements_own()
    call suite_end()
 
@@ -932,30 +974,15 @@ contains
    !> element behind the model's back is not seen (the contract the test
    !> relies on: without the refresh the kernel's torques would be stale).
    subroutine test_hot_form_follows_mode_changes()
-      type(model_t) :: m
-      real(wp), allocatable :: y(:), dydt(:), g(:)
-      type(event_t), allocatable :: events(:)
-      logical, allocatable :: fired(:)
+      type(joint_case_t), target :: jc
       real(wp) :: tl, tr
       integer :: nev, kind, gk
       call test_begin('hot_form_follows_mode_changes')
-      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
-                           "&node type='inertia', inertia=1.3 /"//nl//"&node type='inertia', inertia=0.7 /"//nl// &
-                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, m)
-      call m%initial_state(y)
-      allocate (dydt(size(y)), g(m%n_guards), fired(m%n_guards), events(4))
-      y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
-      call m%init_modes(0.0_wp, y)
+      call open_keyed_joint(jc)
+      associate (m => jc%m, y => jc%y, dydt => jc%dydt, g => jc%g, fired => jc%fired)
       call m%hot_kinds(1, kind, gk)
       call check('init_modes: open', kind == hf_open .and. gk == hg_faces)
-      ! the key has closed on the front face: delta = r (thl - thr) = 0.0015 > b
-      y(1:4) = [0.0015_wp, 1.0_wp, 0.0_wp, -1.0_wp]
-      call m%guards(0.0_wp, y, g)
-      call check('the front-face guard has crossed', g(1) < 0.0_wp)
-      fired = [.true., .false.]
-      nev = 0
-      call m%apply_events(0.0_wp, y, fired, events, nev)
-      call m%hot_kinds(1, kind, gk)
+      call close_on_face(jc, 1, nev, kind, gk)
       call check('apply_events: an impact, the form now closed (yang_sun)', nev == 1 .and. kind == hf_yang_sun)
       call m%rhs_stage(0.0_wp, y, dydt)
       call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
@@ -976,7 +1003,88 @@ contains
       call m%rhs_stage(0.0_wp, y, dydt)
       call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
       call check('init_modes refreshes it again', tl == m%el_torque(1, 1) .and. tr == m%el_torque(2, 1))
+      end associate
    end subroutine test_hot_form_follows_mode_changes
+
+   !> Two disks on a keyed joint, inside its clearance (open), modes set; with
+   !> `lying` present the joint is a rear_lying_joint_t that vouches if lying.
+   subroutine open_keyed_joint(jc, lying)
+      type(joint_case_t), intent(inout) :: jc
+      logical, intent(in), optional :: lying
+      type(rear_lying_joint_t) :: lj
+      call load_model_text("&run t_end = 1e-3, dt = 1e-6, track_energy = .false. /"//nl// &
+                           "&node type='inertia', inertia=1.3 /"//nl//"&node type='inertia', inertia=0.7 /"//nl// &
+                           "&element type='keyed_joint', diameter=2.0, half_clearance=0.001, stiffness=1e6 /"//nl, jc%m)
+      if (present(lying)) then
+         select type (e => jc%m%elements(1)%e)
+         type is (keyed_joint_t)
+            lj%keyed_joint_t = e
+         end select
+         lj%vouch = lying
+         deallocate (jc%m%elements(1)%e)
+         allocate (jc%m%elements(1)%e, source=lj)
+      end if
+      call jc%m%initial_state(jc%y)
+      allocate (jc%dydt(size(jc%y)), jc%g(jc%m%n_guards), jc%fired(jc%m%n_guards), jc%events(4))
+      jc%y(1:4) = [0.0_wp, 1.0_wp, 0.0_wp, -1.0_wp]       ! inside the clearance: open
+      call jc%m%init_modes(0.0_wp, jc%y)
+   end subroutine open_keyed_joint
+
+   !> The key of `open_keyed_joint` closed on a face (1 front, -1 rear: delta =
+   !> r (thl - thr) = +-0.0015, beyond b), that face's guard checked below zero
+   !> and its event applied: nev events, the hot kinds after.
+   subroutine close_on_face(jc, face, nev, kind, gk)
+      type(joint_case_t), intent(inout) :: jc
+      integer, intent(in) :: face
+      integer, intent(out) :: nev, kind, gk
+      integer :: k
+      k = merge(1, 2, face == 1)
+      jc%y(1:4) = face*[0.0015_wp, 1.0_wp, 0.0_wp, -1.0_wp]
+      call jc%m%guards(0.0_wp, jc%y, jc%g)
+      call check('the '//merge('front', 'rear ', face == 1)//'-face guard has crossed', jc%g(k) < 0.0_wp)
+      jc%fired = .false.
+      jc%fired(k) = .true.
+      nev = 0
+      call jc%m%apply_events(0.0_wp, jc%y, jc%fired, jc%events, nev)
+      call jc%m%hot_kinds(1, kind, gk)
+   end subroutine close_on_face
+
+   !> D-167: a mode change probes the element's record (its hot form) against
+   !> its own procedures again, unless the record vouches for itself in every
+   !> mode (hot_form_t%exact, the house's spur gear) and passed the probes
+   !> since the last `init_modes`. A keyed joint that lies about its rear face
+   !> (its torques there twice its record's), open at the start: without a
+   !> vouch the event to the rear face demotes its record (the kernel then asks
+   !> its torques); with one the record is kept (the probes are skipped), until
+   !> `init_modes` probes it again.
+   subroutine test_hot_form_probed_again_unless_it_vouches(vouch)
+      logical, intent(in) :: vouch
+      type(joint_case_t), target :: jc
+      real(wp) :: tl, tr
+      integer :: nev, kind, gk
+      call test_begin('hot_form_probed_again_unless_it_vouches ('//merge('vouching    ', 'not vouching', vouch)//')')
+      call open_keyed_joint(jc, lying=vouch)
+      associate (m => jc%m, y => jc%y, dydt => jc%dydt, g => jc%g, fired => jc%fired)
+      call m%hot_kinds(1, kind, gk)
+      call check('init_modes: open, in its hot form (the probes pass: open, no torque)', kind == hf_open)
+      call close_on_face(jc, -1, nev, kind, gk)
+      call m%rhs_stage(0.0_wp, y, dydt)
+      call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
+      if (vouch) then
+         call check('vouching: the record kept at the event (not probed again), its torques half the element''s', &
+                    nev == 1 .and. kind == hf_yang_sun .and. m%el_torque(1, 1) == 0.5_wp*tl .and. tl /= 0.0_wp)
+      else
+         call check('not vouching: probed at the event, the record demoted, the kernel asks the element''s torques', &
+                    nev == 1 .and. kind == hf_none .and. m%el_torque(1, 1) == tl .and. tl /= 0.0_wp)
+      end if
+      call m%init_modes(0.0_wp, y)
+      call m%hot_kinds(1, kind, gk)
+      call m%rhs_stage(0.0_wp, y, dydt)
+      call m%elements(1)%e%torques(y(1), y(2), y(3), y(4), tl, tr)
+      call check('init_modes probes it again: demoted, the element''s torques', &
+                 kind == hf_none .and. m%el_torque(1, 1) == tl .and. tl /= 0.0_wp)
+      end associate
+   end subroutine test_hot_form_probed_again_unless_it_vouches
 
    !> The inner-stage kernel with energy tracking (`rhs_stage_energy`) sums the
    !> nodes' power terms on a serial chain apart from the elements' and joins

@@ -61,6 +61,11 @@ module trainsim_element
       real(wp) :: s = 0.0_wp                  !< real(mode)
       real(wp) :: c = 1.0_wp, k = 0.0_wp, dmp = 0.0_wp, b = 0.0_wp, r1 = 1.0_wp, r2 = 1.0_wp
       real(wp) :: th_lo = 0.0_wp, th_hi = 0.0_wp
+      !> The element vouches that this record is its own procedures' arithmetic
+      !> in every mode (a house element whose torques, guards, energy and status
+      !> are the record's by construction; the conformance suite checks it): the
+      !> model then probes it once, not at every mode change (D-167).
+      logical :: exact = .false.
    end type hot_form_t
 
    type, abstract :: element_t

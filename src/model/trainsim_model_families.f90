@@ -49,6 +49,9 @@ module trainsim_model_families
       !> The element's elastic energy is neither a linear spring's nor its hot
       !> form's (counted in n_cold: `rhs_simple` then leaves no energy).
       logical :: cold = .true.
+      !> Its hot form vouches for itself (hot_form_t%exact) and passed
+      !> `hot_probe` since the last `init_modes`: not probed again (D-167).
+      logical :: vouched = .false.
    end type fast_element_t
 
    !> An element with guards, as `model_guards` reads it: where its guards are

@@ -5,11 +5,11 @@
 !> stage kernel (trainsim_model_stage.inc) includes too (D-70).
 module trainsim_model_kernels
    use trainsim_kinds, only: wp
-   use trainsim_element, only: hot_form_t, hf_open, hf_yang_sun
+   use trainsim_element, only: element_t, hot_form_t, hf_none, hf_open, hf_yang_sun, hg_none
    implicit none
    private
 
-   public :: spring, contact, hot_torques, hot_force, hot_potential, hot_guards
+   public :: spring, contact, hot_torques, hot_force, hot_potential, hot_guards, hot_probe
 
 contains
 
@@ -125,5 +125,59 @@ contains
       end if
       g(4) = h%th_hi - thl
    end subroutine hot_guards
+
+   !> The element's own procedures against its hot form h (D-35) at three probe
+   !> states (two with the face penetrated by a little, one anywhere): h%kind and
+   !> h%guards set to none where they disagree, pe_ok (its elastic energy, asked
+   !> only if pe_ok on entry) and st_ok (its status) false where those do
+   !> (D-36). vouched: h vouches for itself (h%exact) and passed every probe,
+   !> torques and guards both in a hot form (`refresh_hot` then skips the probes
+   !> until the next `init_modes`, D-167).
+   subroutine hot_probe(e, h, ng, pe_ok, st_ok, vouched)
+      class(element_t), intent(in) :: e
+      type(hot_form_t), intent(inout) :: h
+      integer, intent(in) :: ng
+      logical, intent(inout) :: pe_ok
+      logical, intent(out) :: st_ok, vouched
+      real(wp) :: x(4), g(4), gh(4), tl, tr, pw, htl, htr, hpw, pen, sd, sf
+      integer :: p, sc, sp, kind0, guards0
+      logical :: pe0
+      st_ok = .true.
+      kind0 = h%kind
+      guards0 = h%guards
+      pe0 = pe_ok
+      do p = 1, 3
+         if (h%kind == hf_none .and. h%guards == hg_none) exit
+         ! two states with the face penetrated by a little, one anywhere
+         x = [0.0_wp, 1.1_wp*p, 0.3_wp*p, -0.7_wp/p]
+         pen = 0.25_wp*p*max(h%b, 1.0e-3_wp)
+         if (h%r1 /= 0.0_wp) x(1) = (h%r2*x(3) + h%s*(h%b + pen))/h%r1
+         if (p == 3) x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]
+         if (h%kind /= hf_none) then
+            call e%torques(x(1), x(2), x(3), x(4), tl, tr)
+            call hot_torques(h, x(1), x(2), x(3), x(4), htl, htr, hpw)
+            if (.not. (tl == htl .and. tr == htr)) h%kind = hf_none
+            call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
+            if (.not. (tl == htl .and. tr == htr .and. pw == hpw)) h%kind = hf_none
+            ! D-36: its elastic energy and status as `rhs_simple` leaves them
+            ! (each until it disagrees; the energy only where it can be read)
+            if (pe_ok) then
+               if (.not. e%potential_energy(x(1), x(3)) == hot_potential(h, x(1), x(3))) pe_ok = .false.
+            end if
+            if (st_ok) then
+               call e%status(x(1), x(2), x(3), x(4), sd, sf, sc, sp)
+               if (.not. (sd == h%r1*x(1) - h%r2*x(3) .and. sf == hot_force(h, x(1), x(2), x(3), x(4)) .and. &
+                          sc == h%mode)) st_ok = .false.
+            end if
+         end if
+         if (h%guards /= hg_none) then
+            call e%guards(x(1), x(2), x(3), x(4), g(1:ng))
+            call hot_guards(h, x(1), x(3), gh)
+            if (any(g(1:ng) /= gh(1:ng))) h%guards = hg_none
+         end if
+      end do
+      vouched = h%exact .and. kind0 /= hf_none .and. guards0 /= hg_none .and. h%kind == kind0 .and. &
+                h%guards == guards0 .and. st_ok .and. (pe_ok .eqv. pe0)
+   end subroutine hot_probe
 
 end module trainsim_model_kernels

@@ -11,7 +11,7 @@ submodule (trainsim_model) trainsim_model_tables
                                       lf_cl_linear, fast_element_t, table_t, spring_ni, spring_nr, contact_ni, &
                                       contact_nr, free_ni, free_nr, held_ni, held_nr, load_ni, load_nr, row_ends, &
                                       build_chain, chain_laws
-   use trainsim_model_kernels, only: hot_potential, hot_force, hot_torques, hot_guards
+   use trainsim_model_kernels, only: hot_probe
    use trainsim_ports, only: port_init_at
    implicit none
 
@@ -448,6 +448,7 @@ contains
       rebuild = .true.
       if (present(tables)) rebuild = tables
       if (rebuild) call self%build_fast_path()   ! a copy may have been re-parameterised since finalize
+      self%fe(:)%vouched = .false.   ! (each element's record probed again: D-167)
       call self%kinematics(t, y)
       do i = 1, size(self%elements)
          l = self%elements(i)%e%left
@@ -480,8 +481,7 @@ contains
 
    module procedure refresh_hot
       type(hot_form_t) :: h
-      real(wp) :: x(4), g(4), gh(4), tl, tr, pw, htl, htr, hpw, pen, sd, sf
-      integer :: p, ng, sc, sp
+      integer :: p, ng
       logical :: pe_ok, st_ok, in_family
       ! hot_pe is read only with energy tracking (ws_energy needs run%track_energy,
       ! which every run's init_modes refreshes with): without, it stays false
@@ -499,36 +499,13 @@ contains
          ng = q%ng
          if (.not. ((h%guards == hg_faces .and. ng == 2) .or. (h%guards == hg_faces_zone .and. ng == 4))) &
             h%guards = hg_none
-         do p = 1, 3
-            if (h%kind == hf_none .and. h%guards == hg_none) exit
-            ! two states with the face penetrated by a little, one anywhere
-            x = [0.0_wp, 1.1_wp*p, 0.3_wp*p, -0.7_wp/p]
-            pen = 0.25_wp*p*max(h%b, 1.0e-3_wp)
-            if (h%r1 /= 0.0_wp) x(1) = (h%r2*x(3) + h%s*(h%b + pen))/h%r1
-            if (p == 3) x = [0.37_wp, -1.3_wp, -0.52_wp, 2.1_wp]
-            if (h%kind /= hf_none) then
-               call e%torques(x(1), x(2), x(3), x(4), tl, tr)
-               call hot_torques(h, x(1), x(2), x(3), x(4), htl, htr, hpw)
-               if (.not. (tl == htl .and. tr == htr)) h%kind = hf_none
-               call e%torques_dissipation(x(1), x(2), x(3), x(4), tl, tr, pw)
-               if (.not. (tl == htl .and. tr == htr .and. pw == hpw)) h%kind = hf_none
-               ! D-36: its elastic energy and status as `rhs_simple` leaves them
-               ! (each until it disagrees; the energy only where it can be read)
-               if (pe_ok) then
-                  if (.not. e%potential_energy(x(1), x(3)) == hot_potential(h, x(1), x(3))) pe_ok = .false.
-               end if
-               if (st_ok) then
-                  call e%status(x(1), x(2), x(3), x(4), sd, sf, sc, sp)
-                  if (.not. (sd == h%r1*x(1) - h%r2*x(3) .and. sf == hot_force(h, x(1), x(2), x(3), x(4)) .and. &
-                             sc == h%mode)) st_ok = .false.
-               end if
-            end if
-            if (h%guards /= hg_none) then
-               call e%guards(x(1), x(2), x(3), x(4), g(1:ng))
-               call hot_guards(h, x(1), x(3), gh)
-               if (any(g(1:ng) /= gh(1:ng))) h%guards = hg_none
-            end if
-         end do
+         ! the element's procedures against its record at three probe states, unless
+         ! it vouches for its record in every mode and passed them before (D-167)
+         if (h%exact .and. q%vouched .and. h%kind /= hf_none .and. h%guards /= hg_none) then
+            st_ok = .true.
+         else
+            call hot_probe(e, h, ng, pe_ok, st_ok, q%vouched)
+         end if
          self%fh(i) = h
          q%gform = h%guards
          q%hot_pe = pe_ok .and. h%kind /= hf_none
