@@ -24,7 +24,7 @@ module trainsim_int_rk4
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
-   use trainsim_model_families, only: windows_below, block_run_t
+   use trainsim_model_families, only: block_run_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    use trainsim_fixed_step, only: fixed_step_t
    implicit none
@@ -542,6 +542,8 @@ contains
          b%nw = nw
       end subroutine block_run
    end subroutine rk4_advance_block
+
+   include '../model/trainsim_model_windows.inc'
 
    ! The step maps of a local event step (L, one component of L). They stay in this
    ! module, not in a submodule: gfortran gives every procedure of a submodule an

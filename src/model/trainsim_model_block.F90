@@ -2,12 +2,12 @@
 !> call (D-166): `model_rk4_block`, each step's inner stages, its combination
 !> and its end in the block's column with the kernels of `model_rk4_stages` and
 !> `model_rhs_step_end` (trainsim_model_rk4_kernels.inc) inlined in one loop, so
-!> that a step makes no call and loads its tables' bounds once a block. The
+!> that a step makes no call (no frames, dispatch or argument lists a step). The
 !> `module procedure` is declared, with its arguments and their docs, in
 !> trainsim_model.
 submodule (trainsim_model) trainsim_model_block
    use trainsim_model_families, only: spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr
-   use trainsim_model_families, only: chain_ni, chain_nr, ch_spring, ch_damper, ch_open, ch_ys, ch_unit, windows_below
+   use trainsim_model_families, only: chain_ni, chain_nr, ch_spring, ch_damper, ch_open, ch_ys, ch_unit
    use trainsim_kinds, only: i8
    implicit none
 
@@ -79,5 +79,6 @@ contains
 #include "trainsim_model_rk4_kernels.inc"
 #undef RK4_INNER
 #include "trainsim_model_rk4_kernels.inc"
+#include "trainsim_model_windows.inc"
    end procedure model_rk4_block
 end submodule trainsim_model_block

@@ -307,18 +307,5 @@ contains
       if (i2 == i1 + 1) x(2) = iw(i2)
    end function row_ends
 
-   !> Whether a guard is below zero at y, by the windows of `guard_windows`
-   !> (n rows; D-145): the same answer as `guards_below`, without the guards.
-   pure logical function windows_below(n, iw, w, y) result(below)
-      integer, intent(in) :: n, iw(2, n)
-      real(wp), intent(in) :: w(6, n), y(*)
-      integer :: k
-      real(wp) :: d, th
-      below = .false.
-      do k = 1, n
-         th = y(iw(1, k))
-         d = w(1, k)*th - w(2, k)*y(iw(2, k))
-         if (d < w(3, k) .or. d > w(4, k) .or. th < w(5, k) .or. th > w(6, k)) below = .true.
-      end do
-   end function windows_below
+   include 'trainsim_model_windows.inc'
 end module trainsim_model_families
