@@ -114,7 +114,7 @@ contains
    logical function probe() result(below)
       logical :: win
       below = m%guards_below(0.0_wp, y, g)
-      win = windows_below(n, iw, w, y)   ! (the function advance_block and rk4_block use, D-166)
+      win = windows_below(n, iw, w, y)   ! (the function advance_block and rk4_block use, D-168)
       n_probe = n_probe + 1
       if (below) n_below = n_below + 1
       if (win .neqv. below) n_diff = n_diff + 1

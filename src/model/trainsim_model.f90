@@ -44,7 +44,7 @@ module trainsim_model
       real(wp), allocatable :: disp(:, :), force(:, :), torque(:, :)
       real(wp), allocatable :: omega(:, :)               !< (node, step): omega at the step's end
       real(wp), allocatable :: stored(:), elastic(:), work(:, :)   !< (step); (2, step): the work states
-      type(block_run_t) :: run   !< the block's grid and limits for `rk4_block` (D-166)
+      type(block_run_t) :: run   !< the block's grid and limits for `rk4_block` (D-168)
    end type step_block_t
 
    type :: model_t
@@ -299,7 +299,7 @@ module trainsim_model
          real(wp), intent(out) :: ynew(self%n_y)
       end subroutine model_rk4_stages
 
-      !> A block's further plain RK4 steps in one call (D-166), after its column blk%col: trainsim_model_block.
+      !> A block's further plain RK4 steps in one call (D-168), after its column blk%col: trainsim_model_block.
       module subroutine model_rk4_block(self, t, y, k1, k2, k3, k4, ynew, g1, gw_i, gw)
          class(model_t), intent(inout) :: self
          real(wp), intent(inout) :: t, y(self%n_y), k1(self%n_y), k2(self%n_y), k3(self%n_y), k4(self%n_y), ynew(self%n_y), g1(*)

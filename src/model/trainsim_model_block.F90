@@ -1,5 +1,5 @@
 !> A block's plain RK4 steps of a simple model without energy tracking in one
-!> call (D-166): `model_rk4_block`, each step's inner stages, its combination
+!> call (D-168): `model_rk4_block`, each step's inner stages, its combination
 !> and its end in the block's column with the kernels of `model_rk4_stages` and
 !> `model_rhs_step_end` (trainsim_model_rk4_kernels.inc) inlined in one loop, so
 !> that a step makes no call (no frames, dispatch or argument lists a step). The

@@ -153,7 +153,7 @@ module trainsim_model_families
       real(wp), allocatable :: th(:), w(:), pw(:)   !< scratch: node angles, speeds; element powers
    end type families_t
 
-   !> A block's plain RK4 steps as the model takes them (`rk4_block`, D-166): the
+   !> A block's plain RK4 steps as the model takes them (`rk4_block`, D-168): the
    !> grid (step istep ends at min(t0 + istep dt, t_end)), the block's limits and
    !> guard windows (nw, set by the integrator), the steps computed (ns) and how
    !> it ended (done: the block ends, pend: with the step of size h not taken).
