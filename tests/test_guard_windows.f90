@@ -13,6 +13,7 @@ program test_guard_windows
    use, intrinsic :: ieee_exceptions, only: ieee_get_halting_mode, ieee_set_halting_mode, ieee_set_flag, ieee_invalid
    use trainsim_kinds, only: wp
    use trainsim_model, only: model_t
+   use trainsim_model_families, only: windows_below
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_test_support, only: load_model_text
    implicit none
@@ -111,16 +112,9 @@ contains
 
    !> The windows' answer at y against guards_below's; returns guards_below's.
    logical function probe() result(below)
-      real(wp) :: d, th
       logical :: win
-      integer :: q
       below = m%guards_below(0.0_wp, y, g)
-      win = .false.
-      do q = 1, n
-         th = y(iw(1, q))
-         d = w(1, q)*th - w(2, q)*y(iw(2, q))
-         if (d < w(3, q) .or. d > w(4, q) .or. th < w(5, q) .or. th > w(6, q)) win = .true.
-      end do
+      win = windows_below(n, iw, w, y)   ! (the function advance_block and rk4_block use, D-168)
       n_probe = n_probe + 1
       if (below) n_below = n_below + 1
       if (win .neqv. below) n_diff = n_diff + 1

@@ -24,6 +24,7 @@ module trainsim_int_rk4
    use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
+   use trainsim_model_families, only: block_run_t
    use trainsim_integrator, only: integrator_t, adv_step, adv_reached, adv_event
    use trainsim_fixed_step, only: fixed_step_t
    implicit none
@@ -426,7 +427,7 @@ contains
       real(wp), intent(inout), contiguous :: y(:)
       real(wp) :: t_grid, h, t_bp, s, v1, v2
       integer :: j, i, n, nw, ns, n2
-      logical :: below
+      logical :: below, fast
       model%blk%n = 0
       if (self%mr_on .or. self%pend .or. .not. self%takes_blocks) return
       n = 0
@@ -439,7 +440,29 @@ contains
       nw = 0
       if (self%ng > 0) call model%guard_windows(nw, self%gw_i, self%gw)
       model%blk%ws = .false.   ! each step's column only; the workspace after the block
-      do j = 1, model%blk%cap
+      ! after the first step the model takes the block's further steps in one
+      ! call (`rk4_block`, D-168) where it can: the same steps, tests and values
+      fast = .not. model%run%track_energy
+      if (fast) call block_run(model%blk%run)
+      j = 0
+      do while (j < model%blk%cap)
+         if (fast .and. j > 0) then
+            model%blk%run%istep = self%istep
+            model%blk%run%ns = ns
+            call model%rk4_block(t, y, self%k1, self%k2, self%k3, self%k4, self%ynew, self%g1, self%gw_i, self%gw)
+            self%istep = model%blk%run%istep
+            j = model%blk%col
+            n = j
+            ns = model%blk%run%ns
+            if (model%blk%run%pend) then
+               self%pend = .true.
+               self%t_pend = t
+               self%h_pend = model%blk%run%h
+            end if
+            if (model%blk%run%done .or. j >= model%blk%cap) exit
+            fast = .false.   ! (handed back: the rest here)
+         end if
+         j = j + 1
          ! next_grid, written out (after the block's first step t is on the grid)
          t_grid = min(self%t0 + real(self%istep, wp)*self%dt, self%t_end)
          if (t >= t_grid - self%tiny_t) t_grid = self%grid_target(t)
@@ -504,22 +527,23 @@ contains
       model%ws_step_end = .true.
       self%k1_next = .true.
       self%t_k1 = t
+   contains
+      !> The block's grid and limits for `rk4_block`
+      subroutine block_run(b)
+         type(block_run_t), intent(inout) :: b
+         b%t0 = self%t0
+         b%dt = self%dt
+         b%t_end = self%t_end
+         b%tiny_t = self%tiny_t
+         b%t_goal = t_goal
+         b%t_bp = t_bp
+         b%t_tol = t_tol
+         b%y_limit = y_limit
+         b%nw = nw
+      end subroutine block_run
    end subroutine rk4_advance_block
 
-   !> Whether a guard is below zero at y, by the windows of `guard_windows`
-   !> (n rows; D-145): the same answer as `guards_below`, without the guards.
-   pure logical function windows_below(n, iw, w, y) result(below)
-      integer, intent(in) :: n, iw(2, n)
-      real(wp), intent(in) :: w(6, n), y(*)
-      integer :: k
-      real(wp) :: d, th
-      below = .false.
-      do k = 1, n
-         th = y(iw(1, k))
-         d = w(1, k)*th - w(2, k)*y(iw(2, k))
-         if (d < w(3, k) .or. d > w(4, k) .or. th < w(5, k) .or. th > w(6, k)) below = .true.
-      end do
-   end function windows_below
+   include '../model/trainsim_model_windows.inc'
 
    ! The step maps of a local event step (L, one component of L). They stay in this
    ! module, not in a submodule: gfortran gives every procedure of a submodule an

@@ -21,7 +21,7 @@ module trainsim_model
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
    use trainsim_event, only: event_t
-   use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t
+   use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t, block_run_t
    use trainsim_run_settings, only: run_settings_t
    use trainsim_constraints, only: constraint_set_t
    implicit none
@@ -29,12 +29,11 @@ module trainsim_model
 
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
-   !> The end-of-step quantities the observer folds, for up to `cap` plain
-   !> steps an integrator takes in one call (`advance_block`, D-38). Inside a
-   !> block, column `col` is written by `rhs_step_end` of a simple model (col =
-   !> 0 outside a block: no column written); the workspace (el_disp, el_force,
-   !> el_torque, theta, torque) too unless `ws` is cleared (then the integrator
-   !> writes it after the block, so that it holds the last step's end).
+   !> The end-of-step quantities the observer folds, for up to `cap` plain steps an integrator
+   !> takes in one call (`advance_block`, D-38). Inside a block, column `col` is written by
+   !> `rhs_step_end` of a simple model (col = 0 outside a block: no column written); the
+   !> workspace (el_disp, el_force, el_torque, theta, torque) too unless `ws` is cleared (then
+   !> the integrator writes it after the block, so that it holds the last step's end).
    type, public :: step_block_t
       integer :: cap = 1          !< columns
       integer :: col = 0          !< the column the next `rhs_step_end` writes (0: none)
@@ -45,6 +44,7 @@ module trainsim_model
       real(wp), allocatable :: disp(:, :), force(:, :), torque(:, :)
       real(wp), allocatable :: omega(:, :)               !< (node, step): omega at the step's end
       real(wp), allocatable :: stored(:), elastic(:), work(:, :)   !< (step); (2, step): the work states
+      type(block_run_t) :: run   !< the block's grid and limits for `rk4_block` (D-168)
    end type step_block_t
 
    type :: model_t
@@ -145,6 +145,7 @@ module trainsim_model
       procedure :: rhs_step_end => model_rhs_step_end
       procedure :: rhs_stage => model_rhs_stage
       procedure :: rk4_stages => model_rk4_stages
+      procedure :: rk4_block => model_rk4_block
       procedure :: block_ok => model_block_ok
       procedure :: rhs_part => model_rhs_part
       procedure :: part_power => model_part_power
@@ -232,19 +233,18 @@ module trainsim_model
          real(wp), intent(in) :: t, y(:)
       end subroutine kinematics_all
 
-      !> dy/dt at (t, y). Leaves node kinematics and net node torques in the workspace.
-      !> Linear-spring elements and plain-inertia nodes come from the hot-path
-      !> tables; the others are asked through their procedures, in the same order.
+      !> dy/dt at (t, y). Leaves node kinematics and net node torques in the workspace. Linear-spring elements
+      !> and plain-inertia nodes come from the hot-path tables; the others are asked through their procedures,
+      !> in the same order.
       module subroutine model_rhs(self, t, y, dydt)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
          real(wp), intent(out) :: dydt(:)
       end subroutine model_rhs
 
-      !> `rhs_fast` of a simple model: the kernel `rhs_simple` with the model's
-      !> workspace, and at a step's end inside a block (D-38) its column. On
-      !> explicit-size y and dydt (their addresses only: `model_rhs_step_end` calls
-      !> it for every step of a block).
+      !> `rhs_fast` of a simple model: the kernel `rhs_simple` with the model's workspace, and at a step's end
+      !> inside a block (D-38) its column. On explicit-size y and dydt (their addresses only:
+      !> `model_rhs_step_end` calls it for every step of a block).
       module subroutine rhs_simple_ws(self, t, y, dydt, step_end)
          type(model_t), intent(inout) :: self
          real(wp), intent(in) :: t
@@ -260,10 +260,9 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine column_energy_end
 
-      !> `model_rhs` at the end of an integrator's step, where the observer reads
-      !> the workspace (RK4, D-33): a simple model with energy tracking also leaves
-      !> the stored energy there (D-36). Every other RHS (CVODE's, the stages, the
-      !> event location) is `model_rhs`, which does not compute it.
+      !> `model_rhs` at the end of an integrator's step, where the observer reads the workspace (RK4, D-33): a
+      !> simple model with energy tracking also leaves the stored energy there (D-36). Every other RHS
+      !> (CVODE's, the stages, the event location) is `model_rhs`, which does not compute it.
       module subroutine model_rhs_step_end(self, t, y, dydt)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t
@@ -272,14 +271,12 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine model_rhs_step_end
 
-      !> dy/dt at (t, y) as `model_rhs`, the same values bit for bit, for an
-      !> integrator's inner stage, after which no one reads the workspace: a
-      !> simple model runs the kernel `rhs_stage_simple` (with energy tracking
-      !> `rhs_stage_energy`, D-40: two kernels, each called once here, so that the
-      !> compiler inlines and compiles each apart), which stores nothing but
-      !> dy/dt and the element torques (no node angles, speeds and torques, no
-      !> element displacements and forces), and the workspace then holds nothing
-      !> a caller may read (`ws_step_end` cleared). Other models run `model_rhs`.
+      !> dy/dt at (t, y) as `model_rhs`, the same values bit for bit, for an integrator's inner stage, after
+      !> which no one reads the workspace: a simple model runs the kernel `rhs_stage_simple` (with energy
+      !> tracking `rhs_stage_energy`, D-40: two kernels, each called once here, so that the compiler inlines
+      !> and compiles each apart), which stores nothing but dy/dt and the element torques (no node angles,
+      !> speeds and torques, no element displacements and forces), and the workspace then holds nothing a
+      !> caller may read (`ws_step_end` cleared). Other models run `model_rhs`.
       module subroutine model_rhs_stage(self, t, y, dydt)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t
@@ -288,12 +285,11 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine model_rhs_stage
 
-      !> RK4's inner stages and its combination (D-77), given k1 = f(t, y): k2 =
-      !> f(t + h/2, y + h/2 k1), k3 = f(t + h/2, y + h/2 k2), k4 = f(t4, y + h k3),
-      !> each as `model_rhs_stage` at that state, the same values bit for bit, and
-      !> ynew = y + h/6 (k1 + 2 (k2 + k3) + k4). A simple model's kernel reads y(j) +
-      !> c k(j) where it reads the state, without forming it (ytmp untouched,
-      !> D-75); any other model forms it in ytmp and runs `model_rhs`.
+      !> RK4's inner stages and its combination (D-77), given k1 = f(t, y): k2 = f(t + h/2, y + h/2 k1), k3 =
+      !> f(t + h/2, y + h/2 k2), k4 = f(t4, y + h k3), each as `model_rhs_stage` at that state, the same
+      !> values bit for bit, and ynew = y + h/6 (k1 + 2 (k2 + k3) + k4). A simple model's kernel reads y(j) +
+      !> c k(j) where it reads the state, without forming it (ytmp untouched, D-75); any other model forms it
+      !> in ytmp and runs `model_rhs`.
       module subroutine model_rk4_stages(self, t, h, t4, y, k1, k2, k3, k4, ytmp, ynew)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, h, t4
@@ -303,17 +299,24 @@ module trainsim_model
          real(wp), intent(out) :: ynew(self%n_y)
       end subroutine model_rk4_stages
 
-      !> Whether an integrator may take a block of steps (D-38) in the current
-      !> modes: a simple model whose `rhs_step_end` leaves in the block's columns
-      !> everything the observer folds after a step (every element's status in
-      !> the workspace, and with energy tracking the stored energy), and room
-      !> for two steps at least.
+      !> A block's further plain RK4 steps in one call (D-168), after its column blk%col: trainsim_model_block.
+      module subroutine model_rk4_block(self, t, y, k1, k2, k3, k4, ynew, g1, gw_i, gw)
+         class(model_t), intent(inout) :: self
+         real(wp), intent(inout) :: t, y(self%n_y), k1(self%n_y), k2(self%n_y), k3(self%n_y), k4(self%n_y), ynew(self%n_y), g1(*)
+         integer, intent(in) :: gw_i(2, *)
+         real(wp), intent(in) :: gw(6, *)
+      end subroutine model_rk4_block
+
+      !> Whether an integrator may take a block of steps (D-38) in the current modes: a simple model whose
+      !> `rhs_step_end` leaves in the block's columns everything the observer folds after a step (every
+      !> element's status in the workspace, and with energy tracking the stored energy), and room for two
+      !> steps at least.
       module logical function model_block_ok(self) result(ok)
          class(model_t), intent(in) :: self
       end function model_block_ok
 
-      !> Torques of element i on its left and right node at the kinematics in the
-      !> workspace (after `kinematics`): the hot path for linear springs.
+      !> Torques of element i on its left and right node at the kinematics in the workspace (after
+      !> `kinematics`): the hot path for linear springs.
       module subroutine model_element_torques(self, i, tl, tr)
          class(model_t), intent(in) :: self
          integer, intent(in) :: i
@@ -325,12 +328,10 @@ module trainsim_model
          class(model_t), intent(in) :: self
       end function model_potential_energy
 
-      !> dy/dt at (t, y) for the states of the nodes der(:) only (event location on
-      !> a part of a long train). kin(:) must hold der and every node of the
-      !> elements els(:), and els every element of a node in der, in increasing
-      !> order: the torques then add up in the same order as in `rhs`, and the
-      !> derivatives of der are bit for bit those of `rhs`. Other entries of dydt
-      !> are left as they were; no energy rates.
+      !> dy/dt at (t, y) for the states of the nodes der(:) only (event location on a part of a long train).
+      !> kin(:) must hold der and every node of the elements els(:), and els every element of a node in der,
+      !> in increasing order: the torques then add up in the same order as in `rhs`, and the derivatives of
+      !> der are bit for bit those of `rhs`. Other entries of dydt are left as they were; no energy rates.
       module subroutine model_rhs_part(self, t, y, dydt, kin, els, der)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
@@ -338,10 +339,10 @@ module trainsim_model
          integer, intent(in) :: kin(:), els(:), der(:)
       end subroutine model_rhs_part
 
-      !> The energy rates of a part of the train at the kinematics and torques `rhs_part` just left in
-      !> the workspace (same t, kin, els, der): pdiss and pin of the elements els, of the nodes der (in_der:
-      !> the same set as a mask over the nodes) and of the loads on them; the terms are those of `rhs`, so
-      !> the rates of a partition of the train add up to the whole train's.
+      !> The energy rates of a part of the train at the kinematics and torques `rhs_part` just left in the
+      !> workspace (same t, kin, els, der): pdiss and pin of the elements els, of the nodes der (in_der: the
+      !> same set as a mask over the nodes) and of the loads on them; the terms are those of `rhs`, so the
+      !> rates of a partition of the train add up to the whole train's.
       module subroutine model_part_power(self, t, y, els, der, in_der, pdiss, pin)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
@@ -373,9 +374,9 @@ module trainsim_model
          real(wp), intent(out) :: g(:)
       end subroutine model_guards
 
-      !> `model_guards` on an integrator's own arrays (explicit size: their
-      !> addresses only, no descriptors), and whether a guard is below zero: the
-      !> check at the end of every RK4 step (D-38). All rows: guard_rows.
+      !> `model_guards` on an integrator's own arrays (explicit size: their addresses only, no descriptors),
+      !> and whether a guard is below zero: the check at the end of every RK4 step (D-38). All rows:
+      !> guard_rows.
       module logical function model_guards_below(self, t, y, g) result(below)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t
@@ -383,8 +384,8 @@ module trainsim_model
          real(wp), intent(inout) :: g(self%n_guards)
       end function model_guards_below
 
-      !> `guards_below`'s test as windows (D-145), valid until the modes change;
-      !> n = -1 where an element has no guard row. See trainsim_model_guards.
+      !> `guards_below`'s test as windows (D-145), valid until the modes change; n = -1 where an element has
+      !> no guard row. See trainsim_model_guards.
       module subroutine model_guard_windows(self, n, iw, w)
          class(model_t), intent(in) :: self
          integer, intent(out) :: n, iw(2, *)

@@ -3,7 +3,7 @@
 !> clearance in its hot form, D-35, a guard row, a load) and the families as
 !> structure of arrays that the kernels (trainsim_model_kernels) evaluate.
 module trainsim_model_families
-   use trainsim_kinds, only: wp
+   use trainsim_kinds, only: wp, i8
    use trainsim_element, only: hg_none
    implicit none
    private
@@ -13,7 +13,7 @@ module trainsim_model_families
    public :: lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, lf_cl_linear
    public :: families_t, table_t, spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr, &
              load_ni, load_nr, row_ends, chain_ni, chain_nr, build_chain, chain_laws
-   public :: ch_spring, ch_damper, ch_open, ch_ys, ch_lin, ch_unit
+   public :: ch_spring, ch_damper, ch_open, ch_ys, ch_lin, ch_unit, windows_below, block_run_t
 
    !> Kinds of node on the hot path.
    integer, parameter :: nk_other = 0, nk_plain = 1, nk_held = 2
@@ -155,6 +155,18 @@ module trainsim_model_families
       logical :: mixed = .false.
       real(wp), allocatable :: th(:), w(:), pw(:)   !< scratch: node angles, speeds; element powers
    end type families_t
+
+   !> A block's plain RK4 steps as the model takes them (`rk4_block`, D-168): the
+   !> grid (step istep ends at min(t0 + istep dt, t_end)), the block's limits and
+   !> guard windows (nw, set by the integrator), the steps computed (ns) and how
+   !> it ended (done: the block ends, pend: with the step of size h not taken).
+   type :: block_run_t
+      real(wp) :: t0 = 0.0_wp, dt = 0.0_wp, t_end = 0.0_wp, tiny_t = 0.0_wp
+      real(wp) :: t_goal = 0.0_wp, t_bp = 0.0_wp, t_tol = 0.0_wp, y_limit = 0.0_wp, h = 0.0_wp
+      integer(i8) :: istep = 1
+      integer :: nw = 0, ns = 0
+      logical :: done = .false., pend = .false.
+   end type block_run_t
 
 contains
 
@@ -306,4 +318,6 @@ contains
       if (i2 >= i1) x(1) = iw(i1)
       if (i2 == i1 + 1) x(2) = iw(i2)
    end function row_ends
+
+   include 'trainsim_model_windows.inc'
 end module trainsim_model_families

@@ -59,20 +59,8 @@ contains
       end associate
       call column_end(self, t, y, c, .false.)
    contains
-      ! a block's step before its last: the column, not the workspace (D-120;
-      ! internal: inlined at its one call)
-#define STEP_END 3
-#define KERNEL column_plain
-#define ENERGY 0
-#include "trainsim_model_stage.inc"
-#undef KERNEL
-#define KERNEL column_chain
-#define CHAIN_ONLY 1
-#include "trainsim_model_stage.inc"
-#undef CHAIN_ONLY
-#undef KERNEL
-#undef ENERGY
-#undef STEP_END
+      ! a block's step before its last: the column, not the workspace (D-120)
+#include "trainsim_model_rk4_kernels.inc"
    end procedure model_rhs_step_end
 
    module procedure model_rhs_stage
@@ -113,20 +101,8 @@ contains
          call stage_formed(t4, h, k3, k4)
       else if (self%run%track_energy) then
          call rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
-      else if (self%fam%chain%n > 0) then
-         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
-                             self%fam%th, self%fam%w, hh, k1)
-         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
-                             self%fam%th, self%fam%w, hh, k2)
-         call chain_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
-                             self%fam%th, self%fam%w, h, k3)
       else
-         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
-                             self%fam%th, self%fam%w, hh, k1)
-         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
-                             self%fam%th, self%fam%w, hh, k2)
-         call stage_plain_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
-                             self%fam%th, self%fam%w, h, k3)
+#include "trainsim_model_rk4_inner.inc"
       end if
       h6 = h/6.0_wp
       do j = 1, self%n_y
@@ -143,21 +119,10 @@ contains
          end do
          call rhs_fast(self, ts, ytmp, dydt)
       end subroutine stage_formed
-      ! the stage kernel at y + c k, energy off and on (internal: inlined here)
-#define FROM 1
-#define KERNEL stage_plain_at
-#define ENERGY 0
-#define STEP_END 0
-#include "trainsim_model_stage.inc"
-#undef KERNEL
-#define KERNEL chain_plain_at
-#define CHAIN_ONLY 1
-#include "trainsim_model_stage.inc"
-#undef CHAIN_ONLY
-#undef KERNEL
-#undef ENERGY
-#undef STEP_END
-#undef FROM
+      ! the stage kernel at y + c k (internal: inlined here)
+#define RK4_INNER 1
+#include "trainsim_model_rk4_kernels.inc"
+#undef RK4_INNER
    end procedure model_rk4_stages
 
    !> `model_rk4_stages`' inner stages with energy tracking, a procedure of their
