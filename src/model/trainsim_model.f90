@@ -145,6 +145,8 @@ module trainsim_model
       procedure :: rhs_step_end => model_rhs_step_end
       procedure :: rhs_stage => model_rhs_stage
       procedure :: rk4_stages => model_rk4_stages
+      procedure :: rk4_energy_stages
+      procedure :: column_energy_end
       procedure :: block_ok => model_block_ok
       procedure :: rhs_part => model_rhs_part
       procedure :: part_power => model_part_power
@@ -253,9 +255,23 @@ module trainsim_model
          logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       end subroutine rhs_simple_ws
 
-      !> `model_rhs_step_end` with energy tracking inside a block (D-120), a procedure of its own (D-160).
+      !> `model_rk4_stages` of a simple model with energy tracking, its inner
+      !> stages and the combination, a procedure of its own in a file of its own:
+      !> the energy-off stages are compiled without it; RK4's block calls it
+      !> straight (D-172).
+      module subroutine rk4_energy_stages(self, t, h, t4, y, k1, k2, k3, k4, ynew)
+         class(model_t), intent(inout) :: self
+         real(wp), intent(in) :: t, h, t4
+         real(wp), intent(in) :: y(self%n_y), k1(self%n_y)
+         real(wp), intent(out) :: k2(self%n_y), k3(self%n_y), k4(self%n_y), ynew(self%n_y)
+      end subroutine rk4_energy_stages
+
+      !> `model_rhs_step_end` with energy tracking inside a block (D-120), a
+      !> procedure of its own (D-160), which RK4's block calls straight at a
+      !> step's end before its last (a simple model, the block's column, not the
+      !> workspace: D-172).
       module subroutine column_energy_end(self, t, y, dydt)
-         type(model_t), intent(inout) :: self
+         class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(self%n_y)
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine column_energy_end

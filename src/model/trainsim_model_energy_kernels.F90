@@ -21,21 +21,75 @@ contains
       self%ws_energy = self%n_cold == 0
       c = self%blk%col
       associate (b => self%blk)
-         call column_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
-                            self%theta, self%omega, self%fam%pw, self%el_pe, self%ws_energy, b%stored(c), &
-                            b%elastic(c), b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c))
+         if (self%fam%chain%n > 0) then
+            call column_energy_chain(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
+                                     self%theta, self%omega, self%fam%pw, self%el_pe, self%ws_energy, b%stored(c), &
+                                     b%elastic(c), b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c))
+         else
+            call column_energy(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, dydt, self%el_torque, &
+                               self%theta, self%omega, self%fam%pw, self%el_pe, self%ws_energy, b%stored(c), &
+                               b%elastic(c), b%disp(:, c), b%force(:, c), b%torque(:, c), b%omega(:, c))
+         end if
          b%t(c) = t
          b%work(1, c) = y(self%n_states + 1)
          b%work(2, c) = y(self%n_states + 2)
       end associate
    contains
-      ! (internal: inlined at its one call)
+      ! (and the chain's path alone, D-164; internal: each inlined at its one call)
 #define STEP_END 3
 #define KERNEL column_energy
 #define ENERGY 1
 #include "trainsim_model_stage.inc"
 #undef KERNEL
+#define KERNEL column_energy_chain
+#define CHAIN_ONLY 1
+#include "trainsim_model_stage.inc"
+#undef CHAIN_ONLY
+#undef KERNEL
 #undef ENERGY
 #undef STEP_END
    end procedure column_energy_end
+
+   module procedure rk4_energy_stages
+      integer :: j
+      real(wp) :: hh, h6
+      self%ws_step_end = .false.
+      hh = 0.5_wp*h
+      if (self%fam%chain%n > 0) then
+         call chain_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
+                              self%fam%th, self%fam%w, hh, k1, self%fam%pw)
+         call chain_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
+                              self%fam%th, self%fam%w, hh, k2, self%fam%pw)
+         call chain_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
+                              self%fam%th, self%fam%w, h, k3, self%fam%pw)
+      else
+         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
+                              self%fam%th, self%fam%w, hh, k1, self%fam%pw)
+         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
+                              self%fam%th, self%fam%w, hh, k2, self%fam%pw)
+         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
+                              self%fam%th, self%fam%w, h, k3, self%fam%pw)
+      end if
+      h6 = h/6.0_wp
+      do j = 1, self%n_y
+         ynew(j) = y(j) + h6*(k1(j) + 2.0_wp*(k2(j) + k3(j)) + k4(j))
+      end do
+   contains
+      ! the stage kernel at y + c k with energy tracking, and the chain's path
+      ! alone (D-164; internal: each inlined at its one call)
+#define FROM 1
+#define STEP_END 0
+#define KERNEL stage_energy_at
+#define ENERGY 1
+#include "trainsim_model_stage.inc"
+#undef KERNEL
+#define KERNEL chain_energy_at
+#define CHAIN_ONLY 1
+#include "trainsim_model_stage.inc"
+#undef CHAIN_ONLY
+#undef KERNEL
+#undef ENERGY
+#undef STEP_END
+#undef FROM
+   end procedure rk4_energy_stages
 end submodule trainsim_model_energy_kernels
