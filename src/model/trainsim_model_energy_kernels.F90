@@ -37,56 +37,43 @@ contains
    contains
       ! (and the chain's path alone, D-164; internal: each inlined at its one call)
 #define STEP_END 3
-#define KERNEL column_energy
 #define ENERGY 1
-#include "trainsim_model_stage.inc"
-#undef KERNEL
-#define KERNEL column_energy_chain
-#define CHAIN_ONLY 1
-#include "trainsim_model_stage.inc"
-#undef CHAIN_ONLY
+#define KERNEL column_energy
+#define CHAIN_KERNEL column_energy_chain
+#include "trainsim_model_stage_chain.inc"
+#undef CHAIN_KERNEL
 #undef KERNEL
 #undef ENERGY
 #undef STEP_END
    end procedure column_energy_end
 
    module procedure rk4_energy_stages
-      integer :: j
       real(wp) :: hh, h6
       self%ws_step_end = .false.
       hh = 0.5_wp*h
+      ! (the three stages through kernel K, spelled once)
+#define STAGES(K) \
+call K(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, self%fam%th, self%fam%w, hh, k1, self%fam%pw); \
+call K(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, self%fam%th, self%fam%w, hh, k2, self%fam%pw); \
+call K(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, self%fam%th, self%fam%w, h, k3, self%fam%pw)
       if (self%fam%chain%n > 0) then
-         call chain_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
-                              self%fam%th, self%fam%w, hh, k1, self%fam%pw)
-         call chain_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
-                              self%fam%th, self%fam%w, hh, k2, self%fam%pw)
-         call chain_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
-                              self%fam%th, self%fam%w, h, k3, self%fam%pw)
+         STAGES(chain_energy_at)
       else
-         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
-                              self%fam%th, self%fam%w, hh, k1, self%fam%pw)
-         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
-                              self%fam%th, self%fam%w, hh, k2, self%fam%pw)
-         call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
-                              self%fam%th, self%fam%w, h, k3, self%fam%pw)
+         STAGES(stage_energy_at)
       end if
+#undef STAGES
       h6 = h/6.0_wp
-      do j = 1, self%n_y
-         ynew(j) = y(j) + h6*(k1(j) + 2.0_wp*(k2(j) + k3(j)) + k4(j))
-      end do
+      ynew = y + h6*(k1 + 2.0_wp*(k2 + k3) + k4)   ! (RK4's combination, as model_rk4_stages')
    contains
       ! the stage kernel at y + c k with energy tracking, and the chain's path
       ! alone (D-164; internal: each inlined at its one call)
 #define FROM 1
 #define STEP_END 0
-#define KERNEL stage_energy_at
 #define ENERGY 1
-#include "trainsim_model_stage.inc"
-#undef KERNEL
-#define KERNEL chain_energy_at
-#define CHAIN_ONLY 1
-#include "trainsim_model_stage.inc"
-#undef CHAIN_ONLY
+#define KERNEL stage_energy_at
+#define CHAIN_KERNEL chain_energy_at
+#include "trainsim_model_stage_chain.inc"
+#undef CHAIN_KERNEL
 #undef KERNEL
 #undef ENERGY
 #undef STEP_END
