@@ -253,7 +253,7 @@ module trainsim_model
          logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       end subroutine rhs_simple_ws
 
-      !> `model_rk4_stages` with energy tracking, in a file of its own (D-172).
+      !> `model_rk4_stages` with energy tracking, in a file of its own (D-169).
       module subroutine rk4_energy_stages(self, t, h, t4, y, k1, k2, k3, k4, ynew)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, h, t4, y(self%n_y), k1(self%n_y)

@@ -35,7 +35,7 @@ contains
       integer :: c
       if (self%run%track_energy .and. self%blk%col > 0) then
          if (self%simple .and. .not. self%blk%ws) then
-            ! (first: before the energy-off kernel's set-up, D-172)
+            ! (first: before the energy-off kernel's set-up, D-169)
             call column_energy_end(self, t, y, dydt)   ! (a procedure of its own, D-160)
             return
          end if
@@ -110,7 +110,7 @@ contains
       integer :: j
       real(wp) :: hh, h6
       if (self%run%track_energy .and. self%simple) then
-         ! (first: before the energy-off stages' set-up, D-172)
+         ! (first: before the energy-off stages' set-up, D-169)
          call rk4_energy_stages(self, t, h, t4, y, k1, k2, k3, k4, ynew)   ! (the combination too)
          return
       end if

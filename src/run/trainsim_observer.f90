@@ -536,7 +536,7 @@ contains
          end if
          if (self%track) then
             ! the short way's energies (the stored energy from the kernel, D-36),
-            ! the figures in registers and the sample's energies the last step's (D-172)
+            ! the figures in registers and the sample's energies the last step's (D-169)
             rmax = self%res%energy_residual_max
             scale = self%res%energy_scale
             e0 = model%energy0
