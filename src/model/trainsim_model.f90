@@ -253,9 +253,15 @@ module trainsim_model
          logical, intent(in) :: step_end   !< leave the stored energy too (`model_rhs_step_end`)
       end subroutine rhs_simple_ws
 
+      !> `model_rk4_stages` with energy tracking, in a file of its own (D-169).
+      module subroutine rk4_energy_stages(self, t, h, t4, y, k1, k2, k3, k4, ynew)
+         class(model_t), intent(inout) :: self
+         real(wp), intent(in) :: t, h, t4, y(self%n_y), k1(self%n_y)
+         real(wp), intent(out) :: k2(self%n_y), k3(self%n_y), k4(self%n_y), ynew(self%n_y)
+      end subroutine rk4_energy_stages
       !> `model_rhs_step_end` with energy tracking inside a block (D-120), a procedure of its own (D-160).
       module subroutine column_energy_end(self, t, y, dydt)
-         type(model_t), intent(inout) :: self
+         class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(self%n_y)
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine column_energy_end
@@ -271,12 +277,9 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine model_rhs_step_end
 
-      !> dy/dt at (t, y) as `model_rhs`, the same values bit for bit, for an integrator's inner stage, after
-      !> which no one reads the workspace: a simple model runs the kernel `rhs_stage_simple` (with energy
-      !> tracking `rhs_stage_energy`, D-40: two kernels, each called once here, so that the compiler inlines
-      !> and compiles each apart), which stores nothing but dy/dt and the element torques (no node angles,
-      !> speeds and torques, no element displacements and forces), and the workspace then holds nothing a
-      !> caller may read (`ws_step_end` cleared). Other models run `model_rhs`.
+      !> dy/dt at (t, y) as `model_rhs`, bit for bit, for an inner stage: a simple model's stage
+      !> kernel (energy off or on, D-40) stores only dy/dt and the element torques, and the
+      !> workspace then holds nothing to read (`ws_step_end` cleared). Others run `model_rhs`.
       module subroutine model_rhs_stage(self, t, y, dydt)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t

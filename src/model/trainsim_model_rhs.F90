@@ -33,6 +33,13 @@ contains
 
    module procedure model_rhs_step_end
       integer :: c
+      if (self%run%track_energy .and. self%blk%col > 0) then
+         if (self%simple .and. .not. self%blk%ws) then
+            ! (first: before the energy-off kernel's set-up, D-169)
+            call column_energy_end(self, t, y, dydt)   ! (a procedure of its own, D-160)
+            return
+         end if
+      end if
       if (.not. self%simple) then
          call rhs_fast(self, t, y, dydt)
          return
@@ -40,9 +47,6 @@ contains
          ! straight to the kernel (every step of a block, D-38): no second layer
          ! of descriptors
          call rhs_simple_ws(self, t, y, dydt, .true.)
-         return
-      else if (self%run%track_energy) then
-         call column_energy_end(self, t, y, dydt)   ! (a procedure of its own, D-160)
          return
       end if
       ! a block's step before its last: its column only, not the workspace
@@ -93,14 +97,17 @@ contains
    module procedure model_rk4_stages
       integer :: j
       real(wp) :: hh, h6
+      if (self%run%track_energy .and. self%simple) then
+         ! (first: before the energy-off stages' set-up, D-169)
+         call rk4_energy_stages(self, t, h, t4, y, k1, k2, k3, k4, ynew)   ! (the combination too)
+         return
+      end if
       self%ws_step_end = .false.
       hh = 0.5_wp*h
       if (.not. self%simple) then
          call stage_formed(t + hh, hh, k1, k2)
          call stage_formed(t + hh, hh, k2, k3)
          call stage_formed(t4, h, k3, k4)
-      else if (self%run%track_energy) then
-         call rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
       else
 #include "trainsim_model_rk4_inner.inc"
       end if
@@ -124,34 +131,6 @@ contains
 #include "trainsim_model_rk4_kernels.inc"
 #undef RK4_INNER
    end procedure model_rk4_stages
-
-   !> `model_rk4_stages`' inner stages with energy tracking, a procedure of their
-   !> own: the energy-off stages keep their registers (D-153).
-   subroutine rk4_stages_energy(self, t, h, t4, y, k1, k2, k3, k4)
-      type(model_t), intent(inout) :: self
-      real(wp), intent(in) :: t, h, t4
-      real(wp), intent(in) :: y(self%n_y), k1(self%n_y)
-      real(wp), intent(out) :: k2(self%n_y), k3(self%n_y), k4(self%n_y)
-      real(wp) :: hh
-      hh = 0.5_wp*h
-      call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k2, self%el_torque, &
-                           self%fam%th, self%fam%w, hh, k1, self%fam%pw)
-      call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t + hh, y, k3, self%el_torque, &
-                           self%fam%th, self%fam%w, hh, k2, self%fam%pw)
-      call stage_energy_at(self%fam, self%fam%iw, self%fam%rw, self%elements, t4, y, k4, self%el_torque, &
-                           self%fam%th, self%fam%w, h, k3, self%fam%pw)
-   contains
-      ! the stage kernel at y + c k with energy tracking (internal: inlined here)
-#define FROM 1
-#define STEP_END 0
-#define KERNEL stage_energy_at
-#define ENERGY 1
-#include "trainsim_model_stage.inc"
-#undef KERNEL
-#undef ENERGY
-#undef STEP_END
-#undef FROM
-   end subroutine rk4_stages_energy
 
    module procedure model_block_ok
       ok = self%simple .and. self%blk%cap >= 4

@@ -251,10 +251,18 @@ contains
    !> The sample's energies into the balance figures.
    subroutine fold_energy(self)
       type(observer_t), intent(inout) :: self
-      self%res%energy_residual_max = max(self%res%energy_residual_max, abs(self%s%energy(5)))
-      self%res%energy_scale = max(self%res%energy_scale, abs(self%s%energy(1) + self%s%energy(2)), &
-                                  abs(self%s%energy(4)), abs(self%s%energy(3)))
+      call balance_fold(self%s%energy(1), self%s%energy(2), self%s%energy(3), self%s%energy(4), self%s%energy(5), &
+                        self%res%energy_residual_max, self%res%energy_scale)
    end subroutine fold_energy
+
+   !> A sample's energies (kinetic, elastic, dissipated, input, residual) into
+   !> the balance figures: the largest residual and the energy scale.
+   pure subroutine balance_fold(ek, ep, wd, wi, res, rmax, scale)
+      real(wp), intent(in) :: ek, ep, wd, wi, res
+      real(wp), intent(inout) :: rmax, scale
+      rmax = max(rmax, abs(res))
+      scale = max(scale, abs(ek + ep), abs(wi), abs(wd))
+   end subroutine balance_fold
 
    !> The kernel of `step`'s short way on plain arrays (dummies: no aliasing, the array
    !> descriptors read once): per element, its status from the workspace (a
@@ -491,7 +499,7 @@ contains
       logical, intent(in) :: samples
       type(error_t), allocatable, intent(out) :: err
       integer :: n, j, j0, js, i, nh
-      real(wp) :: d1, d2
+      real(wp) :: d1, d2, rmax, scale, e0
       n = model%blk%n
       if (n == 0) return
       if (.not. allocated(self%turn_hits)) allocate (self%turn_hits(model%blk%cap))
@@ -527,14 +535,22 @@ contains
             self%turn_t1 = b%t(n)
          end if
          if (self%track) then
-            do j = 1, n   ! the short way's energies (the stored energy from the kernel, D-36)
-               self%s%energy(2) = b%elastic(j)
-               self%s%energy(1) = b%stored(j) - b%elastic(j)
-               self%s%energy(3) = b%work(1, j)
-               self%s%energy(4) = b%work(2, j)
-               self%s%energy(5) = b%stored(j) + self%s%energy(3) - self%s%energy(4) - model%energy0
-               call fold_energy(self)
+            ! the short way's energies (the stored energy from the kernel, D-36),
+            ! the figures in registers and the sample's energies the last step's (D-169)
+            rmax = self%res%energy_residual_max
+            scale = self%res%energy_scale
+            e0 = model%energy0
+            do j = 1, n
+               call balance_fold(b%stored(j) - b%elastic(j), b%elastic(j), b%work(1, j), b%work(2, j), &
+                                 b%stored(j) + b%work(1, j) - b%work(2, j) - e0, rmax, scale)
             end do
+            self%res%energy_residual_max = rmax
+            self%res%energy_scale = scale
+            self%s%energy(2) = b%elastic(n)
+            self%s%energy(1) = b%stored(n) - b%elastic(n)
+            self%s%energy(3) = b%work(1, n)
+            self%s%energy(4) = b%work(2, n)
+            self%s%energy(5) = b%stored(n) + self%s%energy(3) - self%s%energy(4) - e0
          end if
          if (samples .and. size(self%mesh_el) > 0) then   ! every step end an output sample (D-104)
             do j = j0, n
