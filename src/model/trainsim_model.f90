@@ -242,9 +242,8 @@ module trainsim_model
          real(wp), intent(out) :: dydt(:)
       end subroutine model_rhs
 
-      !> `rhs_fast` of a simple model: the kernel `rhs_simple` with the model's workspace, and at a step's end
-      !> inside a block (D-38) its column. On explicit-size y and dydt (their addresses only:
-      !> `model_rhs_step_end` calls it for every step of a block).
+      !> `rhs_fast` of a simple model: the kernel `rhs_simple` with the model's workspace, and at a step's end inside a
+      !> block (D-38) its column. On explicit-size y and dydt (addresses only: called for every step of a block).
       module subroutine rhs_simple_ws(self, t, y, dydt, step_end)
          type(model_t), intent(inout) :: self
          real(wp), intent(in) :: t
@@ -288,11 +287,10 @@ module trainsim_model
          real(wp), intent(out) :: dydt(self%n_y)
       end subroutine model_rhs_stage
 
-      !> RK4's inner stages and its combination (D-77), given k1 = f(t, y): k2 = f(t + h/2, y + h/2 k1), k3 =
-      !> f(t + h/2, y + h/2 k2), k4 = f(t4, y + h k3), each as `model_rhs_stage` at that state, the same
-      !> values bit for bit, and ynew = y + h/6 (k1 + 2 (k2 + k3) + k4). A simple model's kernel reads y(j) +
-      !> c k(j) where it reads the state, without forming it (ytmp untouched, D-75); any other model forms it
-      !> in ytmp and runs `model_rhs`.
+      !> RK4's inner stages and combination (D-77), given k1 = f(t, y): k2 = f(t + h/2, y + h/2 k1), k3 = f(t + h/2,
+      !> y + h/2 k2), k4 = f(t4, y + h k3), each bit for bit `model_rhs_stage` there, and ynew = y + h/6 (k1 + 2 (k2
+      !> + k3) + k4). A simple model's kernel reads y(j) + c k(j) without forming it (ytmp untouched, D-75); any
+      !> other model forms it in ytmp and runs `model_rhs`.
       module subroutine model_rk4_stages(self, t, h, t4, y, k1, k2, k3, k4, ytmp, ynew)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, h, t4
@@ -310,10 +308,9 @@ module trainsim_model
          real(wp), intent(in) :: gw(6, *)
       end subroutine model_rk4_block
 
-      !> Whether an integrator may take a block of steps (D-38) in the current modes: a simple model whose
-      !> `rhs_step_end` leaves in the block's columns everything the observer folds after a step (every
-      !> element's status in the workspace, and with energy tracking the stored energy), and room for two
-      !> steps at least.
+      !> Whether an integrator may take a block of steps (D-38) in the current modes: a simple model whose `rhs_step_end`
+      !> leaves in the block's columns all the observer folds after a step (every element's status in the workspace,
+      !> with energy tracking the stored energy), and room for two steps at least.
       module logical function model_block_ok(self) result(ok)
          class(model_t), intent(in) :: self
       end function model_block_ok
