@@ -62,7 +62,7 @@ module trainsim_monodromy
       !> state, and the variational stages
       real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), xs(:), xt(:), xg(:)
       real(wp), allocatable :: p1(:, :), p2(:, :), p3(:, :), p4(:, :), ps(:, :), b(:)
-      !> the Jacobian's nonzeros (row, column, value) in column order, for J Phi
+      !> the Jacobian's nonzeros by rows (row starts jr, columns jc, values jv), for J Phi
       integer, allocatable :: jr(:), jc(:)
       real(wp), allocatable :: jv(:)
       type(event_t), allocatable :: events(:)
@@ -168,7 +168,7 @@ contains
                 w%xt(model%n_y), w%xg(model%n_y))
       if (w%var) then
          allocate (w%p1(w%n, w%n), w%p2(w%n, w%n), w%p3(w%n, w%n), w%p4(w%n, w%n), w%ps(w%n, w%n), w%b(w%n))
-         allocate (w%jr(w%n*w%n), w%jc(w%n*w%n), w%jv(w%n*w%n))
+         allocate (w%jr(w%n + 1), w%jc(w%n*w%n), w%jv(w%n*w%n))
          allocate (w%phi(w%n, w%n), w%q(w%n, size(model%elements)), w%jac(w%ny, w%ny))
          allocate (w%smat(w%n, w%n), w%jac0(w%n, w%n))
          allocate (w%has_q(size(model%elements)), w%tau(w%n), w%rl(w%ny), w%rt(w%ny), w%ja(w%ny, w%ny), w%jt(w%ny, w%ny))
@@ -531,7 +531,7 @@ contains
       real(wp), intent(in), contiguous :: phi(:, :)
       real(wp), intent(out), contiguous :: dphi(:, :)
       type(pass_t), intent(inout) :: w
-      integer :: e, j, nz
+      integer :: e, j
       if (w%split) then                 ! the constant part and the varying elements' parts (D-181)
          w%jac = w%ja
          call model%jacobian(t, x, w%jac, part=w%part)
@@ -541,9 +541,9 @@ contains
          call watch_stage(model, t, x, w)
       end if
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
-      ! two nodes), each entry summed over k in order, as matmul does (D-148)
-      call nonzeros(w%n, w%ny, w%jac, nz, w%jr, w%jc, w%jv)
-      call sparse_product(w%n, nz, w%jr, w%jc, w%jv, phi, dphi)
+      ! two nodes), each entry summed over k in order, as matmul does (D-148, D-181)
+      call nonzeros(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
+      call sparse_product(w%n, w%jr, w%jc, w%jv, phi, dphi)
       do e = 1, size(w%has_q)
          if (.not. w%has_q(e)) cycle
          if (w%split) then               ! (the nodes' gains of the constant part)
