@@ -90,6 +90,10 @@ module trainsim_model_families
       logical :: ok = .false.
       logical, allocatable :: vary(:)       !< per element: its part varies in its mode
       real(wp), allocatable :: dtq(:, :)    !< (5, nodes) d(dydt of state k) / d(net torque)
+      !> the varying elements' entries (`element_scatter`), in element order: element,
+      !> row, the columns of node b's angle and speed, ports a and b, the gain dtq(k, node)
+      integer, allocatable :: sc(:, :)      !< (8, nsc)
+      integer :: nsc = 0
    end type jac_part_t
 
    !> A table of the families: n rows, row q at iw(i0 + ni (q - 1) + 1 : i0 + ni q)

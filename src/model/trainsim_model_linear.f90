@@ -54,23 +54,87 @@ contains
          jac(self%nodes(self%cn%node(k))%n%offset + 2, :) = 0.0_wp
       end do
       if (present(constant)) constant = jacobian_constant(self)
-      if (present(part)) part%dtq = self%jdtq
+      if (present(part)) then
+         part%dtq = self%jdtq
+         if (part%ok) call varying_entries(self, part)
+      end if
    end procedure model_jacobian
 
    !> Element i's part of the Jacobian added to jac at the kinematics in the
-   !> workspace: its torques' partials through its nodes' gains dtq.
+   !> workspace: its torques' partials (`port_partials`) through its nodes'
+   !> gains dtq, entry by entry as `element_scatter` lists them.
    subroutine add_element_part(self, i, dtq, jac)
       class(model_t), intent(inout) :: self
       integer, intent(in) :: i
       real(wp), intent(in) :: dtq(:, :)
       real(wp), intent(inout) :: jac(:, :)
-      real(wp) :: jt(max_ports, 2*max_ports), th(max_ports), w(max_ports), jt2(2, 4)
-      integer :: a, b, k, na, nb, row, ia, ib, np
-      integer :: ends(max_ports)
+      real(wp) :: jt(max_ports, 2*max_ports)
+      integer :: sc(8, 5*max_ports*max_ports), m, l
+      call element_scatter(self, i, dtq, sc, m)
+      if (m == 0) return
+      call port_partials(self, i, jt)
+      do l = 1, m
+         call add_entry(sc(:, l), size(dtq, 2), dtq, jt, size(jac, 1), jac)
+      end do
+   end subroutine add_element_part
+
+   !> jac(row, ia : ib) += dtq(k, node) * d(torque at port a) / d(angle, speed at port b).
+   pure subroutine add_entry(e, nn, dtq, jt, ny, jac)
+      integer, intent(in) :: e(8), nn, ny
+      real(wp), intent(in) :: dtq(5, nn), jt(max_ports, 2*max_ports)
+      real(wp), intent(inout) :: jac(ny, ny)
+      jac(e(2), e(3)) = jac(e(2), e(3)) + dtq(e(7), e(8))*jt(e(5), 2*e(6) - 1)
+      jac(e(2), e(4)) = jac(e(2), e(4)) + dtq(e(7), e(8))*jt(e(5), 2*e(6))
+   end subroutine add_entry
+
+   !> The entries element i adds to the Jacobian, in the order they are added:
+   !> for each port a whose node has states, each state k with a gain, each port
+   !> b whose node has an angle and a speed: (i, row of k, columns of b's angle
+   !> and speed, a, b, k, a's node).
+   subroutine element_scatter(self, i, dtq, sc, m)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: dtq(:, :)
+      integer, intent(inout) :: sc(:, :)
+      integer, intent(out) :: m
+      real(wp) :: th(max_ports), w(max_ports)
+      integer :: a, b, k, na, nb, np, ends(max_ports)
+      m = 0
       associate (e => self%elements(i)%e)
          np = e%n_ports()
          if (np == 2) then
             ends(1:2) = [e%left, e%right]
+         else
+            call port_kinematics(e, self%theta, self%omega, ends, th, w)
+         end if
+      end associate
+      do a = 1, np
+         na = ends(a)
+         if (self%speed_of(na) /= 0) cycle
+         do k = 1, self%nodes(na)%n%nstates()
+            if (dtq(k, na) == 0.0_wp) cycle
+            do b = 1, np
+               nb = ends(b)
+               if (self%speed_of(nb) /= 0 .or. self%nodes(nb)%n%nstates() < 2) cycle
+               m = m + 1
+               sc(:, m) = [i, self%nodes(na)%n%offset + k, self%nodes(nb)%n%offset + 1, self%nodes(nb)%n%offset + 2, &
+                           a, b, k, na]
+            end do
+         end do
+      end do
+   end subroutine element_scatter
+
+   !> Element i's torques' partials at the kinematics in the workspace: jt(a, 2b - 1 : 2b),
+   !> d(torque at port a) / d(angle, speed at port b).
+   subroutine port_partials(self, i, jt)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(out) :: jt(max_ports, 2*max_ports)
+      real(wp) :: th(max_ports), w(max_ports), jt2(2, 4)
+      integer :: np, ends(max_ports)
+      associate (e => self%elements(i)%e)
+         np = e%n_ports()
+         if (np == 2) then
             call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
                                    self%omega(e%right), jt2)
             jt(1:2, 1:4) = jt2            ! (jt(1:2, 1:4) itself is not contiguous: a temporary)
@@ -78,40 +142,46 @@ contains
             call port_kinematics(e, self%theta, self%omega, ends, th, w)
             call e%port_jacobian(th(1:np), w(1:np), jt(1:np, 1:2*np))
          end if
-         do a = 1, np
-            na = ends(a)
-            if (self%speed_of(na) /= 0) cycle
-            do k = 1, self%nodes(na)%n%nstates()
-               if (dtq(k, na) == 0.0_wp) cycle
-               row = self%nodes(na)%n%offset + k
-               do b = 1, np
-                  nb = ends(b)
-                  if (self%speed_of(nb) /= 0 .or. self%nodes(nb)%n%nstates() < 2) cycle
-                  ia = self%nodes(nb)%n%offset + 1
-                  ib = self%nodes(nb)%n%offset + 2
-                  jac(row, ia) = jac(row, ia) + dtq(k, na)*jt(a, 2*b - 1)
-                  jac(row, ib) = jac(row, ib) + dtq(k, na)*jt(a, 2*b)
-               end do
-            end do
-         end do
       end associate
-   end subroutine add_element_part
+   end subroutine port_partials
 
-   !> The varying elements' parts (part%vary, two-ports: part%ok) added to jac at
+   !> The varying elements' parts (part%sc, two-ports: part%ok) added to jac at
    !> (t, y), through the node gains part%dtq of the constant part's call (D-181).
    subroutine add_varying_parts(self, t, y, part, jac)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
       type(jac_part_t), intent(in) :: part
       real(wp), intent(inout) :: jac(:, :)
-      integer :: i, ends(2)
-      do i = 1, size(part%vary)
-         if (.not. part%vary(i)) cycle
-         ends = [self%elements(i)%e%left, self%elements(i)%e%right]
-         call self%kinematics_part(t, y, ends)
-         call add_element_part(self, i, part%dtq, jac)
+      real(wp) :: jt(max_ports, 2*max_ports)
+      integer :: i, l, last, ends(2)
+      last = 0
+      do l = 1, part%nsc
+         i = part%sc(1, l)
+         if (i /= last) then
+            ends = [self%elements(i)%e%left, self%elements(i)%e%right]
+            call self%kinematics_part(t, y, ends)
+            call port_partials(self, i, jt)
+            last = i
+         end if
+         call add_entry(part%sc(:, l), size(part%dtq, 2), part%dtq, jt, size(jac, 1), jac)
       end do
    end subroutine add_varying_parts
+
+   !> The varying elements' entries (part%sc) from the node gains part%dtq.
+   subroutine varying_entries(self, part)
+      class(model_t), intent(in) :: self
+      type(jac_part_t), intent(inout) :: part
+      integer :: i, m, sc(8, 5*max_ports*max_ports)
+      if (.not. allocated(part%sc)) allocate (part%sc(8, 4*size(self%elements)))
+      part%nsc = 0
+      do i = 1, size(part%vary)
+         if (.not. part%vary(i)) cycle
+         call element_scatter(self, i, part%dtq, sc, m)
+         if (part%nsc + m > size(part%sc, 2)) part%sc = reshape(part%sc, [8, 2*(part%nsc + m)], pad=[0])
+         part%sc(:, part%nsc + 1:part%nsc + m) = sc(:, 1:m)
+         part%nsc = part%nsc + m
+      end do
+   end subroutine varying_entries
 
    !> The split of the Jacobian in the current modes (D-181): part%vary, the
    !> elements that are not linear in their mode (`element_constant`); part%ok,
