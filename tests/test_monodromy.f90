@@ -291,7 +291,7 @@ contains
       call split_jacobian_in_contact(m, x)
    end subroutine test_tangent_map_where_linear_in_the_mode
 
-   !> D-181: the rig's yang_sun mesh in contact varies, the rest of its Jacobian
+   !> D-170: the rig's yang_sun mesh in contact varies, the rest of its Jacobian
    !> (inertias, shafts) is constant in the mode: every step of a mode but its
    !> first full one takes J = the constant part + the mesh's part, M the
    !> general pass's to the rounding of the sums' order, the flow bit for bit.
@@ -388,7 +388,7 @@ contains
       x = x0
       call monodromy_saltation(m, t0, period, x, m_gen, err, stats=st_gen, tangent_cache=.false.)
       write (*, '(a,i0,a,i0,a,i0,a,i0,a,es9.2)') '    tangent maps (D-162): ', st%tangent_steps, ' of ', st%steps, &
-         ' steps, ', st%tangent_maps, ' maps; split J (D-181) ', st%split_steps, ' steps; |M - M_general| / max|M| ', &
+         ' steps, ', st%tangent_maps, ' maps; split J (D-170) ', st%split_steps, ' steps; |M - M_general| / max|M| ', &
          maxval(abs(mm - m_gen))/maxval(abs(m_gen))
       ! (the same RK4 steps, S Phi summed in another order: a few ulps a step,
       ! accumulated at most linearly over the steps: 4 eps a step)

@@ -358,7 +358,7 @@ module trainsim_model
       end subroutine model_apply_loads
 
       !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes (energy rows zero); constant: it stays constant
-      !> until the next event (D-162); part: its constant part, or the varying elements' parts added (D-181, jac_part_t).
+      !> until the next event (D-162); part: its constant part, or the varying elements' parts added (D-170, jac_part_t).
       module subroutine model_jacobian(self, t, y, jac, constant, part)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)

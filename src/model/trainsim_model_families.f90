@@ -78,7 +78,7 @@ module trainsim_model_families
       real(wp) :: v = 0.0_wp
    end type fast_load_t
 
-   !> The variational pass's split of the model's Jacobian (D-181, `model%jacobian`'s
+   !> The variational pass's split of the model's Jacobian (D-170, `model%jacobian`'s
    !> part): J = its constant part (every element but the varying ones, the nodes)
    !> + each varying element's part, its torques' 2 x 4 Jacobian through its
    !> nodes' gains dtq. varying = .false.: jac is the constant part and vary, ok,

@@ -15,7 +15,7 @@ contains
       integer :: i, k, na, row, ib
       if (.not. allocated(self%jdtq)) allocate (self%jdtq(5, size(self%nodes)))
       if (present(part)) then
-         if (part%varying) then                  ! the varying elements' parts alone, added (D-181)
+         if (part%varying) then                  ! the varying elements' parts alone, added (D-170)
             call add_varying_parts(self, t, y, part, jac)
             return
          end if
@@ -146,7 +146,7 @@ contains
    end subroutine port_partials
 
    !> The varying elements' parts (part%sc, two-ports: part%ok) added to jac at
-   !> (t, y), through the node gains part%dtq of the constant part's call (D-181).
+   !> (t, y), through the node gains part%dtq of the constant part's call (D-170).
    subroutine add_varying_parts(self, t, y, part, jac)
       class(model_t), intent(inout) :: self
       real(wp), intent(in) :: t, y(:)
@@ -183,7 +183,7 @@ contains
       end do
    end subroutine varying_entries
 
-   !> The split of the Jacobian in the current modes (D-181): part%vary, the
+   !> The split of the Jacobian in the current modes (D-170): part%vary, the
    !> elements that are not linear in their mode (`element_constant`); part%ok,
    !> the rest stays constant until the next event and every varying element is
    !> a two-port.

@@ -60,7 +60,7 @@ contains
    !> F = c (k p + D p pdot) (eqs. 3.18-3.19) gives dF/dD = c p pdot (0 where
    !> no_tension clips F), put on its nodes' states as their Jacobians put a
    !> torque: through dtq, the nodes' gains d(dydt of state k)/d(net torque)
-   !> (5, nodes) where given (the Jacobian's constant part, D-181: only the
+   !> (5, nodes) where given (the Jacobian's constant part, D-170: only the
    !> element's nodes' kinematics), else through the nodes' own Jacobians (jac:
    !> scratch they add to).
    subroutine damping_column(model, e, t, x, jac, b, dtq)

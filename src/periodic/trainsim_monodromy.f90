@@ -45,7 +45,7 @@ module trainsim_monodromy
       integer :: stage = 0
       real(wp) :: h_grid = 0.0_wp
       !> the mode's split J = the constant part ja + the varying elements' parts
-      !> (D-181): split, every step of the rest of the mode takes it; try_split,
+      !> (D-170): split, every step of the rest of the mode takes it; try_split,
       !> while its first full step runs (ja held, the split agrees with J)
       logical :: split = .false., try_split = .false.
       type(jac_part_t) :: part
@@ -476,7 +476,7 @@ contains
    end subroutine rk4_var
 
    !> A stage of the mode's first full step: J, and whether it is constant (its
-   !> four stage Jacobians one: D-162) or its constant part is (D-181): the part
+   !> four stage Jacobians one: D-162) or its constant part is (D-170): the part
    !> at the first stage and again at the last, bit for bit, and the split at the
    !> first stage equal to J to the rounding of the sums' order.
    subroutine watch_stage(model, t, x, w)
@@ -532,7 +532,7 @@ contains
       real(wp), intent(out), contiguous :: dphi(:, :)
       type(pass_t), intent(inout) :: w
       integer :: e, j
-      if (w%split) then                 ! the constant part and the varying elements' parts (D-181)
+      if (w%split) then                 ! the constant part and the varying elements' parts (D-170)
          w%jac = w%ja
          call model%jacobian(t, x, w%jac, part=w%part)
       else if (.not. w%watch) then
@@ -541,7 +541,7 @@ contains
          call watch_stage(model, t, x, w)
       end if
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
-      ! two nodes), each entry summed over k in order, as matmul does (D-148, D-181)
+      ! two nodes), each entry summed over k in order, as matmul does (D-148, D-170)
       call nonzeros(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
       call sparse_product(w%n, w%jr, w%jc, w%jv, phi, dphi)
       do e = 1, size(w%has_q)

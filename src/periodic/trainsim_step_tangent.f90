@@ -82,7 +82,7 @@ contains
    end subroutine nonzeros
 
    !> dphi = J phi from J's nonzeros by rows (`nonzeros`): each entry summed
-   !> over k in increasing order from 0, as matmul does, in a register (D-181:
+   !> over k in increasing order from 0, as matmul does, in a register (D-170:
    !> the values of the column-order scatter it replaces, bit for bit).
    pure subroutine sparse_product(n, rs, jc, jv, phi, dphi)
       integer, intent(in) :: n, rs(n + 1), jc(*)
