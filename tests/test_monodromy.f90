@@ -14,6 +14,7 @@ program test_monodromy
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
+   use trainsim_model_families, only: jac_part_t
    use trainsim_session, only: session_t
    use trainsim_monodromy, only: monodromy_saltation, flow_events, monodromy_stats_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
@@ -287,7 +288,49 @@ contains
       allocate (jac(m%n_y, m%n_y))
       call m%jacobian(m%run%t_start, x, jac, constant=const)
       call check('a yang_sun mesh in contact: not constant', .not. const)
+      call split_jacobian_in_contact(m, x)
    end subroutine test_tangent_map_where_linear_in_the_mode
+
+   !> D-170: the rig's yang_sun mesh in contact varies, the rest of its Jacobian
+   !> (inertias, shafts) is constant in the mode: every step of a mode but its
+   !> first full one takes J = the constant part + the mesh's part, M the
+   !> general pass's to the rounding of the sums' order, the flow bit for bit.
+   subroutine split_jacobian_in_contact(m0, x0)
+      type(model_t), intent(in) :: m0
+      real(wp), intent(in) :: x0(:)
+      type(model_t) :: m
+      type(jac_part_t) :: part
+      real(wp), allocatable :: x(:), x1(:), mm(:, :), mg(:, :), jac(:, :), js(:, :)
+      type(monodromy_stats_t) :: st, sg
+      type(error_t), allocatable :: err
+      integer :: n
+      m = m0
+      n = m%n_states
+      allocate (jac(m%n_y, m%n_y), js(m%n_y, m%n_y))
+      call m%jacobian(m%run%t_start, x0, jac)
+      call m%jacobian(m%run%t_start, x0, js, part=part)
+      call check('the split: only the mesh varies, the rest is constant', part%ok .and. count(part%vary) == 1)
+      part%varying = .true.
+      call m%jacobian(m%run%t_start, x0, js, part=part)
+      call check('the constant part + the mesh''s part = J (to the sums'' order)', &
+                 maxval(abs(js(1:n, 1:n) - jac(1:n, 1:n)))/maxval(abs(jac(1:n, 1:n))), 0.0_wp, &
+                 abs_tol=4.0_wp*epsilon(1.0_wp))
+      x1 = x0
+      call monodromy_saltation(m, m%run%t_start, 1.0_wp/485.0_wp, x1, mm, err, stats=st)
+      call check('rig: no error', .not. allocated(err))
+      m = m0
+      x = x0
+      call monodromy_saltation(m, m%run%t_start, 1.0_wp/485.0_wp, x, mg, err, stats=sg, tangent_cache=.false.)
+      write (*, '(a,i0,a,i0,a,i0,a,es9.2)') '    rig in contact: ', st%split_steps, ' of ', st%steps, &
+         ' steps by the split J, events ', st%events, '; |M - M_general| / max|M| ', maxval(abs(mm - mg))/maxval(abs(mg))
+      ! every step but each mode's first full one (events + 1 modes) and the two parts of a step split at an event
+      call check('rig in contact: every step but each mode''s first full one by the split J', &
+                 st%split_steps >= st%steps - 3*st%events - 1 .and. st%split_steps > st%steps/2)
+      call check('rig: the general pass takes no split', sg%split_steps == 0)
+      call check('rig: the same M as the general pass (4 eps a step of max |M|)', maxval(abs(mm - mg))/maxval(abs(mg)), &
+                 0.0_wp, abs_tol=4.0_wp*epsilon(1.0_wp)*st%steps)
+      call check('rig: the same flow, bit for bit', all(x == x1))
+   end subroutine split_jacobian_in_contact
 
    !> The model at its initial state and modes (energy states off).
    subroutine start(m, x)
@@ -344,8 +387,8 @@ contains
       m = m0
       x = x0
       call monodromy_saltation(m, t0, period, x, m_gen, err, stats=st_gen, tangent_cache=.false.)
-      write (*, '(a,i0,a,i0,a,i0,a,es9.2)') '    tangent maps (D-162): ', st%tangent_steps, ' of ', st%steps, &
-         ' steps, ', st%tangent_maps, ' maps; |M - M_general| / max|M| ', &
+      write (*, '(a,i0,a,i0,a,i0,a,i0,a,es9.2)') '    tangent maps (D-162): ', st%tangent_steps, ' of ', st%steps, &
+         ' steps, ', st%tangent_maps, ' maps; split J (D-170) ', st%split_steps, ' steps; |M - M_general| / max|M| ', &
          maxval(abs(mm - m_gen))/maxval(abs(m_gen))
       ! (the same RK4 steps, S Phi summed in another order: a few ulps a step,
       ! accumulated at most linearly over the steps: 4 eps a step)

@@ -21,7 +21,7 @@ module trainsim_model
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
    use trainsim_event, only: event_t
-   use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t, block_run_t
+   use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t, block_run_t, jac_part_t
    use trainsim_run_settings, only: run_settings_t
    use trainsim_constraints, only: constraint_set_t
    implicit none
@@ -29,11 +29,10 @@ module trainsim_model
 
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
-   !> The end-of-step quantities the observer folds, for up to `cap` plain steps an integrator
-   !> takes in one call (`advance_block`, D-38). Inside a block, column `col` is written by
-   !> `rhs_step_end` of a simple model (col = 0 outside a block: no column written); the
-   !> workspace (el_disp, el_force, el_torque, theta, torque) too unless `ws` is cleared (then
-   !> the integrator writes it after the block, so that it holds the last step's end).
+   !> The end-of-step quantities the observer folds, for up to `cap` plain steps an integrator takes in one
+   !> call (`advance_block`, D-38). Inside a block, column `col` is written by `rhs_step_end` of a simple model
+   !> (col = 0 outside a block: none); the workspace (el_disp, el_force, el_torque, theta, torque) too unless
+   !> `ws` is cleared (then the integrator writes it after the block: it holds the last step's end).
    type, public :: step_block_t
       integer :: cap = 1          !< columns
       integer :: col = 0          !< the column the next `rhs_step_end` writes (0: none)
@@ -109,10 +108,10 @@ module trainsim_model
       ! objects; every other node and element is asked as before.
       type(fast_node_t), allocatable, private :: fn(:)
       type(fast_element_t), allocatable, private :: fe(:)
-      !> Per element: its hot form (D-35) in its current mode, refreshed after every
-      !> mode change the model makes (`refresh_hot`); apart from fe (which every
-      !> element's evaluation reads) so that fe stays small.
+      !> Per element: its hot form (D-35) in its current mode, refreshed after every mode change the model
+      !> makes (`refresh_hot`); apart from fe (which every element's evaluation reads) so that fe stays small.
       type(hot_form_t), allocatable, private :: fh(:)
+      real(wp), allocatable, private :: jdtq(:, :)   !< `jacobian`'s node gains (5, nodes), kept: no allocation a call
       type(guard_row_t), allocatable, private :: gr(:)   !< per element (guards), see guard_row_t
       !> Elements with guards but no guard row (kept by refresh_hot): at 0, every
       !> guard is a row's and `model_guards` runs on plain arrays.
@@ -358,13 +357,14 @@ module trainsim_model
          real(wp), intent(in) :: t
       end subroutine model_apply_loads
 
-      !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes (the energy states' rows zero: they feed
-      !> nothing back); constant: whether it stays constant until the next event (D-162, trainsim_model_linear).
-      module subroutine model_jacobian(self, t, y, jac, constant)
+      !> Dense Jacobian d(dydt)/dy at (t, y) in the current modes (energy rows zero); constant: it stays constant
+      !> until the next event (D-162); part: its constant part, or the varying elements' parts added (D-170, jac_part_t).
+      module subroutine model_jacobian(self, t, y, jac, constant, part)
          class(model_t), intent(inout) :: self
          real(wp), intent(in) :: t, y(:)
-         real(wp), intent(out) :: jac(:, :)
+         real(wp), intent(inout) :: jac(:, :)
          logical, intent(out), optional :: constant
+         type(jac_part_t), intent(inout), optional :: part
       end subroutine model_jacobian
 
       !> All elements' guards at (t, y) (a mode is valid while every guard is >= 0).

@@ -8,7 +8,7 @@ module trainsim_model_families
    implicit none
    private
 
-   public :: fast_node_t, fast_element_t, guard_row_t, fast_load_t
+   public :: fast_node_t, fast_element_t, guard_row_t, fast_load_t, jac_part_t
    public :: nk_other, nk_plain, nk_held
    public :: lf_general, lf_undamped, lf_unit, lf_open, lf_yang_sun, lf_cl_linear
    public :: families_t, table_t, spring_ni, spring_nr, contact_ni, contact_nr, free_ni, free_nr, held_ni, held_nr, &
@@ -80,6 +80,24 @@ module trainsim_model_families
       logical :: const = .false.
       real(wp) :: v = 0.0_wp
    end type fast_load_t
+
+   !> The variational pass's split of the model's Jacobian (D-170, `model%jacobian`'s
+   !> part): J = its constant part (every element but the varying ones, the nodes)
+   !> + each varying element's part, its torques' 2 x 4 Jacobian through its
+   !> nodes' gains dtq. varying = .false.: jac is the constant part and vary, ok,
+   !> dtq are set; .true.: the varying elements' parts are added to jac.
+   type :: jac_part_t
+      logical :: varying = .false.
+      !> the rest of J stays constant until the next event (every node a plain
+      !> inertia or held, no speed-law load, no constraint, no n-port element)
+      logical :: ok = .false.
+      logical, allocatable :: vary(:)       !< per element: its part varies in its mode
+      real(wp), allocatable :: dtq(:, :)    !< (5, nodes) d(dydt of state k) / d(net torque)
+      !> the varying elements' entries (`element_scatter`), in element order: element,
+      !> row, the columns of node b's angle and speed, ports a and b, the gain dtq(k, node)
+      integer, allocatable :: sc(:, :)      !< (8, nsc)
+      integer :: nsc = 0
+   end type jac_part_t
 
    !> A table of the families: n rows, row q at iw(i0 + ni (q - 1) + 1 : i0 + ni q)
    !> and rw(r0 + nr (q - 1) + 1 : r0 + nr q) of the families' two arrays (ni and

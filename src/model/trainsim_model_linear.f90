@@ -6,23 +6,29 @@ submodule (trainsim_model) trainsim_model_linear
    use trainsim_element, only: lin_closed, max_ports
    use trainsim_ports, only: port_kinematics
    use trainsim_element, only: hf_open, hf_linear
-   use trainsim_model_families, only: nk_plain
+   use trainsim_model_families, only: nk_plain, jac_part_t
    implicit none
 
 contains
 
    module procedure model_jacobian
-      real(wp) :: dtq(5, size(self%nodes)), jt(max_ports, 2*max_ports), th(max_ports), w(max_ports), jt2(2, 4)
-      integer :: i, a, b, k, na, nb, row, ia, ib, np
-      integer :: ends(max_ports)
+      integer :: i, k, na, row, ib
+      if (.not. allocated(self%jdtq)) allocate (self%jdtq(5, size(self%nodes)))
+      if (present(part)) then
+         if (part%varying) then                  ! the varying elements' parts alone, added (D-170)
+            call add_varying_parts(self, t, y, part, jac)
+            return
+         end if
+         call jacobian_parts(self, part)
+      end if
       jac = 0.0_wp
-      dtq = 0.0_wp
+      self%jdtq = 0.0_wp
       call self%kinematics(t, y)
       call self%apply_loads(t)
       do i = 1, size(self%nodes)
          if (self%speed_of(i) /= 0) cycle
          associate (nd => self%nodes(i)%n)
-            if (nd%nstates() > 0) call nd%jacobian(t, y, jac, dtq(1:nd%nstates(), i))
+            if (nd%nstates() > 0) call nd%jacobian(t, y, jac, self%jdtq(1:nd%nstates(), i))
          end associate
       end do
       do i = 1, size(self%loads)   ! a load with a speed law: d torque / d omega (D-79)
@@ -32,38 +38,14 @@ contains
          ib = self%nodes(na)%n%offset + 2
          do k = 1, self%nodes(na)%n%nstates()
             row = self%nodes(na)%n%offset + k
-            jac(row, ib) = jac(row, ib) + dtq(k, na)*self%loads(i)%slope(t, self%omega(na))
+            jac(row, ib) = jac(row, ib) + self%jdtq(k, na)*self%loads(i)%slope(t, self%omega(na))
          end do
       end do
       do i = 1, size(self%elements)
-         associate (e => self%elements(i)%e)
-            np = e%n_ports()
-            if (np == 2) then
-               ends(1:2) = [e%left, e%right]
-               call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
-                                      self%omega(e%right), jt2)
-               jt(1:2, 1:4) = jt2            ! (jt(1:2, 1:4) itself is not contiguous: a temporary)
-            else                                                  ! an n-port element (D-73)
-               call port_kinematics(e, self%theta, self%omega, ends, th, w)
-               call e%port_jacobian(th(1:np), w(1:np), jt(1:np, 1:2*np))
-            end if
-            do a = 1, np
-               na = ends(a)
-               if (self%speed_of(na) /= 0) cycle
-               do k = 1, self%nodes(na)%n%nstates()
-                  if (dtq(k, na) == 0.0_wp) cycle
-                  row = self%nodes(na)%n%offset + k
-                  do b = 1, np
-                     nb = ends(b)
-                     if (self%speed_of(nb) /= 0 .or. self%nodes(nb)%n%nstates() < 2) cycle
-                     ia = self%nodes(nb)%n%offset + 1
-                     ib = self%nodes(nb)%n%offset + 2
-                     jac(row, ia) = jac(row, ia) + dtq(k, na)*jt(a, 2*b - 1)
-                     jac(row, ib) = jac(row, ib) + dtq(k, na)*jt(a, 2*b)
-                  end do
-               end do
-            end do
-         end associate
+         if (present(part)) then
+            if (part%vary(i)) cycle
+         end if
+         call add_element_part(self, i, self%jdtq, jac)
       end do
       ! a node in a rigid cluster (D-81) accelerates with its cluster, exactly: its
       ! row left without partials keeps Newton's updates of joined speeds equal
@@ -72,17 +54,172 @@ contains
          jac(self%nodes(self%cn%node(k))%n%offset + 2, :) = 0.0_wp
       end do
       if (present(constant)) constant = jacobian_constant(self)
+      if (present(part)) then
+         part%dtq = self%jdtq
+         if (part%ok) call varying_entries(self, part)
+      end if
    end procedure model_jacobian
 
+   !> Element i's part of the Jacobian added to jac at the kinematics in the
+   !> workspace: its torques' partials (`port_partials`) through its nodes'
+   !> gains dtq, entry by entry as `element_scatter` lists them.
+   subroutine add_element_part(self, i, dtq, jac)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: dtq(:, :)
+      real(wp), intent(inout) :: jac(:, :)
+      real(wp) :: jt(max_ports, 2*max_ports)
+      integer :: sc(8, 5*max_ports*max_ports), m, l
+      call element_scatter(self, i, dtq, sc, m)
+      if (m == 0) return
+      call port_partials(self, i, jt)
+      do l = 1, m
+         call add_entry(sc(:, l), size(dtq, 2), dtq, jt, size(jac, 1), jac)
+      end do
+   end subroutine add_element_part
+
+   !> jac(row, ia : ib) += dtq(k, node) * d(torque at port a) / d(angle, speed at port b).
+   pure subroutine add_entry(e, nn, dtq, jt, ny, jac)
+      integer, intent(in) :: e(8), nn, ny
+      real(wp), intent(in) :: dtq(5, nn), jt(max_ports, 2*max_ports)
+      real(wp), intent(inout) :: jac(ny, ny)
+      jac(e(2), e(3)) = jac(e(2), e(3)) + dtq(e(7), e(8))*jt(e(5), 2*e(6) - 1)
+      jac(e(2), e(4)) = jac(e(2), e(4)) + dtq(e(7), e(8))*jt(e(5), 2*e(6))
+   end subroutine add_entry
+
+   !> The entries element i adds to the Jacobian, in the order they are added:
+   !> for each port a whose node has states, each state k with a gain, each port
+   !> b whose node has an angle and a speed: (i, row of k, columns of b's angle
+   !> and speed, a, b, k, a's node).
+   subroutine element_scatter(self, i, dtq, sc, m)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      real(wp), intent(in) :: dtq(:, :)
+      integer, intent(inout) :: sc(:, :)
+      integer, intent(out) :: m
+      real(wp) :: th(max_ports), w(max_ports)
+      integer :: a, b, k, na, nb, np, ends(max_ports)
+      m = 0
+      associate (e => self%elements(i)%e)
+         np = e%n_ports()
+         if (np == 2) then
+            ends(1:2) = [e%left, e%right]
+         else
+            call port_kinematics(e, self%theta, self%omega, ends, th, w)
+         end if
+      end associate
+      do a = 1, np
+         na = ends(a)
+         if (self%speed_of(na) /= 0) cycle
+         do k = 1, self%nodes(na)%n%nstates()
+            if (dtq(k, na) == 0.0_wp) cycle
+            do b = 1, np
+               nb = ends(b)
+               if (self%speed_of(nb) /= 0 .or. self%nodes(nb)%n%nstates() < 2) cycle
+               m = m + 1
+               sc(:, m) = [i, self%nodes(na)%n%offset + k, self%nodes(nb)%n%offset + 1, self%nodes(nb)%n%offset + 2, &
+                           a, b, k, na]
+            end do
+         end do
+      end do
+   end subroutine element_scatter
+
+   !> Element i's torques' partials at the kinematics in the workspace: jt(a, 2b - 1 : 2b),
+   !> d(torque at port a) / d(angle, speed at port b).
+   subroutine port_partials(self, i, jt)
+      class(model_t), intent(inout) :: self
+      integer, intent(in) :: i
+      real(wp), intent(out) :: jt(max_ports, 2*max_ports)
+      real(wp) :: th(max_ports), w(max_ports), jt2(2, 4)
+      integer :: np, ends(max_ports)
+      associate (e => self%elements(i)%e)
+         np = e%n_ports()
+         if (np == 2) then
+            call e%torque_jacobian(self%theta(e%left), self%omega(e%left), self%theta(e%right), &
+                                   self%omega(e%right), jt2)
+            jt(1:2, 1:4) = jt2            ! (jt(1:2, 1:4) itself is not contiguous: a temporary)
+         else                                                  ! an n-port element (D-73)
+            call port_kinematics(e, self%theta, self%omega, ends, th, w)
+            call e%port_jacobian(th(1:np), w(1:np), jt(1:np, 1:2*np))
+         end if
+      end associate
+   end subroutine port_partials
+
+   !> The varying elements' parts (part%sc, two-ports: part%ok) added to jac at
+   !> (t, y), through the node gains part%dtq of the constant part's call (D-170).
+   subroutine add_varying_parts(self, t, y, part, jac)
+      class(model_t), intent(inout) :: self
+      real(wp), intent(in) :: t, y(:)
+      type(jac_part_t), intent(in) :: part
+      real(wp), intent(inout) :: jac(:, :)
+      real(wp) :: jt(max_ports, 2*max_ports)
+      integer :: i, l, last, ends(2)
+      last = 0
+      do l = 1, part%nsc
+         i = part%sc(1, l)
+         if (i /= last) then
+            ends = [self%elements(i)%e%left, self%elements(i)%e%right]
+            call self%kinematics_part(t, y, ends)
+            call port_partials(self, i, jt)
+            last = i
+         end if
+         call add_entry(part%sc(:, l), size(part%dtq, 2), part%dtq, jt, size(jac, 1), jac)
+      end do
+   end subroutine add_varying_parts
+
+   !> The varying elements' entries (part%sc) from the node gains part%dtq.
+   subroutine varying_entries(self, part)
+      class(model_t), intent(in) :: self
+      type(jac_part_t), intent(inout) :: part
+      integer :: i, m, sc(8, 5*max_ports*max_ports)
+      if (.not. allocated(part%sc)) allocate (part%sc(8, 4*size(self%elements)))
+      part%nsc = 0
+      do i = 1, size(part%vary)
+         if (.not. part%vary(i)) cycle
+         call element_scatter(self, i, part%dtq, sc, m)
+         if (part%nsc + m > size(part%sc, 2)) part%sc = reshape(part%sc, [8, 2*(part%nsc + m)], pad=[0])
+         part%sc(:, part%nsc + 1:part%nsc + m) = sc(:, 1:m)
+         part%nsc = part%nsc + m
+      end do
+   end subroutine varying_entries
+
+   !> The split of the Jacobian in the current modes (D-170): part%vary, the
+   !> elements that are not linear in their mode (`element_constant`); part%ok,
+   !> the rest stays constant until the next event and every varying element is
+   !> a two-port.
+   subroutine jacobian_parts(self, part)
+      class(model_t), intent(in) :: self
+      type(jac_part_t), intent(inout) :: part
+      integer :: i
+      if (allocated(part%vary)) then
+         if (size(part%vary) /= size(self%elements)) deallocate (part%vary)
+      end if
+      if (.not. allocated(part%vary)) allocate (part%vary(size(self%elements)))
+      part%vary = .false.
+      part%ok = rest_constant(self)
+      if (.not. part%ok) return                ! (jac then the whole Jacobian)
+      do i = 1, size(self%elements)
+         part%vary(i) = .not. element_constant(self, i)
+      end do
+   end subroutine jacobian_parts
+
    !> Whether the Jacobian is constant between events in the current modes
-   !> (D-162): every node with states a plain inertia (or held), no load with
-   !> a speed law, no kinematic constraint, no n-port element, and every
-   !> element a checked linear spring or in a checked hot form that is linear
-   !> in its mode (a clearance open, or closed with the linear law, its
-   !> stiffness factor constant until the next event, no no_tension clip).
-   !> Anything else (yang_sun, a varying mesh stiffness, tooth friction, an
-   !> element without a hot form) says .false.
+   !> (D-162): the rest of the train (`rest_constant`) and every element
+   !> (`element_constant`).
    pure logical function jacobian_constant(self) result(const)
+      class(model_t), intent(in) :: self
+      integer :: i
+      const = .false.
+      if (.not. rest_constant(self)) return
+      do i = 1, size(self%elements)
+         if (.not. element_constant(self, i)) return
+      end do
+      const = .true.
+   end function jacobian_constant
+
+   !> Every node with states a plain inertia (or held), no load with a speed
+   !> law, no kinematic constraint, no n-port element (the hot-path tables built).
+   pure logical function rest_constant(self) result(const)
       class(model_t), intent(in) :: self
       integer :: i
       const = .false.
@@ -97,14 +234,23 @@ contains
          if (self%speed_of(i) /= 0) cycle
          if (self%fn(i)%kind /= nk_plain .and. self%nodes(i)%n%nstates() > 0) return
       end do
-      do i = 1, size(self%elements)
-         if (self%fe(i)%linear) cycle
-         if (self%fh(i)%kind == hf_open) cycle
-         if (self%fh(i)%kind == hf_linear .and. .not. self%fh(i)%no_tension) cycle
-         return
-      end do
       const = .true.
-   end function jacobian_constant
+   end function rest_constant
+
+   !> Element i is linear in its mode: a checked linear spring or in a checked
+   !> hot form (D-35) that is linear in its mode (a clearance open, or closed
+   !> with the linear law, its stiffness factor constant until the next event,
+   !> no no_tension clip). yang_sun, a varying mesh stiffness, tooth friction,
+   !> an element without a hot form are not (the caller checks the tables exist).
+   pure logical function element_constant(self, i) result(const)
+      class(model_t), intent(in) :: self
+      integer, intent(in) :: i
+      const = .true.
+      if (self%fe(i)%linear) return
+      if (self%fh(i)%kind == hf_open) return
+      if (self%fh(i)%kind == hf_linear .and. .not. self%fh(i)%no_tension) return
+      const = .false.
+   end function element_constant
 
    module procedure closed_speed_ratio
       real(wp) :: k(2, 2), c(2, 2)

@@ -23,6 +23,8 @@ module trainsim_contact_sequence
       !> steps whose variational part was their mode's tangent map (Phi <- S Phi),
       !> and the tangent maps built (one per mode stretch whose Jacobian is constant, D-162)
       integer :: tangent_steps = 0, tangent_maps = 0
+      !> steps whose stage Jacobians were the mode's constant part plus the varying elements' parts (D-170)
+      integer :: split_steps = 0
       !> smallest rate at which a guard crossed, |n^T f- + dg/dt| / |n| (the
       !> guard's units per second: a length or an angle), and that guard: a
       !> near-grazing contact shows here (the saltation grows as 1 / rate)

@@ -19,11 +19,11 @@ module trainsim_monodromy
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
+   use trainsim_model_families, only: jac_part_t
    use trainsim_event, only: event_t
-   use trainsim_clearance_element, only: clearance_element_t
-   use trainsim_contact, only: law_yang_sun, contact_law_t
+   use trainsim_impact_memory, only: impact_gradient, damping_column
    use trainsim_contact_sequence, only: monodromy_stats_t, record_event
-   use trainsim_guard_geometry, only: face_of, guard_gradient, approach
+   use trainsim_guard_geometry, only: face_of, guard_gradient
    use trainsim_step_tangent, only: step_partials, nonzeros, sparse_product, dense_product, tangent_map
    implicit none
    private
@@ -44,19 +44,25 @@ module trainsim_monodromy
       logical :: watch = .false., same_j = .false.
       integer :: stage = 0
       real(wp) :: h_grid = 0.0_wp
+      !> the mode's split J = the constant part ja + the varying elements' parts
+      !> (D-170): split, every step of the rest of the mode takes it; try_split,
+      !> while its first full step runs (ja held, the split agrees with J)
+      logical :: split = .false., try_split = .false.
+      type(jac_part_t) :: part
+      real(wp), allocatable :: ja(:, :), jt(:, :)   !< (ny, ny) the constant part; scratch
       real(wp), allocatable :: smat(:, :), jac0(:, :)
       real(wp), allocatable :: phi(:, :)    !< (n, n) d x / d x(t0)
       real(wp), allocatable :: q(:, :)      !< (n, elements) d D_e / d x(t0), rows where has_q
       logical, allocatable :: has_q(:)      !< element e's impact damping depends on x(t0)
       real(wp), allocatable :: jac(:, :)    !< (ny, ny) the model's Jacobian
       real(wp), allocatable :: tau(:)       !< (n) d t / d x(t0) of the current time (exact_step: after an event)
-      real(wp), allocatable :: rl(:)        !< (ny) d R / d l of the last step to an event (exact_step)
+      real(wp), allocatable :: rl(:), rt(:) !< (ny) d R / d l of the last step to an event, d R / d t (exact_step)
       real(wp), allocatable :: g(:), g0(:), gw(:)
       !> scratch of the steps (no allocation per step, D-148): the stages, a trial
       !> state, and the variational stages
       real(wp), allocatable :: k1(:), k2(:), k3(:), k4(:), xs(:), xt(:), xg(:)
       real(wp), allocatable :: p1(:, :), p2(:, :), p3(:, :), p4(:, :), ps(:, :), b(:)
-      !> the Jacobian's nonzeros (row, column, value) in column order, for J Phi
+      !> the Jacobian's nonzeros by rows (row starts jr, columns jc, values jv), for J Phi
       integer, allocatable :: jr(:), jc(:)
       real(wp), allocatable :: jv(:)
       type(event_t), allocatable :: events(:)
@@ -162,10 +168,10 @@ contains
                 w%xt(model%n_y), w%xg(model%n_y))
       if (w%var) then
          allocate (w%p1(w%n, w%n), w%p2(w%n, w%n), w%p3(w%n, w%n), w%p4(w%n, w%n), w%ps(w%n, w%n), w%b(w%n))
-         allocate (w%jr(w%n*w%n), w%jc(w%n*w%n), w%jv(w%n*w%n))
+         allocate (w%jr(w%n + 1), w%jc(w%n*w%n), w%jv(w%n*w%n))
          allocate (w%phi(w%n, w%n), w%q(w%n, size(model%elements)), w%jac(w%ny, w%ny))
          allocate (w%smat(w%n, w%n), w%jac0(w%n, w%n))
-         allocate (w%has_q(size(model%elements)), w%tau(w%n), w%rl(w%ny))
+         allocate (w%has_q(size(model%elements)), w%tau(w%n), w%rl(w%ny), w%rt(w%ny), w%ja(w%ny, w%ny), w%jt(w%ny, w%ny))
          w%tau = 0.0_wp
          w%phi = 0.0_wp
          do k = 1, w%n
@@ -252,19 +258,18 @@ contains
       real(wp), intent(inout) :: x(:)
       type(pass_t), intent(inout) :: w
       logical, intent(in) :: to_event
-      real(wp) :: rt(size(x))
       logical :: moving
       integer :: j
       moving = .false.
       if (w%var .and. w%exact) then
          moving = any(w%tau /= 0.0_wp)
-         if (moving .or. to_event) call step_partials(model, t, hs, x, w%jac, w%rl, rt)
+         if (moving .or. to_event) call step_partials(model, t, hs, x, w%jac, w%rl, w%rt)
       end if
       call advance_state(model, t, hs, x, w)
       if (moving) then
-         rt(1:w%n) = rt(1:w%n) - w%rl(1:w%n)
+         w%rt(1:w%n) = w%rt(1:w%n) - w%rl(1:w%n)
          do j = 1, w%n
-            w%phi(:, j) = w%phi(:, j) + rt(1:w%n)*w%tau(j)
+            w%phi(:, j) = w%phi(:, j) + w%rt(1:w%n)*w%tau(j)
          end do
          w%tau = 0.0_wp
       end if
@@ -370,7 +375,8 @@ contains
       nev = 0
       call model%apply_events(t, x, fired, w%events, nev)
       if (.not. w%var) return
-      w%s_ok = .false.                                ! a new mode: its own tangent map, if any
+      w%s_ok = .false.                                ! a new mode: its own tangent map or split, if any
+      w%split = .false.
       w%lin = w%cache
       call model%rhs(t, x, fp)
       row = matmul(nv, w%phi)/den                     ! n^T Phi- / (n^T f- + dg/dt) = -d t_e / d x(t0)
@@ -393,39 +399,17 @@ contains
       end do
    end subroutine event_at
 
-   !> Element e (a clearance) closed at (t, x) with the damping D(V_i) of eq.
-   !> (3.12), V_i its approach velocity there: q_e = dD/dV_i dV_i/dx dxe.
-   !> Only the yang_sun law has a D that depends on V_i.
+   !> Element e closed at (t, x): q_e = dD/dx dxe where its impact damping D
+   !> depends on the approach velocity (yang_sun, `impact_gradient`).
    subroutine impact_sensitivity(model, e, t, x, dxe, w)
       type(model_t), intent(inout) :: model
       integer, intent(in) :: e
       real(wp), intent(in) :: t, x(:), dxe(:, :)
       type(pass_t), intent(inout) :: w
-      type(contact_law_t) :: lw
-      real(wp) :: v, hv, dp, dm, dd_dv, gv(w%n), xp(size(x)), vp, hx
-      integer :: k, face
-      face = face_of(model, e)
-      select type (el => model%elements(e)%e)
-      class is (clearance_element_t)
-         if (el%cl%law%law /= law_yang_sun) return
-         v = approach(model, e, t, x, face)
-         if (abs(v) <= el%cl%law%v_min) return            ! D from the floor: no dependence on x
-         hv = 1.0e-6_wp*abs(v)
-         lw = el%cl%law; call lw%begin_contact(v + hv, .false.); dp = lw%d
-         lw = el%cl%law; call lw%begin_contact(v - hv, .false.); dm = lw%d
-         dd_dv = (dp - dm)/(2.0_wp*hv)
-      class default
-         return
-      end select
-      xp = x
-      do k = 1, w%n                                      ! dV_i/dx: V_i is linear in the speeds
-         hx = 1.0e-5_wp*max(1.0_wp, abs(x(k)))
-         xp(k) = x(k) + hx
-         vp = approach(model, e, t, xp, face)
-         xp(k) = x(k) - hx
-         gv(k) = (vp - approach(model, e, t, xp, face))/(2.0_wp*hx)
-         xp(k) = x(k)
-      end do
+      real(wp) :: dd_dv, gv(w%n)
+      logical :: found
+      call impact_gradient(model, e, t, x, dd_dv, gv, found)
+      if (.not. found) return
       w%q(:, e) = dd_dv*matmul(gv, dxe)
       w%has_q(e) = .true.
       w%st%impacts = w%st%impacts + 1
@@ -463,8 +447,9 @@ contains
          call tangent_step(w)
          return
       end if
-      w%watch = w%lin .and. full .and. .not. any(w%has_q)
+      w%watch = w%lin .and. full
       w%stage = 0
+      if (w%split) w%st%split_steps = w%st%split_steps + 1
       call model%rhs(t, x, w%k1)
       call var_rhs(model, t, x, w%phi, w%p1, w)
       w%xs = x + 0.5_wp*hs*w%k1
@@ -481,15 +466,45 @@ contains
       call var_rhs(model, t + hs, w%xs, w%ps, w%p4, w)
       x = x + hs/6.0_wp*(w%k1 + 2.0_wp*(w%k2 + w%k3) + w%k4)
       w%phi = w%phi + hs/6.0_wp*(w%p1 + 2.0_wp*(w%p2 + w%p3) + w%p4)
-      if (w%watch) then
+      if (w%watch) then              ! the mode's first full step: its S (J constant), its split, or general
          w%watch = .false.
-         if (w%same_j) then
-            call build_tangent(w, hs)
-         else
-            w%lin = .false.          ! the model's claim did not hold: general until the next event
-         end if
+         w%lin = .false.
+         if (w%same_j .and. .not. any(w%has_q)) call build_tangent(w, hs)
+         w%split = w%try_split .and. (w%same_j .or. any(w%part%vary))
+         w%part%varying = .true.
       end if
    end subroutine rk4_var
+
+   !> A stage of the mode's first full step: J, and whether it is constant (its
+   !> four stage Jacobians one: D-162) or its constant part is (D-170): the part
+   !> at the first stage and again at the last, bit for bit, and the split at the
+   !> first stage equal to J to the rounding of the sums' order.
+   subroutine watch_stage(model, t, x, w)
+      type(model_t), intent(inout) :: model
+      real(wp), intent(in) :: t, x(:)
+      type(pass_t), intent(inout) :: w
+      w%stage = w%stage + 1
+      if (w%stage == 1) then
+         call model%jacobian(t, x, w%jac, constant=w%same_j)
+         w%jac0 = w%jac(1:w%n, 1:w%n)
+         w%part%varying = .false.
+         call model%jacobian(t, x, w%ja, part=w%part)
+         w%try_split = w%part%ok
+         if (.not. (w%try_split .and. any(w%part%vary))) return
+         w%jt = w%ja
+         w%part%varying = .true.
+         call model%jacobian(t, x, w%jt, part=w%part)
+         w%try_split = all(abs(w%jt(1:w%n, 1:w%n) - w%jac(1:w%n, 1:w%n)) <= &
+                           8.0_wp*epsilon(1.0_wp)*(abs(w%ja(1:w%n, 1:w%n)) + abs(w%jt(1:w%n, 1:w%n) - w%ja(1:w%n, 1:w%n))))
+         return
+      end if
+      call model%jacobian(t, x, w%jac)
+      if (w%same_j) w%same_j = all(w%jac(1:w%n, 1:w%n) == w%jac0)
+      if (w%stage < 4 .or. .not. (w%try_split .and. any(w%part%vary))) return
+      w%part%varying = .false.
+      call model%jacobian(t, x, w%jt, part=w%part)
+      w%try_split = w%part%ok .and. all(w%jt(1:w%n, 1:w%n) == w%ja(1:w%n, 1:w%n))
+   end subroutine watch_stage
 
    !> S of the mode from its constant Jacobian (jac0) and the step hs.
    subroutine build_tangent(w, hs)
@@ -516,70 +531,29 @@ contains
       real(wp), intent(in), contiguous :: phi(:, :)
       real(wp), intent(out), contiguous :: dphi(:, :)
       type(pass_t), intent(inout) :: w
-      integer :: e, j, nz
-      if (.not. w%watch) then
+      integer :: e, j
+      if (w%split) then                 ! the constant part and the varying elements' parts (D-170)
+         w%jac = w%ja
+         call model%jacobian(t, x, w%jac, part=w%part)
+      else if (.not. w%watch) then
          call model%jacobian(t, x, w%jac)
-      else                              ! the mode's first full step: constant, and its stage Jacobians one?
-         w%stage = w%stage + 1
-         if (w%stage == 1) then
-            call model%jacobian(t, x, w%jac, constant=w%same_j)
-            w%jac0 = w%jac(1:w%n, 1:w%n)
-         else
-            call model%jacobian(t, x, w%jac)
-            if (w%same_j) w%same_j = all(w%jac(1:w%n, 1:w%n) == w%jac0)
-         end if
+      else
+         call watch_stage(model, t, x, w)
       end if
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
-      ! two nodes), each entry summed over k in order, as matmul does (D-148)
-      call nonzeros(w%n, w%ny, w%jac, nz, w%jr, w%jc, w%jv)
-      call sparse_product(w%n, nz, w%jr, w%jc, w%jv, phi, dphi)
+      ! two nodes), each entry summed over k in order, as matmul does (D-148, D-170)
+      call nonzeros(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
+      call sparse_product(w%n, w%jr, w%jc, w%jv, phi, dphi)
       do e = 1, size(w%has_q)
          if (.not. w%has_q(e)) cycle
-         call damping_column(model, e, t, x, w%b, w)
+         if (w%split) then               ! (the nodes' gains of the constant part)
+            call damping_column(model, e, t, x, w%jt, w%b, w%part%dtq)
+         else
+            call damping_column(model, e, t, x, w%jac, w%b)
+         end if
          do j = 1, w%n
             dphi(:, j) = dphi(:, j) + w%b*w%q(j, e)
          end do
       end do
    end subroutine var_rhs
-
-   !> df/dD of clearance e (yang_sun, in contact) at (t, x): its contact force
-   !> F = c (k p + D p pdot) (eqs. 3.18-3.19) gives dF/dD = c p pdot (0 where
-   !> no_tension clips F), put on its nodes' states as their Jacobians put a torque.
-   subroutine damping_column(model, e, t, x, b, w)
-      type(model_t), intent(inout) :: model
-      integer, intent(in) :: e
-      real(wp), intent(in) :: t, x(:)
-      real(wp), intent(out) :: b(:)
-      type(pass_t), intent(inout) :: w
-      real(wp) :: s, c, p, pdot, dfs, dtq(8), tq(2)
-      integer :: l, r, a, nd, k, ns
-      b = 0.0_wp
-      call model%kinematics(t, x)
-      l = model%elements(e)%e%left
-      r = model%elements(e)%e%right
-      select type (el => model%elements(e)%e)
-      class is (clearance_element_t)
-         if (el%cl%mode == 0) return
-         s = real(el%cl%mode, wp)
-         c = el%factor(model%theta(l))
-         p = s*(el%cl%r1*model%theta(l) - el%cl%r2*model%theta(r)) - el%cl%b
-         pdot = s*(el%cl%r1*model%omega(l) - el%cl%r2*model%omega(r))
-         if (el%cl%law%no_tension .and. c*(el%cl%law%k*p + el%cl%law%d*p*pdot) < 0.0_wp) return
-         dfs = s*c*p*pdot
-         tq = [-el%cl%r1*dfs, el%cl%r2*dfs]
-      class default
-         return
-      end select
-      do a = 1, 2
-         nd = l
-         if (a == 2) nd = r
-         if (model%speed_of(nd) /= 0) cycle
-         ns = model%nodes(nd)%n%nstates()
-         if (ns == 0) cycle
-         call model%nodes(nd)%n%jacobian(t, x, w%jac, dtq(1:ns))
-         do k = 1, ns
-            b(model%nodes(nd)%n%offset + k) = b(model%nodes(nd)%n%offset + k) + dtq(k)*tq(a)
-         end do
-      end do
-   end subroutine damping_column
 end module trainsim_monodromy

@@ -59,37 +59,44 @@ contains
       end function f_t
    end subroutine step_partials
 
-   !> The nonzeros of jac(1:n, 1:n) in column order (explicit shapes: plain
-   !> loops without the descriptors of the pass's components).
-   pure subroutine nonzeros(n, ny, jac, nz, jr, jc, jv)
+   !> The nonzeros of jac(1:n, 1:n) by rows (row i's in jv(rs(i) : rs(i+1) - 1),
+   !> their columns jc in increasing order; explicit shapes: plain loops without
+   !> the descriptors of the pass's components).
+   pure subroutine nonzeros(n, ny, jac, rs, jc, jv)
       integer, intent(in) :: n, ny
       real(wp), intent(in) :: jac(ny, ny)
-      integer, intent(out) :: nz, jr(n*n), jc(n*n)
+      integer, intent(out) :: rs(n + 1), jc(n*n)
       real(wp), intent(out) :: jv(n*n)
-      integer :: i, k
+      integer :: i, k, nz
       nz = 0
-      do k = 1, n
-         do i = 1, n
+      do i = 1, n
+         rs(i) = nz + 1
+         do k = 1, n
             if (jac(i, k) == 0.0_wp) cycle
             nz = nz + 1
-            jr(nz) = i
             jc(nz) = k
             jv(nz) = jac(i, k)
          end do
       end do
+      rs(n + 1) = nz + 1
    end subroutine nonzeros
 
-   !> dphi = J phi from J's nonzeros (row jr, column jc, value jv), each entry
-   !> summed over the columns in order.
-   pure subroutine sparse_product(n, nz, jr, jc, jv, phi, dphi)
-      integer, intent(in) :: n, nz, jr(nz), jc(nz)
-      real(wp), intent(in) :: jv(nz), phi(n, n)
+   !> dphi = J phi from J's nonzeros by rows (`nonzeros`): each entry summed
+   !> over k in increasing order from 0, as matmul does, in a register (D-170:
+   !> the values of the column-order scatter it replaces, bit for bit).
+   pure subroutine sparse_product(n, rs, jc, jv, phi, dphi)
+      integer, intent(in) :: n, rs(n + 1), jc(*)
+      real(wp), intent(in) :: jv(*), phi(n, n)
       real(wp), intent(out) :: dphi(n, n)
-      integer :: j, l
-      dphi = 0.0_wp
+      integer :: i, j, l
+      real(wp) :: acc
       do j = 1, n
-         do l = 1, nz
-            dphi(jr(l), j) = dphi(jr(l), j) + jv(l)*phi(jc(l), j)
+         do i = 1, n
+            acc = 0.0_wp
+            do l = rs(i), rs(i + 1) - 1
+               acc = acc + jv(l)*phi(jc(l), j)
+            end do
+            dphi(i, j) = acc
          end do
       end do
    end subroutine sparse_product
