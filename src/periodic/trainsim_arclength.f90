@@ -8,9 +8,10 @@
 !> differences (D-115), dP/dlambda by a central difference of the period map.
 !> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is
 !> z + ds t, the corrector chord Newton on [G; t'(z - z_pred)] with the bordered
-!> matrix of the last point. Step control: halve on failure (down to ds_min: the
-!> branch stops with the reason), grow by 1.5 after at most 3 corrector steps
-!> (up to ds_max).
+!> matrix of the last point (full Newton where it fails, from the same predictor;
+!> a corrector that cannot converge in its steps left stops early, D-184). Step
+!> control: halve on failure (down to ds_min: the branch stops with the reason),
+!> grow by 1.5 after at most 3 corrector steps (up to ds_max).
 !>
 !> Bifurcations between two accepted points: a fold where the lambda-component
 !> of the tangent changes sign (a multiplier through +1), a period-doubling where
@@ -222,7 +223,7 @@ module trainsim_arclength
          real(wp), intent(in) :: t_prev(:)
          type(error_t), allocatable, intent(out) :: err
       end subroutine linearise
-      module subroutine correct(c, p, z_pred, opt, q, why, full)
+      module subroutine correct(c, p, z_pred, opt, q, why, full, px_pred)
          type(ctx_t), intent(inout) :: c
          type(node_t), intent(in) :: p
          real(wp), intent(in) :: z_pred(:)
@@ -230,6 +231,7 @@ module trainsim_arclength
          type(node_t), intent(out) :: q
          character(len=:), allocatable, intent(out) :: why
          logical, intent(in), optional :: full
+         real(wp), allocatable, intent(inout), optional :: px_pred(:)
       end subroutine correct
       module subroutine store(br, c, p, ds, kind, border, segment)
          type(branch_t), intent(inout) :: br
@@ -447,6 +449,7 @@ contains
       type(node_t) :: nxt
       real(wp) :: lam
       character(len=:), allocatable :: why
+      real(wp), allocatable :: px_pred(:)
       logical :: crossed, rephased
       integer :: before
       rephased = .false.
@@ -459,8 +462,10 @@ contains
                          str(cur%z(c%n + 1)*c%ls, 10)
             exit
          end if
-         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why)
-         if (len(why) > 0 .and. opt%nonsmooth) call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
+         if (allocated(px_pred)) deallocate (px_pred)   ! (the map at the predictor: the chord's, then Newton's)
+         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, px_pred=px_pred)
+         if (len(why) > 0 .and. opt%nonsmooth) &
+            call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true., px_pred=px_pred)
          crossed = .false.
          if (len(why) == 0) then
             call linearise(c, nxt, cur%t, err)
