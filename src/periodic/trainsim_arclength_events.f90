@@ -154,9 +154,8 @@ contains
    !> last rate of contraction the steps left would not bring it below 10 tol;
    !> Newton when its residual grows twice, or grows after a step that reduced it
    !> (its first step from the predictor may overshoot; a later growth is a
-   !> contact sequence it bounces between). px_pred: the map at z_pred, taken by
-   !> the first corrector from z_pred and given to the next (Newton after the
-   !> chord), which does not take it again.
+   !> contact sequence it bounces between). px_pred: the map at z_pred, set by the
+   !> chord and taken from it by Newton after the chord (not mapped again).
    module procedure correct
       type(error_t), allocatable :: err
       real(wp), allocatable :: b(:, :), rhs(:), px(:)
@@ -174,10 +173,11 @@ contains
       do it = 0, opt%max_corrector
          lam = q%z(n + 1)*c%ls
          if (it == 0 .and. present(px_pred)) then
-            if (allocated(px_pred)) then
+            if (allocated(px_pred) .and. newton) then
                px = px_pred
                why = ''
             else
+               if (allocated(px_pred)) deallocate (px_pred)   ! (a chord's: the last predictor's)
                call evaluate(c, q%z, px, why, err)
                if (len(why) == 0 .and. .not. allocated(err)) px_pred = px
             end if
@@ -442,7 +442,6 @@ contains
             if (cheap) then
                ! from the last trial in p's sequence, on the same hyperplane t_p'(z - z_p) = sm:
                ! the chord with the Jacobian of that sequence's nearest trial, else full Newton
-               if (allocated(px_pred)) deallocate (px_pred)
                call correct(c, pj, a%z + (sm - sa)*p%t, opt, r, why, px_pred=px_pred)
                if (len(why) > 0) call correct(c, p, a%z + (sm - sa)*p%t, opt, r, why, full=.true., px_pred=px_pred)
             else

@@ -425,9 +425,8 @@ contains
       type(session_t), intent(inout), target :: self
       type(error_t), allocatable, intent(out) :: err
       logical, intent(in), optional :: new_inputs
-      logical :: keep
-      keep = .true.
-      if (present(new_inputs)) keep = .not. new_inputs
+      self%d%bounds_kept = allocated(self%d%disp_bound)
+      if (present(new_inputs)) self%d%bounds_kept = self%d%bounds_kept .and. .not. new_inputs
       if (allocated(self%integ)) then
          call self%integ%statistics(self%stats)
          call self%integ%finish()
@@ -440,8 +439,7 @@ contains
          return
       end if
       self%integ%region_instants = .true.
-      call drive_setup(self%model, self%integ, self%obs, self%d, self%dout, self%t_end, self%t_int, self%y, err, &
-                       keep_bounds=keep)
+      call drive_setup(self%model, self%integ, self%obs, self%d, self%dout, self%t_end, self%t_int, self%y, err)
    end subroutine fresh_integrator
 
    !> A fixed-step integrator's grid (its start and the index of the next point).

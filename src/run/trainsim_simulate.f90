@@ -59,12 +59,11 @@ module trainsim_simulate
       logical :: blocks = .false.
       !> blocks, and the output times are the integrator's grid (output_interval = dt)
       logical :: block_samples = .false.
-      !> per element: the largest |displacement| a physical run reaches
-      !> (element%displacement_bound, D-55), checked at the output times
+      !> per element: the largest |displacement| a physical run reaches (element%displacement_bound,
+      !> D-55), checked at the output times; taken at each drive_setup unless kept (a session, D-185)
       real(wp), allocatable :: disp_bound(:)
-      !> first output time at which the energy residual exceeded
-      !> run%energy_check of the energy scale so far (-1: not yet)
-      real(wp) :: t_ledger = -1.0_wp
+      logical :: bounds_kept = .false.
+      real(wp) :: t_ledger = -1.0_wp   !< first output time the energy residual exceeded run%energy_check (-1: not yet)
    end type drive_t
 
 contains
@@ -272,10 +271,8 @@ contains
    !> The loop's set-up at (t, y): its bookkeeping d, the breakpoints of the
    !> inputs up to t_end, the integrator started, a guard already below zero at
    !> t settled. dout: the interval of the output times (blocks of plain steps
-   !> when the observer's samples allow them, D-38). keep_bounds: d's
-   !> displacement bounds are this model's already (a session's integrator started
-   !> afresh with its loads, inertias and window as before, D-185): not computed again.
-   subroutine drive_setup(model, integ, obs, d, dout, t_end, t, y, err, keep_bounds)
+   !> when the observer's samples allow them, D-38).
+   subroutine drive_setup(model, integ, obs, d, dout, t_end, t, y, err)
       type(model_t), intent(inout), target :: model
       class(integrator_t), intent(inout), target :: integ
       type(observer_t), intent(inout) :: obs
@@ -283,8 +280,6 @@ contains
       real(wp), intent(in) :: dout, t_end, t
       real(wp), intent(inout) :: y(:)
       type(error_t), allocatable, intent(out) :: err
-      logical, intent(in), optional :: keep_bounds
-      logical :: keep
       ! one instant: 1e-9 dt, never below 4 ulp of the run's times (a breakpoint one ulp off)
       d%tol = max(1.0e-9_wp*model%run%dt, 4.0_wp*spacing(max(abs(model%run%t_start), abs(t_end))))
       d%t_window = t
@@ -298,10 +293,7 @@ contains
       d%block_samples = d%blocks .and. dout == model%run%dt .and. .not. obs%want_whole
       if (allocated(d%g)) deallocate (d%g, d%fired, d%ev)
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
-      keep = .false.
-      if (present(keep_bounds)) keep = keep_bounds .and. allocated(d%disp_bound)
-      if (keep) keep = size(d%disp_bound) == size(model%elements)
-      if (.not. keep) call displacement_bounds(model, d%disp_bound)
+      if (.not. (d%bounds_kept .and. allocated(d%disp_bound))) call displacement_bounds(model, d%disp_bound)
       d%ibp = 1
       call model%breakpoints(t, t_end, d%bp)
       call set_next_stop(d, integ, t, t_end)
