@@ -8,7 +8,7 @@
 !> (D-115), dP/dlambda by a central difference of the period map.
 !> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is z + ds t, the
 !> corrector chord Newton on [G; t'(z - z_pred)] with the bordered matrix of the last point (then
-!> full Newton; each stops early where it cannot converge, D-184). Step control: halve on failure
+!> full Newton; each stops early where it cannot converge, D-172). Step control: halve on failure
 !> (down to ds_min: the branch stops with the reason), grow by 1.5 after at most 3 corrector
 !> steps (up to ds_max).
 !>

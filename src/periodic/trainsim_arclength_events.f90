@@ -150,7 +150,7 @@ contains
    !> `full` Newton with the Jacobian A(z) of each iterate (the one-sided Jacobian
    !> of its own contact sequence: the non-smooth corrector, D-115). why = ''
    !> if it converged. It stops as failed, before its steps are spent, where it
-   !> cannot converge (D-184): the chord when its residual grows, or when at its
+   !> cannot converge (D-172): the chord when its residual grows, or when at its
    !> last rate of contraction the steps left would not bring it below 10 tol;
    !> Newton when its residual grows twice, or grows after a step that reduced it
    !> (its first step from the predictor may overshoot; a later growth is a

@@ -420,7 +420,7 @@ contains
    !> (the previous integrator's counters kept in self%stats). The displacement
    !> bounds of the run's checks are taken again only at a start or when an input
    !> changed (`new_inputs`): a save, restore or new state changes none of the
-   !> loads, inertias or the run's window they are computed from (D-185).
+   !> loads, inertias or the run's window they are computed from (D-173).
    subroutine fresh_integrator(self, err, new_inputs)
       type(session_t), intent(inout), target :: self
       type(error_t), allocatable, intent(out) :: err

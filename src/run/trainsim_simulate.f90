@@ -60,7 +60,7 @@ module trainsim_simulate
       !> blocks, and the output times are the integrator's grid (output_interval = dt)
       logical :: block_samples = .false.
       !> per element: the largest |displacement| a physical run reaches (element%displacement_bound,
-      !> D-55), checked at the output times; taken at each drive_setup unless kept (a session, D-185)
+      !> D-55), checked at the output times; taken at each drive_setup unless kept (a session, D-173)
       real(wp), allocatable :: disp_bound(:)
       logical :: bounds_kept = .false.
       real(wp) :: t_ledger = -1.0_wp   !< first output time the energy residual exceeded run%energy_check (-1: not yet)
