@@ -1,23 +1,22 @@
-!> Pseudo-arclength continuation of periodic orbits in a deck parameter lambda
-!> (issue 27 item 3; docs/periodic.md "Continuation"; D-108).
+!> Pseudo-arclength continuation of periodic orbits in a deck parameter lambda (issue 27 item 3;
+!> docs/periodic.md "Continuation"; D-108).
 !>
 !> Unknowns z = (x, lambda): the reduced state x at the forcing phase t0 and the parameter.
 !> G(x, lambda) = P(x; lambda) - x, P the period map at lambda (the problem's model retuned or
-!> built there, D-131; its forcing period as shooting takes it). In the scaled variables
-!> (x/s, lambda/l) A = [S^-1 (M - I) S, S^-1 dP/dlambda l], M by saltation matrices or
-!> differences (D-115), dP/dlambda by a central difference of the period map.
-!> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is
-!> z + ds t, the corrector chord Newton on [G; t'(z - z_pred)] with the bordered
-!> matrix of the last point. Step control: halve on failure (down to ds_min: the
-!> branch stops with the reason), grow by 1.5 after at most 3 corrector steps
-!> (up to ds_max).
+!> built there, D-131; its forcing period as shooting takes it). In the scaled variables (x/s,
+!> lambda/l) A = [S^-1 (M - I) S, S^-1 dP/dlambda l], M by saltation matrices or differences
+!> (D-115), dP/dlambda by a central difference of the period map.
+!> The tangent t solves [A; t_prev'] t = (0, 1), normalised; the predictor is z + ds t, the
+!> corrector chord Newton on [G; t'(z - z_pred)] with the bordered matrix of the last point (then
+!> full Newton; each stops early where it cannot converge, D-172). Step control: halve on failure
+!> (down to ds_min: the branch stops with the reason), grow by 1.5 after at most 3 corrector
+!> steps (up to ds_max).
 !>
-!> Bifurcations between two accepted points: a fold where the lambda-component
-!> of the tangent changes sign (a multiplier through +1), a period-doubling where
-!> det(M + I) does (a real multiplier through -1), a Neimark-Sacker point where
-!> the number of complex multipliers outside the unit circle changes. Each is
-!> located by the Illinois secant on its test function along the arclength from
-!> the earlier point, to lam_tol in lambda (a fold: to a tangent lambda-component
+!> Bifurcations between two accepted points: a fold where the lambda-component of the tangent
+!> changes sign (a multiplier through +1), a period-doubling where det(M + I) does (a real
+!> multiplier through -1), a Neimark-Sacker point where the number of complex multipliers outside
+!> the unit circle changes. Each is located by the Illinois secant on its test function along the
+!> arclength from the earlier point, to lam_tol in lambda (a fold: to a tangent lambda-component
 !> below 1e-9, which puts lambda within ~1e-18/curvature of the turn).
 module trainsim_arclength
    use trainsim_kinds, only: wp
@@ -222,7 +221,7 @@ module trainsim_arclength
          real(wp), intent(in) :: t_prev(:)
          type(error_t), allocatable, intent(out) :: err
       end subroutine linearise
-      module subroutine correct(c, p, z_pred, opt, q, why, full)
+      module subroutine correct(c, p, z_pred, opt, q, why, full, px_pred)
          type(ctx_t), intent(inout) :: c
          type(node_t), intent(in) :: p
          real(wp), intent(in) :: z_pred(:)
@@ -230,6 +229,7 @@ module trainsim_arclength
          type(node_t), intent(out) :: q
          character(len=:), allocatable, intent(out) :: why
          logical, intent(in), optional :: full
+         real(wp), allocatable, intent(inout), optional :: px_pred(:)
       end subroutine correct
       module subroutine store(br, c, p, ds, kind, border, segment)
          type(branch_t), intent(inout) :: br
@@ -447,6 +447,7 @@ contains
       type(node_t) :: nxt
       real(wp) :: lam
       character(len=:), allocatable :: why
+      real(wp), allocatable :: px_pred(:)
       logical :: crossed, rephased
       integer :: before
       rephased = .false.
@@ -459,8 +460,8 @@ contains
                          str(cur%z(c%n + 1)*c%ls, 10)
             exit
          end if
-         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why)
-         if (len(why) > 0 .and. opt%nonsmooth) call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, full=.true.)
+         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, px_pred=px_pred)
+         if (len(why) > 0 .and. opt%nonsmooth) call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, .true., px_pred)
          crossed = .false.
          if (len(why) == 0) then
             call linearise(c, nxt, cur%t, err)

@@ -149,7 +149,13 @@ contains
    !> chord Newton with the bordered matrix [A; t'] of the point `p`, or with
    !> `full` Newton with the Jacobian A(z) of each iterate (the one-sided Jacobian
    !> of its own contact sequence: the non-smooth corrector, D-115). why = ''
-   !> if it converged.
+   !> if it converged. It stops as failed, before its steps are spent, where it
+   !> cannot converge (D-172): the chord when its residual grows, or when at its
+   !> last rate of contraction the steps left would not bring it below 10 tol;
+   !> Newton when its residual grows twice, or grows after a step that reduced it
+   !> (its first step from the predictor may overshoot; a later growth is a
+   !> contact sequence it bounces between). px_pred: the map at z_pred, set by the
+   !> chord and taken from it by Newton after the chord (not mapped again).
    module procedure correct
       type(error_t), allocatable :: err
       real(wp), allocatable :: b(:, :), rhs(:), px(:)
@@ -166,7 +172,18 @@ contains
       allocate (ipiv(n + 1))
       do it = 0, opt%max_corrector
          lam = q%z(n + 1)*c%ls
-         call evaluate(c, q%z, px, why, err)
+         if (it == 0 .and. present(px_pred)) then
+            if (allocated(px_pred) .and. newton) then
+               px = px_pred
+               why = ''
+            else
+               if (allocated(px_pred)) deallocate (px_pred)   ! (a chord's: the last predictor's)
+               call evaluate(c, q%z, px, why, err)
+               if (len(why) == 0 .and. .not. allocated(err)) px_pred = px
+            end if
+         else
+            call evaluate(c, q%z, px, why, err)
+         end if
          if (allocated(err)) why = err%message
          if (len(why) > 0) return
          r = maxval(abs(px/c%s - q%z(1:n)))
@@ -174,11 +191,19 @@ contains
          q%residual = r
          q%corrector = it
          if (r <= opt%tol) return
-         if (.not. r < r_old) grown = grown + 1
-         if (grown > merge(1, 0, newton)) then
-            why = 'the corrector diverged at lambda = '//str(lam, 10)//' (residual '//str(r, 3)//' after '// &
-                  str(r_old, 3)//')'
-            return
+         if (.not. r < r_old) then
+            grown = grown + 1
+            if (.not. newton .or. grown > 1 .or. it >= 2) then
+               why = 'the corrector diverged at lambda = '//str(lam, 10)//' (residual '//str(r, 3)//' after '// &
+                     str(r_old, 3)//')'
+               return
+            end if
+         else if (.not. newton .and. it >= 2) then
+            if (r*(r/r_old)**(opt%max_corrector - it) > 10.0_wp*opt%tol) then
+               why = 'the chord converges too slowly at lambda = '//str(lam, 10)//' (residual '//str(r, 3)// &
+                     ' after '//str(r_old, 3)//', '//str(opt%max_corrector - it)//' steps left)'
+               return
+            end if
          end if
          if (it == opt%max_corrector) exit
          r_old = r
@@ -405,6 +430,7 @@ contains
          type(monodromy_stats_t) :: sr
          type(error_t), allocatable :: e
          character(len=:), allocatable :: why
+         real(wp), allocatable :: px_pred(:)
          real(wp) :: sb, sm
          integer :: it
          logical :: same
@@ -416,8 +442,8 @@ contains
             if (cheap) then
                ! from the last trial in p's sequence, on the same hyperplane t_p'(z - z_p) = sm:
                ! the chord with the Jacobian of that sequence's nearest trial, else full Newton
-               call correct(c, pj, a%z + (sm - sa)*p%t, opt, r, why)
-               if (len(why) > 0) call correct(c, p, a%z + (sm - sa)*p%t, opt, r, why, full=.true.)
+               call correct(c, pj, a%z + (sm - sa)*p%t, opt, r, why, px_pred=px_pred)
+               if (len(why) > 0) call correct(c, p, a%z + (sm - sa)*p%t, opt, r, why, full=.true., px_pred=px_pred)
             else
                call correct(c, p, p%z + sm*p%t, opt, r, why, full=.true.)
             end if

@@ -319,7 +319,7 @@ contains
       call set_value(self, i, kind, value, changed)
       if (.not. changed) return
       call grid_of(self%integ, t0, next)
-      call fresh_integrator(self, err)
+      call fresh_integrator(self, err, new_inputs=.true.)
       if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
    end subroutine session_set_input
 
@@ -417,10 +417,16 @@ contains
    end subroutine session_finish
 
    !> A new integrator started at (t, y), the loop's bookkeeping set up there
-   !> (the previous integrator's counters kept in self%stats).
-   subroutine fresh_integrator(self, err)
+   !> (the previous integrator's counters kept in self%stats). The displacement
+   !> bounds of the run's checks are taken again only at a start or when an input
+   !> changed (`new_inputs`): a save, restore or new state changes none of the
+   !> loads, inertias or the run's window they are computed from (D-173).
+   subroutine fresh_integrator(self, err, new_inputs)
       type(session_t), intent(inout), target :: self
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: new_inputs
+      self%d%bounds_kept = allocated(self%d%disp_bound)
+      if (present(new_inputs)) self%d%bounds_kept = self%d%bounds_kept .and. .not. new_inputs
       if (allocated(self%integ)) then
          call self%integ%statistics(self%stats)
          call self%integ%finish()

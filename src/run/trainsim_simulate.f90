@@ -59,12 +59,11 @@ module trainsim_simulate
       logical :: blocks = .false.
       !> blocks, and the output times are the integrator's grid (output_interval = dt)
       logical :: block_samples = .false.
-      !> per element: the largest |displacement| a physical run reaches
-      !> (element%displacement_bound, D-55), checked at the output times
+      !> per element: the largest |displacement| a physical run reaches (element%displacement_bound,
+      !> D-55), checked at the output times; taken at each drive_setup unless kept (a session, D-173)
       real(wp), allocatable :: disp_bound(:)
-      !> first output time at which the energy residual exceeded
-      !> run%energy_check of the energy scale so far (-1: not yet)
-      real(wp) :: t_ledger = -1.0_wp
+      logical :: bounds_kept = .false.
+      real(wp) :: t_ledger = -1.0_wp   !< first output time the energy residual exceeded run%energy_check (-1: not yet)
    end type drive_t
 
 contains
@@ -294,7 +293,7 @@ contains
       d%block_samples = d%blocks .and. dout == model%run%dt .and. .not. obs%want_whole
       if (allocated(d%g)) deallocate (d%g, d%fired, d%ev)
       allocate (d%g(model%n_guards), d%fired(model%n_guards), d%ev(64))
-      call displacement_bounds(model, d%disp_bound)
+      if (.not. (d%bounds_kept .and. allocated(d%disp_bound))) call displacement_bounds(model, d%disp_bound)
       d%ibp = 1
       call model%breakpoints(t, t_end, d%bp)
       call set_next_stop(d, integ, t, t_end)
