@@ -6,14 +6,60 @@ submodule(trainsim_arclength) trainsim_arclength_restart
 
 contains
 
-   !> A fold at p: a real multiplier within 0.05 of +1, or the tangent nearly normal
-   !> to lambda (|t_lambda| < 0.05).
-   module logical function at_fold(p, n)
-      type(node_t), intent(in) :: p
-      integer, intent(in) :: n
-      at_fold = abs(p%t(n + 1)) < 0.05_wp .or. &
-                any(abs(aimag(p%mu)) <= 1.0e-8_wp*abs(p%mu) .and. abs(real(p%mu, wp) - 1.0_wp) < 0.05_wp)
-   end function at_fold
+   !> Whether the corrector's failure at the smallest step is at a fold it could not turn
+   !> (D-187), by the fold's test functions along the branch, not by a multiplier's
+   !> closeness to +1 (a damped train's slow modes sit near it without any fold): the
+   !> tangent's lambda-component and det(M - I) = prod(mu - 1) each change sign where a
+   !> real multiplier passes +1. Each is extrapolated linearly in arclength from the
+   !> stretch's last two regular points (t_lambda is linear in arclength through a fold;
+   !> short of it, where the branch bends more, the line is late): a zero within three more
+   !> steps of the last one's length, and falling, is a fold ahead. note: why, in words.
+   module procedure fold_ahead
+      character(len=*), parameter :: names(2) = [character(len=27) :: 'the tangent''s lambda-part', &
+                                                 'det(M - I)']
+      real(wp) :: f(2, 2), h, s
+      integer :: l, m, j
+      fold = .false.
+      l = last_regular(br, size(br%pts), 0)
+      m = 0
+      if (l > 0) m = last_regular(br, l - 1, br%pts(l)%segment)
+      if (m == 0) then
+         note = ' (not known to be a fold: one point in this stretch)'
+         return
+      end if
+      h = br%pts(l)%ds
+      f(:, 1) = tests(br%pts(m))
+      f(:, 2) = tests(br%pts(l))
+      do j = 1, 2
+         if (f(j, 1)*f(j, 2) <= 0.0_wp .or. abs(f(j, 2)) >= abs(f(j, 1))) cycle
+         s = h*abs(f(j, 2))/(abs(f(j, 1)) - abs(f(j, 2)))
+         if (s > 3.0_wp*h) cycle
+         fold = .true.
+         note = ' (a fold: '//trim(names(j))//' went from '//str(f(j, 1), 3)//' to '//str(f(j, 2), 3)// &
+                ' over the last step, '//str(h, 3)//', and changes sign '//str(s, 3)//' further on)'
+         return
+      end do
+      note = ' (not at a fold: neither the tangent''s lambda-part ('//str(f(1, 1), 3)//' -> '//str(f(1, 2), 3)// &
+             ') nor det(M - I) ('//str(f(2, 1), 3)//' -> '//str(f(2, 2), 3)//') heads for a sign change within 3 steps of '// &
+             str(h, 3)//')'
+   contains
+      !> the index of the last regular point up to i (of segment seg, or any with seg 0); 0: none
+      integer function last_regular(br, i, seg) result(k)
+         type(branch_t), intent(in) :: br
+         integer, intent(in) :: i, seg
+         do k = i, 1, -1
+            if (br%pts(k)%status /= branch_done) cycle
+            if (seg > 0 .and. br%pts(k)%segment /= seg) exit
+            if (len(br%pts(k)%kind) == 0 .and. allocated(br%pts(k)%tangent) .and. allocated(br%pts(k)%mu)) return
+         end do
+         k = 0
+      end function last_regular
+      function tests(p) result(t)
+         type(branch_point_t), intent(in) :: p
+         real(wp) :: t(2)
+         t = [p%tangent(size(p%tangent)), real(product(p%mu - 1.0_wp), wp)]
+      end function tests
+   end procedure fold_ahead
 
    !> A stretch of the branch ended (br%status, br%message: why, at cur): store that as a
    !> failed point and shoot the orbit again restart_step further on in lambda (in the
