@@ -9,15 +9,19 @@ contains
    !> Whether the corrector's failure at the smallest step is at a fold it could not turn
    !> (D-187), by the fold's test functions along the branch, not by a multiplier's
    !> closeness to +1 (a damped train's slow modes sit near it without any fold): the
-   !> tangent's lambda-component and det(M - I) = prod(mu - 1) each change sign where a
-   !> real multiplier passes +1. Each is extrapolated linearly in arclength from the
+   !> tangent's lambda-component, and mu - 1 of each real multiplier (with the previous
+   !> point's real one nearest it: the factors of det(M - I) that change its sign; a complex
+   !> pair near +1 shrinks det without one), change sign where a real multiplier passes +1.
+   !> Each is extrapolated linearly in arclength from the
    !> stretch's last two regular points (t_lambda is linear in arclength through a fold;
    !> short of it, where the branch bends more, the line is late): a zero within three more
    !> steps of the last one's length, and falling, is a fold ahead. note: why, in words.
    module procedure fold_ahead
-      character(len=*), parameter :: names(2) = [character(len=27) :: 'the tangent''s lambda-part', &
-                                                 'det(M - I)']
-      real(wp) :: f(2, 2), h, s
+      character(len=*), parameter :: names(2) = [character(len=30) :: 'the tangent''s lambda-part', &
+                                                 'a real multiplier'], &
+                                     ends(2) = [character(len=12) :: 'changes sign', 'reaches +1']
+      real(wp), parameter :: off(2) = [0.0_wp, 1.0_wp]
+      real(wp) :: f(2, 2), h, s   ! f(:, j): test j at the two points
       integer :: l, m, j
       fold = .false.
       l = last_regular(br, size(br%pts), 0)
@@ -28,20 +32,20 @@ contains
          return
       end if
       h = br%pts(l)%ds
-      f(:, 1) = tests(br%pts(m))
-      f(:, 2) = tests(br%pts(l))
+      f(:, 1) = [br%pts(m)%tangent(size(br%pts(m)%tangent)), br%pts(l)%tangent(size(br%pts(l)%tangent))]
+      f(:, 2) = nearest_pair(br%pts(m)%mu, br%pts(l)%mu)
       do j = 1, 2
-         if (f(j, 1)*f(j, 2) <= 0.0_wp .or. abs(f(j, 2)) >= abs(f(j, 1))) cycle
-         s = h*abs(f(j, 2))/(abs(f(j, 1)) - abs(f(j, 2)))
+         if (f(1, j)*f(2, j) <= 0.0_wp .or. abs(f(2, j)) >= abs(f(1, j))) cycle
+         s = h*abs(f(2, j))/(abs(f(1, j)) - abs(f(2, j)))
          if (s > 3.0_wp*h) cycle
          fold = .true.
-         note = ' (a fold: '//trim(names(j))//' went from '//str(f(j, 1), 3)//' to '//str(f(j, 2), 3)// &
-                ' over the last step, '//str(h, 3)//', and changes sign '//str(s, 3)//' further on)'
+         note = ' (a fold: '//trim(names(j))//' went from '//str(f(1, j) + off(j), 6)//' to '// &
+                str(f(2, j) + off(j), 6)//' over the last step, '//str(h, 3)//', and '//trim(ends(j))//' '// &
+                str(s, 3)//' further on)'
          return
       end do
-      note = ' (not at a fold: neither the tangent''s lambda-part ('//str(f(1, 1), 3)//' -> '//str(f(1, 2), 3)// &
-             ') nor det(M - I) ('//str(f(2, 1), 3)//' -> '//str(f(2, 2), 3)//') heads for a sign change within 3 steps of '// &
-             str(h, 3)//')'
+      note = ' (not at a fold: neither the tangent''s lambda-part ('//str(f(1, 1), 3)//' -> '//str(f(2, 1), 3)// &
+             ') nor a real multiplier heads for +1 within 3 steps of '//str(h, 3)//')'
    contains
       !> the index of the last regular point up to i (of segment seg, or any with seg 0); 0: none
       integer function last_regular(br, i, seg) result(k)
@@ -54,11 +58,31 @@ contains
          end do
          k = 0
       end function last_regular
-      function tests(p) result(t)
-         type(branch_point_t), intent(in) :: p
-         real(wp) :: t(2)
-         t = [p%tangent(size(p%tangent)), real(product(p%mu - 1.0_wp), wp)]
-      end function tests
+      !> (mu_a - 1, mu_b - 1) of the real multiplier mu_b of b and the real one of a nearest
+      !> it, the pair whose mu_b - 1 would reach 0 first, extrapolated; (0, 0): none heads there
+      function nearest_pair(a, b) result(d)
+         complex(wp), intent(in) :: a(:), b(:)
+         real(wp) :: d(2), da, best
+         integer :: i, k
+         d = 0.0_wp
+         best = huge(1.0_wp)
+         do i = 1, size(b)
+            if (abs(aimag(b(i))) > 1.0e-8_wp*abs(b(i))) cycle
+            da = huge(1.0_wp)
+            do k = 1, size(a)
+               if (abs(aimag(a(k))) > 1.0e-8_wp*abs(a(k))) cycle
+               if (abs(real(a(k) - b(i), wp)) < abs(da - real(b(i), wp) + 1.0_wp)) da = real(a(k), wp) - 1.0_wp
+            end do
+            if (da == huge(1.0_wp)) cycle
+            associate (db => real(b(i), wp) - 1.0_wp)
+               if (da*db <= 0.0_wp .or. abs(db) >= abs(da)) cycle
+               if (abs(db)/(abs(da) - abs(db)) < best) then
+                  best = abs(db)/(abs(da) - abs(db))
+                  d = [da, db]
+               end if
+            end associate
+         end do
+      end function nearest_pair
    end procedure fold_ahead
 
    !> A stretch of the branch ended (br%status, br%message: why, at cur): store that as a
