@@ -217,7 +217,7 @@ contains
    !> past a failure. A chord corrector of 4 steps (no full-Newton retry) at a smallest step
    !> of 0.04 turns the jump-down fold (located, 11.1132) and fails 16 points further down the
    !> middle branch, 0.043 rad/s below it, its tangent turning away from the fold: reason 2,
-   !> not at a fold (before D-187 "a fold it could not turn", a real multiplier being within
+   !> not at a fold (before D-174 "a fold it could not turn", a real multiplier being within
    !> 0.05 of +1 there). A chord corrector of 8 steps at a fixed step of 0.08 turns the
    !> jump-down fold and fails 0.0127 rad/s short of the jump-up one (10.6077), t_lambda
    !> falling towards it: reason 5. With one restart (the first corrector) the orbit is shot
@@ -265,9 +265,9 @@ contains
                                         1.02_wp]) < 1.0e-12_wp) .and. all(br%pts%status == branch_no_start))
    end subroutine test_reasons_and_restarts
 
-   !> A damped train's slow mode is no fold (D-187): the oscillator with a second inertia
+   !> A damped train's slow mode is no fold (D-174): the oscillator with a second inertia
    !> held by a weak shaft (k = 1e-4, c = 1: an overdamped mode at s = -1e-4, a real
-   !> multiplier exp(-1e-4 T) = 0.99993 at every point, which before D-187 made any failure a
+   !> multiplier exp(-1e-4 T) = 0.99993 at every point, which before D-174 made any failure a
    !> "fold"). A chord corrector of one step fails at the first step (as in
    !> `failures_stop_with_a_reason`): reason 2, not at a fold; the two failures of
    !> `reasons_and_restarts` (`fold_failures`) keep their reasons 2 and 5.

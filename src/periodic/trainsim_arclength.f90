@@ -41,7 +41,7 @@ module trainsim_arclength
    !> (or, with restarts, why a stretch of the branch ended): 1 no periodic orbit near the
    !> start, 2 the corrector failed at the smallest step (not at a fold), 3 the point
    !> budget spent, 4 an error, 5 the corrector failed at the smallest step at a fold (a
-   !> fold test function heading for its sign change: a fold it could not turn, D-187).
+   !> fold test function heading for its sign change: a fold it could not turn, D-174).
    integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
                          branch_failed = 4, branch_fold = 5
 

@@ -7,7 +7,7 @@ submodule(trainsim_arclength) trainsim_arclength_restart
 contains
 
    !> Whether the corrector's failure at the smallest step is at a fold it could not turn
-   !> (D-187), by the fold's test functions along the branch, not by a multiplier's
+   !> (D-174), by the fold's test functions along the branch, not by a multiplier's
    !> closeness to +1 (a damped train's slow modes sit near it without any fold): the
    !> tangent's lambda-component, and mu - 1 of each real multiplier (with the previous
    !> point's real one nearest it: the factors of det(M - I) that change its sign; a complex
