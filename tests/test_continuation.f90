@@ -53,6 +53,7 @@ program test_continuation
    call test_retuned_model_gives_the_same_branch()
    call test_failures_stop_with_a_reason()
    call test_reasons_and_restarts()
+   call test_slow_damped_mode_is_no_fold()
    call suite_end()
 
 contains
@@ -213,10 +214,14 @@ contains
    end subroutine test_failures_stop_with_a_reason
 
    !> Each reason a branch stops for, constructed, and with restarts the branch going on
-   !> past a failure: a chord corrector of 4 steps (no full-Newton retry) at a smallest step of 0.04 cannot turn
-   !> the jump-down fold (the chord Newton needs more steps near a fold, whose curvature
-   !> the step cannot follow): status fold, within 0.05 rad/s of the closed-form fold;
-   !> with one restart the orbit is shot again 1 % further up in W, beyond the fold,
+   !> past a failure. A chord corrector of 4 steps (no full-Newton retry) at a smallest step
+   !> of 0.04 turns the jump-down fold (located, 11.1132) and fails 16 points further down the
+   !> middle branch, 0.043 rad/s below it, its tangent turning away from the fold: reason 2,
+   !> not at a fold (before D-174 "a fold it could not turn", a real multiplier being within
+   !> 0.05 of +1 there). A chord corrector of 8 steps at a fixed step of 0.08 turns the
+   !> jump-down fold and fails 0.0127 rad/s short of the jump-up one (10.6077), t_lambda
+   !> falling towards it: reason 5. With one restart (the first corrector) the orbit is shot
+   !> again 1 % further up in W, beyond the jump-down fold,
    !> and the branch goes on along the lower (non-contact) branch to
    !> w_end (status done, one failed point, its reason kept); a start with no orbit,
    !> given 2 restarts, is tried at three frequencies and stops with three failed points.
@@ -226,16 +231,11 @@ contains
       type(error_t), allocatable :: err
       integer :: i, nf
       call test_begin('reasons_and_restarts')
+      call fold_failures(prob)
       opt = options()
       opt%nonsmooth = .false.     ! (the chord corrector alone: no full-Newton retry)
       opt%max_corrector = 4
       opt%ds_min = 0.04_wp
-      call continue_branch(prob, w_start, opt, br, err)
-      write (*, '(a)') '    '//msg(br)
-      call check('a fold it could not turn: status fold ('//msg(br)//')', .not. allocated(err) .and. &
-                 br%status == branch_fold)
-      if (size(br%pts) > 0) call check('... near the jump-down fold (within 0.05 rad/s)', &
-                                       abs(br%pts(size(br%pts))%lam - w_fold(1)) < 0.05_wp)
       opt%restarts = 1
       opt%restart_step = 0.01_wp
       call continue_branch(prob, w_start, opt, br, err)
@@ -244,11 +244,11 @@ contains
          br%pts(size(br%pts))%lam
       call check('with a restart the branch reaches its end ('//msg(br)//')', .not. allocated(err) .and. &
                  br%status == branch_done .and. br%pts(size(br%pts))%lam > w_end)
-      call check('one failed point, reason fold, then segment 2', nf == 1)
+      call check('one failed point, reason 2, then segment 2', nf == 1)
       do i = 1, size(br%pts)
          if (br%pts(i)%status == branch_done) cycle
-         call check('the failed point keeps its reason', br%pts(i)%status == branch_fold .and. &
-                    index(br%pts(i)%message, 'fold') > 0)
+         call check('the failed point keeps its reason', br%pts(i)%status == branch_step_min .and. &
+                    index(br%pts(i)%message, 'not at a fold') > 0)
          if (i < size(br%pts)) call check('the next point is a new segment, beyond the fold, stable', &
                                           br%pts(i + 1)%segment == 2 .and. br%pts(i + 1)%lam > w_fold(1) .and. &
                                           br%pts(i + 1)%stability == 'stable')
@@ -264,6 +264,76 @@ contains
       if (size(br%pts) == 3) call check('... at w, w + 1 %, w + 2 %', all(abs(br%pts%lam - w_start*[1.0_wp, 1.01_wp, &
                                         1.02_wp]) < 1.0e-12_wp) .and. all(br%pts%status == branch_no_start))
    end subroutine test_reasons_and_restarts
+
+   !> A damped train's slow mode is no fold (D-174): the oscillator with a second inertia
+   !> held by a weak shaft (k = 1e-4, c = 1: an overdamped mode at s = -1e-4, a real
+   !> multiplier exp(-1e-4 T) = 0.99993 at every point, which before D-174 made any failure a
+   !> "fold"). A chord corrector of one step fails at the first step (as in
+   !> `failures_stop_with_a_reason`): reason 2, not at a fold; the two failures of
+   !> `reasons_and_restarts` (`fold_failures`) keep their reasons 2 and 5.
+   subroutine test_slow_damped_mode_is_no_fold()
+      type(sine_problem_t) :: dprob
+      type(branch_options_t) :: opt
+      type(branch_t) :: br
+      type(error_t), allocatable :: err
+      call test_begin('slow_damped_mode_is_no_fold')
+      call load_model_text('&run t_end = 1.0, dt = 2e-4, integrator = ''rk4'', output_interval = 2e-4 /'//nl// &
+                           "&node id='g', type='fixed' /"//nl//"&node id='m', type='inertia', inertia="//str(jj)//' /'// &
+                           nl//"&node id='r', type='inertia', inertia=1 /"//nl// &
+                           "&element type='shaft', left='m', right='g', stiffness="//str(k1)//', damping='// &
+                           str(c1)//' /'//nl//"&element type='clearance_coupling', left='m', right='g', clearance="// &
+                           str(2.0_wp*b)//', stiffness='//str(k2)//', contact_damping=0 /'//nl// &
+                           "&element type='shaft', left='r', right='g', stiffness=1e-4, damping=1 /"//nl// &
+                           "&load node='m', kind='sine', offset="//str(tq0)//', amplitude='//str(amp)// &
+                           ', frequency=1.75 /', dprob%base)
+      opt = options()
+      opt%max_corrector = 1
+      opt%nonsmooth = .false.
+      opt%ds_min = 0.00125_wp
+      call continue_branch(dprob, w_start, opt, br, err)
+      write (*, '(a)') '    '//msg(br)
+      call check('no error, stopped at the smallest step', .not. allocated(err) .and. br%status /= branch_done)
+      if (size(br%pts) > 0) call check('the slow mode''s multiplier sits near +1 (0.9999)', &
+                                       any(abs(br%pts(1)%mu - exp(-1.0e-4_wp*2.0_wp*pi/w_start)) < 1.0e-6_wp))
+      call check('... and is no fold: reason 2 ('//msg(br)//')', br%status == branch_step_min .and. &
+                 index(br%message, 'not ') > 0)
+      call fold_failures(dprob)
+   end subroutine test_slow_damped_mode_is_no_fold
+
+   !> The chord corrector of 4 steps at a smallest step of 0.04 past the jump-down fold:
+   !> reason 2 (the fold located before it); of 8 steps at a step of 0.08 short of the jump-up
+   !> fold: reason 5, within 0.05 rad/s of it.
+   subroutine fold_failures(pr)
+      type(sine_problem_t), intent(in) :: pr
+      type(branch_options_t) :: opt
+      type(branch_t) :: br
+      type(error_t), allocatable :: err
+      integer :: i, nf
+      opt = options()
+      opt%nonsmooth = .false.
+      opt%max_corrector = 4
+      opt%ds_min = 0.04_wp
+      call continue_branch(pr, w_start, opt, br, err)
+      write (*, '(a)') '    '//msg(br)
+      nf = count([(br%pts(i)%kind == 'fold', i=1, size(br%pts))])
+      call check('past the jump-down fold, which it turned: reason 2 ('//msg(br)//')', .not. allocated(err) .and. &
+                 br%status == branch_step_min .and. index(br%message, 'not at a fold') > 0 .and. nf == 1)
+      if (size(br%pts) > 0) call check('... below the jump-down fold (within 0.05 rad/s)', &
+                                       br%pts(size(br%pts))%lam < w_fold(1) .and. &
+                                       abs(br%pts(size(br%pts))%lam - w_fold(1)) < 0.05_wp)
+      opt%max_corrector = 8
+      opt%ds_min = 0.08_wp
+      opt%ds_max = 0.08_wp
+      opt%ds = 0.08_wp
+      call continue_branch(pr, w_start, opt, br, err)
+      write (*, '(a)') '    '//msg(br)
+      nf = count([(br%pts(i)%kind == 'fold', i=1, size(br%pts))])
+      call check('short of the jump-up fold: reason 5 ('//msg(br)//')', .not. allocated(err) .and. &
+                 br%status == branch_fold .and. nf == 1)
+      if (size(br%pts) > 0) call check('... above the jump-up fold (within 0.05 rad/s)', &
+                                       br%pts(size(br%pts))%lam > w_fold(2) .and. &
+                                       abs(br%pts(size(br%pts))%lam - w_fold(2)) < 0.05_wp)
+   end subroutine fold_failures
 
    function msg(br) result(s)
       type(branch_t), intent(in) :: br

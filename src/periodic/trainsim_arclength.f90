@@ -40,7 +40,7 @@ module trainsim_arclength
    !> (or, with restarts, why a stretch of the branch ended): 1 no periodic orbit near the
    !> start, 2 the corrector failed at the smallest step (not at a fold), 3 the point
    !> budget spent, 4 an error, 5 the corrector failed at the smallest step at a fold (a
-   !> multiplier near +1: a fold it could not turn).
+   !> fold test function heading for its sign change: a fold it could not turn, D-174).
    integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
                          branch_failed = 4, branch_fold = 5
 
@@ -243,10 +243,11 @@ module trainsim_arclength
 
    !> Restarts past a failure and failed points (trainsim_arclength_restart.f90, D-119)
    interface
-      module logical function at_fold(p, n)
-         type(node_t), intent(in) :: p
-         integer, intent(in) :: n
-      end function at_fold
+      module subroutine fold_ahead(br, fold, note)
+         type(branch_t), intent(in) :: br
+         logical, intent(out) :: fold
+         character(len=:), allocatable, intent(out) :: note
+      end subroutine fold_ahead
       module subroutine restart(c, opt, br, cur, ds, restarts, err)
          type(ctx_t), intent(inout) :: c
          type(branch_options_t), intent(in) :: opt
@@ -446,9 +447,9 @@ contains
       procedure(point_hook_i), optional :: hook
       type(node_t) :: nxt
       real(wp) :: lam
-      character(len=:), allocatable :: why
+      character(len=:), allocatable :: why, note
       real(wp), allocatable :: px_pred(:)
-      logical :: crossed, rephased
+      logical :: crossed, rephased, fold
       integer :: before
       rephased = .false.
       do
@@ -490,11 +491,10 @@ contains
          if (len(why) > 0) then
             br%rejected = br%rejected + 1
             if (ds <= opt%ds_min) then
-               br%status = branch_step_min
-               if (at_fold(cur, c%n)) br%status = branch_fold
+               call fold_ahead(br, fold, note)
+               br%status = merge(branch_fold, branch_step_min, fold)
                br%message = 'the step reached its minimum '//str(opt%ds_min, 3)//' at lambda = '// &
-                            str(cur%z(c%n + 1)*c%ls, 10)//trim(merge(' (a fold: a multiplier near +1)', ' (not at a fold)               ', &
-                            br%status == branch_fold))//' and the corrector still failed: '//why
+                            str(cur%z(c%n + 1)*c%ls, 10)//note//' and the corrector still failed: '//why
                if (restarts >= opt%restarts) then
                   call failed_point(br, cur%z(c%n + 1)*c%ls, br%status, br%message)
                   exit

@@ -6,14 +6,84 @@ submodule(trainsim_arclength) trainsim_arclength_restart
 
 contains
 
-   !> A fold at p: a real multiplier within 0.05 of +1, or the tangent nearly normal
-   !> to lambda (|t_lambda| < 0.05).
-   module logical function at_fold(p, n)
-      type(node_t), intent(in) :: p
-      integer, intent(in) :: n
-      at_fold = abs(p%t(n + 1)) < 0.05_wp .or. &
-                any(abs(aimag(p%mu)) <= 1.0e-8_wp*abs(p%mu) .and. abs(real(p%mu, wp) - 1.0_wp) < 0.05_wp)
-   end function at_fold
+   !> Whether the corrector's failure at the smallest step is at a fold it could not turn
+   !> (D-174), by the fold's test functions along the branch, not by a multiplier's
+   !> closeness to +1 (a damped train's slow modes sit near it without any fold): the
+   !> tangent's lambda-component, and mu - 1 of each real multiplier (with the previous
+   !> point's real one nearest it: the factors of det(M - I) that change its sign; a complex
+   !> pair near +1 shrinks det without one), change sign where a real multiplier passes +1.
+   !> Each is extrapolated linearly in arclength from the
+   !> stretch's last two regular points (t_lambda is linear in arclength through a fold;
+   !> short of it, where the branch bends more, the line is late): a zero within three more
+   !> steps of the last one's length, and falling, is a fold ahead. note: why, in words.
+   module procedure fold_ahead
+      character(len=*), parameter :: names(2) = [character(len=30) :: 'the tangent''s lambda-part', &
+                                                 'a real multiplier'], &
+                                     ends(2) = [character(len=12) :: 'changes sign', 'reaches +1']
+      real(wp), parameter :: off(2) = [0.0_wp, 1.0_wp]
+      real(wp) :: f(2, 2), h, s   ! f(:, j): test j at the two points
+      integer :: l, m, j
+      fold = .false.
+      l = last_regular(br, size(br%pts), 0)
+      m = 0
+      if (l > 0) m = last_regular(br, l - 1, br%pts(l)%segment)
+      if (m == 0) then
+         note = ' (not known to be a fold: one point in this stretch)'
+         return
+      end if
+      h = br%pts(l)%ds
+      f(:, 1) = [br%pts(m)%tangent(size(br%pts(m)%tangent)), br%pts(l)%tangent(size(br%pts(l)%tangent))]
+      f(:, 2) = nearest_pair(br%pts(m)%mu, br%pts(l)%mu)
+      do j = 1, 2
+         if (f(1, j)*f(2, j) <= 0.0_wp .or. abs(f(2, j)) >= abs(f(1, j))) cycle
+         s = h*abs(f(2, j))/(abs(f(1, j)) - abs(f(2, j)))
+         if (s > 3.0_wp*h) cycle
+         fold = .true.
+         note = ' (a fold: '//trim(names(j))//' went from '//str(f(1, j) + off(j), 6)//' to '// &
+                str(f(2, j) + off(j), 6)//' over the last step, '//str(h, 3)//', and '//trim(ends(j))//' '// &
+                str(s, 3)//' further on)'
+         return
+      end do
+      note = ' (not at a fold: neither the tangent''s lambda-part ('//str(f(1, 1), 3)//' -> '//str(f(2, 1), 3)// &
+             ') nor a real multiplier heads for +1 within 3 steps of '//str(h, 3)//')'
+   contains
+      !> the index of the last regular point up to i (of segment seg, or any with seg 0); 0: none
+      integer function last_regular(br, i, seg) result(k)
+         type(branch_t), intent(in) :: br
+         integer, intent(in) :: i, seg
+         do k = i, 1, -1
+            if (br%pts(k)%status /= branch_done) cycle
+            if (seg > 0 .and. br%pts(k)%segment /= seg) exit
+            if (len(br%pts(k)%kind) == 0 .and. allocated(br%pts(k)%tangent) .and. allocated(br%pts(k)%mu)) return
+         end do
+         k = 0
+      end function last_regular
+      !> (mu_a - 1, mu_b - 1) of the real multiplier mu_b of b and the real one of a nearest
+      !> it, the pair whose mu_b - 1 would reach 0 first, extrapolated; (0, 0): none heads there
+      function nearest_pair(a, b) result(d)
+         complex(wp), intent(in) :: a(:), b(:)
+         real(wp) :: d(2), da, best
+         integer :: i, k
+         d = 0.0_wp
+         best = huge(1.0_wp)
+         do i = 1, size(b)
+            if (abs(aimag(b(i))) > 1.0e-8_wp*abs(b(i))) cycle
+            da = huge(1.0_wp)
+            do k = 1, size(a)
+               if (abs(aimag(a(k))) > 1.0e-8_wp*abs(a(k))) cycle
+               if (abs(real(a(k) - b(i), wp)) < abs(da - real(b(i), wp) + 1.0_wp)) da = real(a(k), wp) - 1.0_wp
+            end do
+            if (da == huge(1.0_wp)) cycle
+            associate (db => real(b(i), wp) - 1.0_wp)
+               if (da*db <= 0.0_wp .or. abs(db) >= abs(da)) cycle
+               if (abs(db)/(abs(da) - abs(db)) < best) then
+                  best = abs(db)/(abs(da) - abs(db))
+                  d = [da, db]
+               end if
+            end associate
+         end do
+      end function nearest_pair
+   end procedure fold_ahead
 
    !> A stretch of the branch ended (br%status, br%message: why, at cur): store that as a
    !> failed point and shoot the orbit again restart_step further on in lambda (in the
