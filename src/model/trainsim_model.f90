@@ -20,6 +20,7 @@ module trainsim_model
    use trainsim_speed_law, only: load_t, law_none
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_event, only: event_t
    use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t
    use trainsim_run_settings, only: run_settings_t
@@ -57,6 +58,10 @@ module trainsim_model
       type(run_settings_t) :: run
       type(node_slot_t), allocatable :: nodes(:)
       type(element_slot_t), allocatable :: elements(:)
+      !> Each element's params() as the builder asked them (for the plausibility checks,
+      !> the print-out and the static reference: asked once, D-175); unallocated once a
+      !> parameter is set after the build (apply_derived): then params() itself.
+      type(param_list_t), allocatable :: element_params(:)
       type(load_t), allocatable :: loads(:)
       type(motion_t), allocatable :: speeds(:)   !< prescribed motions (speed, angle or acceleration)
       integer, allocatable :: speed_of(:)        !< per node: index into speeds, 0 if free
