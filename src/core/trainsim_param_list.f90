@@ -26,15 +26,10 @@ contains
       character(len=*), intent(in) :: names(:)
       real(wp), intent(in) :: values(:)
       type(param_list_t) :: p
-      integer :: i, n
+      integer :: i
       allocate (p%names(size(names)))
       do i = 1, size(names)
-         n = len(names(i))   ! (its last non-blank by code, not len_trim: a library call a name)
-         do while (n > 0)
-            if (iachar(names(i)(n:n)) /= 32) exit
-            n = n - 1
-         end do
-         p%names(i)%s = names(i)(1:n)   ! (not trim(): no temporary)
+         p%names(i)%s = names(i)(1:len_trim(names(i)))   ! (not trim(): no temporary)
       end do
       p%values = values
    end function make_param_list

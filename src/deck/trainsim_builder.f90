@@ -80,10 +80,7 @@ contains
       end do
       allocate (model%warnings(0))
       call check_plausibility(deck, model, model%warnings, err, ep, np)
-      if (allocated(err)) return
-      if (allocated(ep)) then   ! kept: the print-out and the static reference ask them again (D-175)
-         if (size(ep) == size(model%elements)) call move_alloc(ep, model%element_params)
-      end if
+      if (.not. allocated(err)) call move_alloc(ep, model%element_params)   ! every element's, kept (D-175)
    end subroutine build_model
 
    subroutine read_run(deck, model, err)
@@ -340,8 +337,7 @@ contains
          k = k + 1
          associate (g => deck%groups(i))
             call g%get_optional_string('id', id, has_id, err); if (allocated(err)) return
-            if (.not. has_id) id = 'n'//str(k)   ! (the default built only when it is used)
-            call g%get_string('type', tname, err); if (allocated(err)) return
+            if (.not. has_id) id = 'n'//str(k); call g%get_string('type', tname, err); if (allocated(err)) return
             call node_ids%insert(id, k, j)
             if (j /= 0) then
                call fatal_error(err, g%where('id')//": error: duplicate node id '"//id//"' (already used by node "// &
@@ -384,8 +380,7 @@ contains
          k = k + 1
          associate (g => deck%groups(i))
             call g%get_optional_string('id', id, has_id, err); if (allocated(err)) return
-            if (.not. has_id) id = 'e'//str(k)   ! (the default built only when it is used)
-            call g%get_string('type', tname, err); if (allocated(err)) return
+            if (.not. has_id) id = 'e'//str(k); call g%get_string('type', tname, err); if (allocated(err)) return
             call element_ids%insert(id, k, j)
             if (j /= 0) then
                call fatal_error(err, g%where('id')//": error: duplicate element id '"//id//"'", err_input)
@@ -405,17 +400,14 @@ contains
                call g%get_optional_string('left', lid, has_left, err); if (allocated(err)) return
                call g%get_optional_string('right', rid, has_right, err); if (allocated(err)) return
                e%left = merge(k, 0, k <= nn); e%right = merge(k + 1, 0, k + 1 <= nn)
-               if (has_left) e%left = node_ids%get(lid)
-               if (has_right) e%right = node_ids%get(rid)
+               if (has_left) e%left = node_ids%get(lid); if (has_right) e%right = node_ids%get(rid)
                if (e%left == 0) then
-                  if (.not. has_left) lid = ''   ! (the message's name: '' only here)
                   call fatal_error(err, g%where('left')//": error: element '"//e%id//"' joins node '"//lid// &
                                    "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
                                    len(lid) == 0)), err_input)
                   return
                end if
                if (e%right == 0) then
-                  if (.not. has_right) rid = ''
                   call fatal_error(err, g%where('right')//": error: element '"//e%id//"' joins node '"//rid// &
                                    "', which is not defined"//trim(merge(' (give right = ...)', '                   ', &
                                    len(rid) == 0)), err_input)

@@ -377,8 +377,8 @@ contains
       end associate
    end subroutine group_get_string
 
-   !> String value of `key` into `val` if the group has it (found); `val` untouched
-   !> otherwise: no '' allocated and freed for an absent key (D-175). The rules of get_string.
+   !> String value of `key` (found), else '': as get_string with default '', but `val`
+   !> kept when it holds '' already (no '' allocated and freed an absent key: D-175).
    subroutine group_get_optional_string(self, key, val, found, err)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
@@ -388,7 +388,14 @@ contains
       integer :: k
       call scalar_entry(self, key, 'a string', .true., k, err)
       found = k > 0 .and. .not. allocated(err)
-      if (.not. found) return
+      if (.not. found) then
+         if (.not. allocated(val)) then
+            val = ''
+         else if (len(val) > 0) then
+            val = ''
+         end if
+         return
+      end if
       associate (v => self%vals(:, self%entries(k)%first))
          val = self%pool(v(1):v(1) + v(2) - 1)
       end associate

@@ -27,7 +27,6 @@ module trainsim_model
    use trainsim_constraints, only: constraint_set_t
    implicit none
    private
-
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
    !> The end-of-step quantities the observer folds, for up to `cap` plain
@@ -58,10 +57,7 @@ module trainsim_model
       type(run_settings_t) :: run
       type(node_slot_t), allocatable :: nodes(:)
       type(element_slot_t), allocatable :: elements(:)
-      !> Each element's params() as the builder asked them (for the plausibility checks,
-      !> the print-out and the static reference: asked once, D-175); unallocated once a
-      !> parameter is set after the build (apply_derived): then params() itself.
-      type(param_list_t), allocatable :: element_params(:)
+      type(param_list_t), allocatable :: element_params(:)   !< the builder's params() lists (D-175)
       type(load_t), allocatable :: loads(:)
       type(motion_t), allocatable :: speeds(:)   !< prescribed motions (speed, angle or acceleration)
       integer, allocatable :: speed_of(:)        !< per node: index into speeds, 0 if free
