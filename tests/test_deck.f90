@@ -681,6 +681,9 @@ contains
       character(len=40), parameter :: fixed(14) = [character(len=40) :: '1', '-0', '+.5', '7.', '-0.0e0', &
          '4.9406564584124654e-324', '2.4703282292062328D-324', '1.7976931348623157e308', '2.2250738585072011e-308', &
          '0.1', '1e-310', '123456789012345678901234567890', '9.999999999999999999e307', '.000000000000000000001D+5']
+      character(len=24), parameter :: edges(12) = [character(len=24) :: '999999999999999e22', '9007199254740993', &
+         '123456789012345e-22', '0.1e-22', '1e23', '-0.0', '0e-30', '8.98846567431158e307', '4.9e-324', &
+         '900719925474099.1', '1.7976931348623157e308', '.000000000000001e22']
       real(wp) :: v, ref
       integer(int64) :: st64
       integer :: k, j, stat, ios, n_bad, n_read
@@ -724,6 +727,34 @@ contains
       end do
       call check('numbers read (of 60 014 texts, some refused)', n_read > 20000)
       call check('numbers that read differently from Fortran''s read', real(n_bad, wp), 0.0_wp, abs_tol=0.0_wp)
+      ! the fast path's own range (D-175): 1 to 17 digits (15 and fewer take it), the point
+      ! anywhere, exponents -30..30 (|digits' power| <= 22 takes it), and its edges
+      n_bad = 0
+      n_read = 0
+      do k = 1, 60000
+         if (k <= size(edges)) then
+            t = trim(edges(k))
+         else
+            t = ''
+            if (next_rand(st64, 4) == 1) t = '-'
+            do j = 1, next_rand(st64, 17)
+               t = t//achar(47 + next_rand(st64, 10))
+            end do
+            j = next_rand(st64, len(t) + 1)
+            if (next_rand(st64, 3) > 1) t = t(1:j - 1)//'.'//t(j:)
+            if (next_rand(st64, 2) == 1) t = t//'e'//str(next_rand(st64, 61) - 31)
+         end if
+         call parse_real(t, v, stat)
+         if (stat /= 0) cycle
+         n_read = n_read + 1
+         read (t, *, iostat=ios) ref
+         if (ios /= 0 .or. transfer(v, 0_int64) /= transfer(ref, 0_int64)) then
+            n_bad = n_bad + 1
+            if (n_bad <= 5) write (*, '(4x,3a,2es26.17)') 'differs: "', t, '"', v, ref
+         end if
+      end do
+      call check('short numbers read (of 60 000 texts)', n_read > 50000)
+      call check('short numbers that read differently from Fortran''s read', real(n_bad, wp), 0.0_wp, abs_tol=0.0_wp)
    end subroutine test_parse_real_reads_as_fortran
 
    !> 1..m from the xorshift sequence st.

@@ -25,6 +25,7 @@ program test_overrides
    call test_mesh_frequency_carries_gear_ratio_to_every_node()
    call test_cycles_set_settle_time_and_t_end()
    call test_api_set_and_sweep_accept_what_set_accepts()
+   call test_kept_params_are_params()
    call suite_end()
 
 contains
@@ -139,6 +140,52 @@ contains
       call check('640 teeth/s: Cook''s 125.664 rad/s to its printed digits', &
                  derived%speeds(1)%value(0.0_wp), 125.664_wp, 0.0_wp, 0.5e-3_wp)
    end subroutine test_ghm_mesh_frequency_matches_hand_computed_speed
+
+   !> The builder keeps each element's params() for the print-out and the static
+   !> reference (D-175): after the build they are what params() gives, name for name and
+   !> bit for bit (finalize and the plausibility checks change no element); a derived
+   !> parameter set after the build drops them, so that no stale value is printed.
+   subroutine test_kept_params_are_params()
+      use, intrinsic :: iso_fortran_env, only: int64
+      type(deck_t) :: deck
+      type(model_t) :: m
+      type(error_t), allocatable :: err
+      type(param_list_t) :: p
+      integer :: i, j, n_bad
+      logical :: words_ok
+      call test_begin('kept_params_are_params')
+      call load(ghm, deck)
+      call prepare_model(deck, [override_t ::], m, err)
+      call check('the GHM deck builds', .not. allocated(err))
+      call check('the builder''s lists are kept, one an element', allocated(m%element_params))
+      if (.not. allocated(m%element_params)) return
+      call check('one list an element', size(m%element_params) == size(m%elements))
+      n_bad = 0
+      do i = 1, size(m%elements)
+         p = m%elements(i)%e%params()
+         associate (q => m%element_params(i))
+            if (size(q%names) /= size(p%names)) then
+               n_bad = n_bad + 1
+               cycle
+            end if
+            do j = 1, size(p%names)
+               if (q%names(j)%s /= p%names(j)%s) n_bad = n_bad + 1
+               if (transfer(q%values(j), 0_int64) /= transfer(p%values(j), 0_int64)) n_bad = n_bad + 1
+            end do
+            words_ok = allocated(q%words) .eqv. allocated(p%words)
+            if (words_ok .and. allocated(p%words)) then
+               do j = 1, size(p%words)
+                  if (q%words(j)%s /= p%words(j)%s) words_ok = .false.
+               end do
+            end if
+            if (.not. words_ok) n_bad = n_bad + 1
+         end associate
+      end do
+      call check('kept parameters that differ from params()', real(n_bad, wp), 0.0_wp, abs_tol=0.0_wp)
+      call prepare_model(deck, sets([character(len=40) :: 'mesh.mesh_frequency=485']), m, err)
+      call check('mesh_frequency=485 builds', .not. allocated(err))
+      call check('a derived parameter drops the kept lists', .not. allocated(m%element_params))
+   end subroutine test_kept_params_are_params
 
    !> 28:56 spur pair behind a 1:3 ideal gear: speeds divide by the ratios, a torque-driven
    !> train (no prescribed speed) gets initial speeds only, the fixed node stays at 0.

@@ -107,7 +107,7 @@ contains
       type(param_list_t) :: p
       type(error_t), allocatable :: err
       integer :: ne, nn, i, k, n
-      logical :: turned, turns_held
+      logical :: turned, turns_held, kept
       ne = size(model%elements); nn = size(model%nodes)
       turned = .false.
       allocate (ref%force(ne), ref%te_min(ne), ref%te_max(ne), ref%te_mean(ne), ref%mesh(ne), ref%period(ne))
@@ -115,10 +115,17 @@ contains
       ref%force = 0.0_wp; ref%te_min = 0.0_wp; ref%te_max = 0.0_wp; ref%te_mean = 0.0_wp
       ref%note = ''
       npos = 0
+      kept = .false.   ! the builder's lists, not asked again (D-175)
+      if (allocated(model%element_params)) kept = size(model%element_params) == ne
       do i = 1, ne
-         p = model%elements(i)%e%params()
-         ref%period(i) = period_of(p)
-         if (ref%period(i) > 0.0_wp) npos(i) = static_positions*static_cycles(p)
+         if (kept) then
+            ref%period(i) = period_of(model%element_params(i))
+            if (ref%period(i) > 0.0_wp) npos(i) = static_positions*static_cycles(model%element_params(i))
+         else
+            p = model%elements(i)%e%params()
+            ref%period(i) = period_of(p)
+            if (ref%period(i) > 0.0_wp) npos(i) = static_positions*static_cycles(p)
+         end if
       end do
       ref%mesh = ref%period > 0.0_wp
       if (.not. any(ref%mesh)) then

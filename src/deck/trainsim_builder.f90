@@ -80,6 +80,7 @@ contains
       end do
       allocate (model%warnings(0))
       call check_plausibility(deck, model, model%warnings, err, ep, np)
+      if (.not. allocated(err)) call move_alloc(ep, model%element_params)   ! every element's, kept (D-175)
    end subroutine build_model
 
    subroutine read_run(deck, model, err)
@@ -321,6 +322,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j
       character(len=:), allocatable :: id, tname
+      logical :: has_id
 
       allocate (model%nodes(deck%count_groups('node'))); allocate (np(size(model%nodes)))
       if (size(model%nodes) == 0) then
@@ -334,9 +336,8 @@ contains
          if (.not. deck%groups(i)%named('node')) cycle
          k = k + 1
          associate (g => deck%groups(i))
-            call g%get_string('id', id, err, default=''); if (allocated(err)) return
-            if (.not. g%holds('id')) id = 'n'//str(k)   ! (the default built only when it is used)
-            call g%get_string('type', tname, err); if (allocated(err)) return
+            call g%get_optional_string('id', id, has_id, err); if (allocated(err)) return
+            if (.not. has_id) id = 'n'//str(k); call g%get_string('type', tname, err); if (allocated(err)) return
             call node_ids%insert(id, k, j)
             if (j /= 0) then
                call fatal_error(err, g%where('id')//": error: duplicate node id '"//id//"' (already used by node "// &
@@ -349,7 +350,7 @@ contains
                                 "'; valid node types are: "//join(node_type_names(), ', '), err_input)
                return
             end if
-            model%nodes(k)%n%id = id
+            call move_alloc(id, model%nodes(k)%n%id)   ! (moved, not copied: D-175)
             model%nodes(k)%n%origin = g%where()
             call model%nodes(k)%n%configure(g, model%units, err); if (allocated(err)) return
             np(k) = model%nodes(k)%n%params()
@@ -367,6 +368,7 @@ contains
       type(error_t), allocatable, intent(out) :: err
       integer :: i, k, j, nn
       character(len=:), allocatable :: id, tname, lid, rid
+      logical :: has_id, has_left, has_right
       type(id_table_t) :: element_ids
 
       allocate (model%elements(deck%count_groups('element'))); allocate (ep(size(model%elements)))
@@ -377,9 +379,8 @@ contains
          if (.not. deck%groups(i)%named('element')) cycle
          k = k + 1
          associate (g => deck%groups(i))
-            call g%get_string('id', id, err, default=''); if (allocated(err)) return
-            if (.not. g%holds('id')) id = 'e'//str(k)   ! (the default built only when it is used)
-            call g%get_string('type', tname, err); if (allocated(err)) return
+            call g%get_optional_string('id', id, has_id, err); if (allocated(err)) return
+            if (.not. has_id) id = 'e'//str(k); call g%get_string('type', tname, err); if (allocated(err)) return
             call element_ids%insert(id, k, j)
             if (j /= 0) then
                call fatal_error(err, g%where('id')//": error: duplicate element id '"//id//"'", err_input)
@@ -392,30 +393,29 @@ contains
                return
             end if
             associate (e => model%elements(k)%e)
-               e%id = id
+               call move_alloc(id, e%id)   ! (moved, not copied: D-175)
                e%origin = g%where()
                ! serial chain by default (TRAIN's numbering): element k joins nodes k and k+1,
                ! taken by index (0 beyond the last node: the message names '' as before; D-157)
-               call g%get_string('left', lid, err, default=''); if (allocated(err)) return
-               call g%get_string('right', rid, err, default=''); if (allocated(err)) return
+               call g%get_optional_string('left', lid, has_left, err); if (allocated(err)) return
+               call g%get_optional_string('right', rid, has_right, err); if (allocated(err)) return
                e%left = merge(k, 0, k <= nn); e%right = merge(k + 1, 0, k + 1 <= nn)
-               if (g%holds('left')) e%left = node_ids%get(lid)
-               if (g%holds('right')) e%right = node_ids%get(rid)
+               if (has_left) e%left = node_ids%get(lid); if (has_right) e%right = node_ids%get(rid)
                if (e%left == 0) then
-                  call fatal_error(err, g%where('left')//": error: element '"//id//"' joins node '"//lid// &
+                  call fatal_error(err, g%where('left')//": error: element '"//e%id//"' joins node '"//lid// &
                                    "', which is not defined"//trim(merge(' (give left = ...)', '                  ', &
                                    len(lid) == 0)), err_input)
                   return
                end if
                if (e%right == 0) then
-                  call fatal_error(err, g%where('right')//": error: element '"//id//"' joins node '"//rid// &
+                  call fatal_error(err, g%where('right')//": error: element '"//e%id//"' joins node '"//rid// &
                                    "', which is not defined"//trim(merge(' (give right = ...)', '                   ', &
                                    len(rid) == 0)), err_input)
                   return
                end if
                if (e%left == e%right) then
-                  if (.not. g%holds('left')) lid = model%nodes(e%left)%n%id   ! (the default, named)
-                  call fatal_error(err, g%where('right')//": error: element '"//id//"' joins node '"//lid// &
+                  if (.not. has_left) lid = model%nodes(e%left)%n%id   ! (the default, named)
+                  call fatal_error(err, g%where('right')//": error: element '"//e%id//"' joins node '"//lid// &
                                    "' to itself", err_input)
                   return
                end if

@@ -49,6 +49,7 @@ module trainsim_deck_group
       procedure :: get_int => group_get_int
       procedure :: get_logical => group_get_logical
       procedure :: get_string => group_get_string
+      procedure :: get_optional_string => group_get_optional_string
       procedure :: get_real_array => group_get_real_array
       procedure :: count_values => group_count_values
       procedure :: where => group_where
@@ -375,6 +376,30 @@ contains
          val = self%pool(v(1):v(1) + v(2) - 1)
       end associate
    end subroutine group_get_string
+
+   !> String value of `key` (found), else '': as get_string with default '', but `val`
+   !> kept when it holds '' already (no '' allocated and freed an absent key: D-175).
+   subroutine group_get_optional_string(self, key, val, found, err)
+      class(deck_group_t), intent(inout) :: self
+      character(len=*), intent(in) :: key
+      character(len=:), allocatable, intent(inout) :: val
+      logical, intent(out) :: found
+      type(error_t), allocatable, intent(out) :: err
+      integer :: k
+      call scalar_entry(self, key, 'a string', .true., k, err)
+      found = k > 0 .and. .not. allocated(err)
+      if (.not. found) then
+         if (.not. allocated(val)) then
+            val = ''
+         else if (len(val) > 0) then
+            val = ''
+         end if
+         return
+      end if
+      associate (v => self%vals(:, self%entries(k)%first))
+         val = self%pool(v(1):v(1) + v(2) - 1)
+      end associate
+   end subroutine group_get_optional_string
 
    !> All values of `key` as reals. An absent key gives a size-0 array and no error.
    subroutine group_get_real_array(self, key, vals, err)

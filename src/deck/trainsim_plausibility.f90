@@ -60,7 +60,8 @@ contains
       type(string_t), allocatable, intent(inout) :: warnings(:)
       type(error_t), allocatable, intent(out) :: err
       !> the first elements' and nodes' params() as the builder asked them (moved
-      !> in; the rest, an element added after them, asked here: D-114)
+      !> in; the rest, an element added after them, asked here: D-114); ep on return:
+      !> every element's (moved out)
       type(param_list_t), allocatable, intent(inout), optional :: ep(:), np(:)
       type(ctx_t) :: c
 
@@ -74,6 +75,7 @@ contains
       end if
       call run_checks(deck, model, c, err)
       call move_alloc(c%warnings, warnings)
+      if (present(ep)) call move_alloc(c%ep, ep)   ! (every element's, for the model to keep: D-175)
    end subroutine check_plausibility
 
    !> c%ep and c%np for every element and node: those the builder gave kept (moved,

@@ -20,13 +20,36 @@ contains
    subroutine print_parameters(model, unit)
       type(model_t), intent(in) :: model
       integer, intent(in) :: unit
-      integer :: i, j, w
-      type(param_list_t) :: p
+      integer :: i, w
       type(text_out_t) :: out   ! the lines of '(4x,aW,1x,es15.7)' and '(4x,aW,1x,a15)'
+      logical :: kept
       out%unit = unit
+      kept = .false.   ! the builder's lists, not asked again (D-175)
+      if (allocated(model%element_params)) kept = size(model%element_params) == size(model%elements)
       do i = 1, size(model%elements)
-         p = model%elements(i)%e%params()
-         if (size(p%names) == 0) cycle
+         if (kept) then
+            call print_element(model%element_params(i))
+         else
+            call print_element(model%elements(i)%e%params())
+         end if
+      end do
+      call out%flush()
+      if (model%run%preload) then
+         w = id_width(model, nodes=.true.)
+         write (unit, '(a)') 'initial angles from the static preload (initial_state = ''preload''), rad:'
+         do i = 1, size(model%nodes)
+            associate (nd => model%nodes(i)%n)
+               if (nd%nstates() == 0 .or. model%is_held(i)) cycle
+               write (unit, '(4x,a'//str(w)//',es18.9)') nd%id, nd%theta0
+            end associate
+         end do
+      end if
+   contains
+      !> Element i's lines.
+      subroutine print_element(p)
+         type(param_list_t), intent(in) :: p
+         integer :: j, w
+         if (size(p%names) == 0) return
          call out%a('element ', 0)   ! (piece by piece: no concatenated temporary a line)
          call out%a(model%elements(i)%e%id, 0)
          call out%a(' (', 0)
@@ -48,18 +71,7 @@ contains
             end if
             call out%end_line()
          end do
-      end do
-      call out%flush()
-      if (model%run%preload) then
-         w = id_width(model, nodes=.true.)
-         write (unit, '(a)') 'initial angles from the static preload (initial_state = ''preload''), rad:'
-         do i = 1, size(model%nodes)
-            associate (nd => model%nodes(i)%n)
-               if (nd%nstates() == 0 .or. model%is_held(i)) cycle
-               write (unit, '(4x,a'//str(w)//',es18.9)') nd%id, nd%theta0
-            end associate
-         end do
-      end if
+      end subroutine print_element
    end subroutine print_parameters
 
    !> Whether parameter j of p is printed as a word.

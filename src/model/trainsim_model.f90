@@ -20,13 +20,13 @@ module trainsim_model
    use trainsim_speed_law, only: load_t, law_none
    use trainsim_node, only: node_slot_t
    use trainsim_element, only: element_slot_t, hot_form_t
+   use trainsim_param_list, only: param_list_t
    use trainsim_event, only: event_t
    use trainsim_model_families, only: fast_node_t, fast_element_t, guard_row_t, fast_load_t, families_t, block_run_t, jac_part_t
    use trainsim_run_settings, only: run_settings_t
    use trainsim_constraints, only: constraint_set_t
    implicit none
    private
-
    public :: model_t, run_settings_t, load_t, closed_speed_ratio, rigid_speeds, settle_budget
 
    !> The end-of-step quantities the observer folds, for up to `cap` plain steps an integrator takes in one
@@ -56,6 +56,7 @@ module trainsim_model
       type(run_settings_t) :: run
       type(node_slot_t), allocatable :: nodes(:)
       type(element_slot_t), allocatable :: elements(:)
+      type(param_list_t), allocatable :: element_params(:)   !< the builder's params() lists (D-175)
       type(load_t), allocatable :: loads(:)
       type(motion_t), allocatable :: speeds(:)   !< prescribed motions (speed, angle or acceleration)
       integer, allocatable :: speed_of(:)        !< per node: index into speeds, 0 if free

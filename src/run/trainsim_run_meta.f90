@@ -21,6 +21,7 @@ contains
       type(model_t), intent(in) :: model
       type(run_meta_t) :: meta
       integer :: i, k, n, ne, nn
+      logical :: kept
       type(string_t), allocatable :: names(:)
       nn = size(model%nodes); ne = size(model%elements)
       meta%title = model%title
@@ -55,6 +56,8 @@ contains
          meta%node_params(i) = model%nodes(i)%n%params()
       end do
       allocate (meta%element_ids(ne), meta%element_types(ne), meta%element_params(ne), meta%element_disp_units(ne))
+      kept = .false.
+      if (allocated(model%element_params)) kept = size(model%element_params) == ne
       allocate (meta%element_left(ne), meta%element_right(ne))
       do i = 1, ne
          associate (e => model%elements(i)%e)
@@ -62,7 +65,11 @@ contains
             meta%element_types(i)%s = e%type_name
             meta%element_left(i) = e%left
             meta%element_right(i) = e%right
-            meta%element_params(i) = e%params()
+            if (kept) then   ! the builder's (D-175)
+               meta%element_params(i) = model%element_params(i)
+            else
+               meta%element_params(i) = e%params()
+            end if
             meta%element_disp_units(i)%s = e%displacement_unit()
             if (meta%element_disp_units(i)%s == 'length') meta%element_disp_units(i)%s = model%units%length
          end associate

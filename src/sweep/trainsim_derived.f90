@@ -48,6 +48,8 @@ contains
       character(len=:), allocatable :: blame
       integer :: by_pass(size(derived_keys))   ! the override that set each pass's key (0: none)
       by_pass = 0
+      ! a parameter set after the build: the builder's params() lists no longer hold (D-175)
+      if (any(ovs(:)%derived) .and. allocated(model%element_params)) deallocate (model%element_params)
 
       do pass = 1, size(derived_keys)
          do k = 1, size(ovs)
