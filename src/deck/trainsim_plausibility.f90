@@ -1,6 +1,5 @@
-!> Plausibility of a built model (docs/deck.md, "Plausibility checks"): the rules of
-!> the calculators `trainsim gear` and `trainsim key` (trainsim_gear_calc) applied to
-!> the deck, so that a unit slip is not simulated with exit 0.
+!> Plausibility of a built model (docs/deck.md, "Plausibility checks"): the rules of the calculators
+!> `trainsim gear` and `trainsim key` (trainsim_gear_calc) applied to the deck: no unit slip simulated.
 !>
 !> Each rule compares a value with the unit system or with the geometry the deck
 !> itself implies (a backlash with the base pitch, an inertia with the train's largest
@@ -59,9 +58,8 @@ contains
       type(model_t), intent(in) :: model
       type(string_t), allocatable, intent(inout) :: warnings(:)
       type(error_t), allocatable, intent(out) :: err
-      !> the first elements' and nodes' params() as the builder asked them (moved
-      !> in; the rest, an element added after them, asked here: D-114); ep on return:
-      !> every element's (moved out)
+      !> the first elements' and nodes' params() as the builder asked them (moved in; the rest, an element
+      !> added after them, asked here: D-114); ep on return: every element's (moved out)
       type(param_list_t), allocatable, intent(inout), optional :: ep(:), np(:)
       type(ctx_t) :: c
 

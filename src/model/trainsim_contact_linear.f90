@@ -62,6 +62,9 @@ contains
          end if
       else
          call grp%get_real('contact_damping', self%c, err); if (allocated(err)) return
+         ! in D-28's range like every parameter of the equations of motion (5e30 left CVODE
+         ! crawling through a contact whose time constant is 1e-33 s; fuzz_decks deck 298)
+         call check_magnitude(grp, 'contact_damping', self%c, err); if (allocated(err)) return
          if (.not. self%c >= 0.0_wp) then
             call fatal_error(err, grp%where('contact_damping')//': error: must be >= 0, got '//str(self%c), err_input)
             return

@@ -1,7 +1,6 @@
-!> The model: nodes joined by elements, external torques, prescribed speeds
-!> and run settings. A model is a plain value (no global state, no pointers):
-!> copy it to re-parameterise a run. The right-hand side, the guards and the
-!> mode updates below are the only code the integrators call; they do no
+!> The model: nodes joined by elements, external torques, prescribed speeds and run settings. A model
+!> is a plain value (no global state, no pointers): copy it to re-parameterise a run. The right-hand
+!> side, the guards and the mode updates below are the only code the integrators call; they do no
 !> allocation, I/O or string work.
 !>
 !> This module is the model's interface: its types and the signature of every
