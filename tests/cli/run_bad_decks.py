@@ -300,6 +300,15 @@ CASES = [
          deck=RUN + "&node id = 'a', type = 'inertia', inertia = 1.0e999 /\n"
          "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
          exit=2, stderr=["deck.nml:2:", "'inertia'", "out of range"]),
+    # D-28's range holds for a contact law's parameters too (fuzz deck 298: 5e30 ran CVODE
+    # through a contact whose time constant was 1e-33 s)
+    dict(name="contact_damping out of range",
+         deck=RUN + "&node id = 'a', type = 'inertia', inertia = 5.0 /\n"
+         "&node id = 'b', type = 'inertia', inertia = 11.0 /\n"
+         "&element id = 'g', type = 'spur_gear', stiffness = 234500.0, rb_driver = 3.7588, rb_driven = 3.7588, "
+         "teeth = 32, contact_ratio = 1.6676, approach_angle = 0.1637, half_backlash = 0.005, "
+         "contact_law = 'linear', contact_damping = 5.0e30 /\n",
+         exit=2, stderr=["deck.nml:4:", "contact_damping", "out of range"]),
     dict(name="quoted number",
          deck=RUN + "&node id = 'a', type = 'inertia', inertia = '5.0' /\n"
          "&node id = 'b', type = 'inertia', inertia = 11.0 /\n" + SHAFT,
