@@ -684,9 +684,8 @@ contains
       character(len=24), parameter :: edges(12) = [character(len=24) :: '999999999999999e22', '9007199254740993', &
          '123456789012345e-22', '0.1e-22', '1e23', '-0.0', '0e-30', '8.98846567431158e307', '4.9e-324', &
          '900719925474099.1', '1.7976931348623157e308', '.000000000000001e22']
-      real(wp) :: v, ref
       integer(int64) :: st64
-      integer :: k, j, stat, ios, n_bad, n_read
+      integer :: k, j, n_bad, n_read
       call test_begin('parse_real_reads_as_fortran')
       n_bad = 0
       n_read = 0
@@ -716,14 +715,7 @@ contains
                t = t//str(next_rand(st64, 340) - 1)
             end if
          end if
-         call parse_real(t, v, stat)
-         if (stat /= 0) cycle
-         n_read = n_read + 1
-         read (t, *, iostat=ios) ref
-         if (ios /= 0 .or. transfer(v, 0_int64) /= transfer(ref, 0_int64)) then
-            n_bad = n_bad + 1
-            if (n_bad <= 5) write (*, '(4x,3a,2es26.17)') 'differs: "', t, '"', v, ref
-         end if
+         call read_both(t, n_read, n_bad)
       end do
       call check('numbers read (of 60 014 texts, some refused)', n_read > 20000)
       call check('numbers that read differently from Fortran''s read', real(n_bad, wp), 0.0_wp, abs_tol=0.0_wp)
@@ -744,18 +736,28 @@ contains
             if (next_rand(st64, 3) > 1) t = t(1:j - 1)//'.'//t(j:)
             if (next_rand(st64, 2) == 1) t = t//'e'//str(next_rand(st64, 61) - 31)
          end if
-         call parse_real(t, v, stat)
-         if (stat /= 0) cycle
-         n_read = n_read + 1
-         read (t, *, iostat=ios) ref
-         if (ios /= 0 .or. transfer(v, 0_int64) /= transfer(ref, 0_int64)) then
-            n_bad = n_bad + 1
-            if (n_bad <= 5) write (*, '(4x,3a,2es26.17)') 'differs: "', t, '"', v, ref
-         end if
+         call read_both(t, n_read, n_bad)
       end do
       call check('short numbers read (of 60 000 texts)', n_read > 50000)
       call check('short numbers that read differently from Fortran''s read', real(n_bad, wp), 0.0_wp, abs_tol=0.0_wp)
    end subroutine test_parse_real_reads_as_fortran
+
+   !> t by parse_real and by Fortran's read: counted as read when parse_real takes it, bad when they differ
+   subroutine read_both(t, n_read, n_bad)
+      use, intrinsic :: iso_fortran_env, only: int64
+      character(len=*), intent(in) :: t
+      integer, intent(inout) :: n_read, n_bad
+      real(wp) :: v, ref
+      integer :: stat, ios
+      call parse_real(t, v, stat)
+      if (stat /= 0) return
+      n_read = n_read + 1
+      read (t, *, iostat=ios) ref
+      if (ios /= 0 .or. transfer(v, 0_int64) /= transfer(ref, 0_int64)) then
+         n_bad = n_bad + 1
+         if (n_bad <= 5) write (*, '(4x,3a,2es26.17)') 'differs: "', t, '"', v, ref
+      end if
+   end subroutine read_both
 
    !> 1..m from the xorshift sequence st.
    integer function next_rand(st, m)

@@ -372,10 +372,18 @@ contains
          end if
          return
       end if
+      call entry_string(self, k, val)
+   end subroutine group_get_string
+
+   !> The string of entry k (its first value, in the pool).
+   subroutine entry_string(self, k, val)
+      class(deck_group_t), intent(in) :: self
+      integer, intent(in) :: k
+      character(len=:), allocatable, intent(inout) :: val
       associate (v => self%vals(:, self%entries(k)%first))
          val = self%pool(v(1):v(1) + v(2) - 1)
       end associate
-   end subroutine group_get_string
+   end subroutine entry_string
 
    !> String value of `key` (found), else '': as get_string with default '', but `val`
    !> kept when it holds '' already (no '' allocated and freed an absent key: D-175).
@@ -396,9 +404,7 @@ contains
          end if
          return
       end if
-      associate (v => self%vals(:, self%entries(k)%first))
-         val = self%pool(v(1):v(1) + v(2) - 1)
-      end associate
+      call entry_string(self, k, val)
    end subroutine group_get_optional_string
 
    !> All values of `key` as reals. An absent key gives a size-0 array and no error.
