@@ -215,7 +215,8 @@ contains
             ngroups = ngroups + 1
             name = deck%text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
             call lower_in_place(name)
-            do k = 1, size(names)
+            do k = 1, size(names)   ! (the length first: a name of another length is passed over)
+               if (len(names(k)%s) /= len(name)) cycle
                if (same_key(names(k)%s, name)) exit
             end do
             if (k > size(names)) call add_name(name)
@@ -273,7 +274,7 @@ contains
       character(len=:), allocatable, intent(inout) :: name
       type(deck_group_t), intent(inout) :: g
       type(error_t), allocatable, intent(out) :: err
-      integer :: nent, k, nkeys, nchars, nvals
+      integer :: nent, k, nkeys, nchars, nvals, c
 
       call move_alloc(name, g%name)
       g%file = file
@@ -324,8 +325,11 @@ contains
          associate (e => g%entries(nent))
             e%key_at = g%pool_len + 1
             e%key_len = toks%nc(i)
-            g%pool(e%key_at:e%key_at + e%key_len - 1) = text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
-            call lower_in_place(g%pool(e%key_at:e%key_at + e%key_len - 1))
+            do k = 0, e%key_len - 1   ! copied in lower case in one pass (D-182)
+               c = iachar(text(toks%at(i) + k:toks%at(i) + k))
+               if (c >= 65 .and. c <= 90) c = c + 32
+               g%pool(e%key_at + k:e%key_at + k) = achar(c)
+            end do
             g%pool_len = g%pool_len + e%key_len
             e%line = toks%line(i)
             e%first = g%nvals + 1
@@ -528,10 +532,15 @@ contains
    integer function deck_count_groups(self, name) result(n)
       class(deck_t), intent(in) :: self
       character(len=*), intent(in) :: name
-      integer :: i
+      integer :: i, ln
+      logical :: padded
       n = 0
       if (.not. allocated(self%groups)) return
+      ln = len(name)
+      padded = .false.   ! (a stored name never ends in a blank: one of another length
+      if (ln > 0) padded = iachar(name(ln:ln)) == 32   ! matches only a padded `name`)
       do i = 1, size(self%groups)
+         if (len(self%groups(i)%name) /= ln .and. .not. padded) cycle
          if (same_key(self%groups(i)%name, name)) n = n + 1
       end do
    end function deck_count_groups
