@@ -319,7 +319,7 @@ contains
 
    !> The valid keys a message lists are in order of first query, present and absent keys
    !> interleaved, each once, whatever its case (present keys are marked in their entry,
-   !> absent ones written: D-182); a queried entry is no near miss.
+   !> absent ones written: D-176); a queried entry is no near miss.
    subroutine test_queried_keys_in_order_of_first_query()
       type(deck_t) :: deck
       type(error_t), allocatable :: err

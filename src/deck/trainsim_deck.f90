@@ -322,7 +322,7 @@ contains
          associate (e => g%entries(nent))
             e%key_at = g%pool_len + 1
             e%key_len = toks%nc(i)
-            do k = 0, e%key_len - 1   ! copied in lower case in one pass (D-182)
+            do k = 0, e%key_len - 1   ! copied in lower case in one pass (D-176)
                c = iachar(text(toks%at(i) + k:toks%at(i) + k))
                g%pool(e%key_at + k:e%key_at + k) = achar(merge(c + 32, c, c >= 65 .and. c <= 90))
             end do

@@ -41,7 +41,7 @@ module trainsim_deck_group
       !> Keys asked for through has/get_*/count_values (D-62): a key present by the order
       !> of its first query in its entry's `asked`, without a copy of its text; an absent
       !> one here, followed by ',' and the order of its query in 4 bytes, in one text (one
-      !> allocation a group, not one a key: D-90, D-182). nasked: the queries so far.
+      !> allocation a group, not one a key: D-90, D-176). nasked: the queries so far.
       character(len=:), allocatable, private :: queried
       integer, private :: queried_len = 0
       integer, private :: nasked = 0
@@ -91,7 +91,7 @@ module trainsim_deck_group
       end subroutine group_set_entry
 
       !> Write `key` (lower case) into the queried keys with the order of its query (an
-      !> absent key, or one padded with blanks: D-182).
+      !> absent key, or one padded with blanks: D-176).
       module subroutine record_query(self, key)
          class(deck_group_t), intent(inout) :: self
          character(len=*), intent(in) :: key
@@ -546,7 +546,7 @@ contains
    end function find
 
    !> Index of entry `key` as `find`, the query recorded: a key present by the order of
-   !> its first query in its entry (no copy of its text, D-182), another in `queried`.
+   !> its first query in its entry (no copy of its text, D-176), another in `queried`.
    integer function query(self, key) result(k)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key

@@ -152,7 +152,7 @@ contains
    end function was_queried
 
    !> The queried keys each followed by ',', in order of query: the keys written in
-   !> `queried` and the present keys asked (each by the order of its query, D-182).
+   !> `queried` and the present keys asked (each by the order of its query, D-176).
    function queried_text(self) result(t)
       class(deck_group_t), intent(in) :: self
       character(len=:), allocatable :: t
@@ -179,7 +179,7 @@ contains
    end function queried_text
 
    !> Write `key` (lower case) into the queried keys with the order of its query (an
-   !> absent key, or one padded with blanks: D-182).
+   !> absent key, or one padded with blanks: D-176).
    module procedure record_query
       character(len=:), allocatable :: tmp
       integer :: n, i, c

@@ -31,7 +31,7 @@ module trainsim_deck_lexer
       integer, allocatable :: kind(:), line(:), at(:), nc(:)
    end type token_list_t
 
-   !> The class of each byte for `tokenize` (D-182): a table look-up a character of the
+   !> The class of each byte for `tokenize` (D-176): a table look-up a character of the
    !> deck instead of a chain of tests. 0: a word's, 1: line end, 2: blank (space, tab,
    !> CR), 3: '!', 4: '=', ',' or '/', 5: '&', 6: a quote.
    integer, parameter :: c_lf = 1, c_blank = 2, c_bang = 3, c_punct = 4, c_amp = 5, c_quote = 6
@@ -412,7 +412,7 @@ contains
    end subroutine parse_int
 
    !> Repeat count such as `3*0.0` or `3*`: digits and then '*' (by codes, not index()
-   !> and verify(): library calls a value of the deck, D-182).
+   !> and verify(): library calls a value of the deck, D-176).
    pure logical function is_repeat(s)
       character(len=*), intent(in) :: s
       integer :: p, c
