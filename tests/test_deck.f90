@@ -23,6 +23,7 @@ program test_deck
    call test_error_duplicate_key()
    call test_error_misc_syntax()
    call test_check_unused()
+   call test_queried_keys_in_order_of_first_query()
    call test_check_group_names()
    call test_read_deck_missing_and_directory()
    call test_read_deck_file()
@@ -315,6 +316,44 @@ contains
          call check('all used: no error', .not. allocated(err))
       end associate
    end subroutine test_check_unused
+
+   !> The valid keys a message lists are in order of first query, present and absent keys
+   !> interleaved, each once, whatever its case (present keys are marked in their entry,
+   !> absent ones written: D-176); a queried entry is no near miss.
+   subroutine test_queried_keys_in_order_of_first_query()
+      type(deck_t) :: deck
+      type(error_t), allocatable :: err
+      real(wp) :: x
+      logical :: yes
+      call test_begin('queried keys listed in order of first query, present and absent interleaved')
+      call parse_ok('&g Alpha = 1, beta = 2, gama = 3 /', deck)
+      if (size(deck%groups) /= 1) return
+      associate (g => deck%groups(1))
+         call g%get_real('BETA', x, err)
+         call g%get_real('zeta', x, err, default=0.0_wp)
+         call g%get_real('alpha', x, err)
+         yes = g%has('beta')
+         yes = g%has('Zeta')
+         call g%expect([character(len=5) :: 'delta', 'alpha'])
+         call g%check_unused(err, 'g')
+         call check('error returned', allocated(err))
+         if (.not. allocated(err)) return
+         call check('exact message: '//err%message, err%message == &
+                    "g.nml:1: error: &g #1: unknown key 'gama' for g; valid keys are: beta, zeta, alpha, delta")
+         call g%get_real('gamma', x, err)
+         call check('near miss not queried', allocated(err))
+         if (.not. allocated(err)) return
+         call check('exact message: '//err%message, err%message == &
+                    "g.nml:1: error: &g #1: unknown key 'gama'; did you mean 'gamma'? "// &
+                    "(the required key 'gamma' (a real number) is missing)")
+         yes = g%has('gama')
+         call g%get_real('gamma', x, err)
+         call check('queried entry is no near miss', allocated(err))
+         if (.not. allocated(err)) return
+         call check('exact message: '//err%message, err%message == &
+                    "g.nml:1: error: &g #1: missing required key 'gamma' (a real number)")
+      end associate
+   end subroutine test_queried_keys_in_order_of_first_query
 
    subroutine test_check_group_names()
       type(deck_t) :: deck

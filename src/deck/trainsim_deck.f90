@@ -1,9 +1,8 @@
-!> Input decks in Fortran namelist syntax, parsed by hand so that every error names the
-!> file, the line, the group, the key and the offending text, like a compiler would.
-!>
-!> A deck is a sequence of groups `&name key = value[, value ...] /` (or `... &end`).
-!> Values are kept as raw tokens; the typed getters of deck_group_t convert them and
-!> record which keys were read, so that check_unused can report misspelt keys.
+!> Input decks in Fortran namelist syntax, parsed by hand so that every error names the file,
+!> the line, the group, the key and the offending text, like a compiler would. A deck is a
+!> sequence of groups `&name key = value[, value ...] /` (or `... &end`). Values are kept as
+!> raw tokens; the typed getters of deck_group_t convert them and record which keys were
+!> read, so that check_unused can report misspelt keys.
 module trainsim_deck
    use, intrinsic :: iso_fortran_env, only: int64
    use trainsim_error, only: error_t, fatal_error, err_input, err_io
@@ -33,11 +32,9 @@ module trainsim_deck
 contains
 
    !> Read the deck file `path` and parse it. A missing, unreadable or directory path gives
-   !> an error with code err_io; syntax errors give err_input.
-   !>
-   !> The file is read twice in blocks (once to measure the text, once to copy it), so
-   !> that the deck text exists once in memory, without CRs of CR-LF line ends, a
-   !> leading UTF-8 byte-order mark or one final line end.
+   !> an error with code err_io; syntax errors give err_input. The file is read twice in
+   !> blocks (to measure the text, to copy it), so that the deck text exists once in memory,
+   !> without CRs of CR-LF line ends, a leading UTF-8 byte-order mark or one final line end.
    subroutine read_deck(path, deck, err)
       character(len=*), intent(in) :: path
       type(deck_t), intent(out) :: deck
@@ -215,7 +212,8 @@ contains
             ngroups = ngroups + 1
             name = deck%text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
             call lower_in_place(name)
-            do k = 1, size(names)
+            do k = 1, size(names)   ! (the length first: a name of another length is passed over)
+               if (len(names(k)%s) /= len(name)) cycle
                if (same_key(names(k)%s, name)) exit
             end do
             if (k > size(names)) call add_name(name)
@@ -260,10 +258,10 @@ contains
 
    end subroutine parse_into
 
-   !> Parse one group starting at token `i` (a tk_group token, its name `name` in lower
-   !> case, moved into the group); on return `i` is past its end. Its keys and values are
-   !> copied into the group's pool, whose room and the entries are counted first and
-   !> allocated once: three allocations a group, none a key or value (D-159).
+   !> Parse one group starting at token `i` (a tk_group token, its name `name` in lower case,
+   !> moved into the group); on return `i` is past its end. Its keys and values are copied into
+   !> the group's pool, whose room and the entries are counted first and allocated once: three
+   !> allocations a group, none a key or value (D-159).
    subroutine parse_group(text, toks, i, file, ordinal, name, g, err)
       character(len=*), intent(in) :: text
       type(token_list_t), intent(in) :: toks
@@ -273,7 +271,7 @@ contains
       character(len=:), allocatable, intent(inout) :: name
       type(deck_group_t), intent(inout) :: g
       type(error_t), allocatable, intent(out) :: err
-      integer :: nent, k, nkeys, nchars, nvals
+      integer :: nent, k, nkeys, nchars, nvals, c
 
       call move_alloc(name, g%name)
       g%file = file
@@ -324,8 +322,10 @@ contains
          associate (e => g%entries(nent))
             e%key_at = g%pool_len + 1
             e%key_len = toks%nc(i)
-            g%pool(e%key_at:e%key_at + e%key_len - 1) = text(toks%at(i):toks%at(i) + toks%nc(i) - 1)
-            call lower_in_place(g%pool(e%key_at:e%key_at + e%key_len - 1))
+            do k = 0, e%key_len - 1   ! copied in lower case in one pass (D-176)
+               c = iachar(text(toks%at(i) + k:toks%at(i) + k))
+               g%pool(e%key_at + k:e%key_at + k) = achar(merge(c + 32, c, c >= 65 .and. c <= 90))
+            end do
             g%pool_len = g%pool_len + e%key_len
             e%line = toks%line(i)
             e%first = g%nvals + 1
@@ -528,10 +528,13 @@ contains
    integer function deck_count_groups(self, name) result(n)
       class(deck_t), intent(in) :: self
       character(len=*), intent(in) :: name
-      integer :: i
+      integer :: i, ln
       n = 0
       if (.not. allocated(self%groups)) return
+      ln = len(name)   ! (a stored name ends in no blank: one of another length matches a padded `name`)
+      if (ln > 0) ln = merge(-1, ln, iachar(name(ln:ln)) == 32)
       do i = 1, size(self%groups)
+         if (len(self%groups(i)%name) /= ln .and. ln >= 0) cycle
          if (same_key(self%groups(i)%name, name)) n = n + 1
       end do
    end function deck_count_groups
@@ -567,8 +570,8 @@ contains
       end do
    end subroutine deck_check_group_names
 
-   !> The deck as parsed: "&group key=v1,v2 ... /" a line, strings quoted (what the
-   !> fingerprint of a sweep file digests: comments and layout do not count).
+   !> The deck as parsed: "&group key=v1,v2 ... /" a line, strings quoted (what the fingerprint
+   !> of a sweep file digests: comments and layout do not count).
    function canonical_deck(deck) result(t)
       type(deck_t), intent(in) :: deck
       character(len=:), allocatable :: t

@@ -21,6 +21,7 @@ module trainsim_deck_group
       integer :: n = 0                              !< number of values
       integer :: line = 0                           !< line of the key
       logical :: used = .false.                     !< set by the getters
+      integer :: asked = 0                          !< order of the key's first query (0: never asked)
    end type deck_entry_t
 
    !> One `&name ... /` group of a deck.
@@ -37,10 +38,13 @@ module trainsim_deck_group
       integer :: pool_len = 0
       integer, allocatable :: vals(:, :)
       integer :: nvals = 0
-      !> Keys asked for through has/get_*/count_values, in order of first query, each
-      !> followed by ',' in one text (one allocation a group, not one a key: D-90).
+      !> Keys asked for through has/get_*/count_values (D-62): a key present by the order
+      !> of its first query in its entry's `asked`, without a copy of its text; an absent
+      !> one here, followed by ',' and the order of its query in 4 bytes, in one text (one
+      !> allocation a group, not one a key: D-90, D-176). nasked: the queries so far.
       character(len=:), allocatable, private :: queried
       integer, private :: queried_len = 0
+      integer, private :: nasked = 0
    contains
       procedure :: has => group_has
       procedure :: holds => group_holds
@@ -86,6 +90,13 @@ module trainsim_deck_group
          integer, intent(in) :: line
       end subroutine group_set_entry
 
+      !> Write `key` (lower case) into the queried keys with the order of its query (an
+      !> absent key, or one padded with blanks: D-176).
+      module subroutine record_query(self, key)
+         class(deck_group_t), intent(inout) :: self
+         character(len=*), intent(in) :: key
+      end subroutine record_query
+
       !> Index of the entry not yet read whose key is a likely misspelling of `key` (0: none).
       module integer function near_miss(self, key) result(best)
          class(deck_group_t), intent(in) :: self
@@ -107,8 +118,7 @@ contains
    logical function group_has(self, key) result(yes)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
-      call record_query(self, key)
-      yes = find(self, key) > 0
+      yes = query(self, key) > 0
    end function group_has
 
    !> True if the group has an entry `key`, WITHOUT recording `key` as a valid key (for a
@@ -124,9 +134,9 @@ contains
    subroutine group_expect(self, keys)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: keys(:)
-      integer :: j
+      integer :: j, k
       do j = 1, size(keys)
-         call record_query(self, trim(keys(j)))
+         k = query(self, trim(keys(j)))
       end do
    end subroutine group_expect
 
@@ -135,8 +145,7 @@ contains
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
       integer :: k
-      call record_query(self, key)
-      k = find(self, key)
+      k = query(self, key)
       n = 0
       if (k > 0) n = self%entries(k)%n
    end function group_count_values
@@ -414,8 +423,7 @@ contains
       real(wp), allocatable, intent(out) :: vals(:)
       type(error_t), allocatable, intent(out) :: err
       integer :: k, j, stat
-      call record_query(self, key)
-      k = find(self, key)
+      k = query(self, key)
       if (k == 0) then
          allocate (vals(0))
          return
@@ -445,8 +453,7 @@ contains
       integer, intent(out) :: k
       type(error_t), allocatable, intent(out) :: err
       integer :: j
-      call record_query(self, key)
-      k = find(self, key)
+      k = query(self, key)
       if (k == 0) then
          if (.not. has_default) then
             ! a misspelt key is reported on its own line, before the key it stands for (D-62)
@@ -538,30 +545,23 @@ contains
       end do
    end function find
 
-   !> Add `key` (lower case) to the group's list of queried keys. Appended without
-   !> a look for it first (that look was O(keys) a query: D-107); `queried_keys`
-   !> lists each key once.
-   subroutine record_query(self, key)
+   !> Index of entry `key` as `find`, the query recorded: a key present by the order of
+   !> its first query in its entry (no copy of its text, D-176), another in `queried`.
+   integer function query(self, key) result(k)
       class(deck_group_t), intent(inout) :: self
       character(len=*), intent(in) :: key
-      character(len=:), allocatable :: tmp
-      integer :: n, i, c
-      n = self%queried_len + len(key) + 1
-      if (.not. allocated(self%queried)) then
-         allocate (character(len=max(64, n)) :: self%queried)
-      else if (n > len(self%queried)) then
-         allocate (character(len=max(2*len(self%queried), n)) :: tmp)
-         tmp(1:self%queried_len) = self%queried(1:self%queried_len)
-         call move_alloc(tmp, self%queried)
+      k = find(self, key)
+      if (k > 0) then
+         if (self%entries(k)%key_len == len(key)) then   ! (not padded: the key as stored)
+            if (self%entries(k)%asked == 0) then
+               self%nasked = self%nasked + 1
+               self%entries(k)%asked = self%nasked
+            end if
+            return
+         end if
       end if
-      do i = 1, len(key)   ! copied in lower case (to_lower's result is a temporary)
-         c = iachar(key(i:i))
-         if (c >= 65 .and. c <= 90) c = c + 32
-         self%queried(self%queried_len + i:self%queried_len + i) = achar(c)
-      end do
-      self%queried(n:n) = ','
-      self%queried_len = n
-   end subroutine record_query
+      call record_query(self, key)
+   end function query
 
    !> `stored` (lower case) == `key` in lower case, blank-padded as Fortran compares,
    !> without a lowered copy of `key` (an allocation a look-up, D-90). By character

@@ -133,15 +133,17 @@ contains
    logical function was_queried(self, key) result(yes)
       class(deck_group_t), intent(in) :: self
       character(len=*), intent(in) :: key
+      character(len=:), allocatable :: t
       integer :: p, q
       yes = .false.
+      t = queried_text(self)
       p = 1
-      do while (p <= self%queried_len)
-         q = p   ! the key is queried(p:q-1), queried(q:q) its ','
-         do while (self%queried(q:q) /= ',')
+      do while (p <= len(t))
+         q = p   ! the key is t(p:q-1), t(q:q) its ','
+         do while (t(q:q) /= ',')
             q = q + 1
          end do
-         if (same_key(self%queried(p:q - 1), key)) then
+         if (same_key(t(p:q - 1), key)) then
             yes = .true.
             return
          end if
@@ -149,19 +151,71 @@ contains
       end do
    end function was_queried
 
+   !> The queried keys each followed by ',', in order of query: the keys written in
+   !> `queried` and the present keys asked (each by the order of its query, D-176).
+   function queried_text(self) result(t)
+      class(deck_group_t), intent(in) :: self
+      character(len=:), allocatable :: t
+      integer :: q, j, p, e
+      t = ''
+      p = 1   ! the next key written: queried(p:e-1), its ',' and its order in 4 bytes
+      e = 0
+      do q = 1, self%nasked
+         if (e < p .and. p <= self%queried_len) then
+            e = p + index(self%queried(p:self%queried_len), ',') - 1
+         end if
+         if (e >= p) then
+            if (transfer(self%queried(e + 1:e + 4), q) == q) then
+               t = t//self%queried(p:e)
+               p = e + 5
+               cycle
+            end if
+         end if
+         if (.not. allocated(self%entries)) cycle
+         do j = 1, size(self%entries)
+            if (self%entries(j)%asked == q) t = t//self%key_of(j)//','
+         end do
+      end do
+   end function queried_text
+
+   !> Write `key` (lower case) into the queried keys with the order of its query (an
+   !> absent key, or one padded with blanks: D-176).
+   module procedure record_query
+      character(len=:), allocatable :: tmp
+      integer :: n, i, c
+      n = self%queried_len + len(key) + 5
+      if (.not. allocated(self%queried)) then
+         allocate (character(len=max(64, n)) :: self%queried)
+      else if (n > len(self%queried)) then
+         allocate (character(len=max(2*len(self%queried), n)) :: tmp)
+         tmp(1:self%queried_len) = self%queried(1:self%queried_len)
+         call move_alloc(tmp, self%queried)
+      end if
+      do i = 1, len(key)   ! copied in lower case (to_lower's result is a temporary)
+         c = iachar(key(i:i))
+         if (c >= 65 .and. c <= 90) c = c + 32
+         self%queried(self%queried_len + i:self%queried_len + i) = achar(c)
+      end do
+      self%nasked = self%nasked + 1
+      self%queried(n - 4:n - 4) = ','
+      self%queried(n - 3:n) = transfer(self%nasked, 'abcd')
+      self%queried_len = n
+   end procedure record_query
+
    !> The queried keys as a list, each once, in order of first query (for messages).
    function queried_keys(self) result(keys)
       class(deck_group_t), intent(in) :: self
       type(string_t), allocatable :: keys(:), all(:)
       integer :: p, q, n, j
       logical :: seen
-      n = 0
-      if (self%queried_len > 0) n = count_commas(self%queried(1:self%queried_len))
+      character(len=:), allocatable :: t
+      t = queried_text(self)
+      n = count_commas(t)
       allocate (all(n))
       p = 1
       do n = 1, size(all)
-         q = p + index(self%queried(p:self%queried_len), ',') - 2
-         all(n)%s = self%queried(p:q)
+         q = p + index(t(p:), ',') - 2
+         all(n)%s = t(p:q)
          p = q + 2
       end do
       allocate (keys(0))

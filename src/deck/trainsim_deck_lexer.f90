@@ -4,7 +4,7 @@
 module trainsim_deck_lexer
    use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
    use, intrinsic :: iso_c_binding, only: c_int, c_double, c_char
-   use, intrinsic :: iso_fortran_env, only: int64
+   use, intrinsic :: iso_fortran_env, only: int64, int8
    use trainsim_kinds, only: wp
    use trainsim_error, only: error_t, fatal_error, err_input
    use trainsim_strings, only: str, invalid_text_byte
@@ -30,6 +30,16 @@ module trainsim_deck_lexer
       integer :: n = 0
       integer, allocatable :: kind(:), line(:), at(:), nc(:)
    end type token_list_t
+
+   !> The class of each byte for `tokenize` (D-176): a table look-up a character of the
+   !> deck instead of a chain of tests. 0: a word's, 1: line end, 2: blank (space, tab,
+   !> CR), 3: '!', 4: '=', ',' or '/', 5: '&', 6: a quote.
+   integer, parameter :: c_lf = 1, c_blank = 2, c_bang = 3, c_punct = 4, c_amp = 5, c_quote = 6
+   integer :: tk_i_
+   integer(int8), parameter :: byte_class(0:255) = int([(merge(c_lf, 0, tk_i_ == 10) + &
+      merge(c_blank, 0, tk_i_ == 32 .or. tk_i_ == 9 .or. tk_i_ == 13) + merge(c_bang, 0, tk_i_ == 33) + &
+      merge(c_punct, 0, tk_i_ == 61 .or. tk_i_ == 44 .or. tk_i_ == 47) + merge(c_amp, 0, tk_i_ == 38) + &
+      merge(c_quote, 0, tk_i_ == 39 .or. tk_i_ == 34), tk_i_ = 0, 255)], int8)
 
    !> 10^0 .. 10^22: every one exact in double precision (parse_real's fast path)
    real(wp), parameter :: pow10(0:22) = [1.0e0_wp, 1.0e1_wp, 1.0e2_wp, 1.0e3_wp, 1.0e4_wp, 1.0e5_wp, 1.0e6_wp, &
@@ -97,26 +107,27 @@ contains
       line = 1
       i = 1
       do while (i <= n)
-         c = text(i:i)
          kind = 0   ! a token found: its kind, at and nc, appended below
-         if (c == new_line('a')) then
+         select case (byte_class(iachar(text(i:i))))
+         case (c_lf)
             line = line + 1
             i = i + 1
-         else if (is_blank(c)) then
+         case (c_blank)
             i = i + 1
-         else if (c == '!') then
+         case (c_bang)
             do while (i <= n)
                if (text(i:i) == new_line('a')) exit
                i = i + 1
             end do
-         else if (c == '=' .or. c == ',' .or. c == '/') then
+         case (c_punct)
+            c = text(i:i)
             kind = tk_end
             if (c == '=') kind = tk_eq
             if (c == ',') kind = tk_comma
             at = i
             nc = 0
             i = i + 1
-         else if (c == '&') then
+         case (c_amp)
             j = i + 1
             do while (j <= n)
                if (.not. is_name_char(text(j:j))) exit
@@ -142,9 +153,9 @@ contains
                nc = j - i - 1
             end if
             i = j
-         else if (c == "'" .or. c == '"') then
+         case (c_quote)
             ! Find the closing quote; a doubled quote stands for one (kept doubled here).
-            q = c
+            q = text(i:i)
             j = i + 1
             do
                if (j > n) exit
@@ -171,17 +182,19 @@ contains
             at = i + 1
             nc = j - i - 1
             i = j + 1
-         else
-            j = i
+         case default   ! a word: to a blank, line end, ',', '=', '/', '!' or quote ('&' is a word's)
+            j = i + 1
             do while (j <= n)
-               if (ends_word(text(j:j))) exit
+               if (byte_class(iachar(text(j:j))) > 0) then
+                  if (byte_class(iachar(text(j:j))) /= c_amp) exit
+               end if
                j = j + 1
             end do
             kind = tk_word
             at = i
             nc = j - i
             i = j
-         end if
+         end select
          if (kind /= 0) then
             nt = nt + 1
             toks%kind(nt) = kind
@@ -398,14 +411,18 @@ contains
       stat = 0
    end subroutine parse_int
 
-   !> Repeat count such as `3*0.0` or `3*`.
+   !> Repeat count such as `3*0.0` or `3*`: digits and then '*' (by codes, not index()
+   !> and verify(): library calls a value of the deck, D-176).
    pure logical function is_repeat(s)
       character(len=*), intent(in) :: s
-      integer :: p
-      p = index(s, '*')
+      integer :: p, c
       is_repeat = .false.
-      if (p <= 1) return
-      is_repeat = verify(s(1:p - 1), '0123456789') == 0
+      do p = 1, len(s)
+         c = iachar(s(p:p))
+         if (c == 42) exit   ! '*'
+         if (c < 48 .or. c > 57) return
+      end do
+      is_repeat = p > 1 .and. p <= len(s)
    end function is_repeat
 
    !> Key names: a letter followed by letters, digits and '_'.
@@ -430,15 +447,6 @@ contains
          if (c >= iachar('A') .and. c <= iachar('Z')) t(k:k) = achar(c + 32)
       end do
    end subroutine lower_in_place
-
-   !> (by code, not `c == ' '`: gfortran compares with a blank through len_trim, a
-   !> library call a character of the deck)
-   pure logical function is_blank(c)
-      character(len=1), intent(in) :: c
-      integer :: b
-      b = iachar(c)
-      is_blank = b == 32 .or. b == 9 .or. b == 13
-   end function is_blank
 
    !> Decimal digits of i (a line or ordinal; as str(i) writes them, -1 too) in buf(1:n).
    pure subroutine digits(i, buf, n)
@@ -474,16 +482,6 @@ contains
       if (b /= iachar('n')) return
       is_end = ior(iachar(t(3:3)), 32) == iachar('d')
    end function is_end
-
-   pure logical function ends_word(c)
-      character(len=1), intent(in) :: c
-      select case (c)   ! not index(): a library call a character of the deck (D-90)
-      case (' ', achar(9), achar(13), achar(10), ',', '=', '/', '!', "'", '"')
-         ends_word = .true.
-      case default
-         ends_word = .false.
-      end select
-   end function ends_word
 
    pure logical function is_letter(c)
       character(len=1), intent(in) :: c
