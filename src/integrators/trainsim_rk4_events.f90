@@ -314,7 +314,7 @@ contains
    !> A guard that reads two plain inertias' angles (`rk4_dense_guard`'s first
    !> way, not in a local event step) in locals: its element, its index and the
    !> two angles' dense-output operands, read once for a root's iterations
-   !> (il = 0: the guard is not such a guard; D-176).
+   !> (il = 0: the guard is not such a guard; D-177).
    subroutine angle_dense_of(self, model, y, j, q)
       class(rk4_t), intent(in) :: self
       type(model_t), intent(in) :: model
