@@ -5,6 +5,12 @@
 submodule(trainsim_int_rk4) trainsim_rk4_events
    implicit none
 
+   !> A guard on two angles on the dense output, its operands in locals (`angle_dense_of`)
+   type :: angle_dense_t
+      integer :: e = 0, k = 0, il = 0
+      real(wp) :: h = 0.0_wp, l(5) = 0.0_wp, r(5) = 0.0_wp
+   end type angle_dense_t
+
 contains
 
    !> For each element with guards in a long train: the part of the train its
@@ -250,13 +256,10 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: y(:), s
       integer, intent(in) :: j
-      real(wp) :: th, b1, b2, b4, h, c1, c2, c4
+      real(wp) :: b1, b2, b4, h, c1, c2, c4
       integer :: e, k, i
       h = self%h_loc
-      th = s/h
-      b1 = th*(1.0_wp - th*(1.5_wp - th*(2.0_wp/3.0_wp)))
-      b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
-      b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
+      call dense_weights(s/h, b1, b2, b4)
       e = self%g_el(j)
       if (.not. self%mr_on) then
          ! guards that read only two plain inertias' angles (the model says which
@@ -268,8 +271,8 @@ contains
          if (self%dg_l > 0) then
             associate (il => self%dg_l, ir => self%dg_r)
                g = model%angle_guard(e, self%g_loc(j), &
-                                     y(il) + h*(b1*self%k1(il) + b2*(self%d2(il) + self%d3(il)) + b4*self%d4(il)), &
-                                     y(ir) + h*(b1*self%k1(ir) + b2*(self%d2(ir) + self%d3(ir)) + b4*self%d4(ir)))
+                                     dense_at(y(il), self%k1(il), self%d2(il), self%d3(il), self%d4(il), h, b1, b2, b4), &
+                                     dense_at(y(ir), self%k1(ir), self%d2(ir), self%d3(ir), self%d4(ir), h, b1, b2, b4))
             end associate
             return
          end if
@@ -278,22 +281,69 @@ contains
          if (self%mr_on) then
             if (.not. self%in_l(self%el_nodes((k + 1)/2, e))) then
                ! a node of B in a local event step: the unsplit step's dense output
-               th = (self%t_loc + s - self%mt0)/self%mh
-               c1 = th*(1.0_wp - th*(1.5_wp - th*(2.0_wp/3.0_wp)))
-               c2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
-               c4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
+               call dense_weights((self%t_loc + s - self%mt0)/self%mh, c1, c2, c4)
                do i = self%el_states(k, e), self%el_states(k + 1, e)
-                  self%yi(i) = self%my0(i) + self%mh*(c1*self%mk1(i) + c2*(self%md2(i) + self%md3(i)) + c4*self%md4(i))
+                  self%yi(i) = dense_at(self%my0(i), self%mk1(i), self%md2(i), self%md3(i), self%md4(i), self%mh, c1, c2, c4)
                end do
                cycle
             end if
          end if
          do i = self%el_states(k, e), self%el_states(k + 1, e)
-            self%yi(i) = y(i) + h*(b1*self%k1(i) + b2*(self%d2(i) + self%d3(i)) + b4*self%d4(i))
+            self%yi(i) = dense_at(y(i), self%k1(i), self%d2(i), self%d3(i), self%d4(i), h, b1, b2, b4)
          end do
       end do
       g = model%element_guard(e, self%g_loc(j), self%t_loc + s, self%yi)
    end function rk4_dense_guard
+
+   !> The weights of the RK4 continuous extension at th = s/h (`rk4_dense_guard`):
+   !> b1 = th - 3th^2/2 + 2th^3/3, b2 = b3 = th^2 - 2th^3/3, b4 = -th^2/2 + 2th^3/3.
+   pure subroutine dense_weights(th, b1, b2, b4)
+      real(wp), intent(in) :: th
+      real(wp), intent(out) :: b1, b2, b4
+      b1 = th*(1.0_wp - th*(1.5_wp - th*(2.0_wp/3.0_wp)))
+      b2 = th*th*(1.0_wp - th*(2.0_wp/3.0_wp))
+      b4 = th*th*(-0.5_wp + th*(2.0_wp/3.0_wp))
+   end subroutine dense_weights
+
+   !> A state on the dense output: y0 + h (b1 k1 + b2 (k2 + k3) + b4 k4).
+   pure real(wp) function dense_at(y0, k1, k2, k3, k4, h, b1, b2, b4) result(v)
+      real(wp), intent(in) :: y0, k1, k2, k3, k4, h, b1, b2, b4
+      v = y0 + h*(b1*k1 + b2*(k2 + k3) + b4*k4)
+   end function dense_at
+
+   !> A guard that reads two plain inertias' angles (`rk4_dense_guard`'s first
+   !> way, not in a local event step) in locals: its element, its index and the
+   !> two angles' dense-output operands, read once for a root's iterations
+   !> (il = 0: the guard is not such a guard; D-177).
+   subroutine angle_dense_of(self, model, y, j, q)
+      class(rk4_t), intent(in) :: self
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: y(:)
+      integer, intent(in) :: j
+      type(angle_dense_t), intent(out) :: q
+      integer :: il, ir
+      il = 0
+      ir = 0
+      q%e = self%g_el(j)
+      if (.not. self%mr_on) call model%guard_angles(q%e, il, ir)
+      q%il = il
+      if (il == 0) return
+      q%k = self%g_loc(j)
+      q%h = self%h_loc
+      q%l = [y(il), self%k1(il), self%d2(il), self%d3(il), self%d4(il)]
+      q%r = [y(ir), self%k1(ir), self%d2(ir), self%d3(ir), self%d4(ir)]
+   end subroutine angle_dense_of
+
+   !> That guard at t_loc + s on the dense output: `rk4_dense_guard`'s value.
+   real(wp) function angle_dense_guard(model, q, s) result(g)
+      type(model_t), intent(in) :: model
+      type(angle_dense_t), intent(in) :: q
+      real(wp), intent(in) :: s
+      real(wp) :: b1, b2, b4
+      call dense_weights(s/q%h, b1, b2, b4)
+      g = model%angle_guard(q%e, q%k, dense_at(q%l(1), q%l(2), q%l(3), q%l(4), q%l(5), q%h, b1, b2, b4), &
+                            dense_at(q%r(1), q%r(2), q%r(3), q%r(4), q%r(5), q%h, b1, b2, b4))
+   end function angle_dense_guard
 
    !> Guard j at t_loc + s on the step map: ys = RK4(y, s), on the part of the
    !> train the guard sees (on_part) when that is small.
@@ -336,15 +386,22 @@ contains
       type(model_t), intent(inout) :: model
       real(wp), intent(in) :: y(:), ga0, b0, gb0
       integer, intent(in) :: j
-      real(wp) :: a, fa, fb, s, fs
+      real(wp) :: a, fa, fb, s, fs, tol
+      type(angle_dense_t) :: q
       integer :: side, it
       a = 0.0_wp; b = b0; fa = ga0; fb = gb0; side = 0
       self%dg_e = 0
+      tol = self%event_tol
+      call angle_dense_of(self, model, y, j, q)
       do it = 1, 100
-         if (b - a <= self%event_tol) exit
+         if (b - a <= tol) exit
          s = (a*fb - b*fa)/(fb - fa)
          s = min(max(s, a + 0.01_wp*(b - a)), b - 0.01_wp*(b - a))
-         fs = rk4_dense_guard(self, model, y, j, s)
+         if (q%il > 0) then
+            fs = angle_dense_guard(model, q, s)
+         else
+            fs = rk4_dense_guard(self, model, y, j, s)
+         end if
          if (fs < 0.0_wp) then
             b = s; fb = fs
             if (side == -1) fa = 0.5_wp*fa
@@ -374,6 +431,7 @@ contains
       integer, intent(in) :: j
       real(wp) :: a, fa, fb, sc, gc, sp, gp, r, dl, slope, tol, tol_acc
       real(wp), allocatable :: swap(:)
+      type(angle_dense_t) :: q
       integer :: it, side
       logical :: have_b, have_r, b_full
       tol = self%event_tol
@@ -407,7 +465,12 @@ contains
                end if
             else
                dl = 1.0e-3_wp*self%h_loc
-               slope = (rk4_dense_guard(self, model, y, j, sc + dl) - rk4_dense_guard(self, model, y, j, sc - dl))/(2.0_wp*dl)
+               call angle_dense_of(self, model, y, j, q)
+               if (q%il > 0) then
+                  slope = (angle_dense_guard(model, q, sc + dl) - angle_dense_guard(model, q, sc - dl))/(2.0_wp*dl)
+               else
+                  slope = (rk4_dense_guard(self, model, y, j, sc + dl) - rk4_dense_guard(self, model, y, j, sc - dl))/(2.0_wp*dl)
+               end if
                if (slope /= 0.0_wp) then
                   r = sc - gc/slope                                     ! Newton, dense-output slope
                   have_r = .true.
