@@ -456,7 +456,7 @@ contains
          call check('key_k100 of fit '//trim(fits(j))//' = its stiffness at 100 lbf at run time', key_k100(j) == k)
          do kf = 1, 2
             call load_model_text(two_disks//"&element type='keyed_joint', diameter=1.0, half_clearance=0.001,"// &
-                                 " stiffness_fit='"//trim(fits(j))//"', key_length=1.5, friction=0.15,"// &
+                                 " stiffness_fit='"//trim(fits(j))//"', key_length=1.5, friction=0.15, load_radius=2.0,"// &
                                  " bore_friction='"//trim(bores(kf))//"' /", m)
             allocate (y(m%n_y))
             do i = -20, 20
