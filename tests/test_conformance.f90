@@ -293,7 +293,7 @@ contains
             call m%init_modes(0.0_wp, y)
             associate (e => m%elements(1)%e)
                call e%torques_dissipation(x(1, c), x(2, c), x(3, c), x(4, c), tl, tr, pw)
-               ! (the general path makes the one call for both: D-197)
+               ! (the general path makes the one call for both: D-178)
                call e%torques(x(1, c), x(2, c), x(3, c), x(4, c), tl2, tr2)
                one_call = one_call .and. tl2 == tl .and. tr2 == tr .and. &
                           e%dissipation_power(x(1, c), x(2, c), x(3, c), x(4, c)) == pw

@@ -437,7 +437,7 @@ contains
    end subroutine test_key_fit_force_is_six_newton_steps
 
    !> The keyed joint's torques and dissipated power from one key fit (the
-   !> general path's one call, D-197): bit for bit `torques` and
+   !> general path's one call, D-178): bit for bit `torques` and
    !> `dissipation_power`, each fit, bore friction from the hub load or the key
    !> force, open and on both faces; key_fit_force's start (key_k100, folded by
    !> the compiler) equal to the fit's stiffness at 100 lbf evaluated at run time.
