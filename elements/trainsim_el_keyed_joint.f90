@@ -212,13 +212,19 @@ contains
    end function key_dissipation
 
    !> Its own `torques` and `dissipation_power` (not the clearance element's
-   !> combined form: both add the bore friction).
+   !> combined form: both add the bore friction), from one key fit: bit for bit
+   !> the two calls (key_friction reads tkey only with key_force, where
+   !> key_dissipation passes the clearance's tr, as key_torques does).
    pure subroutine key_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
       class(keyed_joint_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: tl, tr, p
-      call self%torques(thl, wl, thr, wr, tl, tr)
-      p = self%dissipation_power(thl, wl, thr, wr)
+      real(wp) :: tf, dtf, pc
+      call self%cl%torques_dissipation(1.0_wp, thl, wl, thr, wr, tl, tr, pc)
+      call self%friction(wl, wr, tr, tf, dtf)
+      tl = tl - tf
+      tr = tr + tf
+      p = pc + tf*(wl - wr)
    end subroutine key_torques_dissipation
 
    !> Hot form (D-35): the clearance element's, whose torques are key_torques'

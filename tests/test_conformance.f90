@@ -276,10 +276,11 @@ contains
       real(wp), intent(in) :: x(:, :)
       type(model_t) :: m
       real(wp), allocatable :: y(:), dydt(:), dend(:), g(:), gref(:)
-      real(wp) :: tl, tr, pw, pin, est, pot, worst
+      real(wp) :: tl, tr, pw, pin, est, pot, worst, tl2, tr2
       integer :: c, ng, pass
-      logical :: track
+      logical :: track, one_call
       worst = 0.0_wp
+      one_call = .true.
       do pass = 1, 2
          track = pass == 2
          m = m0
@@ -292,6 +293,10 @@ contains
             call m%init_modes(0.0_wp, y)
             associate (e => m%elements(1)%e)
                call e%torques_dissipation(x(1, c), x(2, c), x(3, c), x(4, c), tl, tr, pw)
+               ! (the general path makes the one call for both: D-178)
+               call e%torques(x(1, c), x(2, c), x(3, c), x(4, c), tl2, tr2)
+               one_call = one_call .and. tl2 == tl .and. tr2 == tr .and. &
+                          e%dissipation_power(x(1, c), x(2, c), x(3, c), x(4, c)) == pw
                pin = 0.0_wp
                if (e%supplies_power) pin = e%input_power(x(1, c), x(2, c), x(3, c), x(4, c))
                call m%rhs_stage(0.0_wp, y, dydt)
@@ -324,6 +329,7 @@ contains
          end do
       end do
       call check('max relative mismatch (1e-12)', worst, 0.0_wp, abs_tol=1.0e-12_wp)
+      call check('torques_dissipation = torques, dissipation_power bit for bit', one_call)
    contains
       subroutine worse(a, b)
          real(wp), intent(in) :: a, b

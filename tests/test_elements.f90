@@ -111,7 +111,7 @@ program test_elements
    use trainsim_modes, only: modes_t, compute_modes
    use trainsim_el_helical_gear, only: helical_contact_length
    use trainsim_contact, only: key_lineal_stiffness, fit_tight, fit_loose, fit_average
-   use trainsim_key_fit, only: key_fit_force
+   use trainsim_key_fit, only: key_fit_force, key_k100
    use trainsim_el_keyed_joint, only: keyed_joint_t
    use trainsim_testing, only: suite_begin, suite_end, test_begin, check
    use trainsim_event, only: event_t
@@ -150,6 +150,7 @@ program test_elements
    call test_key_stiffness_fits_match_fem_points()
    call test_key_fit_force_solves_implicit_stiffness()
    call test_key_fit_force_is_six_newton_steps()
+   call test_key_torques_dissipation_one_fit()
    call test_varying_stiffness_work_keeps_energy_balance()
    call test_key_bore_friction_capacity_from_hub_load()
    call test_model_rhs_is_the_plug_ins_own_torques_and_derivatives()
@@ -434,6 +435,51 @@ contains
       end do
       call check('key forces that differ from six Newton steps (of 8403)', real(n_diff, wp), 0.0_wp, abs_tol=0.0_wp)
    end subroutine test_key_fit_force_is_six_newton_steps
+
+   !> The keyed joint's torques and dissipated power from one key fit (the
+   !> general path's one call, D-178): bit for bit `torques` and
+   !> `dissipation_power`, each fit, bore friction from the hub load or the key
+   !> force, open and on both faces; key_fit_force's start (key_k100, folded by
+   !> the compiler) equal to the fit's stiffness at 100 lbf evaluated at run time.
+   subroutine test_key_torques_dissipation_one_fit()
+      character(len=*), parameter :: fits(3) = [character(len=7) :: 'tight', 'loose', 'average']
+      character(len=*), parameter :: bores(2) = [character(len=9) :: 'hub_load', 'key_force']
+      type(model_t) :: m
+      real(wp), allocatable :: y(:)
+      real(wp) :: tl, tr, p, tl2, tr2, k, dk
+      integer :: j, kf, i, n_diff, n_face(-1:1)
+      call test_begin('key_torques_dissipation_one_fit')
+      n_diff = 0
+      n_face = 0
+      do j = 1, 3
+         call key_lineal_stiffness(j, 100.0_wp, k, dk)
+         call check('key_k100 of fit '//trim(fits(j))//' = its stiffness at 100 lbf at run time', key_k100(j) == k)
+         do kf = 1, 2
+            call load_model_text(two_disks//"&element type='keyed_joint', diameter=1.0, half_clearance=0.001,"// &
+                                 " stiffness_fit='"//trim(fits(j))//"', key_length=1.5, friction=0.15, load_radius=2.0,"// &
+                                 " bore_friction='"//trim(bores(kf))//"' /", m)
+            allocate (y(m%n_y))
+            do i = -20, 20
+               y = 0.0_wp
+               y(1:4) = [real(i, wp)*2.0e-4_wp, 3.0_wp*sin(real(i, wp)), 0.0_wp, 1.5_wp*cos(real(i, wp))]
+               call m%init_modes(0.0_wp, y)
+               associate (e => m%elements(1)%e)
+                  call e%torques_dissipation(y(1), y(2), y(3), y(4), tl, tr, p)
+                  call e%torques(y(1), y(2), y(3), y(4), tl2, tr2)
+                  if (.not. (tl == tl2 .and. tr == tr2 .and. p == e%dissipation_power(y(1), y(2), y(3), y(4)))) &
+                     n_diff = n_diff + 1
+                  select type (e)
+                  type is (keyed_joint_t)
+                     n_face(e%cl%mode) = n_face(e%cl%mode) + 1
+                  end select
+               end associate
+            end do
+            deallocate (y)
+         end do
+      end do
+      call check('states on the rear face, open, on the front face', all(n_face > 0))
+      call check('states where the one call differs from the two (of 246)', real(n_diff, wp), 0.0_wp, abs_tol=0.0_wp)
+   end subroutine test_key_torques_dissipation_one_fit
 
    subroutine test_varying_stiffness_work_keeps_energy_balance()
       type(model_t) :: m

@@ -164,21 +164,12 @@ contains
    end function ce_dissipation
 
    !> `torques` and `dissipation_power` with one stiffness factor and one
-   !> contact force (bit for bit the two calls: cl_torques, cl_dissipation).
+   !> elastic force (bit for bit the two calls: cl_torques_dissipation).
    pure subroutine ce_torques_dissipation(self, thl, wl, thr, wr, tl, tr, p)
       class(clearance_element_t), intent(in) :: self
       real(wp), intent(in) :: thl, wl, thr, wr
       real(wp), intent(out) :: tl, tr, p
-      real(wp) :: c, fs, pen, pdot
-      c = self%factor(thl)
-      fs = self%cl%contact_force(c, thl, wl, thr, wr)
-      tl = -fs*self%cl%r1
-      tr = fs*self%cl%r2
-      p = 0.0_wp
-      if (self%cl%mode == 0) return
-      pen = self%cl%mode*(self%cl%r1*thl - self%cl%r2*thr) - self%cl%b
-      pdot = self%cl%mode*(self%cl%r1*wl - self%cl%r2*wr)
-      p = (self%cl%mode*fs - c*self%cl%law%elastic_force(pen))*pdot
+      call self%cl%torques_dissipation(self%factor(thl), thl, wl, thr, wr, tl, tr, p)
    end subroutine ce_torques_dissipation
 
    pure integer function ce_n_guards(self) result(n)

@@ -117,6 +117,7 @@ module trainsim_contact
       procedure, non_overridable :: torques => cl_torques
       procedure, non_overridable :: potential => cl_potential
       procedure, non_overridable :: dissipation => cl_dissipation
+      procedure, non_overridable :: torques_dissipation => cl_torques_dissipation
       procedure :: torque_jacobian => cl_torque_jacobian
    end type clearance_t
 
@@ -150,6 +151,13 @@ module trainsim_contact
          class(contact_law_t), intent(in) :: self
          real(wp), intent(in) :: p
       end function law_elastic_energy
+      !> cl_torques and cl_dissipation at one state from one elastic force (one
+      !> key fit, not two): bit for bit the two calls (in trainsim_contact_linear).
+      pure module subroutine cl_torques_dissipation(self, c, thl, wl, thr, wr, tl, tr, pw)
+         class(clearance_t), intent(in) :: self
+         real(wp), intent(in) :: c, thl, wl, thr, wr
+         real(wp), intent(out) :: tl, tr, pw
+      end subroutine cl_torques_dissipation
    end interface
 
 contains
@@ -580,13 +588,7 @@ contains
    pure real(wp) function cl_dissipation(self, c, thl, wl, thr, wr) result(pw)
       class(clearance_t), intent(in) :: self
       real(wp), intent(in) :: c, thl, wl, thr, wr
-      real(wp) :: p, pdot, f, fel
-      pw = 0.0_wp
-      if (self%mode == 0) return
-      p = self%mode*(self%r1*thl - self%r2*thr) - self%b
-      pdot = self%mode*(self%r1*wl - self%r2*wr)
-      fel = self%law%elastic_force(p)                    ! one key fit for both
-      f = self%law%force_of(c, fel, p, pdot)             ! = mode * contact_force (the same operations)
-      pw = (f - c*fel)*pdot
+      real(wp) :: tl, tr
+      call self%torques_dissipation(c, thl, wl, thr, wr, tl, tr, pw)   ! (one key fit, as alone)
    end function cl_dissipation
 end module trainsim_contact

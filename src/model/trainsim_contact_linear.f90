@@ -179,4 +179,26 @@ contains
          e = e + 0.5_wp*(p - a)*w(i)*self%fit_elastic_force(a + 0.5_wp*(p - a)*(x(i) + 1.0_wp))
       end do
    end function law_elastic_energy
+
+   !> cl_torques and cl_dissipation at one state from one elastic force (one key
+   !> fit, not two): bit for bit the two calls (s p is mode p, s f is mode f).
+   pure module subroutine cl_torques_dissipation(self, c, thl, wl, thr, wr, tl, tr, pw)
+      class(clearance_t), intent(in) :: self
+      real(wp), intent(in) :: c, thl, wl, thr, wr
+      real(wp), intent(out) :: tl, tr, pw
+      real(wp) :: s, p, pdot, fel, f, fs
+      fs = 0.0_wp
+      pw = 0.0_wp
+      if (self%mode /= 0) then
+         s = real(self%mode, wp)
+         p = s*(self%r1*thl - self%r2*thr) - self%b
+         pdot = s*(self%r1*wl - self%r2*wr)
+         fel = self%law%elastic_force(p)
+         f = self%law%force_of(c, fel, p, pdot)
+         fs = s*f
+         pw = (f - c*fel)*pdot
+      end if
+      tl = -fs*self%r1
+      tr = fs*self%r2
+   end subroutine cl_torques_dissipation
 end submodule trainsim_contact_linear

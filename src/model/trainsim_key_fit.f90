@@ -10,6 +10,12 @@ module trainsim_key_fit
 
    !> Load-dependent keyed-joint stiffness fits, eqs. (4.35)-(4.37)
    integer, parameter :: fit_none = 0, fit_tight = 1, fit_loose = 2, fit_average = 3
+   !> Each fit's k at its 100 lbf floor (`lineal`'s expression with fit_constants'
+   !> values, folded by the compiler: the same bits as at run time, which
+   !> test_key_fit asserts); key_fit_force starts from it without a log a call.
+   real(wp), parameter, public :: key_k100(3) = [98800.0_wp/(1.0_wp + 0.0846_wp*log(1.0_wp/100.0_wp)) - 17.1_wp*100.0_wp, &
+                                                 85800.0_wp/(1.0_wp + 0.0774_wp*log(1.0_wp/100.0_wp)) - 4.62_wp*100.0_wp, &
+                                                 99500.0_wp/(1.0_wp + 0.073_wp*log(1.0_wp/100.0_wp)) - 4.05_wp*100.0_wp]
 
 contains
 
@@ -67,8 +73,7 @@ contains
       real(wp) :: fl, fl_next, k, dk, g, a, b, c, p_lin
       integer :: it
       call fit_constants(fit, a, b, c, p_lin)
-      call lineal(a, b, c, p_lin, 100.0_wp, k, dk)
-      fl = k*lp                                          ! start from the low-load stiffness
+      fl = key_k100(merge(fit, fit_average, fit == fit_tight .or. fit == fit_loose))*lp   ! (fit_constants' default)
       do it = 1, 6
          call lineal(a, b, c, p_lin, abs(fl), k, dk)
          g = fl - k*lp

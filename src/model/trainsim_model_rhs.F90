@@ -195,16 +195,18 @@ contains
             else if (self%nport) then
                call general_torques(self%elements(i)%e, self%theta, self%omega, self%torque, track, tl, tr, &
                                     pdiss, pin)                     ! (its further ports' torques added: D-73)
+            else if (track) then
+               ! (one call: an element that shares work between the two, e.g. a
+               ! keyed joint's key fit, does it once; bit for bit the two calls)
+               call self%elements(i)%e%torques_dissipation(self%theta(l), self%omega(l), self%theta(r), &
+                                                           self%omega(r), tl, tr, f)
+               pdiss = pdiss + f
+               if (self%elements(i)%e%supplies_power) then
+                  pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), &
+                                                             self%omega(r))
+               end if
             else
                call self%elements(i)%e%torques(self%theta(l), self%omega(l), self%theta(r), self%omega(r), tl, tr)
-               if (track) then
-                  pdiss = pdiss + self%elements(i)%e%dissipation_power(self%theta(l), self%omega(l), self%theta(r), &
-                                                                       self%omega(r))
-                  if (self%elements(i)%e%supplies_power) then
-                     pin = pin + self%elements(i)%e%input_power(self%theta(l), self%omega(l), self%theta(r), &
-                                                                self%omega(r))
-                  end if
-               end if
             end if
          end associate
          self%el_torque(1, i) = tl
