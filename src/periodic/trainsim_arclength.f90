@@ -153,12 +153,8 @@ module trainsim_arclength
       complex(wp), allocatable :: mu(:)
       integer :: corrector = 0
       real(wp) :: residual = 0.0_wp
-      real(wp) :: r_pred = 0.0_wp, rate = 0.0_wp   !< the corrector's residual at the predictor, its last contraction
       type(monodromy_stats_t) :: st   !< the flow's events over the orbit: its contact sequence's signature
    end type node_t
-
-   logical, save :: ctrace = .false., qpred = .true., sctl = .true., gbound = .true.   ! TEMPORARY trace
-   real(wp), save :: a_target = 8.0_wp, f_max = 2.0_wp, f_min = 0.5_wp, f_nc = 5.0_wp, g_frac = 0.25_wp
 
    interface
       subroutine dgesv(n, nrhs, a, lda, ipiv, b, ldb, info)
@@ -182,15 +178,13 @@ module trainsim_arclength
          integer, intent(in) :: before
          type(ctx_t), intent(in) :: c
       end function closed_loop
-      module subroutine cross_grazing(c, br, p, q, ds, opt, a, sa)
+      module subroutine cross_grazing(c, br, p, q, ds, opt)
          type(ctx_t), intent(inout) :: c
          type(branch_t), intent(inout) :: br
          type(node_t), intent(in) :: p
          type(node_t), intent(inout) :: q
          real(wp), intent(in) :: ds
          type(branch_options_t), intent(in) :: opt
-         type(node_t), intent(out) :: a
-         real(wp), intent(out) :: sa
       end subroutine cross_grazing
       module subroutine detect(c, br, p, q, ds, opt)
          type(ctx_t), intent(inout) :: c
@@ -451,35 +445,14 @@ contains
       integer, intent(inout) :: stored, restarts   !< restarts: made so far (opt%restarts)
       type(error_t), allocatable, intent(out) :: err
       procedure(point_hook_i), optional :: hook
-      type(node_t) :: nxt, graze, q_far
-      real(wp) :: lam, ds_far
-      logical :: known
+      type(node_t) :: nxt
+      real(wp) :: lam
       character(len=:), allocatable :: why, note
-      real(wp), allocatable :: px_pred(:), z_pred(:), t_back(:)
-      real(wp) :: h_back, s_graze
+      real(wp), allocatable :: px_pred(:)
       logical :: crossed, rephased, fold
       integer :: before
       rephased = .false.
-      known = .false.
-      h_back = 0.0_wp
-      block
-         integer :: lt
-         call get_environment_variable('TRAINSIM_CTRACE', length=lt)
-         ctrace = lt > 0
-         call get_environment_variable('TRAINSIM_PRED', length=lt)
-         qpred = lt == 0
-         call get_environment_variable('TRAINSIM_OLDSTEP', length=lt)
-         sctl = lt == 0
-         call get_environment_variable('TRAINSIM_NOGB', length=lt)
-         gbound = lt == 0
-         call envr('TRAINSIM_AT', a_target)
-         call envr('TRAINSIM_FMAX', f_max)
-         call envr('TRAINSIM_FMIN', f_min)
-         call envr('TRAINSIM_NC', f_nc)
-         call envr('TRAINSIM_GB', g_frac)
-      end block
       do
-         if (ctrace) write (0, '(a,i6,i6)') 'TR maps ', c%maps, c%passes
          call report_points(br, stored, err, hook)
          if (allocated(err)) return
          if (size(br%pts) >= opt%max_points) then
@@ -488,13 +461,8 @@ contains
                          str(cur%z(c%n + 1)*c%ls, 10)
             exit
          end if
-         call predict(cur, ds, t_back, h_back, z_pred)
-         call correct(c, cur, z_pred, opt, nxt, why, px_pred=px_pred)
-         if (ctrace) write (0, '(a,es22.14,es11.3,i3,2es11.3,1x,a)') 'TR chord ', cur%z(c%n+1)*c%ls, ds, nxt%corrector, &
-            nxt%r_pred, nxt%rate, why
-         if (len(why) > 0 .and. opt%nonsmooth) call correct(c, cur, z_pred, opt, nxt, why, .true., px_pred)
-         if (ctrace) write (0, '(a,es22.14,es11.3,i3,2es11.3,1x,a)') 'TR after ', cur%z(c%n+1)*c%ls, ds, nxt%corrector, &
-            nxt%r_pred, nxt%rate, why
+         call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, px_pred=px_pred)
+         if (len(why) > 0 .and. opt%nonsmooth) call correct(c, cur, cur%z + ds*cur%t, opt, nxt, why, .true., px_pred)
          crossed = .false.
          if (len(why) == 0) then
             call linearise(c, nxt, cur%t, err)
@@ -503,50 +471,22 @@ contains
                deallocate (err)
             end if
          end if
-         if (opt%nonsmooth .and. .not. rephased .and. .not. known) then
+         if (opt%nonsmooth .and. .not. rephased) then
             ! a memory contact reaching t0 (odd events) or a failed step: move t0 first
             if (len(why) > 0 .or. modulo(nxt%st%events, 2) /= 0) then
                call rephase_point(c, br, cur, rephased, err)
                if (allocated(err)) return
-               if (rephased) then
-                  if (allocated(t_back)) deallocate (t_back)   ! (other coordinates: no curvature yet)
-                  cycle
-               end if
+               if (rephased) cycle
             end if
          end if
          before = size(br%pts)
          if (len(why) == 0) then
             if (opt%nonsmooth .and. .not. same_sequence(cur%st, nxt%st)) then
-               if (known) then   ! (the bounded step past a grazing located from cur already)
-                  if (dot_product(nxt%t, nxt%z - graze%z) < 0.0_wp) nxt%t = -nxt%t
-               else
-                  call cross_grazing(c, br, cur, nxt, ds, opt, graze, s_graze)
-                  if (gbound .and. s_graze > 0.0_wp .and. ds - s_graze > g_frac*opt%ds) then
-                     ! past the grazing the branch is another smooth curve: the step from cur is
-                     ! taken again to end g_frac*ds past it (D-192), the far point kept
-                     if (ctrace) write (0, '(a,2es12.4)') 'TR graze-bound ', ds, s_graze
-                     known = .true.
-                     q_far = nxt
-                     ds_far = ds
-                     ds = s_graze + g_frac*opt%ds
-                     if (allocated(px_pred)) deallocate (px_pred)
-                     cycle
-                  end if
-               end if
-               crossed = .true.
-            else if (known) then   ! (the bounded step did not cross: the far point as before)
-               nxt = q_far
-               ds = ds_far
+               call cross_grazing(c, br, cur, nxt, ds, opt)
                crossed = .true.
             else if (dot_product(nxt%t, cur%t) < 0.9_wp .and. ds > opt%ds_min) then
                why = 'the tangent turned by more than 25 degrees in one step'
             end if
-         end if
-         if (len(why) > 0 .and. known) then   ! (the bounded step failed: the far point as before)
-            nxt = q_far
-            ds = ds_far
-            why = ''
-            crossed = .true.
          end if
          if (len(why) > 0) then
             br%rejected = br%rejected + 1
@@ -560,7 +500,6 @@ contains
                   exit
                end if
                call restart(c, opt, br, cur, ds, restarts, err)
-               if (allocated(t_back)) deallocate (t_back)
                if (allocated(err)) return
                if (br%status /= branch_failed) exit
                cycle
@@ -576,21 +515,9 @@ contains
             exit
          end if
          call store(br, c, nxt, ds, '', cur%t, restarts + 1)
-         if (crossed) then
-            if (allocated(t_back)) deallocate (t_back)   ! (the tangent jumps at a grazing)
-         else
-            t_back = cur%t
-            h_back = norm2(nxt%z - cur%z)
-         end if
          cur = nxt
          rephased = .false.
-         known = .false.
-         if (sctl) then
-            ds = min(next_step(ds, cur%t, t_back, nxt%corrector), opt%ds_max)
-            ds = max(ds, opt%ds_min)
-         else
-            if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
-         end if
+         if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
          br%pts(size(br%pts))%ds_next = ds
          lam = cur%z(c%n + 1)*c%ls
          if (lam > opt%lam_max .or. lam < opt%lam_min) then
@@ -605,50 +532,6 @@ contains
       call report_points(br, stored, err, hook)
       if (.not. allocated(err) .and. present(hook)) call hook(br, 0, err)
    end subroutine follow
-
-   !> The predictor from the accepted point p along its tangent t by the step ds, on the
-   !> hyperplane t'(z - z_p) = ds that the corrector keeps: z_p + ds t, plus, where the
-   !> point before p lies on the same smooth stretch (t_back: its tangent, h_back: the
-   !> chord between them), the curvature's term ds^2/2 k, k = (t - t_back)/h_back with
-   !> its component along t taken out (D-191). The curvature term moves the start in
-   !> the hyperplane, not the hyperplane: the corrector converges to the same point.
-   subroutine predict(p, ds, t_back, h_back, z_pred)
-      type(node_t), intent(in) :: p
-      real(wp), intent(in) :: ds, h_back
-      real(wp), allocatable, intent(in) :: t_back(:)
-      real(wp), allocatable, intent(inout) :: z_pred(:)
-      real(wp) :: k(size(p%t))
-      z_pred = p%z + ds*p%t
-      if (.not. allocated(t_back) .or. .not. qpred) return
-      if (.not. h_back > 0.0_wp) return
-      k = (p%t - t_back)/h_back
-      k = k - dot_product(k, p%t)*p%t
-      z_pred = z_pred + 0.5_wp*ds**2*k
-   end subroutine predict
-
-   subroutine envr(name, v)
-      character(len=*), intent(in) :: name
-      real(wp), intent(inout) :: v
-      character(len=64) :: buf
-      integer :: lt, ios
-      call get_environment_variable(name, buf, length=lt)
-      if (lt > 0) read (buf, *, iostat=ios) v
-   end subroutine envr
-
-   !> The step after an accepted point: ds scaled by the turn of the tangent over it
-   real(wp) function next_step(ds, t, t_back, corrector) result(dn)
-      real(wp), intent(in) :: ds, t(:)
-      real(wp), allocatable, intent(in) :: t_back(:)
-      integer, intent(in) :: corrector
-      real(wp) :: a, f
-      f = f_max
-      if (allocated(t_back)) then
-         a = acos(min(1.0_wp, abs(dot_product(t, t_back))))*45.0_wp/atan(1.0_wp)
-         f = min(f_max, max(f_min, a_target/max(a, 1.0e-12_wp)))
-      end if
-      if (real(corrector, wp) > f_nc) f = min(f, 1.0_wp)
-      dn = f*ds
-   end function next_step
 
    !> The points of br after `stored` given to `hook` (if present), in order.
    subroutine report_points(br, stored, err, hook)

@@ -190,8 +190,6 @@ contains
          q%px = px
          q%residual = r
          q%corrector = it
-         if (it == 0) q%r_pred = r
-         if (it > 0) q%rate = r/r_old
          if (r <= opt%tol) return
          if (.not. r < r_old) then
             grown = grown + 1
@@ -394,8 +392,10 @@ contains
    !> another sequence (an impact the flow does not count), the bisection is done
    !> again with every trial by full Newton and linearised, as before (D-149).
    module procedure cross_grazing
+      type(node_t) :: a
       type(error_t), allocatable :: err
       type(monodromy_stats_t) :: sp
+      real(wp) :: sa
       logical :: ok
       ok = .false.
       a = p
