@@ -547,7 +547,7 @@ contains
       do it = 1, 40
          sm = sb - fb*(sb - sa)/(fb - fa)
          ! from the last trial, on the same hyperplane t_p'(z - z_p) = sm, the chord with the
-         ! Jacobian of the last trial (D-191); as before (from p, p's Jacobian) where it fails
+         ! Jacobian of the last trial (D-193); as before (from p, p's Jacobian) where it fails
          call correct(c, pj, best%z + (sm - s_best)*p%t, opt, r, why)
          if (len(why) > 0) call correct(c, p, p%z + sm*p%t, opt, r, why)
          if (len(why) == 0) call linearise(c, r, p%t, err)
