@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Two branch files of the same continuation compared where their points differ (issue 27,
-D-191): a changed predictor or step control puts the points elsewhere on the same curve,
+D-179): a changed predictor or step control puts the points elsewhere on the same curve,
 so the branches are compared by interpolation, not point by point.
 
 - The change points (folds, period-doublings, Neimark-Sacker points, grazings, failed

@@ -547,7 +547,7 @@ contains
       do it = 1, 40
          sm = sb - fb*(sb - sa)/(fb - fa)
          ! from the last trial, on the same hyperplane t_p'(z - z_p) = sm, the chord with the
-         ! Jacobian of the last trial (D-193); as before (from p, p's Jacobian) where it fails
+         ! Jacobian of the last trial (D-181); as before (from p, p's Jacobian) where it fails
          call correct(c, pj, best%z + (sm - s_best)*p%t, opt, r, why)
          if (len(why) > 0) call correct(c, p, p%z + sm*p%t, opt, r, why)
          if (len(why) == 0) call linearise(c, r, p%t, err)
@@ -575,7 +575,7 @@ contains
          ! a fold's lambda is a turning point of the branch: a point off the curve by the
          ! corrector's tolerance can sit 1e-8 of lambda from it (534.17: 4.8e-6 teeth/s between
          ! two secant paths). The last trial is corrected again, on its own hyperplane, to
-         ! tol/100 (D-193); where that fails it is kept as it is
+         ! tol/100 (D-181); where that fails it is kept as it is
          o = opt
          o%tol = 1.0e-2_wp*opt%tol
          pj%a = best%a

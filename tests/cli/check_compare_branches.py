@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""bench/compare_branches.py (D-191): two continuations of the damped Table 5.5 rig over
+"""bench/compare_branches.py (D-179): two continuations of the damped Table 5.5 rig over
 645 -> 600 teeth/s whose points lie elsewhere on the same curve (first step 0.005 and
 0.0035) are equal by interpolation (the state to 1e-6 of its scale, at least 3 points
 compared each way); a copy of the first with one interior point's state moved by 1e-5 of

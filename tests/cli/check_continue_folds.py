@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The damped Table 5.5 rig's folds by continuation (issue 27; D-193): the whole Fig. 5.11
+"""The damped Table 5.5 rig's folds by continuation (issue 27; D-181): the whole Fig. 5.11
 branch (shaft1 and shaft3 damped 500 lb in s/rad, 645 -> 385 teeth/s, the benchmark's
 command) has exactly two folds, at 392.427597 and 534.170542 teeth/s to 1e-6, each
 corrected to a residual below tol/100 = 1e-12 (a fold's lambda is a turning point: a point
