@@ -527,9 +527,10 @@ contains
       type(branch_options_t), intent(in) :: opt
       integer, intent(in) :: j
       character(len=*), intent(in) :: kind
-      type(node_t) :: r, best
+      type(node_t) :: r, best, pj
+      type(branch_options_t) :: o
       type(error_t), allocatable :: err
-      real(wp) :: sa, sb, fa, fb, sm, fm, la, lb
+      real(wp) :: sa, sb, fa, fb, sm, fm, la, lb, s_best
       character(len=:), allocatable :: why
       integer :: it, side
       sa = 0.0_wp
@@ -539,14 +540,22 @@ contains
       la = p%z(c%n + 1)
       lb = q%z(c%n + 1)
       best = q
+      s_best = ds
+      pj = p   ! (p's tangent and hyperplanes; the Jacobian of the end nearer the zero)
+      if (abs(fb) < abs(fa)) pj%a = q%a
       side = 0
       do it = 1, 40
          sm = sb - fb*(sb - sa)/(fb - fa)
-         call correct(c, p, p%z + sm*p%t, opt, r, why)
+         ! from the last trial, on the same hyperplane t_p'(z - z_p) = sm, the chord with the
+         ! Jacobian of the last trial (D-181); as before (from p, p's Jacobian) where it fails
+         call correct(c, pj, best%z + (sm - s_best)*p%t, opt, r, why)
+         if (len(why) > 0) call correct(c, p, p%z + sm*p%t, opt, r, why)
          if (len(why) == 0) call linearise(c, r, p%t, err)
          if (allocated(err) .or. len(why) > 0) exit
          fm = test_fn(j, r, c%n)
          best = r
+         s_best = sm
+         pj%a = r%a
          if (fm*fb < 0.0_wp) then
             sa = sb
             fa = fb
@@ -562,6 +571,18 @@ contains
          if (j == 1 .and. abs(fm) < 1.0e-9_wp) exit
          if (j /= 1 .and. abs(la - lb) < opt%lam_tol) exit
       end do
+      if (j == 1) then
+         ! a fold's lambda is a turning point of the branch: a point off the curve by the
+         ! corrector's tolerance can sit 1e-8 of lambda from it (534.17: 4.8e-6 teeth/s between
+         ! two secant paths). The last trial is corrected again, on its own hyperplane, to
+         ! tol/100 (D-181); where that fails it is kept as it is
+         o = opt
+         o%tol = 1.0e-2_wp*opt%tol
+         pj%a = best%a
+         call correct(c, pj, best%z, o, r, why)
+         if (len(why) == 0) call linearise(c, r, p%t, err)
+         if (len(why) == 0 .and. .not. allocated(err)) best = r
+      end if
       call store(br, c, best, sm, kind, p%t, br%pts(size(br%pts))%segment)
    end subroutine locate
 end submodule trainsim_arclength_events

@@ -158,7 +158,10 @@ def main(argv=None):
         if len(near) == 0:
             failures.append(f"fold {fl:.6f}: no stable stretch next to it")
             continue
-        side = np.sign(lam[near[0]] - fl)   # +1: the stretch lies above the fold (a down sweep jumps there)
+        # +1: the stretch lies above the fold (a down sweep jumps there); by its farthest point, not
+        # the nearest: next to a fold a point off the curve by the corrector's tolerance can lie
+        # ~1e-6 teeth/s on the other side of it (392.4275972 against the fold 392.4275977, D-181)
+        side = np.sign(lam[near[-1]] - fl)
         direction = "down" if side > 0 else "up"
         # a sweep with the state carried from run to run along that stretch, from where the deck's
         # start lands on it (README: 435-525 on the loop going down to the fold 392.43; 505-528
