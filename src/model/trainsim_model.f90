@@ -299,7 +299,7 @@ module trainsim_model
          integer, intent(in) :: gw_i(2, *)
          real(wp), intent(in) :: gw(6, *)
       end subroutine model_rk4_block
-      !> `model_rk4_block` with energy tracking, in a file of its own (D-179).
+      !> `model_rk4_block` with energy tracking, in a file of its own (D-182).
       module subroutine rk4_block_energy(self, t, y, k1, k2, k3, k4, ynew, g1, gw_i, gw)
          class(model_t), intent(inout) :: self
          real(wp), intent(inout) :: t, y(self%n_y), k1(self%n_y), k2(self%n_y), k3(self%n_y), k4(self%n_y), ynew(self%n_y), g1(*)

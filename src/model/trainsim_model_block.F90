@@ -3,7 +3,7 @@
 !> kernels of `model_rk4_stages` and `model_rhs_step_end`
 !> (trainsim_model_rk4_kernels.inc) inlined, so that a step makes no call (no
 !> frames, dispatch or argument lists a step); with energy tracking the same
-!> loop in `rk4_block_energy` (trainsim_model_energy_kernels.F90, D-179). The
+!> loop in `rk4_block_energy` (trainsim_model_energy_kernels.F90, D-182). The
 !> `module procedure` is declared, with its arguments and their docs, in
 !> trainsim_model.
 submodule (trainsim_model) trainsim_model_block
@@ -24,7 +24,7 @@ contains
          r%pend = .false.
          if (.not. self%simple) return
          if (self%run%track_energy) then
-            ! (the energy-tracking loop in a file of its own, D-179)
+            ! (the energy-tracking loop in a file of its own, D-182)
             call rk4_block_energy(self, t, y, k1, k2, k3, k4, ynew, g1, gw_i, gw)
             return
          end if

@@ -1,7 +1,7 @@
 !> The energy-tracking kernels of RK4 on a simple model, compiled apart from the
 !> energy-off ones (D-160, D-169): RK4's inner stages (`rk4_energy_stages`), a
 !> block's step end before its last (`column_energy_end`, D-120) and the block
-!> loop (`rk4_block_energy`, D-179), each from the includes of the energy-off
+!> loop (`rk4_block_energy`, D-182), each from the includes of the energy-off
 !> path with ENERGY 1 (trainsim_model_rk4_kernels.inc and the stage kernel,
 !> trainsim_model_stage.inc). Their `module procedure`s are declared, with their
 !> arguments and their docs, in trainsim_model.
