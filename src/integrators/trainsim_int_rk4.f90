@@ -441,8 +441,9 @@ contains
       if (self%ng > 0) call model%guard_windows(nw, self%gw_i, self%gw)
       model%blk%ws = .false.   ! each step's column only; the workspace after the block
       ! after the first step the model takes the block's further steps in one
-      ! call (`rk4_block`, D-168) where it can: the same steps, tests and values
-      fast = .not. model%run%track_energy
+      ! call (`rk4_block`, D-168; with energy tracking too, D-182) where it can:
+      ! the same steps, tests and values
+      fast = .true.
       if (fast) call block_run(model%blk%run)
       j = 0
       do while (j < model%blk%cap)

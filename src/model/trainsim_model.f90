@@ -3,14 +3,11 @@
 !> side, the guards and the mode updates below are the only code the integrators call; they do no
 !> allocation, I/O or string work.
 !>
-!> This module is the model's interface: its types and the signature of every
-!> procedure. The bodies live in submodules by role (docs/architecture.md):
-!> trainsim_model_layout (assembly, state layout, kinematics),
-!> trainsim_model_tables (the hot-path tables of the families, modes),
-!> trainsim_model_rhs (the right-hand side and its kernels),
-!> trainsim_model_guards (guards and events), trainsim_model_energy (the
-!> energy ledger) and trainsim_model_linear (the Jacobian, rigid speeds); the
-!> families' row types and hot-form arithmetic are trainsim_model_families.
+!> This module is the model's interface: its types and the signature of every procedure. The bodies live in submodules
+!> by role (docs/architecture.md): trainsim_model_layout (assembly, state layout, kinematics), trainsim_model_tables
+!> (the hot-path tables of the families, modes), trainsim_model_rhs (the right-hand side and its kernels),
+!> trainsim_model_guards (guards and events), trainsim_model_energy (the energy ledger) and trainsim_model_linear (the
+!> Jacobian, rigid speeds); the families' row types and hot-form arithmetic are trainsim_model_families.
 module trainsim_model
    use trainsim_kinds, only: wp
    use trainsim_strings, only: string_t
@@ -90,22 +87,18 @@ module trainsim_model
       !> tracking whose elements are all linear springs or hot forms with agreeing elastic energy).
       real(wp) :: ws_stored = 0.0_wp, ws_elastic = 0.0_wp
       logical :: ws_energy = .false.
-      !> The workspace (theta, omega, torque, el_torque) holds the full RHS at
-      !> (ws_t, the state an integrator has just returned): set by the integrator
-      !> right after it evaluated the RHS there (RK4's end-of-step evaluation,
-      !> which is the next step's first stage); cleared by every other use of
-      !> the workspace (`rhs`, `rhs_part`, `kinematics`, `apply_events`, ...).
-      !> The observer then reads the element torques instead of recomputing them.
+      !> The workspace (theta, omega, torque, el_torque) holds the full RHS at (ws_t, the state an integrator has just
+      !> returned): set by the integrator right after it evaluated the RHS there (RK4's end-of-step evaluation, which
+      !> is the next step's first stage); cleared by every other use of the workspace (`rhs`, `rhs_part`,
+      !> `kinematics`, `apply_events`, ...). The observer then reads the element torques instead of recomputing them.
       logical :: ws_step_end = .false.
       real(wp) :: ws_t = 0.0_wp
       !> The ends of the steps of a block (D-38), sized by `finalize`.
       type(step_block_t) :: blk
-      ! The hot path (`build_fast_path`, redone by `finalize` and at the start of
-      ! every run in `init_modes`, so a re-parameterised copy is current): nodes
-      ! that are plain inertias and elements that are linear springs (their
-      ! optional capabilities, checked against their own procedures) are
-      ! evaluated from these arrays, without calls through the polymorphic
-      ! objects; every other node and element is asked as before.
+      ! The hot path (`build_fast_path`, redone by `finalize` and at the start of every run in `init_modes`, so a
+      ! re-parameterised copy is current): nodes that are plain inertias and elements that are linear springs (their
+      ! optional capabilities, checked against their own procedures) are evaluated from these arrays, without calls
+      ! through the polymorphic objects; every other node and element is asked as before.
       type(fast_node_t), allocatable, private :: fn(:)
       type(fast_element_t), allocatable, private :: fe(:)
       !> Per element: its hot form (D-35) in its current mode, refreshed after every mode change the model
@@ -306,6 +299,13 @@ module trainsim_model
          integer, intent(in) :: gw_i(2, *)
          real(wp), intent(in) :: gw(6, *)
       end subroutine model_rk4_block
+      !> `model_rk4_block` with energy tracking, in a file of its own (D-182).
+      module subroutine rk4_block_energy(self, t, y, k1, k2, k3, k4, ynew, g1, gw_i, gw)
+         class(model_t), intent(inout) :: self
+         real(wp), intent(inout) :: t, y(self%n_y), k1(self%n_y), k2(self%n_y), k3(self%n_y), k4(self%n_y), ynew(self%n_y), g1(*)
+         integer, intent(in) :: gw_i(2, *)
+         real(wp), intent(in) :: gw(6, *)
+      end subroutine rk4_block_energy
 
       !> Whether an integrator may take a block of steps (D-38) in the current modes: a simple model whose `rhs_step_end`
       !> leaves in the block's columns all the observer folds after a step (every element's status in the workspace,

@@ -1,8 +1,9 @@
-!> A block's plain RK4 steps of a simple model without energy tracking in one
-!> call (D-168): `model_rk4_block`, each step's inner stages, its combination
-!> and its end in the block's column with the kernels of `model_rk4_stages` and
-!> `model_rhs_step_end` (trainsim_model_rk4_kernels.inc) inlined in one loop, so
-!> that a step makes no call (no frames, dispatch or argument lists a step). The
+!> A block's plain RK4 steps of a simple model in one call (D-168):
+!> `model_rk4_block`, the block loop (trainsim_model_block_loop.inc) with the
+!> kernels of `model_rk4_stages` and `model_rhs_step_end`
+!> (trainsim_model_rk4_kernels.inc) inlined, so that a step makes no call (no
+!> frames, dispatch or argument lists a step); with energy tracking the same
+!> loop in `rk4_block_energy` (trainsim_model_energy_kernels.F90, D-182). The
 !> `module procedure` is declared, with its arguments and their docs, in
 !> trainsim_model.
 submodule (trainsim_model) trainsim_model_block
@@ -13,10 +14,7 @@ submodule (trainsim_model) trainsim_model_block
 
 contains
 
-   ! The loop is `advance_block`'s (trainsim_int_rk4) from its step blk%col + 1,
-   ! with the same tests in the same order; it hands back (done false) where
-   ! that loop would ask for the grid's next point (grid_target) and returns
-   ! at once (done false, no step) for a model it does not run.
+   ! (at once, done false and no step, for a model it does not run)
    module procedure model_rk4_block
       integer :: j, i
       real(wp) :: t_grid, h, hh, h6, t4, s
@@ -24,55 +22,15 @@ contains
       associate (b => self%blk, r => self%blk%run)
          r%done = .false.
          r%pend = .false.
-         if (.not. self%simple .or. self%run%track_energy) return
-         do j = b%col + 1, b%cap
-            t_grid = min(r%t0 + real(r%istep, wp)*r%dt, r%t_end)
-            if (t >= t_grid - r%tiny_t) return
-            r%done = .true.
-            if (t_grid > r%t_goal .or. t_grid >= r%t_bp) return
-            h = t_grid - t
-            hh = 0.5_wp*h
-            t4 = t + h
-#include "trainsim_model_rk4_inner.inc"
-            h6 = h/6.0_wp
-            do i = 1, self%n_y
-               ynew(i) = y(i) + h6*(k1(i) + 2.0_wp*(k2(i) + k3(i)) + k4(i))
-            end do
-            r%ns = j
-            if (r%nw /= 0) then
-               below = .true.
-               if (r%nw > 0) below = windows_below(r%nw, gw_i, gw, ynew)
-               if (below) below = model_guards_below(self, t + h, ynew, g1)
-               if (below) then
-                  r%pend = .true.
-                  r%h = h
-                  return
-               end if
-            end if
-            ! y = ynew; the sum of |y(i)| in order (D-126, D-161)
-            s = 0.0_wp
-            do i = 1, self%n_y
-               y(i) = ynew(i)
-               s = s + abs(ynew(i))
-            end do
-            t = t_grid
-            r%istep = r%istep + 1
-            b%col = j
-            ! `model_rhs_step_end` of a block's step before its last (D-120)
-            self%ws_step_end = .false.
-            self%ws_t = t
-            self%ws_energy = .false.
-            if (self%fam%chain%n > 0) then
-               call column_chain(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, k1, self%el_torque, &
-                                 self%theta, self%omega, b%disp(:, j), b%force(:, j), b%torque(:, j), b%omega(:, j))
-            else
-               call column_plain(self%fam, self%fam%iw, self%fam%rw, self%elements, t, y, k1, self%el_torque, &
-                                 self%theta, self%omega, b%disp(:, j), b%force(:, j), b%torque(:, j), b%omega(:, j))
-            end if
-            b%t(j) = t
-            if (.not. s <= r%y_limit .or. r%t_goal - t <= r%t_tol) return
-            r%done = .false.
-         end do
+         if (.not. self%simple) return
+         if (self%run%track_energy) then
+            ! (the energy-tracking loop in a file of its own, D-182)
+            call rk4_block_energy(self, t, y, k1, k2, k3, k4, ynew, g1, gw_i, gw)
+            return
+         end if
+#define ENERGY 0
+#include "trainsim_model_block_loop.inc"
+#undef ENERGY
       end associate
    contains
 #define RK4_INNER 1
