@@ -467,7 +467,12 @@ contains
          call constraints_settle(self, t, yc, evs, nev, dstored, .false.)
       end if
       self%energy0 = self%stored_energy(t, y)
-      self%modes_at = [t, y]
+      if (allocated(self%modes_at)) then   ! [t, y] (a constructor [t, y] costs 11 instructions an entry)
+         if (size(self%modes_at) /= size(y) + 1) deallocate (self%modes_at)
+      end if
+      if (.not. allocated(self%modes_at)) allocate (self%modes_at(size(y) + 1))
+      self%modes_at(1) = t
+      self%modes_at(2:) = y
    end procedure model_init_modes
 
    module procedure model_preload_mode
