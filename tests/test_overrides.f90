@@ -144,7 +144,7 @@ contains
    !> The builder keeps each element's params() for the print-out and the static
    !> reference (D-175): after the build they are what params() gives, name for name and
    !> bit for bit (finalize and the plausibility checks change no element); a derived
-   !> parameter set after the build keeps them so (D-185): it sets speeds and times, and
+   !> parameter set after the build keeps them so (D-183): it sets speeds and times, and
    !> the element it names is asked again.
    subroutine test_kept_params_are_params()
       type(deck_t) :: deck

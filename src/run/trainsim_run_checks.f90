@@ -438,7 +438,7 @@ contains
    end function guard_owner
 
    !> Whether the elements' modes are still those the last `init_modes` set at (t, y),
-   !> bit for bit (the step check's, D-185): nothing since changed a mode (an event, a
+   !> bit for bit (the step check's, D-183): nothing since changed a mode (an event, a
    !> preload, a rebuilt table unsets model%modes_at), so a run need not set them again.
    logical function modes_kept(model, t, y) result(kept)
       type(model_t), intent(in) :: model

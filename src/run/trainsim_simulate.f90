@@ -111,7 +111,7 @@ contains
       t = model%run%t_start
       call static_reference(model, obs%qs)   ! each gear mesh's static force and TE, for Kv (D-103)
       call model%initial_state(y)
-      ! the modes the step check set at this state, unless anything changed them since (D-185)
+      ! the modes the step check set at this state, unless anything changed them since (D-183)
       if (.not. (fresh .and. modes_kept(model, t, y))) call model%init_modes(t, y, tables=.not. fresh)
       obs%refine_peaks = .not. is_fixed_step(model%run%integrator)
       ! settling until periodic: the integrator and the loop run to the latest end the

@@ -63,7 +63,7 @@ contains
             case (1)
                call set_mesh_frequency(model, ie, v, err)
                ! the builder's lists (D-175) kept: a mesh frequency sets speeds, not an element's
-               ! parameters; the element it names asked again should it list one (D-185)
+               ! parameters; the element it names asked again should it list one (D-183)
                if (allocated(model%element_params)) then
                   if (size(model%element_params) == size(model%elements)) &
                      model%element_params(ie) = model%elements(ie)%e%params()
