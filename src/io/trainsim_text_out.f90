@@ -15,6 +15,11 @@ module trainsim_text_out
    public :: text_out_t
 
    integer, parameter :: block_chars = 65536   !< written when the buffer holds this much
+   integer, parameter :: i16 = selected_int_kind(38)
+   integer :: k_
+   !> powers of ten looked up, not raised (an integer power of a variable is a library call)
+   integer(i16), parameter :: ten16(0:38) = [(10_i16**k_, k_=0, 38)]
+   integer(int64), parameter :: ten8(0:18) = [(10_int64**k_, k_=0, 18)]
 
    type :: text_out_t
       integer :: unit = 6
@@ -84,20 +89,20 @@ contains
       class(text_out_t), intent(inout) :: self
       character(len=*), intent(in) :: s
       integer, intent(in) :: w
-      integer :: m, n
+      integer :: m, n, k, j
       n = self%n
-      if (w <= 0) then
-         m = len(s)
-         if (.not. fits(self, m)) call grow(self, m)
-         self%buf(n + 1:n + m) = s
-         self%n = n + m
-         return
+      m = len(s)
+      k = m                        ! the field's width
+      if (w > 0) then
+         m = min(m, w)
+         k = w
       end if
-      if (.not. fits(self, w)) call grow(self, w)
-      m = min(len(s), w)
-      if (m < w) self%buf(n + 1:n + w - m) = ' '
-      self%buf(n + w - m + 1:n + w) = s(1:m)
-      self%n = n + w
+      if (.not. fits(self, k)) call grow(self, k)
+      do j = n + 1, n + k - m      ! (a few blanks: no memset call)
+         self%buf(j:j) = ' '
+      end do
+      self%buf(n + k - m + 1:n + k) = s(1:m)
+      self%n = n + k
    end subroutine put_a
 
    !> n blanks (nX).
@@ -129,9 +134,9 @@ contains
          s(j:j) = '-'
       end if
       if (w > 0 .and. len(s) - j + 1 > w) then
-         call self%a(repeat('*', w), w)
+         call put_a(self, repeat('*', w), w)
       else
-         call self%a(s(j:), w)
+         call put_a(self, s(j:), w)
       end if
    end subroutine put_i
 
@@ -162,7 +167,6 @@ contains
       class(text_out_t), intent(inout) :: self
       real(wp), intent(in) :: x
       integer, intent(in) :: w, d
-      integer, parameter :: i16 = selected_int_kind(38)
       integer(i16) :: num, den, q, r, p10
       integer(int64) :: m, q8
       integer :: e2, ex, sc, pass, j, k, n
@@ -178,13 +182,13 @@ contains
          end if
          t(n + 1:n + d + 2) = '0.00000000000000000'   ! (truncated to d + 2 characters)
          t(n + d + 3:n + d + 6) = 'E+00'
-         call self%a(t(1:n + d + 6), w)
+         call put_a(self, t(1:n + d + 6), w)
          done = .true.
          return
       else
          if (abs(x) < tiny(x)) return
          if (d == self%memo_d .and. transfer(x, 0_int64) == self%memo_bits) then
-            call self%a(self%memo_t(1:self%memo_n), w)
+            call put_a(self, self%memo_t(1:self%memo_n), w)
             done = .true.
             return
          end if
@@ -194,12 +198,12 @@ contains
          do pass = 1, 3
             sc = ex - d                                      ! q ~ |x| / 10^sc, d+1 digits
             if (max(e2, 0) + 4*max(-sc, 0) > 70 .or. max(-e2, 0) + 4*max(sc, 0) > 120) return
-            num = int(m, i16)*2_i16**max(e2, 0)*10_i16**max(-sc, 0)
-            den = 2_i16**max(-e2, 0)*10_i16**max(sc, 0)
+            num = shiftl(int(m, i16), max(e2, 0))*ten16(max(-sc, 0))
+            den = shiftl(1_i16, max(-e2, 0))*ten16(max(sc, 0))
             q = num/den
             r = num - q*den
             if (2*r > den .or. (2*r == den .and. mod(q, 2_i16) == 1)) q = q + 1
-            p10 = 10_i16**d
+            p10 = ten16(d)
             if (q >= 10*p10) then
                ex = ex + 1
             else if (q < p10) then
@@ -225,7 +229,7 @@ contains
       t(k + 2:k + 2) = merge('-', '+', ex < 0)
       t(k + 3:k + 3) = achar(48 + abs(ex)/10)
       t(k + 4:k + 4) = achar(48 + mod(abs(ex), 10))
-      call self%a(t(1:n), w)
+      call put_a(self, t(1:n), w)
       self%memo_bits = transfer(x, 0_int64)
       self%memo_d = d
       self%memo_n = n
@@ -257,10 +261,9 @@ contains
       class(text_out_t), intent(inout) :: self
       real(wp), intent(in) :: x
       integer, intent(in) :: w, d
-      integer, parameter :: i16 = selected_int_kind(38)
       integer(i16) :: num, den, q, r
-      integer(int64) :: ip, fp, p10
-      integer :: e2, n, j, k
+      integer(int64) :: ip, fp, p10, q8
+      integer :: e2, n, j, k, s2
       character(len=32) :: t
       done = .false.
       if (d < 1 .or. d > 9) return
@@ -269,22 +272,24 @@ contains
       q = 0
       if (abs(x) >= 1.0e-18_wp) then   ! (below: |x| 10^d < 1e-9 rounds to 0; above: 2^-e2 < 2^113)
          e2 = exponent(x) - digits(x)
-         num = int(scale(fraction(abs(x)), digits(x)), i16)*2_i16**max(e2, 0)*10_i16**d
-         den = 2_i16**max(-e2, 0)
-         q = num/den
-         r = num - q*den
-         if (2*r > den .or. (2*r == den .and. mod(q, 2_i16) == 1)) q = q + 1
+         num = shiftl(int(scale(fraction(abs(x)), digits(x)), i16), max(e2, 0))*ten16(d)
+         s2 = max(-e2, 0)                       ! den = 2^s2: the quotient by a shift
+         den = shiftl(1_i16, s2)
+         q = shiftr(num, s2)
+         r = num - shiftl(q, s2)
+         if (2*r > den .or. (2*r == den .and. iand(q, 1_i16) == 1)) q = q + 1
       end if
-      p10 = 10_int64**d
-      ip = int(q/p10, int64)
-      fp = int(mod(q, int(p10, i16)), int64)
+      p10 = ten8(d)
+      q8 = int(q, int64)                        ! q < 10^18: split in 64 bits
+      ip = q8/p10
+      fp = q8 - ip*p10
       n = 0
       if (sign(1.0_wp, x) < 0.0_wp) then
          n = 1
          t(1:1) = '-'
       end if
       k = 1                                   ! digits of the integer part (at least one)
-      do while (ip >= 10_int64**k)
+      do while (ip >= ten8(k))
          k = k + 1
       end do
       do j = n + k, n + 1, -1
@@ -299,7 +304,7 @@ contains
       end do
       n = n + d
       if (n > w) return
-      call self%a(t(1:n), w)
+      call put_a(self, t(1:n), w)
       done = .true.
    end function f_exact
 
@@ -317,13 +322,13 @@ contains
       if (m <= 0) then
          write (fmt, '(2a,i0,a,i0,a)') '(', letter, w, '.', d, ')'
          write (t, fmt) x
-         call self%a(t(1:w), w)
+         call put_a(self, t(1:w), w)
          return
       end if
       do j = 1, m
          t(j:j) = c(j)
       end do
-      call self%a(t(1:m), w)
+      call put_a(self, t(1:m), w)
    end subroutine put_c_or_fortran
 
    !> Ends the line; the buffer goes out once it holds a block.

@@ -62,9 +62,9 @@ module trainsim_model
       integer :: n_guards = 0
       integer, allocatable :: guard_offset(:)    !< per element
       real(wp) :: energy0 = 0.0_wp               !< stored energy at t_start
+      real(wp), allocatable :: modes_at(:)       !< [t, y] of the last init_modes; unset by a mode change (D-183)
       logical :: any_needs_loads = .false.       !< some element reads its nodes' external loads
-      !> some element has more than two ports (D-73): the general path only (no
-      !> simple kernels, hot forms or linear-spring form for it, no RK4 local steps)
+      !> some element has more than two ports (D-73): the general path only (no simple kernels, hot forms or linear-spring form for it, no RK4 local steps)
       logical :: nport = .false.
       ! workspace (sized once in `finalize`)
       real(wp), allocatable :: theta(:), omega(:), torque(:)

@@ -293,6 +293,7 @@ contains
       type(event_t), allocatable :: grown(:)
       real(wp) :: e_before, de
       e_before = 0.0_wp   ! read below only if track_energy; set so -Wmaybe-uninitialized need not prove that
+      if (allocated(self%modes_at)) deallocate (self%modes_at)   ! (the modes init_modes set: D-183)
       ! the stuck clusters' speeds exactly as the constraints say (an integrator's
       ! interpolation to the event leaves roundoff in them; D-81), before modes change
       de = 0.0_wp

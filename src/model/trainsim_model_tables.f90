@@ -20,6 +20,7 @@ contains
    module procedure model_build_fast_path
       integer :: i, ne
       ne = size(self%elements)
+      if (allocated(self%modes_at)) deallocate (self%modes_at)   ! (init_modes must follow a rebuild)
       call node_table(self)
       if (allocated(self%fe)) deallocate (self%fe, self%fh, self%gr)
       allocate (self%fe(ne), self%fh(ne), self%gr(ne))
@@ -466,9 +467,16 @@ contains
          call constraints_settle(self, t, yc, evs, nev, dstored, .false.)
       end if
       self%energy0 = self%stored_energy(t, y)
+      if (allocated(self%modes_at)) then   ! [t, y] (a constructor [t, y] costs 11 instructions an entry)
+         if (size(self%modes_at) /= size(y) + 1) deallocate (self%modes_at)
+      end if
+      if (.not. allocated(self%modes_at)) allocate (self%modes_at(size(y) + 1))
+      self%modes_at(1) = t
+      self%modes_at(2:) = y
    end procedure model_init_modes
 
    module procedure model_preload_mode
+      if (allocated(self%modes_at)) deallocate (self%modes_at)
       call self%elements(j)%e%preload_mode(face, thl, wl, thr, wr)
       call refresh_hot(self, j)
    end procedure model_preload_mode

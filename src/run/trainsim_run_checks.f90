@@ -4,7 +4,7 @@
 !> physical (`check_physical`, `check_ledger`, D-55), and the advice in their messages
 !> (the limit, the mode that sets it, the integrator to use instead).
 module trainsim_run_checks
-   use trainsim_kinds, only: wp
+   use trainsim_kinds, only: wp, i8
    use trainsim_error, only: error_t, fatal_error, err_input, err_numeric
    use trainsim_strings, only: str
    use trainsim_model, only: model_t
@@ -17,7 +17,7 @@ module trainsim_run_checks
    private
 
    public :: check_fixed_step, check_state, check_physical, check_ledger, displacement_bounds, blowup_limit
-   public :: guard_owner, is_fixed_step, remedy, window_text
+   public :: guard_owner, is_fixed_step, remedy, window_text, modes_kept
 
    !> A state beyond this is a blow-up. Far above any physical angle, speed,
    !> current or energy; its square times any sane coefficient stays finite, so
@@ -436,4 +436,21 @@ contains
          end if
       end do
    end function guard_owner
+
+   !> Whether the elements' modes are still those the last `init_modes` set at (t, y),
+   !> bit for bit (the step check's, D-183): nothing since changed a mode (an event, a
+   !> preload, a rebuilt table unsets model%modes_at), so a run need not set them again.
+   logical function modes_kept(model, t, y) result(kept)
+      type(model_t), intent(in) :: model
+      real(wp), intent(in) :: t, y(:)
+      integer :: i
+      kept = .false.
+      if (.not. allocated(model%modes_at)) return
+      if (size(model%modes_at) /= size(y) + 1) return
+      if (transfer(model%modes_at(1), 0_i8) /= transfer(t, 0_i8)) return
+      do i = 1, size(y)
+         if (transfer(model%modes_at(i + 1), 0_i8) /= transfer(y(i), 0_i8)) return
+      end do
+      kept = .true.
+   end function modes_kept
 end module trainsim_run_checks

@@ -25,7 +25,7 @@ module trainsim_simulate
    use trainsim_progress, only: progress_t
    use trainsim_settle, only: settle_t, settle_setup, settle_sample, settle_kmax
    use trainsim_run_checks, only: check_fixed_step, check_state, check_physical, check_ledger, displacement_bounds, &
-                                  blowup_limit, guard_owner, is_fixed_step, remedy, window_text
+                                  blowup_limit, guard_owner, is_fixed_step, remedy, window_text, modes_kept
    implicit none
    private
 
@@ -111,7 +111,8 @@ contains
       t = model%run%t_start
       call static_reference(model, obs%qs)   ! each gear mesh's static force and TE, for Kv (D-103)
       call model%initial_state(y)
-      call model%init_modes(t, y, tables=.not. fresh)
+      ! the modes the step check set at this state, unless anything changed them since (D-183)
+      if (.not. (fresh .and. modes_kept(model, t, y))) call model%init_modes(t, y, tables=.not. fresh)
       obs%refine_peaks = .not. is_fixed_step(model%run%integrator)
       ! settling until periodic: the integrator and the loop run to the latest end the
       ! budget allows; the loop ends the run a measured window after the settling

@@ -48,8 +48,6 @@ contains
       character(len=:), allocatable :: blame
       integer :: by_pass(size(derived_keys))   ! the override that set each pass's key (0: none)
       by_pass = 0
-      ! a parameter set after the build: the builder's params() lists no longer hold (D-175)
-      if (any(ovs(:)%derived) .and. allocated(model%element_params)) deallocate (model%element_params)
 
       do pass = 1, size(derived_keys)
          do k = 1, size(ovs)
@@ -64,6 +62,12 @@ contains
             select case (pass)
             case (1)
                call set_mesh_frequency(model, ie, v, err)
+               ! the builder's lists (D-175) kept: a mesh frequency sets speeds, not an element's
+               ! parameters; the element it names asked again should it list one (D-183)
+               if (allocated(model%element_params)) then
+                  if (size(model%element_params) == size(model%elements)) &
+                     model%element_params(ie) = model%elements(ie)%e%params()
+               end if
             case default
                f = mesh_frequency_of(model, ie)
                if (.not. f > 0.0_wp) then
