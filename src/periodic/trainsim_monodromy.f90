@@ -49,8 +49,9 @@ module trainsim_monodromy
       !> (D-170): split, every step of the rest of the mode takes it; try_split,
       !> while its first full step runs (ja held, the split agrees with J)
       logical :: split = .false., try_split = .false.
-      !> pattern: jr, jc hold the places of the split J's nonzeros in this mode (D-194)
-      logical :: pattern = .false.
+      !> pattern: jr, jc hold the places of the split J's nonzeros in this mode;
+      !> jac_ja: jac holds ja but at the varying entries' places (D-194)
+      logical :: pattern = .false., jac_ja = .false.
       type(jac_part_t) :: part
       real(wp), allocatable :: ja(:, :), jt(:, :)   !< (ny, ny) the constant part; scratch
       real(wp), allocatable :: smat(:, :), jac0(:, :)
@@ -266,7 +267,10 @@ contains
       moving = .false.
       if (w%var .and. w%exact) then
          moving = any(w%tau /= 0.0_wp)
-         if (moving .or. to_event) call step_partials(model, t, hs, x, w%jac, w%rl, w%rt)
+         if (moving .or. to_event) then
+            call step_partials(model, t, hs, x, w%jac, w%rl, w%rt)
+            w%jac_ja = .false.
+         end if
       end if
       call advance_state(model, t, hs, x, w)
       if (moving) then
@@ -538,11 +542,14 @@ contains
       type(pass_t), intent(inout) :: w
       integer :: e, j
       if (w%split) then                 ! the constant part and the varying elements' parts (D-170)
-         w%jac = w%ja
+         if (.not. w%jac_ja) w%jac = w%ja   ! (after, its varying entries are put back to ja's, D-194)
+         w%jac_ja = .true.
          call model%jacobian(t, x, w%jac, part=w%part)
       else if (.not. w%watch) then
+         w%jac_ja = .false.
          call model%jacobian(t, x, w%jac)
       else
+         w%jac_ja = .false.
          call watch_stage(model, t, x, w)
       end if
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
@@ -552,6 +559,9 @@ contains
          if (.not. w%pattern) call split_pattern(w%n, w%ny, w%ja, w%part%sc, w%part%nsc, w%jr, w%jc)
          w%pattern = .true.
          call gather(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
+         do j = 1, w%part%nsc            ! jac = ja again, entry by entry
+            w%jac(w%part%sc(2, j), w%part%sc(3:4, j)) = w%ja(w%part%sc(2, j), w%part%sc(3:4, j))
+         end do
       else
          call nonzeros(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
       end if
