@@ -19,7 +19,8 @@
 !> change the run at all (the grid goes on from t_start); with an adaptive
 !> one it restarts the solver there, as a breakpoint of the inputs does (a
 !> change within the tolerance). The metrics and events the observer gathers
-!> are not rolled back by `restore`.
+!> are not rolled back by `restore`. With `defer` (D-194) neither starts one: the
+!> next `set_state`, `set_input`, `save` or `advance` does, on the same grid.
 !>
 !> A session must not be copied once started (the integrator holds the
 !> address of the session's model): declare it with `target` or allocate it.
