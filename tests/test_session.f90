@@ -124,7 +124,7 @@ contains
       call s%finish()
    end subroutine test_save_and_restore
 
-   !> `save` and `restore` with `defer` (D-194: the period map's next call is
+   !> `save` and `restore` with `defer` (D-186: the period map's next call is
    !> `set_state`, which starts the integrator): the run goes on as without it, bit
    !> for bit, whether the next call is `set_state` or `advance`.
    subroutine test_deferred_start(integrator)

@@ -63,7 +63,7 @@ contains
    !> (5, nodes) where given (the Jacobian's constant part, D-170: only the
    !> element's nodes' kinematics), else through the nodes' own Jacobians (jac:
    !> scratch they add to). current: the workspace holds the kinematics of e's
-   !> nodes at (t, x) already (the split Jacobian's varying part just took them, D-194).
+   !> nodes at (t, x) already (the split Jacobian's varying part just took them, D-186).
    subroutine damping_column(model, e, t, x, jac, b, dtq, current)
       type(model_t), intent(inout) :: model
       integer, intent(in) :: e

@@ -50,7 +50,7 @@ module trainsim_monodromy
       !> while its first full step runs (ja held, the split agrees with J)
       logical :: split = .false., try_split = .false.
       !> pattern: jr, jc hold the places of the split J's nonzeros in this mode;
-      !> jac_ja: jac holds ja but at the varying entries' places (D-194)
+      !> jac_ja: jac holds ja but at the varying entries' places (D-186)
       logical :: pattern = .false., jac_ja = .false.
       type(jac_part_t) :: part
       real(wp), allocatable :: ja(:, :), jt(:, :)   !< (ny, ny) the constant part; scratch
@@ -542,7 +542,7 @@ contains
       type(pass_t), intent(inout) :: w
       integer :: e, j
       if (w%split) then                 ! the constant part and the varying elements' parts (D-170)
-         if (.not. w%jac_ja) w%jac = w%ja   ! (after, its varying entries are put back to ja's, D-194)
+         if (.not. w%jac_ja) w%jac = w%ja   ! (after, its varying entries are put back to ja's, D-186)
          w%jac_ja = .true.
          call model%jacobian(t, x, w%jac, part=w%part)
       else if (.not. w%watch) then
@@ -554,7 +554,7 @@ contains
       end if
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
       ! two nodes), each entry summed over k in order, as matmul does (D-148, D-170);
-      ! in a split mode over the mode's pattern of them (D-194)
+      ! in a split mode over the mode's pattern of them (D-186)
       if (w%split) then
          if (.not. w%pattern) call split_pattern(w%n, w%ny, w%ja, w%part%sc, w%part%nsc, w%jr, w%jc)
          w%pattern = .true.
@@ -569,7 +569,7 @@ contains
       do e = 1, size(w%has_q)
          if (.not. w%has_q(e)) cycle
          if (w%split) then               ! (the nodes' gains of the constant part; e's kinematics
-            ! taken at (t, x) by its varying part if it has one, D-194)
+            ! taken at (t, x) by its varying part if it has one, D-186)
             call damping_column(model, e, t, x, w%jt, w%b, w%part%dtq, &
                                 current=any(w%part%sc(1, 1:w%part%nsc) == e))
          else

@@ -206,7 +206,7 @@ contains
       m%run = deck_run
       end associate
       if (allocated(err)) return
-      call self%s%save(self%p0, err, defer=.true.)   ! (every use restores it first, D-194)
+      call self%s%save(self%p0, err, defer=.true.)   ! (every use restores it first, D-186)
       ! the memory: kept across a new t0 or parameter (rephase, a branch's next lambda), else the deck's start
       keep = .false.
       if (present(keep_memory)) keep = keep_memory
@@ -254,7 +254,7 @@ contains
       self%mem_end = self%mem
       do j = 1, np, self%k
          ! a chunk of k periods from t0 (the forcing repeats): restore, set, advance
-         call self%s%restore(self%p0, err, defer=.true.)   ! (set_state starts the integrator, D-194)
+         call self%s%restore(self%p0, err, defer=.true.)   ! (set_state starts the integrator, D-186)
          if (allocated(err)) return
          call self%hold_memory(self%s%model, self%mem_end)   ! (the memory the last chunk ended with)
          call self%s%set_state(self%full_state(x1), err)

@@ -83,7 +83,7 @@ contains
 
    !> The places of J(1:n, 1:n)'s nonzeros in a mode with a split Jacobian (D-170):
    !> the constant part ja's and the varying elements' entries (sc rows 2-4: row, the
-   !> columns of an angle and a speed), by rows as `nonzeros` lists them (D-194).
+   !> columns of an angle and a speed), by rows as `nonzeros` lists them (D-186).
    pure subroutine split_pattern(n, ny, ja, sc, nsc, rs, jc)
       integer, intent(in) :: n, ny, nsc, sc(8, *)
       real(wp), intent(in) :: ja(ny, ny)
@@ -110,7 +110,7 @@ contains
 
    !> J's values at the places of a pattern (`split_pattern`): an entry that is
    !> zero at this stage is kept, and adds +0 to a sum that is never -0, so
-   !> `sparse_product` gives what it gives over `nonzeros` (D-194).
+   !> `sparse_product` gives what it gives over `nonzeros` (D-186).
    pure subroutine gather(n, ny, jac, rs, jc, jv)
       integer, intent(in) :: n, ny, rs(n + 1), jc(*)
       real(wp), intent(in) :: jac(ny, ny)

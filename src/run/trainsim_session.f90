@@ -19,7 +19,7 @@
 !> change the run at all (the grid goes on from t_start); with an adaptive
 !> one it restarts the solver there, as a breakpoint of the inputs does (a
 !> change within the tolerance). The metrics and events the observer gathers
-!> are not rolled back by `restore`. With `defer` (D-194) neither starts one: the
+!> are not rolled back by `restore`. With `defer` (D-186) neither starts one: the
 !> next `set_state`, `set_input`, `save` or `advance` does, on the same grid.
 !>
 !> A session must not be copied once started (the integrator holds the
@@ -89,7 +89,7 @@ module trainsim_session
       integer, allocatable, private :: input_kinds(:)
       logical, private :: owns_sequences = .false.
       integer, private :: start_no = 0   !< this start's number (n_starts)
-      !> no integrator running (`save` or `restore` with `defer`, D-194): the next
+      !> no integrator running (`save` or `restore` with `defer`, D-186): the next
       !> `set_state`, `set_input`, `save` or `advance` starts one on this grid
       logical, private :: idle = .false.
       real(wp), private :: idle_t0 = 0.0_wp
@@ -200,7 +200,7 @@ contains
 
    !> The session's point (time, state, modes, parameters) into `state`; the
    !> integrator starts afresh here (as after `restore`). `defer`: the caller goes
-   !> on only by `restore` or `set_state` (the period map, D-194): no integrator is
+   !> on only by `restore` or `set_state` (the period map, D-186): no integrator is
    !> started here; one is started on the grid when the run goes on.
    subroutine session_save(self, state, err, defer)
       class(session_t), intent(inout), target :: self
@@ -227,7 +227,7 @@ contains
 
    !> Go back (or forward) to a point `save` took of this session's run (since its
    !> last start; a point of another run is refused: err_input). `defer`: the
-   !> caller's next call is `set_state` (the period map, D-194), which starts the
+   !> caller's next call is `set_state` (the period map, D-186), which starts the
    !> integrator: none is started here for it to replace.
    subroutine session_restore(self, state, err, defer)
       class(session_t), intent(inout), target :: self
@@ -457,7 +457,7 @@ contains
    end subroutine stop_integrator
 
    !> A new integrator at the session's point on the fixed-step grid (t0, next);
-   !> with `defer`, none: the session idles until the run goes on (D-194).
+   !> with `defer`, none: the session idles until the run goes on (D-186).
    subroutine restart_on_grid(self, t0, next, err, defer)
       type(session_t), intent(inout), target :: self
       real(wp), intent(in) :: t0

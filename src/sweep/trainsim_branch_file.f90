@@ -289,7 +289,7 @@ contains
          return
       end if
       ! (a file just created holds no message: every slot pending, its text the fill
-      ! value; reading each slot's text back cost ~430 M instructions, D-194)
+      ! value; reading each slot's text back cost ~430 M instructions, D-186)
       if (resume) call clean_slot_messages(self%file, 'runs', self%d_message, self%t_message, st /= status_pending, &
                                            self%path, err)
    end subroutine open_sets
