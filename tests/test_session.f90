@@ -22,6 +22,8 @@ program test_session
    call test_session_equals_run('arkode-dp')
    call test_save_and_restore('rk4')
    call test_save_and_restore('cvode-bdf')
+   call test_deferred_start('rk4')
+   call test_deferred_start('cvode-bdf')
    call test_off_grid_points()
    call test_input_torque('rk4')
    call test_input_torque('cvode-bdf')
@@ -121,6 +123,56 @@ contains
       end if
       call s%finish()
    end subroutine test_save_and_restore
+
+   !> `save` and `restore` with `defer` (D-186: the period map's next call is
+   !> `set_state`, which starts the integrator): the run goes on as without it, bit
+   !> for bit, whether the next call is `set_state` or `advance`.
+   subroutine test_deferred_start(integrator)
+      character(len=*), intent(in) :: integrator
+      type(model_t) :: m
+      type(session_t), target :: s
+      type(session_state_t) :: p
+      type(error_t), allocatable :: err
+      real(wp), allocatable :: y2(:), y3(:), ys(:), ya(:), yb(:)
+      real(wp) :: t1, t2
+      call test_begin('deferred_start_'//integrator)
+      call rig(integrator, m)
+      t1 = 6.0e-3_wp
+      t2 = 1.52e-2_wp
+      call s%start(m, err)
+      if (.not. allocated(err)) call s%advance(t1, err)
+      ys = 1.001_wp*s%y                ! (a state of the caller's own at t1)
+      if (.not. allocated(err)) call s%save(p, err)
+      if (.not. allocated(err)) call s%advance(t2, err)
+      y2 = s%y
+      if (.not. allocated(err)) call s%restore(p, err)
+      if (.not. allocated(err)) call s%set_state(ys, err)
+      if (.not. allocated(err)) call s%advance(t2, err)
+      ya = s%y
+      call s%finish()
+      call check('saved, restored, a state set and advanced without error', .not. allocated(err))
+      call s%start(m, err)
+      if (.not. allocated(err)) call s%advance(t1, err)
+      if (.not. allocated(err)) call s%save(p, err, defer=.true.)
+      if (.not. allocated(err)) call s%advance(t2, err)
+      call check('deferred: the run goes on after its save as without the deferral, bit for bit', &
+                 .not. allocated(err) .and. all(s%y == y2))
+      if (.not. allocated(err)) call s%restore(p, err, defer=.true.)
+      if (.not. allocated(err)) call s%advance(t2, err)
+      call check('   and after a deferred restore straight to advance', .not. allocated(err) .and. all(s%y == y2))
+      if (.not. allocated(err)) call s%restore(p, err, defer=.true.)
+      if (.not. allocated(err)) call s%set_state(ys, err)
+      if (.not. allocated(err)) call s%advance(t2, err)
+      yb = s%y
+      call check('   and after a deferred restore and a state set (the period map''s use)', &
+                 .not. allocated(err) .and. all(yb == ya))
+      if (.not. allocated(err)) call s%restore(p, err, defer=.true.)
+      if (.not. allocated(err)) call s%save(p, err)
+      if (.not. allocated(err)) call s%advance(t2, err)
+      y3 = s%y
+      call check('   and saved again while idle, then advanced', .not. allocated(err) .and. all(y3 == y2))
+      call s%finish()
+   end subroutine test_deferred_start
 
    !> Communication points off the dt grid, 0.37 dt to 90 dt apart, across the
    !> contact events (cvode-bdf at rtol 1e-9): the session ends at t_end in the

@@ -62,20 +62,24 @@ contains
    !> torque: through dtq, the nodes' gains d(dydt of state k)/d(net torque)
    !> (5, nodes) where given (the Jacobian's constant part, D-170: only the
    !> element's nodes' kinematics), else through the nodes' own Jacobians (jac:
-   !> scratch they add to).
-   subroutine damping_column(model, e, t, x, jac, b, dtq)
+   !> scratch they add to). current: the workspace holds the kinematics of e's
+   !> nodes at (t, x) already (the split Jacobian's varying part just took them, D-186).
+   subroutine damping_column(model, e, t, x, jac, b, dtq, current)
       type(model_t), intent(inout) :: model
       integer, intent(in) :: e
       real(wp), intent(in) :: t, x(:)
       real(wp), intent(inout) :: jac(:, :)
       real(wp), intent(out) :: b(:)
       real(wp), intent(in), optional :: dtq(:, :)
+      logical, intent(in), optional :: current
       real(wp) :: s, c, p, pdot, dfs, g(8), tq(2)
       integer :: l, r, a, nd, k, ns
       b = 0.0_wp
       l = model%elements(e)%e%left
       r = model%elements(e)%e%right
-      if (present(dtq)) then
+      if (present(current)) then
+         if (.not. current) call model%kinematics_part(t, x, [l, r])
+      else if (present(dtq)) then
          call model%kinematics_part(t, x, [l, r])
       else
          call model%kinematics(t, x)

@@ -24,7 +24,8 @@ module trainsim_monodromy
    use trainsim_impact_memory, only: impact_gradient, damping_column
    use trainsim_contact_sequence, only: monodromy_stats_t, record_event
    use trainsim_guard_geometry, only: face_of, guard_gradient
-   use trainsim_step_tangent, only: step_partials, nonzeros, sparse_product, dense_product, tangent_map
+   use trainsim_step_tangent, only: step_partials, nonzeros, split_pattern, gather, sparse_product, dense_product, &
+                                    tangent_map
    implicit none
    private
 
@@ -48,6 +49,9 @@ module trainsim_monodromy
       !> (D-170): split, every step of the rest of the mode takes it; try_split,
       !> while its first full step runs (ja held, the split agrees with J)
       logical :: split = .false., try_split = .false.
+      !> pattern: jr, jc hold the places of the split J's nonzeros in this mode;
+      !> jac_ja: jac holds ja but at the varying entries' places (D-186)
+      logical :: pattern = .false., jac_ja = .false.
       type(jac_part_t) :: part
       real(wp), allocatable :: ja(:, :), jt(:, :)   !< (ny, ny) the constant part; scratch
       real(wp), allocatable :: smat(:, :), jac0(:, :)
@@ -263,7 +267,10 @@ contains
       moving = .false.
       if (w%var .and. w%exact) then
          moving = any(w%tau /= 0.0_wp)
-         if (moving .or. to_event) call step_partials(model, t, hs, x, w%jac, w%rl, w%rt)
+         if (moving .or. to_event) then
+            call step_partials(model, t, hs, x, w%jac, w%rl, w%rt)
+            w%jac_ja = .false.
+         end if
       end if
       call advance_state(model, t, hs, x, w)
       if (moving) then
@@ -377,6 +384,7 @@ contains
       if (.not. w%var) return
       w%s_ok = .false.                                ! a new mode: its own tangent map or split, if any
       w%split = .false.
+      w%pattern = .false.
       w%lin = w%cache
       call model%rhs(t, x, fp)
       row = matmul(nv, w%phi)/den                     ! n^T Phi- / (n^T f- + dg/dt) = -d t_e / d x(t0)
@@ -471,6 +479,7 @@ contains
          w%lin = .false.
          if (w%same_j .and. .not. any(w%has_q)) call build_tangent(w, hs)
          w%split = w%try_split .and. (w%same_j .or. any(w%part%vary))
+         w%pattern = .false.
          w%part%varying = .true.
       end if
    end subroutine rk4_var
@@ -533,21 +542,36 @@ contains
       type(pass_t), intent(inout) :: w
       integer :: e, j
       if (w%split) then                 ! the constant part and the varying elements' parts (D-170)
-         w%jac = w%ja
+         if (.not. w%jac_ja) w%jac = w%ja   ! (after, its varying entries are put back to ja's, D-186)
+         w%jac_ja = .true.
          call model%jacobian(t, x, w%jac, part=w%part)
       else if (.not. w%watch) then
+         w%jac_ja = .false.
          call model%jacobian(t, x, w%jac)
       else
+         w%jac_ja = .false.
          call watch_stage(model, t, x, w)
       end if
       ! J Phi over J's nonzeros (a train's Jacobian is sparse: an element couples
-      ! two nodes), each entry summed over k in order, as matmul does (D-148, D-170)
-      call nonzeros(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
+      ! two nodes), each entry summed over k in order, as matmul does (D-148, D-170);
+      ! in a split mode over the mode's pattern of them (D-186)
+      if (w%split) then
+         if (.not. w%pattern) call split_pattern(w%n, w%ny, w%ja, w%part%sc, w%part%nsc, w%jr, w%jc)
+         w%pattern = .true.
+         call gather(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
+         do j = 1, w%part%nsc            ! jac = ja again, entry by entry
+            w%jac(w%part%sc(2, j), w%part%sc(3:4, j)) = w%ja(w%part%sc(2, j), w%part%sc(3:4, j))
+         end do
+      else
+         call nonzeros(w%n, w%ny, w%jac, w%jr, w%jc, w%jv)
+      end if
       call sparse_product(w%n, w%jr, w%jc, w%jv, phi, dphi)
       do e = 1, size(w%has_q)
          if (.not. w%has_q(e)) cycle
-         if (w%split) then               ! (the nodes' gains of the constant part)
-            call damping_column(model, e, t, x, w%jt, w%b, w%part%dtq)
+         if (w%split) then               ! (the nodes' gains of the constant part; e's kinematics
+            ! taken at (t, x) by its varying part if it has one, D-186)
+            call damping_column(model, e, t, x, w%jt, w%b, w%part%dtq, &
+                                current=any(w%part%sc(1, 1:w%part%nsc) == e))
          else
             call damping_column(model, e, t, x, w%jac, w%b)
          end if

@@ -206,7 +206,7 @@ contains
       m%run = deck_run
       end associate
       if (allocated(err)) return
-      call self%s%save(self%p0, err)
+      call self%s%save(self%p0, err, defer=.true.)   ! (every use restores it first, D-186)
       ! the memory: kept across a new t0 or parameter (rephase, a branch's next lambda), else the deck's start
       keep = .false.
       if (present(keep_memory)) keep = keep_memory
@@ -254,7 +254,7 @@ contains
       self%mem_end = self%mem
       do j = 1, np, self%k
          ! a chunk of k periods from t0 (the forcing repeats): restore, set, advance
-         call self%s%restore(self%p0, err)
+         call self%s%restore(self%p0, err, defer=.true.)   ! (set_state starts the integrator, D-186)
          if (allocated(err)) return
          call self%hold_memory(self%s%model, self%mem_end)   ! (the memory the last chunk ended with)
          call self%s%set_state(self%full_state(x1), err)
@@ -380,7 +380,7 @@ contains
       real(wp), intent(in) :: x(:), tau
       real(wp), intent(out) :: y(:)
       type(error_t), allocatable, intent(out) :: err
-      call self%s%restore(self%p0, err)
+      call self%s%restore(self%p0, err, defer=.true.)
       if (allocated(err)) return
       call self%hold_memory(self%s%model)
       call self%s%set_state(self%full_state(x), err)
@@ -454,7 +454,7 @@ contains
       n = max(64, min(2048, nint(span/self%model%run%dt)))
       ne = size(self%model%elements)
       allocate (disp(ne), force(ne), contact(ne), open(n), closed(size(self%memory), n))
-      call self%s%restore(self%p0, err)
+      call self%s%restore(self%p0, err, defer=.true.)
       if (allocated(err)) return
       call self%hold_memory(self%s%model)
       call self%s%set_state(self%full_state(x), err)
@@ -527,7 +527,7 @@ contains
       self%seg_p(0) = self%p0
       self%seg_x(:, 0) = x
       self%seg_mem(:, 0) = self%mem
-      call self%s%restore(self%p0, err)
+      call self%s%restore(self%p0, err, defer=.true.)
       if (allocated(err)) return
       call self%hold_memory(self%s%model)
       call self%s%set_state(self%full_state(x), err)
@@ -552,7 +552,7 @@ contains
       real(wp), intent(out) :: x1(:)
       type(error_t), allocatable, intent(out) :: err
       real(wp) :: y(size(self%y0))
-      call self%s%restore(self%seg_p(j), err)
+      call self%s%restore(self%seg_p(j), err, defer=.true.)
       if (allocated(err)) return
       y = self%full_state(xj)
       y(self%ang) = y(self%ang) + self%w*self%seg_tau(j)

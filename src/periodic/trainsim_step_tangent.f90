@@ -8,7 +8,7 @@ module trainsim_step_tangent
    implicit none
    private
 
-   public :: step_partials, nonzeros, sparse_product, dense_product, tangent_map
+   public :: step_partials, nonzeros, split_pattern, gather, sparse_product, dense_product, tangent_map
 
 contains
 
@@ -80,6 +80,48 @@ contains
       end do
       rs(n + 1) = nz + 1
    end subroutine nonzeros
+
+   !> The places of J(1:n, 1:n)'s nonzeros in a mode with a split Jacobian (D-170):
+   !> the constant part ja's and the varying elements' entries (sc rows 2-4: row, the
+   !> columns of an angle and a speed), by rows as `nonzeros` lists them (D-186).
+   pure subroutine split_pattern(n, ny, ja, sc, nsc, rs, jc)
+      integer, intent(in) :: n, ny, nsc, sc(8, *)
+      real(wp), intent(in) :: ja(ny, ny)
+      integer, intent(out) :: rs(n + 1), jc(n*n)
+      logical :: used(n, n)
+      integer :: i, k, l, nz
+      used = ja(1:n, 1:n) /= 0.0_wp
+      do l = 1, nsc
+         if (sc(2, l) > n) cycle
+         if (sc(3, l) <= n) used(sc(2, l), sc(3, l)) = .true.
+         if (sc(4, l) <= n) used(sc(2, l), sc(4, l)) = .true.
+      end do
+      nz = 0
+      do i = 1, n
+         rs(i) = nz + 1
+         do k = 1, n
+            if (.not. used(i, k)) cycle
+            nz = nz + 1
+            jc(nz) = k
+         end do
+      end do
+      rs(n + 1) = nz + 1
+   end subroutine split_pattern
+
+   !> J's values at the places of a pattern (`split_pattern`): an entry that is
+   !> zero at this stage is kept, and adds +0 to a sum that is never -0, so
+   !> `sparse_product` gives what it gives over `nonzeros` (D-186).
+   pure subroutine gather(n, ny, jac, rs, jc, jv)
+      integer, intent(in) :: n, ny, rs(n + 1), jc(*)
+      real(wp), intent(in) :: jac(ny, ny)
+      real(wp), intent(out) :: jv(*)
+      integer :: i, l
+      do i = 1, n
+         do l = rs(i), rs(i + 1) - 1
+            jv(l) = jac(i, jc(l))
+         end do
+      end do
+   end subroutine gather
 
    !> dphi = J phi from J's nonzeros by rows (`nonzeros`): each entry summed
    !> over k in increasing order from 0, as matmul does, in a register (D-170:

@@ -19,7 +19,8 @@
 !> change the run at all (the grid goes on from t_start); with an adaptive
 !> one it restarts the solver there, as a breakpoint of the inputs does (a
 !> change within the tolerance). The metrics and events the observer gathers
-!> are not rolled back by `restore`.
+!> are not rolled back by `restore`. With `defer` (D-186) neither starts one: the
+!> next `set_state`, `set_input`, `save` or `advance` does, on the same grid.
 !>
 !> A session must not be copied once started (the integrator holds the
 !> address of the session's model): declare it with `target` or allocate it.
@@ -88,6 +89,11 @@ module trainsim_session
       integer, allocatable, private :: input_kinds(:)
       logical, private :: owns_sequences = .false.
       integer, private :: start_no = 0   !< this start's number (n_starts)
+      !> no integrator running (`save` or `restore` with `defer`, D-186): the next
+      !> `set_state`, `set_input`, `save` or `advance` starts one on this grid
+      logical, private :: idle = .false.
+      real(wp), private :: idle_t0 = 0.0_wp
+      integer(i8), private :: idle_next = 0
    contains
       procedure :: start => session_start
       procedure :: advance => session_advance
@@ -186,16 +192,21 @@ contains
          return
       end if
       if (t_goal - self%t_int <= self%d%tol) return
+      if (self%idle) call restart_on_grid(self, self%idle_t0, self%idle_next, err)
+      if (allocated(err)) return
       call advance_to(self%model, self%integ, self%obs, self%d, t_goal, self%t_end, self%t_int, self%y, err)
       if (.not. allocated(err)) self%t = t_goal
    end subroutine session_advance
 
    !> The session's point (time, state, modes, parameters) into `state`; the
-   !> integrator starts afresh here (as after `restore`).
-   subroutine session_save(self, state, err)
+   !> integrator starts afresh here (as after `restore`). `defer`: the caller goes
+   !> on only by `restore` or `set_state` (the period map, D-186): no integrator is
+   !> started here; one is started on the grid when the run goes on.
+   subroutine session_save(self, state, err, defer)
       class(session_t), intent(inout), target :: self
       type(session_state_t), intent(out) :: state
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: defer
       if (.not. self%started) then
          call fatal_error(err, 'internal: a session saved before it was started', err_internal)
          return
@@ -210,17 +221,19 @@ contains
       call sequence_progress(self%model, state%reached)
       state%saved = .true.
       state%start_no = self%start_no
-      call grid_of(self%integ, state%grid_t0, state%grid_next)
-      call fresh_integrator(self, err)
-      if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
+      call current_grid(self, state%grid_t0, state%grid_next)
+      call restart_on_grid(self, state%grid_t0, state%grid_next, err, defer)
    end subroutine session_save
 
    !> Go back (or forward) to a point `save` took of this session's run (since its
-   !> last start; a point of another run is refused: err_input).
-   subroutine session_restore(self, state, err)
+   !> last start; a point of another run is refused: err_input). `defer`: the
+   !> caller's next call is `set_state` (the period map, D-186), which starts the
+   !> integrator: none is started here for it to replace.
+   subroutine session_restore(self, state, err, defer)
       class(session_t), intent(inout), target :: self
       type(session_state_t), intent(in) :: state
       type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: defer
       if (.not. (self%started .and. state%saved)) then
          call fatal_error(err, 'internal: a session restored from a state it did not save', err_internal)
          return
@@ -230,9 +243,7 @@ contains
                           'belongs to the run between one start and the next)', err_input)
          return
       end if
-      call self%integ%statistics(self%stats)
-      call self%integ%finish()
-      deallocate (self%integ)
+      call stop_integrator(self)
       self%model = state%model
       self%t = state%t
       self%t_int = state%t_int
@@ -241,8 +252,7 @@ contains
       self%input_load = state%input_load
       self%input_kinds = state%input_kinds
       call set_sequence_progress(self%model, state%reached)   ! (the model's sequences are the session's own)
-      call fresh_integrator(self, err)
-      if (.not. allocated(err)) call keep_grid(self%integ, state%grid_t0, state%grid_next)
+      call restart_on_grid(self, state%grid_t0, state%grid_next, err, defer)
    end subroutine session_restore
 
    !> Replace the state at the session's point by y (the layout of `y`): every
@@ -262,9 +272,8 @@ contains
       end if
       self%y = y
       call self%model%init_modes(self%t_int, self%y)
-      call grid_of(self%integ, t0, next)
-      call fresh_integrator(self, err)
-      if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
+      call current_grid(self, t0, next)
+      call restart_on_grid(self, t0, next, err)
    end subroutine session_set_state
 
    !> An input of the run from now on: the external torque `value` on node
@@ -318,7 +327,7 @@ contains
       end if
       call set_value(self, i, kind, value, changed)
       if (.not. changed) return
-      call grid_of(self%integ, t0, next)
+      call current_grid(self, t0, next)
       call fresh_integrator(self, err, new_inputs=.true.)
       if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
    end subroutine session_set_input
@@ -405,9 +414,8 @@ contains
       type(error_t), allocatable :: e
       if (.not. self%started) return
       self%started = .false.
-      call self%integ%statistics(self%stats)
-      call self%integ%finish()
-      deallocate (self%integ)
+      call stop_integrator(self)
+      self%idle = .false.
       self%stats%t_metrics = self%obs%t_metrics
       call self%obs%finish(self%model, self%t_int, self%y, self%stats, self%sink, r, e)
       if (present(result)) result = r
@@ -427,11 +435,8 @@ contains
       logical, intent(in), optional :: new_inputs
       self%d%bounds_kept = allocated(self%d%disp_bound)
       if (present(new_inputs)) self%d%bounds_kept = self%d%bounds_kept .and. .not. new_inputs
-      if (allocated(self%integ)) then
-         call self%integ%statistics(self%stats)
-         call self%integ%finish()
-         deallocate (self%integ)
-      end if
+      call stop_integrator(self)
+      self%idle = .false.
       call make_integrator(self%model%run%integrator, self%integ)
       if (.not. allocated(self%integ)) then
          call fatal_error(err, "internal: integrator '"//self%model%run%integrator//"' is not in the registry", &
@@ -441,6 +446,50 @@ contains
       self%integ%region_instants = .true.
       call drive_setup(self%model, self%integ, self%obs, self%d, self%dout, self%t_end, self%t_int, self%y, err)
    end subroutine fresh_integrator
+
+   !> The integrator finished (its counters kept in self%stats), if one runs.
+   subroutine stop_integrator(self)
+      type(session_t), intent(inout) :: self
+      if (.not. allocated(self%integ)) return
+      call self%integ%statistics(self%stats)
+      call self%integ%finish()
+      deallocate (self%integ)
+   end subroutine stop_integrator
+
+   !> A new integrator at the session's point on the fixed-step grid (t0, next);
+   !> with `defer`, none: the session idles until the run goes on (D-186).
+   subroutine restart_on_grid(self, t0, next, err, defer)
+      type(session_t), intent(inout), target :: self
+      real(wp), intent(in) :: t0
+      integer(i8), intent(in) :: next
+      type(error_t), allocatable, intent(out) :: err
+      logical, intent(in), optional :: defer
+      logical :: later
+      later = .false.
+      if (present(defer)) later = defer
+      if (later) then
+         call stop_integrator(self)
+         self%idle = .true.
+         self%idle_t0 = t0
+         self%idle_next = next
+         return
+      end if
+      call fresh_integrator(self, err)
+      if (.not. allocated(err)) call keep_grid(self%integ, t0, next)
+   end subroutine restart_on_grid
+
+   !> The grid the run is on: the integrator's, or the idle session's.
+   subroutine current_grid(self, t0, next)
+      type(session_t), intent(in) :: self
+      real(wp), intent(out) :: t0
+      integer(i8), intent(out) :: next
+      if (self%idle) then
+         t0 = self%idle_t0
+         next = self%idle_next
+      else
+         call grid_of(self%integ, t0, next)
+      end if
+   end subroutine current_grid
 
    !> A fixed-step integrator's grid (its start and the index of the next point).
    subroutine grid_of(integ, t0, next)

@@ -157,7 +157,7 @@ contains
       else
          call create(self, path, lay, key, err)
       end if
-      if (.not. allocated(err)) call open_sets(self, err)
+      if (.not. allocated(err)) call open_sets(self, resume, err)
       if (allocated(err)) call self%close()
    end subroutine bf_open
 
@@ -253,9 +253,10 @@ contains
       if (k >= 2 .and. k <= 4) vec_size = self%n + 1
    end function vec_size
 
-   !> Open every dataset of the open file; the messages of uncommitted points cleaned.
-   subroutine open_sets(self, err)
+   !> Open every dataset of the open file; resumed, the messages of uncommitted points cleaned.
+   subroutine open_sets(self, resume, err)
       type(branch_file_t), intent(inout) :: self
+      logical, intent(in) :: resume
       type(error_t), allocatable, intent(out) :: err
       integer :: hs
       integer, allocatable :: st(:)
@@ -287,7 +288,10 @@ contains
                           'unreadable, or the deck has other elements): delete it', err_io)
          return
       end if
-      call clean_slot_messages(self%file, 'runs', self%d_message, self%t_message, st /= status_pending, self%path, err)
+      ! (a file just created holds no message: every slot pending, its text the fill
+      ! value; reading each slot's text back cost ~430 M instructions, D-186)
+      if (resume) call clean_slot_messages(self%file, 'runs', self%d_message, self%t_message, st /= status_pending, &
+                                           self%path, err)
    end subroutine open_sets
 
    !> Point i of br (its element metrics el(metric, element), NaN for a failed point) into
