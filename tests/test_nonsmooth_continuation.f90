@@ -150,8 +150,12 @@ contains
       write (*, '(4x,a,2f16.9,a)') 'folds at ', br%pts(f(1))%lam, br%pts(f(2))%lam, ' teeth/s'
       below = count(br%pts(1:f(1))%lam < 503.5_wp)
       call check('the first segment passes 503.565 teeth/s ('//str(below)//' points below 503.5)', below >= 3)
-      first_stable = all([(br%pts(i)%stability == 'stable' .or. br%pts(i)%kind == 'grazing', i=1, f(1) - 1)])
-      mid_unstable = all([(br%pts(i)%stability == 'unstable' .or. br%pts(i)%kind /= '', i=f(1) + 1, f(2) - 1)])
+      ! (failed points apart: the stale points after the grazing at 555.12 and on the unstable
+      ! stretch, each followed by its released orbit, D-188)
+      first_stable = all([(br%pts(i)%stability == 'stable' .or. br%pts(i)%kind == 'grazing' .or. &
+                           br%pts(i)%status /= branch_done, i=1, f(1) - 1)])
+      mid_unstable = all([(br%pts(i)%stability == 'unstable' .or. br%pts(i)%kind /= '' .or. &
+                           br%pts(i)%status /= branch_done, i=f(1) + 1, f(2) - 1)])
       call check('stable down to the first fold', first_stable)
       call check('unstable between the folds', mid_unstable .and. f(2) > f(1) + 3)
       call check('the folds: jump-down below jump-up', br%pts(f(1))%lam < br%pts(f(2))%lam)

@@ -34,15 +34,16 @@ module trainsim_arclength
 
    public :: branch_problem_t, point_hook_i, branch_options_t, branch_point_t, branch_t, continue_branch
    public :: switch_period_doubling
-   public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed, branch_fold
+   public :: branch_done, branch_no_start, branch_step_min, branch_budget, branch_failed, branch_fold, branch_stale
 
    !> branch_t%status, and a failed point's status (branch_point_t%status): why it stopped
    !> (or, with restarts, why a stretch of the branch ended): 1 no periodic orbit near the
    !> start, 2 the corrector failed at the smallest step (not at a fold), 3 the point
    !> budget spent, 4 an error, 5 the corrector failed at the smallest step at a fold (a
-   !> fold test function heading for its sign change: a fold it could not turn, D-174).
+   !> fold test function heading for its sign change: a fold it could not turn, D-174); a failed
+   !> point only: 6 stale, t0 in a contact that strikes within the period (not an orbit, D-188).
    integer, parameter :: branch_done = 0, branch_no_start = 1, branch_step_min = 2, branch_budget = 3, &
-                         branch_failed = 4, branch_fold = 5
+                         branch_failed = 4, branch_fold = 5, branch_stale = 6
 
    !> The deck at a parameter value: extend and give `model_at`; `retune` (optional) changes
    !> only the parameter's value in a model built at another, not building the deck (D-131).
@@ -151,7 +152,7 @@ module trainsim_arclength
    type :: node_t
       real(wp), allocatable :: z(:), px(:), a(:, :), t(:), m(:, :)
       complex(wp), allocatable :: mu(:)
-      integer :: corrector = 0
+      integer :: corrector = 0, stale = 0   !< stale: `stale_check` (D-188)
       real(wp) :: residual = 0.0_wp
       type(monodromy_stats_t) :: st   !< the flow's events over the orbit: its contact sequence's signature
    end type node_t
@@ -241,8 +242,34 @@ module trainsim_arclength
       end subroutine store
    end interface
 
-   !> Restarts past a failure and failed points (trainsim_arclength_restart.f90, D-119)
+   !> Restarts past a failure and failed points, the first point shot (trainsim_arclength_restart.f90,
+   !> D-119); stale points and their release (trainsim_arclength_release.f90, D-188)
    interface
+      module subroutine start_shot(c, lam0, opt, br, cur, t_prev, ds, err)
+         type(ctx_t), intent(inout) :: c
+         real(wp), intent(in) :: lam0
+         type(branch_options_t), intent(in) :: opt
+         type(branch_t), intent(inout) :: br
+         type(node_t), intent(out) :: cur
+         real(wp), allocatable, intent(out) :: t_prev(:)
+         real(wp), intent(out) :: ds
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine start_shot
+      module subroutine stale_check(c, q)
+         type(ctx_t), intent(inout) :: c
+         type(node_t), intent(inout) :: q
+      end subroutine stale_check
+      module subroutine release(c, opt, br, cur_stale, before, q, restarts, released, err)
+         type(ctx_t), intent(inout) :: c
+         type(branch_options_t), intent(in) :: opt
+         type(branch_t), intent(inout) :: br
+         logical, intent(in) :: cur_stale
+         integer, intent(in) :: before
+         type(node_t), intent(inout) :: q
+         integer, intent(in) :: restarts
+         logical, intent(out) :: released
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine release
       module subroutine fold_ahead(br, fold, note)
          type(branch_t), intent(in) :: br
          logical, intent(out) :: fold
@@ -449,9 +476,10 @@ contains
       real(wp) :: lam
       character(len=:), allocatable :: why, note
       real(wp), allocatable :: px_pred(:)
-      logical :: crossed, rephased, fold
+      logical :: crossed, rephased, fold, cur_stale, released
       integer :: before
       rephased = .false.
+      cur_stale = .false.
       do
          call report_points(br, stored, err, hook)
          if (allocated(err)) return
@@ -470,6 +498,7 @@ contains
                why = err%message
                deallocate (err)
             end if
+            if (len(why) == 0 .and. opt%nonsmooth) call stale_check(c, nxt)   ! (after its last map: D-188)
          end if
          if (opt%nonsmooth .and. .not. rephased) then
             ! a memory contact reaching t0 (odd events) or a failed step: move t0 first
@@ -514,7 +543,15 @@ contains
                          str(br%pts(size(br%pts))%lam, 10)//' was met before'
             exit
          end if
-         call store(br, c, nxt, ds, '', cur%t, restarts + 1)
+         released = .false.
+         if (nxt%stale > 0) then   ! (not an orbit of the train: a failed point, released if it can be)
+            call release(c, opt, br, cur_stale, before, nxt, restarts, released, err)
+            if (allocated(err)) return
+            if (released) br%pts(size(br%pts))%ds = ds   ! (its step along the stale map: fold_ahead's h)
+         else
+            call store(br, c, nxt, ds, '', cur%t, restarts + 1)
+         end if
+         cur_stale = nxt%stale > 0
          cur = nxt
          rephased = .false.
          if (nxt%corrector <= 3) ds = min(1.5_wp*ds, opt%ds_max)
@@ -546,55 +583,4 @@ contains
          if (allocated(err)) return
       end do
    end subroutine report_points
-
-   !> The first point: the orbit shot at lam0; t0 there (moved by shooting to an
-   !> instant with no memory contact in progress) kept as a phase of the period.
-   subroutine start_shot(c, lam0, opt, br, cur, t_prev, ds, err)
-      type(ctx_t), intent(inout) :: c
-      real(wp), intent(in) :: lam0
-      type(branch_options_t), intent(in) :: opt
-      type(branch_t), intent(inout) :: br
-      type(node_t), intent(out) :: cur
-      real(wp), allocatable, intent(out) :: t_prev(:)
-      real(wp), intent(out) :: ds
-      type(error_t), allocatable, intent(out) :: err
-      type(shoot_result_t) :: res
-      c%ls = max(abs(lam0), tiny(1.0_wp))
-      if (size(br%pts) > 0) c%ls = max(abs(br%pts(1)%lam), tiny(1.0_wp))
-      c%lam = huge(1.0_wp)
-      call at(c, lam0, err)
-      if (allocated(err)) return
-      call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
-      if (allocated(err)) return
-      if (c%salt) then
-         call shoot(c%pm, opt%shoot, res, err, monodromy=monodromy_variational)
-      else
-         call shoot(c%pm, opt%shoot, res, err)
-      end if
-      c%maps = c%maps + res%maps
-      br%maps = c%maps
-      if (allocated(err)) then
-         br%status = branch_no_start
-         br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//err%message
-         deallocate (err)
-         return
-      end if
-      if (res%status /= shoot_converged) then
-         br%status = branch_no_start
-         br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//res%message
-         return
-      end if
-      br%status = branch_failed
-      c%n = c%pm%n
-      c%phase = (c%pm%t0 - c%t_start)/c%pm%period
-      c%s = res%scale
-      br%scale = c%s
-      br%lam_scale = c%ls
-      br%phase = c%phase
-      cur%z = [res%x/c%s, lam0/c%ls]
-      allocate (t_prev(c%n + 1))
-      t_prev = 0.0_wp
-      t_prev(c%n + 1) = real(sign(1, opt%direction), wp)
-      ds = opt%ds
-   end subroutine start_shot
 end module trainsim_arclength

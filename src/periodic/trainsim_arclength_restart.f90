@@ -171,6 +171,49 @@ contains
       call evaluate(c, cur%z, cur%px, why, err)
    end subroutine reshoot
 
+   !> The first point: the orbit shot at lam0; t0 there (moved by shooting to an
+   !> instant with no memory contact in progress) kept as a phase of the period.
+   module procedure start_shot
+      type(shoot_result_t) :: res
+      c%ls = max(abs(lam0), tiny(1.0_wp))
+      if (size(br%pts) > 0) c%ls = max(abs(br%pts(1)%lam), tiny(1.0_wp))
+      c%lam = huge(1.0_wp)
+      call at(c, lam0, err)
+      if (allocated(err)) return
+      call monodromy_choice(opt%monodromy, c%pm%model, c%salt, err)
+      if (allocated(err)) return
+      if (c%salt) then
+         call shoot(c%pm, opt%shoot, res, err, monodromy=monodromy_variational)
+      else
+         call shoot(c%pm, opt%shoot, res, err)
+      end if
+      c%maps = c%maps + res%maps
+      br%maps = c%maps
+      if (allocated(err)) then
+         br%status = branch_no_start
+         br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//err%message
+         deallocate (err)
+         return
+      end if
+      if (res%status /= shoot_converged) then
+         br%status = branch_no_start
+         br%message = 'no periodic orbit at the start lambda = '//str(lam0)//': '//res%message
+         return
+      end if
+      br%status = branch_failed
+      c%n = c%pm%n
+      c%phase = (c%pm%t0 - c%t_start)/c%pm%period
+      c%s = res%scale
+      br%scale = c%s
+      br%lam_scale = c%ls
+      br%phase = c%phase
+      cur%z = [res%x/c%s, lam0/c%ls]
+      allocate (t_prev(c%n + 1))
+      t_prev = 0.0_wp
+      t_prev(c%n + 1) = real(sign(1, opt%direction), wp)
+      ds = opt%ds
+   end procedure start_shot
+
    !> A failed point: lambda where a stretch ended, its reason and message, no orbit.
    module subroutine failed_point(br, lam, status, message)
       type(branch_t), intent(inout) :: br

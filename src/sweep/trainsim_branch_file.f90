@@ -76,7 +76,8 @@ contains
       s = '0 a point (or the branch left its range), 1 no periodic orbit near the start, 2 the corrector '// &
           'failed at the smallest step (not at a fold), 3 the point budget spent, 4 an error, 5 the corrector '// &
           'failed at the smallest step at a fold (a fold test heading for its sign change: a fold it could '// &
-          'not turn); -1 running'
+          'not turn), 6 a stale point: t0 in a contact that strikes within the period, not an orbit of '// &
+          'the train (a failed point only; D-188); -1 running'
    end function reason_meaning
 
    !> Open the branch file `path` (lay: the deck, its fingerprint with the options that

@@ -101,6 +101,7 @@ def main(argv=None):
         n = int((st != 0).sum())
         lam, ok = f["parameters/values"][:n, 0], st[:n] == 1
         stable, kind = f["runs/stable"][:n] == 1, f["runs/kind"][:n]
+        reason = f["runs/reason"][:n]
         ids = list(f["elements/ids"].asstr()[:])
         p2p = f["elements/p2p_range"][:n, :]
         br = dict(lam=lam, ok=ok, stable=stable, segment=f["runs/segment"][:n], y=p2p)
@@ -108,7 +109,8 @@ def main(argv=None):
     e = ids.index(CASE["element"])
     failures = []
     print(f"continuation 645 -> 385 teeth/s: exit {rc}, {n} points, {int((ok & stable).sum())} stable")
-    if rc != 0:
+    # exit 1 with failed points of reason 6 only: stale points, each before its released orbit (D-188)
+    if rc != 0 and not (rc == 1 and set(reason[~ok].tolist()) <= {6}):
         failures.append(f"trainsim continue exited {rc}")
 
     # 2. the sweep at the branch's own stable points
