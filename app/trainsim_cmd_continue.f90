@@ -19,7 +19,7 @@ module trainsim_cmd_continue
    use trainsim_period_map, only: period_map_t, forcing_period
    use trainsim_orbit, only: orbit_run
    use trainsim_arclength, only: branch_problem_t, branch_options_t, branch_point_t, branch_t, continue_branch, &
-                                 branch_done, switch_period_doubling
+                                 branch_done, branch_stale, switch_period_doubling
    use trainsim_branch_file, only: branch_file_t
    use trainsim_sweep_layout, only: sweep_layout_t, element_metric_names, element_record
    use trainsim_sweep, only: fingerprint
@@ -140,7 +140,8 @@ contains
       character(len=:), allocatable :: param
       real(wp) :: lam0, lam1
       logical :: resume, switch_pd
-      integer :: i, n, n_failed
+      integer :: i, n, n_failed, n_released
+      character(len=:), allocatable :: rel
       deck_path = ''
       switch_pd = .false.
       out_path = ''
@@ -251,7 +252,10 @@ contains
       if (allocated(err)) call close_fail(err)
       call bfile%close()
       n_failed = count(br%pts%status /= branch_done)
-      write (output_unit, '(a)') str(size(br%pts))//' points ('//str(n_failed)//' failed), '//str(br%maps)// &
+      n_released = released_count(br%pts)
+      rel = ''
+      if (n_released > 0) rel = ', '//str(n_released)//' of them stale with an orbit stored at the same value'
+      write (output_unit, '(a)') str(size(br%pts))//' points ('//str(n_failed)//' failed'//rel//'), '//str(br%maps)// &
          ' period maps, '//str(br%rejected)//' steps refused, '//str(br%passes)//' variational passes'
       if (br%status == branch_done .and. allocated(br%message)) then
          if (len(br%message) > 0) write (output_unit, '(a)') br%message
@@ -261,12 +265,26 @@ contains
          write (error_unit, '(a)') 'trainsim: continue: the branch stopped early (status '//str(br%status)//'): '// &
             br%message
          call quit(1)
-      else if (n_failed > 0) then
+      else if (n_failed > n_released) then
          write (error_unit, '(a)') 'trainsim: continue: the branch reached the end of its range, with '// &
-            str(n_failed)//' failed points (their reasons above and in the branch file)'
+            str(n_failed - n_released)//' failed points without an orbit at their value (their reasons '// &
+            'above and in the branch file)'
          call quit(1)
       end if
    end subroutine do_continue
+
+   !> Stale points (reason 6) released: the next stored point an orbit at the same value
+   !> (D-188). They are failed points of the stale map, not of the branch: the branch holds
+   !> an orbit at each of them, so they alone do not make the exit status 1.
+   integer function released_count(pts) result(n)
+      type(branch_point_t), intent(in) :: pts(:)
+      integer :: i
+      n = 0
+      do i = 1, size(pts) - 1
+         if (pts(i)%status == branch_stale .and. pts(i + 1)%status == branch_done .and. &
+             pts(i + 1)%lam == pts(i)%lam) n = n + 1
+      end do
+   end function released_count
 
    subroutine close_fail(err)
       type(error_t), intent(in) :: err

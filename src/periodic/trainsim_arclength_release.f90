@@ -12,13 +12,12 @@
 !> Such a point is not stored as an orbit. It is *released*: t0 moved into the
 !> longest stretch of its orbit in which every memory contact that opens is open
 !> (`rephase`, D-99: there the map does not depend on the memory) and the orbit
-!> corrected there by full Newton at the same lambda. If that converges to an orbit
-!> that is not stale itself, the stale stretch ends there as a jump: the stale point
-!> is a failed point (reason 6) and the released orbit starts a new segment. If it
-!> does not, the stale point is a failed point (reason 6, with why the release
-!> failed) and the continuation goes on from it along the stale map as before, trying
-!> again at its next point: the stale stretch serves as the predictor's path, its
-!> points are not stored as orbits.
+!> corrected there by full Newton at the same lambda. The stale point is a failed
+!> point (reason 6); if the release converges to an orbit that is not stale itself,
+!> that orbit is stored after it at the same lambda, else the message says why not.
+!> Either way the continuation goes on from the stale point along the stale map, which
+!> serves as the predictor's path; its points are not stored as orbits (a jump onto
+!> the released orbit lost the Fig. 5.11 folds: D-188).
 submodule(trainsim_arclength) trainsim_arclength_release
    implicit none
 
