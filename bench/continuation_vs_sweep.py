@@ -119,10 +119,14 @@ def one_damping(exe, d, out, res, thr):
     folds = sorted(set(round(x, 6) for x in br["lam"][(br["kind"] == 1) & br["ok"]]))
     print(f"damping {d:g}: continuation exit {c_rc}, {len(br['lam'])} points, {br['maps']} maps, "
           f"CPU {c_cpu:.2f} s; folds {folds}")
-    # old: 27 runs from the deck's start
-    old_cpu, _ = study.cpu_of([exe, "sweep", study.sweep_deck(CASE, 645.0, 385.0, 27, TOL, out), *sets,
+    # old: 27 runs from the deck's start (a file of an earlier run would be refused)
+    if os.path.exists(os.path.join(out, "fixed.h5")):
+        os.remove(os.path.join(out, "fixed.h5"))
+    old_cpu, old_rc = study.cpu_of([exe, "sweep", study.sweep_deck(CASE, 645.0, 385.0, 27, TOL, out), *sets,
                                "-o", os.path.join(out, "fixed.h5"), "--progress", "100000"],
                               os.path.join(out, "fixed.log"))
+    if old_rc != 0:
+        raise SystemExit(f"the 27-run sweep failed (exit {old_rc}): see {out}/fixed.log")
     grid = list(np.linspace(385.0, 645.0, 27))
     cpu, located, worst, n_on, n_off = [], [], 0.0, 0, 0
     for direction in ("down", "up"):
