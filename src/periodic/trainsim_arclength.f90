@@ -174,6 +174,13 @@ module trainsim_arclength
          logical, intent(out) :: moved
          type(error_t), allocatable, intent(out) :: err
       end subroutine rephase_point
+      module subroutine t0_to_open(c, z, x, moved, err)
+         type(ctx_t), intent(inout) :: c
+         real(wp), intent(in) :: z(:)
+         real(wp), intent(out) :: x(:)
+         logical, intent(out) :: moved
+         type(error_t), allocatable, intent(out) :: err
+      end subroutine t0_to_open
       module logical function closed_loop(br, before, c) result(closed)
          type(branch_t), intent(in) :: br
          integer, intent(in) :: before

@@ -327,19 +327,10 @@ contains
    !> becomes its state at the new t0, its Jacobian and tangent (oriented by the
    !> old one's lambda-component) are taken again. moved: whether t0 moved.
    module procedure rephase_point
-      real(wp) :: x(c%n), t_dir(c%n + 1), t0_old
+      real(wp) :: x(c%n), t_dir(c%n + 1)
       character(len=:), allocatable :: why
-      moved = .false.
-      call at(c, cur%z(c%n + 1)*c%ls, err)
-      if (allocated(err)) return
-      x = cur%z(1:c%n)*c%s
-      t0_old = c%pm%t0
-      call c%pm%rephase(x, err)
-      if (allocated(err)) return
-      c%maps = c%maps + 2
-      if (c%pm%t0 == t0_old) return
-      moved = .true.
-      c%phase = (c%pm%t0 - c%t_start)/c%pm%period
+      call t0_to_open(c, cur%z, x, moved, err)
+      if (allocated(err) .or. .not. moved) return
       br%phase = c%phase
       cur%z(1:c%n) = x/c%s
       t_dir = 0.0_wp
@@ -348,6 +339,23 @@ contains
       if (.not. allocated(err) .and. len(why) > 0) call fatal_error(err, 'moving t0: '//why, err_input)
       if (.not. allocated(err)) call linearise(c, cur, t_dir, err)
    end procedure rephase_point
+
+   !> The map at the point z's lambda with t0 moved into the longest stretch with every
+   !> memory contact that opens open (`rephase`, D-99); x: z's state at the new t0 (at
+   !> the old one if t0 did not move), c%phase the new phase. moved: whether t0 moved.
+   module procedure t0_to_open
+      real(wp) :: t0_old
+      moved = .false.
+      call at(c, z(c%n + 1)*c%ls, err)
+      if (allocated(err)) return
+      x = z(1:c%n)*c%s
+      t0_old = c%pm%t0
+      call c%pm%rephase(x, err)
+      if (allocated(err)) return
+      c%maps = c%maps + 2
+      moved = c%pm%t0 /= t0_old
+      if (moved) c%phase = (c%pm%t0 - c%t_start)/c%pm%period
+   end procedure t0_to_open
 
    !> Whether a fold or grazing point stored after index `before` repeats an earlier
    !> one (lambda to 1e-7 of |lambda_0|, the state to 1e-6 of its scale, or where t0

@@ -64,11 +64,12 @@ contains
    !> orbit's branch cost the Fig. 5.11 rig its folds).
    module procedure release
       type(node_t) :: fix, r
-      real(wp) :: x(c%n), t_dir(c%n + 1), lam, phase0, t0_old
+      real(wp) :: x(c%n), t_dir(c%n + 1), lam, phase0
       real(wp), allocatable :: mem0(:), lams(:)
       logical, allocatable :: kept0(:)
       character(len=:), allocatable :: why, id, msg
       integer :: i
+      logical :: moved
       released = .false.
       lam = q%z(c%n + 1)*c%ls
       id = c%pm%model%elements(c%pm%memory(q%stale))%e%id
@@ -87,17 +88,11 @@ contains
       allocate (kept0, source=c%pm%kept)
       t_dir = 0.0_wp
       t_dir(c%n + 1) = sign(1.0_wp, q%t(c%n + 1))
-      call at(c, lam, err)
+      call t0_to_open(c, q%z, x, moved, err)
       if (allocated(err)) return
-      x = q%z(1:c%n)*c%s
-      t0_old = c%pm%t0
-      call c%pm%rephase(x, err)
-      if (allocated(err)) return
-      c%maps = c%maps + 2
-      if (c%pm%t0 == t0_old) then
+      if (.not. moved) then
          why = 'no stretch of the orbit has every memory contact that opens open'
       else
-         c%phase = (c%pm%t0 - c%t_start)/c%pm%period
          allocate (fix%t(c%n + 1))
          fix%t = t_dir   ! (the bordering row: lambda held)
          call correct(c, fix, [x/c%s, q%z(c%n + 1)], opt, r, why, full=.true.)
