@@ -24,9 +24,8 @@ module t71_problem
    use trainsim_error, only: error_t
    use trainsim_model, only: model_t
    use trainsim_deck, only: deck_t
-   use trainsim_overrides, only: override_t, parse_set_argument
-   use trainsim_prepare, only: prepare_model
    use trainsim_arclength, only: branch_problem_t
+   use trainsim_test_support, only: model_with_sets
    implicit none
    private
    public :: t71_problem_t
@@ -45,14 +44,8 @@ contains
       real(wp), intent(in) :: lam
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
-      type(override_t) :: ov(4)
-      character(len=32) :: buf
-      write (buf, '(es25.17)') lam
-      call parse_set_argument('shaft1.damping=500', ov(1), err)
-      if (.not. allocated(err)) call parse_set_argument('shaft3.damping=500', ov(2), err)
-      if (.not. allocated(err)) call parse_set_argument('shaft5.damping=500', ov(3), err)
-      if (.not. allocated(err)) call parse_set_argument('mesh1.mesh_frequency='//trim(adjustl(buf)), ov(4), err)
-      if (.not. allocated(err)) call prepare_model(self%deck, ov, model, err)
+      call model_with_sets(self%deck, [character(len=18) :: 'shaft1.damping=500', 'shaft3.damping=500', &
+                           'shaft5.damping=500'], 'mesh1.mesh_frequency', lam, model, err)
    end subroutine t71_model_at
 end module t71_problem
 

@@ -16,7 +16,7 @@ module trainsim_test_support
    private
 
    public :: load_model, load_model_text, run_model, nl, zero_crossings, jacobian_fd_error
-   public :: real_text, expect_build_error, loglog_slope, damped_rig_model
+   public :: real_text, expect_build_error, loglog_slope, damped_rig_model, model_with_sets
 
    character(len=1), parameter :: nl = new_line('a')
 
@@ -159,13 +159,28 @@ contains
       real(wp), intent(in) :: lam
       type(model_t), intent(out) :: model
       type(error_t), allocatable, intent(out) :: err
-      type(override_t) :: ov(3)
-      character(len=32) :: buf
-      write (buf, '(es25.17)') lam
-      call parse_set_argument('shaft1.damping=500', ov(1), err)
-      if (.not. allocated(err)) call parse_set_argument('shaft3.damping=500', ov(2), err)
-      if (.not. allocated(err)) call parse_set_argument('mesh.mesh_frequency='//trim(adjustl(buf)), ov(3), err)
-      if (.not. allocated(err)) call prepare_model(deck, ov, model, err)
+      call model_with_sets(deck, [character(len=18) :: 'shaft1.damping=500', 'shaft3.damping=500'], &
+                           'mesh.mesh_frequency', lam, model, err)
    end subroutine damped_rig_model
+
+   !> The model of `deck` with the --set overrides `sets` and `key` set to lam (written
+   !> to 17 digits, as the command line's --param does): a branch problem's model_at.
+   subroutine model_with_sets(deck, sets, key, lam, model, err)
+      type(deck_t), intent(in) :: deck
+      character(len=*), intent(in) :: sets(:), key
+      real(wp), intent(in) :: lam
+      type(model_t), intent(out) :: model
+      type(error_t), allocatable, intent(out) :: err
+      type(override_t) :: ov(size(sets) + 1)
+      character(len=32) :: buf
+      integer :: i
+      write (buf, '(es25.17)') lam
+      do i = 1, size(sets)
+         call parse_set_argument(trim(sets(i)), ov(i), err)
+         if (allocated(err)) return
+      end do
+      call parse_set_argument(key//'='//trim(adjustl(buf)), ov(size(ov)), err)
+      if (.not. allocated(err)) call prepare_model(deck, ov, model, err)
+   end subroutine model_with_sets
 
 end module trainsim_test_support
